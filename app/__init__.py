@@ -1,0 +1,1 @@
+"""poselifter app"""

@@ -1,0 +1,52 @@
+"""Input validation shared by the public functions. Errors name the argument and the problem."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+class PoseLifterError(ValueError):
+    """Raised for invalid user input (shape, non-finite values, degenerate poses, bad cameras)."""
+
+
+class CheckpointError(PoseLifterError):
+    """Raised when a weights file is missing, corrupt or of an unknown format."""
+
+
+def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
+    """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error."""
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise PoseLifterError(f"{name}: could not convert to a numeric array ({exc})") from None
+    expected = f"(..., {num_joints if num_joints is not None else 'J'}, {dim})"
+    if arr.ndim < 2 or arr.shape[-1] != dim or (num_joints is not None and arr.shape[-2] != num_joints):
+        raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}")
+    check_finite(arr, name=name)
+    return arr
+
+
+def check_finite(arr: np.ndarray, *, name: str) -> None:
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        raise PoseLifterError(f"{name}: contains {bad} NaN/inf value(s); all values must be finite")
+
+
+def as_pair(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
+    """Return a scalar or a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``."""
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise PoseLifterError(f"{name}: could not convert to a number or pair ({exc})") from None
+    if arr.ndim == 0:
+        arr = np.stack([arr, arr])
+    elif arr.shape[-1] == 1:
+        arr = np.concatenate([arr, arr], axis=-1)
+    if arr.shape[-1] != 2:
+        raise PoseLifterError(f"{name}: expected a scalar or shape (..., 2), got {tuple(arr.shape)}")
+    check_finite(arr, name=name)
+    if positive and np.any(arr <= 0):
+        raise PoseLifterError(f"{name}: must be > 0, got {arr.tolist() if arr.size <= 8 else 'non-positive values'}")
+    return arr

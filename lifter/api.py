@@ -1,0 +1,174 @@
+"""The inference API: :class:`Lifter` and its :class:`LiftResult`.
+
+Example::
+
+    from lifter import Lifter
+    lifter = Lifter.from_pretrained()                    # shipped default weights
+    res = lifter.lift(keypoints, focal=(fx, fy), principal_point=(cx, cy))
+    res.absolute   # (..., 17, 3) mm, camera frame (OpenCV: +x right, +y down, +z forward)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from ._checks import PoseLifterError, as_pair, as_points
+from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, focal_alpha, root_from_canonical_depth
+from .checkpoint import load_checkpoint
+from .model import PoseLifterNet
+from .normalization import pose_scale_np
+from .skeleton import FLIP_PERMUTATION, NUM_JOINTS
+
+ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
+MIN_POSE_SCALE_PX = 1e-3
+
+
+def model_registry(assets_dir: Path | None = None) -> dict[str, Any]:
+    """``assets/models.json``: ``{"default": name, "models": {name: {"file": ..., "description": ...}}}``."""
+    path = (assets_dir or ASSETS_DIR) / "models.json"
+    if not path.is_file():
+        raise PoseLifterError(f"no shipped models: {path} not found")
+    return json.loads(path.read_text())
+
+
+def available_models() -> list[str]:
+    """Names accepted by :meth:`Lifter.from_pretrained`."""
+    return sorted(model_registry()["models"])
+
+
+@dataclass(frozen=True)
+class LiftResult:
+    """Lifted poses for inputs of leading shape ``(...)``.
+
+    canonical_depth: ``(...)`` mm at the reference focal length F0 = 1000 px (``Z * 1000 / alpha``).
+    root: ``(..., 3)`` mm, camera frame. If ``metric_depth`` is False (no focal length was given),
+        the root is placed for a virtual camera of focal 1000 px: X and Y are correct (they only depend
+        on Z/f), Z equals ``canonical_depth`` and the true Z is ``canonical_depth * alpha / 1000``.
+    relative: ``(..., 17, 3)`` mm, root-relative pose in camera orientation, root row zero.
+    absolute: ``(..., 17, 3)`` mm, camera frame, ``root + relative``.
+    keypoints_2d: ``(..., 17, 2)`` px, the input. principal_point: ``(..., 2)`` px.
+    focal: ``(..., 2)`` px or None when unknown.
+    """
+
+    canonical_depth: np.ndarray
+    root: np.ndarray
+    relative: np.ndarray
+    absolute: np.ndarray
+    keypoints_2d: np.ndarray
+    principal_point: np.ndarray
+    focal: np.ndarray | None
+    metric_depth: bool
+
+    @property
+    def note(self) -> str:
+        if self.metric_depth:
+            return "absolute pose in mm, camera frame"
+        return ("no focal length given: root placed for a 1000-px focal; X, Y are metric but Z is known only "
+                "up to the unknown focal length (Z = canonical_depth * alpha / 1000)")
+
+
+class Lifter:
+    """A trained PoseLifter network with numpy-in / numpy-out inference."""
+
+    def __init__(self, net: PoseLifterNet, *, name: str = "custom", meta: dict[str, Any] | None = None) -> None:
+        self.net = net.eval()
+        self.name = name
+        self.meta = meta or {}
+
+    @property
+    def config(self):
+        return self.net.config
+
+    @classmethod
+    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None) -> "Lifter":
+        """Load a checkpoint file (``weights_only=True``); see :mod:`lifter.checkpoint`."""
+        net, meta = load_checkpoint(path)
+        return cls(net, name=name or Path(path).stem, meta=meta)
+
+    @classmethod
+    def from_pretrained(cls, name: str = "default") -> "Lifter":
+        """Shipped weights by name (see :func:`available_models`); ``"default"`` is the recommended one."""
+        reg = model_registry()
+        if name == "default":
+            name = reg["default"]
+        if name not in reg["models"]:
+            raise PoseLifterError(f"unknown model {name!r}; available: {sorted(reg['models'])} or 'default'")
+        return cls.from_checkpoint(ASSETS_DIR / reg["models"][name]["file"], name=name)
+
+    # ------------------------------------------------------------------------------------------
+    def lift(
+        self,
+        keypoints: Any,
+        *,
+        focal: Any | None = None,
+        principal_point: Any | None = None,
+        image_size: Any | None = None,
+        flip_test: bool = False,
+    ) -> LiftResult:
+        """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order) to absolute 3D poses.
+
+        focal: ``fx = fy`` scalar, ``(fx, fy)`` or batched ``(..., 2)``, px; None -> canonical only.
+        principal_point: ``(cx, cy)`` or ``(..., 2)`` px; defaults to the image centre when
+            ``image_size = (width, height)`` is given.
+        flip_test: also lift the mirrored input and average (slower, slightly more accurate).
+        """
+        kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
+        lead = kp.shape[:-2]
+        if principal_point is None:
+            if image_size is None:
+                raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the image centre)")
+            wh = as_pair(image_size, name="image_size", positive=True)
+            principal_point = wh / 2.0
+        pp = np.broadcast_to(as_pair(principal_point, name="principal_point"), lead + (2,))
+        f = None
+        if focal is not None:
+            f = np.broadcast_to(as_pair(focal, name="focal", positive=True), lead + (2,))
+        scale = pose_scale_np(kp)
+        if np.any(scale < MIN_POSE_SCALE_PX):
+            raise PoseLifterError(
+                f"degenerate pose: all 17 joints at (nearly) one point (2D scale {float(scale.min()):.2g} px); "
+                "the normalization needs a pose with non-zero extent")
+        if self.config.depth_target == "absolute" and f is None:
+            raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
+
+        flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
+        flat_pp = np.ascontiguousarray(pp.reshape(-1, 2))
+        rel, depth = self._run(flat_kp, flat_pp)
+        if flip_test:
+            perm = np.asarray(FLIP_PERMUTATION)
+            kp_m = flat_kp[:, perm].copy()
+            kp_m[..., 0] = 2.0 * flat_pp[:, None, 0] - kp_m[..., 0]
+            rel_m, depth_m = self._run(kp_m, flat_pp)
+            rel_m = rel_m[:, perm]
+            rel_m[..., 0] *= -1.0
+            rel = 0.5 * (rel + rel_m)
+            depth = 0.5 * (depth + depth_m)
+        rel = rel.reshape(lead + (NUM_JOINTS, 3))
+        depth = depth.reshape(lead)
+        if self.config.depth_target == "canonical":
+            canonical = depth
+        else:
+            canonical = canonical_depth_from_depth(depth, focal=f)
+        root = root_from_canonical_depth(kp[..., 0, :], canonical, focal=f if f is not None else CANONICAL_FOCAL,
+                                         principal_point=pp)
+        return LiftResult(canonical_depth=canonical, root=root, relative=rel, absolute=root[..., None, :] + rel,
+                          keypoints_2d=kp, principal_point=np.array(pp), focal=None if f is None else np.array(f),
+                          metric_depth=f is not None)
+
+    def _run(self, kp: np.ndarray, pp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Network on ``(N, 17, 2)`` px and ``(N, 2)`` px -> relative ``(N, 17, 3)`` mm, depth ``(N,)``."""
+        with torch.inference_mode():
+            out = self.net(torch.from_numpy(kp.astype(np.float32)), torch.from_numpy(pp.astype(np.float32)))
+        return out.relative.numpy().astype(np.float64), out.depth.numpy().astype(np.float64)
+
+    def __repr__(self) -> str:
+        c = self.config
+        return f"Lifter(name={self.name!r}, width={c.width}, mode={c.mode!r}, depth_target={c.depth_target!r})"
+

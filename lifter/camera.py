@@ -1,0 +1,226 @@
+"""Camera geometry: world <-> camera, projection with H36M lens distortion, back-projection,
+canonical depth (PoseLifter Eq. 5-6) and the geometrically correct horizontal flip.
+
+Conventions
+-----------
+* Camera frame: OpenCV, +x right, +y down, +z forward. 3D in **millimetres**.
+* World -> camera: ``X_cam = R @ (X_world - C) = R @ X_world + t``.
+* Image coordinates in **pixels**, origin at the top-left pixel corner convention of H36M.
+* ``focal`` is ``(fx, fy)`` in pixels; ``alpha = sqrt(fx * fy)`` is the single focal length used
+  by the canonical depth.
+* Canonical depth: ``Z_canonical = Z * F0 / alpha`` with ``F0 = 1000`` px, i.e. the root depth in
+  mm *as it would be for a 1000-px focal length*. It is what the network predicts; it does not
+  depend on the focal length of the camera that took the picture.
+
+All functions are pure and batched over leading dimensions: points are ``(..., J, 2)`` or
+``(..., J, 3)``; per-camera parameters broadcast against the leading dimensions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ._checks import PoseLifterError, as_pair
+from .skeleton import FLIP_PERMUTATION
+
+CANONICAL_FOCAL: float = 1000.0
+"""F0, the reference focal length (px) of the canonical depth."""
+
+
+def _last2(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
+    """A ``(..., 2)`` pair expanded to broadcast against ``(..., J, 2)``."""
+    return as_pair(x, name=name, positive=positive)[..., None, :]
+
+
+def focal_alpha(focal: Any) -> np.ndarray:
+    """``alpha = sqrt(fx * fy)`` for a scalar or ``(..., 2)`` focal length (px). Returns ``(...)``."""
+    f = as_pair(focal, name="focal", positive=True)
+    return np.sqrt(f[..., 0] * f[..., 1])
+
+
+def world_to_camera(points_world: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``X_cam = R @ X_world + t`` for points ``(..., J, 3)`` in mm; ``R`` is (3, 3), ``t`` is (3,)."""
+    return np.einsum("ij,...j->...i", np.asarray(R, np.float64), np.asarray(points_world, np.float64)) + np.asarray(
+        t, np.float64
+    )
+
+
+def camera_to_world(points_cam: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`world_to_camera`: ``X_world = R^T @ (X_cam - t)``."""
+    return np.einsum("ji,...j->...i", np.asarray(R, np.float64), np.asarray(points_cam, np.float64) - np.asarray(t))
+
+
+def distort(xy: np.ndarray, k: Any, p: Any) -> np.ndarray:
+    """Apply the H36M / Brown-Conrady lens distortion to normalized image points ``(..., 2)``.
+
+    ``k = (k1, k2, k3)`` radial and ``p = (p1, p2)`` tangential coefficients, in the H36M form:
+    ``r2 = |x|^2``, ``radial = 1 + k1 r2 + k2 r2^2 + k3 r2^3``, ``tan = p1*y + p2*x``,
+    ``x_d = x * (radial + tan) + [p2, p1] * r2``.
+    """
+    k = np.asarray(k, np.float64)
+    p = np.asarray(p, np.float64)
+    r2 = np.sum(xy**2, axis=-1, keepdims=True)
+    radial = 1.0 + k[..., 0:1] * r2 + k[..., 1:2] * r2**2 + k[..., 2:3] * r2**3
+    tan = p[..., 0:1] * xy[..., 1:2] + p[..., 1:2] * xy[..., 0:1]
+    return xy * (radial + tan) + p[..., ::-1] * r2
+
+
+def project(
+    points_cam: np.ndarray,
+    *,
+    focal: Any,
+    principal_point: Any,
+    k: Any | None = None,
+    p: Any | None = None,
+) -> np.ndarray:
+    """Project camera-frame points ``(..., J, 3)`` (mm, z > 0) to pixels ``(..., J, 2)``.
+
+    ``focal`` (px) and ``principal_point`` (px) are scalars / pairs, optionally batched as
+    ``(..., 2)`` over the leading dimensions. With ``k`` and ``p`` the H36M lens distortion is
+    applied (this is how H36M's own 2D annotations are made); without them it is a pinhole.
+    """
+    X = np.asarray(points_cam, np.float64)
+    if X.shape[-1] != 3:
+        raise PoseLifterError(f"points_cam: expected shape (..., J, 3), got {X.shape}")
+    z = X[..., 2:3]
+    if np.any(z <= 0):
+        raise PoseLifterError("points_cam: all points must be in front of the camera (z > 0)")
+    xy = X[..., :2] / z
+    if k is not None or p is not None:
+        k_ = np.zeros(3) if k is None else np.asarray(k, np.float64)[..., None, :]
+        p_ = np.zeros(2) if p is None else np.asarray(p, np.float64)[..., None, :]
+        xy = distort(xy, k_, p_)
+    return xy * _last2(focal, name="focal", positive=True) + _last2(principal_point, name="principal_point")
+
+
+def backproject(uv: np.ndarray, depth: np.ndarray, *, focal: Any, principal_point: Any) -> np.ndarray:
+    """Pinhole back-projection of pixels ``(..., 2)`` at depth ``(...)`` mm to camera-frame ``(..., 3)``.
+
+    Inverse of :func:`project` without distortion: ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``.
+    """
+    uv = np.asarray(uv, np.float64)
+    z = np.asarray(depth, np.float64)[..., None]
+    f = as_pair(focal, name="focal", positive=True)
+    c = as_pair(principal_point, name="principal_point")
+    xy = (uv - c) / f * z
+    return np.concatenate([xy, z], axis=-1)
+
+
+def canonical_depth_from_depth(depth_mm: Any, *, focal: Any) -> np.ndarray:
+    """PoseLifter Eq. 5: ``Z_canonical = Z * F0 / alpha`` (mm at a 1000-px focal length)."""
+    return np.asarray(depth_mm, np.float64) * CANONICAL_FOCAL / focal_alpha(focal)
+
+
+def depth_from_canonical_depth(canonical_depth: Any, *, focal: Any) -> np.ndarray:
+    """Inverse of Eq. 5: ``Z = Z_canonical * alpha / F0`` in mm."""
+    return np.asarray(canonical_depth, np.float64) * focal_alpha(focal) / CANONICAL_FOCAL
+
+
+def root_from_canonical_depth(
+    root_2d: np.ndarray, canonical_depth: Any, *, focal: Any, principal_point: Any
+) -> np.ndarray:
+    """PoseLifter Eq. 6: the absolute root ``(..., 3)`` mm from its 2D position ``(..., 2)`` px.
+
+    ``Z = Z_canonical * alpha / F0``; X and Y back-project the 2D root through the pinhole.
+    Note ``X = (u - cx) * Z_canonical / F0 * sqrt(fy/fx)``: X and Y barely depend on the focal
+    length; only Z scales with it.
+    """
+    z = depth_from_canonical_depth(canonical_depth, focal=focal)
+    return backproject(root_2d, z, focal=focal, principal_point=principal_point)
+
+
+# --------------------------------------------------------------------------------------------
+# Horizontal flip
+# --------------------------------------------------------------------------------------------
+
+
+def flip_keypoints_2d(
+    keypoints: np.ndarray, *, image_width: Any, principal_point: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """Mirror a 2D pose ``(..., 17, 2)`` px about the image's vertical centre line.
+
+    ``x -> W - x`` **and** ``cx -> W - cx``, with left/right joints swapped. Returns the flipped
+    keypoints and the flipped principal point ``(..., 2)``. Flipping twice is the identity, and it
+    commutes with pinhole projection of the 3D pose flipped by :func:`flip_pose_3d`.
+    """
+    kp = np.asarray(keypoints, np.float64)
+    W = np.asarray(image_width, np.float64)[..., None]
+    c = as_pair(principal_point, name="principal_point")
+    out = kp[..., FLIP_PERMUTATION, :].copy()
+    out[..., 0] = W - out[..., 0]
+    c_out = c.copy()
+    c_out[..., 0] = np.asarray(image_width, np.float64) - c_out[..., 0]
+    return out, c_out
+
+
+def flip_pose_3d(points_cam: np.ndarray) -> np.ndarray:
+    """Mirror a camera-frame 3D pose ``(..., 17, 3)``: negate X and swap left/right joints."""
+    out = np.asarray(points_cam, np.float64)[..., FLIP_PERMUTATION, :].copy()
+    out[..., 0] = -out[..., 0]
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Camera record
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A calibrated camera: intrinsics (px), H36M lens distortion, extrinsics (mm), image size (px)."""
+
+    focal: tuple[float, float]
+    principal_point: tuple[float, float]
+    width: int
+    height: int
+    k: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    p: tuple[float, float] = (0.0, 0.0)
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))
+    t: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    name: str = ""
+
+    @property
+    def alpha(self) -> float:
+        """``sqrt(fx * fy)`` in px."""
+        return float(np.sqrt(self.focal[0] * self.focal[1]))
+
+    def world_to_camera(self, points_world: np.ndarray) -> np.ndarray:
+        return world_to_camera(points_world, self.R, self.t)
+
+    def project(self, points_cam: np.ndarray, *, distortion: bool = True) -> np.ndarray:
+        """Project camera-frame mm to px, with this camera's lens distortion unless disabled."""
+        if distortion:
+            return project(points_cam, focal=self.focal, principal_point=self.principal_point, k=self.k, p=self.p)
+        return project(points_cam, focal=self.focal, principal_point=self.principal_point)
+
+    def flipped(self) -> "Camera":
+        """The mirror camera: ``cx -> W - cx`` and ``p2 -> -p2``, so that projecting a
+        :func:`flip_pose_3d` pose gives exactly the :func:`flip_keypoints_2d` keypoints, with distortion."""
+        return Camera(
+            focal=self.focal,
+            principal_point=(self.width - self.principal_point[0], self.principal_point[1]),
+            width=self.width,
+            height=self.height,
+            k=self.k,
+            p=(self.p[0], -self.p[1]),
+            R=np.diag([-1.0, 1.0, 1.0]) @ np.asarray(self.R),
+            t=np.diag([-1.0, 1.0, 1.0]) @ np.asarray(self.t),
+            name=self.name + " (flipped)",
+        )
+
+    def scaled(self, factor: float) -> "Camera":
+        """The camera with focal length and principal point (and image size) scaled by ``factor`` (zoom)."""
+        return Camera(
+            focal=(self.focal[0] * factor, self.focal[1] * factor),
+            principal_point=(self.principal_point[0] * factor, self.principal_point[1] * factor),
+            width=int(round(self.width * factor)),
+            height=int(round(self.height * factor)),
+            k=self.k,
+            p=self.p,
+            R=self.R,
+            t=self.t,
+            name=f"{self.name} (x{factor:g})",
+        )

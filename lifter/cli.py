@@ -1,0 +1,124 @@
+"""``poselifter`` command line: train, evaluate (more sub-commands are registered by other modules)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from ._checks import PoseLifterError
+
+
+def _add_train(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("train", help="train a lifter on Human3.6M", formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--out", type=Path, required=True, help="checkpoint path to write (.pt)")
+    p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
+    p.add_argument("--protocol", type=int, default=1, choices=(1, 2))
+    p.add_argument("--mode", default="both", choices=("baseline", "location", "scale", "both"),
+                   help="normalization-layer features (paper Table 2 ablation)")
+    p.add_argument("--depth-target", default="canonical", choices=("canonical", "absolute"))
+    p.add_argument("--scale-definition", default="paper", choices=("paper", "repo"))
+    p.add_argument("--width", type=int, default=1024)
+    p.add_argument("--blocks", type=int, default=2)
+    p.add_argument("--dropout", type=float, default=0.25)
+    p.add_argument("--epochs", type=float, default=30.0)
+    p.add_argument("--batch-size", type=int, default=512)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--weight-decay", type=float, default=1e-4)
+    p.add_argument("--train-stride", type=int, default=5)
+    p.add_argument("--max-minutes", type=float, default=None, help="wall-clock budget; the lr schedule follows it")
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--eval-every", type=int, default=500)
+    p.add_argument("--max-frames-per-sequence", type=int, default=None, help="tiny runs for tests")
+    p.add_argument("--fp32", action="store_true", help="store float32 weights (default float16)")
+    p.set_defaults(func=_run_train)
+
+
+def _run_train(args: argparse.Namespace) -> int:
+    from .data import H36M
+    from .model import ModelConfig
+    from .train import TrainConfig, save_training_outputs, train
+
+    model = ModelConfig(width=args.width, num_blocks=args.blocks, dropout=args.dropout, mode=args.mode,
+                        scale_definition=args.scale_definition, depth_target=args.depth_target)
+    cfg = TrainConfig(model=model, protocol=args.protocol, train_stride=args.train_stride, batch_size=args.batch_size,
+                      epochs=args.epochs, lr=args.lr, weight_decay=args.weight_decay, max_minutes=args.max_minutes,
+                      seed=args.seed, threads=args.threads, eval_every=args.eval_every,
+                      max_frames_per_sequence=args.max_frames_per_sequence)
+    result = train(cfg, data=H36M(args.h36m))
+    out = save_training_outputs(result, cfg, args.out, half=not args.fp32,
+                                extra_meta={"command": "poselifter " + " ".join(sys.argv[1:])})
+    print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
+    return 0
+
+
+def _add_evaluate(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("evaluate", help="evaluate lifters on Human3.6M and print the results table",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("weights", nargs="*", default=["default"],
+                   help="checkpoint paths or shipped model names; LABEL=PATH to name a row")
+    p.add_argument("--h36m", type=Path, default=None)
+    p.add_argument("--protocol", type=int, default=1, choices=(1, 2))
+    p.add_argument("--stride", type=int, default=5, help="test frame stride at 50 fps")
+    p.add_argument("--inputs", default="gt", choices=("gt",), help="2D inputs: ground-truth projection")
+    p.add_argument("--flip-test", action="store_true", help="average with the mirrored input's prediction")
+    p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
+    p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
+    p.add_argument("--max-frames-per-sequence", type=int, default=None)
+    p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
+    p.add_argument("--threads", type=int, default=2)
+    p.set_defaults(func=_run_evaluate)
+
+
+def _run_evaluate(args: argparse.Namespace) -> int:
+    import torch
+
+    from .api import Lifter
+    from .data import H36M
+    from .evaluate import evaluate_lifter, format_per_action, format_table
+
+    torch.set_num_threads(args.threads)
+    data = H36M(args.h36m)
+    samples = data.load_protocol(args.protocol, "test", stride=args.stride,
+                                 max_frames_per_sequence=args.max_frames_per_sequence)
+    print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
+          f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing)")
+    rows = []
+    for spec in args.weights:
+        label, _, ref = spec.rpartition("=")
+        lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
+        label = label or ref
+        rows.extend(evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
+                                    analytic_root=args.analytic_root))
+    print(format_table(rows))
+    if args.per_action:
+        print(format_per_action(rows))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps([r.to_dict() for r in rows], indent=1))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="poselifter", description="PoseLifter: absolute 3D pose from 2D keypoints")
+    sub = parser.add_subparsers(dest="command", required=True)
+    _add_train(sub)
+    _add_evaluate(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (PoseLifterError, FileNotFoundError) as exc:
+        print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,232 @@
+"""Human3.6M data: camera-frame 3D poses and their distorted 2D projections, by protocol.
+
+Reads the repackaged H36M folder (default ``../shared/data/h36m``, or ``$POSELIFTER_H36M``):
+``poses3d_world_17j_mm.npz``, ``cameras.json`` and optionally ``detections2d_sh_16j_px.npz``.
+
+* 3D: world mm -> camera frame with each camera's ``R, t`` (``X_cam = R X_world + t``), mm.
+* 2D: the projection **with the camera's lens distortion** (how H36M's own 2D annotations are
+  made), px, in the 1000 x 1000 (or 1000 x 1002) image.
+* Frames are taken at ``stride`` from frame 0 of each 50-fps sequence.
+
+The data are licensed for non-commercial research and are never copied into the project.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from .camera import Camera, canonical_depth_from_depth, project, world_to_camera
+
+DEFAULT_H36M_DIR = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "h36m"
+
+PROTOCOLS: dict[int, tuple[tuple[int, ...], tuple[int, ...]]] = {
+    1: ((1, 5, 6, 7, 8), (9, 11)),
+    2: ((1, 5, 6, 7, 8, 9), (11,)),
+}
+"""Protocol -> (training subjects, test subjects)."""
+
+ACTIONS: tuple[str, ...] = (
+    "Directions",
+    "Discussion",
+    "Eating",
+    "Greeting",
+    "Phoning",
+    "Posing",
+    "Purchases",
+    "Sitting",
+    "SittingDown",
+    "Smoking",
+    "Photo",
+    "Waiting",
+    "Walking",
+    "WalkDog",
+    "WalkTogether",
+)
+"""The 15 H36M actions in the column order of the paper's Table 5."""
+
+CAMERA_IDS: tuple[str, ...] = ("54138969", "55011271", "58860488", "60457274")
+MISSING_TEST_SEQUENCES: tuple[str, ...] = ("S9/Discussion 1",)
+
+
+def default_h36m_dir() -> Path:
+    """``$POSELIFTER_H36M`` if set, else ``../shared/data/h36m`` relative to the project root."""
+    env = os.environ.get("POSELIFTER_H36M")
+    return Path(env) if env else DEFAULT_H36M_DIR
+
+
+def action_of(sequence: str) -> str:
+    """``"Walking 1"`` -> ``"Walking"``; ``"S9/WalkDog"`` -> ``"WalkDog"``."""
+    name = sequence.split("/")[-1]
+    base = re.sub(r"\s+\d+$", "", name)
+    if base not in ACTIONS:
+        raise ValueError(f"unknown H36M action in sequence name {sequence!r}")
+    return base
+
+
+@dataclass(frozen=True)
+class PoseSamples:
+    """A set of N H36M samples (one camera view of one frame each), all as numpy arrays.
+
+    keypoints_2d: ``(N, 17, 2)`` float32 px, distorted projection of the 3D joints (ground truth).
+    pose_3d: ``(N, 17, 3)`` float32 mm, camera frame.
+    focal, principal_point: ``(N, 2)`` float32 px. image_size: ``(N, 2)`` int (width, height) px.
+    subject: ``(N,)`` int; action: ``(N,)`` int index into :data:`ACTIONS`;
+    camera: ``(N,)`` int index into :data:`CAMERA_IDS`; frame: ``(N,)`` int, 0-based row at 50 fps;
+    sequence: ``(N,)`` int index into ``sequence_names``.
+    """
+
+    keypoints_2d: np.ndarray
+    pose_3d: np.ndarray
+    focal: np.ndarray
+    principal_point: np.ndarray
+    image_size: np.ndarray
+    subject: np.ndarray
+    action: np.ndarray
+    camera: np.ndarray
+    frame: np.ndarray
+    sequence: np.ndarray
+    sequence_names: tuple[str, ...]
+
+    def __len__(self) -> int:
+        return int(self.keypoints_2d.shape[0])
+
+    @property
+    def root(self) -> np.ndarray:
+        """``(N, 3)`` mm: the camera-frame pelvis."""
+        return self.pose_3d[:, 0]
+
+    @property
+    def relative(self) -> np.ndarray:
+        """``(N, 17, 3)`` mm: the root-relative pose (root row zero)."""
+        return self.pose_3d - self.pose_3d[:, :1]
+
+    @property
+    def canonical_depth(self) -> np.ndarray:
+        """``(N,)`` mm at F0 = 1000 px: the canonical root depth target."""
+        return canonical_depth_from_depth(self.pose_3d[:, 0, 2], focal=self.focal).astype(np.float32)
+
+    def subset(self, index: np.ndarray) -> "PoseSamples":
+        kw = {f.name: getattr(self, f.name) for f in fields(self)}
+        for k, v in kw.items():
+            if isinstance(v, np.ndarray):
+                kw[k] = v[index]
+        return PoseSamples(**kw)
+
+    def with_keypoints(self, keypoints_2d: np.ndarray) -> "PoseSamples":
+        """A copy whose 2D inputs are replaced (e.g. by detections or noisy 2D)."""
+        kw = {f.name: getattr(self, f.name) for f in fields(self)}
+        kw["keypoints_2d"] = np.asarray(keypoints_2d, np.float32)
+        return PoseSamples(**kw)
+
+
+class H36M:
+    """Lazy access to the repackaged Human3.6M folder."""
+
+    def __init__(self, root: str | os.PathLike[str] | None = None) -> None:
+        self.root = Path(root) if root is not None else default_h36m_dir()
+        if not (self.root / "poses3d_world_17j_mm.npz").is_file():
+            raise FileNotFoundError(
+                f"Human3.6M data not found at {self.root} (expected poses3d_world_17j_mm.npz there); "
+                "pass the folder explicitly or set POSELIFTER_H36M"
+            )
+        with open(self.root / "cameras.json") as f:
+            self._cameras_raw = json.load(f)["cameras"]
+        self._poses = np.load(self.root / "poses3d_world_17j_mm.npz")
+        self.sequences: tuple[str, ...] = tuple(sorted(self._poses.files))
+
+    def camera(self, subject: int, camera_id: str) -> Camera:
+        c = self._cameras_raw[f"S{subject}/{camera_id}"]
+        return Camera(
+            focal=(float(c["f"][0]), float(c["f"][1])),
+            principal_point=(float(c["c"][0]), float(c["c"][1])),
+            width=int(c["w"]),
+            height=int(c["h"]),
+            k=tuple(float(v) for v in c["k"]),  # type: ignore[arg-type]
+            p=tuple(float(v) for v in c["p"]),  # type: ignore[arg-type]
+            R=np.asarray(c["R"], np.float64),
+            t=np.asarray(c["t"], np.float64),
+            name=f"S{subject}/{camera_id}",
+        )
+
+    def poses_world(self, sequence: str) -> np.ndarray:
+        """``(frames, 17, 3)`` float64 mm, world frame, 50 fps."""
+        return self._poses[sequence].astype(np.float64)
+
+    def sequences_of(self, subjects: Iterable[int]) -> list[str]:
+        subs = {f"S{s}" for s in subjects}
+        return [s for s in self.sequences if s.split("/")[0] in subs]
+
+    def load(
+        self,
+        subjects: Sequence[int],
+        *,
+        stride: int = 5,
+        cameras: Sequence[str] = CAMERA_IDS,
+        actions: Sequence[str] | None = None,
+        max_frames_per_sequence: int | None = None,
+    ) -> PoseSamples:
+        """All samples of the given subjects at a frame stride, for each camera.
+
+        ``max_frames_per_sequence`` keeps only the first frames (after striding) of each sequence:
+        small, fixed slices for tests.
+        """
+        if stride < 1:
+            raise ValueError(f"stride must be >= 1, got {stride}")
+        acc: dict[str, list[np.ndarray]] = {k: [] for k in ("kp", "p3", "f", "c", "wh", "s", "a", "cam", "fr", "seq")}
+        names = self.sequences_of(subjects)
+        for seq_idx, seq in enumerate(names):
+            subject = int(seq.split("/")[0][1:])
+            action = action_of(seq)
+            if actions is not None and action not in actions:
+                continue
+            frames = np.arange(0, self._poses[seq].shape[0], stride)
+            if max_frames_per_sequence is not None:
+                frames = frames[:max_frames_per_sequence]
+            world = self.poses_world(seq)[frames]
+            for cam_id in cameras:
+                cam = self.camera(subject, cam_id)
+                p3 = world_to_camera(world, cam.R, cam.t)
+                kp = project(p3, focal=cam.focal, principal_point=cam.principal_point, k=cam.k, p=cam.p)
+                n = len(frames)
+                acc["kp"].append(kp.astype(np.float32))
+                acc["p3"].append(p3.astype(np.float32))
+                acc["f"].append(np.tile(np.float32(cam.focal), (n, 1)))
+                acc["c"].append(np.tile(np.float32(cam.principal_point), (n, 1)))
+                acc["wh"].append(np.tile(np.int32([cam.width, cam.height]), (n, 1)))
+                acc["s"].append(np.full(n, subject, np.int32))
+                acc["a"].append(np.full(n, ACTIONS.index(action), np.int32))
+                acc["cam"].append(np.full(n, CAMERA_IDS.index(cam_id), np.int32))
+                acc["fr"].append(frames.astype(np.int32))
+                acc["seq"].append(np.full(n, seq_idx, np.int32))
+        if not acc["kp"]:
+            raise ValueError(f"no H36M samples for subjects={list(subjects)} actions={actions}")
+        cat = {k: np.concatenate(v) for k, v in acc.items()}
+        return PoseSamples(
+            keypoints_2d=cat["kp"],
+            pose_3d=cat["p3"],
+            focal=cat["f"],
+            principal_point=cat["c"],
+            image_size=cat["wh"],
+            subject=cat["s"],
+            action=cat["a"],
+            camera=cat["cam"],
+            frame=cat["fr"],
+            sequence=cat["seq"],
+            sequence_names=tuple(names),
+        )
+
+    def load_protocol(self, protocol: int, split: str, *, stride: int, **kw) -> PoseSamples:
+        """Samples of ``split`` ("train" or "test") of Protocol 1 or 2."""
+        if protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {protocol}; expected one of {sorted(PROTOCOLS)}")
+        if split not in ("train", "test"):
+            raise ValueError(f"split must be 'train' or 'test', got {split!r}")
+        train, test = PROTOCOLS[protocol]
+        return self.load(train if split == "train" else test, stride=stride, **kw)

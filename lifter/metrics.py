@@ -1,0 +1,98 @@
+"""Evaluation metrics (spec §8), numpy, batched over leading dimensions. All distances in mm.
+
+* MPJPE: mean over all 17 joints of the Euclidean error of root-relative poses (the root counts
+  as a joint with zero error, as in the authors' and Martinez's code).
+* PA-MPJPE: MPJPE after a similarity Procrustes alignment (rotation, uniform scale, translation).
+  Default: the least-squares optimal alignment with the reflection fix; ``variant="repo"`` uses the
+  authors' RMS-ratio scale and no reflection fix.
+* MRPE: mean Euclidean error of the absolute root; MRPE-X/Y/Z are mean absolute per-axis errors.
+* 3DPCK@150mm: fraction of joints with error < 150 mm (strict), on root-relative poses;
+  AUC: mean PCK over thresholds 0, 5, ..., 150 mm (x 100 to report as %).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+
+def _check_pair(pred: np.ndarray, gt: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    pred = np.asarray(pred, np.float64)
+    gt = np.asarray(gt, np.float64)
+    if pred.shape != gt.shape or pred.shape[-1] != 3:
+        raise ValueError(f"{name}: pred and gt must have the same shape (..., J, 3); got {pred.shape} and {gt.shape}")
+    return pred, gt
+
+
+def joint_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Per-joint Euclidean errors ``(..., J)`` of root-relative poses (both re-centred at joint 0)."""
+    pred, gt = _check_pair(pred, gt, "joint_errors")
+    return np.linalg.norm((pred - pred[..., :1, :]) - (gt - gt[..., :1, :]), axis=-1)
+
+
+def mpjpe(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Per-pose MPJPE ``(...)`` mm after aligning the roots (joint 0)."""
+    return joint_errors(pred, gt).mean(axis=-1)
+
+
+def procrustes_align(
+    pred: np.ndarray, gt: np.ndarray, *, variant: Literal["standard", "repo"] = "standard"
+) -> np.ndarray:
+    """``pred`` ``(..., J, 3)`` aligned to ``gt`` by the best similarity transform."""
+    pred, gt = _check_pair(pred, gt, "procrustes_align")
+    mu_p = pred.mean(axis=-2, keepdims=True)
+    mu_g = gt.mean(axis=-2, keepdims=True)
+    X = pred - mu_p
+    Y = gt - mu_g
+    # Rotation R (3x3) minimizing |R X_j - Y_j|: SVD of the cross-covariance sum_j Y_j X_j^T.
+    M = np.einsum("...ji,...jk->...ik", Y, X)
+    U, S, Vt = np.linalg.svd(M)
+    if variant == "standard":
+        d = np.sign(np.linalg.det(U @ Vt))
+        D = np.ones(S.shape)
+        D[..., -1] = d
+        R = U @ (D[..., :, None] * Vt)
+        scale = (S * D).sum(-1) / np.maximum((X**2).sum((-1, -2)), 1e-12)
+    elif variant == "repo":
+        R = U @ Vt
+        scale = np.sqrt((Y**2).sum((-1, -2)) / np.maximum((X**2).sum((-1, -2)), 1e-12))
+    else:
+        raise ValueError(f"unknown Procrustes variant {variant!r}")
+    return scale[..., None, None] * np.einsum("...ik,...jk->...ji", R, X) + mu_g
+
+
+def pa_mpjpe(pred: np.ndarray, gt: np.ndarray, *, variant: Literal["standard", "repo"] = "standard") -> np.ndarray:
+    """Per-pose PA-MPJPE ``(...)`` mm."""
+    aligned = procrustes_align(pred, gt, variant=variant)
+    return np.linalg.norm(aligned - np.asarray(gt, np.float64), axis=-1).mean(axis=-1)
+
+
+def root_errors(pred_root: np.ndarray, gt_root: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(norm (...), abs per-axis (..., 3))`` root errors in mm."""
+    pred_root = np.asarray(pred_root, np.float64)
+    gt_root = np.asarray(gt_root, np.float64)
+    if pred_root.shape != gt_root.shape or pred_root.shape[-1] != 3:
+        raise ValueError(f"root_errors: expected matching (..., 3) shapes, got {pred_root.shape}, {gt_root.shape}")
+    d = pred_root - gt_root
+    return np.linalg.norm(d, axis=-1), np.abs(d)
+
+
+PCK_THRESHOLD_MM: float = 150.0
+AUC_THRESHOLDS_MM: np.ndarray = np.arange(0.0, 151.0, 5.0)
+
+
+def pck(pred: np.ndarray, gt: np.ndarray, *, threshold: float = PCK_THRESHOLD_MM) -> np.ndarray:
+    """Per-pose fraction ``(...)`` of joints whose root-relative error is < ``threshold`` mm."""
+    return (joint_errors(pred, gt) < threshold).mean(axis=-1)
+
+
+def pck_curve(pred: np.ndarray, gt: np.ndarray, thresholds: np.ndarray = AUC_THRESHOLDS_MM) -> np.ndarray:
+    """PCK over all poses and joints at each threshold ``(T,)``."""
+    e = joint_errors(pred, gt).reshape(-1)
+    return (e[None, :] < np.asarray(thresholds)[:, None]).mean(axis=1)
+
+
+def auc(pred: np.ndarray, gt: np.ndarray) -> float:
+    """Area under the PCK curve over 0:5:150 mm, as a fraction (x 100 for %)."""
+    return float(pck_curve(pred, gt).mean())
