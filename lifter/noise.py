@@ -1,0 +1,529 @@
+"""The 2D detection error model (PoseLifter §4.2, spec §7): a per-joint Gaussian + uniform mixture.
+
+Model
+-----
+For each of the 17 H36M joints ``j`` the 2D detection error ``e = detection - ground truth`` (px) is
+
+    p(e) = gamma_j * N(e; mu_j, diag(sigma_j^2)) + (1 - gamma_j) / v,      v = 100 x 100 px^2 (fixed)
+
+i.e. an inlier Gaussian plus an outlier component that is uniform over a 100 x 100 px box around the
+true joint (its density ``1/v`` is used as a constant, as in the paper). It is fitted by EM
+(:func:`fit_mixture`), initialised from the single-Gaussian maximum-likelihood fit
+(:func:`fit_gaussian`, mean and standard deviation per axis) with ``gamma = 0.9``, and iterated until the
+mean log-likelihood improves by less than ``tol`` (nats per sample) or ``max_iter`` is reached. EM never
+decreases the likelihood. The single Gaussian ``N(mu, diag sigma^2)`` is kept as the baseline (Table 3,
+"single Gaussian" row). NLLs are mean negative log-likelihoods in nats per 2D error (density in px^-2).
+
+Units and the scale rule
+------------------------
+Errors are in **image pixels** of a person of the **reference 2D scale** ``sigma_ref`` (px): the median
+of the fitted samples' 2D scale ``sigma`` (:func:`lifter.normalization.pose_scale_np`, the paper's RMS
+radius of the ground-truth 2D pose). A detector works on a person-sized crop, so its error in image
+pixels grows with the person's size. Hence, when fitting, every error is first rescaled to the reference
+size, ``e * sigma_ref / sigma_i``; when sampling for a pose of scale ``sigma`` every noise component (the
+Gaussian mean and spread, and the outlier box) is multiplied by ``s = sigma / sigma_ref``. This is the
+paper's convention (noise defined in 256-px crop units, so image-px noise grows with the crop) and it is
+what keeps the noise sensible for people much larger or smaller than H36M's. Within H36M's narrow range
+it is not visible in the data: by quintile of the training GT scale (68, 83, 95, 108, 126 px) the median
+raw error is 9.2, 7.4, 7.2, 8.0, 9.3 px (U-shaped; small scales are mostly distant and crouched or
+seated poses, which are harder), so the rule is a modelling assumption, not a measured law.
+
+The shipped fit (``assets/error_model/sh_mixture.json``, ``poselifter fit-noise``): Stacked-Hourglass
+detections of S1, S5, S6, S7, S8 (every 5th frame, 4 cameras, 293,116 per joint) converted with
+:func:`lifter.keypoints.convert`, minus the distorted GT projection; reference scale 95.5 px. Mean
+gamma 0.905 (wrists 0.79, shoulders 0.97); inlier sigma 3.8-9.2 px (mean 5.8 x, 5.5 y); single-Gaussian
+sigma 6.4-21 px (mean 12.4 x, 12.8 y); mean NLL 6.77 (mixture) vs 7.78 (Gaussian) nats; 8-16 EM
+iterations to tol 1e-7. Every joint has mu_x of about +2 px (a detector/pixel-convention offset).
+
+Sampling and the ``level`` knob
+-------------------------------
+:meth:`ErrorModel.sample` draws, per joint independently, a Bernoulli "outlier" with probability
+``p_out = min((1 - gamma_j) * level, max(0.5, 1 - gamma_j))`` and then adds
+
+* inliers: ``s * level * (mu_j + sigma_j * n)``, ``n ~ N(0, I_2)``;
+* outliers: ``s * u``, ``u ~ U[-50, 50]^2`` px (the v box around the true joint), or nothing at all when
+  ``outliers=False`` (the authors' code, which never samples the uniform component).
+
+So ``level = 0`` returns the input unchanged, ``level = 1`` samples the fitted model, and ``level > 1``
+exaggerates it (wider, more biased inliers and proportionally more outliers, capped at 50 %).
+The outlier box does not grow with ``level``. :meth:`ErrorModel.torch_augmenter` is the same sampler in
+torch with the training hook's signature (:data:`lifter.train.Augment2D`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import torch
+
+from ._checks import PoseLifterError, as_points
+from .skeleton import JOINT_NAMES, NUM_JOINTS
+
+OUTLIER_BOX_PX: float = 100.0
+"""Side (px, at the reference scale) of the square outlier box centred on the true joint."""
+OUTLIER_VOLUME_PX2: float = OUTLIER_BOX_PX**2
+"""``v`` in the mixture, px^2."""
+INIT_GAMMA: float = 0.9
+MAX_OUTLIER_PROB: float = 0.5
+DEFAULT_ASSET_NAME: str = "sh_mixture.json"
+FORMAT_TAG: str = "poselifter-error-model"
+FORMAT_VERSION: int = 1
+
+STANDIN_SIGMA_PX: float = 8.0
+STANDIN_REFERENCE_SCALE_PX: float = 100.0
+"""The stand-in used when no fitted model is shipped: a zero-mean Gaussian with 8 px per axis for a
+person of 2D scale 100 px, gamma = 1 (no outliers)."""
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+# ------------------------------------------------------------------------------------------------
+# Fitting
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class MixtureFit:
+    """EM result for one joint. ``mu``, ``sigma``: ``(2,)`` px; ``nll``: nats per sample;
+    ``history``: mean log-likelihood after the initialisation and after every EM iteration."""
+
+    gamma: float
+    mu: np.ndarray
+    sigma: np.ndarray
+    nll: float
+    iterations: int
+    converged: bool
+    history: tuple[float, ...]
+
+
+def _check_errors(errors: Any) -> np.ndarray:
+    e = np.asarray(errors, np.float64)
+    if e.ndim != 2 or e.shape[1] != 2 or e.shape[0] < 2:
+        raise PoseLifterError(f"errors: expected shape (N >= 2, 2) px, got {tuple(e.shape)}")
+    if not np.all(np.isfinite(e)):
+        raise PoseLifterError("errors: contains NaN/inf values")
+    return e
+
+
+def gaussian_loglik(errors: np.ndarray, mu: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Per-sample log-density ``(N,)`` of ``N(mu, diag sigma^2)`` at errors ``(N, 2)`` px (log px^-2)."""
+    z = (errors - mu) / sigma
+    return -0.5 * (z**2).sum(-1) - np.log(sigma).sum() - _LOG_2PI
+
+
+def fit_gaussian(errors: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """Single-Gaussian ML fit of errors ``(N, 2)`` px: ``mu (2,)``, ``sigma (2,)`` (std about the mean,
+    ddof 0) and the mean NLL (nats). The authors' code uses the RMS about zero instead (spec §7)."""
+    e = _check_errors(errors)
+    mu = e.mean(0)
+    sigma = np.maximum(e.std(0), 1e-6)
+    return mu, sigma, float(-gaussian_loglik(e, mu, sigma).mean())
+
+
+def mixture_loglik(errors: np.ndarray, gamma: float, mu: np.ndarray, sigma: np.ndarray, *,
+                   v: float = OUTLIER_VOLUME_PX2) -> np.ndarray:
+    """Per-sample log-density ``(N,)`` of ``gamma N(mu, diag sigma^2) + (1 - gamma)/v``."""
+    lg = np.log(max(gamma, 1e-300)) + gaussian_loglik(errors, mu, sigma)
+    lo = np.log(max(1.0 - gamma, 1e-300)) - np.log(v)
+    return np.logaddexp(lg, lo)
+
+
+def fit_mixture(
+    errors: Any,
+    *,
+    v: float = OUTLIER_VOLUME_PX2,
+    init_gamma: float = INIT_GAMMA,
+    tol: float = 1e-7,
+    max_iter: int = 1000,
+    min_sigma: float = 1e-3,
+) -> MixtureFit:
+    """EM for ``gamma N(mu, diag sigma^2) + (1 - gamma)/v`` on errors ``(N, 2)`` px (v fixed, px^2).
+
+    Initialised from :func:`fit_gaussian` with ``gamma = init_gamma``; stops when the mean
+    log-likelihood improves by less than ``tol`` nats per sample, or after ``max_iter`` iterations.
+    """
+    e = _check_errors(errors)
+    mu, sigma, _ = fit_gaussian(e)
+    gamma = float(init_gamma)
+    ll = float(mixture_loglik(e, gamma, mu, sigma, v=v).mean())
+    history = [ll]
+    converged = False
+    it = 0
+    for it in range(1, max_iter + 1):
+        # E-step: responsibilities of the Gaussian
+        lg = np.log(gamma) + gaussian_loglik(e, mu, sigma)
+        lo = np.log(max(1.0 - gamma, 1e-300)) - np.log(v)
+        r = np.exp(lg - np.logaddexp(lg, lo))
+        # M-step
+        rs = r.sum()
+        if rs <= 1e-9:
+            raise PoseLifterError("EM collapsed: no inliers left (all errors explained by the uniform component)")
+        gamma = float(np.clip(rs / len(e), 1e-9, 1.0 - 1e-12))
+        mu = (r[:, None] * e).sum(0) / rs
+        sigma = np.maximum(np.sqrt((r[:, None] * (e - mu) ** 2).sum(0) / rs), min_sigma)
+        new_ll = float(mixture_loglik(e, gamma, mu, sigma, v=v).mean())
+        history.append(new_ll)
+        improvement = new_ll - ll
+        ll = new_ll
+        if improvement < tol:
+            converged = True
+            break
+    return MixtureFit(gamma=gamma, mu=mu, sigma=sigma, nll=-ll, iterations=it, converged=converged,
+                      history=tuple(history))
+
+
+# ------------------------------------------------------------------------------------------------
+# The model
+# ------------------------------------------------------------------------------------------------
+
+
+def _arr(x: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    a = np.array(x, np.float64)  # a private copy, made read-only below (the dataclass is frozen)
+    if a.shape != shape:
+        raise PoseLifterError(f"{name}: expected shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise PoseLifterError(f"{name}: contains NaN/inf values")
+    a.setflags(write=False)
+    return a
+
+
+def outlier_probability(gamma: np.ndarray, level: float) -> np.ndarray:
+    """``p_out = min((1 - gamma) * level, max(0.5, 1 - gamma))`` per joint (see the module docstring)."""
+    q = 1.0 - np.asarray(gamma, np.float64)
+    return np.minimum(q * level, np.maximum(MAX_OUTLIER_PROB, q))
+
+
+@dataclass(frozen=True, eq=False)
+class ErrorModel:
+    """Per-joint 2D error model, all in image px at the reference 2D scale ``reference_scale``.
+
+    gamma: ``(17,)`` inlier weight; mu, sigma: ``(17, 2)`` px, inlier Gaussian (x, y);
+    v: outlier box area px^2 (square box of side ``sqrt(v)``); reference_scale: px, 2D scale (paper
+    definition) of the fitted data; nll_mixture / nll_gaussian: ``(17,)`` mean NLL (nats) of the
+    mixture and of the single-Gaussian baseline per joint; gaussian_mu / gaussian_sigma: ``(17, 2)`` px,
+    the baseline fit; iterations: ``(17,)`` EM iterations; n_samples: errors per joint; source: text.
+    """
+
+    gamma: np.ndarray
+    mu: np.ndarray
+    sigma: np.ndarray
+    v: float = OUTLIER_VOLUME_PX2
+    reference_scale: float = STANDIN_REFERENCE_SCALE_PX
+    nll_mixture: np.ndarray | None = None
+    nll_gaussian: np.ndarray | None = None
+    gaussian_mu: np.ndarray | None = None
+    gaussian_sigma: np.ndarray | None = None
+    iterations: np.ndarray | None = None
+    n_samples: int = 0
+    source: str = ""
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        J = NUM_JOINTS
+        object.__setattr__(self, "gamma", _arr(self.gamma, (J,), "gamma"))
+        object.__setattr__(self, "mu", _arr(self.mu, (J, 2), "mu"))
+        object.__setattr__(self, "sigma", _arr(self.sigma, (J, 2), "sigma"))
+        for name, shape in (("nll_mixture", (J,)), ("nll_gaussian", (J,)), ("gaussian_mu", (J, 2)),
+                            ("gaussian_sigma", (J, 2)), ("iterations", (J,))):
+            val = getattr(self, name)
+            if val is not None:
+                object.__setattr__(self, name, _arr(val, shape, name))
+        if np.any(self.gamma <= 0) or np.any(self.gamma > 1):
+            raise PoseLifterError("gamma: every inlier weight must be in (0, 1]")
+        if np.any(self.sigma <= 0):
+            raise PoseLifterError("sigma: must be > 0 px")
+        if not (self.v > 0 and self.reference_scale > 0):
+            raise PoseLifterError("v and reference_scale must be > 0")
+
+    # -- construction ---------------------------------------------------------------------------
+    @classmethod
+    def standin(cls) -> "ErrorModel":
+        """The documented stand-in: zero-mean Gaussian, 8 px per axis at scale 100 px, no outliers."""
+        J = NUM_JOINTS
+        return cls(gamma=np.ones(J), mu=np.zeros((J, 2)), sigma=np.full((J, 2), STANDIN_SIGMA_PX),
+                   reference_scale=STANDIN_REFERENCE_SCALE_PX,
+                   source="stand-in (no fitted model shipped): N(0, 8^2 px^2) per axis at 2D scale 100 px, "
+                          "no outliers")
+
+    @classmethod
+    def default(cls) -> "ErrorModel":
+        """The shipped fit (``assets/error_model/sh_mixture.json``), or :meth:`standin` if it is absent."""
+        from .api import ASSETS_DIR
+
+        path = Path(ASSETS_DIR) / "error_model" / DEFAULT_ASSET_NAME
+        if path.is_file():
+            return cls.load(path)
+        return cls.standin()
+
+    @classmethod
+    def load(cls, path: str | Path) -> "ErrorModel":
+        return cls.from_json(Path(path).read_text())
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.to_json())
+        return path
+
+    def baseline(self) -> "ErrorModel":
+        """The single-Gaussian baseline as an :class:`ErrorModel` (gamma = 1: every joint gets
+        ``N(gaussian_mu, gaussian_sigma^2)``), for the Table 3 "single Gaussian" row."""
+        if self.gaussian_mu is None or self.gaussian_sigma is None:
+            raise PoseLifterError("this error model has no single-Gaussian baseline fit")
+        return replace(self, gamma=np.ones(NUM_JOINTS), mu=self.gaussian_mu, sigma=self.gaussian_sigma,
+                       source=self.source + " [single-Gaussian baseline]")
+
+    # -- JSON ------------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        def lst(a: np.ndarray | None) -> Any:
+            return None if a is None else np.round(np.asarray(a, np.float64), 6).tolist()
+
+        return {
+            "format": FORMAT_TAG,
+            "version": FORMAT_VERSION,
+            "units": "image px at the reference 2D scale; v in px^2; NLL in nats per 2D error",
+            "joint_names": list(JOINT_NAMES),
+            "v": self.v,
+            "reference_scale": self.reference_scale,
+            "scale_rule": "noise *= sigma_pose / reference_scale (sigma: paper RMS radius of the clean 2D pose)",
+            "level_rule": "p_out = min((1-gamma)*level, max(0.5, 1-gamma)); inlier noise = level*(mu + sigma*n); "
+                          "outlier noise = U[-sqrt(v)/2, sqrt(v)/2]^2 (or 0 with outliers=False)",
+            "mixture": {"gamma": lst(self.gamma), "mu": lst(self.mu), "sigma": lst(self.sigma),
+                        "nll": lst(self.nll_mixture),
+                        "iterations": None if self.iterations is None else [int(i) for i in self.iterations]},
+            "gaussian": {"mu": lst(self.gaussian_mu), "sigma": lst(self.gaussian_sigma), "nll": lst(self.nll_gaussian)},
+            "n_samples": int(self.n_samples),
+            "source": self.source,
+            "meta": self.meta,
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=1)
+
+    @classmethod
+    def from_json(cls, text: str) -> "ErrorModel":
+        try:
+            d = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise PoseLifterError(f"error model JSON: not valid JSON ({exc})") from None
+        if d.get("format") != FORMAT_TAG:
+            raise PoseLifterError(f"error model JSON: expected format {FORMAT_TAG!r}, got {d.get('format')!r}")
+        m, g = d["mixture"], d.get("gaussian", {})
+        return cls(gamma=m["gamma"], mu=m["mu"], sigma=m["sigma"], v=float(d["v"]),
+                   reference_scale=float(d["reference_scale"]), nll_mixture=m.get("nll"),
+                   nll_gaussian=g.get("nll"), gaussian_mu=g.get("mu"), gaussian_sigma=g.get("sigma"),
+                   iterations=m.get("iterations"), n_samples=int(d.get("n_samples", 0)),
+                   source=d.get("source", ""), meta=d.get("meta", {}))
+
+    # -- sampling --------------------------------------------------------------------------------
+    @property
+    def box_half_width(self) -> float:
+        """Half the side of the outlier box, px at the reference scale (50 px for v = 100^2)."""
+        return 0.5 * math.sqrt(self.v)
+
+    def scale_factor(self, keypoints: np.ndarray) -> np.ndarray:
+        """``s = sigma_pose / reference_scale`` ``(...)`` for clean keypoints ``(..., 17, 2)`` px."""
+        from .normalization import pose_scale_np
+
+        return pose_scale_np(keypoints) / self.reference_scale
+
+    def sample(
+        self,
+        keypoints: Any,
+        *,
+        level: float = 1.0,
+        rng: np.random.Generator | int | None = None,
+        outliers: bool = True,
+        scale: Any | None = None,
+    ) -> np.ndarray:
+        """Noisy copies of clean keypoints ``(..., 17, 2)`` px, same shape, float64.
+
+        level: 0 = clean (input returned unchanged), 1 = as fitted, > 1 exaggerated (module docstring).
+        rng: a numpy Generator (or a seed); the draws are reproducible for a given generator state.
+        outliers: sample the uniform component (True) or give outlier joints zero noise (authors' code).
+        scale: the 2D scale ``sigma`` (px) to scale the noise with, ``(...)`` or scalar; default: that of
+            ``keypoints`` (paper definition, :func:`lifter.normalization.pose_scale_np`).
+        """
+        kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
+        level = float(level)
+        if not math.isfinite(level) or level < 0:
+            raise PoseLifterError(f"level: must be a finite number >= 0, got {level}")
+        if level == 0:
+            return kp.copy()
+        if not isinstance(rng, np.random.Generator):
+            rng = np.random.default_rng(rng)
+        lead = kp.shape[:-2]
+        s = self.scale_factor(kp) if scale is None else np.broadcast_to(np.asarray(scale, np.float64), lead) / self.reference_scale
+        s = np.asarray(s)[..., None, None]
+        p_out = outlier_probability(self.gamma, level)
+        n = rng.standard_normal(kp.shape)
+        is_out = rng.random(kp.shape[:-1]) < p_out
+        u = rng.uniform(-self.box_half_width, self.box_half_width, kp.shape)
+        inlier = level * (self.mu + self.sigma * n)
+        out_noise = u if outliers else np.zeros_like(u)
+        noise = np.where(is_out[..., None], out_noise, inlier)
+        return kp + s * noise
+
+    def torch_augmenter(self, *, level: float = 1.0, outliers: bool = True) -> "TorchErrorAugmenter":
+        """The sampler as a training hook ``f(keypoints (B,17,2) px, principal_point (B,2), generator)``."""
+        return TorchErrorAugmenter(model=self, level=float(level), outliers=outliers)
+
+
+@dataclass(frozen=True, eq=False)
+class TorchErrorAugmenter:
+    """Torch version of :meth:`ErrorModel.sample` with the :data:`lifter.train.Augment2D` signature.
+
+    ``__call__(keypoints (B, 17, 2) px, principal_point (B, 2) px, generator) -> (B, 17, 2)``; the
+    principal point is not used (the noise is translation invariant). Draws come from ``generator``.
+    """
+
+    model: ErrorModel
+    level: float = 1.0
+    outliers: bool = True
+
+    def __call__(self, keypoints: torch.Tensor, principal_point: torch.Tensor,
+                 generator: torch.Generator | None = None) -> torch.Tensor:
+        if self.level == 0:
+            return keypoints
+        kp = keypoints
+        dt, dev = kp.dtype, kp.device
+        m = self.model
+        mu = torch.as_tensor(np.array(m.mu), dtype=dt, device=dev)
+        sg = torch.as_tensor(np.array(m.sigma), dtype=dt, device=dev)
+        p_out = torch.as_tensor(outlier_probability(m.gamma, self.level), dtype=dt, device=dev)
+        d = kp - kp.mean(dim=-2, keepdim=True)
+        s = torch.sqrt((d**2).sum(-1).mean(-1)) / m.reference_scale  # (B,)
+        n = torch.randn(kp.shape, generator=generator, dtype=dt, device=dev)
+        is_out = torch.rand(kp.shape[:-1], generator=generator, dtype=dt, device=dev) < p_out
+        noise = self.level * (mu + sg * n)
+        if self.outliers:
+            u = (torch.rand(kp.shape, generator=generator, dtype=dt, device=dev) - 0.5) * (2 * m.box_half_width)
+            noise = torch.where(is_out[..., None], u, noise)
+        else:
+            noise = torch.where(is_out[..., None], torch.zeros_like(noise), noise)
+        return kp + s[..., None, None] * noise
+
+
+
+# ------------------------------------------------------------------------------------------------
+# Real detections (the H36M Stacked-Hourglass file) and their errors
+# ------------------------------------------------------------------------------------------------
+
+SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
+
+
+def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh16",
+                       dst: str = "h36m17") -> tuple[np.ndarray, np.ndarray]:
+    """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
+
+    Returns ``(keypoints (N, J_dst, 2) px float64, valid (N,) bool)``: detections converted with
+    :func:`lifter.keypoints.convert` (``fmt -> dst``); ``valid`` is False (and the keypoints NaN) where
+    the file has no detection for the sample (e.g. S11 "Directions" camera 54138969, or a training frame
+    that is not a multiple of 5). The row of a frame is inferred per sequence and camera from the row
+    count: ``frame // 5`` when the file holds every 5th frame (training subjects), ``frame`` when it
+    holds every frame (S9, S11). ``data`` is the :class:`lifter.data.H36M` the samples came from.
+    """
+    from .data import CAMERA_IDS, H36M
+    from .keypoints import convert, get_format
+
+    data = data or H36M()
+    path = Path(data.root) / SH_DETECTIONS_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"Stacked-Hourglass detections not found: {path}")
+    npz = np.load(path)
+    J = get_format(dst).num_joints
+    out = np.full((len(samples), J, 2), np.nan)
+    valid = np.zeros(len(samples), bool)
+    seq, cam, frame = samples.sequence, samples.camera, samples.frame
+    starts = np.flatnonzero(np.r_[True, (seq[1:] != seq[:-1]) | (cam[1:] != cam[:-1])])
+    ends = np.r_[starts[1:], len(samples)]
+    n_frames: dict[int, int] = {}
+    for a, b in zip(starts, ends):
+        name = samples.sequence_names[seq[a]]
+        key = f"{name}/{CAMERA_IDS[cam[a]]}"
+        if key not in npz.files:
+            continue
+        det = npz[key]
+        if seq[a] not in n_frames:
+            n_frames[seq[a]] = data.poses_world(name).shape[0]
+        nf = n_frames[seq[a]]
+        if det.shape[0] == nf:
+            stride = 1
+        elif det.shape[0] == -(-nf // 5):
+            stride = 5
+        else:
+            raise PoseLifterError(f"{key}: {det.shape[0]} detection rows for {nf} frames; expected {nf} or {-(-nf // 5)}")
+        fr = frame[a:b]
+        ok = (fr % stride == 0) & (fr // stride < det.shape[0])
+        rows = np.arange(a, b)[ok]
+        out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
+        valid[rows] = True
+    return out, valid
+
+
+def detection_alignment_check(data: Any | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),
+                              camera: str | None = None) -> dict[int, float]:
+    """Verify that detection row ``i`` is frame ``5 i`` for a training subject: the median 2D error (px) of
+    the wrists, elbows, knees and ankles (fast-moving, directly mapped joints) when the detections are
+    compared with the ground truth shifted by ``offset`` frames (50 fps). The minimum should be at 0."""
+    from .data import CAMERA_IDS, H36M
+
+    data = data or H36M()
+    npz = np.load(Path(data.root) / SH_DETECTIONS_FILE)
+    cam_id = camera or CAMERA_IDS[0]
+    s = data.load([subject], stride=1, cameras=[cam_id])
+    sh_idx, h_idx = [0, 1, 4, 5, 10, 11, 14, 15], [3, 2, 5, 6, 16, 15, 12, 13]
+    errs: dict[int, list[np.ndarray]] = {o: [] for o in offsets}
+    for q in np.unique(s.sequence):
+        key = f"{s.sequence_names[q]}/{cam_id}"
+        if key not in npz.files:
+            continue
+        gt = s.keypoints_2d[s.sequence == q]
+        det = npz[key]
+        stride = 1 if det.shape[0] == gt.shape[0] else 5
+        for o in offsets:
+            idx = np.arange(det.shape[0]) * stride + o
+            ok = (idx >= 0) & (idx < gt.shape[0])
+            errs[o].append(np.linalg.norm(det[ok][:, sh_idx] - gt[idx[ok]][:, h_idx], axis=-1).ravel())
+    return {o: float(np.median(np.concatenate(v))) for o, v in errs.items()}
+
+
+def normalized_errors(detections: np.ndarray, ground_truth: np.ndarray, *,
+                      reference_scale: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """Errors ``(N, 17, 2)`` px rescaled to the reference scale, the per-sample GT scale ``(N,)`` px and the
+    reference scale (median GT scale unless given): ``e = (det - gt) * reference_scale / sigma_gt``."""
+    from .normalization import pose_scale_np
+
+    det = as_points(detections, name="detections", dim=2)
+    gt = as_points(ground_truth, name="ground_truth", dim=2)
+    scale = pose_scale_np(gt)
+    ref = float(np.median(scale)) if reference_scale is None else float(reference_scale)
+    return (det - gt) * (ref / scale)[:, None, None], scale, ref
+
+
+def fit_error_model(detections: np.ndarray, ground_truth: np.ndarray, *, source: str = "",
+                    tol: float = 1e-7, max_iter: int = 1000, progress: bool = True,
+                    meta: dict[str, Any] | None = None) -> ErrorModel:
+    """Fit the mixture and the single-Gaussian baseline per joint to detections vs ground truth, both
+    ``(N, 17, 2)`` px in the H36M joint order, with the scale rule of the module docstring."""
+    from tqdm.auto import tqdm
+
+    e, _, ref = normalized_errors(detections, ground_truth)
+    J = NUM_JOINTS
+    gamma, iters = np.zeros(J), np.zeros(J, int)
+    mu, sigma, gmu, gsig = (np.zeros((J, 2)) for _ in range(4))
+    nll_m, nll_g = np.zeros(J), np.zeros(J)
+    for j in tqdm(range(J), desc="EM per joint", unit="joint", disable=not progress):
+        gmu[j], gsig[j], nll_g[j] = fit_gaussian(e[:, j])
+        f = fit_mixture(e[:, j], tol=tol, max_iter=max_iter)
+        gamma[j], mu[j], sigma[j], nll_m[j], iters[j] = f.gamma, f.mu, f.sigma, f.nll, f.iterations
+    m = dict(meta or {})
+    m.update({"em": {"init": "single-Gaussian ML fit, gamma = 0.9", "tol_nats_per_sample": tol, "max_iter": max_iter}})
+    return ErrorModel(gamma=gamma, mu=mu, sigma=sigma, v=OUTLIER_VOLUME_PX2, reference_scale=ref,
+                      nll_mixture=nll_m, nll_gaussian=nll_g, gaussian_mu=gmu, gaussian_sigma=gsig,
+                      iterations=iters, n_samples=int(e.shape[0]), source=source, meta=m)
