@@ -1,0 +1,175 @@
+"""Samples the app can show: the embedded demo set and (optionally) Human3.6M.
+
+A :class:`Sample` bundles one camera view of one pose: 2D joints (px), optional 3D ground truth
+(mm, OpenCV camera frame), optional detected 2D (px), the calibrated :class:`lifter.Camera` (its
+``R, t`` map the world, z up, mm, to the camera) and optionally the photo. Human3.6M is read at run
+time from its folder and never copied.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lifter import Camera, PoseLifterError
+from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
+
+from .demo_assets import DEMO_DIR
+
+SH16_TO_H36M17: tuple[int, ...] = (6, 2, 1, 0, 3, 4, 5, 7, 8, -1, 9, 13, 14, 15, 12, 11, 10)
+"""Index into the 16 Stacked-Hourglass joints for each of our 17 joints; -1 = neck_nose, which SH lacks
+(approximated as the midpoint of thorax and head top)."""
+
+
+def sh16_to_h36m17(det: np.ndarray) -> np.ndarray:
+    """Stacked-Hourglass ``(..., 16, 2)`` px -> H36M 17-joint order ``(..., 17, 2)`` px."""
+    det = np.asarray(det, np.float64)
+    idx = np.array([i if i >= 0 else 0 for i in SH16_TO_H36M17])
+    out = det[..., idx, :].copy()
+    out[..., 9, :] = 0.5 * (out[..., 8, :] + out[..., 10, :])
+    return out
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One view of one pose.
+
+    keypoints_2d: ``(17, 2)`` px, ground-truth 2D (exact projection; with lens distortion for H36M).
+    pose_3d: ``(17, 3)`` mm camera frame (OpenCV), or None when unknown.
+    detected_2d: ``(17, 2)`` px from a 2D detector, or None.
+    camera: intrinsics (px), extrinsics (world mm, z up -> camera), image size (px).
+    image: ``(H, W, 3)`` uint8 RGB photo / render, or None (then a plain canvas is drawn).
+    """
+
+    key: str
+    label: str
+    keypoints_2d: np.ndarray
+    pose_3d: np.ndarray | None
+    detected_2d: np.ndarray | None
+    camera: Camera
+    image: np.ndarray | None
+
+
+def _read_rgb(path: Path) -> np.ndarray | None:
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    return None if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+
+
+class DemoCatalog:
+    """The embedded demo samples made by ``scripts/make_demo_assets.py`` (no H36M needed)."""
+
+    def __init__(self, root: Path = DEMO_DIR) -> None:
+        self.root = Path(root)
+        path = self.root / "samples.npz"
+        if not path.is_file():
+            raise FileNotFoundError(f"demo samples not found at {path}; run scripts/make_demo_assets.py")
+        d = np.load(path)
+        self._d = {k: d[k] for k in d.files}
+        self.names: tuple[str, ...] = tuple(str(n) for n in self._d["names"])
+
+    def get(self, name: str) -> Sample:
+        """The demo sample ``name`` (one of :attr:`names`); raises :class:`PoseLifterError` otherwise."""
+        if name not in self.names:
+            raise PoseLifterError(f"unknown demo sample {name!r}; available: {list(self.names)}")
+        i = self.names.index(name)
+        d = self._d
+        w, h = (int(v) for v in d["image_size"][i])
+        cam = Camera(focal=tuple(float(v) for v in d["focal"][i]),  # type: ignore[arg-type]
+                     principal_point=tuple(float(v) for v in d["principal_point"][i]),  # type: ignore[arg-type]
+                     width=w, height=h, R=d["R"][i].astype(np.float64), t=d["t"][i].astype(np.float64),
+                     name=f"demo/{name}")
+        return Sample(key=f"demo/{name}", label=f"demo: {name}", keypoints_2d=d["keypoints_2d"][i].astype(np.float64),
+                      pose_3d=d["pose_3d"][i].astype(np.float64), detected_2d=None, camera=cam,
+                      image=_read_rgb(self.root / f"{name}.jpg"))
+
+
+class H36MCatalog:
+    """Human3.6M browsing by subject / sequence / camera / frame, read lazily from ``root``.
+
+    The 84 frames in ``root/demo`` show their photo; other frames show a plain canvas.
+    """
+
+    def __init__(self, root: Path) -> None:
+        self.root = Path(root)
+        self.data = H36M(self.root)
+        self._lock = threading.Lock()
+        self._detections = None
+        det = self.root / "detections2d_sh_16j_px.npz"
+        if det.is_file():
+            self._detections = np.load(det)
+        self._photos: dict[tuple[int, str, str, int], str] = {}
+        ann = self.root / "demo" / "annotations.npz"
+        if ann.is_file():
+            a = np.load(ann)
+            for img, s, act, cam, fr in zip(a["image"], a["subject"], a["action"], a["camera"], a["frame"]):
+                self._photos[(int(str(s)[1:]), str(act), str(cam), int(fr))] = str(img)
+        self.subjects: tuple[int, ...] = tuple(sorted({int(s.split("/")[0][1:]) for s in self.data.sequences}))
+        self.camera_ids: tuple[str, ...] = CAMERA_IDS
+
+    def sequences(self, subject: int) -> list[str]:
+        """Sequence names (``"Walking 1"``) of a subject."""
+        return [s.split("/", 1)[1] for s in self.data.sequences_of([subject])]
+
+    def num_frames(self, subject: int, sequence: str) -> int:
+        key = f"S{subject}/{sequence}"
+        if key not in self.data.sequences:
+            raise PoseLifterError(f"unknown H36M sequence {key!r}")
+        with self._lock:
+            return int(self.data._poses[key].shape[0])
+
+    def photo_frames(self) -> list[tuple[int, str, str, int]]:
+        """``(subject, sequence, camera, frame)`` of the frames that have a real photo."""
+        return sorted(self._photos)
+
+    def get(self, subject: int, sequence: str, camera_id: str, frame: int) -> Sample:
+        """One H36M view; raises :class:`PoseLifterError` for an unknown subject/sequence/camera/frame."""
+        key = f"S{subject}/{sequence}"
+        if key not in self.data.sequences:
+            raise PoseLifterError(f"unknown H36M sequence {key!r}")
+        if camera_id not in CAMERA_IDS:
+            raise PoseLifterError(f"unknown H36M camera {camera_id!r}; expected one of {list(CAMERA_IDS)}")
+        n = self.num_frames(subject, sequence)
+        if not 0 <= int(frame) < n:
+            raise PoseLifterError(f"frame {frame} out of range [0, {n}) for {key}")
+        frame = int(frame)
+        with self._lock:
+            world = self.data._poses[key][frame].astype(np.float64)
+            cam = self.data.camera(subject, camera_id)
+            det = None
+            if self._detections is not None:
+                dkey = f"{key}/{camera_id}"
+                if dkey in self._detections.files:
+                    rows = self._detections[dkey]
+                    # Training subjects have every 5th frame; S9/S11 every frame.
+                    step = 1 if rows.shape[0] * 2 > n else 5
+                    if frame % step == 0 and frame // step < rows.shape[0]:
+                        det = sh16_to_h36m17(rows[frame // step])
+        p3 = cam.world_to_camera(world)
+        kp = cam.project(p3)
+        photo = self._photos.get((subject, sequence, camera_id, frame))
+        image = _read_rgb(self.root / "demo" / photo) if photo else None
+        return Sample(key=f"h36m/{key}/{camera_id}/{frame}", label=f"S{subject} {sequence} cam {camera_id} frame {frame}",
+                      keypoints_2d=kp, pose_3d=p3, detected_2d=det, camera=cam, image=image)
+
+
+def default_h36m_root() -> Path | None:
+    """``../shared/data/h36m`` (or ``$POSELIFTER_H36M``) when it exists, else None."""
+    from lifter.data import default_h36m_dir
+
+    root = default_h36m_dir()
+    return root if (root / "poses3d_world_17j_mm.npz").is_file() else None
+
+
+@lru_cache(maxsize=4)
+def open_h36m(root: str) -> H36MCatalog:
+    """A cached :class:`H36MCatalog` (shared by all browser tabs; read-only)."""
+    return H36MCatalog(Path(root))
+
+
+__all__ = ["ACTIONS", "DEFAULT_H36M_DIR", "DemoCatalog", "H36MCatalog", "Sample", "default_h36m_root", "open_h36m",
+           "sh16_to_h36m17"]

@@ -1,0 +1,62 @@
+"""Helpers for tests and benchmarks: a viser server on a free local port and fake browser tabs.
+
+A :class:`FakeTab` is a bare websocket client that speaks enough of viser's protocol (it sends one
+``ViewerCameraMessage``, as the browser does on load) for the server to create a real
+:class:`viser.ClientHandle`, so :class:`app.viewer.PoseLifterApp` builds a per-tab session for it.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgspec
+import viser
+from viser import _messages
+from websockets.sync.client import ClientConnection, connect
+
+
+def local_server() -> viser.ViserServer:
+    """A quiet viser server on 127.0.0.1 and an OS-assigned free port."""
+    return viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+
+
+@dataclass
+class FakeTab:
+    """A websocket "tab" connected to ``server``; close it to disconnect."""
+
+    server: viser.ViserServer
+    conn: ClientConnection = field(init=False)
+    received: int = 0
+
+    def __post_init__(self) -> None:
+        url = f"ws://127.0.0.1:{self.server.get_port()}"
+        self.conn = connect(url, subprotocols=[f"viser-v{viser.__version__}"], max_size=None)  # type: ignore[list-item]
+        msg = _messages.ViewerCameraMessage(
+            wxyz=(1.0, 0.0, 0.0, 0.0), position=(3.0, 3.0, 3.0), fov=1.2, near=0.01, far=1000.0,
+            image_height=600, image_width=800, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 0.0, 1.0))
+        self.conn.send(msgspec.msgpack.encode(msg.as_serializable_dict()))
+        threading.Thread(target=self._drain, daemon=True).start()
+
+    def _drain(self) -> None:
+        try:
+            while True:
+                self.conn.recv()
+                self.received += 1
+        except Exception:  # noqa: BLE001 - closed
+            pass
+
+    def close(self) -> None:
+        self.conn.close()
+
+
+def wait_for(predicate: Any, *, timeout: float = 20.0, interval: float = 0.05) -> bool:
+    """Poll ``predicate()`` until true or ``timeout`` s; returns its last truth value."""
+    end = time.time() + timeout
+    while time.time() < end:
+        if predicate():
+            return True
+        time.sleep(interval)
+    return bool(predicate())

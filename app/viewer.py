@@ -1,0 +1,766 @@
+"""The viser app: one :class:`SessionView` (GUI + 3D scene + state) per browser tab.
+
+Scene layout (viser world: **metres**, z up; Human3.6M's world is z up with the floor at z = 0, and the
+demo samples are authored the same way):
+
+* ``/floor``: the floor grid (z = 0);
+* ``/cam``: the sample's camera, posed by its extrinsics (``X_world = R^T (X_cam - t)``). Everything
+  below it is in the **OpenCV camera frame** (+x right, +y down, +z forward), metres:
+  the frustum and the image plane at depth :data:`IMAGE_PLANE_DEPTH_M` (its field of view follows the
+  focal slider), the draggable 2D joints on that plane, the lifted skeleton at its absolute position,
+  the ground truth, the analytic-root skeleton, the uncertainty cloud and the root's viewing ray.
+
+Every callback goes through :meth:`SessionView._guard`: invalid input shows a message in the status
+panel (and a notification in a real browser) and never propagates into viser's threads.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import threading
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import viser
+import viser.transforms as vtf
+
+from lifter import PoseLifterError
+from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
+
+from .core import (CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX, Frame, LifterPool,
+                   SessionState, clamp_focal, clamp_joint, clamp_noise, compute_frame, readout_markdown)
+from .drawing import COLORS, overlay, scaled_base
+from .noise import ErrorModelLike, default_error_model, model_name
+from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
+
+log = logging.getLogger("poselifter.app")
+
+IMAGE_PLANE_DEPTH_M: float = 1.5
+"""Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
+SIDE_RGB: dict[str, tuple[int, int, int]] = {"left": (40, 110, 255), "right": (255, 60, 60), "center": (235, 235, 235)}
+"""Lifted skeleton: subject's left blue, right red, centre white."""
+GT_RGB = COLORS["gt"]
+ANALYTIC_RGB = (255, 170, 0)
+CLOUD_RGB = (170, 80, 230)
+RAY_RGB = (250, 210, 0)
+FRUSTUM_RGB = (30, 30, 30)
+SOURCES = ("demo", "h36m")
+
+
+def _edges_points(P: np.ndarray) -> np.ndarray:
+    """``(16, 2, 3)`` bone segments of a ``(17, 3)`` pose."""
+    return np.stack([np.stack([P[a], P[b]]) for a, b in EDGES])
+
+
+def _side_colors() -> np.ndarray:
+    c = np.array([SIDE_RGB[edge_side(e)] for e in EDGES], np.uint8)
+    return np.repeat(c[:, None, :], 2, axis=1)
+
+
+def control(func: Callable[..., Any]) -> Callable[..., bool]:
+    """Decorator for :class:`SessionView` controls: returns True on success; on invalid input shows the
+    message in the status panel and returns False (never raises into viser's threads)."""
+
+    @functools.wraps(func)
+    def wrapper(self: "SessionView", *args: Any, **kwargs: Any) -> bool:
+        n = self._message_count
+        try:
+            func(self, *args, **kwargs)
+        except PoseLifterError as exc:
+            self.show_message(str(exc), error=True)
+            return False
+        except Exception as exc:  # noqa: BLE001 - never let a control kill the session
+            log.error("control %s failed:\n%s", func.__name__, traceback.format_exc())
+            self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
+            return False
+        if self._message_count == n and getattr(self, "status_md", None) is not None and self.status_md.content:
+            self.status_md.content = ""
+        return True
+
+    return wrapper
+
+
+@dataclass
+class Timing:
+    """Server-side timing of the last update (ms)."""
+
+    compute_ms: float = 0.0
+    scene_ms: float = 0.0
+    total_ms: float = 0.0
+
+
+class SessionView:
+    """GUI, scene and state of one browser tab (or of the server itself, for headless tests).
+
+    ``target`` is a :class:`viser.ClientHandle` (per-tab, the normal case) or a :class:`viser.ViserServer`
+    (shared; used by tests and benchmarks that run without a browser). Public methods are the controls
+    in code form; the GUI callbacks call them.
+    """
+
+    def __init__(self, app: "PoseLifterApp", target: viser.ClientHandle | viser.ViserServer) -> None:
+        self.app = app
+        self.target = target
+        self.gui = target.gui
+        self.scene = target.scene
+        self.lock = threading.RLock()
+        self.messages: list[str] = []
+        self._message_count = 0
+        self.frame: Frame | None = None
+        self.timing = Timing()
+        self.update_count = 0
+        self._pending: dict[int, np.ndarray] = {}
+        self._pending_lock = threading.Lock()
+        self._drag_lock = threading.Lock()
+        self._tls = threading.local()
+        self._base_key: str | None = None
+        self._base: tuple[np.ndarray, float] | None = None
+        sample = app.demo.get(app.demo.names[0])
+        self.state = SessionState(sample=sample, model=app.default_model)
+        self._build_gui()
+        self._build_scene()
+        with self.lock:
+            self._set_sample(sample)
+        self.set_initial_view()
+
+    @property
+    def _suspend(self) -> bool:
+        """True while this thread sets GUI values programmatically (their callbacks are then ignored)."""
+        return bool(getattr(self._tls, "suspend", False))
+
+    @_suspend.setter
+    def _suspend(self, value: bool) -> None:
+        self._tls.suspend = value
+
+    # ------------------------------------------------------------------------------------------
+    # Error handling
+    # ------------------------------------------------------------------------------------------
+    def _guard(self, func: Callable[..., Any]) -> Callable[..., Any]:
+        """Wrap a callback: errors become a status message; the server keeps running."""
+
+        @functools.wraps(func)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            try:
+                return func(*args, **kwargs)
+            except PoseLifterError as exc:
+                self.show_message(str(exc), error=True)
+            except Exception as exc:  # noqa: BLE001 - never let a callback kill the session
+                log.error("callback %s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
+                self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
+            return None
+
+        return wrapper
+
+    def show_message(self, text: str, *, error: bool = False) -> None:
+        """Show ``text`` in the status panel (and as a browser notification for a real tab)."""
+        self.messages.append(text)
+        self.messages = self.messages[-20:]
+        self._message_count += 1
+        try:
+            self.status_md.content = ("⚠️ " if error else "ℹ️ ") + text
+            if isinstance(self.target, viser.ClientHandle):
+                self.target.add_notification(title="poselifter" if not error else "Input problem", body=text,
+                                             auto_close_seconds=6.0, color="red" if error else "blue")
+        except Exception:  # noqa: BLE001
+            log.exception("could not show message %r", text)
+
+    def clear_message(self) -> None:
+        self.status_md.content = ""
+
+    # ------------------------------------------------------------------------------------------
+    # GUI
+    # ------------------------------------------------------------------------------------------
+    def _build_gui(self) -> None:
+        gui = self.gui
+        app = self.app
+        self.image_gui = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
+        self.legend_md = gui.add_markdown(
+            "<small>2D: <b style='color:#28c83c'>ground truth</b> · <b style='color:#f09600'>detected</b> · "
+            "<b style='color:#a03cdc'>noisy (lifted)</b> · <b style='color:#e61e1e'>current / dragged</b>; "
+            "rings <b style='color:#1e6eff'>left</b> / <b style='color:#ff3ca0'>right</b>. "
+            "3D: lifted (left blue, right red), <b style='color:#28c83c'>ground truth</b>, "
+            "<b style='color:#ffaa00'>analytic root</b>, <b style='color:#aa50e6'>noise cloud</b>, "
+            "<b style='color:#c8a800'>root ray</b>.</small>")
+        self.readout_md = gui.add_markdown("")
+        self.status_md = gui.add_markdown("")
+
+        with gui.add_folder("Sample"):
+            sources = ["demo"] + (["h36m"] if app.h36m is not None else [])
+            self.source_dd = gui.add_dropdown("source", sources, initial_value="demo",
+                                              hint="embedded demo renders, or Human3.6M (--h36m)")
+            self.demo_dd = gui.add_dropdown("demo sample", list(app.demo.names), initial_value=app.demo.names[0])
+            self.input_dd = gui.add_dropdown("2D input", ["gt", "detected"], initial_value="gt",
+                                             hint="ground-truth 2D, or the Stacked-Hourglass detection (H36M only)")
+            if app.h36m is not None:
+                h = app.h36m
+                subj = [f"S{s}" for s in h.subjects]
+                self.subject_dd = gui.add_dropdown("subject", subj, initial_value=subj[-2] if len(subj) > 1 else subj[0])
+                seqs = h.sequences(int(self.subject_dd.value[1:]))
+                self.sequence_dd = gui.add_dropdown("sequence", seqs, initial_value=seqs[0])
+                self.camera_dd = gui.add_dropdown("camera", list(h.camera_ids), initial_value=h.camera_ids[0])
+                n = h.num_frames(int(self.subject_dd.value[1:]), self.sequence_dd.value)
+                self.frame_slider = gui.add_slider("frame", 0, max(n - 1, 1), 1, 0)
+                photos = ["(none)"] + [f"S{s} {q} {c} {f}" for s, q, c, f in h.photo_frames()]
+                self.photo_dd = gui.add_dropdown("frame with photo", photos, initial_value="(none)")
+            else:
+                self.subject_dd = self.sequence_dd = self.camera_dd = self.frame_slider = self.photo_dd = None  # type: ignore[assignment]
+
+        with gui.add_folder("Lifting"):
+            models = app.pool.names or ["(none)"]
+            self.model_dd = gui.add_dropdown("model", models, initial_value=app.default_model or models[0],
+                                             hint="shipped weights (assets/models.json)")
+            self.focal_slider = gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
+                                               hint="alpha = sqrt(fx fy); the root slides along its ray, Z ∝ f")
+            self.focal_reset = gui.add_button("reset focal to camera")
+            self.analytic_cb = gui.add_checkbox("analytic root", False,
+                                                hint="also show the weak-perspective analytic root (baseline)")
+            self.gt_cb = gui.add_checkbox("show ground truth", True)
+        with gui.add_folder("Noise"):
+            self.noise_slider = gui.add_slider("mixture-noise level", 0.0, NOISE_MAX, 0.05, 0.0,
+                                               hint="0 clean · 1 as fitted · 3 exaggerated")
+            self.cloud_num = gui.add_slider("cloud samples", 0, 256, 1, CLOUD_SAMPLES)
+            self.seed_num = gui.add_number("seed", DEFAULT_SEED, step=1)
+            self.resample_btn = gui.add_button("resample noise")
+            gui.add_markdown(f"<small>error model: {model_name(app.error_model)}</small>")
+        with gui.add_folder("Joints"):
+            self.joint_dd = gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0],
+                                             hint="drag the red spheres on the image plane; or nudge here")
+            self.joint_uv = gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0)
+            self.reset_btn = gui.add_button("reset dragged joints")
+            self.view_btn = gui.add_button("reset 3D view")
+
+        g = self._guard
+        self.source_dd.on_update(g(lambda _: self.set_source(self.source_dd.value)))
+        self.demo_dd.on_update(g(lambda _: self.select_demo(self.demo_dd.value)))
+        self.input_dd.on_update(g(lambda _: self.set_input_kind(self.input_dd.value)))
+        if self.subject_dd is not None:
+            self.subject_dd.on_update(g(lambda _: self._on_subject()))
+            self.sequence_dd.on_update(g(lambda _: self._on_h36m_change(reset_frame=True)))
+            self.camera_dd.on_update(g(lambda _: self._on_h36m_change()))
+            self.frame_slider.on_update(g(lambda _: self._on_h36m_change()))
+            self.photo_dd.on_update(g(lambda _: self._on_photo()))
+        self.model_dd.on_update(g(lambda _: self.set_model(self.model_dd.value)))
+        self.focal_slider.on_update(g(lambda _: self.set_focal(self.focal_slider.value)))
+        self.focal_reset.on_click(g(lambda _: self.set_focal(self.state.sample.camera.alpha)))
+        self.analytic_cb.on_update(g(lambda _: self.set_analytic(self.analytic_cb.value)))
+        self.gt_cb.on_update(g(lambda _: self._redraw()))
+        self.noise_slider.on_update(g(lambda _: self.set_noise(self.noise_slider.value)))
+        self.cloud_num.on_update(g(lambda _: self.set_cloud_samples(self.cloud_num.value)))
+        self.seed_num.on_update(g(lambda _: self.set_seed(self.seed_num.value)))
+        self.resample_btn.on_click(g(lambda _: self.resample()))
+        self.joint_dd.on_update(g(lambda _: self._on_joint_selected()))
+        self.joint_uv.on_update(g(lambda _: self._on_joint_uv()))
+        self.reset_btn.on_click(g(lambda _: self.reset_joints()))
+        self.view_btn.on_click(g(lambda _: self.set_initial_view()))
+
+    def _set_gui(self, handle: Any, value: Any) -> None:
+        """Set a GUI value without triggering our own callbacks."""
+        if handle is None:
+            return
+        self._suspend = True
+        try:
+            handle.value = value
+        finally:
+            self._suspend = False
+
+    # ------------------------------------------------------------------------------------------
+    # Scene
+    # ------------------------------------------------------------------------------------------
+    def _build_scene(self) -> None:
+        sc = self.scene
+        self.floor = sc.add_grid("/floor", width=12.0, height=12.0, plane="xy", cell_size=0.5, section_size=1.0)
+        self.cam_frame = sc.add_frame("/cam", show_axes=True, axes_length=0.15, axes_radius=0.006)
+        z = np.zeros((1, 2, 3))
+        self.frustum = sc.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=0.006)
+        self.image_node = sc.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg")
+        self.bones2d = sc.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), COLORS["current"], thickness=0.004)
+        self.joint_nodes = []
+        for j in range(NUM_JOINTS):
+            h = sc.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=0.022, subdivisions=2,
+                                 color=SIDE_RGB[joint_side(j)] if joint_side(j) != "center" else COLORS["current"])
+            h.on_drag(self._guard(functools.partial(self.on_joint_drag, j)))
+            self.joint_nodes.append(h)
+        self.lifted_lines = sc.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _side_colors(), thickness=0.025)
+        self.lifted_joints = sc.add_point_cloud("/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)), (250, 250, 250),
+                                                point_size=0.05, point_shape="circle")
+        self.gt_lines = sc.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.015)
+        self.analytic_lines = sc.add_line_segments("/cam/analytic", np.zeros((16, 2, 3)), ANALYTIC_RGB, thickness=0.015,
+                                                   visible=False)
+        self.cloud_node = sc.add_point_cloud("/cam/cloud", np.zeros((1, 3)), CLOUD_RGB, point_size=0.025,
+                                             point_shape="circle", visible=False)
+        self.ray = sc.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=0.01)
+        self.root_marker = sc.add_icosphere("/cam/root", radius=0.05, color=RAY_RGB)
+        self.root_label = sc.add_label("/cam/root/label", "root")
+
+    def _image_plane(self, uv: np.ndarray) -> np.ndarray:
+        """Pixels ``(..., 2)`` -> points on the image plane ``(..., 3)`` m, camera frame, current focal."""
+        f = np.asarray(self.state.focal)
+        c = np.asarray(self.state.sample.camera.principal_point)
+        d = IMAGE_PLANE_DEPTH_M
+        xy = (np.asarray(uv, np.float64) - c) / f * d
+        return np.concatenate([xy, np.full(xy.shape[:-1] + (1,), d)], axis=-1)
+
+    def _update_camera_geometry(self) -> None:
+        """Frustum and image plane for the current focal length (the field of view follows the slider)."""
+        W, H = self.state.image_size
+        corners = self._image_plane(np.array([[0, 0], [W, 0], [W, H], [0, H]], np.float64))
+        segs = [np.stack([np.zeros(3), c]) for c in corners]
+        segs += [np.stack([corners[i], corners[(i + 1) % 4]]) for i in range(4)]
+        self.frustum.points = np.stack(segs)
+        center = self._image_plane(np.array([W / 2.0, H / 2.0]))
+        f = self.state.focal
+        self.image_node.position = tuple(center + np.array([0, 0, 0.002]))
+        self.image_node.render_width = W / f[0] * IMAGE_PLANE_DEPTH_M
+        self.image_node.render_height = H / f[1] * IMAGE_PLANE_DEPTH_M
+
+    @control
+    def set_initial_view(self) -> None:
+        """A good initial viewpoint: behind, above and to the side of the camera, looking at the person."""
+        cam = self.state.sample.camera
+        R, t = np.asarray(cam.R), np.asarray(cam.t)
+        C = -R.T @ t / 1000.0
+        target_cam = (self.state.sample.pose_3d[0] if self.state.sample.pose_3d is not None
+                      else np.array([0, 0, 4000.0])) / 1000.0
+        target = R.T @ target_cam + C
+        fwd = target - C
+        side = np.cross(fwd, [0, 0, 1.0])
+        side /= max(np.linalg.norm(side), 1e-9)
+        eye = C - 0.2 * fwd + 0.35 * np.linalg.norm(fwd) * side + np.array([0, 0, 0.9])
+        mid = 0.4 * C + 0.6 * target
+        if isinstance(self.target, viser.ClientHandle):
+            cam_h = self.target.camera
+            cam_h.up_direction = (0.0, 0.0, 1.0)
+            cam_h.position = tuple(eye)
+            cam_h.look_at = tuple(mid)
+        else:
+            ic = self.target.initial_camera
+            ic.position = tuple(eye)
+            ic.look_at = tuple(mid)
+            ic.up = (0.0, 0.0, 1.0)
+
+    # ------------------------------------------------------------------------------------------
+    # Controls (public: tests drive these, the GUI callbacks call them)
+    # ------------------------------------------------------------------------------------------
+    @control
+    def set_source(self, source: str) -> None:
+        """``"demo"`` or ``"h36m"``."""
+        if self._suspend:
+            return
+        if source not in SOURCES or (source == "h36m" and self.app.h36m is None):
+            raise PoseLifterError(f"unknown sample source {source!r}" + ("" if self.app.h36m else " (no Human3.6M folder)"))
+        if source == "demo":
+            self.select_demo(self.demo_dd.value)
+        else:
+            self._on_h36m_change()
+
+    @control
+    def select_demo(self, name: str) -> None:
+        """Show the embedded demo sample ``name``."""
+        if self._suspend:
+            return
+        sample = self.app.demo.get(name)
+        with self.lock:
+            self._set_gui(self.source_dd, "demo")
+            self._set_sample(sample)
+
+    @control
+    def select_h36m(self, *, subject: int, sequence: str, camera: str, frame: int) -> None:
+        """Show a Human3.6M view (``camera`` is the camera id, ``frame`` the 0-based 50-fps row)."""
+        if self.app.h36m is None:
+            raise PoseLifterError("no Human3.6M folder was given (--h36m)")
+        sample = self.app.h36m.get(subject, sequence, camera, frame)
+        with self.lock:
+            self._set_gui(self.source_dd, "h36m")
+            self._set_gui(self.subject_dd, f"S{subject}")
+            self._set_gui(self.sequence_dd, sequence)
+            self._set_gui(self.camera_dd, camera)
+            if self.frame_slider is not None:
+                self.frame_slider.max = max(self.app.h36m.num_frames(subject, sequence) - 1, 1)
+            self._set_gui(self.frame_slider, int(frame))
+            self._set_sample(sample)
+
+    def _on_subject(self) -> None:
+        if self._suspend:
+            return
+        subject = int(self.subject_dd.value[1:])
+        seqs = self.app.h36m.sequences(subject)
+        self._suspend = True
+        try:
+            self.sequence_dd.options = seqs
+            self.sequence_dd.value = seqs[0]
+        finally:
+            self._suspend = False
+        self._on_h36m_change(reset_frame=True)
+
+    def _on_h36m_change(self, *, reset_frame: bool = False) -> None:
+        if self._suspend:
+            return
+        frame = 0 if reset_frame else int(self.frame_slider.value)
+        self.select_h36m(subject=int(self.subject_dd.value[1:]), sequence=self.sequence_dd.value,
+                         camera=self.camera_dd.value, frame=frame)
+
+    def _on_photo(self) -> None:
+        if self._suspend or self.photo_dd.value == "(none)":
+            return
+        s, rest = self.photo_dd.value.split(" ", 1)
+        seq, cam, fr = rest.rsplit(" ", 2)
+        self.select_h36m(subject=int(s[1:]), sequence=seq, camera=cam, frame=int(fr))
+
+    def _set_sample(self, sample: Sample) -> None:
+        st = self.state
+        kind = st.input_kind if (st.input_kind == "gt" or sample.detected_2d is not None) else "gt"
+        if kind != st.input_kind:
+            self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D")
+        self.state = SessionState(sample=sample, model=st.model, input_kind=kind, noise_level=st.noise_level,
+                                  seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic)
+        self._set_gui(self.input_dd, kind)
+        self._set_gui(self.focal_slider, float(np.clip(round(sample.camera.alpha), FOCAL_MIN_PX, FOCAL_MAX_PX)))
+        R = np.asarray(sample.camera.R)
+        self.cam_frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
+        self.cam_frame.position = tuple(-R.T @ np.asarray(sample.camera.t) / 1000.0)
+        img = sample.image
+        from .drawing import canvas
+
+        self.image_node.image = img if img is not None else canvas(sample.camera.width, sample.camera.height)
+        self._update_camera_geometry()
+        self._redraw()
+
+    @control
+    def set_input_kind(self, kind: str) -> None:
+        """2D input: ``"gt"`` (ground truth) or ``"detected"`` (Stacked-Hourglass, H36M only). Resets drags."""
+        if self._suspend:
+            return
+        if kind not in ("gt", "detected"):
+            raise PoseLifterError(f"unknown 2D input {kind!r}")
+        with self.lock:
+            old = self.state.input_kind
+            self.state.input_kind = kind
+            try:
+                self.state.keypoints = self.state.base_keypoints().copy()
+            except PoseLifterError:
+                self.state.input_kind = old
+                self._set_gui(self.input_dd, old)
+                raise
+            self.state.dragged.clear()
+            self._redraw()
+
+    @control
+    def set_model(self, name: str) -> None:
+        """Switch the lifting model (a name from ``assets/models.json``)."""
+        if self._suspend:
+            return
+        self.app.pool.get(name)  # raises for unknown names, before touching the state
+        with self.lock:
+            self.state.model = name
+            self._set_gui(self.model_dd, name)
+            self._redraw()
+
+    @control
+    def set_focal(self, value: float) -> None:
+        """Focal length ``alpha`` (px) used to lift: the pose keeps its shape and the root moves along its
+        viewing ray with ``Z ∝ f`` (canonical depth fixed); the frustum's field of view follows."""
+        if self._suspend:
+            return
+        v, msg = clamp_focal(value)
+        with self.lock:
+            self.state.focal_px = v
+            self._set_gui(self.focal_slider, v)
+            if msg:
+                self.show_message(msg, error=True)
+            self._update_camera_geometry()
+            self._redraw()
+
+    @control
+    def set_noise(self, level: float) -> None:
+        """Mixture-noise level (0 clean … 1 as fitted … 3): the lifted pose is that of a noisy draw and the
+        cloud shows :attr:`SessionState.cloud_samples` more lifted draws."""
+        if self._suspend:
+            return
+        v, msg = clamp_noise(level)
+        with self.lock:
+            self.state.noise_level = v
+            self._set_gui(self.noise_slider, v)
+            if msg:
+                self.show_message(msg, error=True)
+            self._redraw()
+
+    @control
+    def set_cloud_samples(self, n: int) -> None:
+        if self._suspend:
+            return
+        n_ = int(n)
+        if not 0 <= n_ <= 1024:
+            raise PoseLifterError(f"cloud samples must be in [0, 1024], got {n}")
+        with self.lock:
+            self.state.cloud_samples = n_
+            self._set_gui(self.cloud_num, n_)
+            self._redraw()
+
+    @control
+    def set_seed(self, seed: float) -> None:
+        if self._suspend:
+            return
+        try:
+            s = int(seed)
+        except (TypeError, ValueError, OverflowError):
+            raise PoseLifterError(f"seed must be an integer, got {seed!r}") from None
+        if s < 0:
+            raise PoseLifterError(f"seed must be >= 0, got {s}")
+        with self.lock:
+            self.state.seed = s
+            self._set_gui(self.seed_num, s)
+            self._redraw()
+
+    @control
+    def resample(self) -> None:
+        """New noise draws (seed + 1)."""
+        with self.lock:
+            self.state.seed += 1
+            self._set_gui(self.seed_num, self.state.seed)
+            self._redraw()
+
+    @control
+    def set_analytic(self, on: bool) -> None:
+        """Toggle the analytic weak-perspective root skeleton (orange)."""
+        if self._suspend:
+            return
+        with self.lock:
+            self.state.analytic = bool(on)
+            self._set_gui(self.analytic_cb, bool(on))
+            self._redraw()
+
+    @control
+    def reset_joints(self) -> None:
+        """Undo all joint drags."""
+        with self.lock:
+            self.state.keypoints = self.state.base_keypoints().copy()
+            self.state.dragged.clear()
+            self._redraw()
+
+    @control
+    def move_joint(self, joint: int, uv: Any) -> None:
+        """Put 2D joint ``joint`` at pixel ``uv`` (clamped near the image) and re-lift."""
+        if not 0 <= int(joint) < NUM_JOINTS:
+            raise PoseLifterError(f"joint index {joint} out of range [0, {NUM_JOINTS})")
+        try:
+            p = np.asarray(uv, np.float64).reshape(2)
+        except (TypeError, ValueError):
+            raise PoseLifterError(f"joint position must be (u, v) px, got {uv!r}") from None
+        p, msg = clamp_joint(p, size=self.state.image_size)
+        with self.lock:
+            old = self.state.keypoints.copy()
+            self.state.keypoints = old.copy()
+            self.state.keypoints[int(joint)] = p
+            self.state.dragged.add(int(joint))
+            try:
+                self._redraw()
+            except PoseLifterError:
+                self.state.keypoints = old
+                self._redraw_2d_only()
+                raise
+            if msg:
+                self.show_message(msg, error=True)
+
+    @control
+    def set_keypoints(self, keypoints: Any) -> None:
+        """Replace the whole current 2D pose ``(17, 2)`` px (e.g. a pasted pose). Invalid poses raise
+        :class:`PoseLifterError` and leave the previous pose in place."""
+        kp = np.asarray(keypoints, np.float64)
+        if kp.shape != (NUM_JOINTS, 2) or not np.all(np.isfinite(kp)):
+            raise PoseLifterError(f"keypoints must be finite with shape (17, 2) px, got {kp.shape}")
+        with self.lock:
+            old = self.state.keypoints
+            self.state.keypoints = kp.copy()
+            try:
+                self._redraw()
+            except PoseLifterError:
+                self.state.keypoints = old
+                self._redraw_2d_only()
+                raise
+
+    def _on_joint_selected(self) -> None:
+        if self._suspend:
+            return
+        j = JOINT_NAMES.index(self.joint_dd.value)
+        self._set_gui(self.joint_uv, tuple(float(v) for v in np.round(self.state.keypoints[j], 1)))
+        self._redraw_2d_only()
+
+    def _on_joint_uv(self) -> None:
+        if self._suspend:
+            return
+        self.move_joint(JOINT_NAMES.index(self.joint_dd.value), self.joint_uv.value)
+
+    # -- dragging -------------------------------------------------------------------------------
+    def drag_to_pixel(self, event: Any) -> np.ndarray:
+        """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)
+        intersected with the image plane; without the viewer's camera, the central projection of
+        ``end_position`` through the sample camera."""
+        cam = self.state.sample.camera
+        R = np.asarray(cam.R)
+        C = -R.T @ np.asarray(cam.t) / 1000.0
+        end_c = R @ (np.asarray(event.end_position, np.float64) - C)
+        d = IMAGE_PLANE_DEPTH_M
+        p = None
+        client = getattr(event, "client", None)
+        if client is not None:
+            o_c = R @ (np.asarray(client.camera.position, np.float64) - C)
+            ray = end_c - o_c
+            if abs(ray[2]) > 1e-9:
+                s = (d - o_c[2]) / ray[2]
+                if s > 0:
+                    p = o_c + s * ray
+        if p is None:
+            if end_c[2] <= 1e-6:
+                raise PoseLifterError("joint dragged behind the camera; ignored")
+            p = end_c * (d / end_c[2])
+        f = np.asarray(self.state.focal)
+        return p[:2] / d * f + np.asarray(cam.principal_point)
+
+    @control
+    def on_joint_drag(self, joint: int, event: Any) -> None:
+        """Drag callback of 2D joint ``joint`` (a :class:`viser.SceneNodeDragEvent`). Latest position wins:
+        events arriving while a lift is running are merged into the next one."""
+        uv = self.drag_to_pixel(event)
+        with self._pending_lock:
+            self._pending[joint] = uv
+        while True:
+            if not self._drag_lock.acquire(blocking=False):
+                return  # the running worker picks the pending position up
+            try:
+                while True:
+                    with self._pending_lock:
+                        todo, self._pending = self._pending, {}
+                    if not todo:
+                        break
+                    for j, p in todo.items():
+                        if j == max(todo):
+                            self.move_joint(j, p)
+                        else:
+                            with self.lock:
+                                self.state.keypoints[j] = clamp_joint(p, size=self.state.image_size)[0]
+                                self.state.dragged.add(j)
+            finally:
+                self._drag_lock.release()
+            with self._pending_lock:
+                if not self._pending:
+                    return
+
+    # ------------------------------------------------------------------------------------------
+    # Redraw
+    # ------------------------------------------------------------------------------------------
+    def _redraw(self) -> None:
+        """Recompute the lift and push the scene + GUI (under :attr:`lock`)."""
+        with self.lock:
+            t0 = time.perf_counter()
+            lifter = self.app.pool.get(self.state.model)
+            frame = compute_frame(self.state, lifter, self.app.error_model)
+            t1 = time.perf_counter()
+            self.frame = frame
+            self._push(frame)
+            t2 = time.perf_counter()
+            self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
+            self.update_count += 1
+
+    def _redraw_2d_only(self) -> None:
+        with self.lock:
+            self._push_2d(self.state.keypoints, None)
+
+    def _push_2d(self, kp: np.ndarray, noisy: np.ndarray | None) -> None:
+        st = self.state
+        s = st.sample
+        sel = JOINT_NAMES.index(self.joint_dd.value)
+        poses = {"gt": s.keypoints_2d if self.gt_cb.value else None, "detected": s.detected_2d,
+                 "noisy": noisy if st.noise_level > 0 else None, "current": kp}
+        if self._base_key != s.key:
+            self._base = scaled_base(s.image, size=st.image_size)
+            self._base_key = s.key
+        self.image_gui.image = overlay(s.image, size=st.image_size, poses=poses, selected=sel, prescaled=self._base)
+        plane = self._image_plane(kp)
+        self.bones2d.points = _edges_points(plane)
+        last = getattr(self, "_last_plane", None)
+        for j, h in enumerate(self.joint_nodes):  # only the joints that moved (a drag moves one)
+            if last is None or not np.array_equal(last[j], plane[j]):
+                h.position = tuple(plane[j])
+        self._last_plane = plane
+
+    def _push(self, fr: Frame) -> None:
+        st = self.state
+        with self.target.atomic():
+            self._push_2d(fr.current_2d, fr.noisy_2d)
+            m = 1e-3
+            self.lifted_lines.points = _edges_points(fr.lifted * m)
+            self.lifted_joints.points = (fr.lifted * m).astype(np.float32)
+            show_gt = fr.gt_3d is not None and bool(self.gt_cb.value)
+            if fr.gt_3d is not None:
+                self.gt_lines.points = _edges_points(fr.gt_3d * m)
+            self.gt_lines.visible = show_gt
+            if fr.analytic is not None:
+                self.analytic_lines.points = _edges_points(fr.analytic * m)
+            self.analytic_lines.visible = fr.analytic is not None
+            if fr.cloud is not None and len(fr.cloud):
+                self.cloud_node.points = (fr.cloud.reshape(-1, 3) * m).astype(np.float32)
+                self.cloud_node.visible = True
+            else:
+                self.cloud_node.visible = False
+            root = fr.root * m
+            self.ray.points = np.stack([np.stack([np.zeros(3), root * 1.25])])
+            self.root_marker.position = tuple(root)
+            self.root_label.text = f"root Z {fr.root[2] / 1000:.2f} m"
+        self.readout_md.content = readout_markdown(fr, st)
+
+
+class PoseLifterApp:
+    """The exploration app on a viser server: one :class:`SessionView` per connected browser tab.
+
+    Build it on any :class:`viser.ViserServer` (tests: ``ViserServer(host="127.0.0.1", port=0)``);
+    :meth:`headless_view` builds a view on the server itself for in-process tests without a browser.
+    """
+
+    def __init__(self, server: viser.ViserServer, *, h36m_root: Path | None = None, models: list[str] | None = None,
+                 default_model: str | None = None, error_model: ErrorModelLike | None = None,
+                 demo_dir: Path | None = None) -> None:
+        self.server = server
+        self.demo = DemoCatalog(demo_dir) if demo_dir is not None else DemoCatalog()
+        self.h36m: H36MCatalog | None = open_h36m(str(h36m_root)) if h36m_root is not None else None
+        self.pool = LifterPool(models)
+        if self.pool.error:
+            log.error("no models: %s", self.pool.error)
+        if default_model is None:
+            from lifter.api import model_registry
+
+            try:
+                default_model = model_registry()["default"]
+            except PoseLifterError:
+                default_model = self.pool.names[0] if self.pool.names else ""
+        self.default_model = default_model
+        self.error_model = error_model if error_model is not None else default_error_model()
+        self.views: dict[int, SessionView] = {}
+        self._lock = threading.Lock()
+        server.gui.configure_theme(control_width="large", dark_mode=False)
+        server.on_client_connect(self._on_connect)
+        server.on_client_disconnect(self._on_disconnect)
+
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        try:
+            view = SessionView(self, client)
+        except Exception:  # noqa: BLE001
+            log.error("could not build a session for client %s:\n%s", client.client_id, traceback.format_exc())
+            return
+        with self._lock:
+            self.views[client.client_id] = view
+
+    def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self.views.pop(client.client_id, None)
+
+    def headless_view(self) -> SessionView:
+        """A view on the server's shared GUI/scene (no browser needed): for tests and benchmarks."""
+        return SessionView(self, self.server)
+
+    @property
+    def url(self) -> str:
+        return f"http://{self.server.get_host()}:{self.server.get_port()}"

@@ -1,0 +1,88 @@
+#!/usr/bin/env python
+"""Benchmark: drag event -> updated 3D skeleton, server side, with the 64-sample noise cloud.
+
+Starts the app on 127.0.0.1 (free port), connects one fake browser tab (a real viser ClientHandle),
+sets the noise level to 1 (64 noisy draws lifted per update) and fires ``--events`` drag events on
+the left wrist through the joint's registered ``on_drag`` callback. Each event is timed from the call
+until the callback returns: pixel from the pointer ray, lift of 1 + 64 poses in one batch, analytic
+root off, metrics, the 2D panel image and every scene update queued for the client.
+
+Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 30]``
+Exit status 1 when p95 exceeds the target (unless ``--no-check``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+
+import numpy as np
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--events", type=int, default=300)
+    p.add_argument("--warmup", type=int, default=20)
+    p.add_argument("--threads", type=int, default=1, help="torch threads")
+    p.add_argument("--cloud", type=int, default=64)
+    p.add_argument("--target-ms", type=float, default=30.0)
+    p.add_argument("--no-check", action="store_true")
+    args = p.parse_args()
+
+    import torch
+    import viser
+
+    from app.testing import FakeTab, local_server, wait_for
+    from app.viewer import PoseLifterApp
+
+    torch.set_num_threads(args.threads)
+    server = local_server()
+    app = PoseLifterApp(server, h36m_root=None)
+    tab = FakeTab(server)
+    try:
+        assert wait_for(lambda: len(app.views) == 1), "fake tab did not connect"
+        view = next(iter(app.views.values()))
+        view.cloud_num.value = args.cloud
+        view.noise_slider.value = 1.0
+        assert view.frame is not None and view.frame.cloud is not None and view.frame.cloud.shape[0] == args.cloud
+        j = 13
+        cb = view.joint_nodes[j]._impl.drag_cb[0].callback
+        cam = view.state.sample.camera
+        R = np.asarray(cam.R)
+        C = -R.T @ np.asarray(cam.t) / 1000.0
+        start = view.state.keypoints[j].copy()
+        times = []
+        for i in range(args.warmup + args.events):
+            uv = start + 60.0 * np.array([np.cos(i / 7.0), np.sin(i / 5.0)])
+            p_world = R.T @ view._image_plane(uv) + C
+            ev = viser.SceneNodeDragEvent(client=view.target, client_id=view.target.client_id, target=view.joint_nodes[j],
+                                          phase="update", instance_index=None, start_position=tuple(p_world),
+                                          start_screen_pos=(0.5, 0.5), end_position=tuple(p_world),
+                                          end_screen_pos=(0.5, 0.5), button="left", modifier=None)
+            n = view.update_count
+            t0 = time.perf_counter()
+            cb(ev)
+            dt = time.perf_counter() - t0
+            assert view.update_count == n + 1, "the drag did not update the skeleton"
+            if i >= args.warmup:
+                times.append(1e3 * dt)
+        t = np.array(times)
+        res = {"events": len(t), "cloud": args.cloud, "threads": args.threads, "p50_ms": round(float(np.percentile(t, 50)), 2),
+               "p95_ms": round(float(np.percentile(t, 95)), 2), "max_ms": round(float(t.max()), 2),
+               "mean_ms": round(float(t.mean()), 2), "target_p95_ms": args.target_ms,
+               "last_compute_ms": round(view.timing.compute_ms, 2), "last_scene_ms": round(view.timing.scene_ms, 2),
+               "model": view.state.model, "cpu": platform.processor() or platform.machine()}
+        print(json.dumps(res))
+    finally:
+        tab.close()
+        server.stop()
+    if not args.no_check and res["p95_ms"] > args.target_ms:
+        print(f"FAIL: p95 {res['p95_ms']} ms > {args.target_ms} ms")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
