@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
+import numpy as np
+
 from ._checks import PoseLifterError
 
 
@@ -34,6 +36,13 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--eval-every", type=int, default=500)
     p.add_argument("--max-frames-per-sequence", type=int, default=None, help="tiny runs for tests")
     p.add_argument("--fp32", action="store_true", help="store float32 weights (default float16)")
+    p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
+                   help="2D training inputs: GT projection, or the real Stacked-Hourglass detections (train-stride multiple of 5)")
+    p.add_argument("--noise", default="none", choices=("none", "gaussian", "mixture"),
+                   help="synthesize noisy 2D from the fitted error model (assets/error_model)")
+    p.add_argument("--noise-level", type=float, default=1.0)
+    p.add_argument("--no-outliers", action="store_true", help="mixture noise without sampling the uniform outliers (authors' code)")
+    p.add_argument("--zoom-aug", action="store_true", help="zoom augmentation: random focal/resolution scale (spec §6)")
     p.set_defaults(func=_run_train)
 
 
@@ -47,10 +56,31 @@ def _run_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(model=model, protocol=args.protocol, train_stride=args.train_stride, batch_size=args.batch_size,
                       epochs=args.epochs, lr=args.lr, weight_decay=args.weight_decay, max_minutes=args.max_minutes,
                       seed=args.seed, threads=args.threads, eval_every=args.eval_every,
-                      max_frames_per_sequence=args.max_frames_per_sequence)
-    result = train(cfg, data=H36M(args.h36m))
-    out = save_training_outputs(result, cfg, args.out, half=not args.fp32,
-                                extra_meta={"command": "poselifter " + " ".join(sys.argv[1:])})
+                      max_frames_per_sequence=args.max_frames_per_sequence, zoom_aug=args.zoom_aug)
+    data = H36M(args.h36m)
+    train_samples = None
+    if args.inputs == "sh":
+        from .noise import load_sh_detections
+
+        if args.train_stride % 5:
+            raise PoseLifterError("--inputs sh needs --train-stride a multiple of 5 (detections exist every 5th frame)")
+        train_samples = data.load_protocol(args.protocol, "train", stride=args.train_stride,
+                                           max_frames_per_sequence=args.max_frames_per_sequence)
+        det, ok = load_sh_detections(train_samples, data=data)
+        train_samples = train_samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok])
+        print(f"training on real SH detections: {int(ok.sum())} of {len(ok)} samples have one")
+    augment = None
+    if args.noise != "none":
+        from .noise import ErrorModel
+
+        em = ErrorModel.default()
+        if args.noise == "gaussian":
+            em = em.baseline()
+        augment = em.torch_augmenter(level=args.noise_level, outliers=not args.no_outliers)
+    result = train(cfg, data=data, train_samples=train_samples, augment_2d=augment)
+    meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "inputs": args.inputs, "noise": args.noise,
+            "noise_level": args.noise_level, "noise_outliers": not args.no_outliers}
+    out = save_training_outputs(result, cfg, args.out, half=not args.fp32, extra_meta=meta)
     print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     return 0
 
@@ -63,7 +93,12 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--h36m", type=Path, default=None)
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2))
     p.add_argument("--stride", type=int, default=5, help="test frame stride at 50 fps")
-    p.add_argument("--inputs", default="gt", choices=("gt",), help="2D inputs: ground-truth projection")
+    p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
+                   help="2D inputs: ground-truth (distorted) projection, or the real Stacked-Hourglass detections")
+    p.add_argument("--focal-scales", default=None,
+                   help="comma-separated focal factors (e.g. 0.5,0.7,1,1.4,2): re-project the test poses through "
+                        "virtual pinhole cameras with focal x factor and report MRPE per factor")
+    p.add_argument("--pp-shift", default="0,0", help="principal-point shift (px) of the virtual cameras, 'dx,dy'")
     p.add_argument("--flip-test", action="store_true", help="average with the mirrored input's prediction")
     p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
@@ -84,13 +119,34 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     data = H36M(args.h36m)
     samples = data.load_protocol(args.protocol, "test", stride=args.stride,
                                  max_frames_per_sequence=args.max_frames_per_sequence)
+    note = ""
+    if args.inputs == "sh":
+        from .noise import load_sh_detections
+
+        det, ok = load_sh_detections(samples, data=data)
+        note = f"; real SH detections, {int((~ok).sum())} samples without a detection dropped"
+        samples = samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok])
     print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
-          f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing)")
-    rows = []
+          f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note})")
+    lifters = []
     for spec in args.weights:
         label, _, ref = spec.rpartition("=")
         lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
-        label = label or ref
+        lifters.append((label or ref, lifter))
+    if args.focal_scales:
+        from .evaluate import focal_sweep, format_focal_table
+
+        factors = [float(v) for v in args.focal_scales.split(",")]
+        shift = tuple(float(v) for v in args.pp_shift.split(","))
+        sweep = {label: focal_sweep(lifter, samples, factors=factors, principal_shift=shift, flip_test=args.flip_test)
+                 for label, lifter in lifters}
+        print(format_focal_table(sweep, principal_shift=shift))
+        if args.json:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps({k: [r.to_dict() for r in v] for k, v in sweep.items()}, indent=1))
+        return 0
+    rows = []
+    for label, lifter in lifters:
         rows.extend(evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
                                     analytic_root=args.analytic_root))
     print(format_table(rows))
@@ -107,6 +163,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     _add_train(sub)
     _add_evaluate(sub)
+    from .noise_cli import add_parser as _add_fit_noise
+
+    _add_fit_noise(sub)
     return parser
 
 

@@ -112,5 +112,44 @@ def format_per_action(rows: Sequence[EvalRow], metric: str = "mpjpe") -> str:
     return "\n".join(lines)
 
 
-__all__ = ["EvalRow", "Predictions", "predict", "score", "evaluate_lifter", "format_table", "format_per_action",
+def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
+                           principal_shift: tuple[float, float] = (0.0, 0.0)) -> PoseSamples:
+    """The test poses seen through virtual pinhole cameras: focal ``x focal_scale``, principal point shifted
+    by ``principal_shift`` px. The 3D (camera frame) is unchanged; the 2D is re-projected without distortion."""
+    from dataclasses import replace
+
+    from .camera import project
+
+    f = samples.focal.astype(np.float64) * focal_scale
+    c = samples.principal_point.astype(np.float64) + np.asarray(principal_shift, np.float64)
+    kp = project(samples.pose_3d.astype(np.float64), focal=f, principal_point=c)
+    return replace(samples, keypoints_2d=kp.astype(np.float32), focal=f.astype(np.float32),
+                   principal_point=c.astype(np.float32),
+                   image_size=np.round(samples.image_size * focal_scale).astype(np.int32))
+
+
+def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float],
+                principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool = False) -> list[EvalRow]:
+    """One row per focal factor (label ``"x<factor>"``) for virtual cameras of :func:`virtual_camera_samples`."""
+    rows = []
+    for k in factors:
+        vs = virtual_camera_samples(samples, focal_scale=k, principal_shift=principal_shift)
+        rows.append(evaluate_lifter(lifter, vs, label=f"x{k:g}", flip_test=flip_test, progress=False)[0])
+    return rows
+
+
+def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tuple[float, float] = (0.0, 0.0)) -> str:
+    """MRPE (mm) per model and focal factor, with the ratio to the x1 factor."""
+    first = next(iter(sweep.values()))
+    head = f"{'model':<28} " + " ".join(f"{r.label:>15}" for r in first)
+    lines = [f"MRPE (mm) and ratio to x1 on virtual cameras (focal x factor, principal point shifted by {principal_shift} px)",
+             head, "-" * len(head)]
+    for label, rows in sweep.items():
+        ref = next((r.mrpe for r in rows if r.label == "x1"), None)
+        cells = [f"{r.mrpe:7.1f} ({r.mrpe / ref:4.2f})" if ref else f"{r.mrpe:15.1f}" for r in rows]
+        lines.append(f"{label:<28} " + " ".join(f"{c:>15}" for c in cells))
+    return "\n".join(lines)
+
+
+__all__ = ["virtual_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score", "evaluate_lifter", "format_table", "format_per_action",
            "AUC_THRESHOLDS_MM"]

@@ -8,6 +8,8 @@ Recipe (defaults of :class:`TrainConfig`; see the README for the measured learni
 * model: :class:`~lifter.model.PoseLifterNet` with standardized outputs (mean/std of the targets,
   flipped copies included) and the head's initial output at the target mean;
 * loss: :func:`~lifter.loss.poselifter_loss` in mm (48 pose terms + 1 x canonical depth);
+* optional: zoom augmentation (``zoom_aug``) and 2D noise (``augment_2d``, e.g. the fitted error model
+  of :mod:`lifter.noise`), applied after the flip in that order, so noise follows the zoomed size;
 * optimizer: AdamW, ``lr`` with linear warm-up then cosine decay to ``lr * final_lr_fraction``.
   Schedule progress is ``max(step / steps, elapsed / max_minutes)``, so a wall-clock limit ends
   training with a fully decayed learning rate instead of cutting it off mid-schedule.
@@ -55,6 +57,11 @@ class TrainConfig:
     val_stride: int = 100
     eval_every: int = 500
     max_frames_per_sequence: int | None = None
+    zoom_aug: bool = False
+    """Zoom augmentation (spec §6): scale 2D pose, principal point and focal by
+    ``s = 2 ** clip(zoom_sigma * N(0, 1), -zoom_clip, zoom_clip)``; the canonical target becomes ``Z*F0/(s*alpha)``."""
+    zoom_sigma: float = 0.25
+    zoom_clip: float = 0.5
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -195,6 +202,11 @@ def train(
         if cfg.flip_prob > 0:
             mask = torch.rand(bs, generator=gen) < cfg.flip_prob
             kp, pp, rel = flip_batch(kp, pp, w, rel, mask)
+        if cfg.zoom_aug:
+            s = torch.exp2((cfg.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-cfg.zoom_clip, cfg.zoom_clip))
+            kp, pp = kp * s[:, None, None], pp * s[:, None]
+            if cfg.model.depth_target == "canonical":
+                depth = depth / s
         if augment_2d is not None:
             kp = augment_2d(kp, pp, gen)
         pred = net.forward_flat(kp, pp)

@@ -1,0 +1,90 @@
+"""Inference speed of ``Lifter.lift``: single-pose latency and batched throughput against the FLOP limit.
+
+The FLOP limit is measured in the same run: the machine's float32 matmul rate (GFLOP/s, a
+``(B, W) @ (W, W)`` product at the model's width) divided by the FLOPs of one pose through the
+network (2 x multiply-adds of every Linear layer). Reported ratios are within one run, so they hold
+on a shared, noisy machine; absolute times are indicative only.
+
+    python benchmarks/bench_lift.py [--model default] [--threads 2] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+import torch
+
+from lifter import Lifter
+from lifter.camera import project
+
+
+def flops_per_pose(net: torch.nn.Module) -> int:
+    return int(sum(2 * m.in_features * m.out_features for m in net.modules() if isinstance(m, torch.nn.Linear)))
+
+
+def matmul_gflops(width: int, batch: int = 4096, repeats: int = 20) -> float:
+    a = torch.randn(batch, width)
+    b = torch.randn(width, width)
+    for _ in range(3):
+        a @ b
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        a @ b
+        best = min(best, time.perf_counter() - t)
+    return 2 * batch * width * width / best / 1e9
+
+
+def time_calls(fn, n: int) -> np.ndarray:
+    for _ in range(min(20, n)):
+        fn()
+    out = np.empty(n)
+    for i in range(n):
+        t = time.perf_counter()
+        fn()
+        out[i] = time.perf_counter() - t
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--model", default="default")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--single-calls", type=int, default=2000)
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    lifter = Lifter.from_pretrained(args.model) if not args.model.endswith(".pt") else Lifter.from_checkpoint(args.model)
+    rng = np.random.default_rng(0)
+    pose = np.cumsum(rng.normal(0, 150, (8192, 17, 3)), axis=1)
+    pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500
+    kp = project(pose, focal=1145.0, principal_point=(512.0, 515.0))
+
+    fpp = flops_per_pose(lifter.net)
+    gflops = matmul_gflops(lifter.config.width)
+    limit = gflops * 1e9 / fpp
+    print(f"model {lifter.name}: width {lifter.config.width}, {fpp / 1e6:.2f} MFLOP/pose; "
+          f"matmul {gflops:.1f} GFLOP/s with {args.threads} threads -> FLOP limit {limit:,.0f} poses/s")
+
+    single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
+    p50, p95 = np.percentile(single, [50, 95]) * 1e3
+    print(f"single pose Lifter.lift: median {p50:.3f} ms, p95 {p95:.3f} ms ({args.single_calls} calls)")
+    results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
+               "single_median_ms": p50, "single_p95_ms": p95, "batched": []}
+    print(f"{'batch':>6} {'poses/s':>12} {'of FLOP limit':>14}")
+    for b in (1, 16, 256, 2048, 8192):
+        reps = max(3, int(20000 / b))
+        t = time_calls(lambda: lifter.lift(kp[:b], focal=1145.0, principal_point=(512.0, 515.0)), reps)
+        rate = b / np.median(t)
+        results["batched"].append({"batch": b, "poses_per_s": rate, "fraction_of_limit": rate / limit})
+        print(f"{b:>6} {rate:>12,.0f} {100 * rate / limit:>13.1f}%")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,170 @@
+"""The Lifter API: shapes, conventions and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from lifter import Lifter, LiftResult, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter.camera import project
+from lifter.checkpoint import load_checkpoint, save_checkpoint
+from lifter._checks import CheckpointError
+
+from conftest import random_pose_cam
+
+
+@pytest.fixture(scope="module")
+def small_lifter() -> Lifter:
+    torch.manual_seed(0)
+    net = PoseLifterNet(ModelConfig(width=64))
+    mean = torch.zeros(49)
+    mean[-1] = 4400.0
+    net.set_target_statistics(mean, torch.full((49,), 100.0))
+    return Lifter(net.eval(), name="small")
+
+
+@pytest.fixture()
+def keypoints() -> np.ndarray:
+    pose = random_pose_cam(np.random.default_rng(0), 6)
+    return project(pose, focal=1145.0, principal_point=(512.0, 515.0))
+
+
+def test_shapes_batched(small_lifter, keypoints):
+    kp = keypoints.reshape(2, 3, 17, 2)
+    res = small_lifter.lift(kp, focal=(1145.0, 1144.0), principal_point=(512.0, 515.0))
+    assert isinstance(res, LiftResult)
+    assert res.canonical_depth.shape == (2, 3)
+    assert res.root.shape == (2, 3, 3)
+    assert res.relative.shape == res.absolute.shape == (2, 3, 17, 3)
+    np.testing.assert_allclose(res.relative[..., 0, :], 0)
+    np.testing.assert_allclose(res.absolute, res.root[..., None, :] + res.relative)
+    assert res.metric_depth
+    single = small_lifter.lift(kp[1, 2], focal=1145.0, principal_point=(512.0, 515.0))
+    assert single.root.shape == (3,)
+
+
+def test_root_lies_on_the_ray_of_the_2d_root(small_lifter, keypoints):
+    res = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    reproj = project(res.root[:, None, :], focal=1145.0, principal_point=(512.0, 515.0))[:, 0]
+    np.testing.assert_allclose(reproj, keypoints[:, 0], atol=1e-6)
+
+
+def test_focal_changes_only_depth_along_ray(small_lifter, keypoints):
+    """The pose and canonical depth do not depend on the focal length; Z scales with it."""
+    a = small_lifter.lift(keypoints, focal=1000.0, principal_point=(512.0, 515.0))
+    b = small_lifter.lift(keypoints, focal=2000.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(a.relative, b.relative)
+    np.testing.assert_allclose(a.canonical_depth, b.canonical_depth)
+    np.testing.assert_allclose(b.root[:, 2], 2 * a.root[:, 2])
+    np.testing.assert_allclose(b.root[:, :2], a.root[:, :2], rtol=1e-9)
+
+
+def test_unknown_focal_is_flagged(small_lifter, keypoints):
+    res = small_lifter.lift(keypoints, principal_point=(512.0, 515.0))
+    assert not res.metric_depth and res.focal is None
+    assert "up to" in res.note
+    np.testing.assert_allclose(res.root[:, 2], res.canonical_depth)
+    known = small_lifter.lift(keypoints, focal=1000.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(known.root, res.root)
+
+
+def test_principal_point_from_image_size(small_lifter, keypoints):
+    a = small_lifter.lift(keypoints, focal=1145.0, image_size=(1000, 1000))
+    b = small_lifter.lift(keypoints, focal=1145.0, principal_point=(500.0, 500.0))
+    np.testing.assert_allclose(a.absolute, b.absolute)
+
+
+def test_flip_test_is_equivariant(small_lifter, keypoints):
+    """With flip test, lifting the mirrored input gives the mirrored output."""
+    from lifter.camera import flip_keypoints_2d
+
+    c = np.array([512.0, 515.0])
+    res = small_lifter.lift(keypoints, focal=1145.0, principal_point=c, flip_test=True)
+    kp_f, c_f = flip_keypoints_2d(keypoints, image_width=1000, principal_point=c)
+    res_f = small_lifter.lift(kp_f, focal=1145.0, principal_point=c_f, flip_test=True)
+    from lifter.camera import flip_pose_3d
+
+    np.testing.assert_allclose(flip_pose_3d(res_f.relative), res.relative, atol=1e-3)
+    np.testing.assert_allclose(res_f.canonical_depth, res.canonical_depth, rtol=1e-5)
+
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (np.zeros((16, 2)), r"expected shape \(\.\.\., 17, 2\)"),
+        (np.zeros((17, 3)), r"expected shape"),
+        ("abc", "could not convert"),
+    ],
+)
+def test_bad_keypoint_shapes(small_lifter, bad, match):
+    with pytest.raises(PoseLifterError, match=match):
+        small_lifter.lift(bad, focal=1000.0, principal_point=(0, 0))
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf])
+def test_non_finite_keypoints(small_lifter, keypoints, value):
+    kp = keypoints.copy()
+    kp[2, 5, 1] = value
+    with pytest.raises(PoseLifterError, match="NaN/inf"):
+        small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
+
+
+def test_degenerate_pose(small_lifter):
+    with pytest.raises(PoseLifterError, match="degenerate pose"):
+        small_lifter.lift(np.full((17, 2), 300.0), focal=1000.0, principal_point=(500, 500))
+
+
+@pytest.mark.parametrize("focal", [0.0, -1000.0, (1000.0, 0.0), np.nan])
+def test_bad_focal(small_lifter, keypoints, focal):
+    with pytest.raises(PoseLifterError, match="focal"):
+        small_lifter.lift(keypoints, focal=focal, principal_point=(500, 500))
+
+
+def test_missing_principal_point(small_lifter, keypoints):
+    with pytest.raises(PoseLifterError, match="principal_point is required"):
+        small_lifter.lift(keypoints, focal=1000.0)
+
+
+def test_checkpoint_round_trip_and_errors(tmp_path, small_lifter, keypoints):
+    path = save_checkpoint(tmp_path / "m.pt", small_lifter.net, meta={"note": "test"})
+    loaded = Lifter.from_checkpoint(path)
+    a = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    b = loaded.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(a.absolute, b.absolute, atol=1e-3)
+    assert loaded.meta["note"] == "test"
+    half = save_checkpoint(tmp_path / "h.pt", small_lifter.net, half=True)
+    assert half.stat().st_size < path.stat().st_size
+
+    with pytest.raises(CheckpointError, match="not found"):
+        Lifter.from_checkpoint(tmp_path / "missing.pt")
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(CheckpointError, match="corrupt"):
+        Lifter.from_checkpoint(corrupt)
+    garbage = tmp_path / "garbage.pt"
+    garbage.write_bytes(b"not a checkpoint at all")
+    with pytest.raises(CheckpointError, match="corrupt"):
+        load_checkpoint(garbage)
+    foreign = tmp_path / "foreign.pt"
+    torch.save({"weights": torch.zeros(3)}, foreign)
+    with pytest.raises(CheckpointError, match="not a poselifter checkpoint"):
+        load_checkpoint(foreign)
+
+
+def test_checkpoint_refuses_pickled_code(tmp_path):
+    """weights_only=True: a checkpoint carrying an arbitrary object is rejected, not executed."""
+
+    class Evil:
+        def __reduce__(self):
+            return (print, ("executed!",))
+
+    evil = tmp_path / "evil.pt"
+    torch.save({"format": "poselifter-checkpoint", "version": 1, "payload": Evil()}, evil)
+    with pytest.raises(CheckpointError, match="corrupt or not a torch checkpoint"):
+        load_checkpoint(evil)
+
+
+def test_unknown_pretrained_name():
+    with pytest.raises(PoseLifterError, match="unknown model"):
+        Lifter.from_pretrained("no-such-model")

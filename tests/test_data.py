@@ -1,0 +1,74 @@
+"""H36M loading: camera frame, distorted projection matches the dataset's own 2D, splits, flips."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lifter.camera import flip_keypoints_2d, flip_pose_3d, project
+from lifter.data import ACTIONS, CAMERA_IDS, PROTOCOLS, action_of
+
+from conftest import H36M_DIR, requires_h36m
+
+
+def test_action_names():
+    assert action_of("S9/Walking 1") == "Walking"
+    assert action_of("WalkDog") == "WalkDog"
+    assert action_of("S1/SittingDown 2") == "SittingDown"
+    assert len(ACTIONS) == 15
+    with pytest.raises(ValueError, match="unknown H36M action"):
+        action_of("S1/Dancing 1")
+
+
+def test_missing_folder_error(tmp_path):
+    from lifter.data import H36M
+
+    with pytest.raises(FileNotFoundError, match="Human3.6M data not found"):
+        H36M(tmp_path)
+
+
+@requires_h36m
+def test_projection_with_distortion_matches_dataset_2d(h36m):
+    """Our camera-frame 3D + distorted projection reproduces the 2D annotations shipped with the demo frames."""
+    ann = np.load(H36M_DIR / "demo" / "annotations.npz", allow_pickle=True)
+    for i in range(0, len(ann["image"]), 7):
+        subject = int(str(ann["subject"][i]).lstrip("S"))
+        c = h36m.camera(subject, str(ann["camera"][i]))
+        p3 = c.world_to_camera(ann["p3d_world"][i])
+        np.testing.assert_allclose(p3, ann["p3d_cam"][i], atol=1.0)  # int16 world coordinates
+        np.testing.assert_allclose(c.project(p3), ann["p2d_gt"][i], atol=0.5)
+        # and distortion is not negligible everywhere: pinhole differs
+        assert np.abs(c.project(p3, distortion=False) - ann["p2d_gt"][i]).max() > 0.05
+
+
+@requires_h36m
+def test_load_slice_shapes_and_units(h36m):
+    s = h36m.load([9], stride=50, max_frames_per_sequence=3)
+    n = len(s)
+    assert n == 3 * 4 * len(h36m.sequences_of([9]))
+    assert s.keypoints_2d.shape == (n, 17, 2) and s.pose_3d.shape == (n, 17, 3)
+    assert np.all(s.pose_3d[..., 2] > 1000) and np.all(s.pose_3d[..., 2] < 10000)  # mm in front of the camera
+    assert set(s.camera.tolist()) == set(range(len(CAMERA_IDS)))
+    np.testing.assert_allclose(s.relative[:, 0], 0)
+    assert np.all(s.keypoints_2d > -200) and np.all(s.keypoints_2d < 1300)
+    cd = s.canonical_depth
+    np.testing.assert_allclose(cd, s.pose_3d[:, 0, 2] * 1000 / np.sqrt(s.focal.prod(-1)), rtol=1e-5)
+
+
+@requires_h36m
+def test_protocol_splits(h36m):
+    assert PROTOCOLS[1] == ((1, 5, 6, 7, 8), (9, 11))
+    s = h36m.load_protocol(2, "test", stride=200)
+    assert set(s.subject.tolist()) == {11}
+    assert "S9/Discussion 1" not in h36m.sequences  # documented gap in the data
+    with pytest.raises(ValueError, match="split"):
+        h36m.load_protocol(1, "val", stride=5)
+
+
+@requires_h36m
+def test_flip_of_real_sample_is_a_valid_view(h36m):
+    """The flipped 2D is the (pinhole) projection of the flipped 3D through the mirrored principal point."""
+    s = h36m.load([11], stride=100, max_frames_per_sequence=2)
+    kp = project(s.pose_3d, focal=s.focal, principal_point=s.principal_point)
+    kp_f, c_f = flip_keypoints_2d(kp, image_width=s.image_size[:, 0], principal_point=s.principal_point)
+    np.testing.assert_allclose(project(flip_pose_3d(s.pose_3d), focal=s.focal, principal_point=c_f), kp_f, atol=1e-6)

@@ -1,0 +1,161 @@
+"""Conventions: projection <-> back-projection, canonical depth invariance, flips, normalization invariances."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lifter import camera as cam
+from lifter.normalization import normalize_keypoints_np, pose_scale_np
+from lifter.skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, LEFT_RIGHT_PAIRS, PARENTS
+
+from conftest import random_pose_cam
+
+finite = dict(allow_nan=False, allow_infinity=False)
+
+
+def test_skeleton_tables_consistent():
+    assert len(JOINT_NAMES) == len(PARENTS) == len(FLIP_PERMUTATION) == 17
+    assert len(EDGES) == 16
+    perm = np.asarray(FLIP_PERMUTATION)
+    assert np.array_equal(perm[perm], np.arange(17)), "flip permutation must be an involution"
+    for left, right in LEFT_RIGHT_PAIRS:
+        assert JOINT_NAMES[left].startswith("l_") and JOINT_NAMES[right].startswith("r_")
+        assert JOINT_NAMES[left][2:] == JOINT_NAMES[right][2:]
+        assert FLIP_PERMUTATION[left] == right
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), f=st.floats(200, 5000, **finite), cx=st.floats(0, 2000, **finite),
+       cy=st.floats(0, 2000, **finite), aspect=st.floats(0.9, 1.1, **finite))
+def test_project_backproject_round_trip(seed, f, cx, cy, aspect):
+    pose = random_pose_cam(np.random.default_rng(seed), 3)
+    uv = cam.project(pose, focal=(f, f * aspect), principal_point=(cx, cy))
+    back = cam.backproject(uv, pose[..., 2], focal=(f, f * aspect), principal_point=(cx, cy))
+    np.testing.assert_allclose(back, pose, rtol=1e-9, atol=1e-6)
+
+
+def test_projection_convention_opencv():
+    # +x right, +y down, +z forward: a point right of and below the axis lands right of and below c.
+    uv = cam.project(np.array([[[100.0, 50.0, 1000.0]]]), focal=1000.0, principal_point=(500.0, 400.0))
+    np.testing.assert_allclose(uv[0, 0], [600.0, 450.0])
+    with pytest.raises(ValueError, match="in front of the camera"):
+        cam.project(np.array([[[0.0, 0.0, -1.0]]]), focal=1000.0, principal_point=(0, 0))
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), f1=st.floats(300, 4000, **finite), f2=st.floats(300, 4000, **finite))
+def test_canonical_depth_gives_same_root_for_any_focal(seed, f1, f2):
+    """Zoom: the same person imaged with focal f1 or f2 and the canonical depth of each gives the same 3D root."""
+    pose = random_pose_cam(np.random.default_rng(seed), 2)
+    root = pose[:, 0]
+    c = (512.0, 500.0)
+    roots = []
+    for f in (f1, f2):
+        uv = cam.project(pose, focal=f, principal_point=c)
+        cd = cam.canonical_depth_from_depth(root[:, 2], focal=f)
+        roots.append(cam.root_from_canonical_depth(uv[:, 0], cd, focal=f, principal_point=c))
+    np.testing.assert_allclose(roots[0], root, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(roots[1], root, rtol=1e-9, atol=1e-6)
+
+
+def test_canonical_depth_is_depth_at_1000px():
+    np.testing.assert_allclose(cam.canonical_depth_from_depth(5000.0, focal=(1000.0, 1000.0)), 5000.0)
+    np.testing.assert_allclose(cam.canonical_depth_from_depth(5000.0, focal=(2000.0, 2000.0)), 2500.0)
+    np.testing.assert_allclose(cam.depth_from_canonical_depth(2500.0, focal=(2000.0, 2000.0)), 5000.0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), W=st.integers(200, 3000))
+def test_flip_twice_is_identity(seed, W):
+    rng = np.random.default_rng(seed)
+    kp = rng.uniform(0, W, (4, 17, 2))
+    c = rng.uniform(0, W, (4, 2))
+    kp1, c1 = cam.flip_keypoints_2d(kp, image_width=W, principal_point=c)
+    kp2, c2 = cam.flip_keypoints_2d(kp1, image_width=W, principal_point=c1)
+    np.testing.assert_allclose(kp2, kp)
+    np.testing.assert_allclose(c2, c)
+    p = random_pose_cam(rng, 4)
+    np.testing.assert_allclose(cam.flip_pose_3d(cam.flip_pose_3d(p)), p)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_flip_commutes_with_projection(seed):
+    rng = np.random.default_rng(seed)
+    pose = random_pose_cam(rng, 3)
+    W, f, c = 1000, 1145.0, (512.5, 515.4)
+    kp = cam.project(pose, focal=f, principal_point=c)
+    kp_flipped, c_flipped = cam.flip_keypoints_2d(kp, image_width=W, principal_point=c)
+    kp_of_flipped = cam.project(cam.flip_pose_3d(pose), focal=f, principal_point=c_flipped)
+    np.testing.assert_allclose(kp_flipped, kp_of_flipped, atol=1e-9)
+
+
+def test_flip_commutes_with_distorted_projection():
+    """With lens distortion the mirror camera also negates p2 (Camera.flipped)."""
+    rng = np.random.default_rng(1)
+    c = cam.Camera(focal=(1145.0, 1143.8), principal_point=(512.5, 515.5), width=1000, height=1002,
+                   k=(-0.207, 0.248, -0.003), p=(-0.0014, -0.00098))
+    pose = random_pose_cam(rng, 5)
+    kp_flipped, _ = cam.flip_keypoints_2d(c.project(pose), image_width=c.width, principal_point=c.principal_point)
+    np.testing.assert_allclose(c.flipped().project(cam.flip_pose_3d(pose)), kp_flipped, atol=1e-9)
+    # and the flip is not the trivial identity
+    assert np.abs(kp_flipped - c.project(pose)).max() > 1.0
+
+
+def test_distortion_matches_readme_formula():
+    x, y = 0.3, -0.2
+    k1, k2, k3, p1, p2 = -0.2, 0.25, -0.003, -0.0014, -0.001
+    r2 = x * x + y * y
+    radial = 1 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+    tan = p1 * y + p2 * x
+    expected = [x * (radial + tan) + p2 * r2, y * (radial + tan) + p1 * r2]
+    np.testing.assert_allclose(cam.distort(np.array([x, y]), (k1, k2, k3), (p1, p2)), expected)
+
+
+def test_world_camera_round_trip():
+    rng = np.random.default_rng(2)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    t = rng.normal(size=3) * 1000
+    p = rng.normal(size=(5, 17, 3)) * 1000
+    np.testing.assert_allclose(cam.camera_to_world(cam.world_to_camera(p, q, t), q, t), p, atol=1e-9)
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), shift=st.tuples(st.floats(-2000, 2000, **finite), st.floats(-2000, 2000, **finite)),
+       s=st.floats(0.1, 10, **finite), definition=st.sampled_from(["paper", "repo"]))
+def test_normalization_invariance(seed, shift, s, definition):
+    """Translating/scaling the 2D pose leaves the normalized pose unchanged; location and scale features move."""
+    rng = np.random.default_rng(seed)
+    kp = rng.uniform(100, 900, (17, 2))
+    c = np.array([500.0, 500.0])
+    f0 = normalize_keypoints_np(kp, c, mode="both", scale_definition=definition)
+    moved = (kp - c) * s + c + np.asarray(shift)
+    f1 = normalize_keypoints_np(moved, c, mode="both", scale_definition=definition)
+    np.testing.assert_allclose(f1[:34], f0[:34], atol=1e-4)
+    u0, u1 = f0[34:36] / 1e-3, f1[34:36] / 1e-3
+    np.testing.assert_allclose(u1, u0 * s + np.asarray(shift), rtol=1e-4, atol=1e-2)
+    np.testing.assert_allclose(f1[36], f0[36] * s, rtol=1e-4)
+
+
+def test_normalization_features_by_mode():
+    kp = np.random.default_rng(0).uniform(0, 1000, (3, 17, 2))
+    sizes = {m: normalize_keypoints_np(kp, (500, 500), mode=m).shape[-1] for m in ("baseline", "location", "scale", "both")}
+    assert sizes == {"baseline": 34, "location": 36, "scale": 35, "both": 37}
+    f = normalize_keypoints_np(kp, (500, 500), mode="both")
+    # normalized pose has zero mean and (paper definition) unit RMS radius
+    pose = f[..., :34].reshape(3, 17, 2)
+    np.testing.assert_allclose(pose.mean(-2), 0, atol=1e-5)
+    np.testing.assert_allclose(np.sqrt((pose**2).sum(-1).mean(-1)), 1, atol=1e-5)
+    np.testing.assert_allclose(f[..., 36] / 1e-3, pose_scale_np(kp), rtol=1e-5)
+    with pytest.raises(ValueError, match="unknown normalization mode"):
+        normalize_keypoints_np(kp, (500, 500), mode="nope")  # type: ignore[arg-type]
+
+
+def test_principal_point_subtraction():
+    kp = np.random.default_rng(0).uniform(0, 1000, (17, 2))
+    a = normalize_keypoints_np(kp, (500, 500))
+    b = normalize_keypoints_np(kp + 100, (600, 600))
+    np.testing.assert_allclose(a, b, atol=1e-5)
