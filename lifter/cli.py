@@ -104,6 +104,7 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
     p.add_argument("--max-frames-per-sequence", type=int, default=None)
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
+    p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
     p.add_argument("--threads", type=int, default=2)
     p.set_defaults(func=_run_evaluate)
 
@@ -155,6 +156,12 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps([r.to_dict() for r in rows], indent=1))
+    if args.pck_plot:
+        from .metrics import AUC_THRESHOLDS_MM
+        from .plots import plot_pck_curves
+
+        plot_pck_curves({r.label: (AUC_THRESHOLDS_MM, np.asarray(r.pck_curve)) for r in rows if r.root == "learned"},
+                        args.pck_plot)
     return 0
 
 
@@ -166,6 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .noise_cli import add_parser as _add_fit_noise
 
     _add_fit_noise(sub)
+    from .lift_cli import add_parser as _add_lift
+
+    _add_lift(sub)
     return parser
 
 

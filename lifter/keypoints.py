@@ -43,6 +43,50 @@ thorax) with GT joints, w = 0.444 fitted on GT) is 10.0 px mean / 9.2 px median:
 on the thorax-head line (it is the nose, in front of the neck), so no interpolation does much better.
 The remaining 13 joints are direct. The same affine rules are applied to 3D input ``(..., J, 3)``;
 they were fitted in 2D.
+
+
+Detector formats: ``"blazepose33"``, ``"coco17"``, ``"openpose25"``
+-------------------------------------------------------------------
+MediaPipe BlazePose's 33 landmarks, MS-COCO's 17 keypoints and OpenPose's BODY_25 share the limb
+joints (shoulders, elbows, wrists, knees, ankles: mapped directly) and a face (nose, eyes, ears).
+With MH = mid-hips (OpenPose: its MidHip), MS = mid-shoulders (OpenPose: its Neck), ME = mid-ears,
+N = nose, T = MS - MH (the trunk), the other seven H36M joints are (:func:`body_rules`):
+
+==========  ==================================================  =====================================
+joint       rule                                                why
+==========  ==================================================  =====================================
+pelvis      MH + 0.160 T                                        H36M's hip line is higher than COCO's
+r/l_hip     MH + 1.223 (hip - MH) + 0.160 T                     ... and wider (mocap hip joint centres)
+spine       MH + 0.628 T
+thorax      MS + 0.087 T                                        slightly above the shoulder line
+neck_nose   MS + 0.270 (N - MS) + 0.500 (ME - MS)
+head_top    ME + 0.644 (ME - N) + 0.218 (ME - MS)               up from the ears, away from the face
+==========  ==================================================  =====================================
+
+The weights are least-squares fits to the ground truth 2D of the 84 H36M demo frames
+(``../shared/data/h36m/demo``) of MediaPipe BlazePose's landmarks on those images, over the 78 of 82
+detected frames whose median limb-joint error is below 15 px (``scripts/eval_cascade.py`` re-fits
+and prints them). Measured error (px, mean / median over the 78 inlier frames; over all 82 detected frames
+(2 of 84 have no detection) they are within 0.4 px of these):
+
+==========  ============================  ==================  ============================
+joint       naive mapping                 naive error         rule error (cross-camera*)
+==========  ============================  ==================  ============================
+pelvis      mid-hips                      18.8 / 18.5         4.6 / 4.2 (5.3 / 5.2)
+r_hip       BlazePose r_hip               22.9 / 22.3         6.8 / 6.7 (7.5 / 8.1)
+l_hip       BlazePose l_hip               16.1 / 15.8         6.4 / 5.3 (7.2 / 6.4)
+spine       midpoint of MH and MS         15.3 / 15.5         3.7 / 2.7 (4.1 / 2.9)
+thorax      mid-shoulders                 10.8 / 10.4         4.3 / 4.1 (4.4 / 4.9)
+neck_nose   nose                          10.8 / 10.0         2.8 / 2.5 (3.4 / 3.0)
+head_top    mid-ears                      13.1 / 12.6         3.5 / 3.1 (4.0 / 3.6)
+==========  ============================  ==================  ============================
+
+* worst of the two folds "fit on one camera's frames, test on the other camera's". The same
+weights serve ``coco17`` (its joints are BlazePose's subset with the same meaning) and
+``openpose25`` (MidHip and Neck in place of the midpoints). They were measured with BlazePose's
+landmarks only (no COCO or OpenPose network runs offline here); another detector places hips and neck
+a little differently, so treat its errors as indicative. The 84 frames are 5 subjects, mostly S9
+"Posing" from two cameras.
 """
 
 from __future__ import annotations
@@ -185,6 +229,110 @@ register_format(KeypointFormat(
                 "interpolated",
 ))
 
+# ------------------------------------------------------------------------------------------------
+# BlazePose-33, COCO-17, OpenPose BODY-25 (the cascade's 2D detectors)
+# ------------------------------------------------------------------------------------------------
+
+BLAZEPOSE33_JOINT_NAMES: Final[tuple[str, ...]] = (
+    "nose", "l_eye_inner", "l_eye", "l_eye_outer", "r_eye_inner", "r_eye", "r_eye_outer", "l_ear", "r_ear",
+    "mouth_l", "mouth_r", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist", "r_wrist", "l_pinky",
+    "r_pinky", "l_index", "r_index", "l_thumb", "r_thumb", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle",
+    "r_ankle", "l_heel", "r_heel", "l_foot_index", "r_foot_index",
+)
+"""MediaPipe BlazePose landmark order (``mp.solutions.pose.PoseLandmark``); l/r = the subject's sides."""
+
+COCO17_JOINT_NAMES: Final[tuple[str, ...]] = (
+    "nose", "l_eye", "r_eye", "l_ear", "r_ear", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist",
+    "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle",
+)
+"""MS-COCO person keypoints order."""
+
+OPENPOSE25_JOINT_NAMES: Final[tuple[str, ...]] = (
+    "nose", "neck", "r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist", "mid_hip", "r_hip",
+    "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle", "r_eye", "l_eye", "r_ear", "l_ear", "l_big_toe",
+    "l_small_toe", "l_heel", "r_big_toe", "r_small_toe", "r_heel",
+)
+"""OpenPose BODY_25 order."""
+
+PELVIS_UP: Final[float] = 0.160
+HIP_WIDEN: Final[float] = 1.223
+SPINE_UP: Final[float] = 0.628
+THORAX_DOWN: Final[float] = -0.087
+NECK_NOSE_W: Final[tuple[float, float]] = (0.270, 0.500)
+HEAD_TOP_W: Final[tuple[float, float]] = (0.644, 0.218)
+"""Weights of the blazepose33 / coco17 / openpose25 rules (module docstring, "Detector formats");
+least-squares fits on BlazePose detections of the 84 H36M demo frames (``scripts/eval_cascade.py``)."""
+
+_Combo = dict[int, float]
+
+
+def _lin(*terms: tuple[float, _Combo]) -> _Combo:
+    out: _Combo = {}
+    for w, c in terms:
+        for k, v in c.items():
+            out[k] = out.get(k, 0.0) + w * v
+    return out
+
+
+def _rule(c: _Combo) -> Rule:
+    items = [(k, v) for k, v in sorted(c.items()) if abs(v) > 1e-12]
+    total = sum(v for _, v in items)
+    # absorb rounding so that the weights sum to 1 exactly (the largest weight takes the residue)
+    i = max(range(len(items)), key=lambda n: abs(items[n][1]))
+    items[i] = (items[i][0], items[i][1] + 1.0 - total)
+    return tuple(items)
+
+
+def body_rules(idx: dict[str, int], *, mid_hip: _Combo | None = None, mid_shoulder: _Combo | None = None) -> tuple[Rule, ...]:
+    """The 17 H36M rules for a detector with ``nose``, ``l_ear``/``r_ear``, shoulders, elbows, wrists,
+    hips, knees and ankles (``idx``: name -> index). ``mid_hip`` / ``mid_shoulder`` default to the
+    midpoints of the hips / shoulders (OpenPose passes its own MidHip / Neck joints)."""
+    one = lambda name: {idx[name]: 1.0}  # noqa: E731
+    MH = mid_hip or _lin((0.5, one("l_hip")), (0.5, one("r_hip")))
+    MS = mid_shoulder or _lin((0.5, one("l_shoulder")), (0.5, one("r_shoulder")))
+    ME = _lin((0.5, one("l_ear")), (0.5, one("r_ear")))
+    N = one("nose")
+    trunk = _lin((1.0, MS), (-1.0, MH))  # MS - MH
+    rules: dict[str, _Combo] = {
+        "pelvis": _lin((1.0, MH), (PELVIS_UP, trunk)),
+        "r_hip": _lin((1.0, MH), (HIP_WIDEN, _lin((1.0, one("r_hip")), (-1.0, MH))), (PELVIS_UP, trunk)),
+        "l_hip": _lin((1.0, MH), (HIP_WIDEN, _lin((1.0, one("l_hip")), (-1.0, MH))), (PELVIS_UP, trunk)),
+        "spine": _lin((1.0, MH), (SPINE_UP, trunk)),
+        "thorax": _lin((1.0, MS), (-THORAX_DOWN, trunk)),
+        "neck_nose": _lin((1.0, MS), (NECK_NOSE_W[0], _lin((1.0, N), (-1.0, MS))),
+                          (NECK_NOSE_W[1], _lin((1.0, ME), (-1.0, MS)))),
+        "head_top": _lin((1.0, ME), (HEAD_TOP_W[0], _lin((1.0, ME), (-1.0, N))),
+                         (HEAD_TOP_W[1], _lin((1.0, ME), (-1.0, MS)))),
+    }
+    return tuple(_rule(rules[name]) if name in rules else ((idx[name], 1.0),) for name in JOINT_NAMES)
+
+
+def _index(names: Sequence[str]) -> dict[str, int]:
+    return {n: i for i, n in enumerate(names)}
+
+
+register_format(KeypointFormat(
+    name="blazepose33",
+    joint_names=BLAZEPOSE33_JOINT_NAMES,
+    to_h36m=body_rules(_index(BLAZEPOSE33_JOINT_NAMES)),
+    description="MediaPipe BlazePose 33 landmarks; pelvis, hips, spine, thorax, neck_nose, head_top by rules",
+))
+
+register_format(KeypointFormat(
+    name="coco17",
+    joint_names=COCO17_JOINT_NAMES,
+    to_h36m=body_rules(_index(COCO17_JOINT_NAMES)),
+    description="MS-COCO 17 keypoints; pelvis, hips, spine, thorax, neck_nose, head_top by rules",
+))
+
+_OP = _index(OPENPOSE25_JOINT_NAMES)
+register_format(KeypointFormat(
+    name="openpose25",
+    joint_names=OPENPOSE25_JOINT_NAMES,
+    to_h36m=body_rules(_OP, mid_hip={_OP["mid_hip"]: 1.0}, mid_shoulder={_OP["neck"]: 1.0}),
+    description="OpenPose BODY_25 (MidHip and Neck used as mid-hips and mid-shoulders); rules as coco17",
+))
+
 KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
@@ -228,5 +376,6 @@ def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(((np.asarray(target, np.float64) - a) * d).sum() / max((d * d).sum(), 1e-12))
 
 
-__all__: Sequence[str] = ("KEYPOINT_FORMATS", "KeypointFormat", "convert", "fit_line_weight", "get_format",
-                          "keypoint_formats", "register_format", "SH16_JOINT_NAMES")
+__all__: Sequence[str] = ("BLAZEPOSE33_JOINT_NAMES", "COCO17_JOINT_NAMES", "KEYPOINT_FORMATS", "KeypointFormat",
+                          "OPENPOSE25_JOINT_NAMES", "SH16_JOINT_NAMES", "body_rules", "convert", "fit_line_weight",
+                          "get_format", "keypoint_formats", "register_format")

@@ -1,0 +1,524 @@
+"""Images in, 2D keypoints out: image loading (EXIF orientation and focal length, downscaling of huge
+images, clear errors for bad files) and a small 2D pose-estimator interface with a MediaPipe BlazePose
+implementation.
+
+The cascade of the paper is ``image -> 2D pose estimator -> PoseLifter``. This module is the first
+arrow. Everything is in **pixels of the upright original image** (after the EXIF orientation is
+applied, before any downscaling): an estimator may see a downscaled copy, but the keypoints it returns
+are mapped back, so the focal length and principal point of the original photo apply.
+
+Estimators
+----------
+A 2D estimator is any object with the :class:`PoseEstimator2D` protocol: a ``name``, the
+``keypoint_format`` it outputs (a format of :mod:`lifter.keypoints`) and
+``detect(image) -> list[Detection]`` for an ``(H, W, 3)`` uint8 RGB image. Register a factory with
+:func:`register_estimator`; :func:`get_estimator` builds one by name. Built in: ``"blazepose"``
+(:class:`BlazePoseEstimator`).
+
+MediaPipe BlazePose is an optional extra (``pip install -e ".[detect]"``, i.e. ``mediapipe==0.10.21``).
+It is imported lazily; without it :class:`BlazePoseEstimator` raises :class:`MissingDependencyError`
+with the install command. The legacy ``mediapipe.solutions.pose`` graph is used with
+``model_complexity=1``: the wheel ships ``pose_detection.tflite`` and ``pose_landmark_full.tflite``
+only, so complexity 0 ("lite") and 2 ("heavy") would try to download weights at run time and fail
+offline.
+
+Several people
+--------------
+BlazePose's legacy graph returns one person. To notice several, :class:`BlazePoseEstimator` masks the
+person it found (their landmark box, grown by 15 % per side, filled with the image's mean colour) and
+runs again, up to ``max_people`` times; a new detection whose box centre falls inside an earlier
+person's grown box is a remnant of that person and is dropped, and so is a further "person" whose
+mean landmark visibility is below :data:`MIN_EXTRA_VISIBILITY` or with fewer than half of its
+landmarks inside the image (on the demo frames the second pass otherwise hallucinates a half-visible
+person at the image border in 4 of 84 frames). :func:`detect_pose` then takes the largest person
+(area of the landmark box clipped to the image) and says so in its ``warnings``.
+
+Focal length from EXIF
+----------------------
+:func:`focal_from_exif` (px, for the upright full-resolution image), in this order:
+
+1. ``FocalLength`` (mm) and the sensor width: from ``--sensor-width`` if given, else from
+   ``FocalPlaneXResolution`` / ``FocalPlaneResolutionUnit`` and ``PixelXDimension`` (sensor width mm =
+   pixels / resolution). ``f_px = f_mm / sensor_width_mm * image_width_px`` (the width along the
+   sensor's long side, so a rotated photo gets the same focal).
+2. ``FocalLengthIn35mmFilm`` (35-mm equivalent, mm), defined on the diagonal:
+   ``f_px = f35 * image_diagonal_px / 43.27`` (43.27 mm = the 36 x 24 mm frame's diagonal).
+3. Otherwise the default diagonal field of view :data:`DEFAULT_DIAGONAL_FOV_DEG` = 65 deg, i.e.
+   ``f_px = image_diagonal_px / (2 tan 32.5 deg) = 0.785 * diagonal`` (a 34 mm full-frame equivalent;
+   a phone's main camera is about 26 mm, 80 deg). For a 1000 x 1000 image this is 1110 px (H36M's
+   cameras: 1145 px). The absolute depth scales with this guess: 10 % off in focal is 10 % off in Z.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Final, Protocol, runtime_checkable
+
+import numpy as np
+
+from ._checks import PoseLifterError
+from .keypoints import convert, get_format
+
+IMAGE_SUFFIXES: Final[frozenset[str]] = frozenset(
+    {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff", ".gif", ".ppm", ".pgm"})
+"""File suffixes treated as images when a folder is given (files are still opened by content)."""
+
+DEFAULT_MAX_SIDE_PX: Final[int] = 2048
+"""Images with a longer side are downscaled (area filter) before detection; keypoints are mapped back."""
+
+MAX_IMAGE_PIXELS: Final[int] = 400_000_000
+"""Larger images (e.g. decompression bombs) are refused without decoding them."""
+
+DEFAULT_DIAGONAL_FOV_DEG: Final[float] = 65.0
+"""Diagonal field of view assumed when neither the user nor the EXIF data give a focal length."""
+
+FULL_FRAME_DIAGONAL_MM: Final[float] = math.hypot(36.0, 24.0)
+"""43.27 mm: the diagonal of a 36 x 24 mm frame, on which 35-mm-equivalent focal lengths are defined."""
+
+BOX_GROW: Final[float] = 0.15
+"""Relative growth of a person's landmark box (per side) when masking it to look for further people."""
+
+MIN_EXTRA_VISIBILITY: Final[float] = 0.5
+"""A second, third, ... person must have at least this mean landmark visibility to count."""
+
+_EXIF_IFD: Final[int] = 0x8769
+_TAG_FOCAL_LENGTH: Final[int] = 37386
+_TAG_FOCAL_35MM: Final[int] = 41989
+_TAG_FP_XRES: Final[int] = 41486
+_TAG_FP_YRES: Final[int] = 41487
+_TAG_FP_UNIT: Final[int] = 41488
+_TAG_PIXEL_X: Final[int] = 40962
+_TAG_PIXEL_Y: Final[int] = 40963
+_UNIT_MM: Final[dict[int, float]] = {2: 25.4, 3: 10.0, 4: 1.0, 5: 1e-3}
+
+
+class MissingDependencyError(PoseLifterError):
+    """An optional extra (e.g. ``mediapipe`` for BlazePose) is not installed."""
+
+
+class ImageError(PoseLifterError):
+    """A file is not an image, is unreadable or truncated, or is too large."""
+
+
+class NoPersonError(PoseLifterError):
+    """The 2D estimator found nobody in the image."""
+
+
+# ------------------------------------------------------------------------------------------------
+# Images and EXIF
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FocalGuess:
+    """A focal length estimate: ``focal`` px (for the upright full-resolution image), ``source``
+    (``"user"``, ``"exif-focal-plane"``, ``"exif-sensor-width"``, ``"exif-35mm"`` or ``"default-fov"``)
+    and a human-readable ``detail``."""
+
+    focal: float
+    source: str
+    detail: str
+
+
+@dataclass(frozen=True)
+class ExifCamera:
+    """The EXIF fields used for the focal length (None when absent). ``focal_mm``: FocalLength;
+    ``focal_35mm``: FocalLengthIn35mmFilm (mm); ``focal_plane_xres``: pixels per ``focal_plane_unit_mm``
+    on the sensor; ``pixel_x``, ``pixel_y``: PixelX/YDimension (the sensor-orientation image size)."""
+
+    focal_mm: float | None = None
+    focal_35mm: float | None = None
+    focal_plane_xres: float | None = None
+    focal_plane_unit_mm: float | None = None
+    pixel_x: int | None = None
+    pixel_y: int | None = None
+
+    @classmethod
+    def from_pil(cls, img: Any) -> "ExifCamera":
+        """Read the fields from a PIL image's EXIF (missing or malformed fields become None)."""
+        try:
+            ifd = img.getexif().get_ifd(_EXIF_IFD)
+        except Exception:  # noqa: BLE001 -- malformed EXIF must never stop a photo from being processed
+            return cls()
+
+        def num(tag: int) -> float | None:
+            v = ifd.get(tag)
+            try:
+                f = float(v)
+            except (TypeError, ValueError, ZeroDivisionError):
+                return None
+            return f if math.isfinite(f) and f > 0 else None
+
+        unit = ifd.get(_TAG_FP_UNIT, 2)
+        px, py = num(_TAG_PIXEL_X), num(_TAG_PIXEL_Y)
+        return cls(focal_mm=num(_TAG_FOCAL_LENGTH), focal_35mm=num(_TAG_FOCAL_35MM),
+                   focal_plane_xres=num(_TAG_FP_XRES), focal_plane_unit_mm=_UNIT_MM.get(int(unit) if isinstance(unit, int) else 2),
+                   pixel_x=None if px is None else int(px), pixel_y=None if py is None else int(py))
+
+
+def default_focal(image_size: tuple[int, int], *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
+    """The focal length (px) giving a diagonal field of view ``fov_deg`` for ``image_size = (W, H)`` px."""
+    if not 0 < fov_deg < 180:
+        raise PoseLifterError(f"field of view must be in (0, 180) degrees, got {fov_deg}")
+    return math.hypot(*image_size) / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
+
+
+def focal_from_exif(exif: ExifCamera, image_size: tuple[int, int], *, sensor_width_mm: float | None = None,
+                    fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> FocalGuess:
+    """The focal length in px for an upright image of ``image_size = (W, H)`` px (module docstring rules).
+
+    sensor_width_mm: the sensor's long side in mm, if known (overrides the EXIF focal-plane resolution).
+    fov_deg: the diagonal field of view used when EXIF gives nothing usable.
+    """
+    W, H = (float(v) for v in image_size)
+    long_side, diag = max(W, H), math.hypot(W, H)
+    if exif.focal_mm is not None:
+        if sensor_width_mm is not None:
+            if not sensor_width_mm > 0:
+                raise PoseLifterError(f"sensor width must be > 0 mm, got {sensor_width_mm}")
+            f = exif.focal_mm / sensor_width_mm * long_side
+            return FocalGuess(f, "exif-sensor-width", f"EXIF focal {exif.focal_mm:g} mm, sensor width "
+                                                      f"{sensor_width_mm:g} mm (given) -> {f:.1f} px")
+        if exif.focal_plane_xres is not None and exif.focal_plane_unit_mm is not None:
+            px_per_mm = exif.focal_plane_xres / exif.focal_plane_unit_mm
+            # the resolution refers to the sensor-size image (PixelXDimension); rescale to this image
+            native_long = max(exif.pixel_x or 0, exif.pixel_y or 0) or long_side
+            f = exif.focal_mm * px_per_mm * long_side / native_long
+            sensor = native_long / px_per_mm
+            if 1.0 <= sensor <= 100.0:  # plausible sensors: 1 mm (tiny phone) .. 100 mm (medium format)
+                return FocalGuess(f, "exif-focal-plane", f"EXIF focal {exif.focal_mm:g} mm, focal-plane resolution "
+                                                         f"-> sensor {sensor:.2f} mm wide -> {f:.1f} px")
+    if exif.focal_35mm is not None:
+        f = exif.focal_35mm * diag / FULL_FRAME_DIAGONAL_MM
+        return FocalGuess(f, "exif-35mm", f"EXIF 35-mm-equivalent focal {exif.focal_35mm:g} mm (on the diagonal) "
+                                          f"-> {f:.1f} px")
+    f = default_focal((int(W), int(H)), fov_deg=fov_deg)
+    why = "no usable EXIF focal length" if exif.focal_mm is None else \
+        f"EXIF focal {exif.focal_mm:g} mm but no sensor size (give --sensor-width)"
+    return FocalGuess(f, "default-fov", f"{why}: assumed a {fov_deg:g} deg diagonal field of view -> {f:.1f} px")
+
+
+@dataclass(frozen=True)
+class LoadedImage:
+    """An image ready for a 2D estimator.
+
+    rgb: ``(h, w, 3)`` uint8, upright (EXIF orientation applied), possibly downscaled.
+    size: ``(W, H)`` px of the upright **full-resolution** image: keypoints, focal length and principal
+        point refer to it. scale: ``w / W`` (1.0 when not downscaled). exif: the focal-length fields.
+    path: where it came from (or None). notes: messages for the user (downscaling, orientation).
+    """
+
+    rgb: np.ndarray
+    size: tuple[int, int]
+    scale: float
+    exif: ExifCamera = field(default_factory=ExifCamera)
+    path: Path | None = None
+    notes: tuple[str, ...] = ()
+
+
+def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE_PX,
+               max_pixels: int = MAX_IMAGE_PIXELS) -> LoadedImage:
+    """Open and decode an image file, apply the EXIF orientation and downscale it so that its longer
+    side is at most ``max_side`` px (JPEGs are decoded at reduced size directly). Raises
+    :class:`ImageError` with a clear message for a missing file, a file that is not an image, a
+    truncated or corrupt one, or one with more than ``max_pixels`` pixels."""
+    from PIL import Image, ImageOps, UnidentifiedImageError
+
+    p = Path(path)
+    if not p.is_file():
+        raise ImageError(f"{p}: no such file")
+    if p.stat().st_size == 0:
+        raise ImageError(f"{p}: empty file")
+    notes: list[str] = []
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            old_limit = Image.MAX_IMAGE_PIXELS
+            Image.MAX_IMAGE_PIXELS = None  # our own check below, before decoding
+            try:
+                img = Image.open(p)
+            finally:
+                Image.MAX_IMAGE_PIXELS = old_limit
+            W0, H0 = img.size
+            if W0 * H0 > max_pixels:
+                raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP), more than the "
+                                 f"{max_pixels / 1e6:.0f} MP this tool decodes; downscale it first")
+            exif = ExifCamera.from_pil(img)
+            orientation = 1
+            try:
+                orientation = int(img.getexif().get(0x0112, 1))
+            except Exception:  # noqa: BLE001
+                pass
+            if max(W0, H0) > max_side and img.format == "JPEG":
+                img.draft("RGB", (max(1, W0 * max_side // max(W0, H0)), max(1, H0 * max_side // max(W0, H0))))
+            img.load()
+    except ImageError:
+        raise
+    except UnidentifiedImageError:
+        raise ImageError(f"{p}: not an image (or a format this tool cannot read)") from None
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
+        raise ImageError(f"{p}: unreadable or truncated image ({exc})") from None
+    if orientation in (5, 6, 7, 8):
+        W0, H0 = H0, W0
+    if orientation != 1:
+        img = ImageOps.exif_transpose(img)
+        notes.append(f"rotated upright per EXIF orientation {orientation}")
+    if img.mode != "RGB":
+        img = img.convert("RGB")
+    w, h = img.size
+    if max(w, h) > max_side:
+        s = max_side / max(w, h)
+        img = img.resize((max(1, round(w * s)), max(1, round(h * s))), Image.Resampling.BOX)
+    w, h = img.size
+    scale = w / W0
+    if scale < 1.0:
+        notes.append(f"downscaled {W0} x {H0} -> {w} x {h} px for detection; keypoints are in full-resolution px")
+    return LoadedImage(rgb=np.asarray(img, np.uint8), size=(W0, H0), scale=scale, exif=exif, path=p,
+                       notes=tuple(notes))
+
+
+def image_from_array(rgb: Any, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> LoadedImage:
+    """Wrap an ``(H, W, 3)`` uint8 RGB array (e.g. an upload already decoded) as a :class:`LoadedImage`,
+    downscaled like :func:`load_image`. Grey ``(H, W)`` and RGBA ``(H, W, 4)`` arrays are converted."""
+    a = np.asarray(rgb)
+    if a.ndim == 2:
+        a = np.repeat(a[..., None], 3, axis=-1)
+    if a.ndim != 3 or a.shape[-1] not in (3, 4) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ImageError(f"image: expected an (H, W, 3) RGB array, got shape {tuple(a.shape)}")
+    a = np.ascontiguousarray(a[..., :3])
+    if a.dtype != np.uint8:
+        raise ImageError(f"image: expected dtype uint8, got {a.dtype}")
+    H, W = a.shape[:2]
+    notes: tuple[str, ...] = ()
+    scale = 1.0
+    if max(W, H) > max_side:
+        from PIL import Image
+
+        scale = max_side / max(W, H)
+        a = np.asarray(Image.fromarray(a).resize((max(1, round(W * scale)), max(1, round(H * scale))),
+                                                 Image.Resampling.BOX))
+        scale = a.shape[1] / W
+        notes = (f"downscaled {W} x {H} -> {a.shape[1]} x {a.shape[0]} px for detection",)
+    return LoadedImage(rgb=a, size=(W, H), scale=scale, notes=notes)
+
+
+# ------------------------------------------------------------------------------------------------
+# Estimator interface
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One person found by a 2D estimator.
+
+    keypoints: ``(J, 2)`` px in the estimator's ``keypoint_format``, in the coordinates of the image
+        passed to ``detect``. scores: ``(J,)`` per-joint confidence in [0, 1] (BlazePose: visibility).
+    bbox_xywh: ``(4,)`` px, the box of the keypoints (clipped to the image). keypoint_format: a :mod:`lifter.keypoints` name.
+    """
+
+    keypoints: np.ndarray
+    scores: np.ndarray
+    bbox_xywh: np.ndarray
+    keypoint_format: str
+
+    @property
+    def area(self) -> float:
+        """Box area, px^2."""
+        return float(self.bbox_xywh[2] * self.bbox_xywh[3])
+
+    def scaled(self, factor: float) -> "Detection":
+        """The detection with coordinates multiplied by ``factor`` (to map a downscaled image back)."""
+        return Detection(keypoints=self.keypoints * factor, scores=self.scores, bbox_xywh=self.bbox_xywh * factor,
+                         keypoint_format=self.keypoint_format)
+
+
+def bbox_of(points: np.ndarray) -> np.ndarray:
+    """``(x, y, w, h)`` px of the box around ``(J, 2)`` points."""
+    lo, hi = points.min(0), points.max(0)
+    return np.array([lo[0], lo[1], hi[0] - lo[0], hi[1] - lo[1]], np.float64)
+
+
+@runtime_checkable
+class PoseEstimator2D(Protocol):
+    """A single-image 2D human pose estimator."""
+
+    name: str
+    keypoint_format: str
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        """People in an ``(H, W, 3)`` uint8 RGB image, as :class:`Detection` s in that image's px."""
+        ...
+
+
+_ESTIMATORS: dict[str, Callable[..., PoseEstimator2D]] = {}
+
+
+def register_estimator(name: str, factory: Callable[..., PoseEstimator2D], *, overwrite: bool = False) -> None:
+    """Make ``get_estimator(name, **kwargs)`` call ``factory(**kwargs)``."""
+    if name in _ESTIMATORS and not overwrite:
+        raise ValueError(f"2D estimator {name!r} is already registered")
+    _ESTIMATORS[name] = factory
+
+
+def available_estimators() -> tuple[str, ...]:
+    return tuple(sorted(_ESTIMATORS))
+
+
+def get_estimator(name: str = "blazepose", **kwargs: Any) -> PoseEstimator2D:
+    """Build a registered 2D estimator (raises :class:`MissingDependencyError` if its extra is missing)."""
+    if name not in _ESTIMATORS:
+        raise PoseLifterError(f"unknown 2D estimator {name!r}; available: {list(available_estimators())}")
+    return _ESTIMATORS[name](**kwargs)
+
+
+def mediapipe_available() -> bool:
+    """Whether the ``detect`` extra (mediapipe) can be imported."""
+    import importlib.util
+
+    return importlib.util.find_spec("mediapipe") is not None
+
+
+class BlazePoseEstimator:
+    """MediaPipe BlazePose (legacy ``solutions.pose``, full model, 33 landmarks, ``"blazepose33"``).
+
+    model_complexity: 1 (the only weights inside the mediapipe 0.10.21 wheel; 0 and 2 need a download).
+    min_detection_confidence: the person detector's threshold. max_people: how many people to look for
+    by masking each one found and running again (module docstring); 1 = a single pass.
+    """
+
+    name = "blazepose"
+    keypoint_format = "blazepose33"
+
+    def __init__(self, *, model_complexity: int = 1, min_detection_confidence: float = 0.5,
+                 max_people: int = 3) -> None:
+        try:
+            import mediapipe as mp  # noqa: F401
+            from mediapipe.python.solutions import pose as mp_pose
+        except ImportError as exc:
+            raise MissingDependencyError(
+                "the BlazePose 2D detector needs the optional 'detect' extra: pip install -e \".[detect]\" "
+                f"(mediapipe==0.10.21; it needs numpy<2, so use a separate environment) [{exc}]") from None
+        if max_people < 1:
+            raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
+        self.max_people = int(max_people)
+        self.model_complexity = int(model_complexity)
+        self._pose = mp_pose.Pose(static_image_mode=True, model_complexity=self.model_complexity,
+                                  enable_segmentation=False, min_detection_confidence=min_detection_confidence)
+
+    def _once(self, image: np.ndarray) -> Detection | None:
+        res = self._pose.process(image)
+        if res.pose_landmarks is None:
+            return None
+        H, W = image.shape[:2]
+        lm = res.pose_landmarks.landmark
+        kp = np.array([[p.x * W, p.y * H] for p in lm], np.float64)
+        vis = np.clip(np.array([p.visibility for p in lm], np.float64), 0.0, 1.0)
+        box = bbox_of(np.clip(kp, 0.0, [W, H]))  # the in-image part: landmarks may be extrapolated outside
+        return Detection(keypoints=kp, scores=vis, bbox_xywh=box, keypoint_format=self.keypoint_format)
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        img = np.ascontiguousarray(np.asarray(image, np.uint8))
+        if img.ndim != 3 or img.shape[-1] != 3:
+            raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
+        found: list[Detection] = []
+        grown: list[np.ndarray] = []
+        work = img
+        fill = img.reshape(-1, 3).mean(0).astype(np.uint8)
+        H, W = img.shape[:2]
+        for _ in range(self.max_people):
+            det = self._once(work)
+            if det is None:
+                break
+            x, y, w, h = det.bbox_xywh
+            cx, cy = x + w / 2, y + h / 2
+            if any(g[0] <= cx <= g[2] and g[1] <= cy <= g[3] for g in grown):
+                break  # a remnant of someone already found
+            if found:
+                k = det.keypoints
+                inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
+                if float(det.scores.mean()) < MIN_EXTRA_VISIBILITY or inside < 0.5:
+                    break  # a hallucination in the masked image, not another person
+            found.append(det)
+            g = np.array([x - BOX_GROW * w, y - BOX_GROW * h, x + (1 + BOX_GROW) * w, y + (1 + BOX_GROW) * h])
+            grown.append(g)
+            if len(found) == self.max_people:
+                break
+            x0, y0 = int(max(0, math.floor(g[0]))), int(max(0, math.floor(g[1])))
+            x1, y1 = int(min(W, math.ceil(g[2]))), int(min(H, math.ceil(g[3])))
+            if work is img:
+                work = img.copy()
+            work[y0:y1, x0:x1] = fill
+        return found
+
+    def close(self) -> None:
+        self._pose.close()
+
+    def __enter__(self) -> "BlazePoseEstimator":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+register_estimator("blazepose", BlazePoseEstimator)
+
+
+# ------------------------------------------------------------------------------------------------
+# Image -> H36M 2D pose
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DetectedPose:
+    """The person chosen in one image, in H36M order.
+
+    keypoints_2d: ``(17, 2)`` px of the upright full-resolution image (H36M joint order).
+    scores: ``(17,)`` confidence per H36M joint (the minimum over the source joints of its rule).
+    raw: the chosen :class:`Detection` (its own format, full-resolution px).
+    num_people: how many people were found. image_size: ``(W, H)`` px. seconds: detection time.
+    warnings: messages for the user (several people, downscaling, ...).
+    """
+
+    keypoints_2d: np.ndarray
+    scores: np.ndarray
+    raw: Detection
+    num_people: int
+    image_size: tuple[int, int]
+    seconds: float
+    warnings: tuple[str, ...] = ()
+
+
+def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseEstimator2D,
+                max_side: int = DEFAULT_MAX_SIDE_PX) -> DetectedPose:
+    """Run ``estimator`` on an image (a path or a :class:`LoadedImage`), pick the largest person and
+    convert their keypoints to H36M-17. Raises :class:`ImageError` or :class:`NoPersonError`."""
+    img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
+    t0 = time.perf_counter()
+    people = estimator.detect(img.rgb)
+    dt = time.perf_counter() - t0
+    where = f"{img.path}: " if img.path is not None else ""
+    if not people:
+        extra = f" (searched a copy downscaled by {img.scale:.3g})" if img.scale < 1.0 else ""
+        raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
+    people = sorted(people, key=lambda d: d.area, reverse=True)
+    chosen = people[0].scaled(1.0 / img.scale) if img.scale != 1.0 else people[0]
+    notes = list(img.notes)
+    if len(people) > 1:
+        notes.append(f"{len(people)} people found; using the largest (box {chosen.bbox_xywh[2]:.0f} x "
+                     f"{chosen.bbox_xywh[3]:.0f} px)")
+    fmt = get_format(chosen.keypoint_format)
+    kp17 = convert(chosen.keypoints, src=chosen.keypoint_format)
+    scores = np.array([min(float(chosen.scores[k]) for k, _ in rule) for rule in fmt.to_h36m])
+    return DetectedPose(keypoints_2d=kp17, scores=scores, raw=chosen, num_people=len(people), image_size=img.size,
+                        seconds=dt, warnings=tuple(notes))
+
+
+__all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
+           "ExifCamera", "FocalGuess", "ImageError", "LoadedImage", "MissingDependencyError", "NoPersonError",
+           "PoseEstimator2D", "available_estimators", "default_focal", "detect_pose", "focal_from_exif",
+           "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

@@ -1,0 +1,334 @@
+"""Measure the cascade image -> BlazePose -> PoseLifter on the 84 H36M demo frames.
+
+    python scripts/eval_cascade.py [--weights default] [--out docs/cascade/eval_cascade.json]
+
+Needs the ``detect`` extra (mediapipe) and ``../shared/data/h36m/demo``. Measures, with each frame's
+true camera intrinsics (focal, principal point; no lens undistortion):
+
+* MPJPE, PA-MPJPE, MRPE (mm), per joint, for BlazePose 2D, and for reference the ground-truth 2D
+  and the Stacked-Hourglass detections of the same frames; also BlazePose with the focal length
+  unknown (the CLI's default 65 deg diagonal field of view instead of the true focal);
+* time per image (decode, detection, conversion + lifting) on this machine;
+* the keypoint-format rules (:mod:`lifter.keypoints`): pixel error of every interpolated joint
+  against the ground-truth 2D (``p2d_gt``, with lens distortion), the naive mapping for comparison, a
+  re-fit of the weights on the inlier frames and a cross-camera check (fit on one camera's frames,
+  test on the other's). coco17 and openpose25 are measured with BlazePose's landmarks in their joint
+  sets (OpenPose's Neck / MidHip = BlazePose's mid-shoulders / mid-hips): the rules' error given
+  BlazePose-quality joints, not a COCO or OpenPose network's;
+* the Gaussian + uniform mixture error model (:func:`lifter.noise.fit_error_model`) fitted to
+  BlazePose's converted errors over the detected demo frames, written to
+  ``assets/error_model/blazepose_demo.json``, and compared with the shipped SH fit
+  (``assets/error_model/sh_mixture.json``) and with a fit of SH's errors on the same frames.
+
+Writes the JSON and prints markdown tables for the README. Nothing from H36M (images, poses,
+detections) is written: only measured numbers and fitted parameters.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from lifter.api import ASSETS_DIR, Lifter  # noqa: E402
+from lifter.data import H36M, default_h36m_dir  # noqa: E402
+from lifter.detect import DEFAULT_DIAGONAL_FOV_DEG, default_focal, get_estimator, load_image  # noqa: E402
+from lifter.keypoints import (BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES,  # noqa: E402
+                              convert)
+from lifter.metrics import joint_errors, mpjpe, pa_mpjpe, root_errors  # noqa: E402
+from lifter.noise import ErrorModel, fit_error_model, mixture_loglik, normalized_errors  # noqa: E402
+from lifter.skeleton import JOINT_NAMES  # noqa: E402
+
+INLIER_MEDIAN_PX = 15.0
+"""A frame is an inlier for the rule fits when the median error of its 12 limb joints is below this."""
+
+RULE_JOINTS = ("pelvis", "r_hip", "l_hip", "spine", "thorax", "neck_nose", "head_top")
+BP = {n: i for i, n in enumerate(BLAZEPOSE33_JOINT_NAMES)}
+H = {n: i for i, n in enumerate(JOINT_NAMES)}
+LIMBS = ("r_knee", "r_ankle", "l_knee", "l_ankle", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow",
+         "r_wrist")
+
+
+def blazepose_as(fmt: str, kp33: np.ndarray) -> np.ndarray:
+    """BlazePose landmarks ``(N, 33, 2)`` in another format's joint set (coco17, openpose25)."""
+    mid = lambda a, b: 0.5 * (kp33[:, BP[a]] + kp33[:, BP[b]])  # noqa: E731
+    if fmt == "blazepose33":
+        return kp33
+    if fmt == "coco17":
+        return np.stack([kp33[:, BP[n]] for n in COCO17_JOINT_NAMES], 1)
+    extra = {"neck": mid("l_shoulder", "r_shoulder"), "mid_hip": mid("l_hip", "r_hip"),
+             "l_big_toe": kp33[:, BP["l_foot_index"]], "r_big_toe": kp33[:, BP["r_foot_index"]],
+             "l_small_toe": kp33[:, BP["l_foot_index"]], "r_small_toe": kp33[:, BP["r_foot_index"]]}
+    return np.stack([extra[n] if n in extra else kp33[:, BP[n]] for n in OPENPOSE25_JOINT_NAMES], 1)
+
+
+def naive(kp33: np.ndarray) -> dict[str, np.ndarray]:
+    """The obvious mappings the rules replace: mid-hips, the detector's hips, mid-shoulders, nose,
+    and for the head top the mid-ears."""
+    mid = lambda a, b: 0.5 * (kp33[:, BP[a]] + kp33[:, BP[b]])  # noqa: E731
+    return {"pelvis": mid("l_hip", "r_hip"), "r_hip": kp33[:, BP["r_hip"]], "l_hip": kp33[:, BP["l_hip"]],
+            "spine": 0.5 * (mid("l_hip", "r_hip") + mid("l_shoulder", "r_shoulder")),
+            "thorax": mid("l_shoulder", "r_shoulder"), "neck_nose": kp33[:, BP["nose"]], "head_top": mid("l_ear", "r_ear")}
+
+
+def stats(e: np.ndarray) -> dict[str, float]:
+    return {"mean_px": round(float(np.mean(e)), 2), "median_px": round(float(np.median(e)), 2)}
+
+
+def lsq_affine(target: np.ndarray, anchors: list[np.ndarray]) -> np.ndarray:
+    """Weights ``w`` (sum 1) minimizing ``|sum_k w_k anchors_k - target|^2`` over ``(N, 2)`` points."""
+    p0 = anchors[0]
+    A = np.stack([(p - p0).reshape(-1) for p in anchors[1:]], 1)
+    w = np.linalg.lstsq(A, (target - p0).reshape(-1), rcond=None)[0]
+    return np.r_[1.0 - w.sum(), w]
+
+
+def refit_weights(kp33: np.ndarray, gt: np.ndarray) -> dict[str, Any]:
+    """Re-fit the shared rule weights (lifter.keypoints constants) by least squares."""
+    mid = lambda a, b: 0.5 * (kp33[:, BP[a]] + kp33[:, BP[b]])  # noqa: E731
+    MH, MS, ME, N = mid("l_hip", "r_hip"), mid("l_shoulder", "r_shoulder"), mid("l_ear", "r_ear"), kp33[:, BP["nose"]]
+    T = MS - MH
+    out: dict[str, Any] = {}
+    out["PELVIS_UP"] = float(((gt[:, H["pelvis"]] - MH) * T).sum() / (T * T).sum())
+    # hips, both sides together: h36m_hip = MH + a (hip - MH) + b (MS - MH)
+    A = np.concatenate([np.stack([(kp33[:, BP[s]] - MH).reshape(-1), T.reshape(-1)], 1) for s in ("r_hip", "l_hip")])
+    y = np.concatenate([(gt[:, H[s]] - MH).reshape(-1) for s in ("r_hip", "l_hip")])
+    a, b = np.linalg.lstsq(A, y, rcond=None)[0]
+    out["HIP_WIDEN"], out["hip_up (shipped: PELVIS_UP)"] = float(a), float(b)
+    out["SPINE_UP"] = float(((gt[:, H["spine"]] - MH) * T).sum() / (T * T).sum())
+    out["THORAX_DOWN"] = float(((gt[:, H["thorax"]] - MS) * -T).sum() / (T * T).sum())
+    w = lsq_affine(gt[:, H["neck_nose"]], [MS, N, ME])
+    out["NECK_NOSE_W"] = [float(w[1]), float(w[2])]
+    w = lsq_affine(gt[:, H["head_top"]], [ME, N, MS])
+    out["HEAD_TOP_W"] = [float(-w[1]), float(-w[2])]
+    return out
+
+
+def apply_weights(kp33: np.ndarray, w: dict[str, Any]) -> dict[str, np.ndarray]:
+    """The rule joints ``(N, 2)`` with weights ``w`` (as returned by :func:`refit_weights`)."""
+    mid = lambda a, b: 0.5 * (kp33[:, BP[a]] + kp33[:, BP[b]])  # noqa: E731
+    MH, MS, ME, N = mid("l_hip", "r_hip"), mid("l_shoulder", "r_shoulder"), mid("l_ear", "r_ear"), kp33[:, BP["nose"]]
+    T = MS - MH
+    b = w["hip_up (shipped: PELVIS_UP)"]
+    return {"pelvis": MH + w["PELVIS_UP"] * T,
+            "r_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["r_hip"]] - MH) + b * T,
+            "l_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["l_hip"]] - MH) + b * T,
+            "spine": MH + w["SPINE_UP"] * T, "thorax": MS - w["THORAX_DOWN"] * T,
+            "neck_nose": MS + w["NECK_NOSE_W"][0] * (N - MS) + w["NECK_NOSE_W"][1] * (ME - MS),
+            "head_top": ME + w["HEAD_TOP_W"][0] * (ME - N) + w["HEAD_TOP_W"][1] * (ME - MS)}
+
+
+def pose_metrics(pred_abs: np.ndarray, gt_abs: np.ndarray) -> dict[str, Any]:
+    mrpe, _ = root_errors(pred_abs[:, 0], gt_abs[:, 0])
+    je = joint_errors(pred_abs, gt_abs)
+    return {"n": int(len(gt_abs)), "mpjpe": round(float(mpjpe(pred_abs, gt_abs).mean()), 1),
+            "pa_mpjpe": round(float(pa_mpjpe(pred_abs, gt_abs).mean()), 1), "mrpe": round(float(mrpe.mean()), 1),
+            "mrpe_median": round(float(np.median(mrpe)), 1),
+            "mrpe_xyz": np.round(np.abs(pred_abs[:, 0] - gt_abs[:, 0]).mean(0), 1).tolist(),
+            "per_joint_mpjpe": {n: round(float(v), 1) for n, v in zip(JOINT_NAMES, je.mean(0))}}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--h36m", type=Path, default=None)
+    ap.add_argument("--weights", default="default", help="shipped model name or checkpoint .pt")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "cascade" / "eval_cascade.json")
+    ap.add_argument("--error-model-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo.json")
+    ap.add_argument("--threads", type=int, default=1)
+    args = ap.parse_args()
+    import torch
+
+    torch.set_num_threads(args.threads)
+    h36m_dir = args.h36m or default_h36m_dir()
+    demo = h36m_dir / "demo"
+    ann = np.load(demo / "annotations.npz")
+    data = H36M(h36m_dir)
+    n_all = len(ann["image"])
+    cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
+    focal = np.array([c.focal for c in cams])
+    pp = np.array([c.principal_point for c in cams])
+    sizes = np.array([(c.width, c.height) for c in cams])
+    gt2d = ann["p2d_gt"].astype(np.float64)
+    gt3d = ann["p3d_cam"].astype(np.float64)
+    lifter = Lifter.from_checkpoint(args.weights) if args.weights.endswith(".pt") else Lifter.from_pretrained(args.weights)
+    print(f"lifter: {lifter.name} ({lifter!r})")
+
+    # ---------------------------------------------------------------- detection, timed per image
+    est = get_estimator("blazepose")
+    est.detect(np.zeros((64, 64, 3), np.uint8))  # warm-up (graph initialisation)
+    kp33 = np.full((n_all, 33, 2), np.nan)
+    people = np.zeros(n_all, int)
+    t_load, t_det, t_lift = np.zeros(n_all), np.zeros(n_all), np.full(n_all, np.nan)
+    for i, rel in enumerate(ann["image"]):
+        t0 = time.perf_counter()
+        img = load_image(demo / str(rel))
+        t1 = time.perf_counter()
+        dets = est.detect(img.rgb)
+        t2 = time.perf_counter()
+        t_load[i], t_det[i] = t1 - t0, t2 - t1
+        people[i] = len(dets)
+        if dets:
+            d = max(dets, key=lambda d: d.area)
+            kp33[i] = d.keypoints / img.scale
+            t3 = time.perf_counter()
+            lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i])
+            t_lift[i] = time.perf_counter() - t3
+    ok = people > 0
+    print(f"detected a person in {ok.sum()} of {n_all} frames; several people reported in {(people > 1).sum()}")
+    timing = {"decode_ms": round(1e3 * float(np.median(t_load)), 1), "detect_ms": round(1e3 * float(np.median(t_det)), 1),
+              "convert_lift_ms": round(1e3 * float(np.nanmedian(t_lift)), 1),
+              "total_ms": round(1e3 * float(np.nanmedian(t_load + t_det + t_lift)), 1),
+              "detect_ms_mean": round(1e3 * float(np.mean(t_det)), 1),
+              "note": "medians over the 84 frames, one process, torch 1 thread, 1000 x 1000 px JPEGs, 2 shared CPU "
+                      "cores (training jobs running alongside); detection includes the second pass that looks "
+                      "for further people (max_people=3)"}
+
+    # ---------------------------------------------------------------- lifting metrics
+    det17 = convert(kp33[ok], src="blazepose33")
+    rows: dict[str, Any] = {}
+    res = lifter.lift(det17, focal=focal[ok], principal_point=pp[ok])
+    rows["BlazePose 2D, true focal"] = pose_metrics(res.absolute, gt3d[ok])
+    f_def = np.array([default_focal(tuple(s)) for s in sizes[ok]])[:, None].repeat(2, 1)
+    res_nf = lifter.lift(det17, focal=f_def, principal_point=sizes[ok] / 2.0)
+    rows[f"BlazePose 2D, default {DEFAULT_DIAGONAL_FOV_DEG:g} deg FOV, image centre"] = pose_metrics(res_nf.absolute, gt3d[ok])
+    sh17 = convert(ann["sh_det"].astype(np.float64), src="sh16")
+    rows["SH detections 2D (same frames), true focal"] = pose_metrics(
+        lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok])
+    rows["ground-truth 2D (same frames), true focal"] = pose_metrics(
+        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok])
+    rows["ground-truth 2D, all 84 frames"] = pose_metrics(
+        lifter.lift(gt2d, focal=focal, principal_point=pp).absolute, gt3d)
+    rows["SH detections 2D, all 84 frames"] = pose_metrics(
+        lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d)
+    default_fov_focal = {"mean_px": round(float(f_def[:, 0].mean()), 1), "true_mean_px": round(float(np.sqrt(focal[ok].prod(1)).mean()), 1)}
+
+    # ---------------------------------------------------------------- converter rules
+    k = kp33[ok]
+    g = gt2d[ok]
+    limb_err = np.linalg.norm(k[:, [BP[n] for n in LIMBS]] - g[:, [H[n] for n in LIMBS]], axis=-1)
+    inl = np.median(limb_err, axis=1) < INLIER_MEDIAN_PX
+    conv: dict[str, Any] = {"inlier_rule": f"median limb-joint error < {INLIER_MEDIAN_PX:g} px",
+                            "n_detected": int(ok.sum()), "n_inlier": int(inl.sum()), "formats": {}}
+    nv = naive(k)
+    for fmt in ("blazepose33", "coco17", "openpose25"):
+        out17 = convert(blazepose_as(fmt, k), src=fmt)
+        e = np.linalg.norm(out17 - g, axis=-1)
+        conv["formats"][fmt] = {
+            "per_joint_all": {n: stats(e[:, H[n]]) for n in JOINT_NAMES},
+            "per_joint_inliers": {n: stats(e[inl, H[n]]) for n in JOINT_NAMES},
+            "mean_all_joints": stats(e), "mean_all_joints_inliers": stats(e[inl])}
+    conv["naive"] = {n: {"all": stats(np.linalg.norm(nv[n] - g[:, H[n]], axis=-1)),
+                         "inliers": stats(np.linalg.norm(nv[n][inl] - g[inl, H[n]], axis=-1))} for n in RULE_JOINTS}
+    w_all = refit_weights(k[inl], g[inl])
+    conv["refit_on_inliers"] = {kk: np.round(v, 3).tolist() for kk, v in w_all.items()}
+    cam_ids = ann["camera"][ok]
+    cross: dict[str, Any] = {}
+    for c in sorted(set(cam_ids.tolist())):
+        tr, te = inl & (cam_ids != c), inl & (cam_ids == c)
+        if tr.sum() < 5 or te.sum() < 5:
+            continue
+        wc = refit_weights(k[tr], g[tr])
+        pred = apply_weights(k[te], wc)
+        cross[f"test camera {c} (n={int(te.sum())})"] = {n: stats(np.linalg.norm(pred[n] - g[te, H[n]], axis=-1))
+                                                         for n in RULE_JOINTS}
+    conv["cross_camera"] = cross
+
+    # ---------------------------------------------------------------- error model
+    sh_model = ErrorModel.load(Path(ASSETS_DIR) / "error_model" / "sh_mixture.json")
+    meta = {"data": "84 H36M demo frames (../shared/data/h36m/demo), " f"{int(ok.sum())} with a detection",
+            "detector": "MediaPipe BlazePose (mediapipe 0.10.21, solutions.pose, model_complexity=1), converted "
+                        "with lifter.keypoints 'blazepose33'",
+            "caveat": "84 frames, 5 subjects, mostly S9 'Posing' from 2 cameras: the fit is indicative only"}
+    bp_model = fit_error_model(det17, g, source="MediaPipe BlazePose detections vs distorted GT projection, "
+                               "84 H36M demo frames", progress=False, meta=meta)
+    args.error_model_out.parent.mkdir(parents=True, exist_ok=True)
+    bp_model.save(args.error_model_out)
+    sh_demo = fit_error_model(sh17[ok], g, progress=False)
+    e_bp, _, _ = normalized_errors(det17, g, reference_scale=sh_model.reference_scale)
+    e_sh, _, _ = normalized_errors(sh17[ok], g, reference_scale=sh_model.reference_scale)
+
+    def nll(m: ErrorModel, e: np.ndarray) -> float:
+        return float(np.mean([-mixture_loglik(e[:, j], m.gamma[j], m.mu[j], m.sigma[j], v=m.v).mean() for j in range(17)]))
+
+    def summ(m: ErrorModel) -> dict[str, Any]:
+        return {"reference_scale_px": round(m.reference_scale, 1), "gamma_mean": round(float(m.gamma.mean()), 3),
+                "sigma_mean_px": np.round(m.sigma.mean(0), 2).tolist(), "mu_mean_px": np.round(m.mu.mean(0), 2).tolist(),
+                "gaussian_sigma_mean_px": np.round(m.gaussian_sigma.mean(0), 2).tolist() if m.gaussian_sigma is not None else None,
+                "gamma": np.round(m.gamma, 3).tolist(), "sigma": np.round(m.sigma, 2).tolist(), "n": m.n_samples}
+
+    noise = {"blazepose_demo": summ(bp_model), "sh_shipped (S1,5,6,7,8 training, 293k)": summ(sh_model),
+             "sh_demo (same frames)": summ(sh_demo),
+             "nll_blazepose_errors": {"under blazepose_demo fit (in-sample)": round(nll(bp_model, e_bp), 3),
+                                      "under shipped SH fit": round(nll(sh_model, e_bp), 3)},
+             "nll_sh_errors_same_frames": {"under shipped SH fit": round(nll(sh_model, e_sh), 3),
+                                           "under blazepose_demo fit": round(nll(bp_model, e_sh), 3)},
+             "raw_error_px_same_frames": {"blazepose": stats(np.linalg.norm(det17 - g, axis=-1)),
+                                          "sh": stats(np.linalg.norm(sh17[ok] - g, axis=-1))},
+             "nll_note": "mean over joints of the mean NLL (nats per 2D error), errors rescaled to the SH reference scale"}
+
+    report = {"lifter": {"name": lifter.name, "repr": repr(lifter)}, "frames": n_all,
+              "frames_with_detection": int(ok.sum()), "frames_several_people": int((people > 1).sum()),
+              "frames_without_detection": [str(x) for x in ann["image"][~ok]],
+              "lifting": rows, "default_fov_focal": default_fov_focal, "timing": timing, "converter": conv,
+              "error_model": noise, "error_model_file": str(args.error_model_out)}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(report, indent=1))
+    print(f"wrote {args.out} and {args.error_model_out}")
+    print(markdown(report))
+    return 0
+
+
+def markdown(r: dict[str, Any]) -> str:
+    L = [f"Cascade on the {r['frames']} H36M demo frames (BlazePose found a person in {r['frames_with_detection']}; "
+         f"lifter `{r['lifter']['name']}`; camera intrinsics of each frame unless stated):", "",
+         "| 2D input | frames | MPJPE | PA-MPJPE | MRPE | MRPE x / y / z |", "|---|---|---|---|---|---|"]
+    for name, m in r["lifting"].items():
+        L.append(f"| {name} | {m['n']} | {m['mpjpe']:.1f} | {m['pa_mpjpe']:.1f} | {m['mrpe']:.1f} | "
+                 + " / ".join(f"{v:.0f}" for v in m["mrpe_xyz"]) + " |")
+    L += ["", "Per joint MPJPE (mm):", "", "| joint | " + " | ".join(r["lifting"].keys()) + " |",
+          "|---|" + "---|" * len(r["lifting"])]
+    for j in JOINT_NAMES:
+        L.append(f"| {j} | " + " | ".join(f"{m['per_joint_mpjpe'][j]:.1f}" for m in r["lifting"].values()) + " |")
+    t = r["timing"]
+    L += ["", f"Time per image (median): decode {t['decode_ms']} ms + BlazePose {t['detect_ms']} ms + convert & lift "
+              f"{t['convert_lift_ms']} ms = {t['total_ms']} ms ({t['note']}).", ""]
+    c = r["converter"]
+    L += [f"Keypoint rules, pixel error vs ground-truth 2D (mean / median px; all {c['n_detected']} detected frames | "
+          f"{c['n_inlier']} inlier frames, {c['inlier_rule']}):", "",
+          "| joint | naive mapping | blazepose33 | coco17 | openpose25 |", "|---|---|---|---|---|"]
+    for j in RULE_JOINTS:
+        nv = c["naive"][j]
+        cells = [f"{nv['all']['mean_px']:.1f} / {nv['all']['median_px']:.1f} \\| {nv['inliers']['mean_px']:.1f} / {nv['inliers']['median_px']:.1f}"]
+        for fmt in ("blazepose33", "coco17", "openpose25"):
+            a, b = c["formats"][fmt]["per_joint_all"][j], c["formats"][fmt]["per_joint_inliers"][j]
+            cells.append(f"{a['mean_px']:.1f} / {a['median_px']:.1f} \\| {b['mean_px']:.1f} / {b['median_px']:.1f}")
+        L.append(f"| {j} | " + " | ".join(cells) + " |")
+    L += ["", "Cross-camera check (rule weights fitted on one camera's inlier frames, error on the other's, mean / median px):", ""]
+    for k, v in c["cross_camera"].items():
+        L.append(f"- {k}: " + ", ".join(f"{j} {s['mean_px']:.1f} / {s['median_px']:.1f}" for j, s in v.items()))
+    e = r["error_model"]
+    L += ["", "Mixture error model (px at the fit's reference 2D scale): BlazePose on the demo frames vs Stacked Hourglass:", "",
+          "| fit | n per joint | ref. scale px | mean gamma | mean sigma x, y px | mean single-Gaussian sigma x, y px |",
+          "|---|---|---|---|---|---|"]
+    for name in ("blazepose_demo", "sh_demo (same frames)", "sh_shipped (S1,5,6,7,8 training, 293k)"):
+        m = e[name]
+        gs = m["gaussian_sigma_mean_px"]
+        L.append(f"| {name} | {m['n']} | {m['reference_scale_px']} | {m['gamma_mean']:.3f} | {m['sigma_mean_px'][0]:.2f}, "
+                 f"{m['sigma_mean_px'][1]:.2f} | {gs[0]:.2f}, {gs[1]:.2f} |")
+    L += ["", f"NLL of BlazePose's errors: {e['nll_blazepose_errors']}; of SH's errors on the same frames: "
+              f"{e['nll_sh_errors_same_frames']} ({e['nll_note']}). Raw 2D error, same frames: {e['raw_error_px_same_frames']}."]
+    return "\n".join(L)
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    raise SystemExit(main())

@@ -1,0 +1,164 @@
+"""Detector keypoint formats (blazepose33, coco17, openpose25 -> h36m17) and the BlazePose detector.
+
+The converter tests need nothing optional; the detector tests skip without mediapipe (the ``detect``
+extra) and use the project's own mannequin renders (assets/demo) and, when present, two H36M demo
+frames read at run time from ../shared (never copied)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lifter import PoseLifterError
+from lifter.keypoints import (BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, HEAD_TOP_W, HIP_WIDEN, NECK_NOSE_W,
+                              OPENPOSE25_JOINT_NAMES, PELVIS_UP, SPINE_UP, THORAX_DOWN, convert, get_format,
+                              keypoint_formats)
+from lifter.skeleton import JOINT_NAMES
+
+from conftest import H36M_DIR
+
+ROOT = Path(__file__).resolve().parents[1]
+FORMATS = {"blazepose33": BLAZEPOSE33_JOINT_NAMES, "coco17": COCO17_JOINT_NAMES, "openpose25": OPENPOSE25_JOINT_NAMES}
+H = {n: i for i, n in enumerate(JOINT_NAMES)}
+DIRECT = ("r_knee", "r_ankle", "l_knee", "l_ankle", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow",
+          "r_wrist")
+
+
+def test_formats_registered():
+    for name, joints in FORMATS.items():
+        assert name in keypoint_formats()
+        f = get_format(name)
+        assert f.joint_names == joints and f.num_joints == len(joints)
+        assert sorted(JOINT_NAMES[j] for j in f.direct_joints) == sorted(DIRECT)
+        np.testing.assert_allclose(f.matrix.sum(1), 1.0, atol=1e-12)
+    assert len(BLAZEPOSE33_JOINT_NAMES) == 33 and len(OPENPOSE25_JOINT_NAMES) == 25
+
+
+@pytest.mark.parametrize("fmt", list(FORMATS))
+def test_direct_joints_and_affine(rng, fmt):
+    J = len(FORMATS[fmt])
+    x = rng.normal(400, 80, (3, J, 2))
+    out = convert(x, src=fmt)
+    assert out.shape == (3, 17, 2)
+    for n in DIRECT:
+        np.testing.assert_array_equal(out[:, H[n]], x[:, FORMATS[fmt].index(n)])
+    a, t = 0.6, np.array([-40.0, 25.0])
+    np.testing.assert_allclose(convert(a * x + t, src=fmt), a * out + t, rtol=1e-10)
+    assert convert(rng.normal(0, 1, (J, 3)), src=fmt).shape == (17, 3)  # 3D works too
+    with pytest.raises(PoseLifterError, match=f"{J} joints"):
+        convert(np.zeros((J + 1, 2)), src=fmt)
+    with pytest.raises(PoseLifterError, match="cannot be produced"):
+        convert(np.zeros((17, 2)), src="h36m17", dst=fmt)
+
+
+def _named(fmt: str, x: np.ndarray) -> dict[str, np.ndarray]:
+    return {n: x[..., i, :] for i, n in enumerate(FORMATS[fmt])}
+
+
+@pytest.mark.parametrize("fmt", list(FORMATS))
+def test_documented_rules(rng, fmt):
+    x = rng.normal(400, 80, (5, len(FORMATS[fmt]), 2))
+    j = _named(fmt, x)
+    out = convert(x, src=fmt)
+    if fmt == "openpose25":
+        MH, MS = j["mid_hip"], j["neck"]
+    else:
+        MH, MS = 0.5 * (j["l_hip"] + j["r_hip"]), 0.5 * (j["l_shoulder"] + j["r_shoulder"])
+    ME, N, T = 0.5 * (j["l_ear"] + j["r_ear"]), j["nose"], MS - MH
+    expect = {
+        "pelvis": MH + PELVIS_UP * T,
+        "r_hip": MH + HIP_WIDEN * (j["r_hip"] - MH) + PELVIS_UP * T,
+        "l_hip": MH + HIP_WIDEN * (j["l_hip"] - MH) + PELVIS_UP * T,
+        "spine": MH + SPINE_UP * T,
+        "thorax": MS - THORAX_DOWN * T,
+        "neck_nose": MS + NECK_NOSE_W[0] * (N - MS) + NECK_NOSE_W[1] * (ME - MS),
+        "head_top": ME + HEAD_TOP_W[0] * (ME - N) + HEAD_TOP_W[1] * (ME - MS),
+    }
+    for n, e in expect.items():
+        np.testing.assert_allclose(out[:, H[n]], e, atol=1e-9, err_msg=n)
+
+
+def test_coco_and_blazepose_agree(rng):
+    """COCO's joints are a subset of BlazePose's with the same meaning: same H36M pose."""
+    bp = rng.normal(400, 80, (4, 33, 2))
+    coco = np.stack([bp[:, BLAZEPOSE33_JOINT_NAMES.index(n)] for n in COCO17_JOINT_NAMES], 1)
+    np.testing.assert_allclose(convert(coco, src="coco17"), convert(bp, src="blazepose33"), atol=1e-9)
+
+
+def test_missing_extra_is_a_clear_error(monkeypatch):
+    from lifter.detect import BlazePoseEstimator, MissingDependencyError, get_estimator
+
+    monkeypatch.setitem(sys.modules, "mediapipe", None)  # import mediapipe -> ImportError
+    monkeypatch.setitem(sys.modules, "mediapipe.python", None)
+    monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)
+    with pytest.raises(MissingDependencyError, match=r'pip install -e "\.\[detect\]"'):
+        BlazePoseEstimator()
+    with pytest.raises(MissingDependencyError):
+        get_estimator("blazepose")
+    with pytest.raises(PoseLifterError, match="unknown 2D estimator"):
+        get_estimator("nope")
+
+
+# ------------------------------------------------------------------------------------------------
+# BlazePose (needs mediapipe)
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def blazepose():
+    pytest.importorskip("mediapipe")
+    from lifter.detect import BlazePoseEstimator
+
+    est = BlazePoseEstimator(max_people=3)
+    yield est
+    est.close()
+
+
+@pytest.fixture(scope="module")
+def mannequins():
+    p = ROOT / "assets" / "demo" / "samples.npz"
+    if not p.is_file():
+        pytest.skip("assets/demo not present")
+    return np.load(p)
+
+
+def test_blazepose_on_mannequin_renders(blazepose, mannequins):
+    from lifter.detect import detect_pose
+
+    errs = []
+    for i, name in enumerate(mannequins["names"]):
+        det = detect_pose(ROOT / "assets" / "demo" / f"{name}.jpg", estimator=blazepose)
+        assert det.keypoints_2d.shape == (17, 2) and det.raw.keypoints.shape == (33, 2) and det.num_people == 1
+        assert tuple(det.image_size) == tuple(int(v) for v in mannequins["image_size"][i])
+        errs.append(np.linalg.norm(det.keypoints_2d - mannequins["keypoints_2d"][i], axis=-1))
+    errs = np.array(errs)
+    # the mannequin is no person, but BlazePose finds it; limbs land near the true projections
+    limb = [H[n] for n in DIRECT]
+    assert np.median(errs[:, limb]) < 25, np.median(errs, 0)
+
+
+def test_blazepose_several_people_takes_largest(blazepose):
+    from PIL import Image
+
+    from lifter.detect import detect_pose, image_from_array
+
+    a = np.asarray(Image.open(ROOT / "assets" / "demo" / "standing.jpg").convert("RGB"))
+    b = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
+    canvas = np.concatenate([a, b], axis=1)  # two mannequins side by side, the walking one wider
+    det = detect_pose(image_from_array(canvas), estimator=blazepose)
+    assert det.num_people == 2 and any("2 people found; using the largest" in w for w in det.warnings)
+    assert det.keypoints_2d[:, 0].min() > 800  # the right-hand (walking, larger box) one
+
+
+@pytest.mark.skipif(not (H36M_DIR / "demo" / "annotations.npz").is_file(), reason="H36M demo frames not present")
+def test_blazepose_on_h36m_demo_frames(blazepose):
+    from lifter.detect import detect_pose
+
+    ann = np.load(H36M_DIR / "demo" / "annotations.npz")
+    for i in (0, 10):
+        det = detect_pose(H36M_DIR / "demo" / str(ann["image"][i]), estimator=blazepose)
+        err = np.linalg.norm(det.keypoints_2d - ann["p2d_gt"][i], axis=-1)
+        assert np.median(err) < 15, err

@@ -1,0 +1,304 @@
+"""``poselifter lift`` on keypoint JSON files and bad inputs, and the EXIF / image-loading logic.
+None of these need mediapipe (images that would reach the detector are bad files, or the detector is
+a stub)."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from lifter import Lifter, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter.camera import project
+from lifter.checkpoint import save_checkpoint
+from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, Detection, ExifCamera, ImageError, bbox_of, default_focal,
+                           detect_pose, focal_from_exif, image_from_array, load_image, register_estimator)
+from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES, convert
+from lifter.lift_cli import main, output_names, parse_keypoint_json
+from lifter.skeleton import JOINT_NAMES
+
+from conftest import random_pose_cam
+
+Image = pytest.importorskip("PIL.Image")
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory) -> Path:
+    torch.manual_seed(0)
+    net = PoseLifterNet(ModelConfig(width=32))
+    mean = torch.zeros(49)
+    mean[-1] = 4400.0
+    net.set_target_statistics(mean, torch.full((49,), 100.0))
+    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", net.eval())
+
+
+@pytest.fixture()
+def kp17() -> np.ndarray:
+    return project(random_pose_cam(np.random.default_rng(0), 1)[0], focal=1000.0, principal_point=(640.0, 360.0))
+
+
+def run(argv: list[str], capsys) -> tuple[int, str]:
+    code = main(["lift", "--no-progress", *argv])
+    return code, capsys.readouterr().err
+
+
+def coco_from_h36m(kp: np.ndarray) -> np.ndarray:
+    """A COCO-17 pose whose limb joints are the H36M ones; face joints near the head."""
+    H = {n: i for i, n in enumerate(JOINT_NAMES)}
+    face = {"nose": kp[H["neck_nose"]], "l_eye": kp[H["neck_nose"]] + [3, -4], "r_eye": kp[H["neck_nose"]] + [-3, -4],
+            "l_ear": kp[H["head_top"]] + [8, 10], "r_ear": kp[H["head_top"]] + [-8, 10]}
+    return np.stack([face[n] if n in face else kp[H[n]] for n in COCO17_JOINT_NAMES])
+
+
+def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
+    d = tmp_path / "in"
+    d.mkdir()
+    (d / "a.json").write_text(json.dumps({"keypoints": kp17.tolist(), "image_size": [1280, 720], "focal": 1000}))
+    (d / "b.json").write_text(json.dumps({"keypoints": coco_from_h36m(kp17).tolist(), "format": "coco17",
+                                          "image_size": [1280, 720]}))
+    # OpenPose output with two people: the larger one is used
+    op = np.zeros((25, 3))
+    for i, n in enumerate(OPENPOSE25_JOINT_NAMES):
+        op[i, :2] = kp17[JOINT_NAMES.index(n)] if n in JOINT_NAMES else kp17[0] + [i, -i]
+        op[i, 2] = 0.9
+    small = op.copy()
+    small[:, :2] = 0.3 * (small[:, :2] - small[0, :2]) + [100, 100]
+    (d / "notes.txt").write_text("ignored")
+    out = tmp_path / "out"
+    code, err = run([str(d), "--out", str(out), "--principal-point", "640", "360", "--glb", "--bvh",
+                     "--weights", str(weights)], capsys)
+    assert code == 0, err
+    assert "lifted 2 of 2" in err
+    assert sorted(p.name for p in out.iterdir()) == ["a.bvh", "a.glb", "a.json", "b.bvh", "b.glb", "b.json"]
+    # OpenPose's output has no image size: it needs --focal (and --principal-point)
+    (tmp_path / "c.json").write_text(json.dumps({"people": [{"pose_keypoints_2d": small.ravel().tolist()},
+                                                            {"pose_keypoints_2d": op.ravel().tolist()}]}))
+    code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360",
+                     "--weights", str(weights)], capsys)
+    assert code == 1 and "no focal length and no image size" in err
+    code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
+                     "--weights", str(weights)], capsys)
+    assert code == 0 and "2 people in the file; using the largest" in err
+    a = json.loads((out / "a.json").read_text())
+    assert np.array(a["keypoints_2d"]).shape == (17, 2) and np.array(a["absolute"]).shape == (17, 3)
+    assert np.array(a["root"]).shape == (3,) and a["focal"] == [1000.0, 1000.0] and a["focal_source"] == "keypoint-file"
+    assert a["principal_point"] == [640.0, 360.0] and a["joint_names"] == list(JOINT_NAMES)
+    np.testing.assert_allclose(a["keypoints_2d"], kp17, atol=0.01)
+    np.testing.assert_allclose(np.array(a["absolute"])[0], a["root"], atol=0.02)
+    # the root projects back onto the 2D pelvis (Eq. 6)
+    np.testing.assert_allclose(project(np.array(a["root"])[None], focal=1000.0, principal_point=(640, 360))[0],
+                               kp17[0], atol=0.05)
+    b = json.loads((out / "b.json").read_text())
+    assert b["source_format"] == "coco17" and b["focal_source"] == "default-fov"
+    assert b["focal"][0] == pytest.approx(default_focal((1280, 720)), abs=0.01)
+    c = json.loads((out / "c.json").read_text())
+    assert c["source_format"] == "openpose25"
+    assert np.ptp(np.array(c["keypoints_2d"])[:, 1]) > 0.9 * np.ptp(kp17[:, 1])  # the large person
+    from lifter.export import read_bvh, read_glb_joints
+
+    np.testing.assert_allclose(read_bvh(out / "a.bvh"), a["absolute"], atol=0.05)
+    np.testing.assert_allclose(read_glb_joints(out / "a.glb"), a["absolute"], atol=0.1)
+
+
+def test_cli_matches_api(tmp_path, weights, kp17, capsys):
+    (tmp_path / "k.json").write_text(json.dumps(kp17.tolist()))
+    code, err = run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--focal", "900", "950",
+                     "--principal-point", "600", "300", "--weights", str(weights)], capsys)
+    assert code == 0, err
+    assert "assumed H36M order" in err
+    got = json.loads((tmp_path / "o" / "k.json").read_text())
+    ref = Lifter.from_checkpoint(weights).lift(kp17, focal=(900, 950), principal_point=(600, 300))
+    np.testing.assert_allclose(got["absolute"], ref.absolute, atol=0.01)
+    assert got["canonical_depth"] == pytest.approx(float(ref.canonical_depth), abs=0.01)
+    assert got["focal"] == [900.0, 950.0] and got["focal_source"] == "user"
+
+
+def _jpeg_bytes(size=(64, 48)) -> bytes:
+    buf = io.BytesIO()
+    Image.new("RGB", size, (120, 130, 140)).save(buf, format="JPEG")
+    return buf.getvalue()
+
+
+def test_bad_inputs_do_not_stop_the_batch(tmp_path, weights, kp17, capsys):
+    d = tmp_path / "in"
+    d.mkdir()
+    (d / "good.json").write_text(json.dumps({"keypoints": kp17.tolist(), "image_size": [1280, 720]}))
+    (d / "broken.json").write_text("{not json")
+    (d / "wrongcount.json").write_text(json.dumps({"keypoints": [[1, 2]] * 12}))
+    (d / "nan.json").write_text(json.dumps({"keypoints": [[1, 2]] * 16 + [[float("nan"), 3]], "image_size": [9, 9]}))
+    (d / "nosize.json").write_text(json.dumps({"keypoints": kp17.tolist()}))
+    (d / "text.jpg").write_text("this is not an image")
+    (d / "empty.png").write_bytes(b"")
+    (d / "truncated.jpg").write_bytes(_jpeg_bytes()[:300])
+    out = tmp_path / "out"
+    code, err = run([str(d), str(tmp_path / "missing.png"), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    assert (out / "good.json").is_file() and len(list(out.iterdir())) == 1
+    for frag in ("broken.json: not valid JSON", "wrongcount.json: 12 joints", "nan.json: joint(s)",
+                 "nosize.json: no focal length and no image size", "text.jpg: not an image", "empty.png: empty file",
+                 "truncated.jpg: unreadable or truncated", "missing.png: no such file", "lifted 1 of 9"):
+        assert frag in err, (frag, err)
+
+
+def test_exit_code_when_all_fail(tmp_path, weights, capsys):
+    (tmp_path / "x.jpg").write_text("nope")
+    code, err = run([str(tmp_path / "x.jpg"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1 and "lifted 0 of 1" in err
+    code, err = run([str(tmp_path / "nothing_here"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1
+    code, err = run([str(tmp_path / "x.jpg"), "--out", str(tmp_path / "o"), "--focal", "1", "2", "3",
+                     "--weights", str(weights)], capsys)
+    assert code == 2 and "--focal takes" in err
+
+
+def test_output_names(tmp_path):
+    files = [tmp_path / "a.png", tmp_path / "sub" / "a.png", tmp_path / "a.json", tmp_path / "b.json"]
+    assert output_names(files, tmp_path / "out") == ["a", "a_png", "a_json", "b"]
+    # never overwrite an input keypoint file
+    assert output_names([tmp_path / "b.json"], tmp_path) == ["b_json"]
+
+
+def test_parse_formats(tmp_path):
+    p = tmp_path / "f.json"
+    p.write_text(json.dumps([{"keypoints": np.c_[np.arange(34.0).reshape(17, 2), np.ones(17)].ravel().tolist()}]))
+    kf = parse_keypoint_json(p)
+    assert kf.format == "coco17" and kf.keypoints.shape == (17, 2)
+    p.write_text(json.dumps({"keypoints": [[0, 0]] * 17, "format": "nope"}))
+    with pytest.raises(PoseLifterError, match="unknown keypoint format"):
+        parse_keypoint_json(p)
+
+
+# ------------------------------------------------------------------------------------------------
+# EXIF focal length and image loading
+# ------------------------------------------------------------------------------------------------
+
+
+def test_focal_rules():
+    size = (4000, 3000)
+    # focal mm + focal-plane resolution (px per cm): sensor 4000 px / 800 px/cm = 5 mm wide
+    g = focal_from_exif(ExifCamera(focal_mm=4.0, focal_plane_xres=8000.0, focal_plane_unit_mm=10.0, pixel_x=4000,
+                                   pixel_y=3000), size)
+    assert g.source == "exif-focal-plane" and g.focal == pytest.approx(4.0 * 800.0)
+    # the same photo resized to half: the focal in px halves
+    g2 = focal_from_exif(ExifCamera(focal_mm=4.0, focal_plane_xres=8000.0, focal_plane_unit_mm=10.0, pixel_x=4000,
+                                    pixel_y=3000), (2000, 1500))
+    assert g2.focal == pytest.approx(1600.0)
+    # user-given sensor width wins; portrait images use the long side
+    g3 = focal_from_exif(ExifCamera(focal_mm=4.0), (3000, 4000), sensor_width_mm=5.0)
+    assert g3.source == "exif-sensor-width" and g3.focal == pytest.approx(3200.0)
+    # 35 mm equivalent on the diagonal
+    g4 = focal_from_exif(ExifCamera(focal_mm=4.0, focal_35mm=26.0), size)
+    assert g4.source == "exif-35mm" and g4.focal == pytest.approx(26.0 * 5000.0 / math.hypot(36, 24))
+    # nothing usable: the stated default field of view
+    g5 = focal_from_exif(ExifCamera(), size)
+    assert g5.source == "default-fov" and "65 deg" in g5.detail
+    assert 2 * math.degrees(math.atan(5000 / 2 / g5.focal)) == pytest.approx(DEFAULT_DIAGONAL_FOV_DEG)
+    # implausible focal-plane data (sensor 0.04 mm) is ignored
+    g6 = focal_from_exif(ExifCamera(focal_mm=4.0, focal_plane_xres=1e6, focal_plane_unit_mm=10.0), size)
+    assert g6.source == "default-fov" and "--sensor-width" in g6.detail
+    with pytest.raises(PoseLifterError, match="field of view"):
+        default_focal(size, fov_deg=190)
+
+
+def _jpeg_with_exif(path: Path, size, *, orientation: int = 1, focal_mm=None, f35=None) -> Path:
+    img = Image.new("RGB", size, (90, 100, 110))
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    ifd = exif.get_ifd(0x8769)
+    if focal_mm is not None:
+        ifd[37386] = focal_mm
+    if f35 is not None:
+        ifd[41989] = f35
+    img.save(path, format="JPEG", exif=exif)
+    return path
+
+
+def test_load_image_exif(tmp_path):
+    p = _jpeg_with_exif(tmp_path / "e.jpg", (120, 80), focal_mm=4.2, f35=28)
+    img = load_image(p)
+    assert img.size == (120, 80) and img.rgb.shape == (80, 120, 3) and img.scale == 1.0
+    assert img.exif.focal_mm == pytest.approx(4.2) and img.exif.focal_35mm == 28
+    g = focal_from_exif(img.exif, img.size)
+    assert g.source == "exif-35mm" and g.focal == pytest.approx(28 * math.hypot(120, 80) / math.hypot(36, 24))
+    # orientation 6 (rotate 90 deg): the upright image is portrait
+    r = load_image(_jpeg_with_exif(tmp_path / "r.jpg", (120, 80), orientation=6))
+    assert r.size == (80, 120) and r.rgb.shape == (120, 80, 3) and any("orientation" in n for n in r.notes)
+
+
+def test_huge_images_are_downscaled_or_refused(tmp_path):
+    p = tmp_path / "wide.png"
+    Image.new("RGB", (3000, 400), (1, 2, 3)).save(p)
+    img = load_image(p, max_side=1000)
+    assert img.size == (3000, 400) and max(img.rgb.shape[:2]) == 1000
+    assert img.scale == pytest.approx(1000 / 3000) and "downscaled" in img.notes[0]
+    j = _jpeg_with_exif(tmp_path / "big.jpg", (2400, 1600))
+    jj = load_image(j, max_side=500)
+    assert jj.size == (2400, 1600) and jj.rgb.shape[1] == 500
+    with pytest.raises(ImageError, match="MP"):
+        load_image(p, max_pixels=1_000_000)
+    a = image_from_array(np.zeros((100, 5000, 3), np.uint8), max_side=1000)
+    assert a.size == (5000, 100) and a.rgb.shape[1] == 1000
+
+
+class _StubEstimator:
+    """Returns fixed detections (in the px of the image it is given)."""
+
+    name = "stub"
+    keypoint_format = "h36m17"
+
+    def __init__(self, people: list[np.ndarray]) -> None:
+        self.people = people
+        self.seen: tuple[int, ...] | None = None
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        self.seen = image.shape
+        return [Detection(keypoints=k, scores=np.ones(17), bbox_xywh=bbox_of(k), keypoint_format="h36m17")
+                for k in self.people]
+
+
+def test_detect_pose_picks_largest_and_maps_back(tmp_path, kp17):
+    p = tmp_path / "big.png"
+    Image.new("RGB", (4000, 2000), (9, 9, 9)).save(p)
+    img = load_image(p, max_side=1000)  # scale 0.25
+    small = 0.3 * (kp17 - kp17[0]) + 100
+    est = _StubEstimator([small * 0.25, kp17 * 0.25])
+    det = detect_pose(img, estimator=est)
+    assert est.seen == (500, 1000, 3)
+    np.testing.assert_allclose(det.keypoints_2d, kp17, atol=1e-9)  # full-resolution px
+    assert det.num_people == 2 and any("2 people found; using the largest" in w for w in det.warnings)
+    from lifter.detect import NoPersonError
+
+    with pytest.raises(NoPersonError, match="no person"):
+        detect_pose(img, estimator=_StubEstimator([]))
+
+
+def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
+    """The image path of the CLI end to end, with a registered stub estimator instead of mediapipe."""
+    register_estimator("_stub_test", lambda **kw: _StubEstimator([kp17 * 0.5]), overwrite=True)
+    p = tmp_path / "photo.png"
+    Image.new("RGB", (1280, 720), (50, 60, 70)).save(p)
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--detector", "_stub_test", "--max-side", "640",
+                     "--weights", str(weights)], capsys)
+    assert code == 0, err
+    got = json.loads((tmp_path / "o" / "photo.json").read_text())
+    np.testing.assert_allclose(got["keypoints_2d"], kp17, atol=0.01)
+    assert got["image_size"] == [1280, 720] and got["principal_point"] == [640.0, 360.0]
+    assert got["focal_source"] == "default-fov" and got["detector"] == "stub" and got["num_people"] == 1
+    assert "downscaled" in err and "65 deg" in err
+
+
+def test_missing_extra_message(tmp_path, weights, capsys):
+    pytest.importorskip("PIL")
+    from lifter.detect import mediapipe_available
+
+    if mediapipe_available():
+        pytest.skip("mediapipe is installed")
+    p = tmp_path / "photo.png"
+    Image.new("RGB", (64, 64)).save(p)
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1 and "optional 'detect' extra" in err and 'pip install -e ".[detect]"' in err
