@@ -102,14 +102,21 @@ class SessionState:
         return (self.sample.camera.width, self.sample.camera.height)
 
 
-def clamp_focal(value: float) -> tuple[float, str | None]:
-    """Clamp a focal length (px) to the slider range; returns the value and a message if it was changed."""
+def focal_max(sample: Sample) -> float:
+    """Upper end of the focal slider for ``sample``: :data:`FOCAL_MAX_PX`, or 2.5 x the camera's focal
+    rounded up to 100 px when that is larger (big uploaded photos have focal lengths of several 1000 px)."""
+    return max(FOCAL_MAX_PX, 100.0 * math.ceil(2.5 * sample.camera.alpha / 100.0))
+
+
+def clamp_focal(value: float, *, hi: float = FOCAL_MAX_PX) -> tuple[float, str | None]:
+    """Clamp a focal length (px) to the slider range ``[FOCAL_MIN_PX, hi]``; returns the value and a
+    message if it was changed."""
     v = float(value)
     if not math.isfinite(v):
         return FOCAL_MIN_PX, f"focal length {value!r} is not a finite number; using {FOCAL_MIN_PX:g} px"
-    if v < FOCAL_MIN_PX or v > FOCAL_MAX_PX:
-        c = min(max(v, FOCAL_MIN_PX), FOCAL_MAX_PX)
-        return c, f"focal length {v:g} px is outside [{FOCAL_MIN_PX:g}, {FOCAL_MAX_PX:g}]; clamped to {c:g} px"
+    if v < FOCAL_MIN_PX or v > hi:
+        c = min(max(v, FOCAL_MIN_PX), hi)
+        return c, f"focal length {v:g} px is outside [{FOCAL_MIN_PX:g}, {hi:g}]; clamped to {c:g} px"
     return v, None
 
 
@@ -184,6 +191,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         noisy = kp.copy()
         batch = kp[None]
     res = lifter.lift(batch, focal=f, principal_point=pp)
+    if not (np.all(np.isfinite(res.absolute)) and np.all(np.isfinite(res.root))):
+        raise PoseLifterError("the lift is not finite (extreme 2D coordinates or focal length); input ignored")
     lifted = res.absolute[0]
     cloud = res.absolute[1:] if batch.shape[0] > 1 else None
     analytic = None
@@ -202,6 +211,14 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics)
 
 
+def _focal_origin(state: SessionState) -> str:
+    up = state.sample.upload
+    if up is None:
+        return "camera"
+    return {"exif-35mm": "EXIF 35 mm equiv.", "exif-focal-plane": "EXIF", "exif-sensor-width": "EXIF",
+            "default-fov": "default field of view", "keypoint-file": "keypoint file"}.get(up.focal_source, up.focal_source)
+
+
 def readout_markdown(frame: Frame, state: SessionState) -> str:
     """The readout panel: canonical depth, root X/Y/Z, the ambiguity ``Z / f``, and metrics."""
     X, Y, Z = frame.root
@@ -209,8 +226,14 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     lines = [
         f"**Canonical depth** {frame.canonical_depth:,.0f} mm (at f = 1000 px)",
         f"**Root** X {X:,.0f} · Y {Y:,.0f} · **Z {Z:,.0f}** mm",
-        f"**Focal** {alpha:,.0f} px (camera: {state.sample.camera.alpha:,.0f} px) · Z/f = {Z / alpha:.3f} mm/px",
+        f"**Focal** {alpha:,.0f} px ({_focal_origin(state)}: {state.sample.camera.alpha:,.0f} px) · "
+        f"Z/f = {Z / alpha:.3f} mm/px",
     ]
+    up = state.sample.upload
+    if up is not None:
+        people = f" · {up.num_people} people found, largest used" if (up.num_people or 0) > 1 else ""
+        lines.append(f"**Input** {up.name} ({'photo, ' + str(up.detector) if up.kind == 'image' else 'keypoint file, ' + up.source_format})"
+                     f"{people}")
     if frame.metrics:
         m = frame.metrics
         lines.append(f"**MPJPE** {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "

@@ -12,28 +12,16 @@ import threading
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
+from lifter.keypoints import convert
 from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
 
 from .demo_assets import DEMO_DIR
-
-SH16_TO_H36M17: tuple[int, ...] = (6, 2, 1, 0, 3, 4, 5, 7, 8, -1, 9, 13, 14, 15, 12, 11, 10)
-"""Index into the 16 Stacked-Hourglass joints for each of our 17 joints; -1 = neck_nose, which SH lacks
-(approximated as the midpoint of thorax and head top)."""
-
-
-def sh16_to_h36m17(det: np.ndarray) -> np.ndarray:
-    """Stacked-Hourglass ``(..., 16, 2)`` px -> H36M 17-joint order ``(..., 17, 2)`` px."""
-    det = np.asarray(det, np.float64)
-    idx = np.array([i if i >= 0 else 0 for i in SH16_TO_H36M17])
-    out = det[..., idx, :].copy()
-    out[..., 9, :] = 0.5 * (out[..., 8, :] + out[..., 10, :])
-    return out
-
 
 @dataclass(frozen=True)
 class Sample:
@@ -43,7 +31,10 @@ class Sample:
     pose_3d: ``(17, 3)`` mm camera frame (OpenCV), or None when unknown.
     detected_2d: ``(17, 2)`` px from a 2D detector, or None.
     camera: intrinsics (px), extrinsics (world mm, z up -> camera), image size (px).
-    image: ``(H, W, 3)`` uint8 RGB photo / render, or None (then a plain canvas is drawn).
+    image: ``(H, W, 3)`` uint8 RGB photo / render, or None (then a plain canvas is drawn). It may be a
+        downscaled copy (uploads): 2D coordinates always refer to ``camera.width x camera.height``.
+    has_gt_2d: False when ``keypoints_2d`` is not ground truth (uploads: the detected / given 2D).
+    upload: provenance of an uploaded sample (:class:`app.upload.UploadInfo`), else None.
     """
 
     key: str
@@ -53,6 +44,8 @@ class Sample:
     detected_2d: np.ndarray | None
     camera: Camera
     image: np.ndarray | None
+    has_gt_2d: bool = True
+    upload: Any = None
 
 
 def _read_rgb(path: Path) -> np.ndarray | None:
@@ -148,7 +141,7 @@ class H36MCatalog:
                     # Training subjects have every 5th frame; S9/S11 every frame.
                     step = 1 if rows.shape[0] * 2 > n else 5
                     if frame % step == 0 and frame // step < rows.shape[0]:
-                        det = sh16_to_h36m17(rows[frame // step])
+                        det = convert(rows[frame // step], src="sh16")  # the library's sh16 rules
         p3 = cam.world_to_camera(world)
         kp = cam.project(p3)
         photo = self._photos.get((subject, sequence, camera_id, frame))
@@ -171,5 +164,4 @@ def open_h36m(root: str) -> H36MCatalog:
     return H36MCatalog(Path(root))
 
 
-__all__ = ["ACTIONS", "DEFAULT_H36M_DIR", "DemoCatalog", "H36MCatalog", "Sample", "default_h36m_root", "open_h36m",
-           "sh16_to_h36m17"]
+__all__ = ["ACTIONS", "DEFAULT_H36M_DIR", "DemoCatalog", "H36MCatalog", "Sample", "default_h36m_root", "open_h36m"]

@@ -11,6 +11,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
+from uuid import uuid4
 
 import msgspec
 import viser
@@ -47,6 +48,25 @@ class FakeTab:
                 self.received += 1
         except Exception:  # noqa: BLE001 - closed
             pass
+
+    def send(self, msg: Any) -> None:
+        """Send one client -> server message (a :mod:`viser._messages` message)."""
+        self.conn.send(msgspec.msgpack.encode(msg.as_serializable_dict()))
+
+    def upload(self, handle: Any, name: str, content: bytes, *, chunk_size: int = 512 * 1024,
+               declared_size: int | None = None, max_parts: int | None = None) -> None:
+        """Upload ``content`` through the upload button ``handle`` the way the browser does (a
+        ``FileTransferStartUpload`` then 512-KiB ``FileTransferPart`` s). ``declared_size`` / ``max_parts``
+        let a test announce a size it does not send."""
+        uuid = handle._impl.uuid
+        transfer = uuid4().hex
+        parts = [content[i:i + chunk_size] for i in range(0, len(content), chunk_size)]
+        self.send(_messages.FileTransferStartUpload(
+            source_component_uuid=uuid, transfer_uuid=transfer, filename=name, mime_type="", part_count=len(parts),
+            size_bytes=len(content) if declared_size is None else int(declared_size)))
+        for i, part in enumerate(parts[:max_parts]):
+            self.send(_messages.FileTransferPart(source_component_uuid=uuid, transfer_uuid=transfer, part_index=i,
+                                                 content=part))
 
     def close(self) -> None:
         self.conn.close()

@@ -10,6 +10,10 @@ demo samples are authored the same way):
   focal slider), the draggable 2D joints on that plane, the lifted skeleton at its absolute position,
   the ground truth, the analytic-root skeleton, the uncertainty cloud and the root's viewing ray.
 
+The "Your photo" folder uploads a photo (2D joints by :mod:`lifter.detect`, largest person, EXIF or
+default-FOV focal) or a keypoint JSON (:mod:`app.upload`) into the tab as a sample without 3D ground
+truth, and downloads the current result as the JSON ``poselifter lift`` writes, or as a GLB.
+
 Every callback goes through :meth:`SessionView._guard`: invalid input shows a message in the status
 panel (and a notification in a real browser) and never propagates into viser's threads.
 """
@@ -33,23 +37,26 @@ from lifter import PoseLifterError
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
 
 from .core import (CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX, Frame, LifterPool,
-                   SessionState, clamp_focal, clamp_joint, clamp_noise, compute_frame, readout_markdown)
+                   SessionState, clamp_focal, clamp_joint, clamp_noise, compute_frame, focal_max, readout_markdown)
 from .drawing import COLORS, overlay, scaled_base
 from .noise import ErrorModelLike, default_error_model, model_name
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
+from . import upload as up
 
 log = logging.getLogger("poselifter.app")
 
-IMAGE_PLANE_DEPTH_M: float = 1.5
+IMAGE_PLANE_DEPTH_M: float = 1.0
 """Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
-SIDE_RGB: dict[str, tuple[int, int, int]] = {"left": (40, 110, 255), "right": (255, 60, 60), "center": (235, 235, 235)}
-"""Lifted skeleton: subject's left blue, right red, centre white."""
+VIEW_ZOOM: float = 0.85
+"""Initial viewpoint: how close to the person the viewer starts (1 = the frustum and the person small)."""
+SIDE_RGB: dict[str, tuple[int, int, int]] = {"left": (40, 110, 255), "right": (255, 60, 60), "center": (70, 70, 70)}
+"""Lifted skeleton: subject's left blue, right red, centre dark grey."""
 GT_RGB = COLORS["gt"]
 ANALYTIC_RGB = (255, 170, 0)
 CLOUD_RGB = (170, 80, 230)
 RAY_RGB = (250, 210, 0)
 FRUSTUM_RGB = (30, 30, 30)
-SOURCES = ("demo", "h36m")
+SOURCES = ("demo", "h36m", "upload")
 
 
 def _edges_points(P: np.ndarray) -> np.ndarray:
@@ -119,6 +126,12 @@ class SessionView:
         self._tls = threading.local()
         self._base_key: str | None = None
         self._base: tuple[np.ndarray, float] | None = None
+        self._last_upload: Sample | None = None
+        self._sample_gen = 0
+        self._drag_gen: int | None = None
+        self._photo: up.Photo | None = None
+        self.last_download: tuple[str, bytes] | None = None
+        """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         sample = app.demo.get(app.demo.names[0])
         self.state = SessionState(sample=sample, model=app.default_model)
         self._build_gui()
@@ -179,7 +192,7 @@ class SessionView:
         app = self.app
         self.image_gui = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
         self.legend_md = gui.add_markdown(
-            "<small>2D: <b style='color:#28c83c'>ground truth</b> · <b style='color:#f09600'>detected</b> · "
+            "<small>2D: <b style='color:#28c83c'>ground truth</b> · <b style='color:#f09600'>detected / uploaded</b> · "
             "<b style='color:#a03cdc'>noisy (lifted)</b> · <b style='color:#e61e1e'>current / dragged</b>; "
             "rings <b style='color:#1e6eff'>left</b> / <b style='color:#ff3ca0'>right</b>. "
             "3D: lifted (left blue, right red), <b style='color:#28c83c'>ground truth</b>, "
@@ -209,6 +222,15 @@ class SessionView:
             else:
                 self.subject_dd = self.sequence_dd = self.camera_dd = self.frame_slider = self.photo_dd = None  # type: ignore[assignment]
 
+        with gui.add_folder("Your photo"):
+            self.upload_btn = gui.add_upload_button(
+                "upload photo or keypoint JSON", icon=viser.Icon.UPLOAD, mime_type="image/*,.json,application/json",
+                hint=f"a photo (2D joints by MediaPipe BlazePose, draggable) or a 2D keypoint JSON as `poselifter lift` "
+                     f"reads it; at most {up.MAX_UPLOAD_BYTES // 2**20} MiB")
+            self.download_btn = gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
+                                               hint="the current lift with the same fields as `poselifter lift` writes")
+            self.download_glb_btn = gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
+                                                   hint="the lifted skeleton as a mesh (metres, y-up)")
         with gui.add_folder("Lifting"):
             models = app.pool.names or ["(none)"]
             self.model_dd = gui.add_dropdown("model", models, initial_value=app.default_model or models[0],
@@ -256,6 +278,10 @@ class SessionView:
         self.joint_uv.on_update(g(lambda _: self._on_joint_uv()))
         self.reset_btn.on_click(g(lambda _: self.reset_joints()))
         self.view_btn.on_click(g(lambda _: self.set_initial_view()))
+        self.upload_btn.on_upload(g(lambda _: self.load_upload(self.upload_btn.value.name, self.upload_btn.value.content)))
+        self.download_btn.on_click(g(lambda _: self.download("json")))
+        self.download_glb_btn.on_click(g(lambda _: self.download("glb")))
+        self._install_upload_limit()
 
     def _set_gui(self, handle: Any, value: Any) -> None:
         """Set a GUI value without triggering our own callbacks."""
@@ -276,7 +302,8 @@ class SessionView:
         self.cam_frame = sc.add_frame("/cam", show_axes=True, axes_length=0.15, axes_radius=0.006)
         z = np.zeros((1, 2, 3))
         self.frustum = sc.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=0.006)
-        self.image_node = sc.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg")
+        self.image_node = sc.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg",
+                                       cast_shadow=False, receive_shadow=False)
         self.bones2d = sc.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), COLORS["current"], thickness=0.004)
         self.joint_nodes = []
         for j in range(NUM_JOINTS):
@@ -284,13 +311,14 @@ class SessionView:
                                  color=SIDE_RGB[joint_side(j)] if joint_side(j) != "center" else COLORS["current"])
             h.on_drag(self._guard(functools.partial(self.on_joint_drag, j)))
             self.joint_nodes.append(h)
-        self.lifted_lines = sc.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _side_colors(), thickness=0.025)
-        self.lifted_joints = sc.add_point_cloud("/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)), (250, 250, 250),
-                                                point_size=0.05, point_shape="circle")
-        self.gt_lines = sc.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.015)
+        self.lifted_lines = sc.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _side_colors(), thickness=0.035)
+        self.lifted_joints = sc.add_point_cloud(
+            "/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)),
+            np.array([SIDE_RGB[joint_side(j)] for j in range(NUM_JOINTS)], np.uint8), point_size=0.045, point_shape="circle")
+        self.gt_lines = sc.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.012)
         self.analytic_lines = sc.add_line_segments("/cam/analytic", np.zeros((16, 2, 3)), ANALYTIC_RGB, thickness=0.015,
                                                    visible=False)
-        self.cloud_node = sc.add_point_cloud("/cam/cloud", np.zeros((1, 3)), CLOUD_RGB, point_size=0.025,
+        self.cloud_node = sc.add_point_cloud("/cam/cloud", np.zeros((1, 3)), CLOUD_RGB, point_size=0.014,
                                              point_shape="circle", visible=False)
         self.ray = sc.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=0.01)
         self.root_marker = sc.add_icosphere("/cam/root", radius=0.05, color=RAY_RGB)
@@ -323,14 +351,22 @@ class SessionView:
         cam = self.state.sample.camera
         R, t = np.asarray(cam.R), np.asarray(cam.t)
         C = -R.T @ t / 1000.0
-        target_cam = (self.state.sample.pose_3d[0] if self.state.sample.pose_3d is not None
-                      else np.array([0, 0, 4000.0])) / 1000.0
+        if self.state.sample.pose_3d is not None:
+            target_cam = self.state.sample.pose_3d[0] / 1000.0
+        elif self.frame is not None and np.all(np.isfinite(self.frame.root)) and self.frame.root[2] > 0:
+            target_cam = np.asarray(self.frame.root) / 1000.0
+        else:
+            target_cam = np.array([0, 0, 4.0])
         target = R.T @ target_cam + C
         fwd = target - C
         side = np.cross(fwd, [0, 0, 1.0])
         side /= max(np.linalg.norm(side), 1e-9)
-        eye = C - 0.2 * fwd + 0.35 * np.linalg.norm(fwd) * side + np.array([0, 0, 0.9])
-        mid = 0.4 * C + 0.6 * target
+        d = float(np.linalg.norm(fwd))
+        mid = 0.3 * C + 0.7 * target
+        eye = C - 0.1 * fwd + 0.6 * d * side + np.array([0, 0, 1.5])
+        right = np.cross(mid - eye, [0, 0, 1.0])
+        mid = mid + 0.35 * right / max(np.linalg.norm(right), 1e-9)  # the GUI panel covers the right of the canvas
+        eye = mid + VIEW_ZOOM * (eye - mid)
         if isinstance(self.target, viser.ClientHandle):
             cam_h = self.target.camera
             cam_h.up_direction = (0.0, 0.0, 1.0)
@@ -354,6 +390,12 @@ class SessionView:
             raise PoseLifterError(f"unknown sample source {source!r}" + ("" if self.app.h36m else " (no Human3.6M folder)"))
         if source == "demo":
             self.select_demo(self.demo_dd.value)
+        elif source == "upload":
+            if self._last_upload is None:
+                self._set_gui(self.source_dd, self.state.sample.key.split("/")[0])
+                raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button")
+            with self.lock:
+                self._set_sample(self._last_upload)
         else:
             self._on_h36m_change()
 
@@ -365,6 +407,7 @@ class SessionView:
         sample = self.app.demo.get(name)
         with self.lock:
             self._set_gui(self.source_dd, "demo")
+            self._set_gui(self.demo_dd, name)
             self._set_sample(sample)
 
     @control
@@ -411,14 +454,42 @@ class SessionView:
         self.select_h36m(subject=int(s[1:]), sequence=seq, camera=cam, frame=int(fr))
 
     def _set_sample(self, sample: Sample) -> None:
+        """Show ``sample`` (drags reset; focal to its camera's; noise, seed, model and toggles kept). If it
+        cannot be lifted the previous state is restored and the error raised."""
         st = self.state
         kind = st.input_kind if (st.input_kind == "gt" or sample.detected_2d is not None) else "gt"
-        if kind != st.input_kind:
+        if not sample.has_gt_2d and sample.detected_2d is not None:
+            kind = "detected"
+        elif kind != st.input_kind and st.sample.has_gt_2d:  # (leaving an upload: back to ground truth silently)
             self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D")
-        self.state = SessionState(sample=sample, model=st.model, input_kind=kind, noise_level=st.noise_level,
-                                  seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic)
-        self._set_gui(self.input_dd, kind)
-        self._set_gui(self.focal_slider, float(np.clip(round(sample.camera.alpha), FOCAL_MIN_PX, FOCAL_MAX_PX)))
+        self._apply_state(SessionState(sample=sample, model=st.model, input_kind=kind, noise_level=st.noise_level,
+                                       seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic))
+
+    def _apply_state(self, state: SessionState) -> None:
+        """Make ``state`` the tab's state and redraw everything; on :class:`PoseLifterError` (e.g. a
+        degenerate uploaded pose) put the previous state back and re-raise."""
+        old = self.state
+        self.state = state
+        try:
+            self._sync_sample()
+        except PoseLifterError:
+            self.state = old
+            self._sync_sample()
+            raise
+
+    def _sync_sample(self) -> None:
+        """Push the sample-dependent GUI values, camera pose, image and frustum of :attr:`state`, and redraw."""
+        st = self.state
+        sample = st.sample
+        self._sample_gen += 1
+        src = sample.key.split("/")[0]
+        if src in SOURCES and src in self.source_dd.options:
+            self._set_gui(self.source_dd, src)
+        self._set_gui(self.input_dd, st.input_kind)
+        hi = focal_max(sample)
+        if self.focal_slider.max != hi:
+            self.focal_slider.max = hi
+        self._set_gui(self.focal_slider, float(np.clip(round(st.focal_px), FOCAL_MIN_PX, hi)))
         R = np.asarray(sample.camera.R)
         self.cam_frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
         self.cam_frame.position = tuple(-R.T @ np.asarray(sample.camera.t) / 1000.0)
@@ -465,7 +536,7 @@ class SessionView:
         viewing ray with ``Z ∝ f`` (canonical depth fixed); the frustum's field of view follows."""
         if self._suspend:
             return
-        v, msg = clamp_focal(value)
+        v, msg = clamp_focal(value, hi=focal_max(self.state.sample))
         with self.lock:
             self.state.focal_px = v
             self._set_gui(self.focal_slider, v)
@@ -594,6 +665,99 @@ class SessionView:
             return
         self.move_joint(JOINT_NAMES.index(self.joint_dd.value), self.joint_uv.value)
 
+    # -- upload / download -----------------------------------------------------------------------
+    @control
+    def load_upload(self, name: str, content: bytes) -> None:
+        """An uploaded file: a photo (2D joints by the app's detector, the largest person) or a keypoint
+        JSON (:mod:`app.upload`). On any problem a message is shown and the tab's state is left as it was."""
+        name = up.safe_name(name)
+        content = bytes(content or b"")
+        up.check_upload(name, content, max_bytes=self.app.max_upload_bytes)
+        key = f"upload/{self.app.next_upload_id()}/{name}"
+        if up.is_json_upload(name, content):
+            sample = up.keypoint_sample(name, content, key=key, photo=self._photo)
+        else:
+            photo, img = up.decode_photo(name, content)  # not-an-image / truncated / too many pixels raise here
+            self._photo = photo  # kept for a keypoint JSON uploaded next, even if detection fails below
+            try:
+                estimator = self.app.estimator()
+            except up.MissingDependencyError as exc:
+                raise PoseLifterError(up.missing_detector_message(name, exc)) from None
+            lifter = self.app.pool.get(self.state.model)
+            with self.app.detect_lock:
+                sample = up.photo_sample(photo, img, key=key, lifter=lifter, estimator=estimator)
+        with self.lock:
+            try:
+                self._set_sample(sample)  # restores the previous state if the pose cannot be lifted
+            except PoseLifterError as exc:
+                raise PoseLifterError(f"{name}: {exc}") from None
+            self._last_upload = sample
+            if "upload" not in self.source_dd.options:
+                self._suspend = True
+                try:
+                    self.source_dd.options = list(self.source_dd.options) + ["upload"]
+                finally:
+                    self._suspend = False
+            self._set_gui(self.source_dd, "upload")
+        self.set_initial_view()
+        info = sample.upload
+        what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
+                if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
+        notes = [n for n in info.warnings if n != info.focal_detail]
+        self.show_message(f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
+                          + ("".join(f" Note: {n}." for n in notes)))
+
+    def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
+        """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the
+        current clean 2D, dragged joints included, lifted at the current focal length) or ``"glb"``."""
+        if fmt not in ("json", "glb"):
+            raise PoseLifterError(f"unknown download format {fmt!r}; expected 'json' or 'glb'")
+        with self.lock:
+            st = self.state
+            rec = up.result_record(st.sample, st.keypoints, lifter=self.app.pool.get(st.model), focal=st.focal,
+                                   dragged=set(st.dragged), focal_changed=abs(st.focal_px - st.sample.camera.alpha) > 0.5)
+            stem = up.download_stem(st.sample)
+        if fmt == "json":
+            return f"{stem}.json", up.json_bytes(rec)
+        return f"{stem}.glb", up.glb_bytes(rec)
+
+    @control
+    def download(self, fmt: str = "json") -> None:
+        """Send the current result to this tab as a file download (:meth:`download_payload`)."""
+        name, data = self.download_payload(fmt)
+        self.last_download = (name, data)
+        if isinstance(self.target, viser.ClientHandle):
+            self.target.send_file_download(name, data, save_immediately=True)
+
+    def _install_upload_limit(self) -> None:
+        """Stop an upload larger than the app's limit as soon as the browser announces its size, so viser
+        does not buffer it (viser 1.1.1 has no limit of its own). Best effort: uses viser internals and
+        silently does nothing if they change; :meth:`load_upload` checks the size again in any case."""
+        gui = self.gui
+        iface = getattr(gui, "_websock_interface", None)
+        states = getattr(gui, "_current_file_upload_states", None)
+        uuid = getattr(getattr(self.upload_btn, "_impl", None), "uuid", None)
+        if iface is None or not isinstance(states, dict) or uuid is None:
+            return
+        from viser import _messages
+
+        def on_start(client_id: int, msg: Any) -> None:
+            try:
+                if msg.source_component_uuid != uuid or msg.size_bytes <= self.app.max_upload_bytes:
+                    return
+                if isinstance(self.target, viser.ClientHandle) and client_id != self.target.client_id:
+                    return
+                states.pop(msg.transfer_uuid, None)  # later parts are ignored by viser
+                iface.queue_message(_messages.FileTransferPartAck(  # ends the browser's progress bar
+                    source_component_uuid=uuid, transfer_uuid=msg.transfer_uuid, transferred_bytes=msg.size_bytes,
+                    total_bytes=msg.size_bytes))
+                self.show_message(up.oversize_message(msg.filename, msg.size_bytes, max_bytes=self.app.max_upload_bytes),
+                                  error=True)
+            except Exception:  # noqa: BLE001 - never break viser's message loop
+                log.exception("upload size check failed")
+
+        iface.register_handler(_messages.FileTransferStartUpload, on_start)
+
     # -- dragging -------------------------------------------------------------------------------
     def drag_to_pixel(self, event: Any) -> np.ndarray:
         """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)
@@ -623,7 +787,13 @@ class SessionView:
     @control
     def on_joint_drag(self, joint: int, event: Any) -> None:
         """Drag callback of 2D joint ``joint`` (a :class:`viser.SceneNodeDragEvent`). Latest position wins:
-        events arriving while a lift is running are merged into the next one."""
+        events arriving while a lift is running are merged into the next one. Events of a drag that began
+        on another sample (late events after the sample changed mid-drag) are ignored."""
+        phase = getattr(event, "phase", "update")
+        if phase == "start":
+            self._drag_gen = self._sample_gen
+        elif self._drag_gen is not None and self._drag_gen != self._sample_gen:
+            return
         uv = self.drag_to_pixel(event)
         with self._pending_lock:
             self._pending[joint] = uv
@@ -673,7 +843,7 @@ class SessionView:
         st = self.state
         s = st.sample
         sel = JOINT_NAMES.index(self.joint_dd.value)
-        poses = {"gt": s.keypoints_2d if self.gt_cb.value else None, "detected": s.detected_2d,
+        poses = {"gt": s.keypoints_2d if (self.gt_cb.value and s.has_gt_2d) else None, "detected": s.detected_2d,
                  "noisy": noisy if st.noise_level > 0 else None, "current": kp}
         if self._base_key != s.key:
             self._base = scaled_base(s.image, size=st.image_size)
@@ -713,6 +883,12 @@ class SessionView:
         self.readout_md.content = readout_markdown(fr, st)
 
 
+def _default_estimator() -> Any:
+    from lifter.detect import get_estimator
+
+    return get_estimator(up.DEFAULT_DETECTOR)
+
+
 class PoseLifterApp:
     """The exploration app on a viser server: one :class:`SessionView` per connected browser tab.
 
@@ -722,8 +898,16 @@ class PoseLifterApp:
 
     def __init__(self, server: viser.ViserServer, *, h36m_root: Path | None = None, models: list[str] | None = None,
                  default_model: str | None = None, error_model: ErrorModelLike | None = None,
-                 demo_dir: Path | None = None) -> None:
+                 demo_dir: Path | None = None, estimator_factory: Callable[[], Any] | None = None,
+                 max_upload_bytes: int = up.MAX_UPLOAD_BYTES) -> None:
         self.server = server
+        self.max_upload_bytes = int(max_upload_bytes)
+        self._estimator_factory = estimator_factory or _default_estimator
+        self._estimator: Any = None
+        self._estimator_error: Exception | None = None
+        self.detect_lock = threading.Lock()
+        """Serialises 2D detection (one shared MediaPipe graph)."""
+        self._upload_ids = 0
         self.demo = DemoCatalog(demo_dir) if demo_dir is not None else DemoCatalog()
         self.h36m: H36MCatalog | None = open_h36m(str(h36m_root)) if h36m_root is not None else None
         self.pool = LifterPool(models)
@@ -756,6 +940,26 @@ class PoseLifterApp:
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             self.views.pop(client.client_id, None)
+
+    def estimator(self) -> Any:
+        """The shared 2D estimator for photo uploads (built on first use); raises
+        :class:`lifter.detect.MissingDependencyError` when its extra is not installed."""
+        with self.detect_lock:
+            if self._estimator is None and self._estimator_error is None:
+                try:
+                    self._estimator = self._estimator_factory()
+                except PoseLifterError as exc:
+                    self._estimator_error = exc
+            if self._estimator_error is not None:
+                if isinstance(self._estimator_error, up.MissingDependencyError):
+                    raise self._estimator_error
+                raise PoseLifterError(f"the 2D detector could not be started: {self._estimator_error}")
+            return self._estimator
+
+    def next_upload_id(self) -> int:
+        with self._lock:
+            self._upload_ids += 1
+            return self._upload_ids
 
     def headless_view(self) -> SessionView:
         """A view on the server's shared GUI/scene (no browser needed): for tests and benchmarks."""

@@ -1,12 +1,14 @@
 """Real-browser test: Debian Chromium driven by Playwright against the app on 127.0.0.1.
 
 Opens the app, checks the WebGL view is not blank, moves the focal-length slider and sees the server-side
-pose change, drags a 2D joint on the image plane and sees it re-lifted, and writes ``docs/app.png``.
+pose change, drags a 2D joint on the image plane and sees it re-lifted, writes ``docs/app.png``, then
+uploads a keypoint JSON through the upload button and downloads the result.
 Skips (with the reason) when Chromium or the ``playwright`` package is missing; it never downloads browsers.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import time
@@ -19,6 +21,7 @@ from lifter import PoseLifterError, available_models
 
 ROOT = Path(__file__).resolve().parents[2]
 SCREENSHOT = ROOT / "docs" / "app.png"
+SCREENSHOT_SAMPLE = "walking"
 CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
                  "--disable-background-networking", "--disable-component-update", "--no-first-run",
                  "--disable-dev-shm-usage"]
@@ -129,10 +132,20 @@ def test_browser_end_to_end() -> None:
             moved = np.linalg.norm(view.state.keypoints - before, axis=1)
             assert moved.max() > 3.0
 
-            # 4. screenshot for the README: noise cloud + analytic root on
-            view.noise_slider.value = 1.0
-            view.analytic_cb.value = True
-            time.sleep(2.0)
+            # 4. screenshot for the README: a clean sample and viewpoint where the frustum with its image, the
+            # lifted skeleton, the ground truth and a light noise cloud are all visible
+            n = -1
+            while view.update_count != n:  # let the drag's last events drain
+                n = view.update_count
+                time.sleep(1.0)
+            view.reset_joints()
+            view.select_demo(SCREENSHOT_SAMPLE)
+            view.cloud_num.value = 16
+            view.noise_slider.value = 0.2
+            view.analytic_cb.value = False
+            view.set_initial_view()
+            time.sleep(5.0)  # software WebGL: let the new scene render
+            assert not view.state.dragged and view.state.sample.key == f"demo/{SCREENSHOT_SAMPLE}"
             try:  # close the "software WebGL" notification before the screenshot
                 for b in page.locator(".mantine-Notification-closeButton").all():
                     b.click(timeout=2000)
@@ -142,6 +155,22 @@ def test_browser_end_to_end() -> None:
             if os.environ.get("POSELIFTER_NO_SCREENSHOT") != "1":
                 SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
                 page.screenshot(path=str(SCREENSHOT))
+
+            # 5. upload a keypoint JSON through the upload button's file input, then download the result
+            s = app.demo.get("walking")
+            doc = {"keypoints": s.keypoints_2d.tolist(), "format": "h36m17",
+                   "image_size": [s.camera.width, s.camera.height], "focal": list(s.camera.focal)}
+            page.locator(f"#file_upload_{view.upload_btn._impl.uuid}").set_input_files(
+                files=[{"name": "walking_kp.json", "mimeType": "application/json", "buffer": json.dumps(doc).encode()}])
+            assert _wait(lambda: view.state.sample.key.startswith("upload/"), 30), f"upload not received: {view.messages[-3:]}"
+            np.testing.assert_allclose(view.state.keypoints, s.keypoints_2d, atol=1e-6)
+            with page.expect_download(timeout=30000) as dl:
+                page.get_by_role("button", name="download result (JSON)").click()
+            d = json.loads(Path(dl.value.path()).read_text())
+            assert dl.value.suggested_filename == "walking_kp_lifted.json"
+            np.testing.assert_allclose(d["keypoints_2d"], s.keypoints_2d, atol=0.01)
+            np.testing.assert_allclose(d["absolute"][0], d["root"], atol=0.02)
+            assert d["focal"] == [round(v, 2) for v in s.camera.focal]
             browser.close()
     finally:
         server.stop()

@@ -1,0 +1,361 @@
+"""Uploads and downloads of the app, headless (no viser here).
+
+Upload: a **photo** (any format Pillow reads) goes through :mod:`lifter.detect` and
+:func:`lifter.lift_cli.lift_image` exactly as ``poselifter lift`` does: EXIF orientation, downscaling of
+huge images for detection (keypoints stay in full-resolution px), the largest person when there are
+several, and the focal length from EXIF (:func:`lifter.detect.focal_from_exif`) or the default diagonal
+field of view (:data:`lifter.detect.DEFAULT_DIAGONAL_FOV_DEG`); the principal point is the image centre.
+A **keypoint JSON** (every layout ``poselifter lift`` accepts, :func:`lifter.lift_cli.parse_keypoint_json`,
+converted with :func:`lifter.keypoints.convert`) is drawn on a plain canvas of its ``image_size``, or on
+the photo uploaded just before when the sizes agree (so a photo + keypoints work without MediaPipe).
+Both become a :class:`app.samples.Sample` without 3D ground truth whose 2D is the detected / given one.
+
+Download: :func:`result_record` lifts the tab's current (possibly dragged) clean 2D at the current focal
+length and returns a :class:`lifter.lift_cli.LiftRecord`; its ``to_json()`` has the same fields as the
+files ``poselifter lift`` writes (``keypoints_2d``, ``absolute``, ``root``, ``canonical_depth``, ``focal``,
+``principal_point``, ...). :func:`glb_bytes` is the skeleton as a binary glTF (:mod:`lifter.export`).
+
+Every problem raises :class:`lifter.PoseLifterError` (subclasses: :class:`UploadError`,
+:class:`lifter.detect.ImageError`, :class:`lifter.detect.NoPersonError`,
+:class:`lifter.detect.MissingDependencyError`) with a message meant for the user.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Final
+
+import cv2
+import numpy as np
+
+from lifter import Camera, PoseLifterError
+from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, ExifCamera, LoadedImage,
+                           MissingDependencyError, PoseEstimator2D, default_focal, focal_from_exif, load_image)
+from lifter.keypoints import H36M17, convert
+from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
+
+from .drawing import canvas
+from .samples import Sample
+
+MAX_UPLOAD_BYTES: Final[int] = 20 * 1024 * 1024
+"""Uploads larger than this (20 MiB) are refused (viser itself buffers uploads of any size)."""
+DISPLAY_MAX_SIDE: Final[int] = 1280
+"""Uploaded photos are shown (GUI panel, frustum image) downscaled to this longer side."""
+MAX_CANVAS_SIDE: Final[int] = 100_000
+"""A keypoint file's ``image_size`` must be at most this many px per side."""
+CAMERA_HEIGHT_MM: Final[float] = 1600.0
+"""Uploaded photos have no extrinsics: the camera is placed 1.6 m above the floor, looking horizontally
+along the world's +y axis (world z up), so the 3D view has the usual floor grid."""
+MIN_FOCAL_PX: Final[float] = 1.0
+MAX_FOCAL_PX: Final[float] = 1e6
+"""Focal lengths (px) outside this range in a keypoint file are refused."""
+INSTALL_HINT: Final[str] = 'pip install -e ".[detect]"'
+DEFAULT_DETECTOR: Final[str] = "blazepose"
+
+
+class UploadError(PoseLifterError):
+    """An upload that cannot be used (empty, too large, not a keypoint file, ...)."""
+
+
+@dataclass(frozen=True)
+class UploadInfo:
+    """Where an uploaded sample came from (for the readout and the download).
+
+    name: the uploaded file's name. kind: ``"image"`` or ``"keypoints"``. focal_source: as in
+    ``poselifter lift`` (``exif-35mm``, ``default-fov``, ``keypoint-file``, ...). focal_detail: the
+    human-readable reason. scores: ``(17,)`` detector confidences or None. source_format: the keypoint
+    format before conversion. num_people: people found (photos). detector: the 2D estimator's name.
+    warnings: notes for the user (several people, downscaling, EXIF rotation, focal guess).
+    """
+
+    name: str
+    kind: str
+    focal_source: str
+    focal_detail: str
+    scores: np.ndarray | None = None
+    source_format: str = H36M17
+    num_people: int | None = None
+    detector: str | None = None
+    warnings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Photo:
+    """A decoded uploaded photo: display copy (RGB, longer side <= :data:`DISPLAY_MAX_SIDE`), the
+    upright full-resolution size ``(W, H)`` and the EXIF focal-length fields."""
+
+    name: str
+    display: np.ndarray
+    size: tuple[int, int]
+    exif: ExifCamera
+    notes: tuple[str, ...] = ()
+
+
+# ------------------------------------------------------------------------------------------------
+# Checks and helpers
+# ------------------------------------------------------------------------------------------------
+
+
+def safe_name(name: str) -> str:
+    """The file name part of an uploaded name, for messages and download names."""
+    base = re.split(r"[\\/]", str(name or "upload"))[-1].strip() or "upload"
+    return base[:120]
+
+
+def check_upload(name: str, content: bytes, *, max_bytes: int = MAX_UPLOAD_BYTES) -> None:
+    """Refuse empty and oversize uploads (:class:`UploadError`)."""
+    n = len(content)
+    if n == 0:
+        raise UploadError(f"{safe_name(name)}: empty file")
+    if n > max_bytes:
+        raise UploadError(f"{safe_name(name)}: file is {n / 2**20:.1f} MiB, more than the {max_bytes / 2**20:.0f} MiB "
+                          "the app accepts; downscale or re-encode the photo (e.g. JPEG) first")
+
+
+def oversize_message(name: str, size_bytes: int, *, max_bytes: int = MAX_UPLOAD_BYTES) -> str:
+    return (f"{safe_name(name)}: file is {size_bytes / 2**20:.1f} MiB, more than the {max_bytes / 2**20:.0f} MiB the "
+            "app accepts; the upload was stopped. Downscale or re-encode the photo (e.g. JPEG) first")
+
+
+def is_json_upload(name: str, content: bytes) -> bool:
+    """A ``.json`` name, or content that starts like JSON (``{`` or ``[``)."""
+    if safe_name(name).lower().endswith(".json"):
+        return True
+    head = content[:64].lstrip(b"\xef\xbb\xbf \t\r\n")
+    return head[:1] in (b"{", b"[")
+
+
+def _with_temp_file(name: str, content: bytes, suffix: str, func: Callable[[Path], Any]) -> Any:
+    """Run ``func(path)`` on ``content`` written to a temporary file; the temporary path in any
+    :class:`PoseLifterError` message is replaced by the uploaded name."""
+    with tempfile.TemporaryDirectory(prefix="poselifter-upload-") as d:
+        path = Path(d) / f"upload{suffix}"
+        path.write_bytes(content)
+        try:
+            return func(path)
+        except PoseLifterError as exc:
+            msg = str(exc).replace(str(path), safe_name(name))
+            try:
+                new = type(exc)(msg)
+            except TypeError:
+                new = PoseLifterError(msg)
+            raise new from None
+
+
+def upload_camera(focal: tuple[float, float], principal_point: tuple[float, float], size: tuple[int, int],
+                  name: str) -> Camera:
+    """The camera of an uploaded photo / keypoint file (intrinsics as given, extrinsics: :data:`CAMERA_HEIGHT_MM`)."""
+    R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # world z up -> camera y down, z = world y
+    C = np.array([0.0, 0.0, CAMERA_HEIGHT_MM])
+    return Camera(focal=(float(focal[0]), float(focal[1])), principal_point=(float(principal_point[0]), float(principal_point[1])),
+                  width=int(size[0]), height=int(size[1]), R=R, t=-R @ C, name=f"upload/{name}")
+
+
+def _display(rgb: np.ndarray, max_side: int = DISPLAY_MAX_SIDE) -> np.ndarray:
+    h, w = rgb.shape[:2]
+    s = min(1.0, max_side / float(max(h, w)))
+    if s >= 1.0:
+        return np.ascontiguousarray(rgb)
+    return cv2.resize(rgb, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA)
+
+
+def _display_canvas(size: tuple[int, int]) -> np.ndarray:
+    W, H = size
+    s = min(1.0, DISPLAY_MAX_SIDE / float(max(W, H)))
+    return canvas(max(1, round(W * s)), max(1, round(H * s)))
+
+
+def _check_2d(kp: np.ndarray, where: str, size: tuple[int, int] | None = None) -> np.ndarray:
+    """Finite ``(17, 2)`` px and, given the image size, within the image grown by its size on every side."""
+    kp = np.asarray(kp, np.float64)
+    if kp.shape != (NUM_JOINTS, 2) or not np.all(np.isfinite(kp)):
+        raise UploadError(f"{where}: the 2D pose must be 17 finite (x, y) px, got shape {kp.shape}")
+    if size is not None:
+        W, H = size
+        out = (kp[:, 0] < -W) | (kp[:, 0] > 2 * W) | (kp[:, 1] < -H) | (kp[:, 1] > 2 * H)
+        if out.any():
+            names = [JOINT_NAMES[j] for j in np.flatnonzero(out)][:5]
+            raise UploadError(f"{where}: joint(s) {names} lie far outside the {W} x {H} px image (more than its size "
+                              "beyond an edge); are the keypoints in pixels of this image?")
+    return kp
+
+
+def _check_focal(focal: tuple[float, float], where: str) -> None:
+    if not all(math.isfinite(f) and MIN_FOCAL_PX <= f <= MAX_FOCAL_PX for f in focal):
+        raise UploadError(f"{where}: focal length {list(focal)} px is not plausible (expected {MIN_FOCAL_PX:g} .. "
+                          f"{MAX_FOCAL_PX:g} px)")
+
+
+# ------------------------------------------------------------------------------------------------
+# Photos
+# ------------------------------------------------------------------------------------------------
+
+
+def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> tuple[Photo, LoadedImage]:
+    """Decode an uploaded photo with :func:`lifter.detect.load_image` (EXIF orientation, downscaling of
+    huge images, :class:`lifter.detect.ImageError` for not-an-image / truncated / too many pixels)."""
+    check_upload(name, content)
+    suffix = Path(safe_name(name)).suffix.lower()
+    suffix = suffix if suffix in IMAGE_SUFFIXES else ".img"
+    img: LoadedImage = _with_temp_file(name, content, suffix, lambda p: load_image(p, max_side=max_side))
+    img = LoadedImage(rgb=img.rgb, size=img.size, scale=img.scale, exif=img.exif, path=Path(safe_name(name)),
+                      notes=img.notes)
+    return Photo(name=safe_name(name), display=_display(img.rgb), size=img.size, exif=img.exif, notes=img.notes), img
+
+
+def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estimator: PoseEstimator2D,
+                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
+    """Detect the largest person on an uploaded photo and make it a sample (:func:`lifter.lift_cli.lift_image`:
+    raises :class:`lifter.detect.NoPersonError` when nobody is found)."""
+    from lifter.lift_cli import lift_image
+
+    rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg)
+    kp = _check_2d(rec.keypoints_2d, photo.name)  # (detections may be extrapolated outside the image)
+    detail = next((w for w in rec.warnings if "px" in w and ("EXIF" in w or "field of view" in w)), rec.focal_source)
+    info = UploadInfo(name=photo.name, kind="image", focal_source=rec.focal_source, focal_detail=detail,
+                      scores=None if rec.scores is None else np.asarray(rec.scores, np.float64),
+                      source_format=rec.source_format, num_people=rec.num_people, detector=rec.detector,
+                      warnings=tuple(rec.warnings))
+    cam = upload_camera(rec.focal, rec.principal_point, photo.size, photo.name)
+    return Sample(key=key, label=f"upload: {photo.name}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(),
+                  camera=cam, image=photo.display, has_gt_2d=False, upload=info)
+
+
+# ------------------------------------------------------------------------------------------------
+# Keypoint files
+# ------------------------------------------------------------------------------------------------
+
+
+def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None = None,
+                    fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
+    """A sample from an uploaded keypoint JSON (any layout ``poselifter lift`` accepts).
+
+    Image size: the file's ``image_size``; else, when the file gives none, that of ``photo`` (the photo
+    uploaded just before); else twice its ``principal_point``. The photo is drawn under the keypoints
+    when its size matches. Focal: the file's ``focal``; else the photo's EXIF focal (when drawn on it);
+    else the default field of view ``fov_deg``. Principal point: the file's, else the image centre.
+    """
+    from lifter.lift_cli import parse_keypoint_json
+
+    check_upload(name, content)
+    nm = safe_name(name)
+    try:
+        json.loads(content.decode("utf-8-sig"))
+    except UnicodeDecodeError:
+        raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 keypoint JSON file") from None
+    except json.JSONDecodeError as exc:
+        raise UploadError(f"{nm}: not valid JSON ({exc}); expected a keypoint file as `poselifter lift` reads it") from None
+    kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
+    kp = _check_2d(convert(kf.keypoints, src=kf.format), nm)
+    if kf.focal is not None:
+        _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
+    notes = list(kf.warnings)
+    size = kf.image_size
+    use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
+    if size is None and use_photo:
+        size = photo.size  # type: ignore[union-attr]
+    if size is None and kf.principal_point is not None:
+        size = (max(1, round(2 * float(kf.principal_point[0]))), max(1, round(2 * float(kf.principal_point[1]))))
+        notes.append(f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the principal point)")
+    if size is None:
+        raise UploadError(f"{nm}: the keypoint file has no \"image_size\": [W, H] (nor a \"principal_point\"); "
+                          "add it, or upload the photo first")
+    if min(size) <= 0 or max(size) > MAX_CANVAS_SIDE:
+        raise UploadError(f"{nm}: image_size {list(size)} px is not plausible")
+    _check_2d(kp, nm, size)
+    if use_photo:
+        notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
+    if kf.focal is not None:
+        focal, src, detail = (float(kf.focal[0]), float(kf.focal[1])), "keypoint-file", "focal from the keypoint file"
+    else:
+        if use_photo:
+            g = focal_from_exif(photo.exif, size, fov_deg=fov_deg)  # type: ignore[union-attr]
+        else:
+            f0 = default_focal(size, fov_deg=fov_deg)
+            from lifter.detect import FocalGuess
+
+            g = FocalGuess(f0, "default-fov", f"no focal length given: assumed a {fov_deg:g} deg diagonal field of "
+                                              f"view -> {f0:.1f} px")
+        focal, src, detail = (g.focal, g.focal), g.source, g.detail
+        notes.append(g.detail)
+    pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
+        else (size[0] / 2.0, size[1] / 2.0)
+    info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
+                      warnings=tuple(notes))
+    image = photo.display if use_photo else _display_canvas(size)  # type: ignore[union-attr]
+    cam = upload_camera(focal, pp, size, nm)
+    return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
+                  image=image, has_gt_2d=False, upload=info)
+
+
+def missing_detector_message(name: str, exc: Exception) -> str:
+    return (f"{safe_name(name)}: cannot find 2D joints in a photo: the MediaPipe detector is not installed "
+            f"(install it with: {INSTALL_HINT}; mediapipe==0.10.21 needs numpy<2, so use a separate environment). "
+            "Uploading a keypoint JSON file still works (e.g. {\"keypoints\": [[x, y], ...], \"format\": \"coco17\", "
+            "\"image_size\": [W, H]}); one uploaded now is drawn on this photo when its image_size matches. "
+            f"[{type(exc).__name__}]")
+
+
+# ------------------------------------------------------------------------------------------------
+# Download
+# ------------------------------------------------------------------------------------------------
+
+
+def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: tuple[float, float],
+                  dragged: set[int] | frozenset[int] = frozenset(), focal_changed: bool = False) -> Any:
+    """The tab's result as a :class:`lifter.lift_cli.LiftRecord`: the current clean 2D (``(17, 2)`` px,
+    dragged joints included, no noise) lifted at ``focal`` and the sample's principal point."""
+    from lifter.lift_cli import LiftRecord
+
+    kp = _check_2d(keypoints, sample.label)
+    cam = sample.camera
+    pp = (float(cam.principal_point[0]), float(cam.principal_point[1]))
+    res = lifter.lift(kp, focal=focal, principal_point=pp)
+    info: UploadInfo | None = sample.upload
+    warnings = list(info.warnings) if info is not None else []
+    if dragged:
+        warnings.append("2D joints corrected in the app: " + ", ".join(JOINT_NAMES[j] for j in sorted(dragged)))
+    if focal_changed:
+        src = "app-slider"
+        warnings.append(f"focal length set with the app's slider to {math.sqrt(focal[0] * focal[1]):.1f} px")
+    else:
+        src = info.focal_source if info is not None else "calibrated-camera"
+    return LiftRecord(input=info.name if info is not None else sample.label,
+                      kind=info.kind if info is not None else "sample",
+                      keypoints_2d=kp, absolute=np.asarray(res.absolute), relative=np.asarray(res.relative),
+                      root=np.asarray(res.root), canonical_depth=float(res.canonical_depth),
+                      focal=(float(focal[0]), float(focal[1])), focal_source=src, principal_point=pp,
+                      image_size=(int(cam.width), int(cam.height)), model=str(getattr(lifter, "name", "custom")),
+                      scores=None if info is None else info.scores,
+                      source_format=H36M17 if info is None else info.source_format,
+                      num_people=None if info is None else info.num_people,
+                      detector=None if info is None else info.detector, warnings=tuple(warnings))
+
+
+def download_stem(sample: Sample) -> str:
+    """A file-name stem for the result of ``sample``."""
+    raw = Path(sample.upload.name).stem if sample.upload is not None else sample.key
+    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "pose"
+    return stem[:80] + "_lifted"
+
+
+def json_bytes(record: Any) -> bytes:
+    return json.dumps(record.to_json(), indent=1).encode("utf-8")
+
+
+def glb_bytes(record: Any) -> bytes:
+    """The lifted skeleton (``record.absolute``) as a binary glTF (metres, y-up; :mod:`lifter.export`)."""
+    from lifter.export import skeleton_scene
+
+    return bytes(skeleton_scene(record.absolute).export(file_type="glb"))
+
+
+__all__ = ["CAMERA_HEIGHT_MM", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",
+           "UploadInfo", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
+           "keypoint_sample", "missing_detector_message", "oversize_message", "photo_sample", "result_record",
+           "safe_name", "upload_camera"]

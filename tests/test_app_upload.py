@@ -1,0 +1,481 @@
+"""In-process tests of the app's upload / download (photo or keypoint JSON in, `poselifter lift` JSON or GLB
+out) and of its use of the library's keypoint converter and error model. Uploads go through a fake
+browser tab speaking viser's upload protocol; the photo test with the real MediaPipe detector runs only
+where the ``detect`` extra is installed, the others use a fake 2D estimator so they run everywhere."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lifter import PoseLifterError, available_models
+
+viser = pytest.importorskip("viser")
+
+from app import upload as up  # noqa: E402
+from app.demo_assets import DEMO_DIR  # noqa: E402
+from app.testing import FakeTab, local_server, wait_for  # noqa: E402
+from app.viewer import PoseLifterApp, SessionView  # noqa: E402
+from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_available  # noqa: E402
+from lifter.lift_cli import LiftRecord  # noqa: E402
+
+LIFT_FIELDS = {"keypoints_2d", "absolute", "root", "canonical_depth", "focal", "principal_point"}
+
+
+def _models() -> list[str]:
+    try:
+        return available_models()
+    except PoseLifterError as exc:
+        pytest.skip(f"no shipped models: {exc}")
+
+
+class FakeEstimator:
+    """A 2D estimator returning given H36M-order people (full-resolution px), scaled to the image it sees."""
+
+    name = "fake"
+    keypoint_format = "h36m17"
+
+    def __init__(self, people: list[np.ndarray], full_width: int) -> None:
+        self.people = [np.asarray(p, np.float64) for p in people]
+        self.full_width = full_width
+        self.seen: list[tuple[int, int]] = []
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        self.seen.append(image.shape[:2])
+        s = image.shape[1] / self.full_width
+        return [Detection(keypoints=p * s, scores=np.full(17, 0.9), bbox_xywh=bbox_of(p * s), keypoint_format="h36m17")
+                for p in self.people]
+
+
+@pytest.fixture(scope="module")
+def app():
+    _models()
+    server = local_server()
+    a = PoseLifterApp(server, h36m_root=None)
+    yield a
+    server.stop()
+
+
+@pytest.fixture()
+def view(app: PoseLifterApp) -> SessionView:
+    return app.headless_view()
+
+
+def _jpeg(rgb: np.ndarray, **save: object) -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(rgb).save(buf, format="JPEG", quality=90, **save)
+    return buf.getvalue()
+
+
+def _open_tab(app: PoseLifterApp) -> tuple[FakeTab, SessionView]:
+    """A new fake browser tab and its session view (other tests' tabs may still be disconnecting)."""
+    before = set(app.views)
+    tab = FakeTab(app.server)
+    assert wait_for(lambda: bool(set(app.views) - before)), "the fake tab never got a session"
+    return tab, app.views[max(set(app.views) - before)]
+
+
+def _snapshot(view: SessionView) -> tuple:
+    st = view.state
+    return st.sample.key, st.keypoints.copy(), st.focal_px, view.frame
+
+
+def _assert_unchanged(view: SessionView, snap: tuple) -> None:
+    key, kp, f, frame = snap
+    assert view.state.sample.key == key and view.state.focal_px == f
+    np.testing.assert_array_equal(view.state.keypoints, kp)
+    np.testing.assert_allclose(view.frame.lifted, frame.lifted, atol=1e-9)
+
+
+# ----------------------------------------------------------------------------------------------
+# Integration with the library
+# ----------------------------------------------------------------------------------------------
+
+
+def test_noise_slider_uses_the_shipped_error_model(app: PoseLifterApp) -> None:
+    from lifter.api import ASSETS_DIR
+    from lifter.noise import ErrorModel
+
+    assert isinstance(app.error_model, ErrorModel)
+    if (Path(ASSETS_DIR) / "error_model" / "sh_mixture.json").is_file():
+        assert "stand-in" not in app.error_model.source
+        assert np.any(app.error_model.gamma < 1.0)  # a fitted mixture: some outlier weight
+
+
+def test_h36m_detections_use_the_library_converter() -> None:
+    from app.samples import default_h36m_root, open_h36m
+    from lifter.keypoints import convert
+
+    import app.samples as samples
+
+    assert not hasattr(samples, "sh16_to_h36m17") and not hasattr(samples, "SH16_TO_H36M17")
+    root = default_h36m_root()
+    if root is None:
+        pytest.skip("Human3.6M not present")
+    cat = open_h36m(str(root))
+    s = cat.get(9, "Walking 1", cat.camera_ids[0], 0)
+    rows = cat._detections["S9/Walking 1/" + cat.camera_ids[0]]
+    np.testing.assert_allclose(s.detected_2d, convert(rows[0], src="sh16"))
+
+
+# ----------------------------------------------------------------------------------------------
+# Keypoint JSON upload (through a fake tab, viser's upload protocol)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
+    tab, v = _open_tab(app)
+    try:
+        s = app.demo.get(app.demo.names[1])
+        # COCO-style list of two people: the largest is used, and the app says so
+        coco = np.zeros((17, 3))
+        from lifter.keypoints import convert
+
+        coco[:, :2] = _coco_from_h36m(s.keypoints_2d)
+        coco[:, 2] = 1.0
+        small = coco.copy()
+        small[:, :2] = 0.2 * coco[:, :2] + 10
+        content = json.dumps([{"keypoints": small.ravel().tolist()}, {"keypoints": coco.ravel().tolist()}]).encode()
+        tab.upload(v.upload_btn, "two_people.json", content)
+        # a COCO file carries no image size: refused with the reason, the tab keeps its sample
+        assert wait_for(lambda: "image_size" in (v.messages[-1] if v.messages else ""))
+        assert v.state.sample.key.startswith("demo/")
+        content = json.dumps({"keypoints": coco.tolist(), "format": "coco17", "image_size": [800, 600]}).encode()
+        tab.upload(v.upload_btn, "pose.json", content)
+        assert wait_for(lambda: v.state.sample.key.startswith("upload/") and "coco17 keypoints" in v.messages[-1])
+        st = v.state
+        assert st.sample.pose_3d is None and not st.sample.has_gt_2d and st.input_kind == "detected"
+        np.testing.assert_allclose(st.keypoints, convert(coco[:, :2], src="coco17"))
+        assert st.sample.camera.width == 800 and st.sample.camera.principal_point == (400.0, 300.0)
+        from lifter.detect import default_focal
+
+        assert st.focal_px == pytest.approx(default_focal((800, 600)))  # the stated default field of view
+        assert "coco17" in v.messages[-1] and "field of view" in v.messages[-1]
+        assert v.source_dd.value == "upload" and "upload" in v.source_dd.options
+        assert "pose.json" in v.readout_md.content and np.all(v.frame.lifted[:, 2] > 0)
+        # the 2D joints are draggable and the focal slider still works
+        assert v.move_joint(13, st.keypoints[13] + 30.0) is True and 13 in v.state.dragged
+        z = v.frame.root[2]
+        v.focal_slider.value = 2 * v.state.focal_px
+        assert v.frame.root[2] == pytest.approx(2 * z, rel=1e-6)
+        # back to a demo sample and to the upload again
+        v.source_dd.value = "demo"
+        assert v.state.sample.key.startswith("demo/")
+        v.source_dd.value = "upload"
+        assert v.state.sample.key.startswith("upload/")
+    finally:
+        tab.close()
+
+
+def _coco_from_h36m(kp: np.ndarray) -> np.ndarray:
+    """COCO-17 keypoints for an H36M pose: limbs copied, the face placed around neck/nose and head."""
+    n = {name: i for i, name in enumerate(("pelvis", "r_hip", "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle", "spine",
+                                           "thorax", "neck_nose", "head_top", "l_shoulder", "l_elbow", "l_wrist",
+                                           "r_shoulder", "r_elbow", "r_wrist"))}
+    head = 0.5 * (kp[n["neck_nose"]] + kp[n["head_top"]])
+    face = [kp[n["neck_nose"]], head + (6, 0), head - (6, 0), head + (14, 3), head - (14, -3)]
+    limbs = ["l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist", "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee",
+             "l_ankle", "r_ankle"]
+    return np.array(face + [kp[n[j]] for j in limbs], np.float64)
+
+
+def _openpose_from_h36m(kp: np.ndarray) -> np.ndarray:
+    """OpenPose BODY_25 keypoints for an H36M pose (built from :func:`_coco_from_h36m`; feet at the ankles)."""
+    c = dict(zip(("nose", "l_eye", "r_eye", "l_ear", "r_ear", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist",
+                  "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle"), _coco_from_h36m(kp)))
+    c["neck"] = 0.5 * (c["l_shoulder"] + c["r_shoulder"])
+    c["mid_hip"] = 0.5 * (c["l_hip"] + c["r_hip"])
+    for side in "lr":
+        a = c[f"{side}_ankle"]
+        c[f"{side}_big_toe"], c[f"{side}_small_toe"], c[f"{side}_heel"] = a + (0, 12), a + (4, 12), a + (-3, 4)
+    from lifter.keypoints import get_format
+
+    return np.array([c[j] for j in get_format("openpose25").joint_names], np.float64)
+
+
+@pytest.mark.parametrize("layout", ["object_h36m", "openpose", "flat_rows_sh16"])
+def test_keypoint_json_layouts(view: SessionView, app: PoseLifterApp, layout: str) -> None:
+    from lifter.keypoints import convert
+
+    s = app.demo.get(app.demo.names[0])
+    kp = s.keypoints_2d
+    if layout == "object_h36m":
+        doc: object = {"keypoints": kp.tolist(), "format": "h36m17", "image_size": [800, 600], "focal": [1000, 1000]}
+        expect = kp
+    elif layout == "openpose":
+        op = _openpose_from_h36m(kp)
+        doc = {"people": [{"pose_keypoints_2d": np.c_[op, np.ones(25)].ravel().tolist()}]}
+        expect = convert(op, src="openpose25")
+    else:
+        sh = convert(kp, src="h36m17", dst="sh16") if "sh16" in _dst_formats() else None
+        if sh is None:
+            pytest.skip("sh16 cannot be produced from h36m17")
+        doc = {"keypoints": sh.ravel().tolist(), "image_size": [800, 600]}
+        expect = convert(sh, src="sh16")
+    if layout == "openpose":  # OpenPose output has no image size: drawn on the photo uploaded before
+        photo = (DEMO_DIR / f"{app.demo.names[0]}.jpg").read_bytes()
+        view.load_upload("photo.jpg", photo)  # decodes; detection may or may not be available
+    ok = view.load_upload(f"{layout}.json", json.dumps(doc).encode())
+    assert ok is True, view.messages[-1]
+    np.testing.assert_allclose(view.state.keypoints, expect, atol=1e-9)
+    if layout == "object_h36m":
+        assert view.state.focal_px == pytest.approx(1000.0)
+        np.testing.assert_allclose(view.frame.lifted, app.pool.get(view.state.model).lift(
+            kp, focal=1000.0, principal_point=(400, 300)).absolute, atol=1e-6)
+    if layout == "openpose":
+        assert "drawn on the photo" in view.messages[-1] and view.state.sample.image.shape[:2] == (600, 800)
+
+
+def _dst_formats() -> set[str]:
+    from lifter.keypoints import convert, keypoint_formats
+
+    ok = set()
+    for f in keypoint_formats():
+        try:
+            convert(np.zeros((17, 2)) + np.arange(17)[:, None], src="h36m17", dst=f)
+            ok.add(f)
+        except Exception:  # noqa: BLE001
+            pass
+    return ok
+
+
+# ----------------------------------------------------------------------------------------------
+# Bad uploads: a message, the tab's state untouched, the server alive
+# ----------------------------------------------------------------------------------------------
+
+
+def test_corrupt_and_not_an_image_uploads(view: SessionView, app: PoseLifterApp) -> None:
+    view.move_joint(5, view.state.keypoints[5] + 20)  # some state worth keeping
+    snap = _snapshot(view)
+    photo = (DEMO_DIR / "standing.jpg").read_bytes()
+    cases = {
+        "notes.txt": (b"just some text, not a photo", "not an image"),
+        "photo.jpg": (b"\xff\xd8\xff\xe0" + b"\x00" * 50, "image"),
+        "truncated.jpg": (photo[: len(photo) // 2], "truncated"),
+        "empty.png": (b"", "empty file"),
+        "broken.json": (b'{"keypoints": [[1, 2], ', "not valid JSON"),
+        "wrong.json": (json.dumps({"keypoints": [[1, 2]] * 5}).encode(), "5 joints"),
+        "nan.json": (json.dumps({"keypoints": [[400, 300]] * 17, "image_size": [800, 600]}).encode(), "degenerate"),
+        "binary.json": (b"\x89PNG\r\n\x1a\n" + b"\x00" * 30, "not"),
+        "far.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 1e6).tolist(),
+                                 "image_size": [800, 600]}).encode(), "far outside"),
+        "focal.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 10.0).tolist(), "image_size": [800, 600],
+                                   "focal": 0}).encode(), "focal"),
+    }
+    for name, (content, expect) in cases.items():
+        assert view.load_upload(name, content) is False, name
+        assert expect in view.messages[-1], (name, view.messages[-1])
+        assert view.messages[-1].startswith(name), view.messages[-1]
+        _assert_unchanged(view, snap)
+    import urllib.request
+
+    with urllib.request.urlopen(f"http://127.0.0.1:{app.server.get_port()}/", timeout=10) as r:
+        assert r.status == 200
+
+
+def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
+    big = b"\xff\xd8" + b"\x00" * (up.MAX_UPLOAD_BYTES + 10)
+    tab, v = _open_tab(app)
+    try:
+        snap = _snapshot(v)
+        # checked on the bytes themselves
+        assert v.load_upload("huge.jpg", big) is False and "more than the 20 MiB" in v.messages[-1]
+        _assert_unchanged(v, snap)
+        # and refused as soon as the browser announces the size: viser does not buffer the rest
+        states = v.gui._current_file_upload_states
+        tab.upload(v.upload_btn, "huge2.jpg", big[: 3 * 512 * 1024], declared_size=len(big), max_parts=3)
+        assert wait_for(lambda: "huge2.jpg" in (v.messages[-1] if v.messages else ""))
+        assert "more than the 20 MiB" in v.messages[-1] and not states
+        _assert_unchanged(v, snap)
+    finally:
+        tab.close()
+
+
+def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) -> None:
+    def no_mediapipe():
+        raise MissingDependencyError("the BlazePose 2D detector needs the optional 'detect' extra")
+
+    server = local_server()
+    try:
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=no_mediapipe)
+        v = a.headless_view()
+        snap = _snapshot(v)
+        photo = (DEMO_DIR / "walking.jpg").read_bytes()
+        assert v.load_upload("walking.jpg", photo) is False
+        msg = v.messages[-1]
+        assert 'pip install -e ".[detect]"' in msg and "keypoint JSON" in msg and "still works" in msg
+        _assert_unchanged(v, snap)
+        # the keypoint JSON path still works, drawn on that photo (same size, no image_size in the file)
+        s = a.demo.get("walking")
+        assert v.load_upload("walking_kp.json", json.dumps({"keypoints": s.keypoints_2d.tolist(),
+                                                            "format": "h36m17"}).encode()) is True
+        assert v.state.sample.image.shape[:2] == (600, 800) and "drawn on the photo walking.jpg" in v.messages[-1]
+        assert float(v.state.sample.image.std()) > 20  # the photo, not a blank canvas
+    finally:
+        server.stop()
+    if not mediapipe_available():  # this environment: the real default detector says the same
+        v = app.headless_view()
+        assert v.load_upload("walking.jpg", photo) is False and 'pip install -e ".[detect]"' in v.messages[-1]
+
+
+# ----------------------------------------------------------------------------------------------
+# Photo upload with a fake detector: several people, nobody, a huge image, EXIF focal
+# ----------------------------------------------------------------------------------------------
+
+
+def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
+    s = app.demo.get("standing")
+    rgb = s.image
+    server = local_server()
+    try:
+        other = 0.5 * (s.keypoints_2d - s.keypoints_2d.mean(0)) + np.array([120.0, 420.0])
+        est = FakeEstimator([other, s.keypoints_2d], full_width=800)
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+        v = a.headless_view()
+        assert v.load_upload("two.jpg", _jpeg(rgb)) is True
+        np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)  # the largest person
+        assert "2 people found; using the largest" in v.messages[-1]
+        assert "2 people found" in v.readout_md.content or "2 people" in v.readout_md.content
+        # nobody
+        est.people = []
+        snap = _snapshot(v)
+        assert v.load_upload("empty_room.jpg", _jpeg(rgb)) is False and "no person found" in v.messages[-1]
+        _assert_unchanged(v, snap)
+        # a huge image: downscaled for detection, keypoints in full-resolution px, focal slider range follows
+        est.people, est.full_width = [s.keypoints_2d * 4], 3200
+        big = np.repeat(np.repeat(rgb, 4, axis=0), 4, axis=1)  # 3200 x 2400
+        assert v.load_upload("big.jpg", _jpeg(big)) is True
+        assert max(est.seen[-1]) <= 2048 and "downscaled 3200 x 2400" in v.messages[-1]
+        np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d * 4, atol=3.0)
+        assert v.state.sample.camera.width == 3200 and max(v.state.sample.image.shape[:2]) <= up.DISPLAY_MAX_SIDE
+        assert v.focal_slider.max >= v.state.focal_px
+        # EXIF 35-mm-equivalent focal length, as `poselifter lift` reads it
+        from PIL import Image
+
+        est.people, est.full_width = [s.keypoints_2d], 800
+        exif = Image.new("RGB", (1, 1)).getexif()
+        exif.get_ifd(0x8769)[41989] = 26
+        assert v.load_upload("phone.jpg", _jpeg(rgb, exif=exif.tobytes())) is True
+        f35 = 26 * np.hypot(800, 600) / np.hypot(36, 24)
+        assert v.state.focal_px == pytest.approx(f35, rel=1e-6)
+        assert v.state.sample.upload.focal_source == "exif-35mm" and "EXIF" in v.readout_md.content
+        z = v.frame.root[2]
+        v.focal_slider.value = 1.5 * f35
+        assert v.frame.root[2] == pytest.approx(1.5 * z, rel=1e-3)
+    finally:
+        server.stop()
+
+
+# ----------------------------------------------------------------------------------------------
+# Download
+# ----------------------------------------------------------------------------------------------
+
+
+def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
+    from lifter.export import read_glb_joints
+
+    tab, v = _open_tab(app)
+    try:
+        sent: list[tuple] = []
+        v.target.send_file_download = lambda name, data, *a, **k: sent.append((name, data, k))  # type: ignore[method-assign]
+        s = app.demo.get("sitting")
+        v.load_upload("sitting kp.json", json.dumps({"keypoints": s.keypoints_2d.tolist(), "format": "h36m17",
+                                                     "image_size": [800, 600], "focal": 1000}).encode())
+        v.move_joint(16, v.state.keypoints[16] + np.array([25.0, -10.0]))
+        v.set_noise(1.0)  # the download is the clean lift of the current 2D, not a noisy draw
+        v.focal_slider.value = 1200.0
+        v.download_btn.value = True  # click
+        assert sent and sent[-1][0] == "sitting_kp_lifted.json" and sent[-1][2].get("save_immediately") is True
+        d = json.loads(sent[-1][1])
+        assert LIFT_FIELDS <= set(d) and set(d) == set(_record_keys())
+        kp = np.asarray(d["keypoints_2d"])
+        np.testing.assert_allclose(kp, v.state.keypoints, atol=0.01)
+        lifter = app.pool.get(v.state.model)
+        ref = lifter.lift(v.state.keypoints, focal=(1200.0, 1200.0), principal_point=(400.0, 300.0))
+        np.testing.assert_allclose(d["absolute"], ref.absolute, atol=0.01)
+        np.testing.assert_allclose(d["root"], ref.root, atol=0.01)
+        assert d["focal"] == [1200.0, 1200.0] and d["principal_point"] == [400.0, 300.0]
+        assert d["canonical_depth"] == pytest.approx(float(ref.canonical_depth), abs=0.01)
+        assert d["focal_source"] == "app-slider" and any("r_wrist" in w for w in d["warnings"])
+        assert d["kind"] == "keypoints" and d["image_size"] == [800, 600] and d["model"] == v.state.model
+        v.download_glb_btn.value = True
+        assert sent[-1][0] == "sitting_kp_lifted.glb"
+        path = tmp_path / "skeleton.glb"
+        path.write_bytes(sent[-1][1])
+        np.testing.assert_allclose(read_glb_joints(path), ref.absolute, atol=1.0)
+        # a demo sample downloads too (its calibrated camera)
+        v.source_dd.value = "demo"
+        name, data = v.download_payload("json")
+        d = json.loads(data)
+        assert name.startswith("demo_") and d["kind"] == "sample" and d["focal_source"] == "calibrated-camera"
+        assert v.download("xml") is False and "unknown download format" in v.messages[-1]
+    finally:
+        tab.close()
+
+
+def _record_keys() -> list[str]:
+    rec = LiftRecord(input="x", kind="image", keypoints_2d=np.zeros((17, 2)), absolute=np.zeros((17, 3)),
+                     relative=np.zeros((17, 3)), root=np.zeros(3), canonical_depth=1.0, focal=(1.0, 1.0),
+                     focal_source="user", principal_point=(0.0, 0.0), image_size=(1, 1), model="m")
+    return list(rec.to_json())
+
+
+# ----------------------------------------------------------------------------------------------
+# The real detector (only with the `detect` extra)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_photo_upload_with_blazepose(app: PoseLifterApp) -> None:
+    pytest.importorskip("mediapipe")
+    tab, v = _open_tab(app)
+    try:
+        s = app.demo.get("standing")
+        tab.upload(v.upload_btn, "standing.jpg", (DEMO_DIR / "standing.jpg").read_bytes())
+        assert wait_for(lambda: v.state.sample.key.startswith("upload/") and bool(v.messages)
+                        and "found" in v.messages[-1], timeout=60), v.messages[-1:]
+        st = v.state
+        err = np.linalg.norm(st.keypoints - s.keypoints_2d, axis=1)
+        assert np.median(err) < 25.0, err  # BlazePose finds the mannequin's joints
+        info = st.sample.upload
+        assert info.kind == "image" and info.detector == "blazepose" and info.num_people == 1
+        assert info.focal_source == "default-fov" and "blazepose found 1 person" in v.messages[-1]
+        assert st.sample.detected_2d is not None and np.all(v.frame.lifted[:, 2] > 0)
+        # drag to correct a joint, then download
+        assert v.move_joint(16, s.keypoints_2d[16]) is True
+        name, data = v.download_payload("json")
+        d = json.loads(data)
+        assert name == "standing_lifted.json" and d["detector"] == "blazepose" and d["num_people"] == 1
+        np.testing.assert_allclose(d["keypoints_2d"][16], s.keypoints_2d[16], atol=0.01)
+    finally:
+        tab.close()
+
+
+def test_late_drag_events_after_a_sample_change_are_ignored(view: SessionView, app: PoseLifterApp) -> None:
+    """A drag that began on one sample must not move a joint of the next (events arrive late)."""
+    def _drag_event(v: SessionView, joint: int, uv: np.ndarray, phase: str = "update"):
+        cam = v.state.sample.camera
+        R = np.asarray(cam.R)
+        C = -R.T @ np.asarray(cam.t) / 1000.0
+        p = tuple(R.T @ v._image_plane(np.asarray(uv, float)) + C)
+        return viser.SceneNodeDragEvent(client=None, client_id=0, target=v.joint_nodes[joint], phase=phase,
+                                        instance_index=None, start_position=p, start_screen_pos=(0.5, 0.5),
+                                        end_position=p, end_screen_pos=(0.5, 0.5), button="left", modifier=None)
+
+    j = 16
+    cb = view.joint_nodes[j]._impl.drag_cb[0].callback
+    ev_start = _drag_event(view, j, view.state.keypoints[j] + 30.0, "start")
+    cb(ev_start)
+    assert j in view.state.dragged
+    view.select_demo(app.demo.names[2])
+    before = view.state.keypoints.copy()
+    cb(_drag_event(view, j, view.state.keypoints[j] + 80.0))  # a late "update" of the old drag
+    np.testing.assert_array_equal(view.state.keypoints, before)
+    assert not view.state.dragged
+    cb(_drag_event(view, j, view.state.keypoints[j] + 20.0, "start"))  # a new drag works
+    assert j in view.state.dragged
