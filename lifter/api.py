@@ -27,7 +27,9 @@ from .normalization import pose_scale_np
 from .skeleton import FLIP_PERMUTATION, NUM_JOINTS
 
 ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
-MIN_POSE_SCALE_PX = 1e-3
+DEGENERATE_SCALE_PX = 1e-3
+MIN_POSE_SCALE_PX = 2.0
+"""Poses whose 2D scale (RMS radius) is below this many pixels are rejected: they are degenerate or not in pixels."""
 
 
 def model_registry(assets_dir: Path | None = None) -> dict[str, Any]:
@@ -74,6 +76,14 @@ class LiftResult:
                 "up to the unknown focal length (Z = canonical_depth * alpha / 1000)")
 
 
+def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
+    try:
+        return np.broadcast_to(x, lead + (2,))
+    except ValueError:
+        raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
+                              f"shape {lead} (expected (2,) or {lead + (2,)})") from None
+
+
 class Lifter:
     """A trained PoseLifter network with numpy-in / numpy-out inference."""
 
@@ -114,7 +124,9 @@ class Lifter:
     ) -> LiftResult:
         """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order) to absolute 3D poses.
 
-        focal: ``fx = fy`` scalar, ``(fx, fy)`` or batched ``(..., 2)``, px; None -> canonical only.
+        focal: ``fx = fy`` scalar, ``(fx, fy)`` or batched ``(..., 2)`` (per pose: give the last axis
+            explicitly, ``(..., 2)`` or ``(..., 1)``; a bare ``(2,)`` always means ``(fx, fy)``), px;
+            None -> canonical depth only.
         principal_point: ``(cx, cy)`` or ``(..., 2)`` px; defaults to the image centre when
             ``image_size = (width, height)`` is given.
         flip_test: also lift the mirrored input and average (slower, slightly more accurate).
@@ -126,15 +138,19 @@ class Lifter:
                 raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the image centre)")
             wh = as_pair(image_size, name="image_size", positive=True)
             principal_point = wh / 2.0
-        pp = np.broadcast_to(as_pair(principal_point, name="principal_point"), lead + (2,))
+        pp = _broadcast(as_pair(principal_point, name="principal_point"), lead, name="principal_point")
         f = None
         if focal is not None:
-            f = np.broadcast_to(as_pair(focal, name="focal", positive=True), lead + (2,))
+            f = _broadcast(as_pair(focal, name="focal", positive=True), lead, name="focal")
         scale = pose_scale_np(kp)
-        if np.any(scale < MIN_POSE_SCALE_PX):
+        if np.any(scale < DEGENERATE_SCALE_PX):
             raise PoseLifterError(
                 f"degenerate pose: all 17 joints at (nearly) one point (2D scale {float(scale.min()):.2g} px); "
                 "the normalization needs a pose with non-zero extent")
+        if np.any(scale < MIN_POSE_SCALE_PX):
+            raise PoseLifterError(
+                f"2D pose scale {float(scale.min()):.3g} px is too small (< {MIN_POSE_SCALE_PX} px): keypoints must be "
+                "in image pixels (normalized [0, 1] coordinates? multiply by the image size)")
         if self.config.depth_target == "absolute" and f is None:
             raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
 

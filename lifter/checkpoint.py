@@ -61,7 +61,7 @@ def load_checkpoint(path: str | os.PathLike[str]) -> tuple[PoseLifterNet, dict[s
         net = PoseLifterNet(config)
         state = {k: v.float() if v.is_floating_point() else v for k, v in payload["state_dict"].items()}
         net.load_state_dict(state, strict=True)
-    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as exc:
         raise CheckpointError(f"{path}: checkpoint content does not match the model: {exc}") from None
     for name, t in net.state_dict().items():
         if t.is_floating_point() and not torch.isfinite(t).all():

@@ -117,6 +117,11 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     from .evaluate import evaluate_lifter, format_per_action, format_table
 
     torch.set_num_threads(args.threads)
+    lifters = []
+    for spec in args.weights:
+        label, _, ref = spec.rpartition("=")
+        lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
+        lifters.append((label or ref, lifter))
     data = H36M(args.h36m)
     samples = data.load_protocol(args.protocol, "test", stride=args.stride,
                                  max_frames_per_sequence=args.max_frames_per_sequence)
@@ -129,11 +134,6 @@ def _run_evaluate(args: argparse.Namespace) -> int:
         samples = samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok])
     print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
           f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note})")
-    lifters = []
-    for spec in args.weights:
-        label, _, ref = spec.rpartition("=")
-        lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
-        lifters.append((label or ref, lifter))
     if args.focal_scales:
         from .evaluate import focal_sweep, format_focal_table
 

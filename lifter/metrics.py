@@ -6,7 +6,8 @@
   Default: the least-squares optimal alignment with the reflection fix; ``variant="repo"`` uses the
   authors' RMS-ratio scale and no reflection fix.
 * MRPE: mean Euclidean error of the absolute root; MRPE-X/Y/Z are mean absolute per-axis errors.
-* 3DPCK@150mm: fraction of joints with error < 150 mm (strict), on root-relative poses;
+* 3DPCK@150mm: fraction of joints with error < 150 mm (strict), on root-relative poses, over the 14
+  joints of the standard 3DPCK protocol (pelvis, spine and neck/nose excluded, spec §8);
   AUC: mean PCK over thresholds 0, 5, ..., 150 mm (x 100 to report as %).
 """
 
@@ -79,17 +80,27 @@ def root_errors(pred_root: np.ndarray, gt_root: np.ndarray) -> tuple[np.ndarray,
 
 
 PCK_THRESHOLD_MM: float = 150.0
+PCK_JOINTS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 10, 11, 12, 13, 14, 15, 16)
+"""The 14 joints scored by 3DPCK / AUC: all but pelvis (0), spine (7) and neck/nose (9)."""
 AUC_THRESHOLDS_MM: np.ndarray = np.arange(0.0, 151.0, 5.0)
 
 
-def pck(pred: np.ndarray, gt: np.ndarray, *, threshold: float = PCK_THRESHOLD_MM) -> np.ndarray:
-    """Per-pose fraction ``(...)`` of joints whose root-relative error is < ``threshold`` mm."""
-    return (joint_errors(pred, gt) < threshold).mean(axis=-1)
+def pck(pred: np.ndarray, gt: np.ndarray, *, threshold: float = PCK_THRESHOLD_MM,
+        joints: tuple[int, ...] | None = PCK_JOINTS) -> np.ndarray:
+    """Per-pose fraction ``(...)`` of ``joints`` (None: all) whose root-relative error is < ``threshold`` mm."""
+    e = joint_errors(pred, gt)
+    if joints is not None:
+        e = e[..., list(joints)]
+    return (e < threshold).mean(axis=-1)
 
 
-def pck_curve(pred: np.ndarray, gt: np.ndarray, thresholds: np.ndarray = AUC_THRESHOLDS_MM) -> np.ndarray:
-    """PCK over all poses and joints at each threshold ``(T,)``."""
-    e = joint_errors(pred, gt).reshape(-1)
+def pck_curve(pred: np.ndarray, gt: np.ndarray, thresholds: np.ndarray = AUC_THRESHOLDS_MM, *,
+              joints: tuple[int, ...] | None = PCK_JOINTS) -> np.ndarray:
+    """PCK over all poses and ``joints`` at each threshold ``(T,)``."""
+    e = joint_errors(pred, gt)
+    if joints is not None:
+        e = e[..., list(joints)]
+    e = e.reshape(-1)
     return (e[None, :] < np.asarray(thresholds)[:, None]).mean(axis=1)
 
 

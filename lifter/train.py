@@ -94,6 +94,14 @@ def flip_batch(
     return torch.where(m, kp_f, kp), torch.where(mask[:, None], pp_f, pp), torch.where(m, rel_f, rel)
 
 
+def zoom_batch(kp: torch.Tensor, pp: torch.Tensor, depth: torch.Tensor, s: torch.Tensor, *,
+               canonical: bool) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Zoom by ``s`` ``(B,)``: the same 3D seen by a camera with focal and principal point (and image) x s.
+    2D keypoints and principal point scale by ``s``; the canonical depth ``Z F0 / (s alpha)`` scales by
+    ``1/s``; an absolute depth target is unchanged (which is why it cannot be learned from zoomed data)."""
+    return kp * s[:, None, None], pp * s[:, None], (depth / s if canonical else depth)
+
+
 def target_statistics(rel: torch.Tensor, depth: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Mean and std ``(49,)`` of the packed targets over the samples and their mirror images."""
     perm = torch.as_tensor(FLIP_PERMUTATION)
@@ -204,9 +212,7 @@ def train(
             kp, pp, rel = flip_batch(kp, pp, w, rel, mask)
         if cfg.zoom_aug:
             s = torch.exp2((cfg.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-cfg.zoom_clip, cfg.zoom_clip))
-            kp, pp = kp * s[:, None, None], pp * s[:, None]
-            if cfg.model.depth_target == "canonical":
-                depth = depth / s
+            kp, pp, depth = zoom_batch(kp, pp, depth, s, canonical=cfg.model.depth_target == "canonical")
         if augment_2d is not None:
             kp = augment_2d(kp, pp, gen)
         pred = net.forward_flat(kp, pp)

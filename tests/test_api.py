@@ -121,6 +121,44 @@ def test_bad_focal(small_lifter, keypoints, focal):
         small_lifter.lift(keypoints, focal=focal, principal_point=(500, 500))
 
 
+def test_keypoints_not_in_pixels(small_lifter, keypoints):
+    with pytest.raises(PoseLifterError, match="must be in image pixels"):
+        small_lifter.lift(keypoints / 1000.0, focal=1.145, principal_point=(0.512, 0.515))
+
+
+def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
+    per_pose = np.stack([np.full(6, 1000.0), np.linspace(900, 1500, 6)], -1)  # (6, 2)
+    res = small_lifter.lift(keypoints, focal=per_pose, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(res.focal, per_pose)
+    one = small_lifter.lift(keypoints[3], focal=per_pose[3], principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(one.absolute, res.absolute[3], atol=1e-6)
+    with pytest.raises(PoseLifterError, match="focal: shape"):
+        small_lifter.lift(keypoints, focal=np.full((4, 2), 1000.0), principal_point=(512.0, 515.0))
+    with pytest.raises(PoseLifterError, match="principal_point: shape"):
+        small_lifter.lift(keypoints, focal=1000.0, principal_point=np.zeros((5, 2)))
+
+
+def test_absolute_depth_model_path():
+    """A direct-depth model (Table 6 "w/o canonical"): its root Z is the network's depth; it needs the focal."""
+    torch.manual_seed(1)
+    net = PoseLifterNet(ModelConfig(width=32, depth_target="absolute"))
+    mean = torch.zeros(49)
+    mean[-1] = 5000.0
+    net.set_target_statistics(mean, torch.full((49,), 50.0))
+    lifter = Lifter(net.eval(), name="abs")
+    kp = project(random_pose_cam(np.random.default_rng(2), 3), focal=1100.0, principal_point=(500.0, 500.0))
+    with pytest.raises(PoseLifterError, match="needs the focal length"):
+        lifter.lift(kp, principal_point=(500.0, 500.0))
+    res = lifter.lift(kp, focal=1100.0, principal_point=(500.0, 500.0))
+    with torch.inference_mode():
+        z = net(torch.tensor(kp, dtype=torch.float32), torch.tensor([[500.0, 500.0]] * 3)).depth.numpy()
+    np.testing.assert_allclose(res.root[:, 2], z, rtol=1e-5)
+    np.testing.assert_allclose(res.canonical_depth, z * 1000.0 / 1100.0, rtol=1e-5)
+    # a different focal does not move the depth of a direct-depth model: that is its failure mode
+    res2 = lifter.lift(kp, focal=2200.0, principal_point=(500.0, 500.0))
+    np.testing.assert_allclose(res2.root[:, 2], res.root[:, 2], rtol=1e-6)
+
+
 def test_missing_principal_point(small_lifter, keypoints):
     with pytest.raises(PoseLifterError, match="principal_point is required"):
         small_lifter.lift(keypoints, focal=1000.0)

@@ -72,3 +72,16 @@ def test_flip_of_real_sample_is_a_valid_view(h36m):
     kp = project(s.pose_3d, focal=s.focal, principal_point=s.principal_point)
     kp_f, c_f = flip_keypoints_2d(kp, image_width=s.image_size[:, 0], principal_point=s.principal_point)
     np.testing.assert_allclose(project(flip_pose_3d(s.pose_3d), focal=s.focal, principal_point=c_f), kp_f, atol=1e-6)
+
+
+@requires_h36m
+def test_virtual_camera_samples(h36m):
+    from lifter.evaluate import virtual_camera_samples
+
+    s = h36m.load([9], stride=200, max_frames_per_sequence=2)
+    v = virtual_camera_samples(s, focal_scale=1.4, principal_shift=(100.0, -80.0))
+    np.testing.assert_allclose(v.focal, s.focal * 1.4, rtol=1e-6)
+    np.testing.assert_allclose(v.principal_point, s.principal_point + np.array([100.0, -80.0]), rtol=1e-6)
+    np.testing.assert_array_equal(v.pose_3d, s.pose_3d)
+    np.testing.assert_allclose(v.keypoints_2d, project(s.pose_3d, focal=v.focal, principal_point=v.principal_point),
+                               atol=1e-3)

@@ -46,19 +46,25 @@ def test_projection_convention_opencv():
 
 
 @settings(max_examples=50, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), f1=st.floats(300, 4000, **finite), f2=st.floats(300, 4000, **finite))
-def test_canonical_depth_gives_same_root_for_any_focal(seed, f1, f2):
-    """Zoom: the same person imaged with focal f1 or f2 and the canonical depth of each gives the same 3D root."""
+@given(seed=st.integers(0, 2**31 - 1), f1=st.floats(300, 4000, **finite), f2=st.floats(300, 4000, **finite),
+       aspect=st.floats(0.8, 1.25, **finite))
+def test_canonical_depth_gives_same_root_for_any_focal(seed, f1, f2, aspect):
+    """The same person imaged with focal f1 or f2 (fx != fy) and the canonical depth of each gives the same 3D
+    root; and canonical depth x 2D scale is the same for both cameras -- the cue the network learns."""
     pose = random_pose_cam(np.random.default_rng(seed), 2)
     root = pose[:, 0]
     c = (512.0, 500.0)
-    roots = []
+    roots, products = [], []
     for f in (f1, f2):
-        uv = cam.project(pose, focal=f, principal_point=c)
-        cd = cam.canonical_depth_from_depth(root[:, 2], focal=f)
-        roots.append(cam.root_from_canonical_depth(uv[:, 0], cd, focal=f, principal_point=c))
+        focal = (f, f * aspect)
+        uv = cam.project(pose, focal=focal, principal_point=c)
+        cd = cam.canonical_depth_from_depth(root[:, 2], focal=focal)
+        roots.append(cam.root_from_canonical_depth(uv[:, 0], cd, focal=focal, principal_point=c))
+        products.append(cd * pose_scale_np(uv))
     np.testing.assert_allclose(roots[0], root, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(roots[1], root, rtol=1e-9, atol=1e-6)
+    # canonical depth scales as 1/f while the 2D scale scales as f: their product is focal-invariant
+    np.testing.assert_allclose(products[0], products[1], rtol=1e-9)
 
 
 def test_canonical_depth_is_depth_at_1000px():

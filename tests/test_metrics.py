@@ -62,12 +62,18 @@ def test_mrpe_known_offset():
 
 
 def test_pck_and_auc():
+    from lifter.metrics import PCK_JOINTS
+
     gt = np.zeros((1, 17, 3))
     pred = np.zeros((1, 17, 3))
-    pred[0, 1:, 0] = np.linspace(10, 300, 16)  # joint errors
-    assert pck(pred, gt)[0] == pytest.approx((1 + np.sum(np.linspace(10, 300, 16) < 150)) / 17)
+    errs = np.linspace(10, 300, 16)
+    pred[0, 1:, 0] = errs  # joint errors of joints 1..16
+    all_err = np.r_[0.0, errs]
+    assert PCK_JOINTS == (1, 2, 3, 4, 5, 6, 8, 10, 11, 12, 13, 14, 15, 16)
+    assert pck(pred, gt)[0] == pytest.approx(np.mean(all_err[list(PCK_JOINTS)] < 150))
+    assert pck(pred, gt, joints=None)[0] == pytest.approx(np.mean(all_err < 150))
     c = pck_curve(pred, gt)
-    assert np.all(np.diff(c) >= 0) and c[0] == pytest.approx(0.0)  # strict <: the zero-error root fails at 0 mm
+    assert np.all(np.diff(c) >= 0) and c[0] == pytest.approx(0.0)  # strict <: zero error fails at 0 mm
     assert auc(gt, gt) == pytest.approx(30 / 31)
 
 
