@@ -71,9 +71,15 @@ def main() -> None:
 
     single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
-    print(f"single pose Lifter.lift: median {p50:.3f} ms, p95 {p95:.3f} ms ({args.single_calls} calls)")
+    print(f"single pose Lifter.lift (float32): median {p50:.3f} ms, p95 {p95:.3f} ms ({args.single_calls} calls)")
+    q = lifter.quantized()
+    single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
+    q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
+    print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
+          f"-> {p50 / q50:.2f}x faster")
     results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
-               "single_median_ms": p50, "single_p95_ms": p95, "batched": []}
+               "single_median_ms": p50, "single_p95_ms": p95, "single_int8_median_ms": q50,
+               "single_int8_p95_ms": q95, "batched": []}
     print(f"{'batch':>6} {'poses/s':>12} {'of FLOP limit':>14}")
     for b in (1, 16, 256, 2048, 8192):
         reps = max(3, int(20000 / b))

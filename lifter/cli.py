@@ -43,6 +43,8 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--noise-level", type=float, default=1.0)
     p.add_argument("--no-outliers", action="store_true", help="mixture noise without sampling the uniform outliers (authors' code)")
     p.add_argument("--zoom-aug", action="store_true", help="zoom augmentation: random focal/resolution scale (spec §6)")
+    p.add_argument("--zoom-sigma", type=float, default=0.25, help="zoom: std of log2(scale)")
+    p.add_argument("--zoom-clip", type=float, default=0.5, help="zoom: |log2(scale)| limit (0.5: x0.71..x1.41)")
     p.set_defaults(func=_run_train)
 
 
@@ -56,7 +58,8 @@ def _run_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(model=model, protocol=args.protocol, train_stride=args.train_stride, batch_size=args.batch_size,
                       epochs=args.epochs, lr=args.lr, weight_decay=args.weight_decay, max_minutes=args.max_minutes,
                       seed=args.seed, threads=args.threads, eval_every=args.eval_every,
-                      max_frames_per_sequence=args.max_frames_per_sequence, zoom_aug=args.zoom_aug)
+                      max_frames_per_sequence=args.max_frames_per_sequence, zoom_aug=args.zoom_aug,
+                      zoom_sigma=args.zoom_sigma, zoom_clip=args.zoom_clip)
     data = H36M(args.h36m)
     train_samples = None
     if args.inputs == "sh":

@@ -206,3 +206,13 @@ def test_checkpoint_refuses_pickled_code(tmp_path):
 def test_unknown_pretrained_name():
     with pytest.raises(PoseLifterError, match="unknown model"):
         Lifter.from_pretrained("no-such-model")
+
+
+def test_quantized_lifter_matches_float32(small_lifter, keypoints):
+    q = small_lifter.quantized()
+    a = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    b = q.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    assert "int8" in q.name
+    # int8 weights: close to, but not bit-identical with, the float32 network
+    assert np.abs(a.relative - b.relative).max() < 0.05 * np.abs(a.relative).max() + 1.0
+    assert np.allclose(a.canonical_depth, b.canonical_depth, rtol=0.05)
