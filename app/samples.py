@@ -113,7 +113,7 @@ class H36MCatalog:
         if key not in self.data.sequences:
             raise PoseLifterError(f"unknown H36M sequence {key!r}")
         with self._lock:
-            return int(self.data._poses[key].shape[0])
+            return self.data.num_frames(key)
 
     def photo_frames(self) -> list[tuple[int, str, str, int]]:
         """``(subject, sequence, camera, frame)`` of the frames that have a real photo."""
@@ -131,7 +131,7 @@ class H36MCatalog:
             raise PoseLifterError(f"frame {frame} out of range [0, {n}) for {key}")
         frame = int(frame)
         with self._lock:
-            world = self.data._poses[key][frame].astype(np.float64)
+            world = self.data.poses_world(key, frame)
             cam = self.data.camera(subject, camera_id)
             det = None
             if self._detections is not None:

@@ -63,15 +63,14 @@ def _run_train(args: argparse.Namespace) -> int:
     data = H36M(args.h36m)
     train_samples = None
     if args.inputs == "sh":
-        from .noise import load_sh_detections
+        from .noise import with_sh_detections
 
         if args.train_stride % 5:
             raise PoseLifterError("--inputs sh needs --train-stride a multiple of 5 (detections exist every 5th frame)")
         train_samples = data.load_protocol(args.protocol, "train", stride=args.train_stride,
                                            max_frames_per_sequence=args.max_frames_per_sequence)
-        det, ok = load_sh_detections(train_samples, data=data)
-        train_samples = train_samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok])
-        print(f"training on real SH detections: {int(ok.sum())} of {len(ok)} samples have one")
+        train_samples, dropped = with_sh_detections(train_samples, data=data)
+        print(f"training on real SH detections: {len(train_samples)} samples ({dropped} without one dropped)")
     augment = None
     if args.noise != "none":
         from .noise import ErrorModel
@@ -130,11 +129,10 @@ def _run_evaluate(args: argparse.Namespace) -> int:
                                  max_frames_per_sequence=args.max_frames_per_sequence)
     note = ""
     if args.inputs == "sh":
-        from .noise import load_sh_detections
+        from .noise import with_sh_detections
 
-        det, ok = load_sh_detections(samples, data=data)
-        note = f"; real SH detections, {int((~ok).sum())} samples without a detection dropped"
-        samples = samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok])
+        samples, dropped = with_sh_detections(samples, data=data)
+        note = f"; real SH detections, {dropped} samples without a detection dropped"
     print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
           f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note})")
     if args.focal_scales:

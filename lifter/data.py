@@ -139,6 +139,7 @@ class H36M:
         with open(self.root / "cameras.json") as f:
             self._cameras_raw = json.load(f)["cameras"]
         self._poses = np.load(self.root / "poses3d_world_17j_mm.npz")
+        self._decoded: dict[str, np.ndarray] = {}  # int16 arrays: an npz member is decompressed on every access
         self.sequences: tuple[str, ...] = tuple(sorted(self._poses.files))
 
     def camera(self, subject: int, camera_id: str) -> Camera:
@@ -155,9 +156,22 @@ class H36M:
             name=f"S{subject}/{camera_id}",
         )
 
-    def poses_world(self, sequence: str) -> np.ndarray:
-        """``(frames, 17, 3)`` float64 mm, world frame, 50 fps."""
-        return self._poses[sequence].astype(np.float64)
+    def _raw(self, sequence: str) -> np.ndarray:
+        arr = self._decoded.get(sequence)
+        if arr is None:
+            if sequence not in self._poses.files:
+                raise KeyError(f"unknown H36M sequence {sequence!r}")
+            arr = self._decoded[sequence] = self._poses[sequence]
+        return arr
+
+    def num_frames(self, sequence: str) -> int:
+        """Number of 50-fps frames of a sequence (``"S9/Walking 1"``)."""
+        return int(self._raw(sequence).shape[0])
+
+    def poses_world(self, sequence: str, frames: np.ndarray | int | slice | None = None) -> np.ndarray:
+        """``(frames, 17, 3)`` float64 mm, world frame, 50 fps (optionally only the given ``frames``)."""
+        raw = self._raw(sequence)
+        return (raw if frames is None else raw[frames]).astype(np.float64)
 
     def sequences_of(self, subjects: Iterable[int]) -> list[str]:
         subs = {f"S{s}" for s in subjects}
@@ -186,10 +200,10 @@ class H36M:
             action = action_of(seq)
             if actions is not None and action not in actions:
                 continue
-            frames = np.arange(0, self._poses[seq].shape[0], stride)
+            frames = np.arange(0, self.num_frames(seq), stride)
             if max_frames_per_sequence is not None:
                 frames = frames[:max_frames_per_sequence]
-            world = self.poses_world(seq)[frames]
+            world = self.poses_world(seq, frames)
             for cam_id in cameras:
                 cam = self.camera(subject, cam_id)
                 p3 = world_to_camera(world, cam.R, cam.t)

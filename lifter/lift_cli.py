@@ -1,7 +1,6 @@
 """``poselifter lift``: photos or 2D keypoint files in, absolute 3D poses out.
 
-Wire it into :mod:`lifter.cli` with ``from .lift_cli import add_parser as _add_lift`` and
-``_add_lift(sub)``. Usage::
+Registered in :mod:`lifter.cli` by :func:`add_parser`. Usage::
 
     poselifter lift INPUT... [--focal FX [FY]] [--principal-point CX CY] --out DIR [--glb] [--bvh]
 
@@ -442,20 +441,3 @@ def run_lift(args: argparse.Namespace) -> int:
     print(f"lifted {ok} of {total} input(s) into {args.out}" + (f"; {failed} failed (see the messages above)" if failed else ""),
           file=sys.stderr)
     return 0 if ok else 1
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Standalone entry point (``python -m lifter.lift_cli lift ...``) until the lead wires it into ``poselifter``."""
-    parser = argparse.ArgumentParser(prog="poselifter")
-    sub = parser.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except (PoseLifterError, FileNotFoundError) as exc:
-        print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

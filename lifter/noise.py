@@ -442,16 +442,13 @@ def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh1
     seq, cam, frame = samples.sequence, samples.camera, samples.frame
     starts = np.flatnonzero(np.r_[True, (seq[1:] != seq[:-1]) | (cam[1:] != cam[:-1])])
     ends = np.r_[starts[1:], len(samples)]
-    n_frames: dict[int, int] = {}
     for a, b in zip(starts, ends):
         name = samples.sequence_names[seq[a]]
         key = f"{name}/{CAMERA_IDS[cam[a]]}"
         if key not in npz.files:
             continue
         det = npz[key]
-        if seq[a] not in n_frames:
-            n_frames[seq[a]] = data.poses_world(name).shape[0]
-        nf = n_frames[seq[a]]
+        nf = data.num_frames(name)
         if det.shape[0] == nf:
             stride = 1
         elif det.shape[0] == -(-nf // 5):
@@ -464,6 +461,13 @@ def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh1
         out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
         valid[rows] = True
     return out, valid
+
+
+def with_sh_detections(samples: Any, *, data: Any | None = None) -> tuple[Any, int]:
+    """``samples`` with their 2D replaced by the real SH detections (converted to h36m17); samples without a
+    detection are dropped. Returns ``(new samples, number dropped)``."""
+    det, ok = load_sh_detections(samples, data=data)
+    return samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok]), int((~ok).sum())
 
 
 def detection_alignment_check(data: Any | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),

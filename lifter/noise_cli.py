@@ -10,7 +10,6 @@ JSON and the figures, and prints the converter's measured errors and the per-joi
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
@@ -260,16 +259,3 @@ def plot_depth_vs_scale(samples: Any, path: Path, *, weights: str = "default") -
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Standalone entry point (``python -m lifter.noise_cli``) until the lead wires it into ``poselifter``."""
-    parser = argparse.ArgumentParser(prog="poselifter")
-    sub = parser.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = parser.parse_args(argv)
-    return int(args.func(args) or 0)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

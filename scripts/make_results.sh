@@ -6,12 +6,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=docs/results
 mkdir -p "$OUT"
+read -r -a SHIPPED <<< "$(python -c "from lifter import available_models as a; print(' '.join(a()))")"  # shipped model names
 ev() { local name=$1; shift; poselifter evaluate "$@" --json "$OUT/$name.json" 2>/dev/null | tee "$OUT/$name.txt"; }
 
 # Shipped models, GT 2D, Protocol 1, every 5th frame (README main table), with the analytic root.
-ev shipped_gt2d $(python -c "from lifter import available_models as a; print(' '.join(a()))") \
+ev shipped_gt2d "${SHIPPED[@]}" \
    --analytic-root --per-action --stride 5 --pck-plot "$OUT/pck_shipped.png"
-ev shipped_gt2d_fliptest $(python -c "from lifter import available_models as a; print(' '.join(a()))") --flip-test --stride 5
+ev shipped_gt2d_fliptest "${SHIPPED[@]}" --flip-test --stride 5
 
 # Table 2 ablation (equal budget: 4 epochs each), GT 2D, Protocol 1, every 5th frame.
 ev table2_ablation baseline=runs/ablation_baseline.pt +location=runs/ablation_location.pt \
@@ -20,12 +21,12 @@ ev table2_ablation baseline=runs/ablation_baseline.pt +location=runs/ablation_lo
 # Table 3: training inputs, evaluated on the real SH detections of S9/S11, every 50th frame (cascade subset).
 ev table3_sh_detections "(a) GT, no loc/scale=runs/ablation_baseline.pt" "(b) GT=runs/ablation_both.pt" \
    "(c) SH detections=runs/t3_sh.pt" "(d) single Gaussian=runs/t3_gauss.pt" "(e) mixture=runs/t3_mixture.pt" \
-   "(e') mixture, no outliers=runs/t3_mixture_no_outliers.pt" $(python -c "from lifter import available_models as a; print(' '.join(a()))") \
+   "(e') mixture, no outliers=runs/t3_mixture_no_outliers.pt" "${SHIPPED[@]}" \
    --inputs sh --stride 50
 
 # Table 6 analogue: MRPE on virtual cameras with scaled focal lengths (GT 2D re-projected, pinhole).
 FOCAL_MODELS=("canonical=runs/t3_mixture.pt" "canonical + zoom aug=runs/f_canonical_zoom.pt"
               "direct depth=runs/f_absolute.pt" "direct depth + zoom aug=runs/f_absolute_zoom.pt")
-FOCAL_MODELS+=($(python -c "from lifter import available_models as a; print(' '.join(a()))"))
+FOCAL_MODELS+=("${SHIPPED[@]}")
 ev focal_sweep "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 ev focal_sweep_shifted_pp "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50

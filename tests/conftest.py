@@ -41,3 +41,35 @@ def random_pose_cam(rng: np.random.Generator, n: int = 1) -> np.ndarray:
             pose[:, j] = pose[:, p] + bones[:, j]
     root = np.stack([rng.uniform(-1000, 1000, n), rng.uniform(-600, 600, n), rng.uniform(3000, 7000, n)], -1)
     return pose - pose[:, :1] + root[:, None]
+
+
+def require_shipped_models() -> list[str]:
+    """The shipped model names, or skip the test when assets/models.json is missing."""
+    from lifter import PoseLifterError, available_models
+
+    try:
+        return available_models()
+    except PoseLifterError as exc:
+        pytest.skip(f"no shipped models: {exc}")
+
+
+@pytest.fixture(scope="module")
+def app():
+    """A :class:`app.viewer.PoseLifterApp` on a viser server bound to 127.0.0.1, any free port (demo samples only)."""
+    pytest.importorskip("viser")
+    from app.testing import local_server
+    from app.viewer import PoseLifterApp
+
+    require_shipped_models()
+    server = local_server()
+    a = PoseLifterApp(server, h36m_root=None)
+    yield a
+    server.stop()
+
+
+@pytest.fixture()
+def view(app):
+    """A headless per-tab view of :func:`app` (no browser)."""
+    v = app.headless_view()
+    assert v.frame is not None
+    return v

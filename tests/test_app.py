@@ -9,9 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lifter import PoseLifterError, available_models, project
+from lifter import project
 
 viser = pytest.importorskip("viser")
+
+from conftest import require_shipped_models  # noqa: E402
 
 from app.demo_assets import DEMO_DIR  # noqa: E402
 from app.samples import DemoCatalog, default_h36m_root  # noqa: E402
@@ -19,27 +21,6 @@ from app.testing import FakeTab, local_server, wait_for  # noqa: E402
 from app.viewer import IMAGE_PLANE_DEPTH_M, PoseLifterApp, SessionView  # noqa: E402
 
 
-def _models() -> list[str]:
-    try:
-        return available_models()
-    except PoseLifterError as exc:
-        pytest.skip(f"no shipped models: {exc}")
-
-
-@pytest.fixture(scope="module")
-def app():
-    _models()
-    server = local_server()
-    a = PoseLifterApp(server, h36m_root=None)
-    yield a
-    server.stop()
-
-
-@pytest.fixture()
-def view(app: PoseLifterApp) -> SessionView:
-    v = app.headless_view()
-    assert v.frame is not None
-    return v
 
 
 def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
@@ -290,7 +271,7 @@ def test_each_tab_has_its_own_state(app: PoseLifterApp) -> None:
 
 @pytest.mark.skipif(default_h36m_root() is None, reason="Human3.6M not present at ../shared/data/h36m")
 def test_h36m_browsing() -> None:
-    _models()
+    require_shipped_models()
     server = local_server()
     try:
         app = PoseLifterApp(server, h36m_root=default_h36m_root())

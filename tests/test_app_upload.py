@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lifter import PoseLifterError, available_models
 
 viser = pytest.importorskip("viser")
+
 
 from app import upload as up  # noqa: E402
 from app.demo_assets import DEMO_DIR  # noqa: E402
@@ -24,13 +24,6 @@ from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_
 from lifter.lift_cli import LiftRecord  # noqa: E402
 
 LIFT_FIELDS = {"keypoints_2d", "absolute", "root", "canonical_depth", "focal", "principal_point"}
-
-
-def _models() -> list[str]:
-    try:
-        return available_models()
-    except PoseLifterError as exc:
-        pytest.skip(f"no shipped models: {exc}")
 
 
 class FakeEstimator:
@@ -50,19 +43,6 @@ class FakeEstimator:
         return [Detection(keypoints=p * s, scores=np.full(17, 0.9), bbox_xywh=bbox_of(p * s), keypoint_format="h36m17")
                 for p in self.people]
 
-
-@pytest.fixture(scope="module")
-def app():
-    _models()
-    server = local_server()
-    a = PoseLifterApp(server, h36m_root=None)
-    yield a
-    server.stop()
-
-
-@pytest.fixture()
-def view(app: PoseLifterApp) -> SessionView:
-    return app.headless_view()
 
 
 def _jpeg(rgb: np.ndarray, **save: object) -> bytes:
