@@ -107,6 +107,7 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames-per-sequence", type=int, default=None)
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
     p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
+    p.add_argument("--quantize", action="store_true", help="also evaluate each model with int8 block weights (Lifter.quantized)")
     p.add_argument("--threads", type=int, default=2)
     p.set_defaults(func=_run_evaluate)
 
@@ -124,6 +125,8 @@ def _run_evaluate(args: argparse.Namespace) -> int:
         label, _, ref = spec.rpartition("=")
         lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
         lifters.append((label or ref, lifter))
+        if args.quantize:
+            lifters.append(((label or ref) + " (int8)", lifter.quantized()))
     data = H36M(args.h36m)
     samples = data.load_protocol(args.protocol, "test", stride=args.stride,
                                  max_frames_per_sequence=args.max_frames_per_sequence)

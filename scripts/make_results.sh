@@ -14,6 +14,9 @@ ev shipped_gt2d "${SHIPPED[@]}" \
    --analytic-root --per-action --stride 5 --pck-plot "$OUT/pck_shipped.png"
 ev shipped_gt2d_fliptest "${SHIPPED[@]}" --flip-test --stride 5
 
+# float32 vs the int8 fast path (Lifter.from_pretrained(quantize=True)), same frames.
+ev shipped_gt2d_int8 "${SHIPPED[@]}" --quantize --stride 5
+
 # Table 2 ablation (equal budget: 4 epochs each), GT 2D, Protocol 1, every 5th frame.
 ev table2_ablation baseline=runs/ablation_baseline.pt +location=runs/ablation_location.pt \
    +scale=runs/ablation_scale.pt "+location & scale=runs/ablation_both.pt" --analytic-root --stride 5
@@ -22,7 +25,7 @@ ev table2_ablation baseline=runs/ablation_baseline.pt +location=runs/ablation_lo
 ev table3_sh_detections "(a) GT, no loc/scale=runs/ablation_baseline.pt" "(b) GT=runs/ablation_both.pt" \
    "(c) SH detections=runs/t3_sh.pt" "(d) single Gaussian=runs/t3_gauss.pt" "(e) mixture=runs/t3_mixture.pt" \
    "(e') mixture, no outliers=runs/t3_mixture_no_outliers.pt" "${SHIPPED[@]}" \
-   --inputs sh --stride 50
+   --inputs sh --stride 50 --analytic-root
 
 # Table 6 analogue: MRPE on virtual cameras with scaled focal lengths (GT 2D re-projected, pinhole).
 FOCAL_MODELS=("canonical=runs/t3_mixture.pt" "canonical + zoom aug=runs/f_canonical_zoom.pt"
