@@ -71,10 +71,13 @@ def _side_colors() -> np.ndarray:
 
 def control(func: Callable[..., Any]) -> Callable[..., bool]:
     """Decorator for :class:`SessionView` controls: returns True on success; on invalid input shows the
-    message in the status panel and returns False (never raises into viser's threads)."""
+    message in the status panel and returns False (never raises into viser's threads). Calls made while
+    the view sets a GUI value itself (:meth:`SessionView._set_gui`) are ignored."""
 
     @functools.wraps(func)
     def wrapper(self: "SessionView", *args: Any, **kwargs: Any) -> bool:
+        if self._suspend:  # a GUI echo of our own _set_gui, not a user action
+            return True
         n = self._message_count
         try:
             func(self, *args, **kwargs)
@@ -283,6 +286,18 @@ class SessionView:
         self.download_glb_btn.on_click(g(lambda _: self.download("glb")))
         self._install_upload_limit()
 
+    def _commit(self, name: str, value: Any, handle: Any, *, message: str = "", camera: bool = False) -> None:
+        """Set ``state.<name>``, mirror it in its GUI ``handle``, show ``message`` (clamping notes) and redraw
+        (``camera``: the frustum too). The one path by which value controls change the session state."""
+        with self.lock:
+            setattr(self.state, name, value)
+            self._set_gui(handle, value)
+            if message:
+                self.show_message(message, error=True)
+            if camera:
+                self._update_camera_geometry()
+            self._redraw()
+
     def _set_gui(self, handle: Any, value: Any) -> None:
         """Set a GUI value without triggering our own callbacks."""
         if handle is None:
@@ -384,8 +399,6 @@ class SessionView:
     @control
     def set_source(self, source: str) -> None:
         """``"demo"`` or ``"h36m"``."""
-        if self._suspend:
-            return
         if source not in SOURCES or (source == "h36m" and self.app.h36m is None):
             raise PoseLifterError(f"unknown sample source {source!r}" + ("" if self.app.h36m else " (no Human3.6M folder)"))
         if source == "demo":
@@ -402,8 +415,6 @@ class SessionView:
     @control
     def select_demo(self, name: str) -> None:
         """Show the embedded demo sample ``name``."""
-        if self._suspend:
-            return
         sample = self.app.demo.get(name)
         with self.lock:
             self._set_gui(self.source_dd, "demo")
@@ -503,8 +514,6 @@ class SessionView:
     @control
     def set_input_kind(self, kind: str) -> None:
         """2D input: ``"gt"`` (ground truth) or ``"detected"`` (Stacked-Hourglass, H36M only). Resets drags."""
-        if self._suspend:
-            return
         if kind not in ("gt", "detected"):
             raise PoseLifterError(f"unknown 2D input {kind!r}")
         with self.lock:
@@ -522,87 +531,49 @@ class SessionView:
     @control
     def set_model(self, name: str) -> None:
         """Switch the lifting model (a name from ``assets/models.json``)."""
-        if self._suspend:
-            return
         self.app.pool.get(name)  # raises for unknown names, before touching the state
-        with self.lock:
-            self.state.model = name
-            self._set_gui(self.model_dd, name)
-            self._redraw()
+        self._commit("model", name, self.model_dd)
 
     @control
     def set_focal(self, value: float) -> None:
         """Focal length ``alpha`` (px) used to lift: the pose keeps its shape and the root moves along its
         viewing ray with ``Z ∝ f`` (canonical depth fixed); the frustum's field of view follows."""
-        if self._suspend:
-            return
         v, msg = clamp_focal(value, hi=focal_max(self.state.sample))
-        with self.lock:
-            self.state.focal_px = v
-            self._set_gui(self.focal_slider, v)
-            if msg:
-                self.show_message(msg, error=True)
-            self._update_camera_geometry()
-            self._redraw()
+        self._commit("focal_px", v, self.focal_slider, message=msg, camera=True)
 
     @control
     def set_noise(self, level: float) -> None:
         """Mixture-noise level (0 clean … 1 as fitted … 3): the lifted pose is that of a noisy draw and the
         cloud shows :attr:`SessionState.cloud_samples` more lifted draws."""
-        if self._suspend:
-            return
         v, msg = clamp_noise(level)
-        with self.lock:
-            self.state.noise_level = v
-            self._set_gui(self.noise_slider, v)
-            if msg:
-                self.show_message(msg, error=True)
-            self._redraw()
+        self._commit("noise_level", v, self.noise_slider, message=msg)
 
     @control
     def set_cloud_samples(self, n: int) -> None:
-        if self._suspend:
-            return
         n_ = int(n)
         if not 0 <= n_ <= 1024:
             raise PoseLifterError(f"cloud samples must be in [0, 1024], got {n}")
-        with self.lock:
-            self.state.cloud_samples = n_
-            self._set_gui(self.cloud_num, n_)
-            self._redraw()
+        self._commit("cloud_samples", n_, self.cloud_num)
 
     @control
     def set_seed(self, seed: float) -> None:
-        if self._suspend:
-            return
         try:
             s = int(seed)
         except (TypeError, ValueError, OverflowError):
             raise PoseLifterError(f"seed must be an integer, got {seed!r}") from None
         if s < 0:
             raise PoseLifterError(f"seed must be >= 0, got {s}")
-        with self.lock:
-            self.state.seed = s
-            self._set_gui(self.seed_num, s)
-            self._redraw()
+        self._commit("seed", s, self.seed_num)
 
     @control
     def resample(self) -> None:
         """New noise draws (seed + 1)."""
-        with self.lock:
-            self.state.seed += 1
-            self._set_gui(self.seed_num, self.state.seed)
-            self._redraw()
+        self._commit("seed", self.state.seed + 1, self.seed_num)
 
     @control
     def set_analytic(self, on: bool) -> None:
         """Toggle the analytic weak-perspective root skeleton (orange)."""
-        if self._suspend:
-            return
-        with self.lock:
-            self.state.analytic = bool(on)
-            self._set_gui(self.analytic_cb, bool(on))
-            self._redraw()
+        self._commit("analytic", bool(on), self.analytic_cb)
 
     @control
     def reset_joints(self) -> None:
