@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from ._checks import PoseLifterError, as_pair, as_points
-from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, focal_alpha, root_from_canonical_depth
+from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, root_from_canonical_depth
 from .checkpoint import load_checkpoint
 from .model import PoseLifterNet
 from .normalization import pose_scale_np
@@ -114,6 +114,14 @@ class Lifter:
         if name not in reg["models"]:
             raise PoseLifterError(f"unknown model {name!r}; available: {sorted(reg['models'])} or 'default'")
         return cls.from_checkpoint(ASSETS_DIR / reg["models"][name]["file"], name=name, quantize=quantize)
+
+    @classmethod
+    def load(cls, ref: str | os.PathLike[str], *, quantize: bool = False) -> "Lifter":
+        """A shipped model name (``"default"``, ``"gt"``, ...) or a checkpoint path (``*.pt``)."""
+        ref = str(ref)
+        if ref.endswith(".pt") or Path(ref).is_file():
+            return cls.from_checkpoint(ref, quantize=quantize)
+        return cls.from_pretrained(ref, quantize=quantize)
 
     def quantized(self) -> "Lifter":
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization).

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 import json
 import sys
 from pathlib import Path
@@ -36,10 +37,18 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--eval-every", type=int, default=500)
     p.add_argument("--max-frames-per-sequence", type=int, default=None, help="tiny runs for tests")
     p.add_argument("--fp32", action="store_true", help="store float32 weights (default float16)")
-    p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
-                   help="2D training inputs: GT projection, or the real Stacked-Hourglass detections (train-stride multiple of 5)")
+    p.add_argument("--inputs", default="gt", choices=("gt", "sh", "mix"),
+                   help="2D training inputs: GT projection, the real Stacked-Hourglass detections, or 'mix': each sample "
+                        "gets its real detection with probability --real-prob, else GT 2D (+ --noise) (sh, mix: "
+                        "train-stride a multiple of 5)")
+    p.add_argument("--real-prob", type=float, default=0.5, help="--inputs mix: probability of the real detection")
     p.add_argument("--noise", default="none", choices=("none", "gaussian", "mixture"),
                    help="synthesize noisy 2D from the fitted error model (assets/error_model)")
+    p.add_argument("--error-model", type=Path, default=None,
+                   help="error-model JSON for --noise (default: the shipped SH fit, assets/error_model/sh_mixture.json)")
+    p.add_argument("--init", default=None,
+                   help="fine-tune: start from this checkpoint or shipped model name (keeps its architecture)")
+    p.add_argument("--ema", type=float, default=None, help="keep an exponential moving average of the weights (e.g. 0.999)")
     p.add_argument("--noise-level", type=float, default=1.0)
     p.add_argument("--no-outliers", action="store_true", help="mixture noise without sampling the uniform outliers (authors' code)")
     p.add_argument("--zoom-aug", action="store_true", help="zoom augmentation: random focal/resolution scale (spec §6)")
@@ -59,29 +68,41 @@ def _run_train(args: argparse.Namespace) -> int:
                       epochs=args.epochs, lr=args.lr, weight_decay=args.weight_decay, max_minutes=args.max_minutes,
                       seed=args.seed, threads=args.threads, eval_every=args.eval_every,
                       max_frames_per_sequence=args.max_frames_per_sequence, zoom_aug=args.zoom_aug,
-                      zoom_sigma=args.zoom_sigma, zoom_clip=args.zoom_clip)
+                      zoom_sigma=args.zoom_sigma, zoom_clip=args.zoom_clip, real_2d_prob=args.real_prob,
+                      ema_decay=args.ema)
+    init = None
+    if args.init is not None:
+        from .api import Lifter
+
+        init = Lifter.load(args.init).net
     data = H36M(args.h36m)
-    train_samples = None
-    if args.inputs == "sh":
-        from .noise import with_sh_detections
+    train_samples = real = None
+    if args.inputs in ("sh", "mix"):
+        from .noise import load_sh_detections
 
         if args.train_stride % 5:
-            raise PoseLifterError("--inputs sh needs --train-stride a multiple of 5 (detections exist every 5th frame)")
+            raise PoseLifterError(f"--inputs {args.inputs} needs --train-stride a multiple of 5 "
+                                  "(detections exist every 5th frame)")
         train_samples = data.load_protocol(args.protocol, "train", stride=args.train_stride,
                                            max_frames_per_sequence=args.max_frames_per_sequence)
-        train_samples, dropped = with_sh_detections(train_samples, data=data)
-        print(f"training on real SH detections: {len(train_samples)} samples ({dropped} without one dropped)")
+        real, ok = load_sh_detections(train_samples, data=data)
+        if args.inputs == "sh":
+            keep = np.flatnonzero(ok)
+            train_samples, real = train_samples.subset(keep).with_keypoints(real[keep]), None
+            print(f"training on real SH detections: {len(train_samples)} samples ({int((~ok).sum())} without one dropped)")
     augment = None
     if args.noise != "none":
         from .noise import ErrorModel
 
-        em = ErrorModel.default()
+        em = ErrorModel.load(args.error_model) if args.error_model else ErrorModel.default()
         if args.noise == "gaussian":
             em = em.baseline()
         augment = em.torch_augmenter(level=args.noise_level, outliers=not args.no_outliers)
-    result = train(cfg, data=data, train_samples=train_samples, augment_2d=augment)
+    result = train(cfg, data=data, train_samples=train_samples, augment_2d=augment, real_keypoints_2d=real, init=init)
+    cfg = replace(cfg, model=result.net.config)
     meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "inputs": args.inputs, "noise": args.noise,
-            "noise_level": args.noise_level, "noise_outliers": not args.no_outliers}
+            "noise_level": args.noise_level, "noise_outliers": not args.no_outliers,
+            "error_model": str(args.error_model) if args.error_model else "default", "init": args.init}
     out = save_training_outputs(result, cfg, args.out, half=not args.fp32, extra_meta=meta)
     print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     return 0
@@ -123,7 +144,7 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     lifters = []
     for spec in args.weights:
         label, _, ref = spec.rpartition("=")
-        lifter = Lifter.from_pretrained(ref) if not ref.endswith(".pt") else Lifter.from_checkpoint(ref)
+        lifter = Lifter.load(ref)
         lifters.append((label or ref, lifter))
         if args.quantize:
             lifters.append(((label or ref) + " (int8)", lifter.quantized()))

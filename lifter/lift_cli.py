@@ -390,7 +390,7 @@ def run_lift(args: argparse.Namespace) -> int:
         print("poselifter lift: no inputs to process", file=sys.stderr)
         return 1
     w = str(args.weights)
-    lifter = Lifter.from_checkpoint(w) if w.endswith(".pt") else Lifter.from_pretrained(w)
+    lifter = Lifter.load(w)
     args.out.mkdir(parents=True, exist_ok=True)
     names = output_names(files, args.out)
     estimator: Any = None

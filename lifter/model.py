@@ -12,7 +12,7 @@ the network from growing its outputs to ~1e3-1e4 over thousands of steps.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
 import torch

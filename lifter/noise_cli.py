@@ -229,7 +229,7 @@ def plot_depth_vs_scale(samples: Any, path: Path, *, weights: str = "default") -
     from .normalization import pose_scale_np
 
     try:
-        lifter = Lifter.from_checkpoint(weights) if str(weights).endswith(".pt") else Lifter.from_pretrained(weights)
+        lifter = Lifter.load(weights)
     except (PoseLifterError, FileNotFoundError) as exc:
         raise SkipFigure(f"no lifter weights ({exc})") from None
     kp = samples.keypoints_2d.astype(np.float64)

@@ -17,6 +17,7 @@ Recipe (defaults of :class:`TrainConfig`; see the README for the measured learni
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import time
@@ -28,6 +29,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from .camera import backproject, root_from_canonical_depth
 from .checkpoint import save_checkpoint
 from .data import H36M, PoseSamples
 from .loss import poselifter_loss
@@ -62,6 +64,12 @@ class TrainConfig:
     ``s = 2 ** clip(zoom_sigma * N(0, 1), -zoom_clip, zoom_clip)``; the canonical target becomes ``Z*F0/(s*alpha)``."""
     zoom_sigma: float = 0.25
     zoom_clip: float = 0.5
+    real_2d_prob: float = 0.5
+    """With ``train(real_keypoints_2d=...)``: probability that a sample is fed its real detection (where it
+    has one) instead of its GT 2D (+ ``augment_2d`` noise). Ignored without real keypoints."""
+    ema_decay: float | None = None
+    """Exponential moving average of the weights (and BatchNorm statistics), e.g. 0.999; validation and the
+    returned network use the average. ``None``: plain weights."""
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -102,6 +110,51 @@ def zoom_batch(kp: torch.Tensor, pp: torch.Tensor, depth: torch.Tensor, s: torch
     return kp * s[:, None, None], pp * s[:, None], (depth / s if canonical else depth)
 
 
+def make_batch(T: dict[str, torch.Tensor], idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
+               augment_2d: Augment2D | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """One training batch ``(kp (B,17,2) px, pp (B,2) px, rel (B,17,3) mm, depth (B,))`` from the tensors ``T``.
+
+    Order: 2D source (the real detection ``T["real"]`` with probability ``cfg.real_2d_prob`` where
+    ``T["has_real"]``, else the GT 2D) -> flip -> zoom -> ``augment_2d`` noise on the GT-sourced rows only
+    (a real detection already carries real errors)."""
+    kp, pp, w, rel, depth = T["kp"][idx], T["pp"][idx], T["w"][idx], T["rel"][idx], T["depth"][idx]
+    bs = len(idx)
+    use_real = None
+    if "has_real" in T:
+        use_real = T["has_real"][idx] & (torch.rand(bs, generator=gen) < cfg.real_2d_prob)
+        kp = torch.where(use_real[:, None, None], T["real"][idx], kp)
+    if cfg.flip_prob > 0:
+        mask = torch.rand(bs, generator=gen) < cfg.flip_prob
+        kp, pp, rel = flip_batch(kp, pp, w, rel, mask)
+    if cfg.zoom_aug:
+        s = torch.exp2((cfg.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-cfg.zoom_clip, cfg.zoom_clip))
+        kp, pp, depth = zoom_batch(kp, pp, depth, s, canonical=cfg.model.depth_target == "canonical")
+    if augment_2d is not None:
+        noisy = augment_2d(kp, pp, gen)
+        kp = noisy if use_real is None else torch.where(use_real[:, None, None], kp, noisy)
+    return kp, pp, rel, depth
+
+
+class WeightAverage:
+    """Exponential moving average of a network's state: ``avg <- decay * avg + (1 - decay) * current`` for
+    every floating-point parameter and buffer (BatchNorm statistics included); integer buffers are copied.
+    ``module`` is the averaged copy (starts equal to the network)."""
+
+    def __init__(self, net: torch.nn.Module, *, decay: float) -> None:
+        if not 0.0 <= decay < 1.0:
+            raise ValueError(f"EMA decay must be in [0, 1); got {decay}")
+        self.decay = float(decay)
+        self.module = copy.deepcopy(net)
+
+    @torch.no_grad()
+    def update(self, net: torch.nn.Module) -> None:
+        for avg, cur in zip(self.module.state_dict().values(), net.state_dict().values()):
+            if avg.is_floating_point():
+                avg.lerp_(cur, 1.0 - self.decay)
+            else:
+                avg.copy_(cur)
+
+
 def target_statistics(rel: torch.Tensor, depth: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Mean and std ``(49,)`` of the packed targets over the samples and their mirror images."""
     perm = torch.as_tensor(FLIP_PERMUTATION)
@@ -132,16 +185,18 @@ def _as_tensors(samples: PoseSamples, depth_target: str) -> dict[str, torch.Tens
 
 
 @torch.inference_mode()
-def _validate(net: PoseLifterNet, val: dict[str, torch.Tensor], val_root: torch.Tensor, focal: torch.Tensor) -> dict[str, float]:
+def _validate(net: PoseLifterNet, val: dict[str, torch.Tensor], val_root: np.ndarray, focal: np.ndarray) -> dict[str, float]:
+    was_training = net.training
     net.eval()
     out = net(val["kp"], val["pp"])
-    net.train()
+    net.train(was_training)
     mpjpe = (out.relative - val["rel"]).norm(dim=-1).mean().item()
-    alpha = focal.prod(-1).sqrt()
-    z = out.depth * alpha / 1000.0 if net.config.depth_target == "canonical" else out.depth
-    xy = (val["kp"][:, 0] - val["pp"]) / focal * z[:, None]
-    root = torch.cat([xy, z[:, None]], dim=1)
-    mrpe = (root - val_root).norm(dim=-1).mean().item()
+    root_2d, pp, depth = val["kp"][:, 0].numpy(), val["pp"].numpy(), out.depth.numpy().astype(np.float64)
+    if net.config.depth_target == "canonical":
+        root = root_from_canonical_depth(root_2d, depth, focal=focal, principal_point=pp)
+    else:
+        root = backproject(root_2d, depth, focal=focal, principal_point=pp)
+    mrpe = float(np.linalg.norm(root - val_root, axis=-1).mean())
     return {"val_mpjpe": mpjpe, "val_mrpe": mrpe}
 
 
@@ -152,11 +207,18 @@ def train(
     train_samples: PoseSamples | None = None,
     val_samples: PoseSamples | None = None,
     augment_2d: Augment2D | None = None,
+    real_keypoints_2d: np.ndarray | None = None,
+    init: PoseLifterNet | None = None,
     progress: bool = True,
     log: Callable[[str], None] = print,
 ) -> TrainResult:
     """Train a PoseLifter network. Pass ``train_samples`` to train on custom data (e.g. detections);
-    otherwise the protocol's training subjects are loaded from ``data`` (default folder)."""
+    otherwise the protocol's training subjects are loaded from ``data`` (default folder).
+
+    ``real_keypoints_2d`` ``(N, 17, 2)`` px, aligned with the training samples (NaN rows: no detection), mixes
+    real detections into training: each sample gets its detection with probability ``cfg.real_2d_prob``, else
+    its GT 2D with ``augment_2d`` noise. Flip and zoom apply to both. ``init`` fine-tunes a copy of that network
+    (its architecture and output statistics are kept; ``cfg.model`` is ignored)."""
     if cfg.threads:
         torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
@@ -171,14 +233,29 @@ def train(
                                          max_frames_per_sequence=cfg.max_frames_per_sequence)
     T = _as_tensors(train_samples, cfg.model.depth_target)
     V = _as_tensors(val_samples, cfg.model.depth_target)
-    val_root = torch.from_numpy(val_samples.root.astype(np.float32))
-    val_focal = torch.from_numpy(val_samples.focal.astype(np.float32))
+    val_root, val_focal = val_samples.root, val_samples.focal
 
-    net = PoseLifterNet(cfg.model)
-    mean, std = target_statistics(T["rel"], T["depth"])
-    net.set_target_statistics(mean, std)
+    if real_keypoints_2d is not None:
+        real = np.asarray(real_keypoints_2d, np.float32)
+        if real.shape != train_samples.keypoints_2d.shape:
+            raise ValueError(f"real_keypoints_2d has shape {real.shape}; expected {train_samples.keypoints_2d.shape} "
+                             "(one row per training sample)")
+        ok = np.isfinite(real).all(axis=(1, 2))
+        T["real"] = torch.from_numpy(np.where(ok[:, None, None], real, 0.0).astype(np.float32))
+        T["has_real"] = torch.from_numpy(ok)
+        log(f"mixing real detections: {int(ok.sum())} of {len(ok)} samples have one, used with p = {cfg.real_2d_prob:g}")
+
+    if init is not None:
+        net = copy.deepcopy(init)
+        cfg = replace(cfg, model=net.config)
+    else:
+        net = PoseLifterNet(cfg.model)
+        mean, std = target_statistics(T["rel"], T["depth"])
+        net.set_target_statistics(mean, std)
     net.train()
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    ema = WeightAverage(net, decay=cfg.ema_decay) if cfg.ema_decay is not None else None
+    eval_net = (lambda: ema.module) if ema is not None else (lambda: net)
 
     n = len(train_samples)
     bs = min(cfg.batch_size, n)
@@ -206,15 +283,7 @@ def train(
             pos = 0
         idx = perm[pos : pos + bs]
         pos += bs
-        kp, pp, w, rel, depth = T["kp"][idx], T["pp"][idx], T["w"][idx], T["rel"][idx], T["depth"][idx]
-        if cfg.flip_prob > 0:
-            mask = torch.rand(bs, generator=gen) < cfg.flip_prob
-            kp, pp, rel = flip_batch(kp, pp, w, rel, mask)
-        if cfg.zoom_aug:
-            s = torch.exp2((cfg.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-cfg.zoom_clip, cfg.zoom_clip))
-            kp, pp, depth = zoom_batch(kp, pp, depth, s, canonical=cfg.model.depth_target == "canonical")
-        if augment_2d is not None:
-            kp = augment_2d(kp, pp, gen)
+        kp, pp, rel, depth = make_batch(T, idx, cfg, gen, augment_2d=augment_2d)
         pred = net.forward_flat(kp, pp)
         loss = poselifter_loss(pred, pack_targets(rel, depth), depth_weight=cfg.depth_weight)
         if not torch.isfinite(loss):
@@ -222,12 +291,14 @@ def train(
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
+        if ema is not None:
+            ema.update(net)
         step += 1
         running = loss.item() if running is None else 0.98 * running + 0.02 * loss.item()
         if step % cfg.eval_every == 0 or step == steps:
             rec = {"step": step, "samples": step * bs, "minutes": (time.perf_counter() - t0) / 60.0,
                    "lr": opt.param_groups[0]["lr"], "train_loss": running}
-            rec.update(_validate(net, V, val_root, val_focal))
+            rec.update(_validate(eval_net(), V, val_root, val_focal))
             curve.append(rec)
             bar.set_postfix(loss=f"{running:.1f}", val_mpjpe=f"{rec['val_mpjpe']:.1f}", val_mrpe=f"{rec['val_mrpe']:.0f}")
         bar.update(1)
@@ -236,8 +307,9 @@ def train(
     if not curve or curve[-1]["step"] != step:
         rec = {"step": step, "samples": step * bs, "minutes": minutes, "lr": opt.param_groups[0]["lr"],
                "train_loss": float(running or 0.0)}
-        rec.update(_validate(net, V, val_root, val_focal))
+        rec.update(_validate(eval_net(), V, val_root, val_focal))
         curve.append(rec)
+    net = eval_net()
     net.eval()
     log(f"done: {step} steps, {step * bs} samples in {minutes:.1f} min ({step * bs / max(minutes * 60, 1e-9):.0f} samples/s)")
     return TrainResult(net=net, curve=curve, steps=step, samples_seen=step * bs, minutes=minutes)

@@ -18,7 +18,7 @@ from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
 from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, Detection, ExifCamera, ImageError, bbox_of, default_focal,
                            detect_pose, focal_from_exif, image_from_array, load_image, register_estimator)
-from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES, convert
+from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
 from lifter.cli import main
 from lifter.lift_cli import output_names, parse_keypoint_json
 from lifter.skeleton import JOINT_NAMES

@@ -9,7 +9,7 @@ import torch
 from lifter.api import Lifter
 from lifter.evaluate import evaluate_lifter
 from lifter.loss import poselifter_loss
-from lifter.model import ModelConfig, PoseLifterNet, pack_targets, split_output
+from lifter.model import ModelConfig, pack_targets, split_output
 from lifter.train import TrainConfig, flip_batch, target_statistics, train
 
 from conftest import requires_h36m
@@ -118,6 +118,31 @@ def test_cli_train_and_evaluate(tmp_path, capsys):
     assert rc == 0 and "MPJPE" in text and "analytic" in text and "Discussion 1" in text
 
 
+@requires_h36m
+def test_cli_mixed_inputs_fine_tune_with_another_error_model(tmp_path, capsys):
+    from lifter.checkpoint import load_checkpoint
+    from lifter.cli import main
+    from lifter.noise import ErrorModel
+
+    base = tmp_path / "base.pt"
+    common = ["--epochs", "1", "--batch-size", "64", "--max-frames-per-sequence", "10", "--train-stride", "5",
+              "--eval-every", "50", "--threads", "1"]
+    assert main(["train", "--out", str(base), "--width", "64", "--inputs", "mix", "--real-prob", "0.7",
+                 "--noise", "mixture", *common]) == 0
+    assert "mixing real detections" in capsys.readouterr().out
+    em = tmp_path / "em.json"
+    ErrorModel.standin().save(em)
+    ft = tmp_path / "ft.pt"
+    assert main(["train", "--out", str(ft), "--init", str(base), "--width", "128", "--noise", "mixture",
+                 "--error-model", str(em), "--ema", "0.9", *common]) == 0
+    net, meta = load_checkpoint(ft)
+    assert net.config.width == 64  # the initial checkpoint's architecture, not --width
+    assert meta["init"] == str(base) and meta["error_model"] == str(em) and meta["train_config"]["ema_decay"] == 0.9
+    capsys.readouterr()
+    assert main(["train", "--out", str(ft), "--inputs", "mix", "--train-stride", "7", "--epochs", "1"]) == 2
+    assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
+
+
 def test_cli_reports_bad_checkpoint(tmp_path, capsys):
     from lifter.cli import main
 
@@ -127,3 +152,81 @@ def test_cli_reports_bad_checkpoint(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 2
     assert "corrupt" in err  # weights are loaded before the data, so this does not need Human3.6M
+
+
+def _batch_tensors(n: int = 2000) -> dict[str, torch.Tensor]:
+    g = torch.Generator().manual_seed(1)
+    return {"kp": 400 + 100 * torch.rand(n, 17, 2, generator=g), "pp": torch.full((n, 2), 500.0),
+            "w": torch.full((n,), 1000.0), "rel": torch.randn(n, 17, 3, generator=g) * 100,
+            "depth": 4000 + torch.rand(n, generator=g) * 1000}
+
+
+def test_make_batch_mixes_real_detections_without_noising_them():
+    from lifter.train import make_batch
+
+    T = _batch_tensors()
+    n = len(T["kp"])
+    T["real"] = T["kp"] + 7.0  # a "detection" 7 px off in x and y
+    T["has_real"] = torch.arange(n) % 2 == 0  # every other sample has one
+    plus_1000 = lambda kp, pp, gen: kp + 1000.0  # noqa: E731 - a noise hook whose effect is unmistakable
+    cfg = TrainConfig(flip_prob=0.0, real_2d_prob=0.5)
+    idx = torch.arange(n)
+    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0), augment_2d=plus_1000)
+    off = (kp - T["kp"])[:, 0, 0]
+    real_rows = torch.isclose(off, torch.tensor(7.0))
+    noisy_rows = torch.isclose(off, torch.tensor(1000.0))
+    assert bool((real_rows | noisy_rows).all())  # each row is either its detection (un-noised) or noisy GT
+    assert not bool(real_rows[~T["has_real"]].any())  # never a detection where there is none
+    frac = real_rows[T["has_real"]].float().mean().item()
+    assert 0.45 < frac < 0.55, frac
+    torch.testing.assert_close(rel, T["rel"])
+    torch.testing.assert_close(depth, T["depth"])
+    # p = 1 with zoom: detections are zoomed like GT (kp and pp scale together), never noised
+    cfg = TrainConfig(flip_prob=0.0, real_2d_prob=1.0, zoom_aug=True, zoom_sigma=0.5, zoom_clip=1.0)
+    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0), augment_2d=plus_1000)
+    s = pp[:, 0] / T["pp"][:, 0]
+    h = T["has_real"]
+    torch.testing.assert_close(kp[h], T["real"][h] * s[h, None, None])
+    torch.testing.assert_close(kp[~h], (T["kp"][~h] + 0.0) * s[~h, None, None] + 1000.0)
+    torch.testing.assert_close(depth, T["depth"] / s)  # canonical depth follows the zoom
+
+
+def test_weight_average_is_an_exponential_moving_average():
+    from lifter.train import WeightAverage
+
+    net = torch.nn.Sequential(torch.nn.Linear(3, 2), torch.nn.BatchNorm1d(2))
+    w0 = {k: v.clone() for k, v in net.state_dict().items()}
+    avg = WeightAverage(net, decay=0.9)
+    with torch.no_grad():
+        net[0].weight.add_(1.0)
+        net[1].running_mean.fill_(5.0)
+        net[1].num_batches_tracked.fill_(3)
+    avg.update(net)
+    sd = avg.module.state_dict()
+    torch.testing.assert_close(sd["0.weight"], 0.9 * w0["0.weight"] + 0.1 * (w0["0.weight"] + 1.0))
+    torch.testing.assert_close(sd["1.running_mean"], torch.full((2,), 0.5))
+    assert int(sd["1.num_batches_tracked"]) == 3
+    assert avg.module is not net
+    with pytest.raises(ValueError, match="decay"):
+        WeightAverage(net, decay=1.0)
+
+
+@requires_h36m
+def test_fine_tuning_keeps_architecture_and_does_not_touch_the_initial_network(h36m):
+    train_s = h36m.load([1], stride=50, max_frames_per_sequence=20)
+    test_s = h36m.load([9], stride=200, max_frames_per_sequence=5)
+    base = train(TrainConfig(model=ModelConfig(width=64), batch_size=64, epochs=1, eval_every=1000),
+                 train_samples=train_s, val_samples=test_s, progress=False, log=lambda s: None).net
+    before = {k: v.clone() for k, v in base.state_dict().items()}
+    # cfg.model asks for another width: ignored, the initial network's architecture and output statistics are kept
+    cfg = TrainConfig(model=ModelConfig(width=32), batch_size=64, epochs=1, eval_every=1000, ema_decay=0.5)
+    res = train(cfg, train_samples=train_s, val_samples=test_s, init=base, progress=False, log=lambda s: None)
+    assert res.net.config == base.config and res.net is not base
+    for k, v in base.state_dict().items():
+        torch.testing.assert_close(v, before[k])  # the initial network is not modified
+    torch.testing.assert_close(res.net.target_mean, base.target_mean)
+    assert not torch.allclose(res.net.stem.weight, base.stem.weight)  # but the copy was trained
+    # real keypoints must align with the training samples
+    with pytest.raises(ValueError, match="real_keypoints_2d"):
+        train(cfg, train_samples=train_s, val_samples=test_s, real_keypoints_2d=np.zeros((3, 17, 2)),
+              progress=False, log=lambda s: None)
