@@ -45,6 +45,16 @@ def available_models() -> list[str]:
     return sorted(model_registry()["models"])
 
 
+def model_for_detector(detector: str) -> str:
+    """The shipped model trained for ``detector``'s 2D errors (the registry entry whose ``"detector"`` is
+    that name, e.g. ``"blazepose"``); the default model when there is none."""
+    reg = model_registry()
+    for name, entry in reg["models"].items():
+        if entry.get("detector") == detector:
+            return name
+    return reg["default"]
+
+
 @dataclass(frozen=True)
 class LiftResult:
     """Lifted poses for inputs of leading shape ``(...)``.

@@ -360,7 +360,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="camera sensor width (long side) in mm, for EXIF focal lengths in mm")
     p.add_argument("--glb", action="store_true", help="also write <name>.glb (skeleton mesh, metres, y-up)")
     p.add_argument("--bvh", action="store_true", help="also write <name>.bvh (cm, y-up)")
-    p.add_argument("--weights", default="default", help="shipped lifter name or checkpoint .pt")
+    p.add_argument("--weights", default="auto",
+                   help="shipped lifter name or checkpoint .pt; 'auto': for images the model trained for --detector's "
+                        "2D errors where one is shipped (e.g. 'blazepose'), for keypoint files the default model")
     p.add_argument("--detector", default="blazepose", help="2D estimator for images")
     p.add_argument("--max-people", type=int, default=3, help="people the detector looks for (the largest is lifted)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX, help="downscale larger images for detection")
@@ -389,8 +391,14 @@ def run_lift(args: argparse.Namespace) -> int:
     if not files:
         print("poselifter lift: no inputs to process", file=sys.stderr)
         return 1
-    w = str(args.weights)
-    lifter = Lifter.load(w)
+    from .api import model_for_detector, model_registry
+
+    refs = {"keypoints": model_registry()["default"], "image": model_for_detector(args.detector)} \
+        if args.weights == "auto" else \
+        {"keypoints": str(args.weights), "image": str(args.weights)}
+    kinds = {"keypoints" if f.suffix.lower() == ".json" else "image" for f in files}
+    loaded = {ref: Lifter.load(ref) for ref in {refs[k] for k in kinds}}  # bad weights fail before any input
+    lifter_for = {k: loaded[refs[k]] for k in kinds}
     args.out.mkdir(parents=True, exist_ok=True)
     names = output_names(files, args.out)
     estimator: Any = None
@@ -400,7 +408,7 @@ def run_lift(args: argparse.Namespace) -> int:
     for path, name in bar:
         try:
             if path.suffix.lower() == ".json":
-                rec = lift_keypoint_file(path, lifter=lifter, focal=focal, principal_point=pp,
+                rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                          default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test)
             else:
                 img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
@@ -414,7 +422,7 @@ def run_lift(args: argparse.Namespace) -> int:
                         estimator_error = str(exc)
                 if estimator_error is not None:
                     raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
-                rec = lift_image(img, lifter=lifter, estimator=estimator, focal=focal, principal_point=pp,
+                rec = lift_image(img, lifter=lifter_for["image"], estimator=estimator, focal=focal, principal_point=pp,
                                  sensor_width_mm=args.sensor_width, fov_deg=args.fov, max_side=args.max_side,
                                  flip_test=args.flip_test)
             (args.out / f"{name}.json").write_text(json.dumps(rec.to_json(), indent=1))

@@ -35,6 +35,8 @@ def main() -> None:
     ap.add_argument("--name", required=True)
     ap.add_argument("--description", default="")
     ap.add_argument("--default", action="store_true")
+    ap.add_argument("--detector", default=None,
+                    help="the 2D detector whose errors this model was trained for (poselifter lift picks it for images)")
     ap.add_argument("--h36m", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(2)
@@ -63,6 +65,8 @@ def main() -> None:
         "samples_seen": lifter.meta.get("samples_seen"),
         "metrics_gt2d_protocol1": metrics,
     }
+    if args.detector:
+        reg["models"][args.name]["detector"] = args.detector
     if args.default:
         reg["default"] = args.name
     reg_path.write_text(json.dumps(reg, indent=1) + "\n")

@@ -293,6 +293,27 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert "downscaled" in err and "65 deg" in err
 
 
+def test_auto_weights_pick_the_detectors_model_for_images(tmp_path, weights, kp17, capsys, monkeypatch):
+    """``--weights auto``: images go through the model registered for the detector, keypoint files through the
+    default; the model used is recorded in each output."""
+    import lifter.api as api
+
+    reg = {"default": "plain", "models": {"plain": {"file": "x.pt"}, "for_stub": {"file": "y.pt", "detector": "_stub_auto"}}}
+    monkeypatch.setattr(api, "model_registry", lambda assets_dir=None: reg)
+    monkeypatch.setattr(api.Lifter, "from_pretrained", classmethod(
+        lambda cls, name, quantize=False: cls.from_checkpoint(weights, name=name)))
+    assert api.model_for_detector("_stub_auto") == "for_stub" and api.model_for_detector("other") == "plain"
+    register_estimator("_stub_auto", lambda **kw: _StubEstimator([kp17]), overwrite=True)
+    img = tmp_path / "photo.png"
+    Image.new("RGB", (1000, 1000), (50, 60, 70)).save(img)
+    kpf = tmp_path / "pose.json"
+    kpf.write_text(json.dumps({"format": "h36m17", "keypoints": kp17.tolist(), "image_size": [1000, 1000]}))
+    code, err = run([str(img), str(kpf), "--out", str(tmp_path / "o"), "--detector", "_stub_auto"], capsys)
+    assert code == 0, err
+    assert json.loads((tmp_path / "o" / "photo.json").read_text())["model"] == "for_stub"
+    assert json.loads((tmp_path / "o" / "pose.json").read_text())["model"] == "plain"
+
+
 def test_missing_extra_message(tmp_path, weights, capsys):
     pytest.importorskip("PIL")
     from lifter.detect import mediapipe_available
