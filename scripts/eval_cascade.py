@@ -143,6 +143,13 @@ def main() -> int:
     ap.add_argument("--weights", default="default", help="shipped model name or checkpoint .pt")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "cascade" / "eval_cascade.json")
     ap.add_argument("--error-model-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo.json")
+    ap.add_argument("--holdout-camera", default="55011271",
+                    help="a second error model is fitted without this camera's frames (for training a lifter), and "
+                         "lifters are compared on those held-out frames")
+    ap.add_argument("--error-model-train-out", type=Path,
+                    default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo_train.json")
+    ap.add_argument("--compare", nargs="*", default=[],
+                    help="more lifters (names or .pt) to compare on BlazePose 2D, all frames and held-out camera")
     ap.add_argument("--threads", type=int, default=1)
     args = ap.parse_args()
     import torch
@@ -159,7 +166,7 @@ def main() -> int:
     sizes = np.array([(c.width, c.height) for c in cams])
     gt2d = ann["p2d_gt"].astype(np.float64)
     gt3d = ann["p3d_cam"].astype(np.float64)
-    lifter = Lifter.from_checkpoint(args.weights) if args.weights.endswith(".pt") else Lifter.from_pretrained(args.weights)
+    lifter = Lifter.load(args.weights)
     print(f"lifter: {lifter.name} ({lifter!r})")
 
     # ---------------------------------------------------------------- detection, timed per image
@@ -209,6 +216,13 @@ def main() -> int:
         lifter.lift(gt2d, focal=focal, principal_point=pp).absolute, gt3d)
     rows["SH detections 2D, all 84 frames"] = pose_metrics(
         lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d)
+    held = ann["camera"][ok] == args.holdout_camera
+    comparison: dict[str, Any] = {}
+    for ref in [args.weights, *args.compare]:
+        lf = lifter if ref == args.weights else Lifter.load(ref)
+        a = lf.lift(det17, focal=focal[ok], principal_point=pp[ok]).absolute
+        comparison[lf.name] = {"all detected frames": pose_metrics(a, gt3d[ok]),
+                               f"held-out camera {args.holdout_camera}": pose_metrics(a[held], gt3d[ok][held])}
     default_fov_focal = {"mean_px": round(float(f_def[:, 0].mean()), 1), "true_mean_px": round(float(np.sqrt(focal[ok].prod(1)).mean()), 1)}
 
     # ---------------------------------------------------------------- converter rules
@@ -252,6 +266,12 @@ def main() -> int:
                                "84 H36M demo frames", progress=False, meta=meta)
     args.error_model_out.parent.mkdir(parents=True, exist_ok=True)
     bp_model.save(args.error_model_out)
+    meta_train = dict(meta, data=f"the 84 H36M demo frames without camera {args.holdout_camera} "
+                                 f"({int((~held).sum())} with a detection); held out for evaluating lifters trained on it")
+    bp_train = fit_error_model(det17[~held], g[~held], source="MediaPipe BlazePose detections vs distorted GT "
+                               f"projection, H36M demo frames without camera {args.holdout_camera}", progress=False,
+                               meta=meta_train)
+    bp_train.save(args.error_model_train_out)
     sh_demo = fit_error_model(sh17[ok], g, progress=False)
     e_bp, _, _ = normalized_errors(det17, g, reference_scale=sh_model.reference_scale)
     e_sh, _, _ = normalized_errors(sh17[ok], g, reference_scale=sh_model.reference_scale)
@@ -265,7 +285,8 @@ def main() -> int:
                 "gaussian_sigma_mean_px": np.round(m.gaussian_sigma.mean(0), 2).tolist() if m.gaussian_sigma is not None else None,
                 "gamma": np.round(m.gamma, 3).tolist(), "sigma": np.round(m.sigma, 2).tolist(), "n": m.n_samples}
 
-    noise = {"blazepose_demo": summ(bp_model), "sh_shipped (S1,5,6,7,8 training, 293k)": summ(sh_model),
+    noise = {"blazepose_demo": summ(bp_model), f"blazepose_demo_train (without camera {args.holdout_camera})": summ(bp_train),
+             "sh_shipped (S1,5,6,7,8 training, 293k)": summ(sh_model),
              "sh_demo (same frames)": summ(sh_demo),
              "nll_blazepose_errors": {"under blazepose_demo fit (in-sample)": round(nll(bp_model, e_bp), 3),
                                       "under shipped SH fit": round(nll(sh_model, e_bp), 3)},
@@ -278,11 +299,12 @@ def main() -> int:
     report = {"lifter": {"name": lifter.name, "repr": repr(lifter)}, "frames": n_all,
               "frames_with_detection": int(ok.sum()), "frames_several_people": int((people > 1).sum()),
               "frames_without_detection": [str(x) for x in ann["image"][~ok]],
-              "lifting": rows, "default_fov_focal": default_fov_focal, "timing": timing, "converter": conv,
+              "lifting": rows, "comparison": comparison, "holdout_camera": args.holdout_camera,
+              "default_fov_focal": default_fov_focal, "timing": timing, "converter": conv,
               "error_model": noise, "error_model_file": str(args.error_model_out)}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=1))
-    print(f"wrote {args.out} and {args.error_model_out}")
+    print(f"wrote {args.out}, {args.error_model_out} and {args.error_model_train_out}")
     print(markdown(report))
     return 0
 
@@ -298,6 +320,12 @@ def markdown(r: dict[str, Any]) -> str:
           "|---|" + "---|" * len(r["lifting"])]
     for j in JOINT_NAMES:
         L.append(f"| {j} | " + " | ".join(f"{m['per_joint_mpjpe'][j]:.1f}" for m in r["lifting"].values()) + " |")
+    L += ["", "Lifters compared on BlazePose 2D (true focal), MPJPE / PA-MPJPE / MRPE (mm):", "",
+          "| lifter | " + " | ".join(f"{k} (n)" for k in next(iter(r["comparison"].values()))) + " |",
+          "|---|" + "---|" * len(next(iter(r["comparison"].values())))]
+    for name, sets in r["comparison"].items():
+        L.append(f"| {name} | " + " | ".join(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['n']})"
+                                           for m in sets.values()) + " |")
     t = r["timing"]
     L += ["", f"Time per image (median): decode {t['decode_ms']} ms + BlazePose {t['detect_ms']} ms + convert & lift "
               f"{t['convert_lift_ms']} ms = {t['total_ms']} ms ({t['note']}).", ""]
@@ -319,7 +347,9 @@ def markdown(r: dict[str, Any]) -> str:
     L += ["", "Mixture error model (px at the fit's reference 2D scale): BlazePose on the demo frames vs Stacked Hourglass:", "",
           "| fit | n per joint | ref. scale px | mean gamma | mean sigma x, y px | mean single-Gaussian sigma x, y px |",
           "|---|---|---|---|---|---|"]
-    for name in ("blazepose_demo", "sh_demo (same frames)", "sh_shipped (S1,5,6,7,8 training, 293k)"):
+    for name in e:
+        if not isinstance(e[name], dict) or "gamma_mean" not in e[name]:
+            continue
         m = e[name]
         gs = m["gaussian_sigma_mean_px"]
         L.append(f"| {name} | {m['n']} | {m['reference_scale_px']} | {m['gamma_mean']:.3f} | {m['sigma_mean_px'][0]:.2f}, "
