@@ -34,6 +34,7 @@ import viser
 import viser.transforms as vtf
 
 from lifter import PoseLifterError
+from lifter.api import model_for_detector
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
 
 from .core import (CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX, Frame, LifterPool,
@@ -654,14 +655,17 @@ class SessionView:
                 estimator = self.app.estimator()
             except up.MissingDependencyError as exc:
                 raise PoseLifterError(up.missing_detector_message(name, exc)) from None
-            lifter = self.app.pool.get(self.state.model)
+            model = self._model_for_photo(estimator)
             with self.app.detect_lock:
-                sample = up.photo_sample(photo, img, key=key, lifter=lifter, estimator=estimator)
+                sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(model), estimator=estimator)
         with self.lock:
             try:
                 self._set_sample(sample)  # restores the previous state if the pose cannot be lifted
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{name}: {exc}") from None
+            switched = sample.upload.kind == "image" and model != self.state.model
+            if switched:
+                self._commit("model", model, self.model_dd)
             self._last_upload = sample
             if "upload" not in self.source_dd.options:
                 self._suspend = True
@@ -675,8 +679,21 @@ class SessionView:
         what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
                 if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
         notes = [n for n in info.warnings if n != info.focal_detail]
+        if switched:
+            notes.append(f"lifter switched to '{model}', the model trained for {info.detector}'s 2D errors (Model menu)")
         self.show_message(f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
                           + ("".join(f" Note: {n}." for n in notes)))
+
+    def _model_for_photo(self, estimator: Any) -> str:
+        """The lifter for a detected photo: the model trained for this detector's errors when the tab still
+        uses the app's default model and that model is loaded; otherwise the tab's current model."""
+        if self.state.model != self.app.default_model:
+            return self.state.model  # the user chose a model: keep it
+        try:
+            name = model_for_detector(str(getattr(estimator, "name", "")))
+        except PoseLifterError:
+            return self.state.model
+        return name if name in self.app.pool.names else self.state.model
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the

@@ -352,6 +352,33 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         server.stop()
 
 
+def test_photo_upload_switches_to_the_detectors_model_unless_the_user_chose_one(monkeypatch) -> None:
+    import app.viewer as viewer
+
+    monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt" if name == "fake" else "mixture")
+    server = local_server()
+    try:
+        a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
+                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d], full_width=800))
+        s = a.demo.get("standing")
+        v = a.headless_view()
+        assert v.state.model == "mixture"
+        assert v.load_upload("one.jpg", _jpeg(s.image)) is True
+        assert v.state.model == "gt" and v.model_dd.value == "gt"
+        assert "lifter switched to 'gt'" in v.messages[-1]
+        # a model the user picked (not the default) is kept, whatever the detector's model is
+        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "mixture")
+        assert v.set_model("gt") is True
+        assert v.load_upload("two.jpg", _jpeg(s.image)) is True
+        assert v.state.model == "gt" and "switched" not in v.messages[-1]
+        # a detector model that is not loaded: no switch
+        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "not-loaded")
+        v2 = a.headless_view()
+        assert v2.load_upload("three.jpg", _jpeg(s.image)) is True and v2.state.model == "mixture"
+    finally:
+        server.stop()
+
+
 # ----------------------------------------------------------------------------------------------
 # Download
 # ----------------------------------------------------------------------------------------------
