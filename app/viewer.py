@@ -134,6 +134,7 @@ class SessionView:
         self._sample_gen = 0
         self._drag_gen: int | None = None
         self._photo: up.Photo | None = None
+        self._model_pinned = False
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         sample = app.demo.get(app.demo.names[0])
@@ -465,16 +466,16 @@ class SessionView:
         seq, cam, fr = rest.rsplit(" ", 2)
         self.select_h36m(subject=int(s[1:]), sequence=seq, camera=cam, frame=int(fr))
 
-    def _set_sample(self, sample: Sample) -> None:
-        """Show ``sample`` (drags reset; focal to its camera's; noise, seed, model and toggles kept). If it
-        cannot be lifted the previous state is restored and the error raised."""
+    def _set_sample(self, sample: Sample, *, model: str | None = None) -> None:
+        """Show ``sample`` (drags reset; focal to its camera's; noise, seed, toggles and, unless ``model`` is
+        given, the model kept). If it cannot be lifted the previous state is restored and the error raised."""
         st = self.state
         kind = st.input_kind if (st.input_kind == "gt" or sample.detected_2d is not None) else "gt"
         if not sample.has_gt_2d and sample.detected_2d is not None:
             kind = "detected"
         elif kind != st.input_kind and st.sample.has_gt_2d:  # (leaving an upload: back to ground truth silently)
             self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D")
-        self._apply_state(SessionState(sample=sample, model=st.model, input_kind=kind, noise_level=st.noise_level,
+        self._apply_state(SessionState(sample=sample, model=model or st.model, input_kind=kind, noise_level=st.noise_level,
                                        seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic))
 
     def _apply_state(self, state: SessionState) -> None:
@@ -498,6 +499,7 @@ class SessionView:
         if src in SOURCES and src in self.source_dd.options:
             self._set_gui(self.source_dd, src)
         self._set_gui(self.input_dd, st.input_kind)
+        self._set_gui(self.model_dd, st.model)
         hi = focal_max(sample)
         if self.focal_slider.max != hi:
             self.focal_slider.max = hi
@@ -533,6 +535,7 @@ class SessionView:
     def set_model(self, name: str) -> None:
         """Switch the lifting model (a name from ``assets/models.json``)."""
         self.app.pool.get(name)  # raises for unknown names, before touching the state
+        self._model_pinned = True  # a photo upload no longer switches to the detector's model
         self._commit("model", name, self.model_dd)
 
     @control
@@ -569,7 +572,8 @@ class SessionView:
     @control
     def resample(self) -> None:
         """New noise draws (seed + 1)."""
-        self._commit("seed", self.state.seed + 1, self.seed_num)
+        with self.lock:  # read-increment-write as one step
+            self._commit("seed", self.state.seed + 1, self.seed_num)
 
     @control
     def set_analytic(self, on: bool) -> None:
@@ -646,6 +650,7 @@ class SessionView:
         content = bytes(content or b"")
         up.check_upload(name, content, max_bytes=self.app.max_upload_bytes)
         key = f"upload/{self.app.next_upload_id()}/{name}"
+        before = model = self.state.model
         if up.is_json_upload(name, content):
             sample = up.keypoint_sample(name, content, key=key, photo=self._photo)
         else:
@@ -659,13 +664,12 @@ class SessionView:
             with self.app.detect_lock:
                 sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(model), estimator=estimator)
         with self.lock:
-            try:
-                self._set_sample(sample)  # restores the previous state if the pose cannot be lifted
+            # switch to the detector's model only if nobody changed the model while the detector ran
+            switched = model != before and self.state.model == before
+            try:  # restores the previous state (model included) if the pose cannot be lifted
+                self._set_sample(sample, model=model if switched else None)
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{name}: {exc}") from None
-            switched = sample.upload.kind == "image" and model != self.state.model
-            if switched:
-                self._commit("model", model, self.model_dd)
             self._last_upload = sample
             if "upload" not in self.source_dd.options:
                 self._suspend = True
@@ -685,10 +689,10 @@ class SessionView:
                           + ("".join(f" Note: {n}." for n in notes)))
 
     def _model_for_photo(self, estimator: Any) -> str:
-        """The lifter for a detected photo: the model trained for this detector's errors when the tab still
-        uses the app's default model and that model is loaded; otherwise the tab's current model."""
-        if self.state.model != self.app.default_model:
-            return self.state.model  # the user chose a model: keep it
+        """The lifter for a detected photo: the model trained for this detector's errors (when it is loaded),
+        unless the user picked a model in this tab (:meth:`set_model`): then that one."""
+        if self._model_pinned:
+            return self.state.model
         try:
             name = model_for_detector(str(getattr(estimator, "name", "")))
         except PoseLifterError:

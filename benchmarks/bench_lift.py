@@ -57,7 +57,7 @@ def main() -> None:
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    lifter = Lifter.from_pretrained(args.model) if not args.model.endswith(".pt") else Lifter.from_checkpoint(args.model)
+    lifter = Lifter.load(args.model)
     rng = np.random.default_rng(0)
     pose = np.cumsum(rng.normal(0, 150, (8192, 17, 3)), axis=1)
     pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500

@@ -49,10 +49,10 @@ def model_for_detector(detector: str) -> str:
     """The shipped model trained for ``detector``'s 2D errors (the registry entry whose ``"detector"`` is
     that name, e.g. ``"blazepose"``); the default model when there is none."""
     reg = model_registry()
-    for name, entry in reg["models"].items():
-        if entry.get("detector") == detector:
-            return name
-    return reg["default"]
+    names = [name for name, entry in reg["models"].items() if entry.get("detector") == detector]
+    if len(names) > 1:
+        raise PoseLifterError(f"assets/models.json names several models for detector {detector!r}: {names}")
+    return names[0] if names else reg["default"]
 
 
 @dataclass(frozen=True)
@@ -129,9 +129,9 @@ class Lifter:
     def load(cls, ref: str | os.PathLike[str], *, quantize: bool = False) -> "Lifter":
         """A shipped model name (``"default"``, ``"gt"``, ...) or a checkpoint path (``*.pt``)."""
         ref = str(ref)
-        if ref.endswith(".pt") or Path(ref).is_file():
-            return cls.from_checkpoint(ref, quantize=quantize)
-        return cls.from_pretrained(ref, quantize=quantize)
+        if ref == "default" or ref in model_registry()["models"] or not (ref.endswith(".pt") or Path(ref).is_file()):
+            return cls.from_pretrained(ref, quantize=quantize)  # shipped names win over same-named local files
+        return cls.from_checkpoint(ref, quantize=quantize)
 
     def quantized(self) -> "Lifter":
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization).

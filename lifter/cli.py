@@ -74,7 +74,11 @@ def _run_train(args: argparse.Namespace) -> int:
     if args.init is not None:
         from .api import Lifter
 
-        init = Lifter.load(args.init).net
+        init_lifter = Lifter.load(args.init)
+        init = init_lifter.net
+        ignored = {k: v for k, v in model.to_dict().items() if v != init.config.to_dict().get(k)}
+        if ignored:
+            print(f"note: --init {args.init}: keeping its architecture; ignored {ignored}")
     data = H36M(args.h36m)
     train_samples = real = None
     if args.inputs in ("sh", "mix"):
@@ -102,7 +106,8 @@ def _run_train(args: argparse.Namespace) -> int:
     cfg = replace(cfg, model=result.net.config)
     meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "inputs": args.inputs, "noise": args.noise,
             "noise_level": args.noise_level, "noise_outliers": not args.no_outliers,
-            "error_model": str(args.error_model) if args.error_model else "default", "init": args.init}
+            "error_model": str(args.error_model) if args.error_model else "default",
+            "init": None if init is None else f"{args.init} ({init_lifter.name})"}
     out = save_training_outputs(result, cfg, args.out, half=not args.fp32, extra_meta=meta)
     print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     return 0

@@ -29,6 +29,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from ._checks import PoseLifterError
 from .camera import backproject, root_from_canonical_depth
 from .checkpoint import save_checkpoint
 from .data import H36M, PoseSamples
@@ -70,6 +71,12 @@ class TrainConfig:
     ema_decay: float | None = None
     """Exponential moving average of the weights (and BatchNorm statistics), e.g. 0.999; validation and the
     returned network use the average. ``None``: plain weights."""
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.real_2d_prob <= 1.0:
+            raise PoseLifterError(f"real_2d_prob (--real-prob) must be in [0, 1], got {self.real_2d_prob}")
+        if self.ema_decay is not None and not 0.0 <= self.ema_decay < 1.0:
+            raise PoseLifterError(f"ema_decay (--ema) must be in [0, 1), got {self.ema_decay}")
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -231,6 +238,8 @@ def train(
     if val_samples is None:
         val_samples = data.load_protocol(cfg.protocol, "test", stride=cfg.val_stride,
                                          max_frames_per_sequence=cfg.max_frames_per_sequence)
+    if init is not None:
+        cfg = replace(cfg, model=init.config)  # before the targets: the depth target is the initial network's
     T = _as_tensors(train_samples, cfg.model.depth_target)
     V = _as_tensors(val_samples, cfg.model.depth_target)
     val_root, val_focal = val_samples.root, val_samples.focal
@@ -247,7 +256,6 @@ def train(
 
     if init is not None:
         net = copy.deepcopy(init)
-        cfg = replace(cfg, model=net.config)
     else:
         net = PoseLifterNet(cfg.model)
         mean, std = target_statistics(T["rel"], T["depth"])

@@ -217,11 +217,14 @@ def main() -> int:
     rows["SH detections 2D, all 84 frames"] = pose_metrics(
         lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d)
     held = ann["camera"][ok] == args.holdout_camera
+    if not held.any() or held.all():
+        raise SystemExit(f"--holdout-camera {args.holdout_camera}: must name one of the demo cameras "
+                         f"{sorted(set(ann['camera'].tolist()))}, leaving frames on both sides")
     comparison: dict[str, Any] = {}
-    for ref in [args.weights, *args.compare]:
+    for ref in dict.fromkeys([args.weights, *args.compare]):
         lf = lifter if ref == args.weights else Lifter.load(ref)
         a = lf.lift(det17, focal=focal[ok], principal_point=pp[ok]).absolute
-        comparison[lf.name] = {"all detected frames": pose_metrics(a, gt3d[ok]),
+        comparison[ref if ref.endswith(".pt") else lf.name] = {"all detected frames": pose_metrics(a, gt3d[ok]),
                                f"held-out camera {args.holdout_camera}": pose_metrics(a[held], gt3d[ok][held])}
     default_fov_focal = {"mean_px": round(float(f_def[:, 0].mean()), 1), "true_mean_px": round(float(np.sqrt(focal[ok].prod(1)).mean()), 1)}
 

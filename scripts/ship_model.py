@@ -57,6 +57,7 @@ def main() -> None:
         print(key, json.dumps(metrics[key]))
     reg_path = ASSETS_DIR / "models.json"
     reg = json.loads(reg_path.read_text()) if reg_path.is_file() else {"default": args.name, "models": {}}
+    previous = reg["models"].get(args.name, {})
     reg["models"][args.name] = {
         "file": f"weights/{args.name}.pt",
         "description": args.description,
@@ -65,8 +66,12 @@ def main() -> None:
         "samples_seen": lifter.meta.get("samples_seen"),
         "metrics_gt2d_protocol1": metrics,
     }
-    if args.detector:
-        reg["models"][args.name]["detector"] = args.detector
+    detector = args.detector or previous.get("detector")  # re-shipping keeps the model's detector
+    if detector:
+        for other in reg["models"].values():  # one model per detector
+            if other.get("detector") == detector:
+                other.pop("detector")
+        reg["models"][args.name]["detector"] = detector
     if args.default:
         reg["default"] = args.name
     reg_path.write_text(json.dumps(reg, indent=1) + "\n")

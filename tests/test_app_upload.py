@@ -366,11 +366,17 @@ def test_photo_upload_switches_to_the_detectors_model_unless_the_user_chose_one(
         assert v.load_upload("one.jpg", _jpeg(s.image)) is True
         assert v.state.model == "gt" and v.model_dd.value == "gt"
         assert "lifter switched to 'gt'" in v.messages[-1]
+        assert v.frame is not None and v.state.sample.key.startswith("upload/")
         # a model the user picked (not the default) is kept, whatever the detector's model is
         monkeypatch.setattr(viewer, "model_for_detector", lambda name: "mixture")
         assert v.set_model("gt") is True
         assert v.load_upload("two.jpg", _jpeg(s.image)) is True
         assert v.state.model == "gt" and "switched" not in v.messages[-1]
+        # picking the default model explicitly counts as a choice too
+        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt")
+        v3 = a.headless_view()
+        assert v3.set_model("mixture") is True and v3.load_upload("four.jpg", _jpeg(s.image)) is True
+        assert v3.state.model == "mixture" and "switched" not in v3.messages[-1]
         # a detector model that is not loaded: no switch
         monkeypatch.setattr(viewer, "model_for_detector", lambda name: "not-loaded")
         v2 = a.headless_view()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -137,7 +139,7 @@ def test_cli_mixed_inputs_fine_tune_with_another_error_model(tmp_path, capsys):
                  "--error-model", str(em), "--ema", "0.9", *common]) == 0
     net, meta = load_checkpoint(ft)
     assert net.config.width == 64  # the initial checkpoint's architecture, not --width
-    assert meta["init"] == str(base) and meta["error_model"] == str(em) and meta["train_config"]["ema_decay"] == 0.9
+    assert meta["init"].startswith(str(base)) and meta["error_model"] == str(em) and meta["train_config"]["ema_decay"] == 0.9
     capsys.readouterr()
     assert main(["train", "--out", str(ft), "--inputs", "mix", "--train-stride", "7", "--epochs", "1"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
@@ -189,6 +191,15 @@ def test_make_batch_mixes_real_detections_without_noising_them():
     torch.testing.assert_close(kp[h], T["real"][h] * s[h, None, None])
     torch.testing.assert_close(kp[~h], (T["kp"][~h] + 0.0) * s[~h, None, None] + 1000.0)
     torch.testing.assert_close(depth, T["depth"] / s)  # canonical depth follows the zoom
+    # p = 1 with flip: it is the detection that gets mirrored (x -> W - x, left/right swapped)
+    from lifter.skeleton import FLIP_PERMUTATION
+
+    cfg = TrainConfig(flip_prob=1.0, real_2d_prob=1.0)
+    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0))
+    expect = T["real"][h][:, list(FLIP_PERMUTATION)].clone()
+    expect[..., 0] = 1000.0 - expect[..., 0]
+    torch.testing.assert_close(kp[h], expect)
+    torch.testing.assert_close(pp[:, 0], 1000.0 - T["pp"][:, 0])
 
 
 def test_weight_average_is_an_exponential_moving_average():
@@ -212,7 +223,7 @@ def test_weight_average_is_an_exponential_moving_average():
 
 
 @requires_h36m
-def test_fine_tuning_keeps_architecture_and_does_not_touch_the_initial_network(h36m):
+def test_fine_tuning_keeps_architecture_and_does_not_touch_the_initial_network(h36m, monkeypatch):
     train_s = h36m.load([1], stride=50, max_frames_per_sequence=20)
     test_s = h36m.load([9], stride=200, max_frames_per_sequence=5)
     base = train(TrainConfig(model=ModelConfig(width=64), batch_size=64, epochs=1, eval_every=1000),
@@ -226,6 +237,24 @@ def test_fine_tuning_keeps_architecture_and_does_not_touch_the_initial_network(h
         torch.testing.assert_close(v, before[k])  # the initial network is not modified
     torch.testing.assert_close(res.net.target_mean, base.target_mean)
     assert not torch.allclose(res.net.stem.weight, base.stem.weight)  # but the copy was trained
+    # with EMA, the returned network is the average, not the last weights: decay 0.5 over 1 step from `base`
+    # gives the midpoint of the initial and the trained weights
+    one = TrainConfig(batch_size=len(train_s), epochs=1, eval_every=1000, ema_decay=0.5, flip_prob=0.0)
+    plain = train(replace(one, ema_decay=None), train_samples=train_s, val_samples=test_s, init=base,
+                  progress=False, log=lambda s: None).net
+    avg = train(one, train_samples=train_s, val_samples=test_s, init=base, progress=False, log=lambda s: None).net
+    torch.testing.assert_close(avg.stem.weight, 0.5 * (base.stem.weight + plain.stem.weight))
+    # the depth target is the initial network's, whatever cfg.model says
+    absolute = train(TrainConfig(model=ModelConfig(width=64, depth_target="absolute"), batch_size=64, epochs=1,
+                                 eval_every=1000), train_samples=train_s, val_samples=test_s,
+                     progress=False, log=lambda s: None).net
+    import lifter.train as train_module
+
+    targets: list[str] = []
+    as_tensors = train_module._as_tensors
+    monkeypatch.setattr(train_module, "_as_tensors", lambda s, t: targets.append(t) or as_tensors(s, t))
+    ft = train(cfg, train_samples=train_s, val_samples=test_s, init=absolute, progress=False, log=lambda s: None).net
+    assert ft.config.depth_target == "absolute" and targets == ["absolute", "absolute"]  # train and val targets
     # real keypoints must align with the training samples
     with pytest.raises(ValueError, match="real_keypoints_2d"):
         train(cfg, train_samples=train_s, val_samples=test_s, real_keypoints_2d=np.zeros((3, 17, 2)),

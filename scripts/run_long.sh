@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The long CPU runs behind the shipped `mixture` / `sh_mix` / `blazepose` models (one torch thread each; two of
+# these steps can run side by side on a 2-core machine). Wall-clock budgets drive the lr schedule, so the
+# number of epochs is whatever fits.
+#   1. mix_long      real SH detections of the training subjects (p = 0.5) + GT 2D with mixture noise, zoom 2^+-1
+#   2. mixture_long  GT 2D with mixture noise only (no real detections), zoom 2^+-1
+#   3. fine-tunes of the default for BlazePose: on BlazePose's error fit (without the held-out camera), and the
+#      control with the SH fit, equal budget, so the effect of the *fit* is separated from extra training.
+# Then scripts/ship_model.py and scripts/eval_cascade.py (see the README).
+set -euo pipefail
+step=${1:-all}
+COMMON=(--noise mixture --no-outliers --zoom-aug --zoom-sigma 0.5 --zoom-clip 1.0 --ema 0.999 --threads 1 --eval-every 1000)
+if [[ $step == all || $step == mix_long ]]; then
+  poselifter train --out runs/mix_long.pt --inputs mix --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 95
+fi
+if [[ $step == all || $step == mixture_long ]]; then
+  poselifter train --out runs/mixture_long.pt "${COMMON[@]}" --epochs 200 --max-minutes 80
+fi
+INIT=${INIT:-runs/mix_long.pt}
+if [[ $step == all || $step == bp_ft ]]; then
+  poselifter train --out runs/bp_ft_long.pt --init "$INIT" --error-model assets/error_model/blazepose_demo_train.json \
+    "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes 15
+fi
+if [[ $step == all || $step == sh_ft ]]; then
+  poselifter train --out runs/sh_ft_long.pt --init "$INIT" "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes 15
+fi
