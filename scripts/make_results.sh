@@ -24,7 +24,7 @@ ev table2_ablation baseline=runs/ablation_baseline.pt +location=runs/ablation_lo
 # Table 3: training inputs, evaluated on the real SH detections of S9/S11, every 50th frame (cascade subset).
 ev table3_sh_detections "(a) GT, no loc/scale=runs/ablation_baseline.pt" "(b) GT=runs/ablation_both.pt" \
    "(c) SH detections=runs/t3_sh.pt" "(d) single Gaussian=runs/t3_gauss.pt" "(e) mixture=runs/t3_mixture.pt" \
-   "(e') mixture, no outliers=runs/t3_mixture_no_outliers.pt" "${SHIPPED[@]}" \
+   "(e') mixture, no outliers=runs/t3_mixture_no_outliers.pt" "(e') mixture, 80 min=runs/mixture_long.pt" "${SHIPPED[@]}" \
    --inputs sh --stride 50 --analytic-root
 
 # Table 6 analogue: MRPE on virtual cameras with scaled focal lengths (GT 2D re-projected, pinhole).

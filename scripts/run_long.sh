@@ -4,8 +4,8 @@
 # number of epochs is whatever fits.
 #   1. mix_long      real SH detections of the training subjects (p = 0.5) + GT 2D with mixture noise, zoom 2^+-1
 #   2. mixture_long  GT 2D with mixture noise only (no real detections), zoom 2^+-1
-#   3. fine-tunes of the default for BlazePose: on BlazePose's error fit (without the held-out camera), and the
-#      control with the SH fit, equal budget, so the effect of the *fit* is separated from extra training.
+#   3. fine-tunes for BlazePose: on BlazePose's error fit (without the held-out camera), and the control with the
+#      SH fit, equal budget, so the effect of the *fit* is separated from extra training.
 # Then scripts/ship_model.py and scripts/eval_cascade.py (see the README).
 set -euo pipefail
 step=${1:-all}
@@ -16,11 +16,15 @@ fi
 if [[ $step == all || $step == mixture_long ]]; then
   poselifter train --out runs/mixture_long.pt "${COMMON[@]}" --epochs 200 --max-minutes 80
 fi
-INIT=${INIT:-runs/mix_long.pt}
+# Fine-tunes (OUT names the pair): shipped `blazepose` = INIT=mixture MINUTES=20 OUT=ft (runs/bp_ft.pt, control
+# runs/sh_ft.pt); the same from the default: INIT=runs/mix_long.pt MINUTES=15 OUT=ft_long.
+INIT=${INIT:-mixture}
+MINUTES=${MINUTES:-20}
+OUT=${OUT:-ft}
 if [[ $step == all || $step == bp_ft ]]; then
-  poselifter train --out runs/bp_ft_long.pt --init "$INIT" --error-model assets/error_model/blazepose_demo_train.json \
-    "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes 15
+  poselifter train --out "runs/bp_${OUT}.pt" --init "$INIT" --error-model assets/error_model/blazepose_demo_train.json \
+    "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes "$MINUTES"
 fi
 if [[ $step == all || $step == sh_ft ]]; then
-  poselifter train --out runs/sh_ft_long.pt --init "$INIT" "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes 15
+  poselifter train --out "runs/sh_${OUT}.pt" --init "$INIT" "${COMMON[@]}" --lr 3e-4 --epochs 100 --max-minutes "$MINUTES"
 fi
