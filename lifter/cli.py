@@ -82,18 +82,18 @@ def _run_train(args: argparse.Namespace) -> int:
     data = H36M(args.h36m)
     train_samples = real = None
     if args.inputs in ("sh", "mix"):
-        from .noise import load_sh_detections
+        from .noise import load_sh_detections, with_sh_detections
 
         if args.train_stride % 5:
             raise PoseLifterError(f"--inputs {args.inputs} needs --train-stride a multiple of 5 "
                                   "(detections exist every 5th frame)")
         train_samples = data.load_protocol(args.protocol, "train", stride=args.train_stride,
                                            max_frames_per_sequence=args.max_frames_per_sequence)
-        real, ok = load_sh_detections(train_samples, data=data)
         if args.inputs == "sh":
-            keep = np.flatnonzero(ok)
-            train_samples, real = train_samples.subset(keep).with_keypoints(real[keep]), None
-            print(f"training on real SH detections: {len(train_samples)} samples ({int((~ok).sum())} without one dropped)")
+            train_samples, dropped = with_sh_detections(train_samples, data=data)
+            print(f"training on real SH detections: {len(train_samples)} samples ({dropped} without one dropped)")
+        else:
+            real, _ = load_sh_detections(train_samples, data=data)  # NaN rows (no detection) stay GT 2D
     augment = None
     if args.noise != "none":
         from .noise import ErrorModel
