@@ -263,7 +263,7 @@ def train(
     net.train()
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     ema = WeightAverage(net, decay=cfg.ema_decay) if cfg.ema_decay is not None else None
-    eval_net = (lambda: ema.module) if ema is not None else (lambda: net)
+    eval_net = ema.module if ema is not None else net  # what validation and the result use
 
     n = len(train_samples)
     bs = min(cfg.batch_size, n)
@@ -306,7 +306,7 @@ def train(
         if step % cfg.eval_every == 0 or step == steps:
             rec = {"step": step, "samples": step * bs, "minutes": (time.perf_counter() - t0) / 60.0,
                    "lr": opt.param_groups[0]["lr"], "train_loss": running}
-            rec.update(_validate(eval_net(), V, val_root, val_focal))
+            rec.update(_validate(eval_net, V, val_root, val_focal))
             curve.append(rec)
             bar.set_postfix(loss=f"{running:.1f}", val_mpjpe=f"{rec['val_mpjpe']:.1f}", val_mrpe=f"{rec['val_mrpe']:.0f}")
         bar.update(1)
@@ -315,9 +315,9 @@ def train(
     if not curve or curve[-1]["step"] != step:
         rec = {"step": step, "samples": step * bs, "minutes": minutes, "lr": opt.param_groups[0]["lr"],
                "train_loss": float(running or 0.0)}
-        rec.update(_validate(eval_net(), V, val_root, val_focal))
+        rec.update(_validate(eval_net, V, val_root, val_focal))
         curve.append(rec)
-    net = eval_net()
+    net = eval_net
     net.eval()
     log(f"done: {step} steps, {step * bs} samples in {minutes:.1f} min ({step * bs / max(minutes * 60, 1e-9):.0f} samples/s)")
     return TrainResult(net=net, curve=curve, steps=step, samples_seen=step * bs, minutes=minutes)
