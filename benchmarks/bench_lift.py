@@ -12,13 +12,24 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 
-import numpy as np
-import torch
 
-from lifter import Lifter
-from lifter.camera import project
+def _thread_args() -> argparse.Namespace:
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--threads", type=int, default=2)
+    return pre.parse_known_args()[0]
+
+
+# numpy's BLAS (used by Lifter.lift for a single pose) reads its thread count at import: match --threads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", str(_thread_args().threads))
+
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from lifter import Lifter  # noqa: E402
+from lifter.camera import project  # noqa: E402
 
 
 def flops_per_pose(net: torch.nn.Module) -> int:
@@ -69,16 +80,28 @@ def main() -> None:
     print(f"model {lifter.name}: width {lifter.config.width}, {fpp / 1e6:.2f} MFLOP/pose; "
           f"matmul {gflops:.1f} GFLOP/s with {args.threads} threads -> FLOP limit {limit:,.0f} poses/s")
 
-    single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
+    def one() -> None:
+        lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0))
+
+    single = time_calls(one, args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
-    print(f"single pose Lifter.lift (float32): median {p50:.3f} ms, p95 {p95:.3f} ms ({args.single_calls} calls)")
+    print(f"single pose Lifter.lift (float32; folded weights, numpy BLAS): median {p50:.3f} ms, p95 {p95:.3f} ms "
+          f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
+    fold = lifter._folded
+    lifter._folded = lambda: None  # the plain nn.Module forward, for comparison in this run
+    try:
+        u50 = float(np.median(time_calls(one, args.single_calls))) * 1e3
+    finally:
+        lifter._folded = fold
+    print(f"single pose, plain nn.Module forward (no folding): median {u50:.3f} ms -> folded path {u50 / p50:.2f}x faster")
     q = lifter.quantized()
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
           f"-> {p50 / q50:.2f}x faster")
     results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
-               "single_median_ms": p50, "single_p95_ms": p95, "single_int8_median_ms": q50,
+               "single_median_ms": p50, "single_p95_ms": p95, "single_unfolded_median_ms": u50,
+               "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
     print(f"{'batch':>6} {'poses/s':>12} {'of FLOP limit':>14}")
     for b in (1, 16, 256, 2048, 8192):
