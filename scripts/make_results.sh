@@ -33,3 +33,7 @@ FOCAL_MODELS=("canonical=runs/t3_mixture.pt" "canonical + zoom aug=runs/f_canoni
 FOCAL_MODELS+=("${SHIPPED[@]}")
 ev focal_sweep "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 ev focal_sweep_shifted_pp "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
+
+# How much of the SH-detection error is the detector's: inputs gt + alpha (det - gt), and MPJPE by frame 2D error.
+python scripts/sh_error_scaling.py --stride 50 --models sh_mix,mixture,gt --out "$OUT/sh_error_scaling" \
+  | tee "$OUT/sh_error_scaling.txt"
