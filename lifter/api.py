@@ -22,15 +22,14 @@ import torch
 from ._checks import PoseLifterError, as_pair, as_points
 from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, root_from_canonical_depth
 from .checkpoint import load_checkpoint
-from .model import FoldedWeights, PoseLifterNet, fold_for_inference, folded_mlp, folded_mlp_np
+from .model import FoldedWeights, PoseLifterNet, fold_for_inference, folded_mlp, folded_mlp_np, split_output
 from .normalization import normalize_keypoints, pose_scale_np
 from .skeleton import FLIP_PERMUTATION, NUM_JOINTS
 
 NUMPY_MAX_BATCH: int = 1
 """Batches up to this many poses run the folded network in numpy, larger ones in torch. A single pose is
-a chain of matrix-vector products, where numpy's OpenBLAS beats torch's CPU kernels (1.4x with one
-thread on the development machine); from two poses on torch is as fast or faster
-(``benchmarks/bench_lift.py`` measures both)."""
+a chain of matrix-vector products, where numpy's OpenBLAS beats torch's CPU kernels on the development
+machine (``benchmarks/bench_lift.py`` times both on one pose); from two poses on torch is as fast or faster."""
 ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
 DEGENERATE_SCALE_PX = 1e-3
 MIN_POSE_SCALE_PX = 2.0
@@ -143,8 +142,8 @@ class Lifter:
 
         A quarter of the weight memory (4 MB instead of 16 MB of block weights), with MPJPE unchanged at
         0.1 mm and MRPE within 1 mm on H36M (``poselifter evaluate --quantize``). It runs the module
-        forward, not the folded float32 path of :meth:`lift`, so a single pose is about as fast as float32
-        (``benchmarks/bench_lift.py``). The normalization layer, stem and head stay float32 (pixel precision).
+        forward (not the folded float32 path of :meth:`lift`); for a single pose it is still ~1.3x faster
+        than float32, less weight memory to stream (``benchmarks/bench_lift.py``). The normalization layer, stem and head stay float32 (pixel precision).
         """
         import copy
         import warnings
@@ -229,17 +228,16 @@ class Lifter:
             folded = self._folded()
             if folded is None:
                 out = self.net(kp_t, pp_t)
-                return out.relative.numpy().astype(np.float64), out.depth.numpy().astype(np.float64)
-            weights, weights_np = folded
-            x = normalize_keypoints(kp_t, pp_t, mode=weights.config.mode,
-                                    scale_definition=weights.config.scale_definition)
-            if len(kp) <= NUMPY_MAX_BATCH:
-                flat = folded_mlp_np(weights_np, x.numpy())
             else:
-                flat = folded_mlp(weights, x).numpy()
-        flat = flat.astype(np.float64)
-        rel = np.concatenate([np.zeros((len(flat), 1, 3)), flat[:, :-1].reshape(-1, NUM_JOINTS - 1, 3)], axis=1)
-        return rel, flat[:, -1]
+                weights, weights_np = folded
+                x = normalize_keypoints(kp_t, pp_t, mode=weights.config.mode,
+                                        scale_definition=weights.config.scale_definition)
+                if len(kp) <= NUMPY_MAX_BATCH:
+                    flat = torch.from_numpy(folded_mlp_np(weights_np, x.numpy()))
+                else:
+                    flat = folded_mlp(weights, x)
+                out = split_output(flat)
+        return out.relative.numpy().astype(np.float64), out.depth.numpy().astype(np.float64)
 
     def _folded(self) -> tuple[FoldedWeights, FoldedWeights] | None:
         """The net's eval-mode weights folded for inference (:func:`~lifter.model.fold_for_inference`), as
