@@ -30,8 +30,7 @@ import torch  # noqa: E402
 
 from lifter import Lifter  # noqa: E402
 from lifter.camera import project  # noqa: E402
-from lifter.model import folded_mlp, folded_mlp_np  # noqa: E402
-from lifter.normalization import normalize_keypoints  # noqa: E402
+import lifter.api as api  # noqa: E402
 
 
 def flops_per_pose(net: torch.nn.Module) -> int:
@@ -87,31 +86,31 @@ def main() -> None:
 
     single = time_calls(one, args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
-    print(f"single pose Lifter.lift (float32; folded weights, numpy BLAS): median {p50:.3f} ms, p95 {p95:.3f} ms "
+    print(f"single pose Lifter.lift (float32, numpy path): median {p50:.3f} ms, p95 {p95:.3f} ms "
           f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
-    fold = lifter._folded
-    lifter._folded = lambda: None  # the plain nn.Module forward, for comparison in this run
-    try:
-        u50 = float(np.median(time_calls(one, args.single_calls))) * 1e3
-    finally:
-        lifter._folded = fold
-    print(f"single pose, plain nn.Module forward (no folding): median {u50:.3f} ms -> folded path {u50 / p50:.2f}x faster")
-    weights, weights_np = lifter._folded()
-    with torch.inference_mode():
-        x = normalize_keypoints(torch.from_numpy(kp[:1].astype(np.float32)), torch.tensor([[512.0, 515.0]]))
-        t_torch = float(np.median(time_calls(lambda: folded_mlp(weights, x), args.single_calls))) * 1e3
-    xn = x.numpy()
-    t_numpy = float(np.median(time_calls(lambda: folded_mlp_np(weights_np, xn), args.single_calls))) * 1e3
-    print(f"folded network alone, one pose: torch {t_torch:.3f} ms, numpy {t_numpy:.3f} ms "
-          f"-> numpy {t_torch / t_numpy:.2f}x faster (Lifter.lift uses numpy for one pose)")
+    default_max = api.NUMPY_MAX_BATCH
+
+    def lift_with(max_batch: int, kp_: np.ndarray) -> float:
+        api.NUMPY_MAX_BATCH = max_batch
+        try:
+            return float(np.median(time_calls(lambda: lifter.lift(kp_, focal=1145.0, principal_point=(512.0, 515.0)),
+                                              args.single_calls))) * 1e3
+        finally:
+            api.NUMPY_MAX_BATCH = default_max
+
+    u50 = lift_with(0, kp[0])
+    print(f"single pose through the torch module instead: median {u50:.3f} ms -> numpy path {u50 / p50:.2f}x faster")
+    two_torch, two_numpy = lift_with(1, kp[:2]), lift_with(2, kp[:2])
+    print(f"two poses: torch module {two_torch:.3f} ms, numpy {two_numpy:.3f} ms "
+          f"(numpy is used up to NUMPY_MAX_BATCH = {default_max} poses)")
     q = lifter.quantized()
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
           f"-> {p50 / q50:.2f}x faster")
     results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
-               "single_median_ms": p50, "single_p95_ms": p95, "single_unfolded_median_ms": u50,
-               "single_net_torch_ms": t_torch, "single_net_numpy_ms": t_numpy,
+               "single_median_ms": p50, "single_p95_ms": p95, "single_torch_module_median_ms": u50,
+               "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
     print(f"{'batch':>6} {'poses/s':>12} {'of FLOP limit':>14}")

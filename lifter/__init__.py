@@ -21,16 +21,16 @@ from .camera import (
 )
 from .keypoints import KEYPOINT_FORMATS, convert
 from .metrics import auc, mpjpe, pa_mpjpe, pck, root_errors
-from .model import FoldedWeights, ModelConfig, PoseLifterNet, fold_for_inference
+from .model import ModelConfig, PoseLifterNet
 from .noise import ErrorModel
 from .normalization import normalize_keypoints, normalize_keypoints_np
 from .skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, NUM_JOINTS, PARENTS
 
 __all__ = [
-    "CANONICAL_FOCAL", "Camera", "ErrorModel", "FoldedWeights", "KEYPOINT_FORMATS", "convert", "CheckpointError", "EDGES", "FLIP_PERMUTATION", "JOINT_NAMES", "LiftResult",
+    "CANONICAL_FOCAL", "Camera", "ErrorModel", "KEYPOINT_FORMATS", "convert", "CheckpointError", "EDGES", "FLIP_PERMUTATION", "JOINT_NAMES", "LiftResult",
     "Lifter", "ModelConfig", "NUM_JOINTS", "PARENTS", "PoseLifterError", "PoseLifterNet", "analytic_root", "auc",
     "available_models", "backproject", "canonical_depth_from_depth", "depth_from_canonical_depth",
-    "flip_keypoints_2d", "flip_pose_3d", "focal_alpha", "fold_for_inference", "model_for_detector", "mpjpe", "normalize_keypoints", "normalize_keypoints_np",
+    "flip_keypoints_2d", "flip_pose_3d", "focal_alpha", "model_for_detector", "mpjpe", "normalize_keypoints", "normalize_keypoints_np",
     "pa_mpjpe", "pck", "project", "root_errors", "root_from_canonical_depth",
 ]
 __version__ = "0.1.0"

@@ -22,14 +22,15 @@ import torch
 from ._checks import PoseLifterError, as_pair, as_points
 from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, root_from_canonical_depth
 from .checkpoint import load_checkpoint
-from .model import FoldedWeights, PoseLifterNet, fold_for_inference, folded_mlp, folded_mlp_np, split_output
+from .model import PoseLifterNet, forward_flat_numpy, split_output
 from .normalization import normalize_keypoints, pose_scale_np
 from .skeleton import FLIP_PERMUTATION, NUM_JOINTS
 
 NUMPY_MAX_BATCH: int = 1
-"""Batches up to this many poses run the folded network in numpy, larger ones in torch. A single pose is
-a chain of matrix-vector products, where numpy's OpenBLAS beats torch's CPU kernels on the development
-machine (``benchmarks/bench_lift.py`` times both on one pose); from two poses on torch is as fast or faster."""
+"""Batches up to this many poses run the network in numpy (:func:`~lifter.model.forward_flat_numpy`),
+larger ones through the torch module. A single pose is a chain of matrix-vector products, where numpy's
+OpenBLAS beats torch's CPU kernels on the development machine (``benchmarks/bench_lift.py`` times both on
+one pose); from two poses on torch is as fast or faster."""
 ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
 DEGENERATE_SCALE_PX = 1e-3
 MIN_POSE_SCALE_PX = 2.0
@@ -141,9 +142,9 @@ class Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization).
 
         A quarter of the weight memory (4 MB instead of 16 MB of block weights), with MPJPE unchanged at
-        0.1 mm and MRPE within 1 mm on H36M (``poselifter evaluate --quantize``). It runs the module
-        forward (not the folded float32 path of :meth:`lift`); for a single pose it is still ~1.3x faster
-        than float32, less weight memory to stream (``benchmarks/bench_lift.py``). The normalization layer, stem and head stay float32 (pixel precision).
+        0.1 mm and MRPE within 1 mm on H36M (``poselifter evaluate --quantize``). It always runs the torch
+        module (not the numpy single-pose path of :meth:`lift`); for a single pose it is still ~1.3x
+        faster than float32, with less weight memory to stream (``benchmarks/bench_lift.py``). The normalization layer, stem and head stay float32 (pixel precision).
         """
         import copy
         import warnings
@@ -222,45 +223,22 @@ class Lifter:
 
     def _run(self, kp: np.ndarray, pp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Network on ``(N, 17, 2)`` px and ``(N, 2)`` px -> relative ``(N, 17, 3)`` mm, depth ``(N,)``."""
+        net = self.net
         kp_t = torch.from_numpy(kp.astype(np.float32))
         pp_t = torch.from_numpy(pp.astype(np.float32))
         with torch.inference_mode():
-            folded = self._folded()
-            if folded is None:
-                out = self.net(kp_t, pp_t)
+            flat = None
+            if len(kp) <= NUMPY_MAX_BATCH:
+                x = normalize_keypoints(kp_t, pp_t, mode=net.config.mode, scale_definition=net.config.scale_definition)
+                flat = forward_flat_numpy(net, x.numpy())
+            if flat is not None:
+                out = split_output(torch.from_numpy(flat))
             else:
-                weights, weights_np = folded
-                x = normalize_keypoints(kp_t, pp_t, mode=weights.config.mode,
-                                        scale_definition=weights.config.scale_definition)
-                if len(kp) <= NUMPY_MAX_BATCH:
-                    flat = torch.from_numpy(folded_mlp_np(weights_np, x.numpy()))
-                else:
-                    flat = folded_mlp(weights, x)
-                out = split_output(flat)
+                if any(m.training for m in net.modules() if isinstance(m, (torch.nn.Dropout, torch.nn.BatchNorm1d))):
+                    raise PoseLifterError(
+                        f"model {self.name!r} is in training mode (dropout, batch statistics): call lifter.net.eval()")
+                out = net(kp_t, pp_t)
         return out.relative.numpy().astype(np.float64), out.depth.numpy().astype(np.float64)
-
-    def _folded(self) -> tuple[FoldedWeights, FoldedWeights] | None:
-        """The net's eval-mode weights folded for inference (:func:`~lifter.model.fold_for_inference`), as
-        tensors and as numpy arrays; rebuilt whenever a parameter or buffer of ``self.net`` was replaced or
-        changed in place. None when the net is in training mode or cannot be folded (quantized blocks)."""
-        if self.net.training:
-            return None
-        top = tuple(map(id, self.net._modules.values()))
-        walk = getattr(self, "_fold_walk", None)
-        if walk is None or walk[0] != top:  # the module tree changed (or first call): list its modules again
-            walk = (top, tuple(self.net.modules()))
-            self._fold_walk = walk
-        key = tuple((id(t), t._version) for m in walk[1]
-                    for t in (*m._parameters.values(), *m._buffers.values()) if t is not None)
-        cached = getattr(self, "_fold_cache", None)  # (key, weights), swapped as one object: thread-safe reads
-        if cached is None or cached[0] != key:
-            try:
-                weights = fold_for_inference(self.net)
-                cached = (key, (weights, weights.numpy()))
-            except TypeError:
-                cached = (key, None)
-            self._fold_cache = cached
-        return cached[1]
 
     def __repr__(self) -> str:
         c = self.config

@@ -12,6 +12,7 @@ the network from growing its outputs to ~1e3-1e4 over thousands of steps.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
@@ -24,7 +25,6 @@ from .skeleton import NUM_JOINTS
 
 DepthTarget = Literal["canonical", "absolute"]
 NUM_OUTPUTS: int = 3 * (NUM_JOINTS - 1) + 1
-Array = torch.Tensor | np.ndarray
 
 
 @dataclass(frozen=True)
@@ -116,93 +116,77 @@ class PoseLifterNet(nn.Module):
         return split_output(self.forward_flat(keypoints, principal_point))
 
 
-@dataclass(frozen=True)
-class FoldedWeights:
-    """An eval-mode :class:`PoseLifterNet` with its affine layers folded into the Linear layers.
+def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]] | None:
+    """The tensors :func:`forward_flat_numpy` reads, in a fixed order: stem weight and bias; per block the
+    first BatchNorm's weight, bias, running mean and variance, the first Linear's weight and bias, the same
+    for the second pair; head weight and bias; target mean and std. Looked up through the modules' own
+    dictionaries on every call (so replaced layers or tensors are always the current ones); and the
+    BatchNorm epsilons, in the same order. None if a
+    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` or a BatchNorm or Dropout is in training mode."""
+    mods = net._modules
+    stem, blocks, head = mods.get("stem"), mods.get("blocks"), mods.get("head")
+    if type(stem) is not nn.Linear or type(head) is not nn.Linear or blocks is None:
+        return None
+    out = [stem._parameters["weight"], stem._parameters["bias"]]
+    eps = []
+    for block in blocks._modules.values():
+        body = block._modules.get("body")
+        layers = list(body._modules.values()) if body is not None else []
+        if len(layers) != 8:
+            return None
+        bn1, drop1, lin1, bn2, drop2, lin2 = layers[0], layers[1], layers[3], layers[4], layers[5], layers[7]
+        if (type(bn1) is not nn.BatchNorm1d or type(bn2) is not nn.BatchNorm1d or type(lin1) is not nn.Linear
+                or type(lin2) is not nn.Linear or bn1.training or bn2.training or drop1.training or drop2.training):
+            return None
+        for bn, lin in ((bn1, lin1), (bn2, lin2)):
+            p, b = bn._parameters, bn._buffers
+            out += [p["weight"], p["bias"], b["running_mean"], b["running_var"], lin._parameters["weight"],
+                    lin._parameters["bias"]]
+            eps.append(float(bn.eps))
+    out += [head._parameters["weight"], head._parameters["bias"], net._buffers["target_mean"], net._buffers["target_std"]]
+    return out, eps
 
-    In eval mode BatchNorm is a per-channel affine map and Dropout is the identity, so a block
-    ``x + L2(ReLU(BN2(L1(ReLU(BN1(x))))))`` becomes ``x + L2(ReLU(L1'(ReLU(s * x + c))))`` with ``BN2``
-    folded into ``L1'``, and the output de-standardization ``mean + std * head(x)`` is folded into the
-    head. Same outputs (to float32 rounding), fewer kernels: for one pose the network is bound by
-    per-op overhead and weight traffic, not FLOPs (``benchmarks/bench_lift.py``).
 
-    Weights are stored transposed, ``(in, out)``, for ``torch.addmm``. Build with :func:`fold_for_inference`.
+_NUMPY_VIEWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""net -> (key, numpy views of :func:`_numpy_tensors`); the views share memory with the tensors, so
+in-place changes are seen without a rebuild, and the key (tensor identities and storage addresses)
+catches replaced tensors or storage."""
+
+
+def forward_flat_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None:
+    """Eval-mode stem -> blocks -> head -> de-standardization in numpy, on normalized features ``(B, F)``
+    float32 -> ``(B, 49)`` outputs in mm, as :meth:`PoseLifterNet.forward_flat` after the normalization.
+
+    For one pose the network is a chain of matrix-vector products, which numpy's BLAS (OpenBLAS) runs
+    faster than torch's CPU kernels on the development machine (``benchmarks/bench_lift.py`` times both).
+    It reads the live weights through numpy views that share memory with the parameters (no copies), so
+    any change to the net, in place or by replacing tensors or layers, is seen on the next call;
+    BatchNorm is applied as the per-channel affine map of its running statistics. Returns None when a
+    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` (e.g. quantized) or a BatchNorm or
+    Dropout is in training mode: use the module then.
     """
-
-    config: ModelConfig
-    stem: tuple[Array, Array]
-    blocks: tuple[tuple[Array, ...], ...]
-    """Per block ``(s, c, W1', b1', W2, b2)``."""
-    head: tuple[Array, Array]
-
-    def numpy(self) -> FoldedWeights:
-        """The same weights as float32 numpy arrays (sharing memory with the tensors), for :func:`folded_mlp_np`."""
-        def conv(group):
-            return tuple(t.numpy() for t in group)
-
-        return FoldedWeights(config=self.config, stem=conv(self.stem), blocks=tuple(conv(b) for b in self.blocks),
-                             head=conv(self.head))
-
-
-def _bn_affine(bn: nn.BatchNorm1d) -> tuple[torch.Tensor, torch.Tensor]:
-    s = bn.weight / torch.sqrt(bn.running_var + bn.eps)
-    return s, bn.bias - bn.running_mean * s
-
-
-@torch.no_grad()
-def fold_for_inference(net: PoseLifterNet) -> FoldedWeights:
-    """Fold BatchNorm (running statistics) and the output de-standardization into the Linear layers.
-
-    Only valid for the net in eval mode (the result never applies dropout or batch statistics).
-    Raises ``TypeError`` for a net whose blocks are not plain float Linear/BatchNorm layers (e.g. quantized).
-    """
-    blocks = []
-    for block in net.blocks:
-        bn1, _, _, lin1, bn2, _, _, lin2 = block.body
-        if not all(type(m) is nn.Linear for m in (lin1, lin2)) or not all(
-                type(m) is nn.BatchNorm1d for m in (bn1, bn2)):
-            raise TypeError("fold_for_inference needs float nn.Linear / nn.BatchNorm1d blocks")
-        s1, c1 = _bn_affine(bn1)
-        s2, c2 = _bn_affine(bn2)
-        w1 = (lin1.weight * s2[:, None]).t().contiguous()
-        b1 = lin1.bias * s2 + c2
-        blocks.append((s1.clone(), c1.clone(), w1, b1, lin2.weight.t().contiguous(), lin2.bias.clone()))
-    head_w = (net.head.weight * net.target_std[:, None]).t().contiguous()
-    head_b = net.head.bias * net.target_std + net.target_mean
-    return FoldedWeights(config=net.config, stem=(net.stem.weight.t().contiguous(), net.stem.bias.clone()),
-                         blocks=tuple(blocks), head=(head_w, head_b))
-
-
-def folded_forward_flat(weights: FoldedWeights, keypoints: torch.Tensor, principal_point: torch.Tensor) -> torch.Tensor:
-    """:meth:`PoseLifterNet.forward_flat` (eval mode) on folded weights: ``(B, 17, 2)`` px, ``(B, 2)`` px -> ``(B, 49)``."""
-    x = normalize_keypoints(keypoints, principal_point, mode=weights.config.mode,
-                            scale_definition=weights.config.scale_definition)
-    return folded_mlp(weights, x)
-
-
-def folded_mlp(weights: FoldedWeights, features: torch.Tensor) -> torch.Tensor:
-    """The folded stem, blocks and head on normalized features ``(B, F)`` -> ``(B, 49)`` outputs in mm."""
-    h = torch.addmm(weights.stem[1], features, weights.stem[0])
-    for s, c, w1, b1, w2, b2 in weights.blocks:
-        y = torch.relu_(torch.addcmul(c, h, s))
-        y = torch.relu_(torch.addmm(b1, y, w1))
-        h = torch.addmm(b2, y, w2).add_(h)
-    return torch.addmm(weights.head[1], h, weights.head[0])
-
-
-def folded_mlp_np(weights: FoldedWeights, features: np.ndarray) -> np.ndarray:
-    """:func:`folded_mlp` in numpy float32 (``weights`` from :meth:`FoldedWeights.numpy`).
-
-    For a single pose numpy's BLAS (OpenBLAS) runs these matrix-vector products faster than torch's
-    CPU kernels on the development machine (``benchmarks/bench_lift.py`` compares them);
-    :class:`~lifter.api.Lifter` uses it for single poses only (``NUMPY_MAX_BATCH``).
-    """
-    h = features @ weights.stem[0] + weights.stem[1]
-    for s, c, w1, b1, w2, b2 in weights.blocks:
-        y = np.maximum(h * s + c, 0.0)
-        y = np.maximum(y @ w1 + b1, 0.0)
-        h = h + (y @ w2 + b2)
-    return h @ weights.head[0] + weights.head[1]
+    found = _numpy_tensors(net)
+    if found is None:
+        return None
+    tensors, eps = found
+    key = tuple((id(t), t.data_ptr()) for t in tensors)
+    cached = _NUMPY_VIEWS.get(net)
+    if cached is None or cached[0] != key:
+        cached = (key, [t.detach().numpy() for t in tensors])
+        _NUMPY_VIEWS[net] = cached  # one assignment: concurrent readers see the old or the new pair
+    v = cached[1]
+    h = features @ v[0].T + v[1]
+    i, k = 2, 0
+    while i < len(v) - 4:
+        g1, be1, m1, var1, w1, b1, g2, be2, m2, var2, w2, b2 = v[i:i + 12]
+        s1 = g1 / np.sqrt(var1 + eps[k])
+        s2 = g2 / np.sqrt(var2 + eps[k + 1])
+        y = np.maximum((h - m1) * s1 + be1, 0.0)
+        y = np.maximum((y @ w1.T + b1 - m2) * s2 + be2, 0.0)
+        h = h + (y @ w2.T + b2)
+        i, k = i + 12, k + 2
+    head_w, head_b, mean, std = v[-4:]
+    return mean + std * (h @ head_w.T + head_b)
 
 
 def split_output(flat: torch.Tensor) -> NetworkOutput:
