@@ -117,14 +117,15 @@ class KeypointFormat:
     name: registry key. joint_names: the format's joints, in order (J of them).
     to_h36m: 17 rules, one per H36M joint (:data:`lifter.skeleton.JOINT_NAMES` order), indices into
         this format's joints. from_h36m: optional, for each of this format's joints the H36M index it
-        equals (formats whose joints are all H36M joints), so that it can be a conversion target.
+        equals, or a rule over H36M joints (the inverse of an interpolated ``to_h36m`` rule), so that the
+        format can be a conversion target.
     description: one line, shown in error messages and docs.
     """
 
     name: str
     joint_names: tuple[str, ...]
     to_h36m: tuple[Rule, ...]
-    from_h36m: tuple[int, ...] | None = None
+    from_h36m: tuple[int | Rule, ...] | None = None
     description: str = ""
 
     def __post_init__(self) -> None:
@@ -136,9 +137,12 @@ class KeypointFormat:
                 raise ValueError(f"format {self.name!r}: rule for {JOINT_NAMES[j]} has bad indices {rule}")
             if abs(sum(w for _, w in rule) - 1.0) > 1e-9:
                 raise ValueError(f"format {self.name!r}: weights of the rule for {JOINT_NAMES[j]} must sum to 1")
-        if self.from_h36m is not None and (len(self.from_h36m) != J or
-                                           any(not 0 <= k < NUM_JOINTS for k in self.from_h36m)):
-            raise ValueError(f"format {self.name!r}: from_h36m must give one H36M index per joint")
+        if self.from_h36m is not None:
+            rules = [((e, 1.0),) if isinstance(e, int) else e for e in self.from_h36m]
+            if len(rules) != J or any(not r or any(not 0 <= k < NUM_JOINTS for k, _ in r)
+                                      or abs(sum(w for _, w in r) - 1.0) > 1e-9 for r in rules):
+                raise ValueError(f"format {self.name!r}: from_h36m must give one H36M index or rule (weights "
+                                 "summing to 1) per joint")
 
     @property
     def num_joints(self) -> int:
@@ -150,6 +154,17 @@ class KeypointFormat:
         M = np.zeros((NUM_JOINTS, self.num_joints))
         for j, rule in enumerate(self.to_h36m):
             for k, w in rule:
+                M[j, k] += w
+        return M
+
+    @property
+    def from_matrix(self) -> np.ndarray | None:
+        """``(J, 17)`` weights: ``fmt = from_matrix @ h36m`` (per coordinate); None without ``from_h36m``."""
+        if self.from_h36m is None:
+            return None
+        M = np.zeros((self.num_joints, NUM_JOINTS))
+        for j, e in enumerate(self.from_h36m):
+            for k, w in (((e, 1.0),) if isinstance(e, int) else e):
                 M[j, k] += w
         return M
 
@@ -220,11 +235,27 @@ def _sh16_rules() -> tuple[Rule, ...]:
     return tuple(rules)
 
 
+def _sh16_inverse_rules() -> tuple[int | Rule, ...]:
+    """h36m17 -> sh16: the exact inverses of the interpolated rules (sh16's "spine" is MPII's thorax,
+    ``pelvis + (spine - pelvis) / 0.585``; its "head_top" the top of the skull, ``thorax + (head_top -
+    thorax) / 0.483``), so that ``sh16 -> h36m17 -> sh16`` is the identity."""
+    h = {n: i for i, n in enumerate(JOINT_NAMES)}
+    out: list[int | Rule] = []
+    for name in SH16_JOINT_NAMES:
+        if name == "spine":
+            out.append(_interp(h["pelvis"], h["spine"], 1.0 / SH16_SPINE_WEIGHT))
+        elif name == "head_top":
+            out.append(_interp(h["thorax"], h["head_top"], 1.0 / SH16_HEAD_WEIGHT))
+        else:
+            out.append(h[name])
+    return tuple(out)
+
+
 register_format(KeypointFormat(
     name="sh16",
     joint_names=SH16_JOINT_NAMES,
     to_h36m=_sh16_rules(),
-    from_h36m=tuple(JOINT_NAMES.index(n) for n in SH16_JOINT_NAMES),
+    from_h36m=_sh16_inverse_rules(),
     description="Stacked Hourglass / MPII 16 joints as in the H36M SH detections; neck_nose, spine, head_top "
                 "interpolated",
 ))
@@ -341,8 +372,8 @@ def convert(keypoints: Any, *, src: str, dst: str = H36M17) -> np.ndarray:
     """Convert keypoints ``(..., J_src, D)`` (D = 2 px or 3 mm) from format ``src`` to ``dst``.
 
     Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules; ``h36m17 ->
-    dst`` selects the H36M joints the format is made of (needs ``from_h36m``); other pairs go through
-    h36m17. Raises :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension,
+    dst`` applies the format's ``from_h36m`` (H36M joints, or the inverses of interpolated rules, so
+    ``src -> h36m17 -> src`` is the identity); other pairs go through h36m17. Raises :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension,
     and NaN/inf input (mark missing joints before converting; the lifter needs all 17).
     """
     f_src, f_dst = get_format(src), get_format(dst)
@@ -366,7 +397,7 @@ def convert(keypoints: Any, *, src: str, dst: str = H36M17) -> np.ndarray:
         return h36m
     if f_dst.from_h36m is None:
         raise PoseLifterError(f"keypoint format {dst!r} cannot be produced from h36m17 (it has joints H36M lacks)")
-    return h36m[..., list(f_dst.from_h36m), :].copy()
+    return np.einsum("jk,...kd->...jd", f_dst.from_matrix, h36m)
 
 
 def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:

@@ -55,6 +55,18 @@ def test_sh16_round_trip_direct_joints(rng, dim):
     np.testing.assert_array_equal(sh2[..., keep, :], sh[..., keep, :])
 
 
+def test_sh16_inverse_rules_round_trip(rng):
+    """h36m17 -> sh16 inverts the interpolation rules: sh16 -> h36m17 -> sh16 is the identity on all 16
+    joints, and h36m17 -> sh16 -> h36m17 on every joint but neck_nose (which sh16 does not have)."""
+    sh = rng.normal(500, 100, (7, 16, 2))
+    np.testing.assert_allclose(convert(convert(sh, src="sh16"), src="h36m17", dst="sh16"), sh, atol=1e-9)
+    x = rng.normal(500, 100, (7, 17, 2))
+    back = convert(convert(x, src="h36m17", dst="sh16"), src="sh16")
+    keep = [j for j in range(17) if JOINT_NAMES[j] != "neck_nose"]
+    np.testing.assert_allclose(back[:, keep], x[:, keep], atol=1e-9)
+    assert np.abs(back[:, JOINT_NAMES.index("neck_nose")] - x[:, JOINT_NAMES.index("neck_nose")]).max() > 1.0
+
+
 def test_sh16_rules(rng):
     sh = rng.normal(500, 100, (7, 16, 2))
     out = convert(sh, src="sh16")
