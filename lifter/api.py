@@ -34,6 +34,9 @@ one pose); from two poses on torch is as fast or faster."""
 ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
 DEGENERATE_SCALE_PX = 1e-3
 MIN_POSE_SCALE_PX = 2.0
+MAX_ABS_PX = 1e6
+"""Keypoints, principal point and focal length beyond this magnitude (px) are refused: float32 overflow
+territory, and never image pixels."""
 """Poses whose 2D scale (RMS radius) is below this many pixels are rejected: they are degenerate or not in pixels."""
 
 
@@ -91,6 +94,13 @@ class LiftResult:
                 "up to the unknown focal length (Z = canonical_depth * alpha / 1000)")
 
 
+def _where(bad: np.ndarray) -> str:
+    """`` (pose at index (i, j))`` for the first True entry of a batched mask; empty for a single pose."""
+    if bad.ndim == 0:
+        return ""
+    return f" (pose at index {tuple(int(i) for i in np.argwhere(bad)[0])}, {int(bad.sum())} such pose(s))"
+
+
 def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
     try:
         return np.broadcast_to(x, lead + (2,))
@@ -144,7 +154,8 @@ class Lifter:
         A quarter of the weight memory (4 MB instead of 16 MB of block weights), with MPJPE unchanged at
         0.1 mm and MRPE within 1 mm on H36M (``poselifter evaluate --quantize``). It always runs the torch
         module (not the numpy single-pose path of :meth:`lift`); for a single pose it is still ~1.3x
-        faster than float32, with less weight memory to stream (``benchmarks/bench_lift.py``). The normalization layer, stem and head stay float32 (pixel precision).
+        faster than float32, with less weight memory to stream (``benchmarks/bench_lift.py``). The
+        normalization layer, stem and head stay float32 (pixel precision).
         """
         import copy
         import warnings
@@ -185,15 +196,20 @@ class Lifter:
         f = None
         if focal is not None:
             f = _broadcast(as_pair(focal, name="focal", positive=True), lead, name="focal")
+        for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
+            if arr is not None and arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
+                raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "
+                                      f"must be below {MAX_ABS_PX:.0e} in magnitude")
         scale = pose_scale_np(kp)
         if np.any(scale < DEGENERATE_SCALE_PX):
             raise PoseLifterError(
-                f"degenerate pose: all 17 joints at (nearly) one point (2D scale {float(scale.min()):.2g} px); "
-                "the normalization needs a pose with non-zero extent")
+                f"degenerate pose{_where(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point (2D scale "
+                f"{float(scale.min()):.2g} px); the normalization needs a pose with non-zero extent")
         if np.any(scale < MIN_POSE_SCALE_PX):
             raise PoseLifterError(
-                f"2D pose scale {float(scale.min()):.3g} px is too small (< {MIN_POSE_SCALE_PX} px): keypoints must be "
-                "in image pixels (normalized [0, 1] coordinates? multiply by the image size)")
+                f"2D pose scale {float(scale.min()):.3g} px{_where(scale < MIN_POSE_SCALE_PX)} is too small "
+                f"(< {MIN_POSE_SCALE_PX} px): keypoints must be in image pixels (normalized [0, 1] coordinates? "
+                "multiply by the image size)")
         if self.config.depth_target == "absolute" and f is None:
             raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
 
@@ -209,6 +225,8 @@ class Lifter:
             rel_m[..., 0] *= -1.0
             rel = 0.5 * (rel + rel_m)
             depth = 0.5 * (depth + depth_m)
+        if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(depth))):
+            raise PoseLifterError(f"model {self.name!r} produced non-finite outputs (corrupt weights?)")
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
         depth = depth.reshape(lead)
         if self.config.depth_target == "canonical":

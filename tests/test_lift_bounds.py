@@ -1,0 +1,60 @@
+"""Lifter.lift refuses out-of-range input and never returns non-finite output."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from lifter import Lifter, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter.camera import project
+
+from conftest import random_pose_cam
+
+
+@pytest.fixture()
+def lifter() -> Lifter:
+    torch.manual_seed(0)
+    net = PoseLifterNet(ModelConfig(width=64))
+    mean = torch.zeros(49)
+    mean[-1] = 4400.0
+    net.set_target_statistics(mean, torch.full((49,), 100.0))
+    return Lifter(net.eval(), name="small")
+
+
+@pytest.fixture()
+def kp() -> np.ndarray:
+    return project(random_pose_cam(np.random.default_rng(0), 4), focal=1145.0, principal_point=(512.0, 515.0))
+
+
+@pytest.mark.parametrize("what", ["keypoints_huge", "keypoints_offset", "focal", "principal_point"])
+def test_out_of_range_pixels_are_refused(lifter, kp, what):
+    args = {"keypoints": kp, "focal": 1145.0, "principal_point": (512.0, 515.0)}
+    if what == "keypoints_huge":
+        args["keypoints"] = kp * 1e39  # overflows float32
+    elif what == "keypoints_offset":
+        args["keypoints"] = kp + 1e20  # float32 cannot resolve the pose: looked degenerate before
+    elif what == "focal":
+        args["focal"] = 1e300
+    else:
+        args["principal_point"] = (5e7, 515.0)
+    name = what.split("_")[0] if what.startswith("keypoints") else what
+    with pytest.raises(PoseLifterError, match=rf"{name}: values up to .* must be below"):
+        lifter.lift(args.pop("keypoints"), **args)
+
+
+def test_degenerate_pose_in_a_batch_is_located(lifter, kp):
+    kp = kp.reshape(2, 2, 17, 2).copy()
+    kp[1, 0] = 400.0
+    with pytest.raises(PoseLifterError, match=r"degenerate pose \(pose at index \(1, 0\), 1 such pose"):
+        lifter.lift(kp, focal=1145.0, principal_point=(512.0, 515.0))
+    with pytest.raises(PoseLifterError, match=r"^degenerate pose: all 17 joints"):  # a single pose: no index
+        lifter.lift(kp[1, 0], focal=1145.0, principal_point=(512.0, 515.0))
+
+
+@pytest.mark.parametrize("n", [1, 4])
+def test_non_finite_outputs_are_an_error(lifter, kp, n):
+    with torch.no_grad():
+        lifter.net.head.bias[5] = float("inf")
+    with pytest.raises(PoseLifterError, match="non-finite outputs"):
+        lifter.lift(kp[:n], focal=1145.0, principal_point=(512.0, 515.0))
