@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
@@ -15,15 +16,30 @@ class CheckpointError(PoseLifterError):
     """Raised when a weights file is missing, corrupt or of an unknown format."""
 
 
+def _untorch(x: Any) -> Any:
+    """A torch tensor (any device, with or without ``requires_grad``, any float dtype) as a CPU tensor numpy
+    can read; anything else unchanged. torch is only consulted when the caller already imported it."""
+    torch = sys.modules.get("torch")
+    if torch is not None and isinstance(x, torch.Tensor):
+        x = x.detach().cpu()
+        if x.is_floating_point():
+            x = x.double()  # float16 / bfloat16 -> float64 (numpy has no bfloat16)
+    return x
+
+
 def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
-    """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error."""
+    """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error.
+    Torch tensors are accepted (detached and copied to the CPU)."""
     try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+        arr = np.asarray(_untorch(x), dtype=np.float64)
+    except (TypeError, ValueError, RuntimeError) as exc:
         raise PoseLifterError(f"{name}: could not convert to a numeric array ({exc})") from None
     expected = f"(..., {num_joints if num_joints is not None else 'J'}, {dim})"
     if arr.ndim < 2 or arr.shape[-1] != dim or (num_joints is not None and arr.shape[-2] != num_joints):
-        raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}")
+        hint = ""
+        if dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 3:
+            hint = f"; if the third column is a detector confidence, pass {name}[..., :2]"
+        raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}{hint}")
     check_finite(arr, name=name)
     return arr
 
@@ -37,8 +53,8 @@ def check_finite(arr: np.ndarray, *, name: str) -> None:
 def as_pair(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
     """Return a scalar or a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``."""
     try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+        arr = np.asarray(_untorch(x), dtype=np.float64)
+    except (TypeError, ValueError, RuntimeError) as exc:
         raise PoseLifterError(f"{name}: could not convert to a number or pair ({exc})") from None
     if arr.ndim == 0:
         arr = np.stack([arr, arr])

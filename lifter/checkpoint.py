@@ -18,9 +18,34 @@ import torch
 
 from ._checks import CheckpointError
 from .model import ModelConfig, PoseLifterNet
+from .normalization import NORM_MODES
 
 FORMAT = "poselifter-checkpoint"
 VERSION = 1
+
+CONFIG_CHOICES: dict[str, tuple[str, ...]] = {
+    "mode": tuple(NORM_MODES),
+    "scale_definition": ("paper", "repo"),
+    "depth_target": ("canonical", "absolute"),
+}
+"""Allowed values of the string fields of ``model_config`` (:class:`lifter.model.ModelConfig`)."""
+
+
+def _check_model_config(raw: Any, *, path: Path) -> dict[str, Any]:
+    """``model_config`` as a dict whose string fields hold allowed values and whose sizes are sane."""
+    if not isinstance(raw, dict):
+        raise CheckpointError(f"{path}: model_config must be a dict, got {type(raw).__name__}")
+    for name, allowed in CONFIG_CHOICES.items():
+        if name in raw and raw[name] not in allowed:
+            raise CheckpointError(f"{path}: model_config.{name} is {raw[name]!r}; expected one of {list(allowed)}")
+    for name in ("width", "num_blocks"):
+        if name in raw and (isinstance(raw[name], bool) or not isinstance(raw[name], int) or raw[name] < 1):
+            raise CheckpointError(f"{path}: model_config.{name} must be an integer >= 1, got {raw[name]!r}")
+    if "dropout" in raw:
+        d = raw["dropout"]
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0.0 <= d < 1.0:
+            raise CheckpointError(f"{path}: model_config.dropout must be a number in [0, 1), got {d!r}")
+    return dict(raw)
 
 
 def save_checkpoint(
@@ -46,6 +71,8 @@ def load_checkpoint(path: str | os.PathLike[str]) -> tuple[PoseLifterNet, dict[s
     """Load a network (eval mode, float32) and its metadata. Raises :class:`CheckpointError` with a
     message naming the problem for a missing, truncated, corrupt or foreign file."""
     path = Path(path)
+    if path.is_dir():
+        raise CheckpointError(f"weights file {path} is a directory, not a checkpoint file")
     if not path.is_file():
         raise CheckpointError(f"weights file not found: {path}")
     try:
@@ -56,8 +83,16 @@ def load_checkpoint(path: str | os.PathLike[str]) -> tuple[PoseLifterNet, dict[s
         raise CheckpointError(f"{path} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
     if payload.get("version") != VERSION:
         raise CheckpointError(f"{path}: unsupported checkpoint version {payload.get('version')!r} (expected {VERSION})")
+    if "model_config" not in payload:
+        raise CheckpointError(f"{path}: checkpoint has no model_config")
+    config_dict = _check_model_config(payload["model_config"], path=path)
+    meta = payload.get("meta")
+    if meta is None:
+        meta = {}
+    if not isinstance(meta, dict):
+        raise CheckpointError(f"{path}: meta must be a dict, got {type(meta).__name__}")
     try:
-        config = ModelConfig.from_dict(dict(payload["model_config"]))
+        config = ModelConfig.from_dict(config_dict)
         net = PoseLifterNet(config)
         state = {k: v.float() if v.is_floating_point() else v for k, v in payload["state_dict"].items()}
         net.load_state_dict(state, strict=True)
@@ -67,4 +102,4 @@ def load_checkpoint(path: str | os.PathLike[str]) -> tuple[PoseLifterNet, dict[s
         if t.is_floating_point() and not torch.isfinite(t).all():
             raise CheckpointError(f"{path}: tensor {name!r} contains NaN/inf")
     net.eval()
-    return net, dict(payload.get("meta", {}))
+    return net, dict(meta)

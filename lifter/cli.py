@@ -14,6 +14,46 @@ import numpy as np
 from ._checks import PoseLifterError
 
 
+def _positive_int(text: str) -> int:
+    """argparse ``type=``: an integer >= 1 (the option name is added by argparse)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def _finite_floats(text: str) -> list[float]:
+    parts = [v.strip() for v in text.split(",")]
+    if not text.strip() or any(not v for v in parts):
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
+    try:
+        values = [float(v) for v in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    if not all(np.isfinite(values)):
+        raise argparse.ArgumentTypeError(f"values must be finite, got {text!r}")
+    return values
+
+
+def _focal_scales(text: str) -> list[float]:
+    """argparse ``type=`` for ``--focal-scales``: comma-separated finite factors > 0 (e.g. ``0.5,1,2``)."""
+    values = _finite_floats(text)
+    if any(v <= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"focal factors must be > 0, got {text!r}")
+    return values
+
+
+def _pp_shift(text: str) -> tuple[float, float]:
+    """argparse ``type=`` for ``--pp-shift``: exactly two finite numbers ``dx,dy`` (px)."""
+    values = _finite_floats(text)
+    if len(values) != 2:
+        raise argparse.ArgumentTypeError(f"expected two numbers 'dx,dy' (px), got {len(values)} value(s) in {text!r}")
+    return (values[0], values[1])
+
+
 def _add_train(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train a lifter on Human3.6M", formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", type=Path, required=True, help="checkpoint path to write (.pt)")
@@ -30,12 +70,12 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--batch-size", type=int, default=512)
     p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--weight-decay", type=float, default=1e-4)
-    p.add_argument("--train-stride", type=int, default=5)
+    p.add_argument("--train-stride", type=_positive_int, default=5)
     p.add_argument("--max-minutes", type=float, default=None, help="wall-clock budget; the lr schedule follows it")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--eval-every", type=int, default=500)
-    p.add_argument("--max-frames-per-sequence", type=int, default=None, help="tiny runs for tests")
+    p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None, help="tiny runs for tests")
     p.add_argument("--fp32", action="store_true", help="store float32 weights (default float16)")
     p.add_argument("--inputs", default="gt", choices=("gt", "sh", "mix"),
                    help="2D training inputs: GT projection, the real Stacked-Hourglass detections, or 'mix': each sample "
@@ -120,25 +160,47 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="checkpoint paths or shipped model names; LABEL=PATH to name a row")
     p.add_argument("--h36m", type=Path, default=None)
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2))
-    p.add_argument("--stride", type=int, default=5, help="test frame stride at 50 fps")
+    p.add_argument("--stride", type=_positive_int, default=5, help="test frame stride at 50 fps")
     p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
                    help="2D inputs: ground-truth (distorted) projection, or the real Stacked-Hourglass detections")
-    p.add_argument("--focal-scales", default=None,
+    p.add_argument("--focal-scales", type=_focal_scales, default=None,
                    help="comma-separated focal factors (e.g. 0.5,0.7,1,1.4,2): re-project the test poses through "
-                        "virtual pinhole cameras with focal x factor and report MRPE per factor")
-    p.add_argument("--pp-shift", default="0,0", help="principal-point shift (px) of the virtual cameras, 'dx,dy'")
+                        "virtual pinhole cameras with focal x factor and report MRPE per factor (GT 2D inputs only; "
+                        "not with --analytic-root, --per-action, --pck-plot)")
+    p.add_argument("--pp-shift", type=_pp_shift, default="0,0",
+                   help="principal-point shift (px) of the virtual cameras, 'dx,dy' (with --focal-scales)")
     p.add_argument("--flip-test", action="store_true", help="average with the mirrored input's prediction")
     p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
-    p.add_argument("--max-frames-per-sequence", type=int, default=None)
+    p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None)
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
     p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
     p.add_argument("--quantize", action="store_true", help="also evaluate each model with int8 block weights (Lifter.quantized)")
-    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--threads", type=_positive_int, default=2)
     p.set_defaults(func=_run_evaluate)
 
 
+def check_evaluate_options(args: argparse.Namespace) -> None:
+    """Reject ``evaluate`` option combinations that would be silently ignored or misleading (before any
+    weights or data are loaded). Raises :class:`PoseLifterError` naming the options."""
+    if args.focal_scales is None:
+        if tuple(args.pp_shift) != (0.0, 0.0):
+            raise PoseLifterError("--pp-shift only applies to the virtual cameras of --focal-scales; "
+                                  "pass --focal-scales too")
+        return
+    if args.inputs != "gt":
+        raise PoseLifterError(f"--focal-scales cannot be combined with --inputs {args.inputs}: the focal sweep "
+                              "re-projects the ground-truth 3D poses through virtual cameras, so there are no "
+                              "detections for them (use --inputs gt)")
+    ignored = [opt for opt, on in (("--analytic-root", args.analytic_root), ("--per-action", args.per_action),
+                                   ("--pck-plot", args.pck_plot is not None)) if on]
+    if ignored:
+        raise PoseLifterError(f"{', '.join(ignored)} cannot be combined with --focal-scales: the focal sweep "
+                              "reports only the learned-root MRPE per focal factor; run those without --focal-scales")
+
+
 def _run_evaluate(args: argparse.Namespace) -> int:
+    check_evaluate_options(args)
     import torch
 
     from .api import Lifter
@@ -167,8 +229,8 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     if args.focal_scales:
         from .evaluate import focal_sweep, format_focal_table
 
-        factors = [float(v) for v in args.focal_scales.split(",")]
-        shift = tuple(float(v) for v in args.pp_shift.split(","))
+        factors = list(args.focal_scales)
+        shift = tuple(args.pp_shift)
         sweep = {label: focal_sweep(lifter, samples, factors=factors, principal_shift=shift, flip_test=args.flip_test)
                  for label, lifter in lifters}
         print(format_focal_table(sweep, principal_shift=shift))

@@ -26,7 +26,9 @@ list of ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [
 openpose25) or a COCO-style list of people ``[{"keypoints": [...]}, ...]``. Without ``format`` it is
 inferred from the joint count (17: h36m17 unless ``--format`` says otherwise; 16: sh16; 25:
 openpose25; 33: blazepose33). Several people: the largest (box area) is used, with a warning. A
-keypoint file needs an image size, a principal point or ``--principal-point``.
+keypoint file needs an image size, a principal point or ``--principal-point``. Camera fields must be
+JSON numbers: ``image_size`` whole px in [1, 100000] (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px,
+``principal_point`` finite and below 1e6 px in magnitude; anything else fails that input with a message.
 
 Bad input never stops the batch: each failure is reported as ``<input>: error: ...`` and the next
 input is processed; a photo with several people uses the largest and says so; images larger than
@@ -38,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -136,6 +139,53 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
     return a[:, :2], conf
 
 
+MAX_IMAGE_SIDE_PX: Final[int] = 100_000
+"""Largest image side (px) accepted for ``image_size``."""
+MAX_FOCAL_PX: Final[float] = 1e6
+"""Focal lengths (px) must be below this (a 1e6-px focal is a ~0.1 deg field of view on a 2000-px image)."""
+MAX_PRINCIPAL_POINT_PX: Final[float] = 1e6
+"""Principal-point coordinates (px) must be below this in magnitude."""
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+
+
+def _image_size_field(raw: Any, *, where: str) -> tuple[int, int] | None:
+    """``image_size`` of a keypoint file: ``[width, height]``, whole px in ``[1, MAX_IMAGE_SIDE_PX]``."""
+    if raw is None:
+        return None
+    form = f"[width, height] in px (whole numbers in [1, {MAX_IMAGE_SIDE_PX}])"
+    if not isinstance(raw, (list, tuple)):
+        raise PoseLifterError(f"{where}: image_size must be a list {form}, got {raw!r}")
+    if len(raw) != 2:
+        raise PoseLifterError(f"{where}: image_size needs two values {form}, got {len(raw)}: {list(raw)!r}")
+    if not all(_is_number(v) for v in raw):
+        raise PoseLifterError(f"{where}: image_size must be numbers {form}, got {list(raw)!r}")
+    if not all(math.isfinite(v) and float(v).is_integer() and 1 <= v <= MAX_IMAGE_SIDE_PX for v in raw):
+        raise PoseLifterError(f"{where}: image_size must be {form}, got {list(raw)!r}")
+    return int(raw[0]), int(raw[1])
+
+
+def _camera_field(raw: Any, *, name: str, where: str | None) -> np.ndarray:
+    """``focal`` (a number or ``[fx, fy]``, finite, in ``(0, MAX_FOCAL_PX)``) or ``principal_point``
+    (``[cx, cy]``, finite, magnitude below ``MAX_PRINCIPAL_POINT_PX``) of a keypoint file (``where``: its
+    path) or an option (``name``: the option, ``where=None``)."""
+    is_focal = name.lstrip("-") == "focal"
+    what = name if where is None else f"{where}: {name}"
+    form = (f"a number or [fx, fy] in px, each in (0, {MAX_FOCAL_PX:.0e})" if is_focal else
+            f"[cx, cy] in px, each finite with magnitude below {MAX_PRINCIPAL_POINT_PX:.0e}")
+    items = list(raw) if isinstance(raw, (list, tuple, np.ndarray)) else [raw]
+    if not all(_is_number(v) for v in items) or not (len(items) == 2 or (is_focal and len(items) == 1)):
+        raise PoseLifterError(f"{what} must be {form}, got {raw!r}")
+    arr = np.asarray(items * 2 if len(items) == 1 else items, np.float64)
+    ok = np.all(np.isfinite(arr)) and (bool(np.all((arr > 0) & (arr < MAX_FOCAL_PX))) if is_focal else
+                                       bool(np.all(np.abs(arr) < MAX_PRINCIPAL_POINT_PX)))
+    if not ok:
+        raise PoseLifterError(f"{what} must be {form}, got {arr.tolist()}")
+    return arr
+
+
 def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
     """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
     p = Path(path)
@@ -201,15 +251,10 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
             raise PoseLifterError(f"{p}: joint(s) {bad} missing (confidence 0 or not finite); every joint the "
                                   f"{fmt} -> h36m17 rules use must be given")
         xy = np.where(missing[:, None], 0.0, xy)
-    size = meta.get("image_size")
-    try:
-        image_size = None if size is None else (int(size[0]), int(size[1]))
-        focal = None if meta.get("focal") is None else as_pair(meta["focal"], name="focal", positive=True)
-        pp = None if meta.get("principal_point") is None else as_pair(meta["principal_point"], name="principal_point")
-    except (TypeError, ValueError, IndexError) as exc:
-        raise PoseLifterError(f"{p}: bad camera field ({exc})") from None
-    if image_size is not None and min(image_size) <= 0:
-        raise PoseLifterError(f"{p}: image_size must be positive, got {list(image_size)}")
+    image_size = _image_size_field(meta.get("image_size"), where=str(p))
+    focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
+    pp = None if meta.get("principal_point") is None else \
+        _camera_field(meta["principal_point"], name="principal_point", where=str(p))
     return KeypointFile(keypoints=xy, format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes))
 
@@ -374,13 +419,33 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+def check_lift_options(args: argparse.Namespace) -> None:
+    """Usage errors in the options that apply to every input, before any weights or input are read
+    (:class:`PoseLifterError` naming the option, the value and what is expected)."""
+    if args.focal is not None:
+        if len(args.focal) not in (1, 2):
+            raise PoseLifterError(f"--focal takes FX or FX FY, got {len(args.focal)} values")
+        _camera_field(list(args.focal), name="--focal", where=None)
+    if args.principal_point is not None:
+        _camera_field(list(args.principal_point), name="--principal-point", where=None)
+    if not (math.isfinite(args.fov) and 0 < args.fov < 180):
+        raise PoseLifterError(f"--fov must be a diagonal field of view in (0, 180) degrees, got {args.fov:g}")
+    if args.sensor_width is not None and not (math.isfinite(args.sensor_width) and 0 < args.sensor_width < 1000):
+        raise PoseLifterError(f"--sensor-width must be the sensor's long side in mm, in (0, 1000), "
+                              f"got {args.sensor_width:g}")
+    for opt, value in (("--max-side", args.max_side), ("--max-people", args.max_people)):
+        if value < 1:
+            raise PoseLifterError(f"{opt} must be >= 1, got {value}")
+    if args.out.exists() and not args.out.is_dir():
+        raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
+
+
 def run_lift(args: argparse.Namespace) -> int:
     from tqdm.auto import tqdm
 
     from .api import Lifter
 
-    if args.focal is not None and len(args.focal) not in (1, 2):
-        raise PoseLifterError(f"--focal takes FX or FX FY, got {len(args.focal)} values")
+    check_lift_options(args)
     if args.format is not None:
         get_format(args.format)
     focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True)
@@ -399,7 +464,10 @@ def run_lift(args: argparse.Namespace) -> int:
     kinds = {"keypoints" if f.suffix.lower() == ".json" else "image" for f in files}
     loaded = {ref: Lifter.load(ref) for ref in {refs[k] for k in kinds}}  # bad weights fail before any input
     lifter_for = {k: loaded[refs[k]] for k in kinds}
-    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise PoseLifterError(f"--out {args.out}: cannot create the output folder ({exc.strerror or exc})") from None
     names = output_names(files, args.out)
     estimator: Any = None
     estimator_error: str | None = None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import torch
@@ -216,3 +218,86 @@ def test_quantized_lifter_matches_float32(small_lifter, keypoints):
     # int8 weights: close to, but not bit-identical with, the float32 network
     assert np.abs(a.relative - b.relative).max() < 0.05 * np.abs(a.relative).max() + 1.0
     assert np.allclose(a.canonical_depth, b.canonical_depth, rtol=0.05)
+
+
+def _edited_checkpoint(tmp_path, net, name: str, edit) -> Path:
+    """A checkpoint of ``net`` whose payload dict was changed in place by ``edit``."""
+    path = save_checkpoint(tmp_path / "base.pt", net)
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    edit(payload)
+    torch.save(payload, tmp_path / name)
+    return tmp_path / name
+
+
+@pytest.mark.parametrize(
+    "field, value, allowed",
+    [
+        ("depth_target", "bogus", "['canonical', 'absolute']"),
+        ("scale_definition", "bogus", "['paper', 'repo']"),
+        ("mode", "bogus", "['baseline', 'location', 'scale', 'both']"),
+        ("depth_target", None, "['canonical', 'absolute']"),
+    ],
+)
+def test_checkpoint_rejects_unknown_config_values(tmp_path, small_lifter, field, value, allowed):
+    """These used to load (depth_target: silently treated as absolute; scale_definition: a raw ValueError on lift)."""
+    path = _edited_checkpoint(tmp_path, small_lifter.net, "bad.pt", lambda p: p["model_config"].__setitem__(field, value))
+    with pytest.raises(CheckpointError) as exc:
+        Lifter.from_checkpoint(path)
+    assert str(exc.value) == f"{path}: model_config.{field} is {value!r}; expected one of {allowed}"
+
+
+@pytest.mark.parametrize(
+    "edit, match",
+    [
+        (lambda p: p.__setitem__("meta", ["x"]), "meta must be a dict, got list"),
+        (lambda p: p.__setitem__("model_config", ["x"]), "model_config must be a dict, got list"),
+        (lambda p: p.pop("model_config"), "checkpoint has no model_config"),
+        (lambda p: p["model_config"].__setitem__("width", 0), r"model_config.width must be an integer >= 1, got 0"),
+        (lambda p: p["model_config"].__setitem__("dropout", 1.5), r"model_config.dropout must be a number in \[0, 1\)"),
+    ],
+)
+def test_checkpoint_rejects_malformed_payload(tmp_path, small_lifter, edit, match):
+    path = _edited_checkpoint(tmp_path, small_lifter.net, "bad.pt", edit)
+    with pytest.raises(CheckpointError, match=match) as exc:
+        load_checkpoint(path)
+    assert str(exc.value).startswith(f"{path}: ")
+
+
+def test_checkpoint_empty_meta_and_valid_configs_load(tmp_path, small_lifter, keypoints):
+    path = _edited_checkpoint(tmp_path, small_lifter.net, "none_meta.pt", lambda p: p.__setitem__("meta", None))
+    _, meta = load_checkpoint(path)
+    assert meta == {}
+    net2 = PoseLifterNet(ModelConfig(width=16, mode="scale", scale_definition="repo", depth_target="absolute"))
+    loaded, _ = load_checkpoint(save_checkpoint(tmp_path / "ok.pt", net2))
+    assert loaded.config == net2.config
+
+
+def test_checkpoint_path_is_a_directory(tmp_path):
+    d = tmp_path / "x.pt"
+    d.mkdir()
+    with pytest.raises(CheckpointError) as exc:
+        load_checkpoint(d)
+    assert str(exc.value) == f"weights file {d} is a directory, not a checkpoint file"
+    with pytest.raises(CheckpointError, match="is a directory"):
+        Lifter.load(str(d))
+
+
+def test_lift_accepts_torch_tensors_that_require_grad(small_lifter, keypoints):
+    ref = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+    kp = torch.tensor(keypoints, dtype=torch.float32, requires_grad=True)
+    res = small_lifter.lift(kp, focal=torch.tensor(1145.0, requires_grad=True),
+                            principal_point=torch.tensor([512.0, 515.0], requires_grad=True))
+    np.testing.assert_allclose(res.absolute, ref.absolute, rtol=1e-4, atol=1e-2)
+    half = small_lifter.lift(torch.tensor(keypoints, dtype=torch.bfloat16), focal=1145.0, principal_point=(512.0, 515.0))
+    assert half.absolute.shape == ref.absolute.shape
+
+
+def test_three_column_keypoints_get_a_confidence_hint(small_lifter, keypoints):
+    with_conf = np.concatenate([keypoints, np.ones(keypoints.shape[:-1] + (1,))], axis=-1)
+    with pytest.raises(PoseLifterError) as exc:
+        small_lifter.lift(with_conf, focal=1000.0, principal_point=(0, 0))
+    assert str(exc.value) == ("keypoints: expected shape (..., 17, 2), got (6, 17, 3); if the third column is a "
+                              "detector confidence, pass keypoints[..., :2]")
+    with pytest.raises(PoseLifterError) as exc:  # no hint where it does not apply
+        small_lifter.lift(np.zeros((17, 4)), focal=1000.0, principal_point=(0, 0))
+    assert "confidence" not in str(exc.value)

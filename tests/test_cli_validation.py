@@ -1,0 +1,219 @@
+"""Usage errors of ``poselifter evaluate`` / ``poselifter lift``: bad option values and option combinations are
+rejected up front (before weights or data are loaded) with a one-line message naming the option, not a traceback."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from conftest import random_pose_cam
+
+from lifter import ModelConfig, PoseLifterNet
+from lifter.camera import project
+from lifter.checkpoint import save_checkpoint
+from lifter.cli import main
+
+MISSING_WEIGHTS = "no-such-dir/never.pt"
+"""Weights that do not exist: a test that gets past option validation would fail with 'weights file not found'."""
+
+
+def evaluate_usage_error(argv: list[str], capsys) -> str:
+    """Run ``poselifter evaluate`` expecting an argparse usage error (exit 2); its stderr."""
+    with pytest.raises(SystemExit) as exc:
+        main(["evaluate", MISSING_WEIGHTS, *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize(
+    "argv, expected",
+    [
+        (["--stride", "0"], "argument --stride: must be >= 1, got 0"),
+        (["--stride", "-3"], "argument --stride: must be >= 1, got -3"),
+        (["--stride", "x"], "argument --stride: expected an integer >= 1, got 'x'"),
+        (["--max-frames-per-sequence", "0"], "argument --max-frames-per-sequence: must be >= 1, got 0"),
+        (["--threads", "0"], "argument --threads: must be >= 1, got 0"),
+        (["--focal-scales", "a,b"], "argument --focal-scales: expected comma-separated numbers, got 'a,b'"),
+        (["--focal-scales", "1,,2"], "argument --focal-scales: expected comma-separated numbers, got '1,,2'"),
+        (["--focal-scales", "0,1"], "argument --focal-scales: focal factors must be > 0, got '0,1'"),
+        (["--focal-scales", "-1"], "argument --focal-scales: focal factors must be > 0"),
+        (["--focal-scales", "nan,1"], "argument --focal-scales: values must be finite"),
+        (["--focal-scales", "1", "--pp-shift", "5"], "argument --pp-shift: expected two numbers 'dx,dy' (px), got 1 value(s)"),
+        (["--focal-scales", "1", "--pp-shift", "1,2,3"], "argument --pp-shift: expected two numbers 'dx,dy' (px), got 3"),
+        (["--focal-scales", "1", "--pp-shift", "inf,0"], "argument --pp-shift: values must be finite"),
+    ],
+)
+def test_evaluate_rejects_bad_option_values(argv, expected, capsys):
+    err = evaluate_usage_error(argv, capsys)
+    assert expected in err, err
+    assert "poselifter evaluate: error:" in err
+
+
+def test_train_rejects_zero_frames_and_stride(capsys, tmp_path):
+    for argv, expected in ((["--max-frames-per-sequence", "0"], "argument --max-frames-per-sequence: must be >= 1"),
+                           (["--train-stride", "0"], "argument --train-stride: must be >= 1, got 0")):
+        with pytest.raises(SystemExit) as exc:
+            main(["train", "--out", str(tmp_path / "m.pt"), *argv])
+        assert exc.value.code == 2
+        assert expected in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv, expected",
+    [
+        (["--focal-scales", "1,2", "--inputs", "sh"],
+         "--focal-scales cannot be combined with --inputs sh: the focal sweep re-projects the ground-truth 3D poses"),
+        (["--focal-scales", "1,2", "--analytic-root"], "--analytic-root cannot be combined with --focal-scales"),
+        (["--focal-scales", "1,2", "--per-action"], "--per-action cannot be combined with --focal-scales"),
+        (["--focal-scales", "1,2", "--pck-plot", "x.png"], "--pck-plot cannot be combined with --focal-scales"),
+        (["--focal-scales", "1", "--analytic-root", "--per-action"],
+         "--analytic-root, --per-action cannot be combined with --focal-scales"),
+        (["--pp-shift", "10,0"], "--pp-shift only applies to the virtual cameras of --focal-scales"),
+    ],
+)
+def test_evaluate_rejects_ignored_option_combinations(argv, expected, capsys):
+    """These used to be silently ignored (or, for --inputs sh, the detections silently replaced by GT 2D)."""
+    code = main(["evaluate", MISSING_WEIGHTS, *argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("poselifter evaluate: error: "), err
+    assert expected in err, err
+    assert "not found" not in err  # rejected before the weights are loaded
+
+
+def test_evaluate_valid_sweep_options_pass_validation(capsys):
+    """Good values parse (and then fail only on the missing weights, i.e. after validation)."""
+    code = main(["evaluate", MISSING_WEIGHTS, "--focal-scales", " 0.5, 1,2 ", "--pp-shift", "100,-80", "--stride", "50",
+                 "--max-frames-per-sequence", "1"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "weights file not found" in err, err
+
+
+# ------------------------------------------------------------------------------------------------
+# poselifter lift
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory) -> Path:
+    torch.manual_seed(0)
+    net = PoseLifterNet(ModelConfig(width=16))
+    mean = torch.zeros(49)
+    mean[-1] = 4400.0
+    net.set_target_statistics(mean, torch.full((49,), 100.0))
+    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", net.eval())
+
+
+@pytest.fixture()
+def kp_file(tmp_path) -> Path:
+    kp = project(random_pose_cam(np.random.default_rng(0), 1)[0], focal=1000.0, principal_point=(640.0, 360.0))
+    path = tmp_path / "pose.json"
+    path.write_text(json.dumps({"keypoints": kp.tolist(), "image_size": [1280, 720]}))
+    return path
+
+
+def lift(argv: list[str], capsys) -> tuple[int, str]:
+    code = main(["lift", "--no-progress", *argv])
+    return code, capsys.readouterr().err
+
+
+def test_lift_out_is_an_existing_file(tmp_path, weights, kp_file, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("keep me")
+    code, err = lift([str(kp_file), "--out", str(afile), "--weights", str(weights)], capsys)
+    assert code == 2
+    assert err.strip() == f"poselifter lift: error: --out {afile}: exists and is not a folder; --out names the output folder"
+    assert afile.read_text() == "keep me"
+    # a folder below a regular file cannot be created either
+    code, err = lift([str(kp_file), "--out", str(afile / "sub"), "--weights", str(weights)], capsys)
+    assert code == 2
+    assert f"--out {afile / 'sub'}: cannot create the output folder" in err
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "argv, expected",
+    [
+        (["--focal", "1e30"], "--focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1e+30, 1e+30]"),
+        (["--focal", "1000", "0"], "--focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1000.0, 0.0]"),
+        (["--focal", "1", "2", "3"], "--focal takes FX or FX FY, got 3 values"),
+        (["--principal-point", "nan", "3"], "--principal-point must be [cx, cy] in px, each finite"),
+        (["--principal-point", "5e7", "3"], "--principal-point must be [cx, cy] in px"),
+        (["--fov", "0"], "--fov must be a diagonal field of view in (0, 180) degrees, got 0"),
+        (["--fov", "180"], "--fov must be a diagonal field of view in (0, 180) degrees, got 180"),
+        (["--sensor-width", "0"], "--sensor-width must be the sensor's long side in mm, in (0, 1000), got 0"),
+        (["--max-side", "0"], "--max-side must be >= 1, got 0"),
+        (["--max-people", "0"], "--max-people must be >= 1, got 0"),
+    ],
+)
+def test_lift_rejects_bad_global_options_up_front(tmp_path, weights, kp_file, argv, expected, capsys):
+    out = tmp_path / "out"
+    code, err = lift([str(kp_file), "--out", str(out), "--weights", str(weights), *argv], capsys)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"poselifter lift: error: {expected}"), err
+    assert not out.exists()  # nothing processed
+
+
+@pytest.mark.parametrize(
+    "fields, expected",
+    [
+        ({"image_size": "1000x1000"},
+         "image_size must be a list [width, height] in px (whole numbers in [1, 100000]), got '1000x1000'"),
+        ({"image_size": [1000]}, ("image_size needs two values [width, height] in px (whole numbers in [1, 100000]), "
+                                  "got 1: [1000]")),
+        ({"image_size": [1000, 1000, 3]}, "image_size needs two values [width, height]"),
+        ({"image_size": ["1000", "1000"]}, "image_size must be numbers [width, height]"),
+        ({"image_size": [1e30, 1000]}, ("image_size must be [width, height] in px (whole numbers in [1, 100000]), "
+                                        "got [1e+30, 1000]")),
+        ({"image_size": [0, 1000]}, "image_size must be [width, height] in px"),
+        ({"image_size": [640.5, 480]}, "image_size must be [width, height] in px (whole numbers"),
+        ({"focal": 1e30}, "focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1e+30, 1e+30]"),
+        ({"focal": [1000, -5]}, "focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1000.0, -5.0]"),
+        ({"focal": [1000, 1000, 1000]}, "focal must be a number or [fx, fy] in px"),
+        ({"focal": "wide"}, "focal must be a number or [fx, fy] in px, each in (0, 1e+06), got 'wide'"),
+        ({"principal_point": [1e30, 0]}, "principal_point must be [cx, cy] in px, each finite with magnitude below 1e+06"),
+        ({"principal_point": [640]}, "principal_point must be [cx, cy] in px"),
+    ],
+)
+def test_lift_rejects_bad_camera_fields_in_keypoint_files(tmp_path, weights, kp_file, fields, expected, capsys):
+    doc = json.loads(kp_file.read_text())
+    doc.update(fields)
+    kp_file.write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    code, err = lift([str(kp_file), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 1, err
+    assert f"error: {kp_file}: {expected}" in err, err
+    assert not (out / "pose.json").exists()
+
+
+def test_lift_huge_image_size_with_explicit_camera_writes_no_nan(tmp_path, weights, kp_file, capsys):
+    """With --focal and --principal-point the absurd image size used to pass and end up in the output."""
+    doc = json.loads(kp_file.read_text())
+    doc["image_size"] = [1e30, 1000]
+    kp_file.write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    code, err = lift([str(kp_file), "--out", str(out), "--weights", str(weights), "--focal", "1000",
+                      "--principal-point", "640", "360"], capsys)
+    assert code == 1
+    assert "image_size must be [width, height]" in err
+    assert not (out / "pose.json").exists()
+
+
+def test_lift_good_camera_fields_still_work(tmp_path, weights, kp_file, capsys):
+    doc = json.loads(kp_file.read_text())
+    doc.update({"image_size": [1280.0, 720], "focal": [1000, 1001.5], "principal_point": [640, 360.5]})
+    kp_file.write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    code, err = lift([str(kp_file), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    res = json.loads((out / "pose.json").read_text())
+    assert res["image_size"] == [1280, 720]
+    assert res["focal"] == [1000.0, 1001.5] and res["principal_point"] == [640.0, 360.5]
+    assert np.all(np.isfinite(res["absolute"]))
