@@ -84,11 +84,17 @@ class SessionState:
             self.focal_px = self.sample.camera.alpha
 
     def base_keypoints(self) -> np.ndarray:
-        """The un-dragged 2D input: ground truth, or the detection when ``input_kind == "detected"``."""
+        """The un-dragged 2D input: ground truth, or the detection when ``input_kind == "detected"``. Raises
+        :class:`PoseLifterError` when the sample has no such 2D (no detection; no ground truth for an upload)."""
         if self.input_kind == "detected":
             if self.sample.detected_2d is None:
                 raise PoseLifterError(f"no 2D detection for {self.sample.label}")
             return np.asarray(self.sample.detected_2d, np.float64)
+        if self.input_kind != "gt":
+            raise PoseLifterError(f"unknown 2D input {self.input_kind!r}; expected 'gt' or 'detected'")
+        if not self.sample.has_gt_2d:
+            raise PoseLifterError(f"no ground-truth 2D for {self.sample.label}: its 2D input is the detected / "
+                                  "uploaded one")
         return np.asarray(self.sample.keypoints_2d, np.float64)
 
     @property
@@ -219,8 +225,30 @@ def _focal_origin(state: SessionState) -> str:
             "default-fov": "default field of view", "keypoint-file": "keypoint file"}.get(up.focal_source, up.focal_source)
 
 
+def input_name(state: SessionState) -> str:
+    """Which 2D is lifted: the ground truth, the Stacked-Hourglass detection (H36M) or an upload's 2D."""
+    up = state.sample.upload
+    if up is not None:
+        return "uploaded detection" + (f" ({up.detector} on the photo)" if up.kind == "image" else " (keypoint file)")
+    return "ground truth" if state.input_kind == "gt" else "Stacked-Hourglass detection"
+
+
+def input_line(state: SessionState) -> str:
+    """The readout's line on the lifted 2D: its source, the dragged joints and, at a noise level > 0, that
+    the lifted pose (and so the metrics) is one noisy draw."""
+    parts = [f"**2D input** {input_name(state)}"]
+    n = len(state.dragged)
+    if n:
+        parts.append(f"{n} joint{'s' if n != 1 else ''} dragged")
+    if state.noise_level > 0:
+        parts.append(f"lifted: one noisy draw at level {state.noise_level:g} (seed {state.seed}); "
+                     "the metrics refer to that draw")
+    return " · ".join(parts)
+
+
 def readout_markdown(frame: Frame, state: SessionState) -> str:
-    """The readout panel: canonical depth, root X/Y/Z, the ambiguity ``Z / f``, and metrics."""
+    """The readout panel: canonical depth, root X/Y/Z, the ambiguity ``Z / f``, which 2D was lifted
+    (:func:`input_line`), and metrics."""
     X, Y, Z = frame.root
     alpha = math.sqrt(frame.focal[0] * frame.focal[1])
     lines = [
@@ -229,6 +257,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         f"**Focal** {alpha:,.0f} px ({_focal_origin(state)}: {state.sample.camera.alpha:,.0f} px) · "
         f"Z/f = {Z / alpha:.3f} mm/px",
     ]
+    lines.append(input_line(state))
     up = state.sample.upload
     if up is not None:
         people = f" · {up.num_people} people found, largest used" if (up.num_people or 0) > 1 else ""

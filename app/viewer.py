@@ -27,7 +27,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, NoReturn
 
 import numpy as np
 import viser
@@ -50,6 +50,10 @@ IMAGE_PLANE_DEPTH_M: float = 1.0
 """Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
 VIEW_ZOOM: float = 0.85
 """Initial viewpoint: how close to the person the viewer starts (1 = the frustum and the person small)."""
+ZOOM_FILL: float = 0.8
+""""zoom to 2D joints": the fraction of the view the 2D joints' bounding box fills."""
+ZOOM_DEFAULT_FOV_DEG: float = 50.0
+"""Vertical field of view assumed when the viewer's is unknown (the server target)."""
 SIDE_RGB: dict[str, tuple[int, int, int]] = {"left": (40, 110, 255), "right": (255, 60, 60), "center": (70, 70, 70)}
 """Lifted skeleton: subject's left blue, right red, centre dark grey."""
 GT_RGB = COLORS["gt"]
@@ -68,6 +72,11 @@ def _edges_points(P: np.ndarray) -> np.ndarray:
 def _side_colors() -> np.ndarray:
     c = np.array([SIDE_RGB[edge_side(e)] for e in EDGES], np.uint8)
     return np.repeat(c[:, None, :], 2, axis=1)
+
+
+def _set_disabled(handle: Any, disabled: bool) -> None:
+    if handle is not None and handle.disabled != disabled:
+        handle.disabled = disabled
 
 
 def control(func: Callable[..., Any]) -> Callable[..., bool]:
@@ -135,6 +144,16 @@ class SessionView:
         self._drag_gen: int | None = None
         self._photo: up.Photo | None = None
         self._model_pinned = False
+        self._auto_model: tuple[str, str] | None = None
+        """``(the user's model, the detector's model)`` of the last automatic switch by a photo upload
+        (:meth:`load_upload`): leaving the uploads goes back to the user's model unless one was picked since."""
+        self._upload_auto = False
+        """The last upload is shown with the detector's model of :attr:`_auto_model` (coming back to it too)."""
+        self._input_pref = "gt"
+        """The 2D input the user chose (:meth:`set_input_kind`); the effective ``state.input_kind`` follows it
+        whenever the sample has that 2D (uploads, without ground-truth 2D, always use their detection)."""
+        self._view_key: tuple | None = None
+        """Source and camera pose the 3D view was last framed for (:meth:`_sync_sample`)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         sample = app.demo.get(app.demo.names[0])
@@ -142,8 +161,7 @@ class SessionView:
         self._build_gui()
         self._build_scene()
         with self.lock:
-            self._set_sample(sample)
-        self.set_initial_view()
+            self._set_sample(sample)  # (frames the 3D view: a new camera)
 
     @property
     def _suspend(self) -> bool:
@@ -259,6 +277,8 @@ class SessionView:
             self.joint_uv = gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0)
             self.reset_btn = gui.add_button("reset dragged joints")
             self.view_btn = gui.add_button("reset 3D view")
+            self.zoom_btn = gui.add_button("zoom to 2D joints", icon=viser.Icon.ZOOM_IN,
+                                           hint="look head-on at the 2D joints on the image plane, for precise dragging")
 
         g = self._guard
         self.source_dd.on_update(g(lambda _: self.set_source(self.source_dd.value)))
@@ -283,6 +303,7 @@ class SessionView:
         self.joint_uv.on_update(g(lambda _: self._on_joint_uv()))
         self.reset_btn.on_click(g(lambda _: self.reset_joints()))
         self.view_btn.on_click(g(lambda _: self.set_initial_view()))
+        self.zoom_btn.on_click(g(lambda _: self.zoom_to_2d_joints()))
         self.upload_btn.on_upload(g(lambda _: self.load_upload(self.upload_btn.value.name, self.upload_btn.value.content)))
         self.download_btn.on_click(g(lambda _: self.download("json")))
         self.download_glb_btn.on_click(g(lambda _: self.download("glb")))
@@ -299,6 +320,13 @@ class SessionView:
             if camera:
                 self._update_camera_geometry()
             self._redraw()
+
+    def _reject(self, handle: Any, name: str, message: str) -> NoReturn:
+        """Refuse a value control's input: its GUI ``handle`` shows ``state.<name>`` (the value in use) again,
+        and :class:`PoseLifterError` ``message`` is raised."""
+        with self.lock:
+            self._set_gui(handle, getattr(self.state, name))
+        raise PoseLifterError(message)
 
     def _set_gui(self, handle: Any, value: Any) -> None:
         """Set a GUI value without triggering our own callbacks."""
@@ -365,6 +393,10 @@ class SessionView:
     @control
     def set_initial_view(self) -> None:
         """A good initial viewpoint: behind, above and to the side of the camera, looking at the person."""
+        self._frame_view()
+
+    def _frame_view(self) -> None:
+        """:meth:`set_initial_view` (for use inside other controls)."""
         cam = self.state.sample.camera
         R, t = np.asarray(cam.R), np.asarray(cam.t)
         C = -R.T @ t / 1000.0
@@ -384,16 +416,62 @@ class SessionView:
         right = np.cross(mid - eye, [0, 0, 1.0])
         mid = mid + 0.35 * right / max(np.linalg.norm(right), 1e-9)  # the GUI panel covers the right of the canvas
         eye = mid + VIEW_ZOOM * (eye - mid)
+        self._set_viewpoint(eye, mid, np.array([0.0, 0.0, 1.0]))
+
+    def _reframe(self) -> None:
+        """:meth:`_frame_view` after a sample change: a failure is logged, never fails the change itself."""
+        try:
+            self._frame_view()
+        except Exception:  # noqa: BLE001 - a viewpoint is cosmetic
+            log.exception("could not frame the 3D view")
+
+    def _set_viewpoint(self, eye: np.ndarray, look_at: np.ndarray, up: np.ndarray) -> None:
+        """Move this tab's viewer camera (world, m); for the server target, its initial camera (new tabs and
+        the viewer's "reset view")."""
         if isinstance(self.target, viser.ClientHandle):
             cam_h = self.target.camera
-            cam_h.up_direction = (0.0, 0.0, 1.0)
+            cam_h.up_direction = tuple(up)
             cam_h.position = tuple(eye)
-            cam_h.look_at = tuple(mid)
+            cam_h.look_at = tuple(look_at)
         else:
             ic = self.target.initial_camera
             ic.position = tuple(eye)
-            ic.look_at = tuple(mid)
-            ic.up = (0.0, 0.0, 1.0)
+            ic.look_at = tuple(look_at)
+            ic.up = tuple(up)
+
+    def _viewer_fov(self) -> tuple[float, float]:
+        """``(vertical field of view (rad), aspect width / height)`` of this tab's viewer; without a browser
+        (or before it reported its camera) :data:`ZOOM_DEFAULT_FOV_DEG` and a square view."""
+        fov, aspect = np.radians(ZOOM_DEFAULT_FOV_DEG), 1.0
+        if isinstance(self.target, viser.ClientHandle):
+            try:
+                cam_h = self.target.camera
+                if 0.05 < float(cam_h.fov) < 3.0:
+                    fov = float(cam_h.fov)
+                if cam_h.image_width > 0 and cam_h.image_height > 0:
+                    aspect = cam_h.image_width / cam_h.image_height
+            except (AssertionError, AttributeError, TypeError, ValueError):  # no camera message yet
+                pass
+        return fov, aspect
+
+    @control
+    def zoom_to_2d_joints(self) -> None:
+        """Look head-on at the image plane from the camera's side, centred on the bounding box of the current
+        2D joints, close enough that the box fills most of the view (:data:`ZOOM_FILL`), with the image's up
+        (the camera's -y axis) up: the 2D joints can then be dragged precisely."""
+        with self.lock:
+            kp = np.asarray(self.state.keypoints, np.float64)
+            cam = self.state.sample.camera
+            lo, hi = kp.min(axis=0), kp.max(axis=0)
+            centre = self._image_plane((lo + hi) / 2.0)  # camera frame, on the plane (z = IMAGE_PLANE_DEPTH_M)
+            w, h = np.abs(self._image_plane(hi) - self._image_plane(lo))[:2]  # box size on the plane (m)
+            R = np.asarray(cam.R)
+            C = -R.T @ np.asarray(cam.t) / 1000.0
+        fov, aspect = self._viewer_fov()
+        half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
+        dist = half / (ZOOM_FILL * np.tan(fov / 2.0))
+        eye = centre - np.array([0.0, 0.0, dist])  # in front of the plane, on the camera's side
+        self._set_viewpoint(R.T @ eye + C, R.T @ centre + C, R.T @ np.array([0.0, -1.0, 0.0]))
 
     # ------------------------------------------------------------------------------------------
     # Controls (public: tests drive these, the GUI callbacks call them)
@@ -419,9 +497,7 @@ class SessionView:
         """Show the embedded demo sample ``name``."""
         sample = self.app.demo.get(name)
         with self.lock:
-            self._set_gui(self.source_dd, "demo")
-            self._set_gui(self.demo_dd, name)
-            self._set_sample(sample)
+            self._set_sample(sample)  # (the source and demo pickers follow: _sync_sample)
 
     @control
     def select_h36m(self, *, subject: int, sequence: str, camera: str, frame: int) -> None:
@@ -430,14 +506,7 @@ class SessionView:
             raise PoseLifterError("no Human3.6M folder was given (--h36m)")
         sample = self.app.h36m.get(subject, sequence, camera, frame)
         with self.lock:
-            self._set_gui(self.source_dd, "h36m")
-            self._set_gui(self.subject_dd, f"S{subject}")
-            self._set_gui(self.sequence_dd, sequence)
-            self._set_gui(self.camera_dd, camera)
-            if self.frame_slider is not None:
-                self.frame_slider.max = max(self.app.h36m.num_frames(subject, sequence) - 1, 1)
-            self._set_gui(self.frame_slider, int(frame))
-            self._set_sample(sample)
+            self._set_sample(sample)  # (the pickers follow the shown sample: _sync_sample)
 
     def _on_subject(self) -> None:
         if self._suspend:
@@ -460,7 +529,11 @@ class SessionView:
                          camera=self.camera_dd.value, frame=frame)
 
     def _on_photo(self) -> None:
-        if self._suspend or self.photo_dd.value == "(none)":
+        if self._suspend:
+            return
+        if self.photo_dd.value == "(none)":  # nothing to show: the dropdown keeps saying what is shown
+            with self.lock:
+                self._sync_pickers(self.state.sample)
             return
         s, rest = self.photo_dd.value.split(" ", 1)
         seq, cam, fr = rest.rsplit(" ", 2)
@@ -468,15 +541,36 @@ class SessionView:
 
     def _set_sample(self, sample: Sample, *, model: str | None = None) -> None:
         """Show ``sample`` (drags reset; focal to its camera's; noise, seed, toggles and, unless ``model`` is
-        given, the model kept). If it cannot be lifted the previous state is restored and the error raised."""
+        given, the model kept). If it cannot be lifted the previous state is restored and the error raised.
+
+        2D input: the user's choice (:attr:`_input_pref`) when the sample has it, else ground truth (with a
+        message when the detection is lost); an upload (no ground-truth 2D) always uses its own 2D.
+        Model: leaving the uploads after a photo upload switched the model (:attr:`_auto_model`) goes back
+        to the user's model, and coming back to that upload to the detector's, unless a model was picked since."""
         st = self.state
-        kind = st.input_kind if (st.input_kind == "gt" or sample.detected_2d is not None) else "gt"
-        if not sample.has_gt_2d and sample.detected_2d is not None:
+        if not sample.has_gt_2d:
             kind = "detected"
-        elif kind != st.input_kind and st.sample.has_gt_2d:  # (leaving an upload: back to ground truth silently)
-            self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D")
+        elif self._input_pref == "detected" and sample.detected_2d is None:
+            kind = "gt"
+            if st.input_kind == "detected" and st.sample.has_gt_2d:  # (leaving an upload: silently)
+                self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D "
+                                  "(the detection is used again where there is one)")
+        else:
+            kind = self._input_pref
+        note = ""
+        if model is None and not self._model_pinned and self._auto_model is not None:
+            user_model, auto_model = self._auto_model
+            leaving = st.sample.upload is not None and sample.upload is None
+            returning = st.sample.upload is None and sample is self._last_upload and self._upload_auto
+            if leaving and st.model == auto_model and user_model != auto_model:
+                model, note = user_model, f"lifter back to '{user_model}', the model in use before the photo upload"
+            elif returning and st.model != auto_model:
+                model, note = auto_model, (f"lifter switched to '{auto_model}' for {sample.label}, the model trained "
+                                           "for its detector's 2D errors (Model menu)")
         self._apply_state(SessionState(sample=sample, model=model or st.model, input_kind=kind, noise_level=st.noise_level,
                                        seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic))
+        if note:
+            self.show_message(note)
 
     def _apply_state(self, state: SessionState) -> None:
         """Make ``state`` the tab's state and redraw everything; on :class:`PoseLifterError` (e.g. a
@@ -498,6 +592,7 @@ class SessionView:
         src = sample.key.split("/")[0]
         if src in SOURCES and src in self.source_dd.options:
             self._set_gui(self.source_dd, src)
+        self._sync_pickers(sample)
         self._set_gui(self.input_dd, st.input_kind)
         self._set_gui(self.model_dd, st.model)
         hi = focal_max(sample)
@@ -513,11 +608,52 @@ class SessionView:
         self.image_node.image = img if img is not None else canvas(sample.camera.width, sample.camera.height)
         self._update_camera_geometry()
         self._redraw()
+        view_key = (src, R.tobytes(), np.asarray(sample.camera.t, np.float64).tobytes())
+        if view_key != self._view_key:  # a new camera (not a new frame of the same one): frame the view
+            self._view_key = view_key
+            self._reframe()
+
+    def _sync_pickers(self, sample: Sample) -> None:
+        """The Sample panel's pickers for ``sample``: those of the other sources disabled; for a Human3.6M
+        sample, subject / sequence / camera / frame and the "frame with photo" entry (or "(none)")."""
+        src = sample.key.split("/")[0]
+        _set_disabled(self.demo_dd, src != "demo")
+        h36m = [self.subject_dd, self.sequence_dd, self.camera_dd, self.frame_slider, self.photo_dd]
+        for h in h36m:
+            _set_disabled(h, src != "h36m")
+        if src == "demo":
+            self._set_gui(self.demo_dd, sample.key.split("/", 1)[1])
+        if src != "h36m" or self.app.h36m is None:
+            return
+        _, subj, sequence, camera, frame = sample.key.split("/")
+        subject, frame_i = int(subj[1:]), int(frame)
+        seqs = self.app.h36m.sequences(subject)
+        self._set_gui(self.subject_dd, subj)
+        if list(self.sequence_dd.options) != seqs:
+            self._suspend = True
+            try:
+                self.sequence_dd.options = seqs
+            finally:
+                self._suspend = False
+        self._set_gui(self.sequence_dd, sequence)
+        self._set_gui(self.camera_dd, camera)
+        hi = max(self.app.h36m.num_frames(subject, sequence) - 1, 1)
+        if self.frame_slider.max != hi:
+            self._suspend = True
+            try:
+                self.frame_slider.max = hi
+            finally:
+                self._suspend = False
+        self._set_gui(self.frame_slider, frame_i)
+        entry = f"{subj} {sequence} {camera} {frame_i}"
+        self._set_gui(self.photo_dd, entry if entry in self.photo_dd.options else "(none)")
 
     @control
     def set_input_kind(self, kind: str) -> None:
-        """2D input: ``"gt"`` (ground truth) or ``"detected"`` (Stacked-Hourglass, H36M only). Resets drags."""
+        """2D input: ``"gt"`` (ground truth; not for uploads) or ``"detected"`` (Stacked-Hourglass, H36M only;
+        an upload's own 2D). Resets drags. The choice is kept for the next samples (:meth:`_set_sample`)."""
         if kind not in ("gt", "detected"):
+            self._set_gui(self.input_dd, self.state.input_kind)
             raise PoseLifterError(f"unknown 2D input {kind!r}")
         with self.lock:
             old = self.state.input_kind
@@ -528,14 +664,22 @@ class SessionView:
                 self.state.input_kind = old
                 self._set_gui(self.input_dd, old)
                 raise
+            if self.state.sample.has_gt_2d:  # (an upload has no choice: that is no preference)
+                self._input_pref = kind
+            self._set_gui(self.input_dd, kind)
             self.state.dragged.clear()
             self._redraw()
 
     @control
     def set_model(self, name: str) -> None:
         """Switch the lifting model (a name from ``assets/models.json``)."""
-        self.app.pool.get(name)  # raises for unknown names, before touching the state
-        self._model_pinned = True  # a photo upload no longer switches to the detector's model
+        try:
+            self.app.pool.get(name)  # raises for unknown names, before touching the state
+        except PoseLifterError:
+            self._set_gui(self.model_dd, self.state.model)
+            raise
+        self._model_pinned = True  # a photo upload no longer switches to the detector's model (nor back)
+        self._auto_model = None
         self._commit("model", name, self.model_dd)
 
     @control
@@ -554,9 +698,12 @@ class SessionView:
 
     @control
     def set_cloud_samples(self, n: int) -> None:
-        n_ = int(n)
+        try:
+            n_ = int(n)
+        except (TypeError, ValueError, OverflowError):
+            self._reject(self.cloud_num, "cloud_samples", f"cloud samples must be an integer, got {n!r}")
         if not 0 <= n_ <= 1024:
-            raise PoseLifterError(f"cloud samples must be in [0, 1024], got {n}")
+            self._reject(self.cloud_num, "cloud_samples", f"cloud samples must be in [0, 1024], got {n}")
         self._commit("cloud_samples", n_, self.cloud_num)
 
     @control
@@ -564,9 +711,9 @@ class SessionView:
         try:
             s = int(seed)
         except (TypeError, ValueError, OverflowError):
-            raise PoseLifterError(f"seed must be an integer, got {seed!r}") from None
+            self._reject(self.seed_num, "seed", f"seed must be an integer, got {seed!r}")
         if s < 0:
-            raise PoseLifterError(f"seed must be >= 0, got {s}")
+            self._reject(self.seed_num, "seed", f"seed must be >= 0, got {s}")
         self._commit("seed", s, self.seed_num)
 
     @control
@@ -590,7 +737,8 @@ class SessionView:
 
     @control
     def move_joint(self, joint: int, uv: Any) -> None:
-        """Put 2D joint ``joint`` at pixel ``uv`` (clamped near the image) and re-lift."""
+        """Put 2D joint ``joint`` at pixel ``uv`` (clamped near the image) and re-lift. The joint becomes the
+        selected one (highlighted; its position in the "joint (u, v) px" box)."""
         if not 0 <= int(joint) < NUM_JOINTS:
             raise PoseLifterError(f"joint index {joint} out of range [0, {NUM_JOINTS})")
         try:
@@ -599,6 +747,7 @@ class SessionView:
             raise PoseLifterError(f"joint position must be (u, v) px, got {uv!r}") from None
         p, msg = clamp_joint(p, size=self.state.image_size)
         with self.lock:
+            self._set_gui(self.joint_dd, JOINT_NAMES[int(joint)])
             old = self.state.keypoints.copy()
             self.state.keypoints = old.copy()
             self.state.keypoints[int(joint)] = p
@@ -632,9 +781,7 @@ class SessionView:
     def _on_joint_selected(self) -> None:
         if self._suspend:
             return
-        j = JOINT_NAMES.index(self.joint_dd.value)
-        self._set_gui(self.joint_uv, tuple(float(v) for v in np.round(self.state.keypoints[j], 1)))
-        self._redraw_2d_only()
+        self._redraw_2d_only()  # the highlight and the (u, v) box follow the selection
 
     def _on_joint_uv(self) -> None:
         if self._suspend:
@@ -671,6 +818,11 @@ class SessionView:
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{name}: {exc}") from None
             self._last_upload = sample
+            if switched:  # (a switch from a previous switch's model still returns to the user's model)
+                user = self._auto_model[0] if self._auto_model is not None and before == self._auto_model[1] else before
+                self._auto_model = (user, model)
+            self._upload_auto = (not self._model_pinned and self._auto_model is not None
+                                 and self.state.model == self._auto_model[1])
             if "upload" not in self.source_dd.options:
                 self._suspend = True
                 try:
@@ -678,7 +830,7 @@ class SessionView:
                 finally:
                     self._suspend = False
             self._set_gui(self.source_dd, "upload")
-        self.set_initial_view()
+            self._reframe()  # (a new photo: a new person to look at, whatever the camera)
         info = sample.upload
         what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
                 if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
@@ -832,9 +984,14 @@ class SessionView:
             self._push_2d(self.state.keypoints, None)
 
     def _push_2d(self, kp: np.ndarray, noisy: np.ndarray | None) -> None:
+        """The 2D view (GUI image, joints and bones on the image plane) and the "joint (u, v) px" box of
+        the current 2D ``kp`` (so the box always shows the selected joint where it is)."""
         st = self.state
         s = st.sample
         sel = JOINT_NAMES.index(self.joint_dd.value)
+        uv = tuple(float(v) for v in np.round(kp[sel], 1))
+        if tuple(float(v) for v in self.joint_uv.value) != uv:
+            self._set_gui(self.joint_uv, uv)
         poses = {"gt": s.keypoints_2d if (self.gt_cb.value and s.has_gt_2d) else None, "detected": s.detected_2d,
                  "noisy": noisy if st.noise_level > 0 else None, "current": kp}
         if self._base_key != s.key:

@@ -296,3 +296,312 @@ def test_h36m_browsing() -> None:
         assert "out of range" in v.messages[-1]
     finally:
         server.stop()
+
+
+# ----------------------------------------------------------------------------------------------
+# Usability review: GUI values follow the state, preferences survive sample changes
+# ----------------------------------------------------------------------------------------------
+
+requires_h36m_app = pytest.mark.skipif(default_h36m_root() is None, reason="Human3.6M not present at ../shared/data/h36m")
+
+
+@pytest.fixture(scope="module")
+def h36m_app():
+    """A :class:`PoseLifterApp` with Human3.6M (skipped where the data are missing)."""
+    if default_h36m_root() is None:
+        pytest.skip("Human3.6M not present at ../shared/data/h36m")
+    require_shipped_models()
+    server = local_server()
+    yield PoseLifterApp(server, h36m_root=default_h36m_root())
+    server.stop()
+
+
+def _uv_box(view: SessionView) -> np.ndarray:
+    return np.asarray(view.joint_uv.value, float)
+
+
+def _selected(view: SessionView) -> int:
+    from lifter.skeleton import JOINT_NAMES
+
+    return JOINT_NAMES.index(view.joint_dd.value)
+
+
+def _json_upload(view: SessionView, sample) -> bool:
+    import json
+
+    doc = {"keypoints": sample.keypoints_2d.tolist(), "format": "h36m17",
+           "image_size": [sample.camera.width, sample.camera.height], "focal": list(sample.camera.focal)}
+    return view.load_upload("kp.json", json.dumps(doc).encode())
+
+
+def test_joint_uv_box_shows_the_selected_joint(view: SessionView, app: PoseLifterApp) -> None:
+    # from the start, not (0, 0)
+    np.testing.assert_allclose(_uv_box(view), view.state.keypoints[_selected(view)], atol=0.05)
+    view.joint_dd.value = "r_wrist"
+    np.testing.assert_allclose(_uv_box(view), view.state.keypoints[16], atol=0.05)
+    # editing one coordinate moves the joint by that much only (it is not thrown to the image edge)
+    uv = _uv_box(view)
+    view.joint_uv.value = (float(uv[0]), float(uv[1]) + 7.0)
+    np.testing.assert_allclose(view.state.keypoints[16], uv + [0.0, 7.0], atol=1e-9)
+    assert view.status_md.content == ""
+    # a new sample: the box shows its joint
+    view.select_demo(app.demo.names[1])
+    np.testing.assert_allclose(_uv_box(view), view.state.keypoints[16], atol=0.05)
+    # a drag selects the dragged joint, and the box follows it
+    j = 13
+    target = view.state.keypoints[j] + np.array([30.0, -20.0])
+    view.joint_nodes[j]._impl.drag_cb[0].callback(_drag_event(view, j, target))
+    assert _selected(view) == j
+    np.testing.assert_allclose(_uv_box(view), target, atol=0.05)
+    assert view.move_joint(5, view.state.keypoints[5] + 11.0) is True
+    assert _selected(view) == 5
+    np.testing.assert_allclose(_uv_box(view), view.state.keypoints[5], atol=0.05)
+    view.reset_btn.value = True
+    np.testing.assert_allclose(_uv_box(view), view.state.sample.keypoints_2d[5], atol=0.05)
+    assert view.set_keypoints(view.state.keypoints + 4.0) is True
+    np.testing.assert_allclose(_uv_box(view), view.state.sample.keypoints_2d[5] + 4.0, atol=0.05)
+    # a rejected move (all joints on one pixel: degenerate) leaves the box on the joint's position
+    for k in range(17):
+        view.move_joint(k, (300.0, 300.0))
+    assert "degenerate" in view.messages[-1] and _selected(view) == 16
+    np.testing.assert_allclose(_uv_box(view), view.state.keypoints[16], atol=0.05)
+    assert not np.allclose(view.state.keypoints[16], (300.0, 300.0))
+    view.select_demo(app.demo.names[0])
+
+
+def test_rejected_seed_puts_the_box_back(view: SessionView) -> None:
+    view.seed_num.value = 3
+    assert view.state.seed == 3
+    view.seed_num.value = -5
+    assert view.state.seed == 3 and view.seed_num.value == 3 and "seed must be >= 0" in view.messages[-1]
+    assert view.set_seed("abc") is False and view.seed_num.value == 3
+    view.seed_num.value = 0
+
+
+def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp) -> None:
+    from lifter import PoseLifterError
+
+    from app.core import SessionState
+
+    assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
+    assert view.state.input_kind == "detected" and view.input_dd.value == "detected"
+    kp = view.state.keypoints.copy()
+    view.input_dd.value = "gt"
+    assert view.state.input_kind == "detected" and view.input_dd.value == "detected"
+    assert "no ground-truth 2D" in view.messages[-1]
+    np.testing.assert_array_equal(view.state.keypoints, kp)
+    with pytest.raises(PoseLifterError, match="no ground-truth 2D"):
+        SessionState(sample=view.state.sample, model=view.state.model, input_kind="gt")
+    view.select_demo(app.demo.names[0])
+    assert view.state.input_kind == "gt"
+
+
+def test_readout_names_the_lifted_2d(view: SessionView, app: PoseLifterApp) -> None:
+    md = view.readout_md.content
+    assert "**2D input** ground truth" in md and "dragged" not in md and "noisy draw" not in md
+    view.move_joint(16, view.state.keypoints[16] + 20.0)
+    view.move_joint(13, view.state.keypoints[13] + 20.0)
+    assert "2 joints dragged" in view.readout_md.content
+    view.seed_num.value = 4
+    view.noise_slider.value = 1.5
+    md = view.readout_md.content
+    assert "one noisy draw at level 1.5 (seed 4)" in md and "metrics refer to that draw" in md
+    view.noise_slider.value = 0.0
+    view.seed_num.value = 0
+    view.reset_joints()
+    assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
+    assert "**2D input** uploaded detection" in view.readout_md.content
+    view.select_demo(app.demo.names[0])
+
+
+def test_zoom_to_2d_joints(view: SessionView, app: PoseLifterApp) -> None:
+    view.select_demo(app.demo.names[1])
+    cam = view.state.sample.camera
+    R, t = np.asarray(cam.R), np.asarray(cam.t)
+    C = -R.T @ t / 1000.0
+    f, c = np.asarray(view.state.focal), np.asarray(cam.principal_point)
+
+    def zoom() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        view.zoom_btn.value = True  # the button
+        ic = app.server.initial_camera
+        eye_c = R @ (np.asarray(ic.position) - C)
+        look_c = R @ (np.asarray(ic.look_at) - C)
+        return eye_c, look_c, np.asarray(ic.up)
+
+    kp = view.state.keypoints
+    eye, look, up = zoom()
+    centre = (kp.min(0) + kp.max(0)) / 2
+    assert look[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)  # on the image plane
+    np.testing.assert_allclose(look[:2] / look[2] * f + c, centre, atol=1e-6)  # at the 2D joints' centre
+    assert eye[2] < IMAGE_PLANE_DEPTH_M  # camera side of the plane
+    np.testing.assert_allclose(eye[:2], look[:2], atol=1e-9)  # head-on
+    np.testing.assert_allclose(up, R.T @ np.array([0.0, -1.0, 0.0]), atol=1e-9)  # image "up" is up
+    d0 = look[2] - eye[2]
+    ext = (kp.max(0) - kp.min(0)) / f * IMAGE_PLANE_DEPTH_M  # bbox size on the plane (m)
+    half_fov = np.arctan(0.5 * max(ext) / d0)  # the bbox fills most of a ~50 deg view
+    assert np.radians(15) < half_fov < np.radians(25)
+    # twice the joints' spread (about the centre): twice the distance
+    assert view.set_keypoints(centre + 2.0 * (kp - centre)) is True
+    eye2, look2, _ = zoom()
+    np.testing.assert_allclose(look2, look, atol=1e-9)
+    assert look2[2] - eye2[2] == pytest.approx(2 * d0, rel=1e-6)
+    view.select_demo(app.demo.names[0])
+
+
+def test_zoom_to_2d_joints_moves_a_tabs_camera(app: PoseLifterApp) -> None:
+    n0 = len(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(app.views) == n0 + 1)
+        v = list(app.views.values())[-1]
+        assert v.zoom_to_2d_joints() is True
+        cam = v.state.sample.camera
+        R = np.asarray(cam.R)
+        C = -R.T @ np.asarray(cam.t) / 1000.0
+        look = R @ (np.asarray(v.target.camera.look_at) - C)
+        eye = R @ (np.asarray(v.target.camera.position) - C)
+        kp = v.state.keypoints
+        np.testing.assert_allclose(look[:2] / look[2] * np.asarray(v.state.focal) + np.asarray(cam.principal_point),
+                                   (kp.min(0) + kp.max(0)) / 2, atol=1e-6)
+        assert eye[2] < look[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)
+        np.testing.assert_allclose(v.target.camera.up_direction, R.T @ np.array([0.0, -1.0, 0.0]), atol=1e-9)
+    finally:
+        tab.close()
+    assert wait_for(lambda: len(app.views) == n0)
+
+
+def test_leaving_an_upload_restores_the_auto_switched_model(monkeypatch) -> None:
+    import cv2
+
+    import app.viewer as viewer
+    from lifter.detect import Detection, bbox_of
+
+    class Estimator:
+        name, keypoint_format = "fake", "h36m17"
+
+        def __init__(self, kp: np.ndarray) -> None:
+            self.kp = kp
+
+        def detect(self, image: np.ndarray) -> list:
+            p = self.kp * image.shape[1] / 800.0
+            return [Detection(keypoints=p, scores=np.full(17, 0.9), bbox_xywh=bbox_of(p), keypoint_format="h36m17")]
+
+    monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt")
+    require_shipped_models()
+    server = local_server()
+    try:
+        s = DemoCatalog().get("standing")
+        a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
+                          estimator_factory=lambda: Estimator(s.keypoints_2d))
+        jpg = cv2.imencode(".jpg", cv2.cvtColor(s.image, cv2.COLOR_RGB2BGR))[1].tobytes()
+        v = a.headless_view()
+        assert v.load_upload("one.jpg", jpg) is True and v.state.model == "gt"
+        v.source_dd.value = "demo"  # leaving the upload: the model the user had
+        assert v.state.model == "mixture" and v.model_dd.value == "mixture" and "'mixture'" in v.messages[-1]
+        v.source_dd.value = "upload"  # back to the upload: its detector's model again
+        assert v.state.model == "gt" and v.model_dd.value == "gt" and v.state.sample.key.startswith("upload/")
+        # a second photo while on the switched model, then leaving: still the user's model
+        assert v.load_upload("two.jpg", jpg) is True and v.state.model == "gt"
+        v.select_demo("walking")
+        assert v.state.model == "mixture"
+        # a keypoint JSON uploaded on the user's model keeps it, also when coming back to it
+        assert _json_upload(v, s) is True and v.state.model == "mixture"
+        v.select_demo("walking")
+        v.source_dd.value = "upload"
+        assert v.state.model == "mixture"
+        # once the user picks a model, nothing is switched back
+        assert v.load_upload("three.jpg", jpg) is True and v.state.model == "gt"
+        n = len(v.messages)
+        assert v.set_model("gt") is True
+        v.source_dd.value = "demo"
+        assert v.state.model == "gt" and all("mixture" not in m for m in v.messages[n:])
+        assert v.set_model("mixture") is True
+        v.source_dd.value = "upload"
+        assert v.state.model == "mixture"
+    finally:
+        server.stop()
+
+
+# -- Human3.6M ---------------------------------------------------------------------------------
+
+
+def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None:
+    v = h36m_app.headless_view()
+    seq = "Directions 1"
+    assert v.select_h36m(subject=1, sequence=seq, camera="54138969", frame=5) is True  # training: every 5th frame
+    v.input_dd.value = "detected"
+    assert v.state.input_kind == "detected"
+    np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
+    v.frame_slider.value = 6  # no detection: ground truth, with a message
+    assert v.state.input_kind == "gt" and v.input_dd.value == "gt" and "no 2D detection" in v.messages[-1]
+    np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
+    v.frame_slider.value = 7
+    assert v.state.input_kind == "gt"
+    v.frame_slider.value = 10  # a detection again: the user's choice is back
+    assert v.state.input_kind == "detected" and v.input_dd.value == "detected"
+    np.testing.assert_allclose(v.state.keypoints, v.state.sample.detected_2d)
+    # an upload forces "detected" without changing the preference; choosing gt does
+    assert _json_upload(v, h36m_app.demo.get("standing")) is True and v.state.input_kind == "detected"
+    v.source_dd.value = "h36m"
+    assert v.state.input_kind == "detected" and v.state.sample.key.endswith("/10")
+    v.input_dd.value = "gt"
+    v.frame_slider.value = 15
+    assert v.state.input_kind == "gt"
+
+
+def test_photo_dropdown_follows_the_frame(h36m_app: PoseLifterApp) -> None:
+    v = h36m_app.headless_view()
+    photos = h36m_app.h36m.photo_frames()
+    s, q, c, f = next(p for p in photos if p[0] == 9)
+    entry = f"S{s} {q} {c} {f}"
+    v.photo_dd.value = entry
+    assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}"
+    v.frame_slider.value = f + 1
+    assert v.photo_dd.value == "(none)"
+    v.photo_dd.value = entry  # picking it again works
+    assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}" and v.state.sample.image is not None
+    v.photo_dd.value = "(none)"  # (no change of sample)
+    assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}" and v.photo_dd.value == entry
+    s2, q2, c2, f2 = next(p for p in photos if p[0] == 7)
+    assert v.select_h36m(subject=s2, sequence=q2, camera=c2, frame=f2) is True
+    assert v.photo_dd.value == f"S{s2} {q2} {c2} {f2}"
+    assert v.sequence_dd.value == q2 and q2 in v.sequence_dd.options and v.subject_dd.value == f"S{s2}"
+
+
+def test_pickers_of_the_other_source_are_disabled(h36m_app: PoseLifterApp) -> None:
+    v = h36m_app.headless_view()
+    h36m_pickers = [v.subject_dd, v.sequence_dd, v.camera_dd, v.frame_slider, v.photo_dd]
+    assert v.state.sample.key.startswith("demo/")
+    assert not v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
+    v.source_dd.value = "h36m"
+    assert v.demo_dd.disabled and not any(h.disabled for h in h36m_pickers)
+    assert _json_upload(v, h36m_app.demo.get("standing")) is True
+    assert v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
+    v.source_dd.value = "demo"
+    assert not v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
+
+
+def test_3d_view_reframed_on_a_new_camera_only(h36m_app: PoseLifterApp) -> None:
+    v = h36m_app.headless_view()
+    ic = h36m_app.server.initial_camera
+
+    def pose() -> np.ndarray:
+        return np.concatenate([np.asarray(ic.position, float), np.asarray(ic.look_at, float)])
+
+    v.source_dd.value = "h36m"
+    p_h36m = pose()
+    v.frame_slider.value = int(v.frame_slider.value) + 40  # scrubbing: the view stays
+    np.testing.assert_array_equal(pose(), p_h36m)
+    v.camera_dd.value = h36m_app.h36m.camera_ids[1]  # another camera: re-framed
+    p_cam1 = pose()
+    assert not np.allclose(p_cam1, p_h36m)
+    v.frame_slider.value = int(v.frame_slider.value) + 40
+    np.testing.assert_array_equal(pose(), p_cam1)
+    v.subject_dd.value = "S11"  # another subject: its own calibration
+    assert not np.allclose(pose(), p_cam1)
+    p_s11 = pose()
+    v.source_dd.value = "demo"
+    assert not np.allclose(pose(), p_s11)
+    p_demo = pose()
+    v.demo_dd.value = h36m_app.demo.names[1]
+    assert not np.allclose(pose(), p_demo)
