@@ -50,6 +50,11 @@ IMAGE_PLANE_DEPTH_M: float = 1.0
 """Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
 VIEW_ZOOM: float = 0.85
 """Initial viewpoint: how close to the person the viewer starts (1 = the frustum and the person small)."""
+JOINT_RADIUS_M: float = 0.022
+"""Radius (m) of the draggable 2D joint spheres on the image plane in the overview (easy to grab from afar)."""
+ZOOM_JOINT_RADIUS: float = 0.02
+""""zoom to 2D joints": sphere radius as a fraction of the 2D joints' extent on the image plane (small
+enough not to hide neighbouring joints up close); the overview restores :data:`JOINT_RADIUS_M`."""
 ZOOM_FILL: float = 0.8
 """"zoom to 2D joints": the fraction of the view the 2D joints' bounding box fills."""
 ZOOM_DEFAULT_FOV_DEG: float = 50.0
@@ -352,7 +357,7 @@ class SessionView:
         self.bones2d = sc.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), COLORS["current"], thickness=0.004)
         self.joint_nodes = []
         for j in range(NUM_JOINTS):
-            h = sc.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=0.022, subdivisions=2,
+            h = sc.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=JOINT_RADIUS_M, subdivisions=2,
                                  color=SIDE_RGB[joint_side(j)] if joint_side(j) != "center" else COLORS["current"])
             h.on_drag(self._guard(functools.partial(self.on_joint_drag, j)))
             self.joint_nodes.append(h)
@@ -416,7 +421,18 @@ class SessionView:
         right = np.cross(mid - eye, [0, 0, 1.0])
         mid = mid + 0.35 * right / max(np.linalg.norm(right), 1e-9)  # the GUI panel covers the right of the canvas
         eye = mid + VIEW_ZOOM * (eye - mid)
+        self._set_close_up(None)
         self._set_viewpoint(eye, mid, np.array([0.0, 0.0, 1.0]))
+
+    def _set_close_up(self, radius: float | None) -> None:
+        """Close-up look of the 2D joints (``radius`` m) or, with None, the overview's: the joint spheres'
+        radius, and the root ray, which passes next to a close-up eye and would cover the joints."""
+        r = JOINT_RADIUS_M if radius is None else radius
+        for h in getattr(self, "joint_nodes", []):
+            if abs(h.radius - r) > 1e-9:
+                h.radius = r
+        if hasattr(self, "ray"):
+            self.ray.visible = radius is None
 
     def _reframe(self) -> None:
         """:meth:`_frame_view` after a sample change: a failure is logged, never fails the change itself."""
@@ -471,6 +487,7 @@ class SessionView:
         half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
         dist = half / (ZOOM_FILL * np.tan(fov / 2.0))
         eye = centre - np.array([0.0, 0.0, dist])  # in front of the plane, on the camera's side
+        self._set_close_up(float(np.clip(ZOOM_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M)))
         self._set_viewpoint(R.T @ eye + C, R.T @ centre + C, R.T @ np.array([0.0, -1.0, 0.0]))
 
     # ------------------------------------------------------------------------------------------

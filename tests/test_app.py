@@ -18,7 +18,7 @@ from conftest import require_shipped_models  # noqa: E402
 from app.demo_assets import DEMO_DIR  # noqa: E402
 from app.samples import DemoCatalog, default_h36m_root  # noqa: E402
 from app.testing import FakeTab, local_server, wait_for  # noqa: E402
-from app.viewer import IMAGE_PLANE_DEPTH_M, PoseLifterApp, SessionView  # noqa: E402
+from app.viewer import IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, ZOOM_JOINT_RADIUS, PoseLifterApp, SessionView  # noqa: E402
 
 
 
@@ -445,6 +445,13 @@ def test_zoom_to_2d_joints(view: SessionView, app: PoseLifterApp) -> None:
     eye2, look2, _ = zoom()
     np.testing.assert_allclose(look2, look, atol=1e-9)
     assert look2[2] - eye2[2] == pytest.approx(2 * d0, rel=1e-6)
+    # up close the joint spheres shrink with the joints' extent (not hiding their neighbours); the overview
+    # restores them
+    r = view.joint_nodes[0].radius
+    assert r < JOINT_RADIUS_M and r == pytest.approx(ZOOM_JOINT_RADIUS * 2.0 * max(ext), rel=1e-6)
+    assert not view.ray.visible  # the root ray would pass next to the eye and cover the joints
+    assert view.set_initial_view() is True
+    assert all(h.radius == JOINT_RADIUS_M for h in view.joint_nodes) and view.ray.visible
     view.select_demo(app.demo.names[0])
 
 
