@@ -20,6 +20,7 @@ panel (and a notification in a real browser) and never propagates into viser's t
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import threading
@@ -27,7 +28,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, NoReturn
+from typing import Any, Callable, Iterator, NoReturn
 
 import numpy as np
 import viser
@@ -337,11 +338,18 @@ class SessionView:
         """Set a GUI value without triggering our own callbacks."""
         if handle is None:
             return
+        with self._quiet():
+            handle.value = value
+
+    @contextlib.contextmanager
+    def _quiet(self) -> Iterator[None]:
+        """Change GUI handles inside this block without triggering our own callbacks (nests)."""
+        before = self._suspend
         self._suspend = True
         try:
-            handle.value = value
+            yield
         finally:
-            self._suspend = False
+            self._suspend = before
 
     # ------------------------------------------------------------------------------------------
     # Scene
@@ -530,12 +538,9 @@ class SessionView:
             return
         subject = int(self.subject_dd.value[1:])
         seqs = self.app.h36m.sequences(subject)
-        self._suspend = True
-        try:
+        with self._quiet():
             self.sequence_dd.options = seqs
             self.sequence_dd.value = seqs[0]
-        finally:
-            self._suspend = False
         self._on_h36m_change(reset_frame=True)
 
     def _on_h36m_change(self, *, reset_frame: bool = False) -> None:
@@ -647,20 +652,14 @@ class SessionView:
         seqs = self.app.h36m.sequences(subject)
         self._set_gui(self.subject_dd, subj)
         if list(self.sequence_dd.options) != seqs:
-            self._suspend = True
-            try:
+            with self._quiet():
                 self.sequence_dd.options = seqs
-            finally:
-                self._suspend = False
         self._set_gui(self.sequence_dd, sequence)
         self._set_gui(self.camera_dd, camera)
         hi = max(self.app.h36m.num_frames(subject, sequence) - 1, 1)
         if self.frame_slider.max != hi:
-            self._suspend = True
-            try:
+            with self._quiet():
                 self.frame_slider.max = hi
-            finally:
-                self._suspend = False
         self._set_gui(self.frame_slider, frame_i)
         entry = f"{subj} {sequence} {camera} {frame_i}"
         self._set_gui(self.photo_dd, entry if entry in self.photo_dd.options else "(none)")
@@ -841,11 +840,8 @@ class SessionView:
             self._upload_auto = (not self._model_pinned and self._auto_model is not None
                                  and self.state.model == self._auto_model[1])
             if "upload" not in self.source_dd.options:
-                self._suspend = True
-                try:
+                with self._quiet():
                     self.source_dd.options = list(self.source_dd.options) + ["upload"]
-                finally:
-                    self._suspend = False
             self._set_gui(self.source_dd, "upload")
             self._reframe()  # (a new photo: a new person to look at, whatever the camera)
         info = sample.upload

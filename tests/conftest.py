@@ -43,6 +43,19 @@ def random_pose_cam(rng: np.random.Generator, n: int = 1) -> np.ndarray:
     return pose - pose[:, :1] + root[:, None]
 
 
+def tiny_net(width: int, *, seed: int = 0):
+    """An untrained eval-mode ``PoseLifterNet`` of the given width whose outputs sit near a plausible pose:
+    target mean 0 mm for the relative joints and 4400 mm root depth, std 100 (seeded, so reproducible)."""
+    from lifter import ModelConfig, PoseLifterNet
+
+    torch.manual_seed(seed)
+    net = PoseLifterNet(ModelConfig(width=width))
+    mean = torch.zeros(49)
+    mean[-1] = 4400.0
+    net.set_target_statistics(mean, torch.full((49,), 100.0))
+    return net.eval()
+
+
 def require_shipped_models() -> list[str]:
     """The shipped model names, or skip the test when assets/models.json is missing."""
     from lifter import PoseLifterError, available_models

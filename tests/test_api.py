@@ -13,17 +13,12 @@ from lifter.camera import project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
 from lifter._checks import CheckpointError
 
-from conftest import random_pose_cam
+from conftest import random_pose_cam, tiny_net
 
 
 @pytest.fixture(scope="module")
 def small_lifter() -> Lifter:
-    torch.manual_seed(0)
-    net = PoseLifterNet(ModelConfig(width=64))
-    mean = torch.zeros(49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.full((49,), 100.0))
-    return Lifter(net.eval(), name="small")
+    return Lifter(tiny_net(64), name="small")
 
 
 @pytest.fixture()

@@ -8,10 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
-from conftest import random_pose_cam
+from conftest import random_pose_cam, tiny_net
 
-from lifter import ModelConfig, PoseLifterNet
 from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
 from lifter.cli import main
@@ -102,12 +100,7 @@ def test_evaluate_valid_sweep_options_pass_validation(capsys):
 
 @pytest.fixture(scope="module")
 def weights(tmp_path_factory) -> Path:
-    torch.manual_seed(0)
-    net = PoseLifterNet(ModelConfig(width=16))
-    mean = torch.zeros(49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.full((49,), 100.0))
-    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", net.eval())
+    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", tiny_net(16))
 
 
 @pytest.fixture()

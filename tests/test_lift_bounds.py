@@ -6,20 +6,15 @@ import numpy as np
 import pytest
 import torch
 
-from lifter import Lifter, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter import Lifter, PoseLifterError
 from lifter.camera import project
 
-from conftest import random_pose_cam
+from conftest import random_pose_cam, tiny_net
 
 
 @pytest.fixture()
 def lifter() -> Lifter:
-    torch.manual_seed(0)
-    net = PoseLifterNet(ModelConfig(width=64))
-    mean = torch.zeros(49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.full((49,), 100.0))
-    return Lifter(net.eval(), name="small")
+    return Lifter(tiny_net(64), name="small")
 
 
 @pytest.fixture()

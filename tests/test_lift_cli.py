@@ -11,9 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 
-from lifter import Lifter, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter import Lifter, PoseLifterError
 from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
 from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, Detection, ExifCamera, ImageError, bbox_of, default_focal,
@@ -23,19 +22,14 @@ from lifter.cli import main
 from lifter.lift_cli import output_names, parse_keypoint_json
 from lifter.skeleton import JOINT_NAMES
 
-from conftest import random_pose_cam
+from conftest import random_pose_cam, tiny_net
 
 Image = pytest.importorskip("PIL.Image")
 
 
 @pytest.fixture(scope="module")
 def weights(tmp_path_factory) -> Path:
-    torch.manual_seed(0)
-    net = PoseLifterNet(ModelConfig(width=32))
-    mean = torch.zeros(49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.full((49,), 100.0))
-    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", net.eval())
+    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", tiny_net(32))
 
 
 @pytest.fixture()
