@@ -34,10 +34,10 @@ one pose); from two poses on torch is as fast or faster."""
 ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
 DEGENERATE_SCALE_PX = 1e-3
 MIN_POSE_SCALE_PX = 2.0
+"""Poses whose 2D scale (RMS radius) is below this many pixels are rejected: they are degenerate or not in pixels."""
 MAX_ABS_PX = 1e6
 """Keypoints, principal point and focal length beyond this magnitude (px) are refused: float32 overflow
 territory, and never image pixels."""
-"""Poses whose 2D scale (RMS radius) is below this many pixels are rejected: they are degenerate or not in pixels."""
 
 
 def model_registry(assets_dir: Path | None = None) -> dict[str, Any]:

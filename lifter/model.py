@@ -122,7 +122,8 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
     for the second pair; head weight and bias; target mean and std. Looked up through the modules' own
     dictionaries on every call (so replaced layers or tensors are always the current ones); and the
     BatchNorm epsilons, in the same order. None if a
-    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` or a BatchNorm or Dropout is in training mode."""
+    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` / ``nn.ReLU`` (or a block not a plain
+    :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
     mods = net._modules
     stem, blocks, head = mods.get("stem"), mods.get("blocks"), mods.get("head")
     if type(stem) is not nn.Linear or type(head) is not nn.Linear or blocks is None:
@@ -134,9 +135,10 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
         layers = list(body._modules.values()) if body is not None else []
         if len(layers) != 8:
             return None
-        bn1, drop1, lin1, bn2, drop2, lin2 = layers[0], layers[1], layers[3], layers[4], layers[5], layers[7]
-        if (type(bn1) is not nn.BatchNorm1d or type(bn2) is not nn.BatchNorm1d or type(lin1) is not nn.Linear
-                or type(lin2) is not nn.Linear or bn1.training or bn2.training or drop1.training or drop2.training):
+        bn1, drop1, act1, lin1, bn2, drop2, act2, lin2 = layers
+        if (type(block) is not ResidualBlock or type(bn1) is not nn.BatchNorm1d or type(bn2) is not nn.BatchNorm1d
+                or type(lin1) is not nn.Linear or type(lin2) is not nn.Linear or type(act1) is not nn.ReLU
+                or type(act2) is not nn.ReLU or bn1.training or bn2.training or drop1.training or drop2.training):
             return None
         for bn, lin in ((bn1, lin1), (bn2, lin2)):
             p, b = bn._parameters, bn._buffers

@@ -132,6 +132,18 @@ def test_quantized_blocks_use_the_module(kp):
     _assert_lift_matches_module(lifter.quantized(), kp[0])
 
 
+def test_replaced_activation_uses_the_module(kp):
+    """A layer the numpy path does not model (here a GELU in place of a ReLU) sends the pose to the module."""
+    lifter = Lifter(_net(), name="small")
+    before = lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative
+    lifter.net.blocks[0].body[2] = torch.nn.GELU()
+    with torch.inference_mode():
+        x = normalize_keypoints(torch.from_numpy(kp[:1].astype(np.float32)), torch.tensor([PP])).numpy()
+    assert forward_flat_numpy(lifter.net, x) is None
+    assert np.abs(lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative - before).max() > 1e-3
+    _assert_lift_matches_module(lifter, kp[0])
+
+
 @pytest.mark.parametrize("part", ["net", "blocks"])
 def test_training_mode_is_refused(kp, part):
     lifter = Lifter(_net(), name="small")
