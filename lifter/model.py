@@ -126,8 +126,9 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
     :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
     mods = net._modules
     stem, blocks, head = mods.get("stem"), mods.get("blocks"), mods.get("head")
-    if type(stem) is not nn.Linear or type(head) is not nn.Linear or blocks is None:
-        return None
+    if (type(stem) is not nn.Linear or type(head) is not nn.Linear or type(blocks) is not nn.Sequential
+            or type(net).forward_flat is not PoseLifterNet.forward_flat or type(net).forward is not PoseLifterNet.forward):
+        return None  # (a subclass that changes the forward pass runs as the module it is)
     out = [stem._parameters["weight"], stem._parameters["bias"]]
     eps = []
     for block in blocks._modules.values():

@@ -144,6 +144,18 @@ def test_replaced_activation_uses_the_module(kp):
     _assert_lift_matches_module(lifter, kp[0])
 
 
+def test_subclass_with_its_own_forward_uses_the_module(kp):
+    class Clamped(PoseLifterNet):
+        def forward_flat(self, keypoints, principal_point):
+            return super().forward_flat(keypoints, principal_point).clamp(max=100.0)
+
+    net = Clamped(ModelConfig(width=64))
+    net.load_state_dict(_net().state_dict())
+    lifter = Lifter(net.eval(), name="clamped")
+    assert lifter.lift(kp[0], focal=1145.0, principal_point=PP).canonical_depth <= 100.0
+    _assert_lift_matches_module(lifter, kp[0])
+
+
 @pytest.mark.parametrize("part", ["net", "blocks"])
 def test_training_mode_is_refused(kp, part):
     lifter = Lifter(_net(), name="small")
