@@ -373,8 +373,9 @@ def convert(keypoints: Any, *, src: str, dst: str = H36M17) -> np.ndarray:
 
     Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules; ``h36m17 ->
     dst`` applies the format's ``from_h36m`` (H36M joints, or the inverses of interpolated rules, so
-    ``src -> h36m17 -> src`` is the identity); other pairs go through h36m17. Raises :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension,
-    and NaN/inf input (mark missing joints before converting; the lifter needs all 17).
+    ``src -> h36m17 -> src`` is the identity); other pairs go through h36m17. Raises
+    :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension, and NaN/inf input
+    (mark missing joints before converting; the lifter needs all 17).
     """
     f_src, f_dst = get_format(src), get_format(dst)
     try:
