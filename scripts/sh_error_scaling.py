@@ -10,6 +10,9 @@ Stacked-Hourglass detections (converted to h36m17). Two measurements, with each 
    (swaps, misses, biases) at half the size. Reports the mean 2D error (px, 17 joints) and
    MPJPE / PA-MPJPE / MRPE (mm) per alpha.
 2. **By frame.** MPJPE of the real detections, grouped by the frame's mean 2D detection error (quintiles).
+3. **Training against test subjects.** MPJPE with GT 2D and with the real detections on the training
+   subjects' frames (every ``--stride``-th, those with a detection) and on the test subjects': does the
+   detection penalty (detections minus GT 2D) grow from the subjects a model was trained on to new ones?
 
 Writes ``<out>.json`` and ``<out>.png`` (MPJPE against mean 2D error) and prints markdown tables.
 Nothing from H36M is written: only measured numbers.
@@ -60,6 +63,14 @@ def main() -> int:
     print(f"Protocol 1 test, stride {args.stride}: {len(samples)} samples with a detection "
           f"(S9 'Discussion 1' has no 3D in the data); mean 2D error of the detections {frame_err.mean():.1f} px")
 
+    train = data.load_protocol(1, "train", stride=args.stride)
+    train_det, train_ok = load_sh_detections(train, data=data)
+    train = train.subset(np.flatnonzero(train_ok))
+    train_det = train_det[train_ok]
+    train_gt2d = train.keypoints_2d.astype(np.float64)
+    print(f"Protocol 1 train, stride {args.stride}: {len(train)} samples with a detection; mean 2D error "
+          f"{np.linalg.norm(train_det - train_gt2d, axis=-1).mean():.1f} px")
+
     result: dict = {"stride": args.stride, "num_samples": len(samples), "alphas": list(ALPHAS), "models": {}}
     quint = np.quantile(frame_err, np.linspace(0, 1, 6))
     bins = np.clip(np.searchsorted(quint, frame_err, side="right") - 1, 0, 4)
@@ -79,6 +90,11 @@ def main() -> int:
                 by_frame = [{"error_px_lo": float(quint[b]), "error_px_hi": float(quint[b + 1]),
                              "mpjpe": float(e[bins == b].mean()), "n": int((bins == b).sum())} for b in range(5)]
         result["models"][name] = {"scaled": rows, "by_frame_quintile": by_frame}
+        split_rows = {"test": {"gt_2d": rows[0]["mpjpe"], "detections": rows[-1]["mpjpe"]}}
+        for inputs, kp in (("gt_2d", train_gt2d), ("detections", train_det)):
+            pred = predict(lifter, train.with_keypoints(kp.astype(np.float32)), progress=False)
+            split_rows.setdefault("train", {})[inputs] = float(mpjpe(pred.relative, train.relative).mean())
+        result["models"][name]["by_split"] = split_rows
 
     print("\n| model | " + " | ".join(f"α = {a:g}" for a in ALPHAS) + " |")
     print("|---|" + "---|" * len(ALPHAS))
@@ -92,6 +108,16 @@ def main() -> int:
     for b in range(5):
         cells = [f"{result['models'][m]['by_frame_quintile'][b]['mpjpe']:.1f}" for m in models]
         print(f"| {quint[b]:.1f}–{quint[b + 1]:.1f} | " + " | ".join(cells) + " |")
+
+    print("\n| MPJPE (mm) | " + " | ".join(f"`{m}` GT 2D / detections (penalty)" for m in models) + " |")
+    print("|---|" + "---|" * len(models))
+    for split, label in (("train", "training subjects (S1, S5–S8)"), ("test", "test subjects (S9, S11)")):
+        cells = []
+        for m in models:
+            r = result["models"][m]["by_split"][split]
+            cells.append(f"{r['gt_2d']:.1f} / {r['detections']:.1f} (+{r['detections'] - r['gt_2d']:.1f})")
+        print(f"| {label} | " + " | ".join(cells) + " |")
+    result["train_num_samples"] = len(train)
 
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
