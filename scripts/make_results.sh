@@ -34,6 +34,9 @@ FOCAL_MODELS+=("${SHIPPED[@]}")
 ev focal_sweep "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 ev focal_sweep_shifted_pp "${FOCAL_MODELS[@]}" --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
 
+# More regularization for the mixed real + synthetic recipe (scripts/run_long.sh mix_reg), on SH detections.
+ev sh_mix_regularized "sh_mix + dropout 0.5, wd 1e-3, 60 min=runs/sh_mix_reg.pt" sh_mix --inputs sh --stride 50
+
 # How much of the SH-detection error is the detector's: inputs gt + alpha (det - gt), and MPJPE by frame 2D error.
 python scripts/sh_error_scaling.py --stride 50 --models sh_mix,mixture,gt --out "$OUT/sh_error_scaling" \
   | tee "$OUT/sh_error_scaling.txt"

@@ -4,6 +4,8 @@
 # number of epochs is whatever fits.
 #   1. mix_long      real SH detections of the training subjects (p = 0.5) + GT 2D with mixture noise, zoom 2^+-1
 #   2. mixture_long  GT 2D with mixture noise only (no real detections), zoom 2^+-1
+#   mix_reg         (not shipped) mix_long with more regularization (dropout 0.5, weight decay 1e-3), 60 min:
+#                   does it narrow the gap to 60 mm on SH detections? (it does not: README Table 3)
 #   3. fine-tunes for BlazePose: on BlazePose's error fit (without the held-out camera), and the control with the
 #      SH fit, equal budget, so the effect of the *fit* is separated from extra training.
 # Then scripts/ship_model.py and scripts/eval_cascade.py (see the README).
@@ -15,6 +17,10 @@ if [[ $step == all || $step == mix_long ]]; then
 fi
 if [[ $step == all || $step == mixture_long ]]; then
   poselifter train --out runs/mixture_long.pt "${COMMON[@]}" --epochs 200 --max-minutes 80
+fi
+if [[ $step == mix_reg ]]; then
+  poselifter train --out runs/sh_mix_reg.pt --inputs mix --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 60 \
+    --dropout 0.5 --weight-decay 1e-3
 fi
 # Fine-tunes (OUT names the pair): shipped `blazepose` = INIT=mixture MINUTES=20 OUT=ft (runs/bp_ft.pt, control
 # runs/sh_ft.pt); the same from the default: INIT=runs/mix_long.pt MINUTES=15 OUT=ft_long.
