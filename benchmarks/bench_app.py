@@ -7,7 +7,7 @@ the left wrist through the joint's registered ``on_drag`` callback. Each event i
 until the callback returns: pixel from the pointer ray, lift of 1 + 64 poses in one batch, analytic
 root off, metrics, the 2D panel image and every scene update queued for the client.
 
-Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 30]``
+Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 30] [--json out.json]``
 Exit status 1 when p95 exceeds the target (unless ``--no-check``).
 """
 
@@ -29,6 +29,7 @@ def main() -> int:
     p.add_argument("--cloud", type=int, default=64)
     p.add_argument("--target-ms", type=float, default=30.0)
     p.add_argument("--no-check", action="store_true")
+    p.add_argument("--json", default=None, help="also write the result to this JSON file")
     args = p.parse_args()
 
     import torch
@@ -75,6 +76,9 @@ def main() -> int:
                "last_compute_ms": round(view.timing.compute_ms, 2), "last_scene_ms": round(view.timing.scene_ms, 2),
                "model": view.state.model, "cpu": platform.processor() or platform.machine()}
         print(json.dumps(res))
+        if args.json:
+            with open(args.json, "w") as fh:
+                json.dump(res, fh, indent=1)
     finally:
         tab.close()
         server.stop()
