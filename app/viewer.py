@@ -669,8 +669,7 @@ class SessionView:
         """2D input: ``"gt"`` (ground truth; not for uploads) or ``"detected"`` (Stacked-Hourglass, H36M only;
         an upload's own 2D). Resets drags. The choice is kept for the next samples (:meth:`_set_sample`)."""
         if kind not in ("gt", "detected"):
-            self._set_gui(self.input_dd, self.state.input_kind)
-            raise PoseLifterError(f"unknown 2D input {kind!r}")
+            self._reject(self.input_dd, "input_kind", f"unknown 2D input {kind!r}")
         with self.lock:
             old = self.state.input_kind
             self.state.input_kind = kind
@@ -691,9 +690,8 @@ class SessionView:
         """Switch the lifting model (a name from ``assets/models.json``)."""
         try:
             self.app.pool.get(name)  # raises for unknown names, before touching the state
-        except PoseLifterError:
-            self._set_gui(self.model_dd, self.state.model)
-            raise
+        except PoseLifterError as exc:
+            self._reject(self.model_dd, "model", str(exc))
         self._model_pinned = True  # a photo upload no longer switches to the detector's model (nor back)
         self._auto_model = None
         self._commit("model", name, self.model_dd)

@@ -205,6 +205,9 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     good = view.frame
     assert view.select_demo("no-such-sample") is False and "unknown demo sample" in view.messages[-1]
     assert view.set_model("no-such-model") is False and "unknown model" in view.messages[-1]
+    assert view.model_dd.value == view.state.model  # the picker shows the model in use again
+    assert view.set_input_kind("bogus") is False and "unknown 2D input" in view.messages[-1]
+    assert view.input_dd.value == view.state.input_kind
     view.focal_slider.value = 1e9
     assert "clamped" in view.messages[-1] and view.state.focal_px == 6000.0 and np.isfinite(view.frame.root).all()
     view.focal_slider.value = float("nan")
