@@ -81,10 +81,7 @@ def main() -> None:
     print(f"model {lifter.name}: width {lifter.config.width}, {fpp / 1e6:.2f} MFLOP/pose; "
           f"matmul {gflops:.1f} GFLOP/s with {args.threads} threads -> FLOP limit {limit:,.0f} poses/s")
 
-    def one() -> None:
-        lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0))
-
-    single = time_calls(one, args.single_calls)
+    single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (float32, numpy path): median {p50:.3f} ms, p95 {p95:.3f} ms "
           f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
@@ -109,7 +106,7 @@ def main() -> None:
     print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
           f"-> {p50 / q50:.2f}x faster")
     results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
-               "single_median_ms": p50, "single_p95_ms": p95, "single_torch_module_median_ms": u50,
+               "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95, "single_torch_module_median_ms": u50,
                "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
