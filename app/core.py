@@ -196,7 +196,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     else:
         noisy = kp.copy()
         batch = kp[None]
-    res = lifter.lift(batch, focal=f, principal_point=pp)
+    res = lifter.lift(batch, focal=f, principal_point=pp, source=lift_source(state))
     if not (np.all(np.isfinite(res.absolute)) and np.all(np.isfinite(res.root))):
         raise PoseLifterError("the lift is not finite (extreme 2D coordinates or focal length); input ignored")
     lifted = res.absolute[0]
@@ -215,6 +215,18 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
             metrics["analytic root error"] = float(np.linalg.norm(analytic[0] - gt[0]))
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics)
+
+
+def lift_source(state: SessionState) -> str:
+    """What the lifted 2D is, for :meth:`lifter.Lifter.lift`: ``"clean"`` for ground-truth and demo 2D (dragged
+    joints included: they are placed by hand) without synthetic noise; ``"detected"`` for detections, photos,
+    keypoint uploads that do not say ``"source": "clean"``, and any 2D with mixture noise on it."""
+    if state.noise_level > 0:
+        return "detected"
+    up = state.sample.upload
+    if up is not None:  # (an upload's own 2D counts as its "detection": it has no ground truth)
+        return "clean" if getattr(up, "source", "detected") == "clean" else "detected"
+    return "detected" if state.input_kind == "detected" else "clean"
 
 
 def _focal_origin(state: SessionState) -> str:

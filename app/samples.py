@@ -17,11 +17,10 @@ from typing import Any
 import cv2
 import numpy as np
 
-from lifter import Camera, PoseLifterError
+from lifter import Camera, DemoSample, PoseLifterError, demo_sample, demo_sample_names
 from lifter.keypoints import convert
 from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
 
-from .demo_assets import DEMO_DIR
 
 @dataclass(frozen=True)
 class Sample:
@@ -54,31 +53,44 @@ def _read_rgb(path: Path) -> np.ndarray | None:
 
 
 class DemoCatalog:
-    """The embedded demo samples made by ``scripts/make_demo_assets.py`` (no H36M needed)."""
+    """The embedded demo samples (:func:`lifter.demo_sample`, made by ``scripts/make_demo_assets.py``; no H36M
+    needed). ``root``: read them from that folder instead of the installed package (same layout)."""
 
-    def __init__(self, root: Path = DEMO_DIR) -> None:
-        self.root = Path(root)
-        path = self.root / "samples.npz"
-        if not path.is_file():
-            raise FileNotFoundError(f"demo samples not found at {path}; run scripts/make_demo_assets.py")
-        d = np.load(path)
-        self._d = {k: d[k] for k in d.files}
-        self.names: tuple[str, ...] = tuple(str(n) for n in self._d["names"])
+    def __init__(self, root: Path | None = None) -> None:
+        self.root = None if root is None else Path(root)
+        if self.root is not None and not (self.root / "samples.npz").is_file():
+            raise FileNotFoundError(f"demo samples not found at {self.root / 'samples.npz'}; run "
+                                    "scripts/make_demo_assets.py")
+        if self.root is None:
+            self.names: tuple[str, ...] = tuple(demo_sample_names())
+        else:
+            with np.load(self.root / "samples.npz") as d:
+                self.names = tuple(str(n) for n in d["names"])
+
+    def _demo(self, name: str) -> DemoSample:
+        if self.root is None:
+            return demo_sample(name)
+        with np.load(self.root / "samples.npz") as d:
+            i = [str(n) for n in d["names"]].index(name)
+            w, h = (int(v) for v in d["image_size"][i])
+            return DemoSample(name=name, keypoints_2d=d["keypoints_2d"][i].astype(np.float64),
+                              pose_3d=d["pose_3d"][i].astype(np.float64), focal=d["focal"][i].astype(np.float64),
+                              principal_point=d["principal_point"][i].astype(np.float64), image_size=(w, h),
+                              R=d["R"][i].astype(np.float64), t=d["t"][i].astype(np.float64),
+                              image=(self.root / f"{name}.jpg").read_bytes())
 
     def get(self, name: str) -> Sample:
         """The demo sample ``name`` (one of :attr:`names`); raises :class:`PoseLifterError` otherwise."""
         if name not in self.names:
             raise PoseLifterError(f"unknown demo sample {name!r}; available: {list(self.names)}")
-        i = self.names.index(name)
-        d = self._d
-        w, h = (int(v) for v in d["image_size"][i])
-        cam = Camera(focal=tuple(float(v) for v in d["focal"][i]),  # type: ignore[arg-type]
-                     principal_point=tuple(float(v) for v in d["principal_point"][i]),  # type: ignore[arg-type]
-                     width=w, height=h, R=d["R"][i].astype(np.float64), t=d["t"][i].astype(np.float64),
-                     name=f"demo/{name}")
-        return Sample(key=f"demo/{name}", label=f"demo: {name}", keypoints_2d=d["keypoints_2d"][i].astype(np.float64),
-                      pose_3d=d["pose_3d"][i].astype(np.float64), detected_2d=None, camera=cam,
-                      image=_read_rgb(self.root / f"{name}.jpg"))
+        d = self._demo(name)
+        w, h = d.image_size
+        cam = Camera(focal=(float(d.focal[0]), float(d.focal[1])),
+                     principal_point=(float(d.principal_point[0]), float(d.principal_point[1])),
+                     width=w, height=h, R=d.R, t=d.t, name=f"demo/{name}")
+        img = cv2.imdecode(np.frombuffer(d.image, np.uint8), cv2.IMREAD_COLOR)
+        return Sample(key=f"demo/{name}", label=f"demo: {name}", keypoints_2d=d.keypoints_2d, pose_3d=d.pose_3d,
+                      detected_2d=None, camera=cam, image=None if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
 
 
 class H36MCatalog:

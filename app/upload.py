@@ -34,8 +34,11 @@ import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
-from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, ExifCamera, LoadedImage,
-                           MissingDependencyError, PoseEstimator2D, default_focal, focal_from_exif, load_image)
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
+from lifter.detect import (DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, ExifCamera, LoadedImage, MissingDependencyError,
+                           PoseEstimator2D, guess_focal, load_image)
+from lifter.io import LiftRecord, parse_keypoint_json
+from lifter.pipeline import lift_image
 from lifter.keypoints import H36M17, convert
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
@@ -80,6 +83,8 @@ class UploadInfo:
     scores: np.ndarray | None = None
     source_format: str = H36M17
     num_people: int | None = None
+    source: str = "detected"
+    """What the 2D is, for the lifter: photos are detector output; keypoint files say so (``"source"``)."""
     detector: str | None = None
     warnings: tuple[str, ...] = ()
 
@@ -210,10 +215,8 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
 
 def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estimator: PoseEstimator2D,
                  fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
-    """Detect the largest person on an uploaded photo and make it a sample (:func:`lifter.lift_cli.lift_image`:
+    """Detect the largest person on an uploaded photo and make it a sample (:func:`lifter.pipeline.lift_image`:
     raises :class:`lifter.detect.NoPersonError` when nobody is found)."""
-    from lifter.lift_cli import lift_image
-
     rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg)
     kp = _check_2d(rec.keypoints_2d, photo.name)  # (detections may be extrapolated outside the image)
     detail = next((w for w in rec.warnings if "px" in w and ("EXIF" in w or "field of view" in w)), rec.focal_source)
@@ -240,8 +243,6 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     when its size matches. Focal: the file's ``focal``; else the photo's EXIF focal (when drawn on it);
     else the default field of view ``fov_deg``. Principal point: the file's, else the image centre.
     """
-    from lifter.lift_cli import parse_keypoint_json
-
     check_upload(name, content)
     nm = safe_name(name)
     try:
@@ -273,19 +274,13 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     if kf.focal is not None:
         focal, src, detail = (float(kf.focal[0]), float(kf.focal[1])), "keypoint-file", "focal from the keypoint file"
     else:
-        if use_photo:
-            g = focal_from_exif(photo.exif, size, fov_deg=fov_deg)  # type: ignore[union-attr]
-        else:
-            f0 = default_focal(size, fov_deg=fov_deg)
-            from lifter.detect import FocalGuess
-
-            g = FocalGuess(f0, "default-fov", f"no focal length given: assumed a {fov_deg:g} deg diagonal field of "
-                                              f"view -> {f0:.1f} px")
+        g = guess_focal(size, exif=photo.exif if use_photo else None, fov_deg=fov_deg)  # type: ignore[union-attr]
         focal, src, detail = (g.focal, g.focal), g.source, g.detail
         notes.append(g.detail)
     pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
         else (size[0] / 2.0, size[1] / 2.0)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
+                      source=kf.source,
                       warnings=tuple(notes))
     image = photo.display if use_photo else _display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm)
@@ -308,15 +303,14 @@ def missing_detector_message(name: str, exc: Exception) -> str:
 
 def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: tuple[float, float],
                   dragged: set[int] | frozenset[int] = frozenset(), focal_changed: bool = False) -> Any:
-    """The tab's result as a :class:`lifter.lift_cli.LiftRecord`: the current clean 2D (``(17, 2)`` px,
+    """The tab's result as a :class:`lifter.io.LiftRecord`: the current clean 2D (``(17, 2)`` px,
     dragged joints included, no noise) lifted at ``focal`` and the sample's principal point."""
-    from lifter.lift_cli import LiftRecord
-
     kp = _check_2d(keypoints, sample.label)
     cam = sample.camera
     pp = (float(cam.principal_point[0]), float(cam.principal_point[1]))
-    res = lifter.lift(kp, focal=focal, principal_point=pp)
     info: UploadInfo | None = sample.upload
+    source = "clean" if info is None or info.source == "clean" else "detected"
+    res = lifter.lift(kp, focal=focal, principal_point=pp, source=source)
     warnings = list(info.warnings) if info is not None else []
     if dragged:
         warnings.append("2D joints corrected in the app: " + ", ".join(JOINT_NAMES[j] for j in sorted(dragged)))

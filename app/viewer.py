@@ -35,7 +35,6 @@ import viser
 import viser.transforms as vtf
 
 from lifter import PoseLifterError
-from lifter.api import model_for_detector
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
 
 from .core import (CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX, Frame, LifterPool,
@@ -149,12 +148,6 @@ class SessionView:
         self._sample_gen = 0
         self._drag_gen: int | None = None
         self._photo: up.Photo | None = None
-        self._model_pinned = False
-        self._auto_model: tuple[str, str] | None = None
-        """``(the user's model, the detector's model)`` of the last automatic switch by a photo upload
-        (:meth:`load_upload`): leaving the uploads goes back to the user's model unless one was picked since."""
-        self._upload_auto = False
-        """The last upload is shown with the detector's model of :attr:`_auto_model` (coming back to it too)."""
         self._input_pref = "gt"
         """The 2D input the user chose (:meth:`set_input_kind`); the effective ``state.input_kind`` follows it
         whenever the sample has that 2D (uploads, without ground-truth 2D, always use their detection)."""
@@ -566,9 +559,8 @@ class SessionView:
         given, the model kept). If it cannot be lifted the previous state is restored and the error raised.
 
         2D input: the user's choice (:attr:`_input_pref`) when the sample has it, else ground truth (with a
-        message when the detection is lost); an upload (no ground-truth 2D) always uses its own 2D.
-        Model: leaving the uploads after a photo upload switched the model (:attr:`_auto_model`) goes back
-        to the user's model, and coming back to that upload to the detector's, unless a model was picked since."""
+        message when the detection is lost); an upload (no ground-truth 2D) always uses its own 2D. The lifter
+        is told whether that 2D is exact or detected (:func:`poselifter_app.core.lift_source`)."""
         st = self.state
         if not sample.has_gt_2d:
             kind = "detected"
@@ -579,20 +571,8 @@ class SessionView:
                                   "(the detection is used again where there is one)")
         else:
             kind = self._input_pref
-        note = ""
-        if model is None and not self._model_pinned and self._auto_model is not None:
-            user_model, auto_model = self._auto_model
-            leaving = st.sample.upload is not None and sample.upload is None
-            returning = st.sample.upload is None and sample is self._last_upload and self._upload_auto
-            if leaving and st.model == auto_model and user_model != auto_model:
-                model, note = user_model, f"lifter back to '{user_model}', the model in use before the photo upload"
-            elif returning and st.model != auto_model:
-                model, note = auto_model, (f"lifter switched to '{auto_model}' for {sample.label}, the model trained "
-                                           "for its detector's 2D errors (Model menu)")
         self._apply_state(SessionState(sample=sample, model=model or st.model, input_kind=kind, noise_level=st.noise_level,
                                        seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic))
-        if note:
-            self.show_message(note)
 
     def _apply_state(self, state: SessionState) -> None:
         """Make ``state`` the tab's state and redraw everything; on :class:`PoseLifterError` (e.g. a
@@ -692,8 +672,6 @@ class SessionView:
             self.app.pool.get(name)  # raises for unknown names, before touching the state
         except PoseLifterError as exc:
             self._reject(self.model_dd, "model", str(exc))
-        self._model_pinned = True  # a photo upload no longer switches to the detector's model (nor back)
-        self._auto_model = None
         self._commit("model", name, self.model_dd)
 
     @control
@@ -811,7 +789,6 @@ class SessionView:
         content = bytes(content or b"")
         up.check_upload(name, content, max_bytes=self.app.max_upload_bytes)
         key = f"upload/{self.app.next_upload_id()}/{name}"
-        before = model = self.state.model
         if up.is_json_upload(name, content):
             sample = up.keypoint_sample(name, content, key=key, photo=self._photo)
         else:
@@ -821,22 +798,15 @@ class SessionView:
                 estimator = self.app.estimator()
             except up.MissingDependencyError as exc:
                 raise PoseLifterError(up.missing_detector_message(name, exc)) from None
-            model = self._model_for_photo(estimator)
             with self.app.detect_lock:
-                sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(model), estimator=estimator)
+                sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(self.state.model),
+                                         estimator=estimator)
         with self.lock:
-            # switch to the detector's model only if nobody changed the model while the detector ran
-            switched = model != before and self.state.model == before
-            try:  # restores the previous state (model included) if the pose cannot be lifted
-                self._set_sample(sample, model=model if switched else None)
+            try:  # restores the previous state if the pose cannot be lifted
+                self._set_sample(sample)
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{name}: {exc}") from None
             self._last_upload = sample
-            if switched:  # (a switch from a previous switch's model still returns to the user's model)
-                user = self._auto_model[0] if self._auto_model is not None and before == self._auto_model[1] else before
-                self._auto_model = (user, model)
-            self._upload_auto = (not self._model_pinned and self._auto_model is not None
-                                 and self.state.model == self._auto_model[1])
             if "upload" not in self.source_dd.options:
                 with self._quiet():
                     self.source_dd.options = list(self.source_dd.options) + ["upload"]
@@ -846,21 +816,8 @@ class SessionView:
         what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
                 if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
         notes = [n for n in info.warnings if n != info.focal_detail]
-        if switched:
-            notes.append(f"lifter switched to '{model}', the model trained for {info.detector}'s 2D errors (Model menu)")
         self.show_message(f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
                           + ("".join(f" Note: {n}." for n in notes)))
-
-    def _model_for_photo(self, estimator: Any) -> str:
-        """The lifter for a detected photo: the model trained for this detector's errors (when it is loaded),
-        unless the user picked a model in this tab (:meth:`set_model`): then that one."""
-        if self._model_pinned:
-            return self.state.model
-        try:
-            name = model_for_detector(str(getattr(estimator, "name", "")))
-        except PoseLifterError:
-            return self.state.model
-        return name if name in self.app.pool.names else self.state.model
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the
@@ -1074,10 +1031,10 @@ class PoseLifterApp:
         if self.pool.error:
             log.error("no models: %s", self.pool.error)
         if default_model is None:
-            from lifter.api import model_registry
+            from lifter.resources import default_model_name
 
             try:
-                default_model = model_registry()["default"]
+                default_model = default_model_name()
             except PoseLifterError:
                 default_model = self.pool.names[0] if self.pool.names else ""
         self.default_model = default_model

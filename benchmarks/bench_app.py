@@ -35,8 +35,8 @@ def main() -> int:
     import torch
     import viser
 
-    from app.testing import FakeTab, local_server, wait_for
-    from app.viewer import PoseLifterApp
+    from poselifter_app.testing import FakeTab, local_server, wait_for
+    from poselifter_app.viewer import PoseLifterApp
 
     torch.set_num_threads(args.threads)
     server = local_server()

@@ -1,14 +1,17 @@
 """poselifter: absolute 3D human pose from a single 2D pose (PoseLifter, Chang, Moon & Lee).
 
-Units: pixels for 2D, millimetres for 3D. Camera frame: OpenCV (+x right, +y down, +z forward).
-Joint order: the 17 Human3.6M joints of :mod:`lifter.skeleton`.
+Data flows one way: 2D keypoints (px) -> :mod:`lifter.codec` (reference camera, normalization layer) ->
+:mod:`lifter.model` (network) -> codec decode (relative pose, canonical depth, root) -> absolute pose (mm)
+-> :mod:`lifter.metrics` / the app. Units: pixels for 2D, millimetres for 3D. Camera frame: OpenCV
+(+x right, +y down, +z forward). Joint order: the 17 Human3.6M joints of :mod:`lifter.skeleton`.
 """
 
 from ._checks import CheckpointError, PoseLifterError
 from .analytic import analytic_root
-from .api import LiftResult, Lifter, available_models, model_for_detector
+from .api import LiftResult, Lifter, available_models
 from .camera import (
     CANONICAL_FOCAL,
+    DEFAULT_DIAGONAL_FOV_DEG,
     Camera,
     backproject,
     canonical_depth_from_depth,
@@ -16,21 +19,27 @@ from .camera import (
     flip_keypoints_2d,
     flip_pose_3d,
     focal_alpha,
+    focal_from_fov,
     project,
     root_from_canonical_depth,
+    to_reference_camera,
 )
+from .codec import SOURCES, Decoded, Encoded, PoseCodec
 from .keypoints import KEYPOINT_FORMATS, convert
 from .metrics import auc, mpjpe, pa_mpjpe, pck, root_errors
 from .model import ModelConfig, PoseLifterNet
 from .noise import ErrorModel
-from .normalization import normalize_keypoints, normalize_keypoints_np
-from .skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, NUM_JOINTS, PARENTS
+from .resources import DemoSample, demo_sample, demo_sample_names
+from .normalization import location_and_scale, normalize_keypoints, pose_features, pose_scale
+from .skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, NUM_JOINTS, PARENTS, mirror
 
 __all__ = [
-    "CANONICAL_FOCAL", "Camera", "ErrorModel", "KEYPOINT_FORMATS", "convert", "CheckpointError", "EDGES", "FLIP_PERMUTATION", "JOINT_NAMES", "LiftResult",
-    "Lifter", "ModelConfig", "NUM_JOINTS", "PARENTS", "PoseLifterError", "PoseLifterNet", "analytic_root", "auc",
-    "available_models", "backproject", "canonical_depth_from_depth", "depth_from_canonical_depth",
-    "flip_keypoints_2d", "flip_pose_3d", "focal_alpha", "model_for_detector", "mpjpe", "normalize_keypoints", "normalize_keypoints_np",
-    "pa_mpjpe", "pck", "project", "root_errors", "root_from_canonical_depth",
+    "CANONICAL_FOCAL", "DEFAULT_DIAGONAL_FOV_DEG", "EDGES", "FLIP_PERMUTATION", "JOINT_NAMES", "KEYPOINT_FORMATS",
+    "NUM_JOINTS", "PARENTS", "SOURCES", "Camera", "CheckpointError", "Decoded", "Encoded", "ErrorModel", "LiftResult",
+    "DemoSample", "Lifter", "ModelConfig", "PoseCodec", "PoseLifterError", "PoseLifterNet", "analytic_root", "auc",
+    "available_models", "backproject", "canonical_depth_from_depth", "convert", "demo_sample", "demo_sample_names", "depth_from_canonical_depth",
+    "flip_keypoints_2d", "flip_pose_3d", "focal_alpha", "focal_from_fov", "location_and_scale", "mirror", "mpjpe",
+    "normalize_keypoints", "pa_mpjpe", "pck", "pose_features", "pose_scale", "project", "root_errors",
+    "root_from_canonical_depth", "to_reference_camera",
 ]
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -3,95 +3,93 @@
 Example::
 
     from lifter import Lifter
-    lifter = Lifter.from_pretrained()                    # shipped default weights
-    res = lifter.lift(keypoints, focal=(fx, fy), principal_point=(cx, cy))
+    lifter = Lifter.from_pretrained()                  # the shipped default, for every input
+    res = lifter.lift(keypoints, focal=(fx, fy), principal_point=(cx, cy))            # detector 2D
+    res = lifter.lift(keypoints, focal=(fx, fy), principal_point=(cx, cy), source="clean")  # exact 2D
     res.absolute   # (..., 17, 3) mm, camera frame (OpenCV: +x right, +y down, +z forward)
 """
 
 from __future__ import annotations
 
-import json
+import copy
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final, Literal
 
 import numpy as np
 import torch
 
+from . import resources as assets
 from ._checks import PoseLifterError, as_pair, as_points
-from .camera import CANONICAL_FOCAL, canonical_depth_from_depth, root_from_canonical_depth
-from .checkpoint import load_checkpoint
-from .model import PoseLifterNet, forward_flat_numpy, split_output
-from .normalization import normalize_keypoints, pose_scale_np
-from .skeleton import FLIP_PERMUTATION, NUM_JOINTS
+from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
+from .checkpoint import Checkpoint, load_checkpoint
+from .codec import SOURCES, Encoded, PoseCodec, Source
+from .model import ModelConfig, PoseLifterNet, forward_numpy
+from .normalization import pose_scale
+from .skeleton import NUM_JOINTS
 
-NUMPY_MAX_BATCH: int = 1
-"""Batches up to this many poses run the network in numpy (:func:`~lifter.model.forward_flat_numpy`),
-larger ones through the torch module. A single pose is a chain of matrix-vector products, where numpy's
-OpenBLAS beats torch's CPU kernels on the development machine (``benchmarks/bench_lift.py`` times both on
-one pose); from two poses on torch is as fast or faster."""
-ASSETS_DIR = Path(os.environ.get("POSELIFTER_ASSETS", Path(__file__).resolve().parent.parent / "assets"))
-DEGENERATE_SCALE_PX = 1e-3
-MIN_POSE_SCALE_PX = 2.0
+NUMPY_MAX_BATCH: Final[int] = 1
+"""Batches up to this many network rows run in numpy (:func:`~lifter.model.forward_numpy`), larger ones
+through the torch module. One row is a chain of matrix-vector products, where numpy's BLAS has less
+overhead than torch; from two rows on, torch's kernels are much faster than OpenBLAS's small-matrix
+path (``benchmarks/bench_lift.py`` times both)."""
+CHUNK_SIZE: Final[int] = 32768
+"""Poses per network pass in :meth:`Lifter.lift`: larger batches are lifted in chunks of this size, so
+memory stays bounded (the result is the same as one pass)."""
+DEGENERATE_SCALE_PX: Final[float] = 1e-3
+MIN_POSE_SCALE_PX: Final[float] = 2.0
 """Poses whose 2D scale (RMS radius) is below this many pixels are rejected: they are degenerate or not in pixels."""
-MAX_ABS_PX = 1e6
+MAX_ABS_PX: Final[float] = 1e6
 """Keypoints, principal point and focal length beyond this magnitude (px) are refused: float32 overflow
 territory, and never image pixels."""
 
-
-def model_registry(assets_dir: Path | None = None) -> dict[str, Any]:
-    """``assets/models.json``: ``{"default": name, "models": {name: {"file": ..., "description": ...}}}``."""
-    path = (assets_dir or ASSETS_DIR) / "models.json"
-    if not path.is_file():
-        raise PoseLifterError(f"no shipped models: {path} not found")
-    return json.loads(path.read_text())
+FocalSource = Literal["given", "default-fov", "reference"]
 
 
 def available_models() -> list[str]:
-    """Names accepted by :meth:`Lifter.from_pretrained`."""
-    return sorted(model_registry()["models"])
-
-
-def model_for_detector(detector: str) -> str:
-    """The shipped model trained for ``detector``'s 2D errors (the registry entry whose ``"detector"`` is
-    that name, e.g. ``"blazepose"``); the default model when there is none."""
-    reg = model_registry()
-    names = [name for name, entry in reg["models"].items() if entry.get("detector") == detector]
-    if len(names) > 1:
-        raise PoseLifterError(f"assets/models.json names several models for detector {detector!r}: {names}")
-    return names[0] if names else reg["default"]
+    """Names accepted by :meth:`Lifter.from_pretrained` (besides ``"default"`` and checkpoint paths)."""
+    return assets.model_names()
 
 
 @dataclass(frozen=True)
 class LiftResult:
-    """Lifted poses for inputs of leading shape ``(...)``.
+    """Lifted poses for inputs of leading shape ``(...)``. All 3D in mm, camera frame (OpenCV).
 
-    canonical_depth: ``(...)`` mm at the reference focal length F0 = 1000 px (``Z * 1000 / alpha``).
-    root: ``(..., 3)`` mm, camera frame. If ``metric_depth`` is False (no focal length was given),
-        the root is placed for a virtual camera of focal 1000 px: X and Y are correct (they only depend
-        on Z/f), Z equals ``canonical_depth`` and the true Z is ``canonical_depth * alpha / 1000``.
-    relative: ``(..., 17, 3)`` mm, root-relative pose in camera orientation, root row zero.
-    absolute: ``(..., 17, 3)`` mm, camera frame, ``root + relative``.
-    keypoints_2d: ``(..., 17, 2)`` px, the input. principal_point: ``(..., 2)`` px.
-    focal: ``(..., 2)`` px or None when unknown.
+    absolute: ``(..., 17, 3)`` the absolute pose, ``root + relative``.
+    root: ``(..., 3)`` the pelvis: the input's 2D pelvis back-projected at depth ``root[..., 2]``.
+    relative: ``(..., 17, 3)`` root-relative pose, root row zero.
+    canonical_depth: ``(...)`` ``Z * 1000 / alpha`` (mm as seen by a 1000-px camera; alpha = sqrt(fx fy)):
+        known whether or not the focal length is.
+    keypoints_2d: ``(..., 17, 2)`` px, the input. principal_point, focal: ``(..., 2)`` px used.
+    focal_source: ``"given"``; ``"default-fov"`` (no focal: the default diagonal field of view of
+        ``image_size``); ``"reference"`` (no focal and no image size: a 1000-px camera).
+    metric_depth: True when the focal length was given. Otherwise Z (and so the root and the absolute pose)
+        is right only up to the unknown focal length, ``Z_true = Z * f_true / f_used`` (paper Eq. 5-6);
+        the canonical depth, the relative pose and the root's direction are known regardless.
+    source: ``"detected"`` or ``"clean"``, as passed.
     """
 
-    canonical_depth: np.ndarray
+    absolute: np.ndarray
     root: np.ndarray
     relative: np.ndarray
-    absolute: np.ndarray
+    canonical_depth: np.ndarray
     keypoints_2d: np.ndarray
     principal_point: np.ndarray
-    focal: np.ndarray | None
+    focal: np.ndarray
+    focal_source: FocalSource
     metric_depth: bool
+    source: Source
 
     @property
     def note(self) -> str:
         if self.metric_depth:
             return "absolute pose in mm, camera frame"
-        return ("no focal length given: root placed for a 1000-px focal; X, Y are metric but Z is known only "
-                "up to the unknown focal length (Z = canonical_depth * alpha / 1000)")
+        used = ("the default field of view of the image" if self.focal_source == "default-fov"
+                else "a 1000-px reference camera")
+        return (f"no focal length given: depth placed for {used}; the pose, the canonical depth (Z/f) and the root's "
+                "direction are known, Z itself only up to the unknown focal length (Z_true = Z * f_true / f_used)")
 
 
 def _where(bad: np.ndarray) -> str:
@@ -110,63 +108,59 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
 
 
 class Lifter:
-    """A trained PoseLifter network with numpy-in / numpy-out inference."""
+    """A trained network and its codec, numpy in / numpy out (module docstring)."""
 
-    def __init__(self, net: PoseLifterNet, *, name: str = "custom", meta: dict[str, Any] | None = None) -> None:
+    def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
+                 meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None) -> None:
+        if net.config != codec.config:
+            raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
         self.net = net.eval()
+        self.codec = codec
         self.name = name
         self.meta = meta or {}
+        self.train_config = train_config
 
     @property
-    def config(self):
+    def config(self) -> ModelConfig:
         return self.net.config
 
+    # -- construction --------------------------------------------------------------------------------
     @classmethod
-    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None,
-                        quantize: bool = False) -> "Lifter":
-        """Load a checkpoint file (``weights_only=True``); see :mod:`lifter.checkpoint`."""
-        net, meta = load_checkpoint(path)
-        lifter = cls(net, name=name or Path(path).stem, meta=meta)
+    def _from(cls, ck: Checkpoint, name: str, quantize: bool) -> "Lifter":
+        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
-    def from_pretrained(cls, name: str = "default", *, quantize: bool = False) -> "Lifter":
-        """Shipped weights by name (see :func:`available_models`); ``"default"`` is the recommended one.
-        ``quantize=True``: see :meth:`quantized`."""
-        reg = model_registry()
-        if name == "default":
-            name = reg["default"]
-        if name not in reg["models"]:
-            raise PoseLifterError(f"unknown model {name!r}; available: {sorted(reg['models'])} or 'default'")
-        return cls.from_checkpoint(ASSETS_DIR / reg["models"][name]["file"], name=name, quantize=quantize)
+    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False) -> "Lifter":
+        """Load your own checkpoint file (``weights_only=True``; :mod:`lifter.checkpoint`)."""
+        return cls._from(load_checkpoint(path), name or Path(path).stem, quantize)
 
     @classmethod
-    def load(cls, ref: str | os.PathLike[str], *, quantize: bool = False) -> "Lifter":
-        """A shipped model name (``"default"``, ``"gt"``, ...) or a checkpoint path (``*.pt``)."""
-        ref = str(ref)
-        if ref == "default" or ref in model_registry()["models"] or not (ref.endswith(".pt") or Path(ref).is_file()):
-            return cls.from_pretrained(ref, quantize=quantize)  # shipped names win over same-named local files
-        return cls.from_checkpoint(ref, quantize=quantize)
+    def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> "Lifter":
+        """Shipped weights by name (``"default"``, or one of :func:`available_models`), checked against their
+        sha256; or a checkpoint path (``.pt``) of your own. ``quantize=True``: see :meth:`quantized`."""
+        ref = str(name)
+        if ref != "default" and ref not in assets.model_names() and (ref.endswith(".pt") or Path(ref).is_file()):
+            return cls.from_checkpoint(ref, quantize=quantize)  # shipped names win over same-named local files
+        entry = assets.model_entry(ref)
+        data = assets.read_bytes(entry["file"])
+        ck = load_checkpoint(data, expected_sha256=entry.get("sha256"), name=f"shipped model {entry['name']!r} "
+                             f"({entry['file']})")
+        return cls._from(ck, entry["name"], quantize)
+
+    load = from_pretrained
+    """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
 
     def quantized(self) -> "Lifter":
-        """A copy whose residual-block Linear layers use int8 weights (dynamic quantization).
-
-        A quarter of the weight memory (4 MB instead of 16 MB of block weights), with MPJPE unchanged at
-        0.1 mm and MRPE within 1 mm on H36M (``poselifter evaluate --quantize``). It always runs the torch
-        module (not the numpy single-pose path of :meth:`lift`); for a single pose it is still ~1.3x
-        faster than float32, with less weight memory to stream (``benchmarks/bench_lift.py``). The
-        normalization layer, stem and head stay float32 (pixel precision).
-        """
-        import copy
-        import warnings
-
+        """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the
+        block weight memory. It always runs the torch module. The stem and head stay float32."""
         net = copy.deepcopy(self.net)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
-        return Lifter(net, name=f"{self.name} (int8)", meta=self.meta)
+        return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config)
 
-    # ------------------------------------------------------------------------------------------
+    # -- lifting -------------------------------------------------------------------------------------
     def lift(
         self,
         keypoints: Any,
@@ -174,33 +168,48 @@ class Lifter:
         focal: Any | None = None,
         principal_point: Any | None = None,
         image_size: Any | None = None,
+        source: Source = "detected",
         flip_test: bool = False,
     ) -> LiftResult:
-        """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order) to absolute 3D poses.
+        """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order, :data:`lifter.JOINT_NAMES`) to absolute 3D.
 
-        focal: ``fx = fy`` scalar, ``(fx, fy)`` or batched ``(..., 2)`` (per pose: give the last axis
-            explicitly, ``(..., 2)`` or ``(..., 1)``; a bare ``(2,)`` always means ``(fx, fy)``), px;
-            None -> canonical depth only.
-        principal_point: ``(cx, cy)`` or ``(..., 2)`` px; defaults to the image centre when
-            ``image_size = (width, height)`` is given.
-        flip_test: also lift the mirrored input and average (slower, slightly more accurate).
+        focal: ``fx = fy`` scalar, ``(fx, fy)`` or per pose ``(..., 2)`` px (a bare ``(2,)`` always means
+            ``(fx, fy)``). None: unknown; then the default diagonal field of view
+            (:data:`lifter.camera.DEFAULT_DIAGONAL_FOV_DEG`) of ``image_size`` is assumed, or a 1000-px
+            reference camera without an image size, and the result says so (``metric_depth=False``).
+        principal_point: ``(cx, cy)`` or ``(..., 2)`` px; defaults to the image centre of ``image_size``.
+        image_size: ``(width, height)`` px, for the defaults above.
+        source: ``"detected"`` (default): 2D from a detector; ``"clean"``: exact 2D (ground truth,
+            hand-placed or dragged joints). The lifter uses what it was trained for on each.
+        flip_test: also lift the mirrored input and average (exactly mirror-equivariant; slower).
         """
+        if source not in SOURCES:
+            raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
         lead = kp.shape[:-2]
+        wh = None if image_size is None else as_pair(image_size, name="image_size", positive=True)
         if principal_point is None:
-            if image_size is None:
-                raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the image centre)")
-            wh = as_pair(image_size, name="image_size", positive=True)
+            if wh is None:
+                raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the "
+                                      "image centre)")
             principal_point = wh / 2.0
         pp = _broadcast(as_pair(principal_point, name="principal_point"), lead, name="principal_point")
-        f = None
-        if focal is not None:
-            f = _broadcast(as_pair(focal, name="focal", positive=True), lead, name="focal")
+        focal_source: FocalSource = "given"
+        if focal is None:
+            if self.config.input_space == "pixel" and self.config.depth_target == "absolute":
+                raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
+            if wh is not None:
+                if wh.ndim != 1:
+                    raise PoseLifterError("image_size: give one (width, height) for the default focal length")
+                focal, focal_source = focal_from_fov(wh, fov_deg=DEFAULT_DIAGONAL_FOV_DEG), "default-fov"
+            else:
+                focal, focal_source = CANONICAL_FOCAL, "reference"
+        f = _broadcast(as_pair(focal, name="focal", positive=True), lead, name="focal")
         for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
-            if arr is not None and arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
+            if arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
                 raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "
                                       f"must be below {MAX_ABS_PX:.0e} in magnitude")
-        scale = pose_scale_np(kp)
+        scale = pose_scale(kp)
         if np.any(scale < DEGENERATE_SCALE_PX):
             raise PoseLifterError(
                 f"degenerate pose{_where(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point (2D scale "
@@ -210,55 +219,60 @@ class Lifter:
                 f"2D pose scale {float(scale.min()):.3g} px{_where(scale < MIN_POSE_SCALE_PX)} is too small "
                 f"(< {MIN_POSE_SCALE_PX} px): keypoints must be in image pixels (normalized [0, 1] coordinates? "
                 "multiply by the image size)")
-        if self.config.depth_target == "absolute" and f is None:
-            raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
-        flat_pp = np.ascontiguousarray(pp.reshape(-1, 2))
-        rel, depth = self._run(flat_kp, flat_pp)
-        if flip_test:
-            perm = np.asarray(FLIP_PERMUTATION)
-            kp_m = flat_kp[:, perm].copy()
-            kp_m[..., 0] = 2.0 * flat_pp[:, None, 0] - kp_m[..., 0]
-            rel_m, depth_m = self._run(kp_m, flat_pp)
-            rel_m = rel_m[:, perm]
-            rel_m[..., 0] *= -1.0
-            rel = 0.5 * (rel + rel_m)
-            depth = 0.5 * (depth + depth_m)
-        if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(depth))):
+        flat_pp = pp.reshape(-1, 2)
+        flat_f = f.reshape(-1, 2)
+        n = len(flat_kp)
+        rel = np.empty((n, NUM_JOINTS, 3))
+        root = np.empty((n, 3))
+        canonical = np.empty(n)
+        for s in range(0, n, CHUNK_SIZE):
+            sl = slice(s, min(n, s + CHUNK_SIZE))
+            rel[sl], root[sl], canonical[sl] = self._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, flip_test)
+        if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(root))):
             raise PoseLifterError(f"model {self.name!r} produced non-finite outputs (corrupt weights?)")
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
-        depth = depth.reshape(lead)
-        if self.config.depth_target == "canonical":
-            canonical = depth
-        else:
-            canonical = canonical_depth_from_depth(depth, focal=f)
-        root = root_from_canonical_depth(kp[..., 0, :], canonical, focal=f if f is not None else CANONICAL_FOCAL,
-                                         principal_point=pp)
-        return LiftResult(canonical_depth=canonical, root=root, relative=rel, absolute=root[..., None, :] + rel,
-                          keypoints_2d=kp, principal_point=np.array(pp), focal=None if f is None else np.array(f),
-                          metric_depth=f is not None)
+        root = root.reshape(lead + (3,))
+        absolute = rel + root[..., None, :]
+        return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
+                          keypoints_2d=kp, principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
+                          metric_depth=focal_source == "given", source=source)
 
-    def _run(self, kp: np.ndarray, pp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Network on ``(N, 17, 2)`` px and ``(N, 2)`` px -> relative ``(N, 17, 3)`` mm, depth ``(N,)``."""
+    def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source,
+                   flip_test: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(N, 17, 2)``, ``(N, 2)``, ``(N, 2)`` px -> relative ``(N, 17, 3)``, root ``(N, 3)`` mm, canonical ``(N,)``."""
+        codec = self.codec
+        kp32, pp32, f32 = kp.astype(np.float32), pp.astype(np.float32), f.astype(np.float32)
+        enc = codec.encode(kp32, principal_point=pp32, focal=f32, source=source)
+        feats = enc.features
+        if flip_test:
+            enc_m = codec.encode(codec.mirror_input(kp32, pp32), principal_point=pp32, focal=f32, source=source)
+            feats = np.concatenate([feats, enc_m.features])
+        out = self._network(np.ascontiguousarray(feats, np.float32))
+        raw = codec.destandardize(out.astype(np.float64))
+        if flip_test:
+            raw = 0.5 * (raw[: len(kp)] + codec.mirror_output(raw[len(kp):]))
+        alpha = np.sqrt(f[:, 0] * f[:, 1])  # float64 from here on: the features alone were float32
+        alpha_in = alpha if codec.config.input_space == "pixel" else np.full_like(alpha, codec.reference_focal)
+        enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha)
+        dec = codec.decode(raw, enc64, root_2d=kp[:, 0], principal_point=pp, focal=f)
+        return dec.relative, dec.root, dec.canonical_depth
+
+    def _network(self, features: np.ndarray) -> np.ndarray:
+        """Standardized network outputs ``(N, 49)`` for features ``(N, F)`` float32."""
         net = self.net
-        kp_t = torch.from_numpy(kp.astype(np.float32))
-        pp_t = torch.from_numpy(pp.astype(np.float32))
+        if len(features) <= NUMPY_MAX_BATCH:
+            out = forward_numpy(net, features)
+            if out is not None:
+                return out
+        if any(m.training for m in net.modules() if isinstance(m, (torch.nn.Dropout, torch.nn.BatchNorm1d))):
+            raise PoseLifterError(f"model {self.name!r} is in training mode (dropout, batch statistics): call "
+                                  "lifter.net.eval()")
         with torch.inference_mode():
-            flat = None
-            if len(kp) <= NUMPY_MAX_BATCH:
-                x = normalize_keypoints(kp_t, pp_t, mode=net.config.mode, scale_definition=net.config.scale_definition)
-                flat = forward_flat_numpy(net, x.numpy())
-            if flat is not None:
-                out = split_output(torch.from_numpy(flat))
-            else:
-                if any(m.training for m in net.modules() if isinstance(m, (torch.nn.Dropout, torch.nn.BatchNorm1d))):
-                    raise PoseLifterError(
-                        f"model {self.name!r} is in training mode (dropout, batch statistics): call lifter.net.eval()")
-                out = net(kp_t, pp_t)
-        return out.relative.numpy().astype(np.float64), out.depth.numpy().astype(np.float64)
+            return net(torch.from_numpy(features)).numpy()
 
     def __repr__(self) -> str:
         c = self.config
-        return f"Lifter(name={self.name!r}, width={c.width}, mode={c.mode!r}, depth_target={c.depth_target!r})"
-
+        return (f"Lifter(name={self.name!r}, input_space={c.input_space!r}, depth_target={c.depth_target!r}, "
+                f"conditioning={c.conditioning!r}, width={c.width})")

@@ -9,8 +9,11 @@ Conventions
 * ``focal`` is ``(fx, fy)`` in pixels; ``alpha = sqrt(fx * fy)`` is the single focal length used
   by the canonical depth.
 * Canonical depth: ``Z_canonical = Z * F0 / alpha`` with ``F0 = 1000`` px, i.e. the root depth in
-  mm *as it would be for a 1000-px focal length*. It is what the network predicts; it does not
-  depend on the focal length of the camera that took the picture.
+  mm *as it would be for a 1000-px focal length*. It does not depend on the focal length of the camera
+  that took the picture (PoseLifter Eq. 5).
+* Reference camera: :func:`to_reference_camera` maps pixels through the intrinsics to a camera of focal
+  ``F0`` and principal point 0, ``(x - c) * F0 / f``. Coordinates there do not depend on the image
+  resolution or the focal length: they are the viewing rays, scaled by ``F0``.
 
 All functions are pure and batched over leading dimensions: points are ``(..., J, 2)`` or
 ``(..., J, 3)``; per-camera parameters broadcast against the leading dimensions.
@@ -18,16 +21,23 @@ All functions are pure and batched over leading dimensions: points are ``(..., J
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
+from array_api_compat import array_namespace
 
 from ._checks import PoseLifterError, as_pair
-from .skeleton import FLIP_PERMUTATION
+from .skeleton import mirror
 
 CANONICAL_FOCAL: float = 1000.0
-"""F0, the reference focal length (px) of the canonical depth."""
+"""F0, the reference focal length (px) of the canonical depth and of the reference camera."""
+DEFAULT_DIAGONAL_FOV_DEG: float = 65.0
+"""Diagonal field of view assumed when neither the user nor the image's EXIF data give a focal length:
+``f = image_diagonal / (2 tan 32.5 deg) = 0.785 * diagonal`` (a 34 mm full-frame equivalent)."""
+
+ArrayT = TypeVar("ArrayT")
 
 
 def _last2(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
@@ -96,17 +106,46 @@ def project(
     return xy * _last2(focal, name="focal", positive=True) + _last2(principal_point, name="principal_point")
 
 
+def _pair(x: ArrayT, like: Any) -> ArrayT:
+    """A scalar / ``(..., 2)`` focal or principal point as a ``(..., 2)`` array of ``like``'s type."""
+    xp = array_namespace(like)
+    a = xp.asarray(x, dtype=like.dtype, device=getattr(like, "device", None)) if not hasattr(x, "shape") else x
+    if a.ndim == 0:
+        a = xp.stack([a, a])
+    return a
+
+
+def to_reference_camera(keypoints: ArrayT, *, focal: Any, principal_point: Any,
+                        reference_focal: float = CANONICAL_FOCAL) -> ArrayT:
+    """Map pixels ``(..., J, 2)`` through the intrinsics to the reference camera: ``(x - c) * F0 / f``.
+
+    ``focal`` ``(fx, fy)`` and ``principal_point`` px, as ``(2,)`` or ``(..., 2)`` arrays of the keypoints'
+    type (numpy or torch). The result is in "pixels of a camera with focal ``F0`` and principal point 0":
+    the viewing ray of each joint times ``F0``. Scaling an image together with its intrinsics, or
+    re-projecting a scene with another focal length, leaves it unchanged.
+    """
+    f = _pair(focal, keypoints)
+    c = _pair(principal_point, keypoints)
+    return (keypoints - c[..., None, :]) * (reference_focal / f[..., None, :])
+
+
+def backproject_generic(uv: ArrayT, depth: Any, focal: Any, principal_point: Any) -> ArrayT:
+    """Pinhole back-projection, no validation, numpy or torch: pixels ``(..., 2)`` at depth ``(...)`` mm ->
+    camera frame ``(..., 3)`` mm, ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``. The one implementation
+    behind :func:`backproject`, :func:`root_from_canonical_depth` and :mod:`lifter.codec`."""
+    xp = array_namespace(uv)
+    z = depth[..., None]
+    xy = (uv - _pair(principal_point, uv)) / _pair(focal, uv) * z
+    return xp.concat([xy, z], axis=-1)
+
+
 def backproject(uv: np.ndarray, depth: np.ndarray, *, focal: Any, principal_point: Any) -> np.ndarray:
     """Pinhole back-projection of pixels ``(..., 2)`` at depth ``(...)`` mm to camera-frame ``(..., 3)``.
 
     Inverse of :func:`project` without distortion: ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``.
     """
-    uv = np.asarray(uv, np.float64)
-    z = np.asarray(depth, np.float64)[..., None]
-    f = as_pair(focal, name="focal", positive=True)
-    c = as_pair(principal_point, name="principal_point")
-    xy = (uv - c) / f * z
-    return np.concatenate([xy, z], axis=-1)
+    return backproject_generic(np.asarray(uv, np.float64), np.asarray(depth, np.float64),
+                               as_pair(focal, name="focal", positive=True), as_pair(principal_point, name="principal_point"))
 
 
 def canonical_depth_from_depth(depth_mm: Any, *, focal: Any) -> np.ndarray:
@@ -132,6 +171,17 @@ def root_from_canonical_depth(
     return backproject(root_2d, z, focal=focal, principal_point=principal_point)
 
 
+def focal_from_fov(image_size: Any, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
+    """The focal length (px) that gives a diagonal field of view ``fov_deg`` to an image of
+    ``image_size = (W, H)`` px: ``hypot(W, H) / (2 tan(fov / 2))``. Scales with the image."""
+    if not (math.isfinite(fov_deg) and 0 < fov_deg < 180):
+        raise PoseLifterError(f"field of view must be in (0, 180) degrees, got {fov_deg}")
+    w, h = (float(v) for v in image_size)
+    if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
+        raise PoseLifterError(f"image_size must be two positive numbers (width, height) px, got {tuple(image_size)}")
+    return math.hypot(w, h) / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
+
+
 # --------------------------------------------------------------------------------------------
 # Horizontal flip
 # --------------------------------------------------------------------------------------------
@@ -142,25 +192,22 @@ def flip_keypoints_2d(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Mirror a 2D pose ``(..., 17, 2)`` px about the image's vertical centre line.
 
-    ``x -> W - x`` **and** ``cx -> W - cx``, with left/right joints swapped. Returns the flipped
-    keypoints and the flipped principal point ``(..., 2)``. Flipping twice is the identity, and it
-    commutes with pinhole projection of the 3D pose flipped by :func:`flip_pose_3d`.
+    ``x -> W - x`` **and** ``cx -> W - cx``, with left/right joints swapped: :func:`lifter.skeleton.mirror`
+    of the coordinates relative to the principal point, re-attached to the mirrored principal point.
+    Returns the flipped keypoints and the flipped principal point ``(..., 2)``. Flipping twice is the
+    identity, and it commutes with pinhole projection of the 3D pose flipped by :func:`flip_pose_3d`.
     """
     kp = np.asarray(keypoints, np.float64)
-    W = np.asarray(image_width, np.float64)[..., None]
+    W = np.asarray(image_width, np.float64)
     c = as_pair(principal_point, name="principal_point")
-    out = kp[..., FLIP_PERMUTATION, :].copy()
-    out[..., 0] = W - out[..., 0]
-    c_out = c.copy()
-    c_out[..., 0] = np.asarray(image_width, np.float64) - c_out[..., 0]
-    return out, c_out
+    c_out = np.stack(np.broadcast_arrays(W - c[..., 0], c[..., 1]), axis=-1)
+    return mirror(kp - c[..., None, :]) + c_out[..., None, :], c_out
 
 
 def flip_pose_3d(points_cam: np.ndarray) -> np.ndarray:
-    """Mirror a camera-frame 3D pose ``(..., 17, 3)``: negate X and swap left/right joints."""
-    out = np.asarray(points_cam, np.float64)[..., FLIP_PERMUTATION, :].copy()
-    out[..., 0] = -out[..., 0]
-    return out
+    """Mirror a camera-frame 3D pose ``(..., 17, 3)``: negate X and swap left/right joints
+    (:func:`lifter.skeleton.mirror`)."""
+    return mirror(np.asarray(points_cam, np.float64))
 
 
 # --------------------------------------------------------------------------------------------

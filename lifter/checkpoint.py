@@ -1,105 +1,173 @@
-"""Checkpoint files: a plain dict of tensors and primitives, always loaded with ``weights_only=True``.
+"""Checkpoint files: a plain dict of tensors and primitives, always loaded with ``torch.load(weights_only=True)``.
 
-Format (``format == "poselifter-checkpoint"``, ``version == 1``)::
+Format ``"poselifter-checkpoint"``, version 2::
 
-    {"format": str, "version": int, "model_config": dict, "state_dict": {name: Tensor},
-     "meta": dict (training recipe, data, metrics; primitives only)}
+    {"format": str, "version": 2,
+     "model_config": dict (lifter.model.ModelConfig),
+     "codec": {"target_mean": Tensor (49,), "target_std": Tensor (49,)},
+     "state_dict": {name: Tensor},            # the network (lifter.model.PoseLifterNet)
+     "train_config": dict or None,            # lifter.config.TrainConfig.to_dict(): reruns with --config
+     "meta": dict}                            # provenance and metrics; primitives only
 
-Weights may be stored in float16 to halve the file size; they are cast back to float32 on load.
+Version 1 files (network and target statistics in one state dict, the paper's pixel-space model) are
+migrated on load. Weights may be stored in float16 to halve the file size; they are cast to float32 on
+load. Loading checks, in this order and before the network is allocated: the file's sha256 when one is
+expected (shipped weights), the format and version, the model config's values and bounds
+(:class:`~lifter.model.ModelConfig`), and every tensor's name and shape against the config; then that
+all values are finite. Each failure raises :class:`~lifter._checks.CheckpointError` naming the problem.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
 import os
+import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import torch
 
-from ._checks import CheckpointError
+from ._checks import CheckpointError, PoseLifterError
+from .codec import PoseCodec
 from .model import ModelConfig, PoseLifterNet
-from .normalization import NORM_MODES
 
 FORMAT = "poselifter-checkpoint"
-VERSION = 1
-
-CONFIG_CHOICES: dict[str, tuple[str, ...]] = {
-    "mode": tuple(NORM_MODES),
-    "scale_definition": ("paper", "repo"),
-    "depth_target": ("canonical", "absolute"),
-}
-"""Allowed values of the string fields of ``model_config`` (:class:`lifter.model.ModelConfig`)."""
+VERSION = 2
+MAX_CHECKPOINT_BYTES = 2 * 1024**3
+"""Files larger than this are refused before they are read."""
 
 
-def _check_model_config(raw: Any, *, path: Path) -> dict[str, Any]:
-    """``model_config`` as a dict whose string fields hold allowed values and whose sizes are sane."""
-    if not isinstance(raw, dict):
-        raise CheckpointError(f"{path}: model_config must be a dict, got {type(raw).__name__}")
-    for name, allowed in CONFIG_CHOICES.items():
-        if name in raw and raw[name] not in allowed:
-            raise CheckpointError(f"{path}: model_config.{name} is {raw[name]!r}; expected one of {list(allowed)}")
-    for name in ("width", "num_blocks"):
-        if name in raw and (isinstance(raw[name], bool) or not isinstance(raw[name], int) or raw[name] < 1):
-            raise CheckpointError(f"{path}: model_config.{name} must be an integer >= 1, got {raw[name]!r}")
-    if "dropout" in raw:
-        d = raw["dropout"]
-        if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0.0 <= d < 1.0:
-            raise CheckpointError(f"{path}: model_config.dropout must be a number in [0, 1), got {d!r}")
-    return dict(raw)
+@dataclass(frozen=True)
+class Checkpoint:
+    """A loaded checkpoint: network (eval mode, float32), codec, training config (dict or None), metadata."""
+
+    net: PoseLifterNet
+    codec: PoseCodec
+    train_config: dict[str, Any] | None
+    meta: dict[str, Any]
 
 
-def save_checkpoint(
-    path: str | os.PathLike[str], net: PoseLifterNet, *, meta: dict[str, Any] | None = None, half: bool = False
-) -> Path:
-    """Write ``net`` to ``path`` (parents created). ``half=True`` stores floating tensors as float16."""
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """Hex sha256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: PoseCodec, *,
+                    train_config: dict[str, Any] | None = None, meta: dict[str, Any] | None = None,
+                    half: bool = False) -> Path:
+    """Write ``net`` and ``codec`` to ``path`` atomically (a temporary file in the same folder, then a rename;
+    parents created). ``half=True`` stores the network's floating tensors as float16."""
     state = {k: (v.detach().to(torch.float16) if half and v.is_floating_point() else v.detach()).cpu().clone()
              for k, v in net.state_dict().items()}
-    # Statistics that need full precision stay float32.
-    for k in ("target_mean", "target_std"):
-        state[k] = net.state_dict()[k].detach().cpu().float().clone()
-    payload = {"format": FORMAT, "version": VERSION, "model_config": net.config.to_dict(), "state_dict": state,
-               "meta": meta or {}}
+    payload = {"format": FORMAT, "version": VERSION, "model_config": net.config.to_dict(),
+               "codec": codec.state_dict(), "state_dict": state, "train_config": train_config, "meta": meta or {}}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    torch.save(payload, tmp)
-    os.replace(tmp, path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            torch.save(payload, f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return path
 
 
-def load_checkpoint(path: str | os.PathLike[str]) -> tuple[PoseLifterNet, dict[str, Any]]:
-    """Load a network (eval mode, float32) and its metadata. Raises :class:`CheckpointError` with a
-    message naming the problem for a missing, truncated, corrupt or foreign file."""
-    path = Path(path)
-    if path.is_dir():
-        raise CheckpointError(f"weights file {path} is a directory, not a checkpoint file")
-    if not path.is_file():
-        raise CheckpointError(f"weights file not found: {path}")
+def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:
+    """A version-1 payload as version 2: the paper's pixel-space model without conditioning, with the target
+    statistics moved from the network's state dict into the codec."""
+    cfg = payload.get("model_config")
+    if not isinstance(cfg, dict):
+        raise CheckpointError(f"{where}: model_config must be a dict, got {type(cfg).__name__}")
+    state = payload.get("state_dict")
+    if not isinstance(state, dict) or "target_mean" not in state or "target_std" not in state:
+        raise CheckpointError(f"{where}: version-1 checkpoint without target statistics in its state dict")
+    state = dict(state)
+    codec = {"target_mean": state.pop("target_mean"), "target_std": state.pop("target_std")}
+    return {**payload, "version": VERSION, "model_config": {"input_space": "pixel", "conditioning": "none", **cfg},
+            "codec": codec, "state_dict": state, "train_config": None}
+
+
+def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: str | None = None,
+                    name: str | None = None) -> Checkpoint:
+    """Load a checkpoint from a path or its bytes (module docstring for the checks).
+
+    expected_sha256: refuse the file unless its bytes hash to this (shipped weights carry one).
+    name: how to refer to the file in errors (default: the path).
+    """
+    if isinstance(source, (bytes, bytearray)):
+        data, where = bytes(source), name or "checkpoint"
+    else:
+        path = Path(source)
+        where = name or str(path)
+        if path.is_dir():
+            raise CheckpointError(f"weights file {where} is a directory, not a checkpoint file")
+        if not path.is_file():
+            raise CheckpointError(f"weights file not found: {where}")
+        if path.stat().st_size > MAX_CHECKPOINT_BYTES:
+            raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger than "
+                                  f"{MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")
+        data = path.read_bytes()
+    if expected_sha256 is not None:
+        got = hashlib.sha256(data).hexdigest()
+        if got != expected_sha256:
+            raise CheckpointError(f"weights file {where} is damaged or was replaced: its sha256 is {got[:16]}..., the "
+                                  f"registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore the file)")
     try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
+        payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
-        raise CheckpointError(f"weights file {path} is corrupt or not a torch checkpoint: {exc}") from None
+        raise CheckpointError(f"weights file {where} is corrupt or not a torch checkpoint: {exc}") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
-        raise CheckpointError(f"{path} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
-    if payload.get("version") != VERSION:
-        raise CheckpointError(f"{path}: unsupported checkpoint version {payload.get('version')!r} (expected {VERSION})")
-    if "model_config" not in payload:
-        raise CheckpointError(f"{path}: checkpoint has no model_config")
-    config_dict = _check_model_config(payload["model_config"], path=path)
-    meta = payload.get("meta")
-    if meta is None:
-        meta = {}
-    if not isinstance(meta, dict):
-        raise CheckpointError(f"{path}: meta must be a dict, got {type(meta).__name__}")
+        raise CheckpointError(f"{where} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
+    version = payload.get("version")
+    if version == 1:
+        payload = _migrate_v1(payload, where)
+    elif version != VERSION:
+        raise CheckpointError(f"{where}: unsupported checkpoint version {version!r} (this poselifter reads 1 and "
+                              f"{VERSION}); upgrade poselifter")
     try:
-        config = ModelConfig.from_dict(config_dict)
-        net = PoseLifterNet(config)
-        state = {k: v.float() if v.is_floating_point() else v for k, v in payload["state_dict"].items()}
-        net.load_state_dict(state, strict=True)
-    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as exc:
-        raise CheckpointError(f"{path}: checkpoint content does not match the model: {exc}") from None
-    for name, t in net.state_dict().items():
+        config = ModelConfig.from_dict(payload.get("model_config"))  # type: ignore[arg-type]
+    except (PoseLifterError, TypeError) as exc:
+        raise CheckpointError(f"{where}: bad model_config: {exc}") from None
+    meta = payload.get("meta") or {}
+    if not isinstance(meta, dict):
+        raise CheckpointError(f"{where}: meta must be a dict, got {type(meta).__name__}")
+    train_config = payload.get("train_config")
+    if train_config is not None and not isinstance(train_config, dict):
+        raise CheckpointError(f"{where}: train_config must be a dict, got {type(train_config).__name__}")
+    state = payload.get("state_dict")
+    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
+        raise CheckpointError(f"{where}: state_dict must map names to tensors")
+    with torch.device("meta"):  # the expected shapes, without allocating anything
+        expected = {k: tuple(v.shape) for k, v in PoseLifterNet(config).state_dict().items()}
+    missing, unexpected = sorted(set(expected) - set(state)), sorted(set(state) - set(expected))
+    if missing or unexpected:
+        raise CheckpointError(f"{where}: checkpoint tensors do not match its model config (missing {missing[:4]}, "
+                              f"unexpected {unexpected[:4]})")
+    wrong = [(k, tuple(state[k].shape), s) for k, s in expected.items() if tuple(state[k].shape) != s]
+    if wrong:
+        k, got, want = wrong[0]
+        raise CheckpointError(f"{where}: tensor {k!r} has shape {got}, its model config needs {want}")
+    try:
+        codec_state = payload.get("codec")
+        if not isinstance(codec_state, dict):
+            raise ValueError("missing codec statistics")
+        codec = PoseCodec.from_state_dict(config, {k: torch.as_tensor(v).double().numpy() for k, v in codec_state.items()})
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CheckpointError(f"{where}: bad codec statistics: {exc}") from None
+    net = PoseLifterNet(config)
+    net.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in state.items()}, strict=True)
+    for k, t in net.state_dict().items():
         if t.is_floating_point() and not torch.isfinite(t).all():
-            raise CheckpointError(f"{path}: tensor {name!r} contains NaN/inf")
+            raise CheckpointError(f"{where}: tensor {k!r} contains NaN/inf")
     net.eval()
-    return net, dict(meta)
+    return Checkpoint(net=net, codec=codec, train_config=train_config, meta=dict(meta))

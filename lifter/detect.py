@@ -62,6 +62,7 @@ from typing import Any, Callable, Final, Protocol, runtime_checkable
 import numpy as np
 
 from ._checks import PoseLifterError
+from .camera import DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
 from .keypoints import convert, get_format
 
 IMAGE_SUFFIXES: Final[frozenset[str]] = frozenset(
@@ -74,8 +75,6 @@ DEFAULT_MAX_SIDE_PX: Final[int] = 2048
 MAX_IMAGE_PIXELS: Final[int] = 400_000_000
 """Larger images (e.g. decompression bombs) are refused without decoding them."""
 
-DEFAULT_DIAGONAL_FOV_DEG: Final[float] = 65.0
-"""Diagonal field of view assumed when neither the user nor the EXIF data give a focal length."""
 
 FULL_FRAME_DIAGONAL_MM: Final[float] = math.hypot(36.0, 24.0)
 """43.27 mm: the diagonal of a 36 x 24 mm frame, on which 35-mm-equivalent focal lengths are defined."""
@@ -161,11 +160,16 @@ class ExifCamera:
                    pixel_x=None if px is None else int(px), pixel_y=None if py is None else int(py))
 
 
-def default_focal(image_size: tuple[int, int], *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
-    """The focal length (px) giving a diagonal field of view ``fov_deg`` for ``image_size = (W, H)`` px."""
-    if not 0 < fov_deg < 180:
-        raise PoseLifterError(f"field of view must be in (0, 180) degrees, got {fov_deg}")
-    return math.hypot(*image_size) / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
+def guess_focal(image_size: tuple[int, int], *, exif: ExifCamera | None = None, sensor_width_mm: float | None = None,
+                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> FocalGuess:
+    """The focal length (px) for an upright image of ``image_size = (W, H)`` px with no focal given: from its
+    EXIF (:func:`focal_from_exif`) when there is some, else the default diagonal field of view ``fov_deg``
+    (:func:`lifter.camera.focal_from_fov`). The one fallback rule of the CLI and the app."""
+    if exif is not None:
+        return focal_from_exif(exif, image_size, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
+    f = focal_from_fov(image_size, fov_deg=fov_deg)
+    return FocalGuess(f, "default-fov", f"no focal length given: assumed a {fov_deg:g} deg diagonal field of view "
+                                        f"-> {f:.1f} px")
 
 
 def focal_from_exif(exif: ExifCamera, image_size: tuple[int, int], *, sensor_width_mm: float | None = None,
@@ -197,7 +201,7 @@ def focal_from_exif(exif: ExifCamera, image_size: tuple[int, int], *, sensor_wid
         f = exif.focal_35mm * diag / FULL_FRAME_DIAGONAL_MM
         return FocalGuess(f, "exif-35mm", f"EXIF 35-mm-equivalent focal {exif.focal_35mm:g} mm (on the diagonal) "
                                           f"-> {f:.1f} px")
-    f = default_focal((int(W), int(H)), fov_deg=fov_deg)
+    f = focal_from_fov((W, H), fov_deg=fov_deg)
     why = "no usable EXIF focal length" if exif.focal_mm is None else \
         f"EXIF focal {exif.focal_mm:g} mm but no sensor size (give --sensor-width)"
     return FocalGuess(f, "default-fov", f"{why}: assumed a {fov_deg:g} deg diagonal field of view -> {f:.1f} px")
@@ -520,5 +524,5 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 __all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
            "ExifCamera", "FocalGuess", "ImageError", "LoadedImage", "MissingDependencyError", "NoPersonError",
-           "PoseEstimator2D", "available_estimators", "default_focal", "detect_pose", "focal_from_exif",
+           "PoseEstimator2D", "available_estimators", "guess_focal", "detect_pose", "focal_from_exif",
            "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

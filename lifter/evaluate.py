@@ -14,6 +14,7 @@ from tqdm.auto import tqdm
 
 from .analytic import analytic_root
 from .api import Lifter
+from .codec import Source
 from .data import ACTIONS, PoseSamples
 from .metrics import AUC_THRESHOLDS_MM, mpjpe, pa_mpjpe, pck, pck_curve, root_errors
 
@@ -48,13 +49,14 @@ class Predictions:
 
 
 def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool = False, analytic: bool = False,
-            batch_size: int = 8192, progress: bool = True) -> Predictions:
+            batch_size: int = 8192, progress: bool = True, source: Source = "detected") -> Predictions:
+    """Lift every sample (its own camera) told ``source``; optionally also the analytic root."""
     rel, root, aroot = [], [], []
     n = len(samples)
     for s in tqdm(range(0, n, batch_size), disable=not progress, desc=f"lifting ({lifter.name})", unit="batch"):
         sl = slice(s, min(n, s + batch_size))
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl], principal_point=samples.principal_point[sl],
-                          flip_test=flip_test)
+                          flip_test=flip_test, source=source)
         rel.append(res.relative)
         root.append(res.root)
         if analytic:
@@ -83,10 +85,10 @@ def score(label: str, root_kind: str, rel: np.ndarray, root: np.ndarray, samples
 
 
 def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None = None, flip_test: bool = False,
-                    analytic_root: bool = False, progress: bool = True) -> list[EvalRow]:
+                    analytic_root: bool = False, progress: bool = True, source: Source = "detected") -> list[EvalRow]:
     """Rows for the learned root and, optionally, the analytic weak-perspective root."""
     label = label or lifter.name
-    pred = predict(lifter, samples, flip_test=flip_test, analytic=analytic_root, progress=progress)
+    pred = predict(lifter, samples, flip_test=flip_test, analytic=analytic_root, progress=progress, source=source)
     rows = [score(label, "learned", pred.relative, pred.root, samples)]
     if pred.analytic_root is not None:
         rows.append(score(label, "analytic", pred.relative, pred.analytic_root, samples))
@@ -129,12 +131,13 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
 
 
 def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float],
-                principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool = False) -> list[EvalRow]:
+                principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool = False,
+                source: Source = "clean") -> list[EvalRow]:
     """One row per focal factor (label ``"x<factor>"``) for virtual cameras of :func:`virtual_camera_samples`."""
     rows = []
     for k in factors:
         vs = virtual_camera_samples(samples, focal_scale=k, principal_shift=principal_shift)
-        rows.append(evaluate_lifter(lifter, vs, label=f"x{k:g}", flip_test=flip_test, progress=False)[0])
+        rows.append(evaluate_lifter(lifter, vs, label=f"x{k:g}", flip_test=flip_test, progress=False, source=source)[0])
     return rows
 
 

@@ -1,66 +1,101 @@
-"""The PoseLifter network: normalization layer -> residual MLP -> relative pose + canonical depth.
+"""The PoseLifter network and its configuration.
 
-Architecture (spec §5): ``Linear(F -> W)`` stem (no activation), ``num_blocks`` pre-activation
-residual blocks ``x + Linear(ReLU(Dropout(BN(Linear(ReLU(Dropout(BN(x))))))))``, and a
-``Linear(W -> 49)`` head: 48 root-relative coordinates (joints 1..16, xyz, mm) and one depth.
+:class:`ModelConfig` names everything that fixes a trained network's shape and conventions: the input
+space and features of :mod:`lifter.codec`, the depth parametrization, the conditioning, and the MLP's size.
 
-Outputs are *standardized*: the head predicts ``(y - mean) / std`` per output, with ``mean`` and
-``std`` stored as buffers computed from the training targets (including flipped copies). This
-reparametrization does not change the loss (which stays in mm, see :mod:`lifter.loss`) but spares
-the network from growing its outputs to ~1e3-1e4 over thousands of steps.
+Architecture (spec §5): ``Linear(F -> W)`` stem (no activation), ``num_blocks`` pre-activation residual
+blocks ``x + Linear(ReLU(Dropout(BN(Linear(ReLU(Dropout(BN(x))))))))``, and a ``Linear(W -> 49)`` head.
+The network maps the codec's features ``(B, F)`` to its *standardized* outputs ``(B, 49)``; the codec
+turns those into millimetres (:meth:`lifter.codec.PoseCodec.destandardize`) and back into a pose and a
+root (:meth:`lifter.codec.PoseCodec.decode`).
 """
 
 from __future__ import annotations
 
 import weakref
-from dataclasses import asdict, dataclass
-from typing import Any, Literal
+from dataclasses import asdict, dataclass, fields
+from typing import Any, Final, Literal, get_args
 
 import numpy as np
 import torch
 from torch import nn
 
-from .normalization import NormMode, ScaleDefinition, normalize_keypoints, num_features
+from ._checks import PoseLifterError
+from .normalization import NORM_MODES, SCALE_DEFINITIONS, NormMode, ScaleDefinition, num_features
 from .skeleton import NUM_JOINTS
 
-DepthTarget = Literal["canonical", "absolute"]
-NUM_OUTPUTS: int = 3 * (NUM_JOINTS - 1) + 1
+InputSpace = Literal["pixel", "camera"]
+DepthTarget = Literal["canonical", "absolute", "size"]
+Conditioning = Literal["none", "source"]
+NUM_OUTPUTS: Final[int] = 3 * (NUM_JOINTS - 1) + 1
+MAX_WIDTH: Final[int] = 8192
+MAX_BLOCKS: Final[int] = 16
+"""Bounds on :class:`ModelConfig` sizes, checked before anything is allocated (a checkpoint's config is
+untrusted input)."""
 
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """Hyper-parameters that define the network's shape and its input/output conventions."""
+    """The network's shape and input/output conventions. Validated on construction.
+
+    input_space: ``"camera"``: the codec maps the 2D through the intrinsics to the reference camera
+        (focal F0 = 1000 px, principal point 0) before the normalization layer, so resolution and focal
+        length are exact symmetries. ``"pixel"``: the paper's layer on image pixels minus the principal point.
+    depth_target: what the network predicts for the root depth, in the input space's camera:
+        ``"canonical"`` ``Z * F0 / alpha_in`` mm (PoseLifter; in the reference camera alpha_in = F0, so it is Z);
+        ``"absolute"`` Z mm (pixel space only: the paper's "w/o canonical depth");
+        ``"size"`` ``Z * sigma_in / alpha_in`` mm, the person's 2D scale in mm (weak perspective), from which
+        ``Z = size * alpha_in / sigma_in``.
+    conditioning: ``"source"`` appends one input feature, 1 for exact 2D (``source="clean"``) and 0 for
+        detector output (``"detected"``).
+    mode, scale_definition: the normalization layer's features and 2D scale (:mod:`lifter.normalization`).
+    """
 
     width: int = 1024
     num_blocks: int = 2
     dropout: float = 0.25
     mode: NormMode = "both"
     scale_definition: ScaleDefinition = "paper"
+    input_space: InputSpace = "camera"
     depth_target: DepthTarget = "canonical"
-    """``"canonical"``: depth in mm at a 1000-px focal (PoseLifter); ``"absolute"``: root Z in mm."""
+    conditioning: Conditioning = "source"
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("width", 1, MAX_WIDTH), ("num_blocks", 1, MAX_BLOCKS)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise PoseLifterError(f"model config: {name} must be an integer in [{lo}, {hi}], got {v!r}")
+        d = self.dropout
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0.0 <= d < 1.0:
+            raise PoseLifterError(f"model config: dropout must be a number in [0, 1), got {d!r}")
+        for name, allowed in (("mode", NORM_MODES), ("scale_definition", SCALE_DEFINITIONS),
+                              ("input_space", get_args(InputSpace)), ("depth_target", get_args(DepthTarget)),
+                              ("conditioning", get_args(Conditioning))):
+            if getattr(self, name) not in allowed:
+                raise PoseLifterError(f"model config: {name} is {getattr(self, name)!r}; expected one of {list(allowed)}")
+        if self.input_space == "camera" and self.depth_target == "absolute":
+            raise PoseLifterError("model config: in the reference camera the canonical depth is the absolute depth; "
+                                  "use depth_target='canonical' (or 'size') with input_space='camera'")
+        if self.depth_target == "size" and self.mode not in ("scale", "both"):
+            raise PoseLifterError("model config: depth_target='size' needs the scale feature (mode 'scale' or 'both')")
+
+    @property
+    def num_features(self) -> int:
+        """Input features: the normalization layer's, plus one for the source flag."""
+        return num_features(self.mode) + (1 if self.conditioning == "source" else 0)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "ModelConfig":
-        known = {f for f in cls.__dataclass_fields__}
-        unknown = set(d) - known
+        """Build from a dict, refusing unknown keys (all checks run before any network is built)."""
+        if not isinstance(d, dict):
+            raise PoseLifterError(f"model config must be a dict, got {type(d).__name__}")
+        unknown = set(d) - {f.name for f in fields(cls)}
         if unknown:
-            raise ValueError(f"unknown model config keys: {sorted(unknown)}")
+            raise PoseLifterError(f"model config: unknown keys {sorted(unknown)}")
         return cls(**d)
-
-
-@dataclass(frozen=True)
-class NetworkOutput:
-    """Raw network output for a batch of B poses.
-
-    relative: ``(B, 17, 3)`` mm, camera-frame orientation, root row zero.
-    depth: ``(B,)`` mm; canonical (at F0 = 1000 px) or absolute depending on ``ModelConfig.depth_target``.
-    """
-
-    relative: torch.Tensor
-    depth: torch.Tensor
 
 
 class ResidualBlock(nn.Module):
@@ -82,57 +117,54 @@ class ResidualBlock(nn.Module):
 
 
 class PoseLifterNet(nn.Module):
-    """2D keypoints (px) + principal point (px) -> root-relative 3D pose (mm) + root depth.
+    """Features ``(B, F)`` (:meth:`lifter.codec.PoseCodec.encode`) -> standardized outputs ``(B, 49)``.
 
     Hidden linear layers use PyTorch's default (Kaiming-uniform) initialization; the head is
-    initialized N(0, 1e-3) with zero bias, so that at step 0 the output is the training-target mean.
+    initialized N(0, 1e-3) with zero bias, so that at step 0 the de-standardized output is the
+    training-target mean. Under ``torch.autocast`` only the residual blocks run in reduced precision:
+    the stem (which reads pixel-precise features) and the head (millimetre outputs) stay float32.
     """
 
-    def __init__(self, config: ModelConfig = ModelConfig()) -> None:
+    def __init__(self, config: ModelConfig | None = None) -> None:
         super().__init__()
+        config = config or ModelConfig()
         self.config = config
-        self.stem = nn.Linear(num_features(config.mode), config.width)
+        self.stem = nn.Linear(config.num_features, config.width)
         self.blocks = nn.Sequential(*[ResidualBlock(config.width, config.dropout) for _ in range(config.num_blocks)])
         self.head = nn.Linear(config.width, NUM_OUTPUTS)
         nn.init.normal_(self.head.weight, std=1e-3)
         nn.init.zeros_(self.head.bias)
-        self.register_buffer("target_mean", torch.zeros(NUM_OUTPUTS))
-        self.register_buffer("target_std", torch.ones(NUM_OUTPUTS))
 
-    def set_target_statistics(self, mean: torch.Tensor, std: torch.Tensor) -> None:
-        """Set the output de-standardization: ``y = mean + std * head(x)``; 49 values each."""
-        self.target_mean.copy_(mean.to(self.target_mean))
-        self.target_std.copy_(std.clamp_min(1e-3).to(self.target_std))
+    def forward(self, features: torch.Tensor) -> torch.Tensor:
+        dev = features.device.type
+        with torch.autocast(dev, enabled=False):
+            h = self.stem(features.float())
+        h = self.blocks(h)
+        with torch.autocast(dev, enabled=False):
+            return self.head(h.float())
 
-    def forward_flat(self, keypoints: torch.Tensor, principal_point: torch.Tensor) -> torch.Tensor:
-        """``(B, 49)`` outputs in mm: 48 relative coordinates (joints 1..16) then the depth."""
-        x = normalize_keypoints(
-            keypoints, principal_point, mode=self.config.mode, scale_definition=self.config.scale_definition
-        )
-        x = self.head(self.blocks(self.stem(x)))
-        return self.target_mean + self.target_std * x
 
-    def forward(self, keypoints: torch.Tensor, principal_point: torch.Tensor) -> NetworkOutput:
-        return split_output(self.forward_flat(keypoints, principal_point))
+# ------------------------------------------------------------------------------------------------
+# One pose through numpy's BLAS
+# ------------------------------------------------------------------------------------------------
 
 
 def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]] | None:
-    """The tensors :func:`forward_flat_numpy` reads, in a fixed order: stem weight and bias; per block the
-    first BatchNorm's weight, bias, running mean and variance, the first Linear's weight and bias, the same
-    for the second pair; head weight and bias; target mean and std. Looked up through the modules' own
-    dictionaries on every call (so replaced layers or tensors are always the current ones); and the
-    BatchNorm epsilons, in the same order. None if a
-    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` / ``nn.ReLU`` (or a block not a plain
-    :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
+    """The tensors :func:`forward_numpy` reads, in a fixed order: stem weight and bias; per block the first
+    BatchNorm's weight, bias, running mean and variance, the first Linear's weight and bias, the same for the
+    second pair; head weight and bias. Looked up through the modules' own dictionaries on every call (so
+    replaced layers or tensors are always the current ones); and the BatchNorm epsilons, in the same order.
+    None if a layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` / ``nn.ReLU`` (or a block not a
+    plain :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
     mods = net._modules
     stem, blocks, head = mods.get("stem"), mods.get("blocks"), mods.get("head")
     if (type(stem) is not nn.Linear or type(head) is not nn.Linear or type(blocks) is not nn.Sequential
-            or type(net).forward_flat is not PoseLifterNet.forward_flat or type(net).forward is not PoseLifterNet.forward):
+            or type(net).forward is not PoseLifterNet.forward):
         return None  # (a subclass that changes the forward pass runs as the module it is)
     out = [stem._parameters["weight"], stem._parameters["bias"]]
     eps = []
     for block in blocks._modules.values():
-        body = block._modules.get("body")
+        body = block._modules.get("body") if block is not None else None
         layers = list(body._modules.values()) if body is not None else []
         if len(layers) != 8:
             return None
@@ -146,8 +178,10 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
             out += [p["weight"], p["bias"], b["running_mean"], b["running_var"], lin._parameters["weight"],
                     lin._parameters["bias"]]
             eps.append(float(bn.eps))
-    out += [head._parameters["weight"], head._parameters["bias"], net._buffers["target_mean"], net._buffers["target_std"]]
-    return out, eps
+    out += [head._parameters["weight"], head._parameters["bias"]]
+    if any(t is None or t.dtype != torch.float32 for t in out):
+        return None
+    return out, eps  # type: ignore[return-value]
 
 
 _NUMPY_VIEWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -156,17 +190,17 @@ in-place changes are seen without a rebuild, and the key (tensor identities and 
 catches replaced tensors or storage."""
 
 
-def forward_flat_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None:
-    """Eval-mode stem -> blocks -> head -> de-standardization in numpy, on normalized features ``(B, F)``
-    float32 -> ``(B, 49)`` outputs in mm, as :meth:`PoseLifterNet.forward_flat` after the normalization.
+def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None:
+    """:meth:`PoseLifterNet.forward` in eval mode, in numpy: features ``(B, F)`` float32 -> standardized
+    outputs ``(B, 49)``.
 
-    For one pose the network is a chain of matrix-vector products, which numpy's BLAS (OpenBLAS) runs
-    faster than torch's CPU kernels on the development machine (``benchmarks/bench_lift.py`` times both).
-    It reads the live weights through numpy views that share memory with the parameters (no copies), so
-    any change to the net, in place or by replacing tensors or layers, is seen on the next call;
-    BatchNorm is applied as the per-channel affine map of its running statistics. Returns None when a
-    layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` (e.g. quantized) or a BatchNorm or
-    Dropout is in training mode: use the module then.
+    For one pose the network is a chain of matrix-vector products, which numpy's BLAS runs with less
+    overhead than torch's CPU kernels (``benchmarks/bench_lift.py`` times both). It reads the live
+    weights through numpy views that share memory with the parameters (no copies), so any change to
+    the net, in place or by replacing tensors or layers, is seen on the next call; BatchNorm is applied
+    as the per-channel affine map of its running statistics. Returns None when a layer is not a plain
+    float32 ``nn.Linear`` / ``nn.BatchNorm1d`` (e.g. quantized) or a BatchNorm or Dropout is in training
+    mode: use the module then.
     """
     found = _numpy_tensors(net)
     if found is None:
@@ -180,7 +214,7 @@ def forward_flat_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray |
     v = cached[1]
     h = features @ v[0].T + v[1]
     i, k = 2, 0
-    while i < len(v) - 4:
+    while i < len(v) - 2:
         g1, be1, m1, var1, w1, b1, g2, be2, m2, var2, w2, b2 = v[i:i + 12]
         s1 = g1 / np.sqrt(var1 + eps[k])
         s2 = g2 / np.sqrt(var2 + eps[k + 1])
@@ -188,17 +222,4 @@ def forward_flat_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray |
         y = np.maximum((y @ w1.T + b1 - m2) * s2 + be2, 0.0)
         h = h + (y @ w2.T + b2)
         i, k = i + 12, k + 2
-    head_w, head_b, mean, std = v[-4:]
-    return mean + std * (h @ head_w.T + head_b)
-
-
-def split_output(flat: torch.Tensor) -> NetworkOutput:
-    """Split ``(B, 49)`` into the relative pose ``(B, 17, 3)`` (root row zero) and the depth ``(B,)``."""
-    rel = flat[:, : NUM_OUTPUTS - 1].reshape(-1, NUM_JOINTS - 1, 3)
-    rel = torch.cat([torch.zeros_like(rel[:, :1]), rel], dim=1)
-    return NetworkOutput(relative=rel, depth=flat[:, -1])
-
-
-def pack_targets(relative: torch.Tensor, depth: torch.Tensor) -> torch.Tensor:
-    """Inverse of :func:`split_output`: ``(B, 17, 3)`` root-relative mm + ``(B,)`` depth -> ``(B, 49)``."""
-    return torch.cat([relative[:, 1:].flatten(1), depth[:, None]], dim=1)
+    return h @ v[-2].T + v[-1]

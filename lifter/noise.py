@@ -61,7 +61,9 @@ from typing import Any, Sequence
 import numpy as np
 import torch
 
+from . import resources as assets
 from ._checks import PoseLifterError, as_points
+from .normalization import pose_scale
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 OUTLIER_BOX_PX: float = 100.0
@@ -192,10 +194,20 @@ def _arr(x: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
     return a
 
 
-def outlier_probability(gamma: np.ndarray, level: float) -> np.ndarray:
-    """``p_out = min((1 - gamma) * level, max(0.5, 1 - gamma))`` per joint (see the module docstring)."""
+def shipped_error_models() -> list[str]:
+    """Names of the shipped error-model fits (``error_model/*.json`` of :mod:`lifter.resources`)."""
+    node = assets.asset("error_model")
+    return sorted(p.name[:-5] for p in node.iterdir() if p.name.endswith(".json")) if node.is_dir() else []
+
+
+def outlier_probability(gamma: Any, level: Any) -> Any:
+    """``p_out = min((1 - gamma) * level, max(0.5, 1 - gamma))`` per joint (module docstring); numpy or torch,
+    ``gamma`` ``(17,)`` broadcast against ``level``."""
+    if isinstance(level, torch.Tensor):
+        q = 1.0 - torch.as_tensor(np.array(gamma), dtype=level.dtype, device=level.device)
+        return torch.minimum(q * level, torch.clamp(q, min=MAX_OUTLIER_PROB))
     q = 1.0 - np.asarray(gamma, np.float64)
-    return np.minimum(q * level, np.maximum(MAX_OUTLIER_PROB, q))
+    return np.minimum(q * np.asarray(level, np.float64), np.maximum(MAX_OUTLIER_PROB, q))
 
 
 @dataclass(frozen=True, eq=False)
@@ -252,17 +264,35 @@ class ErrorModel:
 
     @classmethod
     def default(cls) -> "ErrorModel":
-        """The shipped fit (``assets/error_model/sh_mixture.json``), or :meth:`standin` if it is absent."""
-        from .api import ASSETS_DIR
-
-        path = Path(ASSETS_DIR) / "error_model" / DEFAULT_ASSET_NAME
-        if path.is_file():
-            return cls.load(path)
+        """The shipped fit (``error_model/sh_mixture.json`` of :mod:`lifter.resources`), or :meth:`standin` if it is
+        absent. A present but unreadable file is an error, not a silent fallback."""
+        node = assets.asset(f"error_model/{DEFAULT_ASSET_NAME}")
+        if node.is_file():
+            return cls.from_json(node.read_text())
         return cls.standin()
 
     @classmethod
+    def shipped(cls, name: str) -> "ErrorModel":
+        """A shipped fit by name (``"sh_mixture"``, ``"blazepose_demo"``, ...)."""
+        node = assets.asset(f"error_model/{name}.json")
+        if not node.is_file():
+            raise PoseLifterError(f"no shipped error model {name!r} (shipped: {shipped_error_models()})")
+        return cls.from_json(node.read_text())
+
+    @classmethod
+    def resolve(cls, ref: str) -> "ErrorModel":
+        """A shipped fit name or a JSON file path."""
+        if ref.endswith(".json") or Path(ref).is_file():
+            return cls.load(ref)
+        return cls.shipped(ref)
+
+    @classmethod
     def load(cls, path: str | Path) -> "ErrorModel":
-        return cls.from_json(Path(path).read_text())
+        try:
+            text = Path(path).read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise PoseLifterError(f"error model {path}: cannot read ({exc})") from None
+        return cls.from_json(text)
 
     def save(self, path: str | Path) -> Path:
         path = Path(path)
@@ -326,186 +356,77 @@ class ErrorModel:
         """Half the side of the outlier box, px at the reference scale (50 px for v = 100^2)."""
         return 0.5 * math.sqrt(self.v)
 
-    def scale_factor(self, keypoints: np.ndarray) -> np.ndarray:
-        """``s = sigma_pose / reference_scale`` ``(...)`` for clean keypoints ``(..., 17, 2)`` px."""
-        from .normalization import pose_scale_np
-
-        return pose_scale_np(keypoints) / self.reference_scale
+    def scale_factor(self, keypoints: Any) -> Any:
+        """``s = sigma_pose / reference_scale`` ``(...)`` for clean keypoints ``(..., 17, 2)`` px (numpy or torch):
+        the factor every noise component is multiplied by (module docstring, "scale rule")."""
+        return pose_scale(keypoints) / self.reference_scale
 
     def sample(
         self,
         keypoints: Any,
         *,
-        level: float = 1.0,
+        level: Any = 1.0,
         rng: np.random.Generator | int | None = None,
         outliers: bool = True,
         scale: Any | None = None,
     ) -> np.ndarray:
-        """Noisy copies of clean keypoints ``(..., 17, 2)`` px, same shape, float64.
+        """Noisy copies of clean keypoints ``(..., 17, 2)`` px, same shape, float64 (numpy front end of
+        :meth:`sample_torch`, the one sampler).
 
-        level: 0 = clean (input returned unchanged), 1 = as fitted, > 1 exaggerated (module docstring).
+        level: 0 = clean (input returned unchanged), 1 = as fitted, > 1 exaggerated (module docstring); a
+            number or one level per pose ``(...)``.
         rng: a numpy Generator (or a seed); the draws are reproducible for a given generator state.
         outliers: sample the uniform component (True) or give outlier joints zero noise (authors' code).
         scale: the 2D scale ``sigma`` (px) to scale the noise with, ``(...)`` or scalar; default: that of
-            ``keypoints`` (paper definition, :func:`lifter.normalization.pose_scale_np`).
+            ``keypoints`` (:func:`lifter.normalization.pose_scale`).
         """
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
-        level = float(level)
-        if not math.isfinite(level) or level < 0:
-            raise PoseLifterError(f"level: must be a finite number >= 0, got {level}")
-        if level == 0:
+        lv = np.asarray(level, np.float64)
+        if not np.all(np.isfinite(lv)) or np.any(lv < 0):
+            raise PoseLifterError(f"level: must be finite numbers >= 0, got {level}")
+        if not np.any(lv):
             return kp.copy()
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
+        gen = torch.Generator().manual_seed(int(rng.integers(0, 2**62)))
         lead = kp.shape[:-2]
-        s = self.scale_factor(kp) if scale is None else np.broadcast_to(np.asarray(scale, np.float64), lead) / self.reference_scale
-        s = np.asarray(s)[..., None, None]
-        p_out = outlier_probability(self.gamma, level)
-        n = rng.standard_normal(kp.shape)
-        is_out = rng.random(kp.shape[:-1]) < p_out
-        u = rng.uniform(-self.box_half_width, self.box_half_width, kp.shape)
-        inlier = level * (self.mu + self.sigma * n)
-        out_noise = u if outliers else np.zeros_like(u)
-        noise = np.where(is_out[..., None], out_noise, inlier)
-        return kp + s * noise
+        sc = None if scale is None else torch.from_numpy(np.broadcast_to(np.asarray(scale, np.float64), lead).copy())
+        out = self.sample_torch(torch.from_numpy(np.array(kp)), level=torch.from_numpy(np.broadcast_to(lv, lead).copy()),
+                                generator=gen, outliers=outliers, scale=sc)
+        return out.numpy()
 
-    def torch_augmenter(self, *, level: float = 1.0, outliers: bool = True) -> "TorchErrorAugmenter":
-        """The sampler as a training hook ``f(keypoints (B,17,2) px, principal_point (B,2), generator)``."""
-        return TorchErrorAugmenter(model=self, level=float(level), outliers=outliers)
+    def sample_torch(self, keypoints: torch.Tensor, *, level: Any = 1.0, generator: torch.Generator | None = None,
+                     outliers: bool = True, scale: torch.Tensor | None = None) -> torch.Tensor:
+        """The sampler: noisy copies of clean keypoints ``(..., 17, 2)`` px (any float dtype, any device).
 
-
-@dataclass(frozen=True, eq=False)
-class TorchErrorAugmenter:
-    """Torch version of :meth:`ErrorModel.sample` with the :data:`lifter.train.Augment2D` signature.
-
-    ``__call__(keypoints (B, 17, 2) px, principal_point (B, 2) px, generator) -> (B, 17, 2)``; the
-    principal point is not used (the noise is translation invariant). Draws come from ``generator``.
-    """
-
-    model: ErrorModel
-    level: float = 1.0
-    outliers: bool = True
-
-    def __call__(self, keypoints: torch.Tensor, principal_point: torch.Tensor,
-                 generator: torch.Generator | None = None) -> torch.Tensor:
-        if self.level == 0:
-            return keypoints
+        Per joint independently, an outlier with probability ``min((1 - gamma) * level, max(0.5, 1 - gamma))``
+        gets ``s * U[-50, 50]^2`` px (or nothing with ``outliers=False``); an inlier gets
+        ``s * level * (mu + sigma * n)``; ``s = sigma_pose / reference_scale``. ``level`` is a number or a tensor
+        ``(...)`` (one level per pose); draws come from ``generator``.
+        """
         kp = keypoints
         dt, dev = kp.dtype, kp.device
-        m = self.model
-        mu = torch.as_tensor(np.array(m.mu), dtype=dt, device=dev)
-        sg = torch.as_tensor(np.array(m.sigma), dtype=dt, device=dev)
-        p_out = torch.as_tensor(outlier_probability(m.gamma, self.level), dtype=dt, device=dev)
-        d = kp - kp.mean(dim=-2, keepdim=True)
-        s = torch.sqrt((d**2).sum(-1).mean(-1)) / m.reference_scale  # (B,)
+        lv = torch.as_tensor(level, dtype=dt, device=dev)
+        lv = lv.expand(kp.shape[:-2])[..., None]  # (..., 1): one level per pose
+        mu = torch.as_tensor(np.array(self.mu), dtype=dt, device=dev)
+        sg = torch.as_tensor(np.array(self.sigma), dtype=dt, device=dev)
+        p_out = outlier_probability(self.gamma, lv)  # (..., 17)
+        s = self.scale_factor(kp) if scale is None else scale.to(dt) / self.reference_scale  # (...)
         n = torch.randn(kp.shape, generator=generator, dtype=dt, device=dev)
         is_out = torch.rand(kp.shape[:-1], generator=generator, dtype=dt, device=dev) < p_out
-        noise = self.level * (mu + sg * n)
-        if self.outliers:
-            u = (torch.rand(kp.shape, generator=generator, dtype=dt, device=dev) - 0.5) * (2 * m.box_half_width)
-            noise = torch.where(is_out[..., None], u, noise)
-        else:
-            noise = torch.where(is_out[..., None], torch.zeros_like(noise), noise)
+        u = (torch.rand(kp.shape, generator=generator, dtype=dt, device=dev) - 0.5) * (2 * self.box_half_width)
+        noise = lv[..., None] * (mu + sg * n)
+        noise = torch.where(is_out[..., None], u if outliers else torch.zeros_like(u), noise)
         return kp + s[..., None, None] * noise
-
-
-
-# ------------------------------------------------------------------------------------------------
-# Real detections (the H36M Stacked-Hourglass file) and their errors
-# ------------------------------------------------------------------------------------------------
-
-SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
-
-
-def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh16",
-                       dst: str = "h36m17") -> tuple[np.ndarray, np.ndarray]:
-    """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
-
-    Returns ``(keypoints (N, J_dst, 2) px float64, valid (N,) bool)``: detections converted with
-    :func:`lifter.keypoints.convert` (``fmt -> dst``); ``valid`` is False (and the keypoints NaN) where
-    the file has no detection for the sample (e.g. S11 "Directions" camera 54138969, or a training frame
-    that is not a multiple of 5). The row of a frame is inferred per sequence and camera from the row
-    count: ``frame // 5`` when the file holds every 5th frame (training subjects), ``frame`` when it
-    holds every frame (S9, S11). ``data`` is the :class:`lifter.data.H36M` the samples came from.
-    """
-    from .data import CAMERA_IDS, H36M
-    from .keypoints import convert, get_format
-
-    data = data or H36M()
-    path = Path(data.root) / SH_DETECTIONS_FILE
-    if not path.is_file():
-        raise FileNotFoundError(f"Stacked-Hourglass detections not found: {path}")
-    npz = np.load(path)
-    J = get_format(dst).num_joints
-    out = np.full((len(samples), J, 2), np.nan)
-    valid = np.zeros(len(samples), bool)
-    seq, cam, frame = samples.sequence, samples.camera, samples.frame
-    starts = np.flatnonzero(np.r_[True, (seq[1:] != seq[:-1]) | (cam[1:] != cam[:-1])])
-    ends = np.r_[starts[1:], len(samples)]
-    for a, b in zip(starts, ends):
-        name = samples.sequence_names[seq[a]]
-        key = f"{name}/{CAMERA_IDS[cam[a]]}"
-        if key not in npz.files:
-            continue
-        det = npz[key]
-        nf = data.num_frames(name)
-        if det.shape[0] == nf:
-            stride = 1
-        elif det.shape[0] == -(-nf // 5):
-            stride = 5
-        else:
-            raise PoseLifterError(f"{key}: {det.shape[0]} detection rows for {nf} frames; expected {nf} or {-(-nf // 5)}")
-        fr = frame[a:b]
-        ok = (fr % stride == 0) & (fr // stride < det.shape[0])
-        rows = np.arange(a, b)[ok]
-        out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
-        valid[rows] = True
-    return out, valid
-
-
-def with_sh_detections(samples: Any, *, data: Any | None = None) -> tuple[Any, int]:
-    """``samples`` with their 2D replaced by the real SH detections (converted to h36m17); samples without a
-    detection are dropped. Returns ``(new samples, number dropped)``."""
-    det, ok = load_sh_detections(samples, data=data)
-    return samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok]), int((~ok).sum())
-
-
-def detection_alignment_check(data: Any | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),
-                              camera: str | None = None) -> dict[int, float]:
-    """Verify that detection row ``i`` is frame ``5 i`` for a training subject: the median 2D error (px) of
-    the wrists, elbows, knees and ankles (fast-moving, directly mapped joints) when the detections are
-    compared with the ground truth shifted by ``offset`` frames (50 fps). The minimum should be at 0."""
-    from .data import CAMERA_IDS, H36M
-
-    data = data or H36M()
-    npz = np.load(Path(data.root) / SH_DETECTIONS_FILE)
-    cam_id = camera or CAMERA_IDS[0]
-    s = data.load([subject], stride=1, cameras=[cam_id])
-    sh_idx, h_idx = [0, 1, 4, 5, 10, 11, 14, 15], [3, 2, 5, 6, 16, 15, 12, 13]
-    errs: dict[int, list[np.ndarray]] = {o: [] for o in offsets}
-    for q in np.unique(s.sequence):
-        key = f"{s.sequence_names[q]}/{cam_id}"
-        if key not in npz.files:
-            continue
-        gt = s.keypoints_2d[s.sequence == q]
-        det = npz[key]
-        stride = 1 if det.shape[0] == gt.shape[0] else 5
-        for o in offsets:
-            idx = np.arange(det.shape[0]) * stride + o
-            ok = (idx >= 0) & (idx < gt.shape[0])
-            errs[o].append(np.linalg.norm(det[ok][:, sh_idx] - gt[idx[ok]][:, h_idx], axis=-1).ravel())
-    return {o: float(np.median(np.concatenate(v))) for o, v in errs.items()}
 
 
 def normalized_errors(detections: np.ndarray, ground_truth: np.ndarray, *,
                       reference_scale: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Errors ``(N, 17, 2)`` px rescaled to the reference scale, the per-sample GT scale ``(N,)`` px and the
     reference scale (median GT scale unless given): ``e = (det - gt) * reference_scale / sigma_gt``."""
-    from .normalization import pose_scale_np
-
     det = as_points(detections, name="detections", dim=2)
     gt = as_points(ground_truth, name="ground_truth", dim=2)
-    scale = pose_scale_np(gt)
+    scale = pose_scale(gt)
     ref = float(np.median(scale)) if reference_scale is None else float(reference_scale)
     return (det - gt) * (ref / scale)[:, None, None], scale, ref
 

@@ -1,8 +1,8 @@
-"""The PoseLifter normalization layer (paper Eq. 1-4).
+"""The PoseLifter normalization layer (paper Eq. 1-4), numpy or torch.
 
-Given 2D joints ``p_i`` in **image pixels** and the principal point ``c`` (px):
+Given 2D joints ``p_i`` (px) already expressed relative to the principal point ``c``:
 
-1. ``p'_i = p_i - c``                                   (subtract the principal point)
+1. ``p'_i = p_i - c``                                   (subtract the principal point; :func:`normalize_keypoints`)
 2. ``u = mean_i p'_i``                                   (2D location of the person, px)
 3. ``sigma``: a single scalar scale (px), either
    * ``"paper"`` (default): the RMS radius ``sqrt(mean_i |p'_i - u|^2)`` (Eq. 4), or
@@ -15,102 +15,88 @@ Given 2D joints ``p_i`` in **image pixels** and the principal point ``c`` (px):
 Ablation modes select which of ``u`` and ``sigma`` are appended: ``"baseline"`` (2J = 34 features),
 ``"location"`` (36), ``"scale"`` (35), ``"both"`` (37, the PoseLifter default).
 
-The functions work on torch tensors ``(B, J, 2)`` so that the layer is part of the network; use
-:func:`normalize_keypoints_np` for numpy.
+Which pixels the layer reads is the codec's choice (:mod:`lifter.codec`): the image's own (the paper)
+or the reference camera's (:func:`lifter.camera.to_reference_camera`). Every function here is batched
+over leading dimensions and works on numpy arrays and torch tensors alike.
 """
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Final, Literal, TypeVar
 
-import numpy as np
-import torch
+from array_api_compat import array_namespace
 
 NormMode = Literal["baseline", "location", "scale", "both"]
 ScaleDefinition = Literal["paper", "repo"]
 
-NORM_MODES: tuple[str, ...] = ("baseline", "location", "scale", "both")
-FEATURE_UNIT: float = 1e-3
+NORM_MODES: Final[tuple[str, ...]] = ("baseline", "location", "scale", "both")
+SCALE_DEFINITIONS: Final[tuple[str, ...]] = ("paper", "repo")
+FEATURE_UNIT: Final[float] = 1e-3
 """Location and scale features are multiplied by this (px -> kilo-px)."""
+
+ArrayT = TypeVar("ArrayT")
 
 
 def num_features(mode: NormMode, num_joints: int = 17) -> int:
-    """Number of input features of the network for a mode: 2J (+2 location) (+1 scale)."""
+    """Number of features of the layer for a mode: 2J (+2 location) (+1 scale)."""
     if mode not in NORM_MODES:
         raise ValueError(f"unknown normalization mode {mode!r}; expected one of {NORM_MODES}")
     return 2 * num_joints + (2 if mode in ("location", "both") else 0) + (1 if mode in ("scale", "both") else 0)
 
 
-def location_and_scale(
-    centred: torch.Tensor, *, scale_definition: ScaleDefinition = "paper"
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """Location ``u`` ``(B, 2)`` and scale ``sigma`` ``(B,)`` of principal-point-centred keypoints ``(B, J, 2)``."""
-    u = centred.mean(dim=-2)
-    d = centred - u[..., None, :]
+def location_and_scale(centred: ArrayT, *, scale_definition: ScaleDefinition = "paper") -> tuple[ArrayT, ArrayT]:
+    """Location ``u`` ``(..., 2)`` and scale ``sigma`` ``(...)`` (px) of keypoints ``(..., J, 2)``.
+
+    The one definition of the 2D scale: the normalization layer, the error model's scale rule and the
+    API's degenerate-pose check all use it."""
+    xp = array_namespace(centred)
+    u = xp.mean(centred, axis=-2)
+    d = centred - u[..., None, :]  # type: ignore[index, operator]
+    r2 = xp.sum(d * d, axis=-1)
     if scale_definition == "paper":
-        sigma = torch.sqrt((d**2).sum(-1).mean(-1))
+        sigma = xp.sqrt(xp.mean(r2, axis=-1))
     elif scale_definition == "repo":
-        sigma = torch.linalg.vector_norm(d, dim=-1).std(dim=-1, unbiased=True)
+        sigma = xp.std(xp.sqrt(r2), axis=-1, correction=1)
     else:
-        raise ValueError(f"unknown scale definition {scale_definition!r}; expected 'paper' or 'repo'")
+        raise ValueError(f"unknown scale definition {scale_definition!r}; expected one of {SCALE_DEFINITIONS}")
     return u, sigma
 
 
-def normalize_keypoints(
-    keypoints: torch.Tensor,
-    principal_point: torch.Tensor,
-    *,
-    mode: NormMode = "both",
-    scale_definition: ScaleDefinition = "paper",
-    eps: float = 1e-6,
-) -> torch.Tensor:
-    """Features ``(B, num_features(mode))`` from keypoints ``(B, J, 2)`` px and principal point ``(B, 2)`` px.
+def pose_scale(keypoints: ArrayT, *, scale_definition: ScaleDefinition = "paper") -> ArrayT:
+    """The 2D scale ``sigma`` (px) of keypoints ``(..., J, 2)``; shape ``(...)``. Translation invariant."""
+    return location_and_scale(keypoints, scale_definition=scale_definition)[1]
 
-    ``sigma`` is clamped at ``eps`` px to keep the graph finite; the public API rejects degenerate
+
+def pose_features(centred: ArrayT, *, mode: NormMode = "both", scale_definition: ScaleDefinition = "paper",
+                  eps: float = 1e-6) -> ArrayT:
+    """Features ``(..., num_features(mode))`` from keypoints ``(..., J, 2)`` px relative to the principal point.
+
+    ``sigma`` is clamped at ``eps`` px to keep the result finite; the public API rejects degenerate
     (zero-scale) poses before they get here.
     """
-    if keypoints.ndim != 3 or keypoints.shape[-1] != 2:
-        raise ValueError(f"keypoints: expected shape (B, J, 2), got {tuple(keypoints.shape)}")
-    if principal_point.shape != (keypoints.shape[0], 2):
-        raise ValueError(f"principal_point: expected shape ({keypoints.shape[0]}, 2), got {tuple(principal_point.shape)}")
-    centred = keypoints - principal_point[:, None, :]
+    if centred.ndim < 2 or centred.shape[-1] != 2:  # type: ignore[attr-defined]
+        raise ValueError(f"keypoints: expected shape (..., J, 2), got {tuple(centred.shape)}")  # type: ignore[attr-defined]
+    if mode not in NORM_MODES:
+        raise ValueError(f"unknown normalization mode {mode!r}; expected one of {NORM_MODES}")
+    xp = array_namespace(centred)
     u, sigma = location_and_scale(centred, scale_definition=scale_definition)
-    sigma = sigma.clamp_min(eps)
-    pose = ((centred - u[:, None, :]) / sigma[:, None, None]).flatten(1)
-    parts = [pose]
+    sigma = xp.clip(sigma, min=eps)
+    pose = (centred - u[..., None, :]) / sigma[..., None, None]  # type: ignore[index, operator]
+    parts = [xp.reshape(pose, (*pose.shape[:-2], pose.shape[-2] * 2))]
     if mode in ("location", "both"):
         parts.append(u * FEATURE_UNIT)
     if mode in ("scale", "both"):
-        parts.append(sigma[:, None] * FEATURE_UNIT)
-    if mode not in NORM_MODES:
-        raise ValueError(f"unknown normalization mode {mode!r}; expected one of {NORM_MODES}")
-    return torch.cat(parts, dim=1)
+        parts.append(sigma[..., None] * FEATURE_UNIT)  # type: ignore[index]
+    return xp.concat(parts, axis=-1)
 
 
-def normalize_keypoints_np(
-    keypoints: np.ndarray,
-    principal_point: np.ndarray,
-    *,
-    mode: NormMode = "both",
-    scale_definition: ScaleDefinition = "paper",
-) -> np.ndarray:
-    """Numpy version of :func:`normalize_keypoints`, batched over leading dims: ``(..., J, 2)`` -> ``(..., F)``."""
-    kp = np.asarray(keypoints, np.float64)
-    lead = kp.shape[:-2]
-    pp = np.broadcast_to(np.asarray(principal_point, np.float64), lead + (2,))
-    out = normalize_keypoints(
-        torch.from_numpy(kp.reshape(-1, *kp.shape[-2:])),
-        torch.from_numpy(pp.reshape(-1, 2).copy()),
-        mode=mode,
-        scale_definition=scale_definition,
-    )
-    return out.numpy().reshape(*lead, -1)
-
-
-def pose_scale_np(keypoints: np.ndarray, *, scale_definition: ScaleDefinition = "paper") -> np.ndarray:
-    """The 2D scale ``sigma`` (px) of keypoints ``(..., J, 2)``; shape ``(...)``."""
-    kp = np.asarray(keypoints, np.float64)
-    d = kp - kp.mean(axis=-2, keepdims=True)
-    if scale_definition == "paper":
-        return np.sqrt((d**2).sum(-1).mean(-1))
-    return np.linalg.norm(d, axis=-1).std(axis=-1, ddof=1)
+def normalize_keypoints(keypoints: ArrayT, principal_point: Any, *, mode: NormMode = "both",
+                        scale_definition: ScaleDefinition = "paper", eps: float = 1e-6) -> ArrayT:
+    """The paper's layer on image pixels: :func:`pose_features` of ``keypoints - principal_point``.
+    ``keypoints`` ``(..., J, 2)`` px and ``principal_point`` ``(..., 2)`` px of the same array type."""
+    if not hasattr(principal_point, "shape"):
+        principal_point = array_namespace(keypoints).asarray(principal_point, dtype=keypoints.dtype)  # type: ignore[attr-defined]
+    if tuple(principal_point.shape[-1:]) != (2,):
+        raise ValueError(f"principal_point: expected shape (..., 2), got {tuple(principal_point.shape)}")
+    return pose_features(keypoints - principal_point[..., None, :], mode=mode, scale_definition=scale_definition,
+                         eps=eps)

@@ -29,7 +29,9 @@ Joint order (index: name, index in the 32-joint H36M mocap skeleton):
 
 from __future__ import annotations
 
-from typing import Final
+from typing import Final, TypeVar
+
+from array_api_compat import array_namespace
 
 NUM_JOINTS: Final[int] = 17
 ROOT: Final[int] = 0
@@ -71,6 +73,26 @@ FLIP_PERMUTATION: Final[tuple[int, ...]] = (0, 4, 5, 6, 1, 2, 3, 7, 8, 9, 10, 14
 
 LEFT_JOINTS: Final[tuple[int, ...]] = tuple(left for left, _ in LEFT_RIGHT_PAIRS)
 RIGHT_JOINTS: Final[tuple[int, ...]] = tuple(right for _, right in LEFT_RIGHT_PAIRS)
+
+
+ArrayT = TypeVar("ArrayT")
+
+
+def mirror(points: ArrayT) -> ArrayT:
+    """Mirror points ``(..., 17, D)`` (D = 2 or 3) in the plane ``x = 0``: left and right joints swap and x is
+    negated. numpy arrays or torch tensors (differentiable); returns a new array of the same type.
+
+    This is the one implementation of the horizontal flip. For camera-frame 3D (mm) it mirrors the scene
+    in the camera's vertical plane; for 2D it applies to coordinates *relative to the principal point*,
+    where it equals the image flip ``x -> W - x`` together with ``cx -> W - cx``
+    (:func:`lifter.camera.flip_keypoints_2d`). Mirroring twice is the identity.
+    """
+    xp = array_namespace(points)
+    if points.ndim < 2 or points.shape[-2] != NUM_JOINTS or points.shape[-1] not in (2, 3):  # type: ignore[attr-defined]
+        raise ValueError(f"mirror: expected shape (..., {NUM_JOINTS}, 2 or 3), got {tuple(points.shape)}")  # type: ignore[attr-defined]
+    swapped = points[..., list(FLIP_PERMUTATION), :]  # type: ignore[index]
+    x = -swapped[..., :1]
+    return xp.concat([x, swapped[..., 1:]], axis=-1)
 
 
 def joint_side(index: int) -> str:

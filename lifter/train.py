@@ -1,18 +1,22 @@
-"""Training loop for PoseLifter on Human3.6M (CPU-friendly).
+"""Training PoseLifter on Human3.6M, on one process or under ``torchrun`` (DistributedDataParallel).
 
-Recipe (defaults of :class:`TrainConfig`; see the README for the measured learning curve):
+Recipe: :class:`lifter.config.TrainConfig`. Per step:
 
-* data: Protocol-1 training subjects, every ``train_stride``-th 50-fps frame, 4 cameras, GT 2D
-  (distorted projection); random horizontal flip p = 0.5 done correctly (x -> W - x, cx -> W - cx,
-  L/R swap, X negated), vectorized per batch;
-* model: :class:`~lifter.model.PoseLifterNet` with standardized outputs (mean/std of the targets,
-  flipped copies included) and the head's initial output at the target mean;
-* loss: :func:`~lifter.loss.poselifter_loss` in mm (48 pose terms + 1 x canonical depth);
-* optional: zoom augmentation (``zoom_aug``) and 2D noise (``augment_2d``, e.g. the fitted error model
-  of :mod:`lifter.noise`), applied after the flip in that order, so noise follows the zoomed size;
-* optimizer: AdamW, ``lr`` with linear warm-up then cosine decay to ``lr * final_lr_fraction``.
-  Schedule progress is ``max(step / steps, elapsed / max_minutes)``, so a wall-clock limit ends
-  training with a fully decayed learning rate instead of cutting it off mid-schedule.
+* a batch of training samples (:func:`make_batch`): each gets its exact GT 2D (source "clean"), its real
+  detection, or its GT 2D plus error-model noise at a random level (source "detected"); then the
+  horizontal flip (about the principal point: :func:`lifter.skeleton.mirror` of 2D and 3D) and, for the
+  pixel input space, zoom;
+* the codec (:class:`lifter.codec.PoseCodec`) encodes inputs and targets; the network predicts
+  standardized outputs; the loss (:func:`lifter.loss.poselifter_loss`) is in mm;
+* AdamW with linear warm-up then cosine decay, driven by ``max(step / steps, elapsed / max_minutes)`` so a
+  wall-clock limit still ends fully decayed; optional weight EMA and bf16 autocast of the residual blocks.
+
+Distributed: under ``torchrun`` (``WORLD_SIZE > 1``) every process loads the data, builds the same
+network from the same seed and trains a shard of every global batch (``batch_size / world`` samples,
+disjoint slices of one shared permutation) through :class:`torch.nn.parallel.DistributedDataParallel`
+(gloo on CPU, NCCL on CUDA). Gradients are averaged, BatchNorm statistics are broadcast from rank 0 after
+every step, and the wall-clock schedule uses the slowest rank's clock, so every rank holds the same
+weights at every step. Rank 0 validates and writes the one checkpoint.
 """
 
 from __future__ import annotations
@@ -20,126 +24,173 @@ from __future__ import annotations
 import copy
 import json
 import math
+import os
 import time
-from dataclasses import asdict, dataclass, field, replace
+from contextlib import nullcontext
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 import torch
+import torch.distributed as dist
 from tqdm.auto import tqdm
 
 from ._checks import PoseLifterError
-from .camera import backproject, root_from_canonical_depth
 from .checkpoint import save_checkpoint
+from .codec import PoseCodec
+from .config import TrainConfig
 from .data import H36M, PoseSamples
 from .loss import poselifter_loss
-from .model import ModelConfig, PoseLifterNet, pack_targets
-from .skeleton import FLIP_PERMUTATION
+from .model import PoseLifterNet
+from .noise import ErrorModel
+from .skeleton import mirror
 
-Augment2D = Callable[[torch.Tensor, torch.Tensor, torch.Generator], torch.Tensor]
-"""``f(keypoints (B,17,2) px, principal_point (B,2) px, generator) -> noisy keypoints``."""
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    model: ModelConfig = field(default_factory=ModelConfig)
-    protocol: int = 1
-    train_stride: int = 5
-    batch_size: int = 512
-    epochs: float = 30.0
-    lr: float = 1e-3
-    weight_decay: float = 1e-4
-    warmup_fraction: float = 0.02
-    final_lr_fraction: float = 0.01
-    depth_weight: float = 1.0
-    flip_prob: float = 0.5
-    max_minutes: float | None = None
-    seed: int = 0
-    threads: int | None = None
-    val_stride: int = 100
-    eval_every: int = 500
-    max_frames_per_sequence: int | None = None
-    zoom_aug: bool = False
-    """Zoom augmentation (spec §6): scale 2D pose, principal point and focal by
-    ``s = 2 ** clip(zoom_sigma * N(0, 1), -zoom_clip, zoom_clip)``; the canonical target becomes ``Z*F0/(s*alpha)``."""
-    zoom_sigma: float = 0.25
-    zoom_clip: float = 0.5
-    real_2d_prob: float = 0.5
-    """With ``train(real_keypoints_2d=...)``: probability that a sample is fed its real detection (where it
-    has one) instead of its GT 2D (+ ``augment_2d`` noise). Ignored without real keypoints."""
-    ema_decay: float | None = None
-    """Exponential moving average of the weights (and BatchNorm statistics), e.g. 0.999; validation and the
-    returned network use the average. ``None``: plain weights."""
-
-    def __post_init__(self) -> None:
-        if not 0.0 <= self.real_2d_prob <= 1.0:
-            raise PoseLifterError(f"real_2d_prob (--real-prob) must be in [0, 1], got {self.real_2d_prob}")
-        if self.ema_decay is not None and not 0.0 <= self.ema_decay < 1.0:
-            raise PoseLifterError(f"ema_decay (--ema) must be in [0, 1), got {self.ema_decay}")
-
-    def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["model"] = self.model.to_dict()
-        return d
+Batch = dict[str, torch.Tensor]
+"""A training batch: ``kp`` (B,17,2) px, ``pp`` (B,2) px, ``focal`` (B,2) px, ``rel`` (B,17,3) mm root-relative,
+``depth`` (B,) root Z mm, ``clean`` (B,) bool (the 2D is exact)."""
 
 
 @dataclass(frozen=True)
 class TrainResult:
     net: PoseLifterNet
+    codec: PoseCodec
+    config: TrainConfig
     curve: list[dict[str, float]]
     steps: int
     samples_seen: int
     minutes: float
 
 
-def flip_batch(
-    kp: torch.Tensor, pp: torch.Tensor, width: torch.Tensor, rel: torch.Tensor, mask: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Flip the samples where ``mask`` is true. kp ``(B,17,2)`` px, pp ``(B,2)``, width ``(B,)``,
-    rel ``(B,17,3)`` mm root-relative. The canonical depth is unchanged by a flip."""
-    perm = torch.as_tensor(FLIP_PERMUTATION)
-    kp_f = kp[:, perm].clone()
-    kp_f[..., 0] = width[:, None] - kp_f[..., 0]
-    pp_f = pp.clone()
-    pp_f[:, 0] = width - pp_f[:, 0]
-    rel_f = rel[:, perm].clone()
-    rel_f[..., 0] = -rel_f[..., 0]
+# ------------------------------------------------------------------------------------------------
+# Distributed context
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Dist:
+    """Where this process stands: ``rank`` of ``world`` processes on ``device``."""
+
+    rank: int = 0
+    world: int = 1
+    device: torch.device = torch.device("cpu")
+
+    @property
+    def main(self) -> bool:
+        return self.rank == 0
+
+    @property
+    def active(self) -> bool:
+        return self.world > 1
+
+
+def init_distributed() -> Dist:
+    """Join the process group when started by ``torchrun`` (``WORLD_SIZE > 1``): NCCL with one GPU per
+    process when CUDA is available, gloo on CPU otherwise. A single process returns the trivial context."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if world <= 1:
+        return Dist(device=torch.device("cuda" if torch.cuda.is_available() else "cpu"))
+    use_cuda = torch.cuda.is_available()
+    if not dist.is_initialized():
+        dist.init_process_group(backend="nccl" if use_cuda else "gloo")
+    rank = dist.get_rank()
+    if use_cuda:
+        local = int(os.environ.get("LOCAL_RANK", "0"))
+        torch.cuda.set_device(local)
+        device = torch.device("cuda", local)
+    else:
+        device = torch.device("cpu")
+    return Dist(rank=rank, world=dist.get_world_size(), device=device)
+
+
+# ------------------------------------------------------------------------------------------------
+# Batches
+# ------------------------------------------------------------------------------------------------
+
+
+def samples_to_tensors(samples: PoseSamples, real_keypoints_2d: np.ndarray | None = None) -> Batch:
+    """The tensors batches are drawn from (float32, CPU): GT 2D, intrinsics, relative pose, root depth and,
+    when given, the real detections ``(N, 17, 2)`` px aligned with the samples (NaN rows: none)."""
+    T = {
+        "kp": torch.from_numpy(np.ascontiguousarray(samples.keypoints_2d, np.float32)),
+        "pp": torch.from_numpy(np.ascontiguousarray(samples.principal_point, np.float32)),
+        "focal": torch.from_numpy(np.ascontiguousarray(samples.focal, np.float32)),
+        "rel": torch.from_numpy(np.ascontiguousarray(samples.relative, np.float32)),
+        "depth": torch.from_numpy(np.ascontiguousarray(samples.pose_3d[:, 0, 2], np.float32)),
+    }
+    if real_keypoints_2d is not None:
+        real = np.asarray(real_keypoints_2d, np.float32)
+        if real.shape != samples.keypoints_2d.shape:
+            raise PoseLifterError(f"real detections have shape {real.shape}; expected {samples.keypoints_2d.shape} "
+                                  "(one row per training sample)")
+        ok = np.isfinite(real).all(axis=(1, 2))
+        T["real"] = torch.from_numpy(np.where(ok[:, None, None], real, 0.0).astype(np.float32))
+        T["has_real"] = torch.from_numpy(ok)
+    return T
+
+
+def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torch.Tensor
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+    """Mirror the samples where ``mask`` ``(B,)`` is true: the 2D about its principal point (the same network
+    input as the image flip ``x -> W - x``, ``cx -> W - cx``) and the root-relative 3D; depth is unchanged."""
     m = mask[:, None, None]
-    return torch.where(m, kp_f, kp), torch.where(mask[:, None], pp_f, pp), torch.where(m, rel_f, rel)
+    c = pp[:, None, :]
+    return torch.where(m, c + mirror(kp - c), kp), torch.where(m, mirror(rel), rel)
 
 
-def zoom_batch(kp: torch.Tensor, pp: torch.Tensor, depth: torch.Tensor, s: torch.Tensor, *,
-               canonical: bool) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Zoom by ``s`` ``(B,)``: the same 3D seen by a camera with focal and principal point (and image) x s.
-    2D keypoints and principal point scale by ``s``; the canonical depth ``Z F0 / (s alpha)`` scales by
-    ``1/s``; an absolute depth target is unchanged (which is why it cannot be learned from zoomed data)."""
-    return kp * s[:, None, None], pp * s[:, None], (depth / s if canonical else depth)
+def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
+               noise: ErrorModel | None = None) -> Batch:
+    """One training batch (:data:`Batch`) of the samples ``idx`` (module docstring for the order).
 
-
-def make_batch(T: dict[str, torch.Tensor], idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
-               augment_2d: Augment2D | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """One training batch ``(kp (B,17,2) px, pp (B,2) px, rel (B,17,3) mm, depth (B,))`` from the tensors ``T``.
-
-    Order: 2D source (the real detection ``T["real"]`` with probability ``cfg.real_2d_prob`` where
-    ``T["has_real"]``, else the GT 2D) -> flip -> zoom -> ``augment_2d`` noise on the GT-sourced rows only
-    (a real detection already carries real errors)."""
-    kp, pp, w, rel, depth = T["kp"][idx], T["pp"][idx], T["w"][idx], T["rel"][idx], T["depth"][idx]
+    Sources: clean with ``cfg.data.clean_prob``; else the real detection with ``real_prob`` where there is
+    one; else GT 2D with ``noise`` at a level uniform in ``[noise_level_min, noise_level_max]`` (GT 2D
+    without noise when ``noise`` is None). Noise is drawn after flip and zoom, so it follows the shown size."""
+    d = cfg.data
+    kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
+    rel, depth = T["rel"][idx], T["depth"][idx]
     bs = len(idx)
-    use_real = None
+    u = torch.rand(bs, generator=gen)
+    clean = u < d.clean_prob
+    real = (u >= d.clean_prob) & (u < d.clean_prob + d.real_prob)
     if "has_real" in T:
-        use_real = T["has_real"][idx] & (torch.rand(bs, generator=gen) < cfg.real_2d_prob)
-        kp = torch.where(use_real[:, None, None], T["real"][idx], kp)
-    if cfg.flip_prob > 0:
-        mask = torch.rand(bs, generator=gen) < cfg.flip_prob
-        kp, pp, rel = flip_batch(kp, pp, w, rel, mask)
-    if cfg.zoom_aug:
-        s = torch.exp2((cfg.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-cfg.zoom_clip, cfg.zoom_clip))
-        kp, pp, depth = zoom_batch(kp, pp, depth, s, canonical=cfg.model.depth_target == "canonical")
-    if augment_2d is not None:
-        noisy = augment_2d(kp, pp, gen)
-        kp = noisy if use_real is None else torch.where(use_real[:, None, None], kp, noisy)
-    return kp, pp, rel, depth
+        real &= T["has_real"][idx]
+        kp = torch.where(real[:, None, None], T["real"][idx], kp)
+    else:
+        real = torch.zeros_like(real)
+    if cfg.augment.flip_prob > 0:
+        kp, rel = flip_batch(kp, pp, rel, torch.rand(bs, generator=gen) < cfg.augment.flip_prob)
+    if cfg.augment.zoom:
+        a = cfg.augment
+        s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-a.zoom_clip, a.zoom_clip))
+        kp, pp, f = kp * s[:, None, None], pp * s[:, None], f * s[:, None]
+    synth = ~clean & ~real
+    if noise is not None and bool(synth.any()):
+        level = d.noise_level_min + (d.noise_level_max - d.noise_level_min) * torch.rand(bs, generator=gen)
+        noisy = noise.sample_torch(kp, level=level, generator=gen, outliers=d.noise_outliers)
+        kp = torch.where(synth[:, None, None], noisy, kp)
+    return {"kp": kp, "pp": pp, "focal": f, "rel": rel, "depth": depth, "clean": clean}
+
+
+def target_statistics(codec: PoseCodec, T: Batch) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and std ``(49,)`` of the raw targets (mm) of the clean training samples and their mirror images."""
+    enc = codec.encode(T["kp"].double(), principal_point=T["pp"].double(), focal=T["focal"].double(), source="clean")
+    y = codec.encode_targets(T["rel"].double(), T["depth"].double(), enc)
+    y_m = codec.encode_targets(mirror(T["rel"].double()), T["depth"].double(), enc)
+    y = torch.cat([y, y_m])
+    return y.mean(0).numpy(), y.std(0).numpy()
+
+
+def load_noise(cfg: TrainConfig) -> ErrorModel | None:
+    """The error model of ``cfg.data`` when some samples get synthetic noise, else None."""
+    if cfg.data.noise_prob <= 0:
+        return None
+    em = ErrorModel.resolve(cfg.data.error_model)
+    return em.baseline() if cfg.data.noise == "gaussian" else em
+
+
+# ------------------------------------------------------------------------------------------------
+# Pieces of the loop
+# ------------------------------------------------------------------------------------------------
 
 
 class WeightAverage:
@@ -162,49 +213,72 @@ class WeightAverage:
                 avg.copy_(cur)
 
 
-def target_statistics(rel: torch.Tensor, depth: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """Mean and std ``(49,)`` of the packed targets over the samples and their mirror images."""
-    perm = torch.as_tensor(FLIP_PERMUTATION)
-    rel_f = rel[:, perm].clone()
-    rel_f[..., 0] = -rel_f[..., 0]
-    y = torch.cat([pack_targets(rel, depth), pack_targets(rel_f, depth)])
-    return y.mean(0), y.std(0)
-
-
-def _lr_factor(progress: float, cfg: TrainConfig) -> float:
-    if progress < cfg.warmup_fraction:
-        return max(progress / cfg.warmup_fraction, 1e-3)
-    t = (progress - cfg.warmup_fraction) / max(1e-9, 1.0 - cfg.warmup_fraction)
+def lr_factor(progress: float, cfg: TrainConfig) -> float:
+    """Learning-rate multiplier at ``progress`` in [0, 1]: linear warm-up, then cosine to ``final_lr_fraction``."""
+    s = cfg.schedule
+    if progress < s.warmup_fraction:
+        return max(progress / s.warmup_fraction, 1e-3)
+    t = (progress - s.warmup_fraction) / max(1e-9, 1.0 - s.warmup_fraction)
     t = min(max(t, 0.0), 1.0)
-    lo = cfg.final_lr_fraction
+    lo = s.final_lr_fraction
     return lo + (1 - lo) * 0.5 * (1 + math.cos(math.pi * t))
 
 
-def _as_tensors(samples: PoseSamples, depth_target: str) -> dict[str, torch.Tensor]:
-    depth = samples.canonical_depth if depth_target == "canonical" else samples.pose_3d[:, 0, 2]
-    return {
-        "kp": torch.from_numpy(np.ascontiguousarray(samples.keypoints_2d, np.float32)),
-        "pp": torch.from_numpy(np.ascontiguousarray(samples.principal_point, np.float32)),
-        "w": torch.from_numpy(samples.image_size[:, 0].astype(np.float32)),
-        "rel": torch.from_numpy(np.ascontiguousarray(samples.relative, np.float32)),
-        "depth": torch.from_numpy(np.asarray(depth, np.float32)),
-    }
+def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainConfig) -> torch.Tensor:
+    """The training loss (mm) of one batch."""
+    enc = codec.encode(batch["kp"], principal_point=batch["pp"], focal=batch["focal"], source=batch["clean"])
+    target = codec.encode_targets(batch["rel"], batch["depth"], enc)
+    autocast = torch.autocast(batch["kp"].device.type, dtype=torch.bfloat16) if cfg.optim.precision == "bf16" \
+        else nullcontext()
+    with autocast:
+        out = net(enc.features)
+    pred = codec.destandardize(out.float())
+    return poselifter_loss(pred, target, depth_weight=cfg.optim.depth_weight,
+                           depth_scale=codec.depth_loss_scale(enc))
 
 
 @torch.inference_mode()
-def _validate(net: PoseLifterNet, val: dict[str, torch.Tensor], val_root: np.ndarray, focal: np.ndarray) -> dict[str, float]:
-    was_training = net.training
+def validate(net: PoseLifterNet, codec: PoseCodec, val: dict[str, Batch]) -> dict[str, float]:
+    """MPJPE and MRPE (mm) of ``net`` on each validation set (``{"clean": batch, "detected": batch}``): learning
+    curve points, never used to pick a checkpoint."""
+    was = net.training
     net.eval()
-    out = net(val["kp"], val["pp"])
-    net.train(was_training)
-    mpjpe = (out.relative - val["rel"]).norm(dim=-1).mean().item()
-    root_2d, pp, depth = val["kp"][:, 0].numpy(), val["pp"].numpy(), out.depth.numpy().astype(np.float64)
-    if net.config.depth_target == "canonical":
-        root = root_from_canonical_depth(root_2d, depth, focal=focal, principal_point=pp)
-    else:
-        root = backproject(root_2d, depth, focal=focal, principal_point=pp)
-    mrpe = float(np.linalg.norm(root - val_root, axis=-1).mean())
-    return {"val_mpjpe": mpjpe, "val_mrpe": mrpe}
+    out: dict[str, float] = {}
+    for name, b in val.items():
+        source = "clean" if name == "clean" else "detected"
+        enc = codec.encode(b["kp"], principal_point=b["pp"], focal=b["focal"], source=source)
+        raw = codec.destandardize(net(enc.features))
+        dec = codec.decode(raw, enc, root_2d=b["kp"][:, 0], principal_point=b["pp"], focal=b["focal"])
+        out[f"val_mpjpe_{name}"] = (dec.relative - b["rel"]).norm(dim=-1).mean().item()
+        out[f"val_mrpe_{name}"] = (dec.root - b["root"]).norm(dim=-1).mean().item()
+    net.train(was)
+    return out
+
+
+def validation_sets(samples: PoseSamples, detections: np.ndarray | None) -> dict[str, Batch]:
+    """Validation batches: GT 2D ("clean") and, when given, the real detections ("detected")."""
+    sets: dict[str, Batch] = {}
+    T = samples_to_tensors(samples)
+    T["root"] = torch.from_numpy(samples.root.astype(np.float32))
+    sets["clean"] = T
+    if detections is not None:
+        ok = np.isfinite(detections).all(axis=(1, 2))
+        if ok.any():
+            D = {k: v[torch.from_numpy(ok)] for k, v in T.items()}
+            D["kp"] = torch.from_numpy(detections[ok].astype(np.float32))
+            sets["detected"] = D
+    return sets
+
+
+def _sync_buffers(net: torch.nn.Module) -> None:
+    """Copy rank 0's buffers (BatchNorm running statistics) to every rank."""
+    for b in net.buffers():
+        dist.broadcast(b, src=0)
+
+
+# ------------------------------------------------------------------------------------------------
+# The loop
+# ------------------------------------------------------------------------------------------------
 
 
 def train(
@@ -212,131 +286,145 @@ def train(
     *,
     data: H36M | None = None,
     train_samples: PoseSamples | None = None,
-    val_samples: PoseSamples | None = None,
-    augment_2d: Augment2D | None = None,
     real_keypoints_2d: np.ndarray | None = None,
-    init: PoseLifterNet | None = None,
+    val_sets: dict[str, Batch] | None = None,
+    init: tuple[PoseLifterNet, PoseCodec] | None = None,
+    noise: ErrorModel | None = None,
     progress: bool = True,
     log: Callable[[str], None] = print,
+    ctx: Dist | None = None,
 ) -> TrainResult:
-    """Train a PoseLifter network. Pass ``train_samples`` to train on custom data (e.g. detections);
-    otherwise the protocol's training subjects are loaded from ``data`` (default folder).
-
-    ``real_keypoints_2d`` ``(N, 17, 2)`` px, aligned with the training samples (NaN rows: no detection), mixes
-    real detections into training: each sample gets its detection with probability ``cfg.real_2d_prob``, else
-    its GT 2D with ``augment_2d`` noise. Flip and zoom apply to both. ``init`` fine-tunes a copy of that network
-    (its architecture and output statistics are kept; ``cfg.model`` is ignored)."""
-    if cfg.threads:
-        torch.set_num_threads(cfg.threads)
-    torch.manual_seed(cfg.seed)
-    gen = torch.Generator().manual_seed(cfg.seed)
-    if train_samples is None or val_samples is None:
-        data = data or H36M()
+    """Train a network (module docstring). Data: ``train_samples`` (default: the protocol's training subjects
+    from ``data``), ``real_keypoints_2d`` aligned with them (needed when ``cfg.data.real_prob > 0``),
+    ``val_sets`` for the learning curve (default: the test subjects at ``val_stride``, GT 2D only).
+    ``init``: fine-tune a copy of this network and codec (``cfg.model`` is replaced by its config).
+    ``noise``: the error model (default: :func:`load_noise`). ``ctx``: the distributed context
+    (default: :func:`init_distributed`)."""
+    ctx = ctx or init_distributed()
+    torch.manual_seed(cfg.schedule.seed)
+    gen = torch.Generator().manual_seed(cfg.schedule.seed + 1000 * ctx.rank)  # this rank's augmentation draws
+    perm_gen = torch.Generator().manual_seed(cfg.schedule.seed)  # the shared permutation
     if train_samples is None:
-        train_samples = data.load_protocol(cfg.protocol, "train", stride=cfg.train_stride,
-                                           max_frames_per_sequence=cfg.max_frames_per_sequence)
-    if val_samples is None:
-        val_samples = data.load_protocol(cfg.protocol, "test", stride=cfg.val_stride,
-                                         max_frames_per_sequence=cfg.max_frames_per_sequence)
+        data = data or H36M()
+        train_samples = data.load_protocol(cfg.data.protocol, "train", stride=cfg.data.train_stride,
+                                           max_frames_per_sequence=cfg.data.max_frames_per_sequence)
+    if val_sets is None:
+        data = data or H36M()
+        val = data.load_protocol(cfg.data.protocol, "test", stride=cfg.data.val_stride,
+                                 max_frames_per_sequence=cfg.data.max_frames_per_sequence)
+        val_sets = validation_sets(val, None)
+    if cfg.data.real_prob > 0 and real_keypoints_2d is None:
+        raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
-        cfg = replace(cfg, model=init.config)  # before the targets: the depth target is the initial network's
-    T = _as_tensors(train_samples, cfg.model.depth_target)
-    V = _as_tensors(val_samples, cfg.model.depth_target)
-    val_root, val_focal = val_samples.root, val_samples.focal
-
-    if real_keypoints_2d is not None:
-        real = np.asarray(real_keypoints_2d, np.float32)
-        if real.shape != train_samples.keypoints_2d.shape:
-            raise ValueError(f"real_keypoints_2d has shape {real.shape}; expected {train_samples.keypoints_2d.shape} "
-                             "(one row per training sample)")
-        ok = np.isfinite(real).all(axis=(1, 2))
-        T["real"] = torch.from_numpy(np.where(ok[:, None, None], real, 0.0).astype(np.float32))
-        T["has_real"] = torch.from_numpy(ok)
-        log(f"mixing real detections: {int(ok.sum())} of {len(ok)} samples have one, used with p = {cfg.real_2d_prob:g}")
+        cfg = replace(cfg, model=init[0].config)
+    T = samples_to_tensors(train_samples, real_keypoints_2d if cfg.data.real_prob > 0 else None)
+    noise = noise if noise is not None else load_noise(cfg)
+    if cfg.data.noise_prob > 0 and noise is None:
+        raise PoseLifterError("some samples need synthetic noise (clean_prob + real_prob < 1) but no error model")
 
     if init is not None:
-        net = copy.deepcopy(init)
+        net, codec = copy.deepcopy(init[0]), init[1]
     else:
+        codec = PoseCodec(cfg.model)
+        mean, std = target_statistics(codec, T)
+        codec = PoseCodec(cfg.model, target_mean=mean, target_std=std)
         net = PoseLifterNet(cfg.model)
-        mean, std = target_statistics(T["rel"], T["depth"])
-        net.set_target_statistics(mean, std)
-    net.train()
-    opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    ema = WeightAverage(net, decay=cfg.ema_decay) if cfg.ema_decay is not None else None
-    eval_net = ema.module if ema is not None else net  # what validation and the result use
+    net.to(ctx.device).train()
+    model: torch.nn.Module = net
+    if ctx.active:
+        model = torch.nn.parallel.DistributedDataParallel(net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
+    opt = torch.optim.AdamW(net.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
+    ema = WeightAverage(net, decay=cfg.optim.ema_decay) if cfg.optim.ema_decay is not None else None
+    eval_net = ema.module if ema is not None else net
+    val_dev = {k: {n: t.to(ctx.device) for n, t in v.items()} for k, v in val_sets.items()}
 
     n = len(train_samples)
-    bs = min(cfg.batch_size, n)
-    steps = max(1, int(round(cfg.epochs * n / bs)))
-    log(f"training on {n} samples, batch {bs}, {steps} steps ({cfg.epochs:g} epochs), "
-        f"max {cfg.max_minutes or 'inf'} min, model {cfg.model}")
+    gbs = min(cfg.optim.batch_size, n)
+    if gbs < ctx.world:
+        raise PoseLifterError(f"batch size {gbs} is smaller than the {ctx.world} processes")
+    lbs = gbs // ctx.world
+    steps = max(1, int(round(cfg.schedule.epochs * n / gbs)))
+    if ctx.main:
+        log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}), {steps} steps "
+            f"({cfg.schedule.epochs:g} epochs), max {cfg.schedule.max_minutes or 'inf'} min, {cfg.model}")
     curve: list[dict[str, float]] = []
-    perm = torch.randperm(n, generator=gen)
+    perm = torch.randperm(n, generator=perm_gen)
     pos = 0
     t0 = time.perf_counter()
-    running = None
-    bar = tqdm(total=steps, disable=not progress, unit="step", dynamic_ncols=True, mininterval=2.0)
+    running: float | None = None
+    bar = tqdm(total=steps, disable=not (progress and ctx.main), unit="step", dynamic_ncols=True, mininterval=2.0)
     step = 0
+    clock = torch.zeros(1, device=ctx.device)
+
+    def record() -> None:
+        rec = {"step": step, "samples": step * gbs, "minutes": (time.perf_counter() - t0) / 60.0,
+               "lr": opt.param_groups[0]["lr"], "train_loss": float(running or 0.0)}
+        rec.update(validate(eval_net, codec, val_dev))
+        curve.append(rec)
+        bar.set_postfix({k.replace("val_", ""): f"{v:.1f}" for k, v in rec.items() if k.startswith("val_")})
+        if not progress:
+            log(f"step {step}: " + ", ".join(f"{k} {v:.4g}" for k, v in rec.items() if k != "step"))
+
     while True:
         elapsed = (time.perf_counter() - t0) / 60.0
+        if ctx.active:  # every rank follows the slowest clock, so all stop at the same step
+            clock.fill_(elapsed)
+            dist.all_reduce(clock, op=dist.ReduceOp.MAX)
+            elapsed = float(clock.item())
         prog = step / steps
-        if cfg.max_minutes is not None:
-            prog = max(prog, elapsed / cfg.max_minutes)
+        if cfg.schedule.max_minutes is not None:
+            prog = max(prog, elapsed / cfg.schedule.max_minutes)
         if prog >= 1.0:
             break
         for g in opt.param_groups:
-            g["lr"] = cfg.lr * _lr_factor(prog, cfg)
-        if pos + bs > n:
-            perm = torch.randperm(n, generator=gen)
+            g["lr"] = cfg.optim.lr * lr_factor(prog, cfg)
+        if pos + gbs > n:
+            perm = torch.randperm(n, generator=perm_gen)
             pos = 0
-        idx = perm[pos : pos + bs]
-        pos += bs
-        kp, pp, rel, depth = make_batch(T, idx, cfg, gen, augment_2d=augment_2d)
-        pred = net.forward_flat(kp, pp)
-        loss = poselifter_loss(pred, pack_targets(rel, depth), depth_weight=cfg.depth_weight)
+        idx = perm[pos + ctx.rank * lbs: pos + (ctx.rank + 1) * lbs]
+        pos += gbs
+        batch = {k: v.to(ctx.device) for k, v in make_batch(T, idx, cfg, gen, noise=noise).items()}
+        loss = batch_loss(model, codec, batch, cfg)
         if not torch.isfinite(loss):
             raise FloatingPointError(f"loss became {loss.item()} at step {step}")
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
+        if ctx.active:
+            _sync_buffers(net)
         if ema is not None:
             ema.update(net)
         step += 1
         running = loss.item() if running is None else 0.98 * running + 0.02 * loss.item()
-        if step % cfg.eval_every == 0 or step == steps:
-            rec = {"step": step, "samples": step * bs, "minutes": (time.perf_counter() - t0) / 60.0,
-                   "lr": opt.param_groups[0]["lr"], "train_loss": running}
-            rec.update(_validate(eval_net, V, val_root, val_focal))
-            curve.append(rec)
-            bar.set_postfix(loss=f"{running:.1f}", val_mpjpe=f"{rec['val_mpjpe']:.1f}", val_mrpe=f"{rec['val_mrpe']:.0f}")
+        if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
+            record()
         bar.update(1)
+    if ctx.main and (not curve or curve[-1]["step"] != step):
+        record()
     bar.close()
     minutes = (time.perf_counter() - t0) / 60.0
-    if not curve or curve[-1]["step"] != step:
-        rec = {"step": step, "samples": step * bs, "minutes": minutes, "lr": opt.param_groups[0]["lr"],
-               "train_loss": float(running or 0.0)}
-        rec.update(_validate(eval_net, V, val_root, val_focal))
-        curve.append(rec)
-    net = eval_net
-    net.eval()
-    log(f"done: {step} steps, {step * bs} samples in {minutes:.1f} min ({step * bs / max(minutes * 60, 1e-9):.0f} samples/s)")
-    return TrainResult(net=net, curve=curve, steps=step, samples_seen=step * bs, minutes=minutes)
+    eval_net.eval()
+    eval_net.cpu()
+    if ctx.main:
+        log(f"done: {step} steps, {step * gbs} samples in {minutes:.1f} min "
+            f"({step * gbs / max(minutes * 60, 1e-9):.0f} samples/s)")
+    return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
+                       minutes=minutes)
 
 
-def save_training_outputs(result: TrainResult, cfg: TrainConfig, out: str | Path, *, half: bool = True,
+def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = True,
                           extra_meta: dict[str, Any] | None = None) -> Path:
-    """Write ``out`` (checkpoint), ``out`` with ``.curve.json`` and a learning-curve PNG beside it."""
+    """Write ``out`` (checkpoint, with the config), ``out`` with ``.curve.json`` and a learning-curve PNG beside it."""
     out = Path(out)
-    meta = {"train_config": cfg.to_dict(), "steps": result.steps, "samples_seen": result.samples_seen,
-            "minutes": result.minutes, "final_val": result.curve[-1] if result.curve else {}}
+    meta = {"steps": result.steps, "samples_seen": result.samples_seen, "minutes": result.minutes,
+            "final_val": result.curve[-1] if result.curve else {}}
     meta.update(extra_meta or {})
-    save_checkpoint(out, result.net, meta=meta, half=half)
+    save_checkpoint(out, result.net, result.codec, train_config=result.config.to_dict(), meta=meta, half=half)
     curve_path = out.with_suffix(".curve.json")
-    curve_path.write_text(json.dumps({"config": cfg.to_dict(), "curve": result.curve}, indent=1))
-    try:
-        from .plots import plot_learning_curve
+    tmp = curve_path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps({"train_config": result.config.to_dict(), "curve": result.curve}, indent=1))
+    os.replace(tmp, curve_path)
+    from .plots import plot_learning_curve
 
-        plot_learning_curve(result.curve, out.with_suffix(".curve.png"), title=out.stem)
-    except ImportError:
-        pass
+    plot_learning_curve(result.curve, out.with_suffix(".curve.png"), title=out.stem)
     return out

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from app.demo_assets import DEMO_DIR, write_demo_assets
+from poselifter_app.demo_assets import DEMO_DIR, write_demo_assets
 
 
 def main() -> int:

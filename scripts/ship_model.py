@@ -1,46 +1,69 @@
-"""Copy a trained checkpoint into assets/weights/ and record its measured metrics in assets/models.json.
+"""Copy a trained checkpoint into assets/weights/ and record its sha256 and measured metrics in assets/models.json.
 
-    python scripts/ship_model.py runs/gt_main.pt --name gt --default --description "..."
+    python scripts/ship_model.py runs/default.pt --name default_v2 --default --description "..."
 
-Metrics recorded (GT 2D, Protocol 1, S9 + S11, 4 cameras; S9 'Discussion 1' is missing from the data):
-``full``: every 5th frame (the README's numbers); ``slice``: every 50th frame (what the test suite
-re-evaluates to check the shipped weights reproduce the README).
+Metrics recorded (Protocol 1, S9 + S11, 4 cameras; S9 'Discussion 1' is missing from the data), each as
+``metrics[KEY] = {"inputs", "source", "stride", "learned": {...}, "analytic_root": {...}}``:
+
+* ``gt_clean_s5`` / ``gt_clean_s50``: GT 2D told ``source="clean"``, every 5th / 50th frame;
+* ``sh_detected_s50``: the real Stacked-Hourglass detections told ``source="detected"``, every 50th frame.
+
+The every-50th-frame entries are what ``tests/test_shipped.py`` re-evaluates to check that the shipped weights
+reproduce the README. ``--skip-full`` leaves out the every-5th-frame evaluation (slow on a CPU).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 from pathlib import Path
 
 import torch
 
-from lifter.api import ASSETS_DIR, Lifter
+from lifter.api import Lifter
+from lifter.checkpoint import sha256_file
 from lifter.data import H36M
+from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
+from lifter.resources import assets_root
 
-SLICE_STRIDE = 50
-FULL_STRIDE = 5
+EVALUATIONS = {"gt_clean_s5": ("gt", "clean", 5), "gt_clean_s50": ("gt", "clean", 50),
+               "sh_detected_s50": ("sh", "detected", 50)}
 
 
 def summary(row) -> dict:
-    return {k: round(getattr(row, k), 3) for k in ("mpjpe", "pa_mpjpe", "mrpe", "mrpe_x", "mrpe_y", "mrpe_z", "pck150", "auc")} | {
-        "num_samples": row.num_samples}
+    keys = ("mpjpe", "pa_mpjpe", "mrpe", "mrpe_x", "mrpe_y", "mrpe_z", "pck150", "auc")
+    return {k: round(getattr(row, k), 3) for k in keys} | {"num_samples": row.num_samples}
+
+
+def measure(lifter: Lifter, data: H36M, *, keys: list[str], flip_test: bool = False) -> dict:
+    out = {}
+    for key in keys:
+        inputs, source, stride = EVALUATIONS[key]
+        s = data.load_protocol(1, "test", stride=stride)
+        if inputs == "sh":
+            s, _ = with_sh_detections(s, data=data)
+        learned, analytic = evaluate_lifter(lifter, s, analytic_root=True, source=source, flip_test=flip_test)
+        out[key] = {"inputs": inputs, "source": source, "stride": stride, "flip_test": flip_test,
+                    "learned": summary(learned), "analytic_root": summary(analytic)}
+        print(key, json.dumps(out[key]["learned"]))
+    return out
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("checkpoint", type=Path)
     ap.add_argument("--name", required=True)
     ap.add_argument("--description", default="")
-    ap.add_argument("--default", action="store_true")
-    ap.add_argument("--detector", default=None,
-                    help="the 2D detector whose errors this model was trained for (poselifter lift picks it for images)")
+    ap.add_argument("--default", action="store_true", help="make it the default model")
+    ap.add_argument("--skip-full", action="store_true", help="do not evaluate every 5th frame")
     ap.add_argument("--h36m", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(2)
-    dst = ASSETS_DIR / "weights" / f"{args.name}.pt"
+    root = Path(str(assets_root()))
+    dst = root / "weights" / f"{args.name}.pt"
     dst.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(args.checkpoint, dst)
     for ext in (".curve.json", ".curve.png"):
@@ -48,34 +71,26 @@ def main() -> None:
         if src.is_file():
             shutil.copyfile(src, dst.with_suffix(ext))
     lifter = Lifter.from_checkpoint(dst, name=args.name)
-    data = H36M(args.h36m)
-    metrics = {}
-    for key, stride in (("full", FULL_STRIDE), ("slice", SLICE_STRIDE)):
-        s = data.load_protocol(1, "test", stride=stride)
-        rows = evaluate_lifter(lifter, s, analytic_root=True)
-        metrics[key] = {"stride": stride, "learned": summary(rows[0]), "analytic_root": summary(rows[1])}
-        print(key, json.dumps(metrics[key]))
-    reg_path = ASSETS_DIR / "models.json"
+    keys = [k for k in EVALUATIONS if not (args.skip_full and EVALUATIONS[k][2] == 5)]
+    metrics = measure(lifter, H36M(args.h36m), keys=keys)
+    reg_path = root / "models.json"
     reg = json.loads(reg_path.read_text()) if reg_path.is_file() else {"default": args.name, "models": {}}
-    previous = reg["models"].get(args.name, {})
     reg["models"][args.name] = {
         "file": f"weights/{args.name}.pt",
+        "sha256": sha256_file(dst),
         "description": args.description,
         "train_command": lifter.meta.get("command", ""),
         "train_minutes": round(float(lifter.meta.get("minutes", 0.0)), 1),
         "samples_seen": lifter.meta.get("samples_seen"),
-        "metrics_gt2d_protocol1": metrics,
+        "metrics": metrics,
     }
-    detector = args.detector or previous.get("detector")  # re-shipping keeps the model's detector
-    if detector:
-        for other in reg["models"].values():  # one model per detector
-            if other.get("detector") == detector:
-                other.pop("detector")
-        reg["models"][args.name]["detector"] = detector
     if args.default:
         reg["default"] = args.name
-    reg_path.write_text(json.dumps(reg, indent=1) + "\n")
-    print(f"shipped {dst} ({dst.stat().st_size / 1e6:.1f} MB); registry {reg_path}")
+    tmp = reg_path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(reg, indent=1) + "\n")
+    os.replace(tmp, reg_path)
+    print(f"shipped {dst} ({dst.stat().st_size / 1e6:.1f} MB, sha256 {reg['models'][args.name]['sha256'][:12]}); "
+          f"registry {reg_path}")
 
 
 if __name__ == "__main__":

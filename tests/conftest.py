@@ -43,17 +43,28 @@ def random_pose_cam(rng: np.random.Generator, n: int = 1) -> np.ndarray:
     return pose - pose[:, :1] + root[:, None]
 
 
-def tiny_net(width: int, *, seed: int = 0):
-    """An untrained eval-mode ``PoseLifterNet`` of the given width whose outputs sit near a plausible pose:
-    target mean 0 mm for the relative joints and 4400 mm root depth, std 100 (seeded, so reproducible)."""
+def tiny_net(width: int, *, seed: int = 0, **config):
+    """An untrained eval-mode ``PoseLifterNet`` of the given width (seeded, so reproducible)."""
     from lifter import ModelConfig, PoseLifterNet
 
     torch.manual_seed(seed)
-    net = PoseLifterNet(ModelConfig(width=width))
-    mean = torch.zeros(49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.full((49,), 100.0))
-    return net.eval()
+    return PoseLifterNet(ModelConfig(width=width, **config)).eval()
+
+
+def tiny_lifter(width: int = 64, *, seed: int = 0, name: str = "small", **config):
+    """An untrained :class:`lifter.Lifter` whose outputs vary with the input around a plausible pose: target mean
+    0 mm for the relative joints and a depth output of 4400 mm (400 mm for the ``"size"`` parametrization)."""
+    from lifter import Lifter, PoseCodec
+
+    net = tiny_net(width, seed=seed, **config)
+    with torch.no_grad():  # a head that depends visibly on the input (the trained init is nearly constant)
+        net.head.weight.normal_(0.0, 0.05, generator=torch.Generator().manual_seed(seed))
+    mean = np.zeros(49)
+    mean[-1] = 400.0 if net.config.depth_target == "size" else 4400.0
+    std = np.full(49, 100.0)
+    if net.config.depth_target == "size":
+        std[-1] = 10.0
+    return Lifter(net, PoseCodec(net.config, target_mean=mean, target_std=std), name=name)
 
 
 def require_shipped_models() -> list[str]:
@@ -70,8 +81,8 @@ def require_shipped_models() -> list[str]:
 def app():
     """A :class:`app.viewer.PoseLifterApp` on a viser server bound to 127.0.0.1, any free port (demo samples only)."""
     pytest.importorskip("viser")
-    from app.testing import local_server
-    from app.viewer import PoseLifterApp
+    from poselifter_app.testing import local_server
+    from poselifter_app.viewer import PoseLifterApp
 
     require_shipped_models()
     server = local_server()

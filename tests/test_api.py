@@ -13,12 +13,24 @@ from lifter.camera import project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
 from lifter._checks import CheckpointError
 
-from conftest import random_pose_cam, tiny_net
+from conftest import random_pose_cam, tiny_lifter, tiny_net
+
+
+@pytest.fixture(scope="module", params=["camera", "pixel"])
+def small_lifter(request) -> Lifter:
+    """An untrained lifter of each input space (the default's reference camera, and the paper's pixels)."""
+    conditioning = "source" if request.param == "camera" else "none"
+    return tiny_lifter(64, input_space=request.param, conditioning=conditioning)
 
 
 @pytest.fixture(scope="module")
-def small_lifter() -> Lifter:
-    return Lifter(tiny_net(64), name="small")
+def pixel_lifter() -> Lifter:
+    return tiny_lifter(64, input_space="pixel", conditioning="none", name="pixel")
+
+
+@pytest.fixture(scope="module")
+def camera_lifter() -> Lifter:
+    return tiny_lifter(64, name="camera")
 
 
 @pytest.fixture()
@@ -36,7 +48,7 @@ def test_shapes_batched(small_lifter, keypoints):
     assert res.relative.shape == res.absolute.shape == (2, 3, 17, 3)
     np.testing.assert_allclose(res.relative[..., 0, :], 0)
     np.testing.assert_allclose(res.absolute, res.root[..., None, :] + res.relative)
-    assert res.metric_depth
+    assert res.metric_depth and res.focal_source == "given" and res.source == "detected"
     single = small_lifter.lift(kp[1, 2], focal=1145.0, principal_point=(512.0, 515.0))
     assert single.root.shape == (3,)
 
@@ -45,25 +57,48 @@ def test_root_lies_on_the_ray_of_the_2d_root(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     reproj = project(res.root[:, None, :], focal=1145.0, principal_point=(512.0, 515.0))[:, 0]
     np.testing.assert_allclose(reproj, keypoints[:, 0], atol=1e-6)
+    np.testing.assert_allclose(res.canonical_depth, res.root[:, 2] * 1000.0 / np.sqrt(1145.0 * 1145.0), rtol=1e-9)
 
 
-def test_focal_changes_only_depth_along_ray(small_lifter, keypoints):
-    """The pose and canonical depth do not depend on the focal length; Z scales with it."""
-    a = small_lifter.lift(keypoints, focal=1000.0, principal_point=(512.0, 515.0))
-    b = small_lifter.lift(keypoints, focal=2000.0, principal_point=(512.0, 515.0))
+def test_pixel_model_focal_changes_only_depth_along_ray(pixel_lifter, keypoints):
+    """The paper's pixel-space network reads the pixels alone: with the same pixels, a focal change moves the
+    root along its ray (Z scales with f) and keeps the pose and the canonical depth."""
+    a = pixel_lifter.lift(keypoints, focal=1000.0, principal_point=(512.0, 515.0))
+    b = pixel_lifter.lift(keypoints, focal=2000.0, principal_point=(512.0, 515.0))
     np.testing.assert_allclose(a.relative, b.relative)
     np.testing.assert_allclose(a.canonical_depth, b.canonical_depth)
     np.testing.assert_allclose(b.root[:, 2], 2 * a.root[:, 2])
     np.testing.assert_allclose(b.root[:, :2], a.root[:, :2], rtol=1e-9)
 
 
-def test_unknown_focal_is_flagged(small_lifter, keypoints):
+def test_camera_model_sees_rays(camera_lifter, keypoints):
+    """The reference-camera network reads rays: the same pixels under another focal length are other rays, so
+    the lift changes, while pixels and intrinsics scaled together (the same rays) give the same lift."""
+    c = np.array([512.0, 515.0])
+    a = camera_lifter.lift(keypoints, focal=1145.0, principal_point=c)
+    b = camera_lifter.lift(keypoints, focal=2290.0, principal_point=c)
+    assert not np.allclose(a.relative, b.relative, atol=1e-3)
+    k = 3.7
+    s = camera_lifter.lift(keypoints * k, focal=1145.0 * k, principal_point=c * k)
+    np.testing.assert_allclose(s.absolute, a.absolute, rtol=1e-5, atol=1e-3)
+
+
+def test_unknown_focal(small_lifter, keypoints):
+    """No focal: the default field of view of the image (or a 1000-px camera without one), flagged."""
+    from lifter.camera import focal_from_fov
+
     res = small_lifter.lift(keypoints, principal_point=(512.0, 515.0))
-    assert not res.metric_depth and res.focal is None
-    assert "up to" in res.note
-    np.testing.assert_allclose(res.root[:, 2], res.canonical_depth)
+    assert not res.metric_depth and res.focal_source == "reference" and "up to" in res.note
+    np.testing.assert_allclose(res.focal, 1000.0)
     known = small_lifter.lift(keypoints, focal=1000.0, principal_point=(512.0, 515.0))
-    np.testing.assert_allclose(known.root, res.root)
+    np.testing.assert_allclose(known.absolute, res.absolute)
+    fov = small_lifter.lift(keypoints, image_size=(1024, 1030))
+    assert fov.focal_source == "default-fov" and "field of view" in fov.note
+    f = focal_from_fov((1024, 1030))
+    np.testing.assert_allclose(fov.focal, f)
+    same = small_lifter.lift(keypoints, focal=f, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(fov.absolute, same.absolute)
+    np.testing.assert_allclose(fov.canonical_depth, same.root[:, 2] * 1000.0 / f, rtol=1e-9)
 
 
 def test_principal_point_from_image_size(small_lifter, keypoints):
@@ -73,17 +108,39 @@ def test_principal_point_from_image_size(small_lifter, keypoints):
 
 
 def test_flip_test_is_equivariant(small_lifter, keypoints):
-    """With flip test, lifting the mirrored input gives the mirrored output."""
-    from lifter.camera import flip_keypoints_2d
+    """With flip test, lifting the mirrored image gives the mirrored output, exactly."""
+    from lifter.camera import flip_keypoints_2d, flip_pose_3d
 
     c = np.array([512.0, 515.0])
     res = small_lifter.lift(keypoints, focal=1145.0, principal_point=c, flip_test=True)
     kp_f, c_f = flip_keypoints_2d(keypoints, image_width=1000, principal_point=c)
     res_f = small_lifter.lift(kp_f, focal=1145.0, principal_point=c_f, flip_test=True)
-    from lifter.camera import flip_pose_3d
-
     np.testing.assert_allclose(flip_pose_3d(res_f.relative), res.relative, atol=1e-3)
     np.testing.assert_allclose(res_f.canonical_depth, res.canonical_depth, rtol=1e-5)
+    np.testing.assert_allclose(flip_pose_3d(res_f.absolute), res.absolute, atol=1e-2)
+
+
+def test_source_is_honoured(camera_lifter, pixel_lifter, keypoints):
+    """A source-conditioned network lifts the same 2D differently when told it is exact; one without
+    conditioning ignores the argument; anything but the two sources is refused."""
+    kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
+    d, c = camera_lifter.lift(keypoints, **kw), camera_lifter.lift(keypoints, source="clean", **kw)
+    assert (d.source, c.source) == ("detected", "clean")
+    assert np.abs(d.absolute - c.absolute).max() > 1.0
+    np.testing.assert_array_equal(pixel_lifter.lift(keypoints, **kw).absolute,
+                                  pixel_lifter.lift(keypoints, source="clean", **kw).absolute)
+    with pytest.raises(PoseLifterError, match="source must be one of"):
+        camera_lifter.lift(keypoints, source="gt", **kw)  # type: ignore[arg-type]
+
+
+def test_large_batches_are_chunked_with_the_same_result(camera_lifter, keypoints, monkeypatch):
+    import lifter.api
+
+    kp = np.concatenate([keypoints] * 5)
+    whole = camera_lifter.lift(kp, focal=1145.0, principal_point=(512.0, 515.0))
+    monkeypatch.setattr(lifter.api, "CHUNK_SIZE", 4)
+    chunked = camera_lifter.lift(kp, focal=1145.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(chunked.absolute, whole.absolute, rtol=1e-6, atol=1e-4)
 
 
 @pytest.mark.parametrize(
@@ -128,7 +185,7 @@ def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, focal=per_pose, principal_point=(512.0, 515.0))
     np.testing.assert_allclose(res.focal, per_pose)
     one = small_lifter.lift(keypoints[3], focal=per_pose[3], principal_point=(512.0, 515.0))
-    np.testing.assert_allclose(one.absolute, res.absolute[3], atol=1e-6)
+    np.testing.assert_allclose(one.absolute, res.absolute[3], rtol=1e-6, atol=1e-4)  # numpy vs torch path
     with pytest.raises(PoseLifterError, match="focal: shape"):
         small_lifter.lift(keypoints, focal=np.full((4, 2), 1000.0), principal_point=(512.0, 515.0))
     with pytest.raises(PoseLifterError, match="principal_point: shape"):
@@ -137,18 +194,16 @@ def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
 
 def test_absolute_depth_model_path():
     """A direct-depth model (Table 6 "w/o canonical"): its root Z is the network's depth; it needs the focal."""
-    torch.manual_seed(1)
-    net = PoseLifterNet(ModelConfig(width=32, depth_target="absolute"))
-    mean = torch.zeros(49)
-    mean[-1] = 5000.0
-    net.set_target_statistics(mean, torch.full((49,), 50.0))
-    lifter = Lifter(net.eval(), name="abs")
+    lifter = tiny_lifter(32, seed=1, input_space="pixel", depth_target="absolute", conditioning="none", name="abs")
     kp = project(random_pose_cam(np.random.default_rng(2), 3), focal=1100.0, principal_point=(500.0, 500.0))
     with pytest.raises(PoseLifterError, match="needs the focal length"):
         lifter.lift(kp, principal_point=(500.0, 500.0))
     res = lifter.lift(kp, focal=1100.0, principal_point=(500.0, 500.0))
+    enc = lifter.codec.encode(kp.astype(np.float32), principal_point=np.float32([500.0, 500.0]),
+                              focal=np.float32([1100.0, 1100.0]))
     with torch.inference_mode():
-        z = net(torch.tensor(kp, dtype=torch.float32), torch.tensor([[500.0, 500.0]] * 3)).depth.numpy()
+        out = lifter.net(torch.from_numpy(enc.features)).numpy()
+    z = lifter.codec.destandardize(out.astype(np.float64))[:, -1]
     np.testing.assert_allclose(res.root[:, 2], z, rtol=1e-5)
     np.testing.assert_allclose(res.canonical_depth, z * 1000.0 / 1100.0, rtol=1e-5)
     # a different focal does not move the depth of a direct-depth model: that is its failure mode
@@ -162,14 +217,16 @@ def test_missing_principal_point(small_lifter, keypoints):
 
 
 def test_checkpoint_round_trip_and_errors(tmp_path, small_lifter, keypoints):
-    path = save_checkpoint(tmp_path / "m.pt", small_lifter.net, meta={"note": "test"})
+    path = save_checkpoint(tmp_path / "m.pt", small_lifter.net, small_lifter.codec, meta={"note": "test"})
     loaded = Lifter.from_checkpoint(path)
     a = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     b = loaded.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     np.testing.assert_allclose(a.absolute, b.absolute, atol=1e-3)
-    assert loaded.meta["note"] == "test"
-    half = save_checkpoint(tmp_path / "h.pt", small_lifter.net, half=True)
+    assert loaded.meta["note"] == "test" and loaded.config == small_lifter.config
+    assert Lifter.from_pretrained(str(path)).config == small_lifter.config  # your own .pt through from_pretrained
+    half = save_checkpoint(tmp_path / "h.pt", small_lifter.net, small_lifter.codec, half=True)
     assert half.stat().st_size < path.stat().st_size
+    assert not list(tmp_path.glob("*.tmp"))  # atomic writes leave no temporary files
 
     with pytest.raises(CheckpointError, match="not found"):
         Lifter.from_checkpoint(tmp_path / "missing.pt")
@@ -187,6 +244,21 @@ def test_checkpoint_round_trip_and_errors(tmp_path, small_lifter, keypoints):
         load_checkpoint(foreign)
 
 
+def test_checkpoint_sha256(tmp_path, small_lifter):
+    from lifter.checkpoint import sha256_file
+
+    path = save_checkpoint(tmp_path / "m.pt", small_lifter.net, small_lifter.codec)
+    digest = sha256_file(path)
+    assert load_checkpoint(path, expected_sha256=digest).net.config == small_lifter.config
+    data = bytearray(path.read_bytes())
+    mid = len(data) // 2
+    data[mid:mid + 4096] = bytes(b ^ 0xFF for b in data[mid:mid + 4096])  # 4 KB flipped in the middle
+    flipped = tmp_path / "flipped.pt"
+    flipped.write_bytes(bytes(data))
+    with pytest.raises(CheckpointError, match="damaged or was replaced"):
+        load_checkpoint(flipped, expected_sha256=digest)
+
+
 def test_checkpoint_refuses_pickled_code(tmp_path):
     """weights_only=True: a checkpoint carrying an arbitrary object is rejected, not executed."""
 
@@ -195,14 +267,15 @@ def test_checkpoint_refuses_pickled_code(tmp_path):
             return (print, ("executed!",))
 
     evil = tmp_path / "evil.pt"
-    torch.save({"format": "poselifter-checkpoint", "version": 1, "payload": Evil()}, evil)
+    torch.save({"format": "poselifter-checkpoint", "version": 2, "payload": Evil()}, evil)
     with pytest.raises(CheckpointError, match="corrupt or not a torch checkpoint"):
         load_checkpoint(evil)
 
 
 def test_unknown_pretrained_name():
-    with pytest.raises(PoseLifterError, match="unknown model"):
+    with pytest.raises(PoseLifterError, match="unknown model") as exc:
         Lifter.from_pretrained("no-such-model")
+    assert "Lifter.load('path/to/model.pt')" in str(exc.value)
 
 
 def test_quantized_lifter_matches_float32(small_lifter, keypoints):
@@ -215,9 +288,9 @@ def test_quantized_lifter_matches_float32(small_lifter, keypoints):
     assert np.allclose(a.canonical_depth, b.canonical_depth, rtol=0.05)
 
 
-def _edited_checkpoint(tmp_path, net, name: str, edit) -> Path:
-    """A checkpoint of ``net`` whose payload dict was changed in place by ``edit``."""
-    path = save_checkpoint(tmp_path / "base.pt", net)
+def _edited_checkpoint(tmp_path, lifter, name: str, edit) -> Path:
+    """A checkpoint of ``lifter`` whose payload dict was changed in place by ``edit``."""
+    path = save_checkpoint(tmp_path / "base.pt", lifter.net, lifter.codec)
     payload = torch.load(path, map_location="cpu", weights_only=True)
     edit(payload)
     torch.save(payload, tmp_path / name)
@@ -227,44 +300,84 @@ def _edited_checkpoint(tmp_path, net, name: str, edit) -> Path:
 @pytest.mark.parametrize(
     "field, value, allowed",
     [
-        ("depth_target", "bogus", "['canonical', 'absolute']"),
+        ("depth_target", "bogus", "['canonical', 'absolute', 'size']"),
         ("scale_definition", "bogus", "['paper', 'repo']"),
         ("mode", "bogus", "['baseline', 'location', 'scale', 'both']"),
-        ("depth_target", None, "['canonical', 'absolute']"),
+        ("input_space", "rays", "['pixel', 'camera']"),
+        ("depth_target", None, "['canonical', 'absolute', 'size']"),
     ],
 )
 def test_checkpoint_rejects_unknown_config_values(tmp_path, small_lifter, field, value, allowed):
-    """These used to load (depth_target: silently treated as absolute; scale_definition: a raw ValueError on lift)."""
-    path = _edited_checkpoint(tmp_path, small_lifter.net, "bad.pt", lambda p: p["model_config"].__setitem__(field, value))
+    path = _edited_checkpoint(tmp_path, small_lifter, "bad.pt", lambda p: p["model_config"].__setitem__(field, value))
     with pytest.raises(CheckpointError) as exc:
         Lifter.from_checkpoint(path)
-    assert str(exc.value) == f"{path}: model_config.{field} is {value!r}; expected one of {allowed}"
+    assert str(exc.value) == f"{path}: bad model_config: model config: {field} is {value!r}; expected one of {allowed}"
 
 
 @pytest.mark.parametrize(
     "edit, match",
     [
         (lambda p: p.__setitem__("meta", ["x"]), "meta must be a dict, got list"),
-        (lambda p: p.__setitem__("model_config", ["x"]), "model_config must be a dict, got list"),
-        (lambda p: p.pop("model_config"), "checkpoint has no model_config"),
-        (lambda p: p["model_config"].__setitem__("width", 0), r"model_config.width must be an integer >= 1, got 0"),
-        (lambda p: p["model_config"].__setitem__("dropout", 1.5), r"model_config.dropout must be a number in \[0, 1\)"),
+        (lambda p: p.__setitem__("model_config", ["x"]), "model config must be a dict, got list"),
+        (lambda p: p.pop("model_config"), "model config must be a dict, got NoneType"),
+        (lambda p: p["model_config"].__setitem__("width", 0), r"width must be an integer in \[1, 8192\], got 0"),
+        (lambda p: p["model_config"].__setitem__("num_blocks", 10**6), r"num_blocks must be an integer in \[1, 16\]"),
+        (lambda p: p["model_config"].__setitem__("width", 4096), r"tensor 'stem.weight' has shape \(64, 38\), its model "
+                                                                 r"config needs \(4096, 38\)"),
+        (lambda p: p["model_config"].__setitem__("dropout", 1.5), r"dropout must be a number in \[0, 1\)"),
+        (lambda p: p["model_config"].__setitem__("colour", "red"), r"unknown keys \['colour'\]"),
+        (lambda p: p["state_dict"].pop("head.bias"), r"do not match its model config \(missing \['head.bias'\]"),
+        (lambda p: p.pop("codec"), "bad codec statistics"),
+        (lambda p: p["state_dict"]["head.bias"].fill_(float("nan")), "tensor 'head.bias' contains NaN/inf"),
+        (lambda p: p.__setitem__("version", 7), "unsupported checkpoint version 7"),
     ],
 )
-def test_checkpoint_rejects_malformed_payload(tmp_path, small_lifter, edit, match):
-    path = _edited_checkpoint(tmp_path, small_lifter.net, "bad.pt", edit)
+def test_checkpoint_rejects_malformed_payload(tmp_path, camera_lifter, edit, match):
+    """Config values and bounds, then tensor names and shapes, are checked before the network is allocated."""
+    path = _edited_checkpoint(tmp_path, camera_lifter, "bad.pt", edit)
     with pytest.raises(CheckpointError, match=match) as exc:
         load_checkpoint(path)
     assert str(exc.value).startswith(f"{path}: ")
 
 
+def test_checkpoint_huge_config_is_refused_before_allocating(tmp_path, camera_lifter, monkeypatch):
+    """A config asking for 16 blocks of width 8192 (8.6 GB) is refused from the tensor shapes alone."""
+    import lifter.checkpoint as ck
+
+    built: list[object] = []
+    real = ck.PoseLifterNet
+    monkeypatch.setattr(ck, "PoseLifterNet", lambda cfg: built.append(cfg) or real(cfg))
+    path = _edited_checkpoint(tmp_path, camera_lifter, "huge.pt", lambda p: p["model_config"].update(width=8192,
+                                                                                                       num_blocks=16))
+    with pytest.raises(CheckpointError, match="do not match its model config"):
+        load_checkpoint(path)
+    assert len(built) == 1  # only the meta-device network used for the expected shapes
+
+
+def test_version1_checkpoints_are_migrated(tmp_path, pixel_lifter, keypoints):
+    """A version-1 file (target statistics inside the network's state dict, no input_space) loads as the
+    paper's pixel-space model and lifts exactly as before."""
+    net = pixel_lifter.net
+    state = dict(net.state_dict())
+    state["target_mean"] = torch.tensor(pixel_lifter.codec.target_mean, dtype=torch.float32)
+    state["target_std"] = torch.tensor(pixel_lifter.codec.target_std, dtype=torch.float32)
+    cfg = {k: v for k, v in net.config.to_dict().items() if k not in ("input_space", "conditioning")}
+    torch.save({"format": "poselifter-checkpoint", "version": 1, "model_config": cfg, "state_dict": state,
+                "meta": {"old": True}}, tmp_path / "v1.pt")
+    old = Lifter.from_checkpoint(tmp_path / "v1.pt")
+    assert old.config == net.config and old.meta == {"old": True} and old.train_config is None
+    kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(old.lift(keypoints, **kw).absolute, pixel_lifter.lift(keypoints, **kw).absolute,
+                               rtol=1e-6)
+
+
 def test_checkpoint_empty_meta_and_valid_configs_load(tmp_path, small_lifter, keypoints):
-    path = _edited_checkpoint(tmp_path, small_lifter.net, "none_meta.pt", lambda p: p.__setitem__("meta", None))
-    _, meta = load_checkpoint(path)
-    assert meta == {}
-    net2 = PoseLifterNet(ModelConfig(width=16, mode="scale", scale_definition="repo", depth_target="absolute"))
-    loaded, _ = load_checkpoint(save_checkpoint(tmp_path / "ok.pt", net2))
-    assert loaded.config == net2.config
+    path = _edited_checkpoint(tmp_path, small_lifter, "none_meta.pt", lambda p: p.__setitem__("meta", None))
+    assert load_checkpoint(path).meta == {}
+    other = tiny_lifter(16, mode="scale", scale_definition="repo", depth_target="absolute", input_space="pixel",
+                        conditioning="none")
+    loaded = load_checkpoint(save_checkpoint(tmp_path / "ok.pt", other.net, other.codec))
+    assert loaded.net.config == other.config
 
 
 def test_checkpoint_path_is_a_directory(tmp_path):

@@ -15,10 +15,10 @@ viser = pytest.importorskip("viser")
 
 from conftest import require_shipped_models  # noqa: E402
 
-from app.demo_assets import DEMO_DIR  # noqa: E402
-from app.samples import DemoCatalog, default_h36m_root  # noqa: E402
-from app.testing import FakeTab, local_server, wait_for  # noqa: E402
-from app.viewer import IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, ZOOM_JOINT_RADIUS, PoseLifterApp, SessionView  # noqa: E402
+from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
+from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
+from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
+from poselifter_app.viewer import IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, ZOOM_JOINT_RADIUS, PoseLifterApp, SessionView  # noqa: E402
 
 
 
@@ -70,7 +70,7 @@ def test_server_binds_localhost_on_a_free_port(app: PoseLifterApp) -> None:
 
 
 def test_main_parser_defaults() -> None:
-    from app.main import build_parser
+    from poselifter_app.main import build_parser
 
     a = build_parser().parse_args([])
     assert a.host == "127.0.0.1" and a.port == 8080 and a.h36m is None
@@ -384,7 +384,7 @@ def test_rejected_seed_puts_the_box_back(view: SessionView) -> None:
 def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp) -> None:
     from lifter import PoseLifterError
 
-    from app.core import SessionState
+    from poselifter_app.core import SessionState
 
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
     assert view.state.input_kind == "detected" and view.input_dd.value == "detected"
@@ -478,61 +478,6 @@ def test_zoom_to_2d_joints_moves_a_tabs_camera(app: PoseLifterApp) -> None:
     finally:
         tab.close()
     assert wait_for(lambda: len(app.views) == n0)
-
-
-def test_leaving_an_upload_restores_the_auto_switched_model(monkeypatch) -> None:
-    import cv2
-
-    import app.viewer as viewer
-    from lifter.detect import Detection, bbox_of
-
-    class Estimator:
-        name, keypoint_format = "fake", "h36m17"
-
-        def __init__(self, kp: np.ndarray) -> None:
-            self.kp = kp
-
-        def detect(self, image: np.ndarray) -> list:
-            p = self.kp * image.shape[1] / 800.0
-            return [Detection(keypoints=p, scores=np.full(17, 0.9), bbox_xywh=bbox_of(p), keypoint_format="h36m17")]
-
-    monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt")
-    require_shipped_models()
-    server = local_server()
-    try:
-        s = DemoCatalog().get("standing")
-        a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
-                          estimator_factory=lambda: Estimator(s.keypoints_2d))
-        jpg = cv2.imencode(".jpg", cv2.cvtColor(s.image, cv2.COLOR_RGB2BGR))[1].tobytes()
-        v = a.headless_view()
-        assert v.load_upload("one.jpg", jpg) is True and v.state.model == "gt"
-        v.source_dd.value = "demo"  # leaving the upload: the model the user had
-        assert v.state.model == "mixture" and v.model_dd.value == "mixture" and "'mixture'" in v.messages[-1]
-        v.source_dd.value = "upload"  # back to the upload: its detector's model again
-        assert v.state.model == "gt" and v.model_dd.value == "gt" and v.state.sample.key.startswith("upload/")
-        # a second photo while on the switched model, then leaving: still the user's model
-        assert v.load_upload("two.jpg", jpg) is True and v.state.model == "gt"
-        v.select_demo("walking")
-        assert v.state.model == "mixture"
-        # a keypoint JSON uploaded on the user's model keeps it, also when coming back to it
-        assert _json_upload(v, s) is True and v.state.model == "mixture"
-        v.select_demo("walking")
-        v.source_dd.value = "upload"
-        assert v.state.model == "mixture"
-        # once the user picks a model, nothing is switched back
-        assert v.load_upload("three.jpg", jpg) is True and v.state.model == "gt"
-        n = len(v.messages)
-        assert v.set_model("gt") is True
-        v.source_dd.value = "demo"
-        assert v.state.model == "gt" and all("mixture" not in m for m in v.messages[n:])
-        assert v.set_model("mixture") is True
-        v.source_dd.value = "upload"
-        assert v.state.model == "mixture"
-    finally:
-        server.stop()
-
-
-# -- Human3.6M ---------------------------------------------------------------------------------
 
 
 def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None:

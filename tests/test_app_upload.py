@@ -16,12 +16,12 @@ import pytest
 viser = pytest.importorskip("viser")
 
 
-from app import upload as up  # noqa: E402
-from app.demo_assets import DEMO_DIR  # noqa: E402
-from app.testing import FakeTab, local_server, wait_for  # noqa: E402
-from app.viewer import PoseLifterApp, SessionView  # noqa: E402
+from poselifter_app import upload as up  # noqa: E402
+from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
+from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
+from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
 from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_available  # noqa: E402
-from lifter.lift_cli import LiftRecord  # noqa: E402
+from lifter.io import LiftRecord  # noqa: E402
 
 LIFT_FIELDS = {"keypoints_2d", "absolute", "root", "canonical_depth", "focal", "principal_point"}
 
@@ -79,20 +79,20 @@ def _assert_unchanged(view: SessionView, snap: tuple) -> None:
 
 
 def test_noise_slider_uses_the_shipped_error_model(app: PoseLifterApp) -> None:
-    from lifter.api import ASSETS_DIR
     from lifter.noise import ErrorModel
+    from lifter.resources import asset
 
     assert isinstance(app.error_model, ErrorModel)
-    if (Path(ASSETS_DIR) / "error_model" / "sh_mixture.json").is_file():
+    if asset("error_model/sh_mixture.json").is_file():
         assert "stand-in" not in app.error_model.source
         assert np.any(app.error_model.gamma < 1.0)  # a fitted mixture: some outlier weight
 
 
 def test_h36m_detections_use_the_library_converter() -> None:
-    from app.samples import default_h36m_root, open_h36m
+    from poselifter_app.samples import default_h36m_root, open_h36m
     from lifter.keypoints import convert
 
-    import app.samples as samples
+    import poselifter_app.samples as samples
 
     assert not hasattr(samples, "sh16_to_h36m17") and not hasattr(samples, "SH16_TO_H36M17")
     root = default_h36m_root()
@@ -133,7 +133,7 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
         assert st.sample.pose_3d is None and not st.sample.has_gt_2d and st.input_kind == "detected"
         np.testing.assert_allclose(st.keypoints, convert(coco[:, :2], src="coco17"))
         assert st.sample.camera.width == 800 and st.sample.camera.principal_point == (400.0, 300.0)
-        from lifter.detect import default_focal
+        from lifter.camera import focal_from_fov as default_focal
 
         assert st.focal_px == pytest.approx(default_focal((800, 600)))  # the stated default field of view
         assert "coco17" in v.messages[-1] and "field of view" in v.messages[-1]
@@ -352,35 +352,25 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         server.stop()
 
 
-def test_photo_upload_switches_to_the_detectors_model_unless_the_user_chose_one(monkeypatch) -> None:
-    import app.viewer as viewer
+def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch) -> None:
+    """One model for every input: a photo keeps the tab's model and is lifted with source "detected"; a keypoint
+    file saying "source": "clean" is lifted as exact 2D."""
+    from poselifter_app.core import lift_source
 
-    monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt" if name == "fake" else "mixture")
     server = local_server()
     try:
         a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
                           estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d], full_width=800))
         s = a.demo.get("standing")
         v = a.headless_view()
-        assert v.state.model == "mixture"
+        assert lift_source(v.state) == "clean"  # a demo sample: exact 2D
         assert v.load_upload("one.jpg", _jpeg(s.image)) is True
-        assert v.state.model == "gt" and v.model_dd.value == "gt"
-        assert "lifter switched to 'gt'" in v.messages[-1]
-        assert v.frame is not None and v.state.sample.key.startswith("upload/")
-        # a model the user picked (not the default) is kept, whatever the detector's model is
-        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "mixture")
-        assert v.set_model("gt") is True
-        assert v.load_upload("two.jpg", _jpeg(s.image)) is True
-        assert v.state.model == "gt" and "switched" not in v.messages[-1]
-        # picking the default model explicitly counts as a choice too
-        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "gt")
-        v3 = a.headless_view()
-        assert v3.set_model("mixture") is True and v3.load_upload("four.jpg", _jpeg(s.image)) is True
-        assert v3.state.model == "mixture" and "switched" not in v3.messages[-1]
-        # a detector model that is not loaded: no switch
-        monkeypatch.setattr(viewer, "model_for_detector", lambda name: "not-loaded")
-        v2 = a.headless_view()
-        assert v2.load_upload("three.jpg", _jpeg(s.image)) is True and v2.state.model == "mixture"
+        assert v.state.model == "mixture" and lift_source(v.state) == "detected"
+        assert v.set_model("gt") is True and v.load_upload("two.jpg", _jpeg(s.image)) is True
+        assert v.state.model == "gt"
+        payload = {"keypoints": s.keypoints_2d.tolist(), "image_size": [800, 600], "source": "clean"}
+        assert v.load_upload("pose.json", json.dumps(payload).encode()) is True
+        assert lift_source(v.state) == "clean"
     finally:
         server.stop()
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import random_pose_cam, tiny_net
+from conftest import random_pose_cam, tiny_lifter
 
 from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
@@ -52,9 +52,17 @@ def test_evaluate_rejects_bad_option_values(argv, expected, capsys):
     assert "poselifter evaluate: error:" in err
 
 
-def test_train_rejects_zero_frames_and_stride(capsys, tmp_path):
-    for argv, expected in ((["--max-frames-per-sequence", "0"], "argument --max-frames-per-sequence: must be >= 1"),
-                           (["--train-stride", "0"], "argument --train-stride: must be >= 1, got 0")):
+def test_train_rejects_bad_config_values(capsys, tmp_path):
+    """Every option is a validated config field: bad values exit 2 naming the field, before any data is read."""
+    for argv, expected in ((["--max-frames-per-sequence", "0"], "max_frames_per_sequence must be an integer > 0, got 0"),
+                           (["--train-stride", "0"], "train_stride must be an integer > 0, got 0"),
+                           (["--flip-prob", "1.5"], "flip_prob must be a probability in [0, 1], got 1.5"),
+                           (["--ema-decay", "1"], "ema_decay must be in [0, 1), got 1.0"),
+                           (["--noise-level-min", "2", "--noise-level-max", "1"], "noise_level_min 2.0 > noise_level_max")):
+        assert main(["train", "--out", str(tmp_path / "m.pt"), *argv]) == 2
+        assert expected in capsys.readouterr().err
+    for argv, expected in ((["--epochs", "nan"], "expected a finite number"), (["--width", "x"], "expected int"),
+                           (["--input-space", "rays"], "invalid choice")):
         with pytest.raises(SystemExit) as exc:
             main(["train", "--out", str(tmp_path / "m.pt"), *argv])
         assert exc.value.code == 2
@@ -100,7 +108,7 @@ def test_evaluate_valid_sweep_options_pass_validation(capsys):
 
 @pytest.fixture(scope="module")
 def weights(tmp_path_factory) -> Path:
-    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", tiny_net(16))
+    return _save_tiny(tmp_path_factory.mktemp("w") / "tiny.pt", 16)
 
 
 @pytest.fixture()
@@ -210,3 +218,8 @@ def test_lift_good_camera_fields_still_work(tmp_path, weights, kp_file, capsys):
     assert res["image_size"] == [1280, 720]
     assert res["focal"] == [1000.0, 1001.5] and res["principal_point"] == [640.0, 360.5]
     assert np.all(np.isfinite(res["absolute"]))
+
+
+def _save_tiny(path, width: int):
+    lf = tiny_lifter(width)
+    return save_checkpoint(path, lf.net, lf.codec)

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lifter import camera as cam
-from lifter.normalization import normalize_keypoints_np, pose_scale_np
+from lifter.normalization import normalize_keypoints, pose_scale
 from lifter.skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, LEFT_RIGHT_PAIRS, PARENTS
 
 from conftest import random_pose_cam
@@ -60,7 +60,7 @@ def test_canonical_depth_gives_same_root_for_any_focal(seed, f1, f2, aspect):
         uv = cam.project(pose, focal=focal, principal_point=c)
         cd = cam.canonical_depth_from_depth(root[:, 2], focal=focal)
         roots.append(cam.root_from_canonical_depth(uv[:, 0], cd, focal=focal, principal_point=c))
-        products.append(cd * pose_scale_np(uv))
+        products.append(cd * pose_scale(uv))
     np.testing.assert_allclose(roots[0], root, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(roots[1], root, rtol=1e-9, atol=1e-6)
     # canonical depth scales as 1/f while the 2D scale scales as f: their product is focal-invariant
@@ -137,9 +137,9 @@ def test_normalization_invariance(seed, shift, s, definition):
     rng = np.random.default_rng(seed)
     kp = rng.uniform(100, 900, (17, 2))
     c = np.array([500.0, 500.0])
-    f0 = normalize_keypoints_np(kp, c, mode="both", scale_definition=definition)
+    f0 = normalize_keypoints(kp, c, mode="both", scale_definition=definition)
     moved = (kp - c) * s + c + np.asarray(shift)
-    f1 = normalize_keypoints_np(moved, c, mode="both", scale_definition=definition)
+    f1 = normalize_keypoints(moved, c, mode="both", scale_definition=definition)
     np.testing.assert_allclose(f1[:34], f0[:34], atol=1e-4)
     u0, u1 = f0[34:36] / 1e-3, f1[34:36] / 1e-3
     np.testing.assert_allclose(u1, u0 * s + np.asarray(shift), rtol=1e-4, atol=1e-2)
@@ -148,20 +148,20 @@ def test_normalization_invariance(seed, shift, s, definition):
 
 def test_normalization_features_by_mode():
     kp = np.random.default_rng(0).uniform(0, 1000, (3, 17, 2))
-    sizes = {m: normalize_keypoints_np(kp, (500, 500), mode=m).shape[-1] for m in ("baseline", "location", "scale", "both")}
+    sizes = {m: normalize_keypoints(kp, (500, 500), mode=m).shape[-1] for m in ("baseline", "location", "scale", "both")}
     assert sizes == {"baseline": 34, "location": 36, "scale": 35, "both": 37}
-    f = normalize_keypoints_np(kp, (500, 500), mode="both")
+    f = normalize_keypoints(kp, (500, 500), mode="both")
     # normalized pose has zero mean and (paper definition) unit RMS radius
     pose = f[..., :34].reshape(3, 17, 2)
     np.testing.assert_allclose(pose.mean(-2), 0, atol=1e-5)
     np.testing.assert_allclose(np.sqrt((pose**2).sum(-1).mean(-1)), 1, atol=1e-5)
-    np.testing.assert_allclose(f[..., 36] / 1e-3, pose_scale_np(kp), rtol=1e-5)
+    np.testing.assert_allclose(f[..., 36] / 1e-3, pose_scale(kp), rtol=1e-5)
     with pytest.raises(ValueError, match="unknown normalization mode"):
-        normalize_keypoints_np(kp, (500, 500), mode="nope")  # type: ignore[arg-type]
+        normalize_keypoints(kp, (500, 500), mode="nope")  # type: ignore[arg-type]
 
 
 def test_principal_point_subtraction():
     kp = np.random.default_rng(0).uniform(0, 1000, (17, 2))
-    a = normalize_keypoints_np(kp, (500, 500))
-    b = normalize_keypoints_np(kp + 100, (600, 600))
+    a = normalize_keypoints(kp, (500, 500))
+    b = normalize_keypoints(kp + 100, (600, 600))
     np.testing.assert_allclose(a, b, atol=1e-5)

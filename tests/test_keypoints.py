@@ -124,7 +124,7 @@ def test_register_format():
 
 def test_sh16_rule_errors_on_real_detections(h36m):
     """On a slice of a training subject, the converted detections' interpolated joints are close to GT."""
-    from lifter.noise import load_sh_detections
+    from lifter.detections import load_sh_detections
 
     s = h36m.load([1], stride=5, actions=["Walking", "Posing"], max_frames_per_sequence=40)
     det, ok = load_sh_detections(s, data=h36m)

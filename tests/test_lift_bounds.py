@@ -9,12 +9,12 @@ import torch
 from lifter import Lifter, PoseLifterError
 from lifter.camera import project
 
-from conftest import random_pose_cam, tiny_net
+from conftest import random_pose_cam, tiny_lifter
 
 
 @pytest.fixture()
 def lifter() -> Lifter:
-    return Lifter(tiny_net(64), name="small")
+    return tiny_lifter(64)
 
 
 @pytest.fixture()

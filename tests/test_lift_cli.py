@@ -15,21 +15,24 @@ import pytest
 from lifter import Lifter, PoseLifterError
 from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
-from lifter.detect import (DEFAULT_DIAGONAL_FOV_DEG, Detection, ExifCamera, ImageError, bbox_of, default_focal,
-                           detect_pose, focal_from_exif, image_from_array, load_image, register_estimator)
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
+from lifter.camera import focal_from_fov as default_focal
+from lifter.detect import (Detection, ExifCamera, ImageError, bbox_of, detect_pose, focal_from_exif, image_from_array,
+                           load_image, register_estimator)
 from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
 from lifter.cli import main
-from lifter.lift_cli import output_names, parse_keypoint_json
+from lifter.cli.lift import output_names
+from lifter.io import parse_keypoint_json
 from lifter.skeleton import JOINT_NAMES
 
-from conftest import random_pose_cam, tiny_net
+from conftest import random_pose_cam, tiny_lifter
 
 Image = pytest.importorskip("PIL.Image")
 
 
 @pytest.fixture(scope="module")
 def weights(tmp_path_factory) -> Path:
-    return save_checkpoint(tmp_path_factory.mktemp("w") / "tiny.pt", tiny_net(32))
+    return _save_tiny(tmp_path_factory.mktemp("w") / "tiny.pt", 32)
 
 
 @pytest.fixture()
@@ -287,25 +290,26 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert "downscaled" in err and "65 deg" in err
 
 
-def test_auto_weights_pick_the_detectors_model_for_images(tmp_path, weights, kp17, capsys, monkeypatch):
-    """``--weights auto``: images go through the model registered for the detector, keypoint files through the
-    default; the model used is recorded in each output."""
-    import lifter.api as api
-
-    reg = {"default": "plain", "models": {"plain": {"file": "x.pt"}, "for_stub": {"file": "y.pt", "detector": "_stub_auto"}}}
-    monkeypatch.setattr(api, "model_registry", lambda assets_dir=None: reg)
-    monkeypatch.setattr(api.Lifter, "from_pretrained", classmethod(
-        lambda cls, name, quantize=False: cls.from_checkpoint(weights, name=name)))
-    assert api.model_for_detector("_stub_auto") == "for_stub" and api.model_for_detector("other") == "plain"
-    register_estimator("_stub_auto", lambda **kw: _StubEstimator([kp17]), overwrite=True)
+def test_images_are_lifted_as_detections_and_keypoint_files_say_what_they_are(tmp_path, weights, kp17, capsys):
+    """One model for everything: images are detector output (source "detected"); a keypoint file is "detected"
+    unless it says "source": "clean"; the two sources lift the same 2D differently; a bad value is an error."""
+    register_estimator("_stub_src", lambda **kw: _StubEstimator([kp17]), overwrite=True)
     img = tmp_path / "photo.png"
     Image.new("RGB", (1000, 1000), (50, 60, 70)).save(img)
-    kpf = tmp_path / "pose.json"
-    kpf.write_text(json.dumps({"format": "h36m17", "keypoints": kp17.tolist(), "image_size": [1000, 1000]}))
-    code, err = run([str(img), str(kpf), "--out", str(tmp_path / "o"), "--detector", "_stub_auto"], capsys)
+    files = []
+    for name, extra in (("det", {}), ("clean", {"source": "clean"}), ("bad", {"source": "gt"})):
+        f = tmp_path / f"{name}.json"
+        f.write_text(json.dumps({"format": "h36m17", "keypoints": kp17.tolist(), "image_size": [1000, 1000],
+                                 "focal": 1000.0, **extra}))
+        files.append(str(f))
+    code, err = run([str(img), *files, "--out", str(tmp_path / "o"), "--detector", "_stub_src", "--focal", "1000",
+                     "--weights", str(weights)], capsys)
     assert code == 0, err
-    assert json.loads((tmp_path / "o" / "photo.json").read_text())["model"] == "for_stub"
-    assert json.loads((tmp_path / "o" / "pose.json").read_text())["model"] == "plain"
+    out = {n: json.loads((tmp_path / "o" / f"{n}.json").read_text()) for n in ("photo", "det", "clean")}
+    assert [out[n]["source"] for n in ("photo", "det", "clean")] == ["detected", "detected", "clean"]
+    np.testing.assert_allclose(out["photo"]["absolute"], out["det"]["absolute"], atol=0.02)
+    assert np.abs(np.array(out["clean"]["absolute"]) - np.array(out["det"]["absolute"])).max() > 0.1
+    assert "'source' must be" in err and not (tmp_path / "o" / "bad.json").exists()
 
 
 def test_missing_extra_message(tmp_path, weights, capsys):
@@ -318,3 +322,8 @@ def test_missing_extra_message(tmp_path, weights, capsys):
     Image.new("RGB", (64, 64)).save(p)
     code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 1 and "optional 'detect' extra" in err and 'pip install -e ".[detect]"' in err
+
+
+def _save_tiny(path, width: int):
+    lf = tiny_lifter(width)
+    return save_checkpoint(path, lf.net, lf.codec)

@@ -12,11 +12,11 @@ from lifter.noise import (
     ErrorModel,
     fit_gaussian,
     fit_mixture,
-    load_sh_detections,
     mixture_loglik,
     outlier_probability,
 )
-from lifter.normalization import pose_scale_np
+from lifter.detections import load_sh_detections
+from lifter.normalization import pose_scale
 
 
 
@@ -75,7 +75,7 @@ def test_fit_bad_input():
 def toy_model(gamma: float = 0.85, sigma=(4.0, 6.0), mu=(1.0, -2.0)) -> tuple[ErrorModel, np.ndarray]:
     """A model whose reference scale equals the scale of the returned pose (17, 2) px."""
     pose = np.random.default_rng(7).normal(500, 80, (17, 2))
-    ref = float(pose_scale_np(pose))
+    ref = float(pose_scale(pose))
     J = 17
     m = ErrorModel(gamma=np.full(J, gamma), mu=np.tile(mu, (J, 1)), sigma=np.tile(sigma, (J, 1)), reference_scale=ref,
                    gaussian_mu=np.zeros((J, 2)), gaussian_sigma=np.full((J, 2), 10.0))
@@ -109,9 +109,8 @@ def test_level_zero_is_identity_and_level_rule():
     m, pose = toy_model()
     kp = np.random.default_rng(2).normal(500, 50, (5, 17, 2))
     assert np.array_equal(m.sample(kp, level=0.0, rng=np.random.default_rng(0)), kp)
-    aug = m.torch_augmenter(level=0.0)
     t = torch.as_tensor(kp)
-    assert torch.equal(aug(t, torch.zeros(5, 2), torch.Generator().manual_seed(0)), t)
+    assert torch.equal(m.sample_torch(t, level=0.0, generator=torch.Generator().manual_seed(0)), t)
     # level scales the inlier mean and spread; outlier probability (1 - gamma) * level, capped
     many = np.broadcast_to(pose, (4000, 17, 2))
     e = m.sample(many, level=2.0, rng=np.random.default_rng(3), outliers=False) - many
@@ -137,7 +136,8 @@ def test_scale_rule():
     np.testing.assert_allclose(m.scale_factor(big), 2.0)
     # an explicit scale overrides the pose's own
     e3 = m.sample(pose, level=1.0, rng=np.random.default_rng(0), scale=3 * m.reference_scale) - pose
-    np.testing.assert_allclose(e3, 3.0 * e1[0], rtol=1e-9, atol=1e-9)
+    e_ref = m.sample(pose, level=1.0, rng=np.random.default_rng(0), scale=m.reference_scale) - pose
+    np.testing.assert_allclose(e3, 3.0 * e_ref, rtol=1e-9, atol=1e-9)
 
 
 def test_seeded_reproducibility():
@@ -148,26 +148,30 @@ def test_seeded_reproducibility():
     c = m.sample(kp, level=1.0, rng=np.random.default_rng(43))
     assert np.array_equal(a, b) and not np.array_equal(a, c)
     assert np.array_equal(m.sample(kp, level=1.0, rng=5), m.sample(kp, level=1.0, rng=5))
-    aug = m.torch_augmenter()
     t = torch.as_tensor(kp.copy(), dtype=torch.float32)
-    pp = torch.zeros(10, 2)
-    x = aug(t, pp, torch.Generator().manual_seed(0))
-    y = aug(t, pp, torch.Generator().manual_seed(0))
+    x = m.sample_torch(t, generator=torch.Generator().manual_seed(0))
+    y = m.sample_torch(t, generator=torch.Generator().manual_seed(0))
     assert torch.equal(x, y) and x.dtype == torch.float32 and x.shape == t.shape
 
 
-def test_torch_augmenter_statistics():
+def test_torch_sampler_statistics_and_per_pose_levels():
     m, pose = toy_model(gamma=0.8)
     t = torch.as_tensor(np.broadcast_to(pose, (4000, 17, 2)).copy())
     g = torch.Generator().manual_seed(0)
-    e = (m.torch_augmenter(level=1.0, outliers=False)(t, torch.zeros(4000, 2), g) - t).numpy()
+    e = (m.sample_torch(t, level=1.0, outliers=False, generator=g) - t).numpy()
     nz = ~np.all(e == 0, axis=-1)
     assert 1 - nz.mean() == pytest.approx(0.2, abs=0.01)
     np.testing.assert_allclose(e[nz].std(0), (4, 6), rtol=0.03)
-    e = (m.torch_augmenter(level=1.0)(t, torch.zeros(4000, 2), g) - t).numpy()
+    e = (m.sample_torch(t, level=1.0, generator=g) - t).numpy()
     f = fit_mixture(e.reshape(-1, 2))
     assert abs(f.gamma - 0.8) < 0.015
     assert np.abs(e).max() <= 50 + 1e-6
+    # one level per pose: level 0 rows are untouched, level 2 rows get twice the inlier spread
+    level = torch.tensor([0.0, 2.0]).repeat(2000)
+    e = (m.sample_torch(t, level=level, outliers=False, generator=g) - t).numpy()
+    assert np.all(e[0::2] == 0)
+    nz = ~np.all(e[1::2] == 0, axis=-1)
+    np.testing.assert_allclose(e[1::2][nz].std(0), (8, 12), rtol=0.03)
 
 
 def test_sample_bad_input():
@@ -201,9 +205,7 @@ def test_json_round_trip(tmp_path):
 
 
 def test_default_falls_back_to_standin(tmp_path, monkeypatch):
-    import lifter.api
-
-    monkeypatch.setattr(lifter.api, "ASSETS_DIR", tmp_path)
+    monkeypatch.setenv("POSELIFTER_ASSETS", str(tmp_path))
     m = ErrorModel.default()
     assert "stand-in" in m.source and np.all(m.gamma == 1)
     kp = np.random.default_rng(0).normal(500, 100, (2, 17, 2))
@@ -252,7 +254,7 @@ def test_missing_detections_are_flagged(h36m):
 def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     import argparse
 
-    from lifter.noise_cli import add_parser, format_table, plot_error_histograms
+    from lifter.cli.fit_noise import add_parser, format_table, plot_error_histograms
 
     parser = argparse.ArgumentParser(prog="poselifter")
     add_parser(parser.add_subparsers(dest="command", required=True))
@@ -268,5 +270,5 @@ def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     assert m.n_samples == 400 and np.all(m.nll_mixture <= m.nll_gaussian + 1e-9)
     table = format_table(m)
     assert "r_wrist" in table and "mean" in table
-    e = (det - gt) * (m.reference_scale / pose_scale_np(gt))[:, None, None]
+    e = (det - gt) * (m.reference_scale / pose_scale(gt))[:, None, None]
     assert plot_error_histograms(e, m, tmp_path / "h.png", bins=21, dpi=20).stat().st_size > 1000

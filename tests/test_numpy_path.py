@@ -1,6 +1,6 @@
 """The single-pose fast path: ``Lifter.lift`` runs one pose through numpy on the live weights.
 
-``lifter.model.forward_flat_numpy`` must give the torch module's outputs, see every change to the
+``lifter.model.forward_numpy`` must give the torch module's outputs, see every change to the
 weights (no cache to go stale) and step aside for layers it cannot run (quantized, training mode).
 """
 
@@ -10,10 +10,9 @@ import numpy as np
 import pytest
 import torch
 
-from lifter import Lifter, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet
 from lifter.camera import project
-from lifter.model import forward_flat_numpy, split_output
-from lifter.normalization import normalize_keypoints
+from lifter.model import forward_numpy
 
 from conftest import random_pose_cam
 
@@ -32,10 +31,13 @@ def _net(seed: int = 0, **config) -> PoseLifterNet:
                 m.running_mean.normal_(0.0, 0.5)
                 m.running_var.uniform_(0.3, 2.0)
         net.head.weight.normal_(0.0, 0.05)
-    mean = torch.linspace(-300.0, 300.0, 49)
-    mean[-1] = 4400.0
-    net.set_target_statistics(mean, torch.linspace(50.0, 400.0, 49))
     return net.eval()
+
+
+def _lifter(net: PoseLifterNet, name: str = "small") -> Lifter:
+    mean = np.linspace(-300.0, 300.0, 49)
+    mean[-1] = 4400.0
+    return Lifter(net, PoseCodec(net.config, target_mean=mean, target_std=np.linspace(50.0, 400.0, 49)), name=name)
 
 
 @pytest.fixture()
@@ -43,17 +45,24 @@ def kp() -> np.ndarray:
     return project(random_pose_cam(np.random.default_rng(1), 32), focal=1145.0, principal_point=PP)
 
 
-def _module(net: PoseLifterNet, kp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference: the torch module's eval-mode forward."""
+def _features(net: PoseLifterNet, kp: np.ndarray) -> np.ndarray:
+    k = kp.reshape(-1, 17, 2).astype(np.float32)
+    return PoseCodec(net.config).encode(k, principal_point=np.float32(PP), focal=np.float32([1145.0, 1145.0])).features
+
+
+def _module(lifter: Lifter, kp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The reference: the torch module's eval-mode forward, decoded by the codec."""
     kp = kp.reshape(-1, 17, 2)
+    c = lifter.codec
+    enc = c.encode(kp.astype(np.float32), principal_point=np.float32(PP), focal=np.float32([1145.0, 1145.0]))
     with torch.inference_mode():
-        out = split_output(net.forward_flat(torch.from_numpy(kp.astype(np.float32)),
-                                            torch.tensor([PP]).expand(len(kp), 2)))
-    return out.relative.numpy(), out.depth.numpy()
+        out = lifter.net(torch.from_numpy(enc.features)).numpy()
+    dec = c.decode(c.destandardize(out.astype(np.float64)), enc, root_2d=kp[:, 0], principal_point=PP, focal=1145.0)
+    return dec.relative, dec.canonical_depth
 
 
 def _assert_lift_matches_module(lifter: Lifter, kp: np.ndarray) -> None:
-    rel, depth = _module(lifter.net, kp)
+    rel, depth = _module(lifter, kp)
     res = lifter.lift(kp, focal=1145.0, principal_point=PP)
     np.testing.assert_allclose(res.relative.reshape(rel.shape), rel, rtol=1e-5, atol=2e-3)
     np.testing.assert_allclose(res.canonical_depth.reshape(depth.shape), depth, rtol=1e-5, atol=2e-2)
@@ -62,18 +71,16 @@ def _assert_lift_matches_module(lifter: Lifter, kp: np.ndarray) -> None:
 @pytest.mark.parametrize("mode", ["both", "baseline"])
 def test_numpy_forward_matches_module(kp, mode):
     net = _net(mode=mode)
-    k = torch.from_numpy(kp.astype(np.float32))
-    pp = torch.tensor([PP]).expand(len(kp), 2)
+    x = _features(net, kp)
     with torch.inference_mode():
-        ref = net.forward_flat(k, pp).numpy()
-        x = normalize_keypoints(k, pp, mode=mode).numpy()
-    got = forward_flat_numpy(net, x)
-    assert np.abs(ref).max() > 100.0  # the de-standardization is exercised (outputs in mm, not O(1))
-    np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-3)
+        ref = net(torch.from_numpy(x)).numpy()
+    got = forward_numpy(net, x)
+    assert np.abs(ref).std() > 0.1  # the outputs depend on the input
+    np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-5)
 
 
 def test_single_pose_and_batch_agree_with_module(kp):
-    lifter = Lifter(_net(), name="small")
+    lifter = _lifter(_net())
     _assert_lift_matches_module(lifter, kp)  # batch: torch module
     for i in (0, 7):  # one pose: numpy
         _assert_lift_matches_module(lifter, kp[i])
@@ -85,7 +92,7 @@ def test_single_pose_and_batch_agree_with_module(kp):
 @pytest.mark.parametrize("change", ["in_place", "data", "data_assign", "vector_to_parameters", "state_dict",
                                     "state_dict_assign", "nested_module", "buffer", "eps"])
 def test_single_pose_sees_every_weight_change(kp, change):
-    lifter = Lifter(_net(seed=0), name="small")
+    lifter = _lifter(_net(seed=0))
     net = lifter.net
     before = lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative
     with torch.no_grad():
@@ -105,7 +112,7 @@ def test_single_pose_sees_every_weight_change(kp, change):
         elif change == "nested_module":
             net.blocks[0].body[4] = torch.nn.BatchNorm1d(64).eval()
         elif change == "buffer":
-            net.target_mean.data.mul_(0.5)
+            net.blocks[0].body[0].running_mean.data.add_(0.5)
         elif change == "eps":
             net.blocks[1].body[0].eps = 0.5
     after = lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative
@@ -117,48 +124,44 @@ def test_net_built_under_inference_mode(kp):
     with torch.inference_mode():
         net = PoseLifterNet(ModelConfig(width=64))
         net.load_state_dict(_net().state_dict())
-    lifter = Lifter(net, name="inference")
+    lifter = _lifter(net, name="inference")
     _assert_lift_matches_module(lifter, kp[0])
     _assert_lift_matches_module(lifter, kp[:4])
 
 
 def test_quantized_blocks_use_the_module(kp):
-    lifter = Lifter(_net(), name="small")
+    lifter = _lifter(_net())
     torch.ao.quantization.quantize_dynamic(lifter.net.blocks, {torch.nn.Linear}, dtype=torch.qint8, inplace=True)
-    with torch.inference_mode():
-        x = normalize_keypoints(torch.from_numpy(kp[:1].astype(np.float32)), torch.tensor([PP])).numpy()
-    assert forward_flat_numpy(lifter.net, x) is None
+    assert forward_numpy(lifter.net, _features(lifter.net, kp[:1])) is None
     _assert_lift_matches_module(lifter, kp[0])
     _assert_lift_matches_module(lifter.quantized(), kp[0])
 
 
 def test_replaced_activation_uses_the_module(kp):
     """A layer the numpy path does not model (here a GELU in place of a ReLU) sends the pose to the module."""
-    lifter = Lifter(_net(), name="small")
+    lifter = _lifter(_net())
     before = lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative
     lifter.net.blocks[0].body[2] = torch.nn.GELU()
-    with torch.inference_mode():
-        x = normalize_keypoints(torch.from_numpy(kp[:1].astype(np.float32)), torch.tensor([PP])).numpy()
-    assert forward_flat_numpy(lifter.net, x) is None
+    assert forward_numpy(lifter.net, _features(lifter.net, kp[:1])) is None
     assert np.abs(lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative - before).max() > 1e-3
     _assert_lift_matches_module(lifter, kp[0])
 
 
 def test_subclass_with_its_own_forward_uses_the_module(kp):
     class Clamped(PoseLifterNet):
-        def forward_flat(self, keypoints, principal_point):
-            return super().forward_flat(keypoints, principal_point).clamp(max=100.0)
+        def forward(self, features):
+            return super().forward(features).clamp(max=-30.0)
 
     net = Clamped(ModelConfig(width=64))
     net.load_state_dict(_net().state_dict())
-    lifter = Lifter(net.eval(), name="clamped")
-    assert lifter.lift(kp[0], focal=1145.0, principal_point=PP).canonical_depth <= 100.0
+    lifter = _lifter(net.eval(), name="clamped")
+    assert lifter.lift(kp[0], focal=1145.0, principal_point=PP).canonical_depth < 0  # 4400 + 400 * (-30) mm
     _assert_lift_matches_module(lifter, kp[0])
 
 
 @pytest.mark.parametrize("part", ["net", "blocks"])
 def test_training_mode_is_refused(kp, part):
-    lifter = Lifter(_net(), name="small")
+    lifter = _lifter(_net())
     (lifter.net if part == "net" else lifter.net.blocks).train()
     for k in (kp[0], kp[:4]):
         with pytest.raises(PoseLifterError, match="training mode"):

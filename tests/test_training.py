@@ -1,20 +1,54 @@
-"""A tiny training run on a slice of H36M reduces the loss and beats the mean pose; CLI wiring."""
+"""Training: the loss, batches (sources, flip, zoom, noise), target statistics, EMA, tiny runs that learn,
+fine-tuning, the CLI and its config round trip, and DistributedDataParallel under torchrun."""
 
 from __future__ import annotations
 
+import os
+import socket
+import subprocess
+import sys
+import textwrap
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 
 from lifter.api import Lifter
+from lifter.codec import PoseCodec
+from lifter.config import AugmentConfig, DataConfig, OptimConfig, ScheduleConfig, TrainConfig
+from lifter.data import PoseSamples
 from lifter.evaluate import evaluate_lifter
 from lifter.loss import poselifter_loss
-from lifter.model import ModelConfig, pack_targets, split_output
-from lifter.train import TrainConfig, flip_batch, target_statistics, train
+from lifter.model import ModelConfig
+from lifter.skeleton import mirror
+from lifter.train import (Dist, WeightAverage, flip_batch, make_batch, samples_to_tensors, target_statistics, train,
+                          validation_sets)
 
-from conftest import requires_h36m
+from conftest import random_pose_cam, requires_h36m
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def synthetic_samples(n: int, *, seed: int = 0) -> PoseSamples:
+    """Random plausible poses seen by an H36M-like camera (no dataset needed)."""
+    from lifter.camera import project
+
+    pose = random_pose_cam(np.random.default_rng(seed), n)
+    f, c = np.array([1145.0, 1144.0]), np.array([512.0, 515.0])
+    kp = project(pose, focal=f, principal_point=c)
+    z = np.zeros(n, np.int32)
+    return PoseSamples(keypoints_2d=kp.astype(np.float32), pose_3d=pose.astype(np.float32),
+                       focal=np.tile(f, (n, 1)).astype(np.float32), principal_point=np.tile(c, (n, 1)).astype(np.float32),
+                       image_size=np.tile([1000, 1000], (n, 1)).astype(np.int32), subject=z + 1, action=z, camera=z,
+                       frame=np.arange(n, dtype=np.int32), sequence=z, sequence_names=("S1/Walking 1",))
+
+
+def tiny_config(**model: object) -> TrainConfig:
+    return TrainConfig(model=ModelConfig(width=64, **model),  # type: ignore[arg-type]
+                       optim=OptimConfig(batch_size=64, lr=2e-3),
+                       schedule=ScheduleConfig(epochs=1, eval_every=1000))
 
 
 def test_loss_units_and_weighting():
@@ -24,187 +58,114 @@ def test_loss_units_and_weighting():
     target[:, 48] = 10.0  # 10 mm of canonical depth
     assert poselifter_loss(pred, target).item() == pytest.approx(58.0)
     assert poselifter_loss(pred, target, depth_weight=0.0).item() == pytest.approx(48.0)
+    assert poselifter_loss(pred, target, depth_scale=torch.tensor([0.5, 0.5])).item() == pytest.approx(53.0)
     with pytest.raises(ValueError, match="49"):
         poselifter_loss(torch.zeros(2, 48), torch.zeros(2, 48))
 
 
-def test_pack_split_round_trip():
-    rel = torch.randn(4, 17, 3)
-    rel[:, 0] = 0
-    depth = torch.rand(4) * 5000
-    out = split_output(pack_targets(rel, depth))
-    torch.testing.assert_close(out.relative, rel)
-    torch.testing.assert_close(out.depth, depth)
+@pytest.mark.parametrize("space,target", [("pixel", "canonical"), ("pixel", "absolute"), ("camera", "canonical"),
+                                          ("camera", "size")])
+def test_loss_depth_term_is_the_canonical_depth_error(space, target):
+    """Whatever the depth parametrization, the depth term is |dZ| * F0 / alpha in mm (the paper's form)."""
+    codec = PoseCodec(ModelConfig(input_space=space, depth_target=target, conditioning="none"))
+    s = synthetic_samples(8)
+    kp, pp, f = (torch.tensor(a, dtype=torch.float64) for a in (s.keypoints_2d, s.principal_point, s.focal))
+    enc = codec.encode(kp, principal_point=pp, focal=f)
+    z = torch.tensor(s.pose_3d[:, 0, 2], dtype=torch.float64)
+    rel = torch.tensor(s.relative, dtype=torch.float64)
+    t = codec.encode_targets(rel, z, enc)
+    p = codec.encode_targets(rel, z + 100.0, enc)  # 100 mm too deep
+    loss = poselifter_loss(p, t, depth_scale=codec.depth_loss_scale(enc))
+    alpha = torch.sqrt(f[:, 0] * f[:, 1])
+    assert loss.item() == pytest.approx(float((100.0 * 1000.0 / alpha).mean()), rel=1e-9)
 
 
-def test_flip_batch_matches_numpy_flip():
+def test_flip_batch_is_the_image_flip():
     from lifter.camera import flip_keypoints_2d, flip_pose_3d
 
     g = torch.Generator().manual_seed(0)
-    kp = torch.rand(6, 17, 2, generator=g) * 1000
-    pp = torch.rand(6, 2, generator=g) * 1000
-    w = torch.full((6,), 1000.0)
-    rel = torch.randn(6, 17, 3, generator=g) * 300
+    kp = torch.rand(6, 17, 2, generator=g, dtype=torch.float64) * 1000
+    pp = torch.rand(6, 2, generator=g, dtype=torch.float64) * 1000
+    rel = torch.randn(6, 17, 3, generator=g, dtype=torch.float64) * 300
     mask = torch.tensor([True, False, True, False, True, True])
-    kp_f, pp_f, rel_f = flip_batch(kp, pp, w, rel, mask)
-    kp_np, pp_np = flip_keypoints_2d(kp.numpy(), image_width=1000, principal_point=pp.numpy())
+    kp_f, rel_f = flip_batch(kp, pp, rel, mask)
+    # about the principal point: the same coordinates relative to it as the image flip x -> W - x, cx -> W - cx
+    kp_img, pp_img = flip_keypoints_2d(kp.numpy(), image_width=1000, principal_point=pp.numpy())
     m = mask.numpy()
-    np.testing.assert_allclose(kp_f.numpy()[m], kp_np[m], rtol=1e-6)
-    np.testing.assert_allclose(pp_f.numpy()[m], pp_np[m], rtol=1e-6)
-    np.testing.assert_allclose(rel_f.numpy()[m], flip_pose_3d(rel.numpy())[m], rtol=1e-6)
+    np.testing.assert_allclose((kp_f - pp[:, None]).numpy()[m], (kp_img - pp_img[:, None])[m], rtol=1e-12)
+    np.testing.assert_allclose(rel_f.numpy()[m], flip_pose_3d(rel.numpy())[m], rtol=1e-12)
     np.testing.assert_array_equal(kp_f.numpy()[~m], kp.numpy()[~m])
 
 
-def test_zoom_batch_keeps_the_3d_root():
-    """Zooming 2D, principal point and focal by s with the canonical target / s describes the same 3D root."""
-    from lifter.camera import project, root_from_canonical_depth
-    from lifter.train import zoom_batch
+def _tensors(n: int = 2000) -> dict[str, torch.Tensor]:
+    T = samples_to_tensors(synthetic_samples(n))
+    T["real"] = T["kp"] + 7.0  # a "detection" 7 px off in x and y
+    T["has_real"] = torch.arange(n) % 2 == 0  # every other sample has one
+    return T
 
-    from conftest import random_pose_cam
 
-    pose = random_pose_cam(np.random.default_rng(0), 8)
-    f, c = np.array([1145.0, 1143.0]), np.array([512.0, 515.0])
-    kp = torch.tensor(project(pose, focal=f, principal_point=c))
-    pp = torch.tensor(np.tile(c, (8, 1)))
-    cd = torch.tensor(pose[:, 0, 2] * 1000 / np.sqrt(f.prod()))
-    s = torch.linspace(0.7, 1.4, 8, dtype=torch.float64)
-    kp_z, pp_z, cd_z = zoom_batch(kp, pp, cd, s, canonical=True)
-    root = root_from_canonical_depth(kp_z[:, 0].numpy(), cd_z.numpy(), focal=f * s.numpy()[:, None], principal_point=pp_z.numpy())
-    np.testing.assert_allclose(root, pose[:, 0], rtol=1e-9)
-    # the zoomed 2D is exactly the projection through the zoomed camera
-    np.testing.assert_allclose(kp_z.numpy(), project(pose, focal=f * s.numpy()[:, None], principal_point=pp_z.numpy()), rtol=1e-9)
-    _, _, z_abs = zoom_batch(kp, pp, torch.tensor(pose[:, 0, 2]), s, canonical=False)
-    np.testing.assert_allclose(z_abs.numpy(), pose[:, 0, 2])
+class Plus1000:
+    """A noise model whose effect is unmistakable; records the levels it was asked for."""
+
+    def __init__(self) -> None:
+        self.levels: list[torch.Tensor] = []
+
+    def sample_torch(self, kp, *, level, generator, outliers):  # noqa: ANN001
+        self.levels.append(level)
+        return kp + 1000.0
+
+
+def test_make_batch_sources():
+    """Each row is its clean GT, its real detection (never noised) or noisy GT, at the configured rates."""
+    T = _tensors()
+    n = len(T["kp"])
+    idx = torch.arange(n)
+    cfg = TrainConfig(data=DataConfig(clean_prob=0.3, real_prob=0.4, noise_level_min=0.5, noise_level_max=1.5),
+                      augment=AugmentConfig(flip_prob=0.0))
+    noise = Plus1000()
+    b = make_batch(T, idx, cfg, torch.Generator().manual_seed(0), noise=noise)  # type: ignore[arg-type]
+    off = (b["kp"] - T["kp"])[:, 0, 0]
+    clean, real, noisy = (torch.isclose(off, torch.tensor(v)) for v in (0.0, 7.0, 1000.0))
+    assert bool((clean | real | noisy).all())
+    assert torch.equal(clean, b["clean"])  # the source flag says which rows are exact
+    assert not bool(real[~T["has_real"]].any())  # never a detection where there is none
+    assert 0.25 < clean.float().mean() < 0.35
+    assert 0.35 < real[T["has_real"]].float().mean() < 0.45
+    lv = noise.levels[0]
+    assert float(lv.min()) >= 0.5 and float(lv.max()) <= 1.5 and float(lv.std()) > 0.2  # one level per pose
+    torch.testing.assert_close(b["rel"], T["rel"])
+    torch.testing.assert_close(b["depth"], T["depth"])
+    torch.testing.assert_close(b["focal"], T["focal"])
+
+
+def test_make_batch_flip_and_zoom_apply_to_detections_too():
+    T = _tensors()
+    n = len(T["kp"])
+    h = T["has_real"]
+    cfg = TrainConfig(data=DataConfig(clean_prob=0.0, real_prob=1.0), augment=AugmentConfig(flip_prob=1.0))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(0), noise=Plus1000())  # type: ignore[arg-type]
+    c = T["pp"][:, None]
+    torch.testing.assert_close(b["kp"][h], (c + mirror(T["real"] - c))[h])
+    torch.testing.assert_close(b["rel"], mirror(T["rel"]))
+    cfg = TrainConfig(data=DataConfig(clean_prob=1.0), augment=AugmentConfig(flip_prob=0.0, zoom=True, zoom_sigma=0.5,
+                                                                              zoom_clip=1.0))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(0))
+    s = b["pp"][:, 0] / T["pp"][:, 0]
+    assert float(s.min()) < 0.8 and float(s.max()) > 1.2
+    torch.testing.assert_close(b["kp"], T["kp"] * s[:, None, None])
+    torch.testing.assert_close(b["focal"], T["focal"] * s[:, None])  # intrinsics scale together
+    torch.testing.assert_close(b["depth"], T["depth"])  # the 3D does not change
 
 
 def test_target_statistics_are_flip_symmetric():
-    rel = torch.randn(100, 17, 3) * 200 + torch.tensor([50.0, 0.0, 0.0])
-    rel[:, 0] = 0
-    mean, std = target_statistics(rel, torch.rand(100) * 1000 + 4000)
+    codec = PoseCodec(ModelConfig())
+    mean, std = target_statistics(codec, samples_to_tensors(synthetic_samples(500)))
     x_means = mean[:48].reshape(16, 3)[:, 0]
-    # mirrored copies cancel the X offset on average over each left/right pair
-    assert abs(float(x_means.mean())) < 1e-3
-    assert mean[48] > 4000 and std[48] > 0
-
-
-@requires_h36m
-def test_tiny_training_reduces_loss_and_beats_mean_pose(h36m):
-    train_s = h36m.load([1, 5], stride=20, max_frames_per_sequence=40)
-    test_s = h36m.load([9], stride=100, max_frames_per_sequence=10)
-    cfg = TrainConfig(model=ModelConfig(width=256, dropout=0.1), batch_size=128, epochs=6, lr=2e-3,
-                      eval_every=40, seed=0)
-    res = train(cfg, train_samples=train_s, val_samples=test_s, progress=False, log=lambda s: None)
-    losses = [c["train_loss"] for c in res.curve]
-    assert losses[-1] < 0.6 * losses[0], losses
-    lifter = Lifter(res.net, name="tiny")
-    row = evaluate_lifter(lifter, test_s, progress=False)[0]
-    # the mean pose (the network's output at initialization) as the baseline
-    mean_rel = np.concatenate([np.zeros((1, 3)), res.net.target_mean[:48].numpy().reshape(16, 3)])
-    from lifter.metrics import mpjpe
-
-    baseline = float(mpjpe(np.broadcast_to(mean_rel, test_s.pose_3d.shape), test_s.relative).mean())
-    assert row.mpjpe < 0.75 * baseline, (row.mpjpe, baseline)
-    assert row.mrpe < 1000
-
-
-@requires_h36m
-def test_cli_train_and_evaluate(tmp_path, capsys):
-    from lifter.cli import main
-
-    out = tmp_path / "tiny.pt"
-    rc = main(["train", "--out", str(out), "--width", "64", "--epochs", "1", "--batch-size", "64",
-               "--max-frames-per-sequence", "4", "--train-stride", "50", "--eval-every", "20", "--threads", "1"])
-    assert rc == 0 and out.is_file() and out.with_suffix(".curve.json").is_file()
-    rc = main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root"])
-    text = capsys.readouterr().out
-    assert rc == 0 and "MPJPE" in text and "analytic" in text and "Discussion 1" in text
-
-
-@requires_h36m
-def test_cli_mixed_inputs_fine_tune_with_another_error_model(tmp_path, capsys):
-    from lifter.checkpoint import load_checkpoint
-    from lifter.cli import main
-    from lifter.noise import ErrorModel
-
-    base = tmp_path / "base.pt"
-    common = ["--epochs", "1", "--batch-size", "64", "--max-frames-per-sequence", "10", "--train-stride", "5",
-              "--eval-every", "50", "--threads", "1"]
-    assert main(["train", "--out", str(base), "--width", "64", "--inputs", "mix", "--real-prob", "0.7",
-                 "--noise", "mixture", *common]) == 0
-    assert "mixing real detections" in capsys.readouterr().out
-    em = tmp_path / "em.json"
-    ErrorModel.standin().save(em)
-    ft = tmp_path / "ft.pt"
-    assert main(["train", "--out", str(ft), "--init", str(base), "--width", "128", "--noise", "mixture",
-                 "--error-model", str(em), "--ema", "0.9", *common]) == 0
-    net, meta = load_checkpoint(ft)
-    assert net.config.width == 64  # the initial checkpoint's architecture, not --width
-    assert meta["init"].startswith(str(base)) and meta["error_model"] == str(em) and meta["train_config"]["ema_decay"] == 0.9
-    capsys.readouterr()
-    assert main(["train", "--out", str(ft), "--inputs", "mix", "--train-stride", "7", "--epochs", "1"]) == 2
-    assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
-
-
-def test_cli_reports_bad_checkpoint(tmp_path, capsys):
-    from lifter.cli import main
-
-    bad = tmp_path / "bad.pt"
-    bad.write_bytes(b"junk")
-    rc = main(["evaluate", str(bad), "--stride", "500", "--max-frames-per-sequence", "1"])
-    err = capsys.readouterr().err
-    assert rc == 2
-    assert "corrupt" in err  # weights are loaded before the data, so this does not need Human3.6M
-
-
-def _batch_tensors(n: int = 2000) -> dict[str, torch.Tensor]:
-    g = torch.Generator().manual_seed(1)
-    return {"kp": 400 + 100 * torch.rand(n, 17, 2, generator=g), "pp": torch.full((n, 2), 500.0),
-            "w": torch.full((n,), 1000.0), "rel": torch.randn(n, 17, 3, generator=g) * 100,
-            "depth": 4000 + torch.rand(n, generator=g) * 1000}
-
-
-def test_make_batch_mixes_real_detections_without_noising_them():
-    from lifter.train import make_batch
-
-    T = _batch_tensors()
-    n = len(T["kp"])
-    T["real"] = T["kp"] + 7.0  # a "detection" 7 px off in x and y
-    T["has_real"] = torch.arange(n) % 2 == 0  # every other sample has one
-    plus_1000 = lambda kp, pp, gen: kp + 1000.0  # noqa: E731 - a noise hook whose effect is unmistakable
-    cfg = TrainConfig(flip_prob=0.0, real_2d_prob=0.5)
-    idx = torch.arange(n)
-    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0), augment_2d=plus_1000)
-    off = (kp - T["kp"])[:, 0, 0]
-    real_rows = torch.isclose(off, torch.tensor(7.0))
-    noisy_rows = torch.isclose(off, torch.tensor(1000.0))
-    assert bool((real_rows | noisy_rows).all())  # each row is either its detection (un-noised) or noisy GT
-    assert not bool(real_rows[~T["has_real"]].any())  # never a detection where there is none
-    frac = real_rows[T["has_real"]].float().mean().item()
-    assert 0.45 < frac < 0.55, frac
-    torch.testing.assert_close(rel, T["rel"])
-    torch.testing.assert_close(depth, T["depth"])
-    # p = 1 with zoom: detections are zoomed like GT (kp and pp scale together), never noised
-    cfg = TrainConfig(flip_prob=0.0, real_2d_prob=1.0, zoom_aug=True, zoom_sigma=0.5, zoom_clip=1.0)
-    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0), augment_2d=plus_1000)
-    s = pp[:, 0] / T["pp"][:, 0]
-    h = T["has_real"]
-    torch.testing.assert_close(kp[h], T["real"][h] * s[h, None, None])
-    torch.testing.assert_close(kp[~h], (T["kp"][~h] + 0.0) * s[~h, None, None] + 1000.0)
-    torch.testing.assert_close(depth, T["depth"] / s)  # canonical depth follows the zoom
-    # p = 1 with flip: it is the detection that gets mirrored (x -> W - x, left/right swapped)
-    from lifter.skeleton import FLIP_PERMUTATION
-
-    cfg = TrainConfig(flip_prob=1.0, real_2d_prob=1.0)
-    kp, pp, rel, depth = make_batch(T, idx, cfg, torch.Generator().manual_seed(0))
-    expect = T["real"][h][:, list(FLIP_PERMUTATION)].clone()
-    expect[..., 0] = 1000.0 - expect[..., 0]
-    torch.testing.assert_close(kp[h], expect)
-    torch.testing.assert_close(pp[:, 0], 1000.0 - T["pp"][:, 0])
+    assert abs(float(x_means.mean())) < 1e-6  # mirrored copies cancel the X offset over each left/right pair
+    assert 2000 < mean[48] < 8000 and np.all(std > 0)
 
 
 def test_weight_average_is_an_exponential_moving_average():
-    from lifter.train import WeightAverage
-
     net = torch.nn.Sequential(torch.nn.Linear(3, 2), torch.nn.BatchNorm1d(2))
     w0 = {k: v.clone() for k, v in net.state_dict().items()}
     avg = WeightAverage(net, decay=0.9)
@@ -222,40 +183,159 @@ def test_weight_average_is_an_exponential_moving_average():
         WeightAverage(net, decay=1.0)
 
 
-@requires_h36m
-def test_fine_tuning_keeps_architecture_and_does_not_touch_the_initial_network(h36m, monkeypatch):
-    train_s = h36m.load([1], stride=50, max_frames_per_sequence=20)
-    test_s = h36m.load([9], stride=200, max_frames_per_sequence=5)
-    base = train(TrainConfig(model=ModelConfig(width=64), batch_size=64, epochs=1, eval_every=1000),
-                 train_samples=train_s, val_samples=test_s, progress=False, log=lambda s: None).net
-    before = {k: v.clone() for k, v in base.state_dict().items()}
-    # cfg.model asks for another width: ignored, the initial network's architecture and output statistics are kept
-    cfg = TrainConfig(model=ModelConfig(width=32), batch_size=64, epochs=1, eval_every=1000, ema_decay=0.5)
-    res = train(cfg, train_samples=train_s, val_samples=test_s, init=base, progress=False, log=lambda s: None)
-    assert res.net.config == base.config and res.net is not base
-    for k, v in base.state_dict().items():
-        torch.testing.assert_close(v, before[k])  # the initial network is not modified
-    torch.testing.assert_close(res.net.target_mean, base.target_mean)
-    assert not torch.allclose(res.net.stem.weight, base.stem.weight)  # but the copy was trained
-    # with EMA, the returned network is the average, not the last weights: decay 0.5 over 1 step from `base`
-    # gives the midpoint of the initial and the trained weights
-    one = TrainConfig(batch_size=len(train_s), epochs=1, eval_every=1000, ema_decay=0.5, flip_prob=0.0)
-    plain = train(replace(one, ema_decay=None), train_samples=train_s, val_samples=test_s, init=base,
-                  progress=False, log=lambda s: None).net
-    avg = train(one, train_samples=train_s, val_samples=test_s, init=base, progress=False, log=lambda s: None).net
-    torch.testing.assert_close(avg.stem.weight, 0.5 * (base.stem.weight + plain.stem.weight))
-    # the depth target is the initial network's, whatever cfg.model says
-    absolute = train(TrainConfig(model=ModelConfig(width=64, depth_target="absolute"), batch_size=64, epochs=1,
-                                 eval_every=1000), train_samples=train_s, val_samples=test_s,
-                     progress=False, log=lambda s: None).net
-    import lifter.train as train_module
+@pytest.mark.parametrize("precision", ["fp32", "bf16"])
+def test_tiny_training_learns(precision):
+    """A small network on synthetic poses beats the mean pose, in float32 and with bf16 blocks."""
+    train_s, val_s = synthetic_samples(3000, seed=1), synthetic_samples(300, seed=2)
+    cfg = TrainConfig(model=ModelConfig(width=128, dropout=0.0),
+                      optim=OptimConfig(batch_size=128, lr=2e-3, precision=precision),
+                      schedule=ScheduleConfig(epochs=8, eval_every=40))
+    res = train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False, log=lambda s: None,
+                ctx=Dist())
+    losses = [c["train_loss"] for c in res.curve]
+    assert losses[-1] < 0.7 * losses[0], losses
+    lifter = Lifter(res.net, res.codec, name="tiny")
+    row = evaluate_lifter(lifter, val_s, progress=False, source="clean")[0]
+    mean_rel = np.concatenate([np.zeros((1, 3)), res.codec.target_mean[:48].reshape(16, 3)])
+    from lifter.metrics import mpjpe
 
-    targets: list[str] = []
-    as_tensors = train_module._as_tensors
-    monkeypatch.setattr(train_module, "_as_tensors", lambda s, t: targets.append(t) or as_tensors(s, t))
-    ft = train(cfg, train_samples=train_s, val_samples=test_s, init=absolute, progress=False, log=lambda s: None).net
-    assert ft.config.depth_target == "absolute" and targets == ["absolute", "absolute"]  # train and val targets
-    # real keypoints must align with the training samples
-    with pytest.raises(ValueError, match="real_keypoints_2d"):
-        train(cfg, train_samples=train_s, val_samples=test_s, real_keypoints_2d=np.zeros((3, 17, 2)),
-              progress=False, log=lambda s: None)
+    baseline = float(mpjpe(np.broadcast_to(mean_rel, val_s.pose_3d.shape), val_s.relative).mean())
+    assert row.mpjpe < 0.8 * baseline, (row.mpjpe, baseline)
+    assert res.curve[-1]["val_mpjpe_clean"] == pytest.approx(row.mpjpe, rel=1e-3)
+
+
+def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
+    train_s, val_s = synthetic_samples(400, seed=3), synthetic_samples(50, seed=4)
+    vs = validation_sets(val_s, None)
+    quiet = dict(val_sets=vs, progress=False, log=lambda s: None, ctx=Dist())
+    base = train(tiny_config(), train_samples=train_s, **quiet)
+    before = {k: v.clone() for k, v in base.net.state_dict().items()}
+    cfg = replace(tiny_config(), model=ModelConfig(width=32), optim=OptimConfig(batch_size=64, ema_decay=0.5))
+    res = train(cfg, train_samples=train_s, init=(base.net, base.codec), **quiet)
+    assert res.net.config == base.net.config and res.config.model == base.net.config and res.net is not base.net
+    for k, v in base.net.state_dict().items():
+        torch.testing.assert_close(v, before[k])  # the initial network is not modified
+    np.testing.assert_array_equal(res.codec.target_mean, base.codec.target_mean)  # nor its codec
+    # one step with EMA decay 0.5 from `base` is the midpoint of the initial and the trained weights
+    one = replace(tiny_config(), augment=AugmentConfig(flip_prob=0.0),
+                  optim=OptimConfig(batch_size=len(train_s), ema_decay=0.5))
+    plain = train(replace(one, optim=replace(one.optim, ema_decay=None)), train_samples=train_s,
+                  init=(base.net, base.codec), **quiet).net
+    avg = train(one, train_samples=train_s, init=(base.net, base.codec), **quiet).net
+    torch.testing.assert_close(avg.stem.weight, 0.5 * (base.net.stem.weight + plain.stem.weight))
+
+
+def test_real_detections_are_required_and_aligned():
+    train_s = synthetic_samples(100)
+    cfg = replace(tiny_config(), data=DataConfig(clean_prob=0.5, real_prob=0.5))
+    with pytest.raises(ValueError, match="real detections"):
+        train(cfg, train_samples=train_s, val_sets=validation_sets(train_s, None), progress=False, ctx=Dist())
+    with pytest.raises(ValueError, match="one row per training sample"):
+        train(cfg, train_samples=train_s, real_keypoints_2d=np.zeros((3, 17, 2)), val_sets=validation_sets(train_s, None),
+              progress=False, ctx=Dist())
+
+
+# -- CLI -------------------------------------------------------------------------------------------
+
+
+@requires_h36m
+def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
+    from lifter.checkpoint import load_checkpoint
+    from lifter.cli import main
+
+    out = tmp_path / "tiny.pt"
+    args = ["--width", "64", "--epochs", "1", "--batch-size", "64", "--max-frames-per-sequence", "4",
+            "--train-stride", "5", "--val-stride", "200", "--eval-every", "20", "--threads", "1", "--clean-prob", "0.5",
+            "--real-prob", "0.25", "--noise-level-min", "0", "--noise-level-max", "2", "--no-progress"]
+    assert main(["train", "--out", str(out), *args]) == 0
+    assert out.is_file() and out.with_suffix(".curve.json").is_file() and out.with_suffix(".curve.png").is_file()
+    ck = load_checkpoint(out)
+    cfg = TrainConfig.from_dict(ck.train_config)
+    assert cfg.model.width == 64 and cfg.data.real_prob == 0.25 and cfg.data.noise_level_max == 2.0
+    assert {"val_mpjpe_clean", "val_mpjpe_detected"} <= set(ck.meta["final_val"])
+    # the stored config repeats the run; options given on top of it override it
+    capsys.readouterr()
+    assert main(["train", "--config", str(out), "--print-config", "--epochs", "3"]) == 0
+    again = TrainConfig.from_dict(__import__("json").loads(capsys.readouterr().out))
+    assert again == replace(cfg, schedule=replace(cfg.schedule, epochs=3.0))
+    assert main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root"]) == 0
+    text = capsys.readouterr().out
+    assert "MPJPE" in text and "analytic" in text and "Discussion 1" in text and "source='clean'" in text
+    assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
+    assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
+
+
+def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):
+    from lifter.cli import main
+
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"junk")
+    assert main(["evaluate", str(bad), "--stride", "500", "--max-frames-per-sequence", "1"]) == 2
+    assert "corrupt" in capsys.readouterr().err  # weights are loaded before the data: no Human3.6M needed
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--clean-prob", "0.8", "--real-prob", "0.5"]) == 2
+    assert "clean_prob + real_prob" in capsys.readouterr().err
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--width", "100000"]) == 2
+    assert "width" in capsys.readouterr().err
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--config", str(tmp_path / "missing.json")]) == 2
+    assert "no such file" in capsys.readouterr().err
+
+
+# -- DistributedDataParallel -------------------------------------------------------------------------
+
+DDP_SCRIPT = textwrap.dedent('''
+    import sys, torch
+    sys.path.insert(0, sys.argv[2])
+    from test_training import synthetic_samples, tiny_config
+    from dataclasses import replace
+    from lifter.config import OptimConfig, ScheduleConfig
+    from lifter.train import init_distributed, train, validation_sets
+    torch.set_num_threads(1)
+    ctx = init_distributed()
+    cfg = replace(tiny_config(), optim=OptimConfig(batch_size=64, ema_decay=0.9),
+                  schedule=ScheduleConfig(epochs=3, eval_every=5))
+    s = synthetic_samples(320)
+    res = train(cfg, train_samples=s, val_sets=validation_sets(synthetic_samples(20, seed=9), None),
+                progress=False, log=lambda m: None, ctx=ctx)
+    torch.save({"state": res.net.state_dict(), "steps": res.steps, "world": ctx.world, "rank": ctx.rank,
+                "curve": len(res.curve)}, f"{sys.argv[1]}/rank{ctx.rank}.pt")
+''')
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_ddp_two_cpu_processes_agree(tmp_path):
+    """torchrun, 2 processes, gloo: both ranks end with identical weights (parameters, BatchNorm statistics and
+    the EMA), having trained on disjoint shards of each batch for the same number of steps; only rank 0
+    validates."""
+    script = tmp_path / "ddp_run.py"
+    script.write_text(DDP_SCRIPT)
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--nproc_per_node", "2", "--master_addr", "127.0.0.1",
+           "--master_port", str(_free_port()), str(script), str(tmp_path), str(Path(__file__).parent)]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    r0, r1 = (torch.load(tmp_path / f"rank{r}.pt", weights_only=True) for r in (0, 1))
+    assert (r0["world"], r1["world"]) == (2, 2) and r0["steps"] == r1["steps"] == 15
+    assert r0["curve"] > 0 and r1["curve"] == 0
+    assert r0["state"].keys() == r1["state"].keys()
+    for k in r0["state"]:
+        torch.testing.assert_close(r0["state"][k], r1["state"][k], rtol=0, atol=0, msg=k)
+
+
+@requires_h36m
+def test_ddp_cli_writes_one_checkpoint(tmp_path):
+    out = tmp_path / "ddp.pt"
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--nproc_per_node", "2", "--master_addr", "127.0.0.1",
+           "--master_port", str(_free_port()), "-m", "lifter", "train", "--out", str(out), "--width", "32",
+           "--epochs", "1", "--batch-size", "64", "--max-frames-per-sequence", "3", "--val-stride", "400",
+           "--threads", "1", "--no-progress"]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert out.is_file() and sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".pt") == ["ddp.pt"]
+    lifter = Lifter.from_checkpoint(out)
+    assert lifter.meta["world_size"] == 2 and "2 process(es) x 32" in proc.stdout

@@ -64,8 +64,8 @@ def test_browser_end_to_end() -> None:
         available_models()
     except PoseLifterError as exc:
         pytest.skip(f"no shipped models: {exc}")
-    from app.testing import local_server
-    from app.viewer import PoseLifterApp
+    from poselifter_app.testing import local_server
+    from poselifter_app.viewer import PoseLifterApp
 
     server = local_server()
     app = PoseLifterApp(server, h36m_root=None)

@@ -46,7 +46,7 @@ def _line(target: np.ndarray, a: np.ndarray, b: np.ndarray, w: float) -> tuple[f
 
 def converter_report(gt: np.ndarray, det16: np.ndarray) -> dict[str, Any]:
     """Re-fit and measure the sh16 interpolation rules: GT ``(N, 17, 2)``, raw sh16 detections ``(N, 16, 2)``."""
-    from .keypoints import SH16_HEAD_WEIGHT, SH16_NECK_WEIGHT, SH16_SPINE_WEIGHT, fit_line_weight
+    from ..keypoints import SH16_HEAD_WEIGHT, SH16_NECK_WEIGHT, SH16_SPINE_WEIGHT, fit_line_weight
 
     P, S, T, N, H = (gt[:, j] for j in (0, 7, 8, 9, 10))
     dP, dS, dT, dH = (det16[:, j] for j in (6, 7, 8, 9))
@@ -79,10 +79,10 @@ def scale_dependence(errors_px: np.ndarray, scale: np.ndarray, *, bins: int = 5)
 def run_fit_noise(args: argparse.Namespace) -> int:
     import torch
 
-    from .api import ASSETS_DIR
-    from .data import H36M, PROTOCOLS
-    from .keypoints import convert
-    from .noise import SH_DETECTIONS_FILE, detection_alignment_check, fit_error_model, load_sh_detections
+    from ..data import H36M, PROTOCOLS
+    from ..keypoints import convert
+    from ..detections import SH_DETECTIONS_FILE, detection_alignment_check, load_sh_detections
+    from ..noise import fit_error_model
 
     torch.set_num_threads(args.threads)
     data = H36M(args.h36m)
@@ -118,9 +118,9 @@ def run_fit_noise(args: argparse.Namespace) -> int:
               f"{c['mean_px_median_px'][1]:.1f} px mean/median; direct mapping: {c['direct_mean_px_median_px'][0]:.1f} / "
               f"{c['direct_mean_px_median_px'][1]:.1f} px")
 
-    from .normalization import pose_scale_np
+    from ..normalization import pose_scale
 
-    scale = pose_scale_np(gt)
+    scale = pose_scale(gt)
     dep = scale_dependence(det17 - gt, scale)
     print("scale dependence (median over samples of the per-pose median joint error, by GT 2D scale quintile): "
           + ", ".join(f"{d['median_scale_px']:.0f} px -> {d['median_error_px']:.1f} px" for d in dep))
@@ -132,12 +132,12 @@ def run_fit_noise(args: argparse.Namespace) -> int:
             "error_definition": "convert(sh16 detection) - distorted GT projection, px, rescaled by reference_scale / sigma_gt"}
     model = fit_error_model(det17, gt, source="Stacked-Hourglass (MPII-pretrained) detections vs distorted GT projection, H36M "
                             + ", ".join(f"S{s}" for s in subjects) + ", every 5th frame, 4 cameras", tol=args.tol, max_iter=args.max_iter, meta=meta)
-    out = args.out or Path(ASSETS_DIR) / "error_model" / "sh_mixture.json"
+    out = args.out or DEFAULT_JSON
     model.save(out)
     print(f"reference 2D scale {model.reference_scale:.1f} px; wrote {out}")
     print(format_table(model))
 
-    from .plots import plt  # noqa: F401  (Agg backend)
+    from ..plots import plt  # noqa: F401  (Agg backend)
 
     e = (det17 - gt) * (model.reference_scale / scale)[:, None, None]
     hist = plot_error_histograms(e, model, Path(args.plots) / "error_histograms.png")
@@ -153,7 +153,7 @@ def run_fit_noise(args: argparse.Namespace) -> int:
 
 def format_table(model: Any) -> str:
     """Per-joint table: gamma, inlier mu and sigma (px), baseline sigma, NLLs, EM iterations."""
-    from .skeleton import JOINT_NAMES
+    from ..skeleton import JOINT_NAMES
 
     rows = [f"{'joint':<11} {'gamma':>6} {'mu_x':>6} {'mu_y':>6} {'sig_x':>6} {'sig_y':>6} {'gsig_x':>7} {'gsig_y':>7} "
             f"{'NLL_mix':>8} {'NLL_gau':>8} {'iters':>5}"]
@@ -182,7 +182,7 @@ def plot_error_histograms(errors: np.ndarray, model: Any, path: Path, *, lim: fl
     The mixture's x (or y) marginal is ``gamma N(mu, sigma^2) + (1 - gamma) / 100`` inside the box."""
     import matplotlib.pyplot as plt
 
-    from .skeleton import JOINT_NAMES
+    from ..skeleton import JOINT_NAMES
 
     x = np.linspace(-lim, lim, 600)
     side = np.sqrt(model.v)
@@ -224,17 +224,17 @@ def plot_depth_vs_scale(samples: Any, path: Path, *, weights: str = "default") -
     no such weights exist."""
     import matplotlib.pyplot as plt
 
-    from ._checks import PoseLifterError
-    from .api import Lifter
-    from .normalization import pose_scale_np
+    from .._checks import PoseLifterError
+    from ..api import Lifter
+    from ..normalization import pose_scale
 
     try:
         lifter = Lifter.load(weights)
     except (PoseLifterError, FileNotFoundError) as exc:
         raise SkipFigure(f"no lifter weights ({exc})") from None
     kp = samples.keypoints_2d.astype(np.float64)
-    res = lifter.lift(kp, focal=samples.focal, principal_point=samples.principal_point)
-    sigma = pose_scale_np(kp)
+    res = lifter.lift(kp, focal=samples.focal, principal_point=samples.principal_point, source="clean")
+    sigma = pose_scale(kp)
     pred, true = res.canonical_depth / 1000.0, samples.canonical_depth / 1000.0
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     axes[0].scatter(sigma, true, s=2, alpha=0.15, color="0.5", label="ground truth", rasterized=True)

@@ -1,0 +1,32 @@
+"""``poselifter``: the command line. Each sub-command parses its arguments and calls the library.
+
+``train`` (:mod:`.train`), ``evaluate`` (:mod:`.evaluate`), ``fit-noise`` (:mod:`.fit_noise`) and ``lift``
+(:mod:`.lift`). Usage errors and bad input exit with code 2 and a message naming the problem.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Sequence
+
+from .._checks import PoseLifterError
+from . import evaluate, fit_noise, lift, train
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="poselifter", description="PoseLifter: absolute 3D pose from 2D keypoints")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for module in (train, evaluate, fit_noise, lift):
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (PoseLifterError, FileNotFoundError) as exc:
+        print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
+        return 2

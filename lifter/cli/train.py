@@ -1,0 +1,85 @@
+"""``poselifter train``: train a lifter on Human3.6M, on one process or under ``torchrun``.
+
+Every field of :class:`lifter.config.TrainConfig` is an option (``--width``, ``--clean-prob``, ``--epochs``,
+...); ``--config FILE`` starts from a saved run (a JSON config, a ``.curve.json`` or a checkpoint), and the
+options given override it. The resolved config is stored in the checkpoint, so
+``poselifter train --config runs/x.pt --out runs/x_again.pt`` repeats a run.
+
+Distributed: ``torchrun --nproc_per_node N -m lifter train ...`` (gloo on CPU, NCCL on GPU); the global
+batch is split across the processes and rank 0 writes the checkpoint (:mod:`lifter.train`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..config import TrainConfig, add_config_arguments, config_from_args
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("train", help="train a lifter on Human3.6M (also under torchrun)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
+    p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
+    p.add_argument("--print-config", action="store_true", help="print the resolved config as JSON and exit")
+    p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
+    p.add_argument("--threads", type=int, default=None, help="torch threads per process (default: torch's)")
+    p.add_argument("--fp32-weights", action="store_true", help="store float32 weights (default float16)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_config_arguments(p)
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from .._checks import PoseLifterError
+
+    base = TrainConfig.load(args.config) if args.config is not None else None
+    cfg = config_from_args(args, base)
+    if args.print_config:
+        print(cfg.to_json())
+        return 0
+    if args.out is None:
+        raise PoseLifterError("--out is required: the checkpoint path to write")
+    if args.out.exists() and args.out.is_dir():
+        raise PoseLifterError(f"--out {args.out} is a folder; give the checkpoint file path (e.g. runs/model.pt)")
+    if args.threads is not None and args.threads < 1:
+        raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
+
+    import torch
+    import torch.distributed as dist
+
+    from ..api import Lifter
+    from ..data import H36M
+    from ..detections import SH_DETECTIONS_FILE, load_sh_detections
+    from ..train import init_distributed, save_training_outputs, train, validation_sets
+
+    ctx = init_distributed()
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    data = H36M(args.h36m)
+    d = cfg.data
+    samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
+                                 max_frames_per_sequence=d.max_frames_per_sequence)
+    real = load_sh_detections(samples, data=data)[0] if d.real_prob > 0 else None
+    val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence)
+    val_det = load_sh_detections(val, data=data)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file() else None
+    init = None
+    if cfg.init is not None:
+        lifter = Lifter.load(cfg.init)
+        init = (lifter.net, lifter.codec)
+        if ctx.main and lifter.config != cfg.model:
+            print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
+    result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
+                   val_sets=validation_sets(val, val_det), init=init, progress=not args.no_progress, ctx=ctx)
+    if ctx.main:
+        meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
+        out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
+        print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
+    if ctx.active:
+        dist.barrier()
+        dist.destroy_process_group()
+    return 0

@@ -1,0 +1,96 @@
+"""The real 2D detections shipped with the H36M data: Stacked-Hourglass keypoints (MPII-pretrained, not
+fine-tuned on H36M) for every 5th frame of the training subjects and every frame of S9 and S11.
+
+They are the "detected" inputs of training (``DataConfig.real_prob``) and of the Table 3 evaluation
+(``poselifter evaluate --inputs sh``), and the data the error model is fitted to (``poselifter fit-noise``).
+Pixels; converted from the detector's 16 joints with :func:`lifter.keypoints.convert`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ._checks import PoseLifterError
+from .data import CAMERA_IDS, H36M, PoseSamples
+from .keypoints import convert, get_format
+
+
+SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
+
+
+def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh16",
+                       dst: str = "h36m17") -> tuple[np.ndarray, np.ndarray]:
+    """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
+
+    Returns ``(keypoints (N, J_dst, 2) px float64, valid (N,) bool)``: detections converted with
+    :func:`lifter.keypoints.convert` (``fmt -> dst``); ``valid`` is False (and the keypoints NaN) where
+    the file has no detection for the sample (e.g. S11 "Directions" camera 54138969, or a training frame
+    that is not a multiple of 5). The row of a frame is inferred per sequence and camera from the row
+    count: ``frame // 5`` when the file holds every 5th frame (training subjects), ``frame`` when it
+    holds every frame (S9, S11). ``data`` is the :class:`lifter.data.H36M` the samples came from.
+    """
+    data = data or H36M()
+    path = Path(data.root) / SH_DETECTIONS_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"Stacked-Hourglass detections not found: {path}")
+    npz = np.load(path)
+    J = get_format(dst).num_joints
+    out = np.full((len(samples), J, 2), np.nan)
+    valid = np.zeros(len(samples), bool)
+    seq, cam, frame = samples.sequence, samples.camera, samples.frame
+    starts = np.flatnonzero(np.r_[True, (seq[1:] != seq[:-1]) | (cam[1:] != cam[:-1])])
+    ends = np.r_[starts[1:], len(samples)]
+    for a, b in zip(starts, ends):
+        name = samples.sequence_names[seq[a]]
+        key = f"{name}/{CAMERA_IDS[cam[a]]}"
+        if key not in npz.files:
+            continue
+        det = npz[key]
+        nf = data.num_frames(name)
+        if det.shape[0] == nf:
+            stride = 1
+        elif det.shape[0] == -(-nf // 5):
+            stride = 5
+        else:
+            raise PoseLifterError(f"{key}: {det.shape[0]} detection rows for {nf} frames; expected {nf} or {-(-nf // 5)}")
+        fr = frame[a:b]
+        ok = (fr % stride == 0) & (fr // stride < det.shape[0])
+        rows = np.arange(a, b)[ok]
+        out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
+        valid[rows] = True
+    return out, valid
+
+
+def with_sh_detections(samples: Any, *, data: Any | None = None) -> tuple[Any, int]:
+    """``samples`` with their 2D replaced by the real SH detections (converted to h36m17); samples without a
+    detection are dropped. Returns ``(new samples, number dropped)``."""
+    det, ok = load_sh_detections(samples, data=data)
+    return samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok]), int((~ok).sum())
+
+
+def detection_alignment_check(data: Any | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),
+                              camera: str | None = None) -> dict[int, float]:
+    """Verify that detection row ``i`` is frame ``5 i`` for a training subject: the median 2D error (px) of
+    the wrists, elbows, knees and ankles (fast-moving, directly mapped joints) when the detections are
+    compared with the ground truth shifted by ``offset`` frames (50 fps). The minimum should be at 0."""
+    data = data or H36M()
+    npz = np.load(Path(data.root) / SH_DETECTIONS_FILE)
+    cam_id = camera or CAMERA_IDS[0]
+    s = data.load([subject], stride=1, cameras=[cam_id])
+    sh_idx, h_idx = [0, 1, 4, 5, 10, 11, 14, 15], [3, 2, 5, 6, 16, 15, 12, 13]
+    errs: dict[int, list[np.ndarray]] = {o: [] for o in offsets}
+    for q in np.unique(s.sequence):
+        key = f"{s.sequence_names[q]}/{cam_id}"
+        if key not in npz.files:
+            continue
+        gt = s.keypoints_2d[s.sequence == q]
+        det = npz[key]
+        stride = 1 if det.shape[0] == gt.shape[0] else 5
+        for o in offsets:
+            idx = np.arange(det.shape[0]) * stride + o
+            ok = (idx >= 0) & (idx < gt.shape[0])
+            errs[o].append(np.linalg.norm(det[ok][:, sh_idx] - gt[idx[ok]][:, h_idx], axis=-1).ravel())
+    return {o: float(np.median(np.concatenate(v))) for o, v in errs.items()}

@@ -1,0 +1,262 @@
+"""Files in and out of the pipeline: keypoint JSON files (:func:`parse_keypoint_json`) and the per-input
+result record (:class:`LiftRecord`) that ``poselifter lift`` and the app's download write as JSON.
+
+Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
+"focal": F or [FX, FY], "principal_point": [CX, CY], "source": "detected" | "clean"}`` (only ``keypoints`` is
+required; rows may have a third value, a confidence, which is ignored; a flat ``[x0, y0, c0, x1, ...]`` list
+works too), a bare list of ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}``
+(format openpose25) or a COCO-style list of people ``[{"keypoints": [...]}, ...]``. Without ``format`` it is
+inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33: blazepose33). ``source`` says what
+the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"`` (exact: ground truth or
+hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
+(:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
+magnitude; anything else fails with a message naming the field.
+
+Units: px for 2D, mm for 3D; camera frame OpenCV (+x right, +y down, +z forward).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+
+from ._checks import PoseLifterError
+from .keypoints import H36M17, get_format, keypoint_formats
+from .skeleton import JOINT_NAMES
+
+FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose25", 33: "blazepose33"}
+"""Keypoint format assumed from the joint count when a JSON file names none."""
+
+
+@dataclass(frozen=True)
+class LiftRecord:
+    """The result for one input; :meth:`to_json` is what ``DIR/<name>.json`` holds.
+
+    keypoints_2d: ``(17, 2)`` px (H36M order); absolute, relative: ``(17, 3)`` mm camera frame;
+    root: ``(3,)`` mm; canonical_depth: mm (at a 1000-px focal); focal: ``(fx, fy)`` px;
+    principal_point: ``(cx, cy)`` px; image_size: ``(W, H)`` px or None; scores: ``(17,)`` or None.
+    """
+
+    input: str
+    kind: str
+    keypoints_2d: np.ndarray
+    absolute: np.ndarray
+    relative: np.ndarray
+    root: np.ndarray
+    canonical_depth: float
+    focal: tuple[float, float]
+    focal_source: str
+    principal_point: tuple[float, float]
+    image_size: tuple[int, int] | None
+    model: str
+    scores: np.ndarray | None = None
+    source_format: str = H36M17
+    num_people: int | None = None
+    detector: str | None = None
+    warnings: tuple[str, ...] = field(default=())
+    source: str = "detected"
+
+    def to_json(self) -> dict[str, Any]:
+        r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
+        return {
+            "input": self.input, "kind": self.kind, "model": self.model,
+            "joint_names": list(JOINT_NAMES),
+            "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
+                      "focal": "px", "principal_point": "px"},
+            "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the upright full-resolution image",
+            "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
+            "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
+            "focal": r(self.focal), "focal_source": self.focal_source, "principal_point": r(self.principal_point),
+            "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
+            "source": self.source, "source_format": self.source_format, "detector": self.detector,
+            "num_people": self.num_people,
+            "scores": None if self.scores is None else r(self.scores, 3), "warnings": list(self.warnings),
+        }
+
+
+
+
+@dataclass(frozen=True)
+class KeypointFile:
+    """A parsed keypoint JSON: ``keypoints (J, 2)`` px in ``format``; optional camera fields."""
+
+    keypoints: np.ndarray
+    format: str
+    image_size: tuple[int, int] | None = None
+    focal: np.ndarray | None = None
+    principal_point: np.ndarray | None = None
+    warnings: tuple[str, ...] = ()
+    source: str = "detected"
+
+
+def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(J, 2)`` px and optional ``(J,)`` confidences from ``[[x, y(, c)], ...]`` or a flat list."""
+    try:
+        a = np.asarray(raw, np.float64)
+    except (TypeError, ValueError):
+        raise PoseLifterError(f"{where}: 'keypoints' must be numbers") from None
+    if a.ndim == 1:
+        if a.size % 3 == 0 and (a.size // 3) in FORMAT_BY_COUNT:
+            a = a.reshape(-1, 3)
+        elif a.size % 2 == 0 and (a.size // 2) in FORMAT_BY_COUNT:
+            a = a.reshape(-1, 2)
+        else:
+            raise PoseLifterError(f"{where}: a flat keypoint list of {a.size} numbers is not J x 2 or J x 3 for "
+                                  f"J in {sorted(FORMAT_BY_COUNT)}")
+    if a.ndim != 2 or a.shape[1] not in (2, 3):
+        raise PoseLifterError(f"{where}: keypoints must be rows of [x, y] or [x, y, confidence], got shape {a.shape}")
+    conf = a[:, 2] if a.shape[1] == 3 else None
+    return a[:, :2], conf
+
+
+MAX_IMAGE_SIDE_PX: Final[int] = 100_000
+"""Largest image side (px) accepted for ``image_size``."""
+MAX_FOCAL_PX: Final[float] = 1e6
+"""Focal lengths (px) must be below this (a 1e6-px focal is a ~0.1 deg field of view on a 2000-px image)."""
+MAX_PRINCIPAL_POINT_PX: Final[float] = 1e6
+"""Principal-point coordinates (px) must be below this in magnitude."""
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+
+
+def _image_size_field(raw: Any, *, where: str) -> tuple[int, int] | None:
+    """``image_size`` of a keypoint file: ``[width, height]``, whole px in ``[1, MAX_IMAGE_SIDE_PX]``."""
+    if raw is None:
+        return None
+    form = f"[width, height] in px (whole numbers in [1, {MAX_IMAGE_SIDE_PX}])"
+    if not isinstance(raw, (list, tuple)):
+        raise PoseLifterError(f"{where}: image_size must be a list {form}, got {raw!r}")
+    if len(raw) != 2:
+        raise PoseLifterError(f"{where}: image_size needs two values {form}, got {len(raw)}: {list(raw)!r}")
+    if not all(_is_number(v) for v in raw):
+        raise PoseLifterError(f"{where}: image_size must be numbers {form}, got {list(raw)!r}")
+    if not all(math.isfinite(v) and float(v).is_integer() and 1 <= v <= MAX_IMAGE_SIDE_PX for v in raw):
+        raise PoseLifterError(f"{where}: image_size must be {form}, got {list(raw)!r}")
+    return int(raw[0]), int(raw[1])
+
+
+def _camera_field(raw: Any, *, name: str, where: str | None) -> np.ndarray:
+    """``focal`` (a number or ``[fx, fy]``, finite, in ``(0, MAX_FOCAL_PX)``) or ``principal_point``
+    (``[cx, cy]``, finite, magnitude below ``MAX_PRINCIPAL_POINT_PX``) of a keypoint file (``where``: its
+    path) or an option (``name``: the option, ``where=None``)."""
+    is_focal = name.lstrip("-") == "focal"
+    what = name if where is None else f"{where}: {name}"
+    form = (f"a number or [fx, fy] in px, each in (0, {MAX_FOCAL_PX:.0e})" if is_focal else
+            f"[cx, cy] in px, each finite with magnitude below {MAX_PRINCIPAL_POINT_PX:.0e}")
+    items = list(raw) if isinstance(raw, (list, tuple, np.ndarray)) else [raw]
+    if not all(_is_number(v) for v in items) or not (len(items) == 2 or (is_focal and len(items) == 1)):
+        raise PoseLifterError(f"{what} must be {form}, got {raw!r}")
+    arr = np.asarray(items * 2 if len(items) == 1 else items, np.float64)
+    ok = np.all(np.isfinite(arr)) and (bool(np.all((arr > 0) & (arr < MAX_FOCAL_PX))) if is_focal else
+                                       bool(np.all(np.abs(arr) < MAX_PRINCIPAL_POINT_PX)))
+    if not ok:
+        raise PoseLifterError(f"{what} must be {form}, got {arr.tolist()}")
+    return arr
+
+
+def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
+    """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
+    p = Path(path)
+    try:
+        d = json.loads(p.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PoseLifterError(f"{p}: cannot read ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise PoseLifterError(f"{p}: not valid JSON ({exc})") from None
+    notes: list[str] = []
+    fmt = default_format
+    people: list[Any]
+    meta: dict[str, Any] = {}
+    if isinstance(d, dict) and "people" in d:  # OpenPose output
+        people = [q.get("pose_keypoints_2d") for q in d["people"] if isinstance(q, dict)]
+        fmt = fmt or "openpose25"
+    elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
+        people = [q.get("keypoints") for q in d]
+        fmt = fmt or "coco17"
+    elif isinstance(d, dict) and "keypoints" in d:
+        people = [d["keypoints"]]
+        meta = d
+        fmt = d.get("format") or fmt
+    elif isinstance(d, list):
+        people = [d]
+    else:
+        raise PoseLifterError(f"{p}: expected an object with 'keypoints', a list of [x, y] rows, OpenPose "
+                              "'people' or a list of people")
+    people = [q for q in people if q is not None and len(q) > 0]
+    if not people:
+        raise PoseLifterError(f"{p}: no person in the keypoint file")
+    parsed = []
+    for q in people:
+        xy, conf = _rows(q, str(p))
+        missing = ~np.all(np.isfinite(xy), axis=1)
+        if conf is not None:
+            missing |= conf <= 0  # OpenPose / COCO mark undetected joints with confidence 0
+        parsed.append((xy, missing))
+    if len(parsed) > 1:
+        def area(item: tuple[np.ndarray, np.ndarray]) -> float:
+            xy, miss = item
+            ok = xy[~miss]
+            return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
+
+        parsed.sort(key=area, reverse=True)
+        notes.append(f"{len(parsed)} people in the file; using the largest")
+    xy, missing = parsed[0]
+    J = len(xy)
+    if fmt is None:
+        if J not in FORMAT_BY_COUNT:
+            raise PoseLifterError(f"{p}: {J} joints; give 'format' (one of {list(keypoint_formats())})")
+        fmt = FORMAT_BY_COUNT[J]
+        if J == 17:
+            notes.append("17 joints without 'format': assumed H36M order (use --format coco17 for COCO keypoints)")
+    f = get_format(fmt)
+    if J != f.num_joints:
+        raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {J}")
+    if missing.any():
+        # only the joints a rule uses are needed
+        used = sorted({k for rule in f.to_h36m for k, _ in rule})
+        bad = [f.joint_names[k] for k in used if missing[k]]
+        if bad:
+            raise PoseLifterError(f"{p}: joint(s) {bad} missing (confidence 0 or not finite); every joint the "
+                                  f"{fmt} -> h36m17 rules use must be given")
+        xy = np.where(missing[:, None], 0.0, xy)
+    image_size = _image_size_field(meta.get("image_size"), where=str(p))
+    focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
+    pp = None if meta.get("principal_point") is None else \
+        _camera_field(meta["principal_point"], name="principal_point", where=str(p))
+    source = meta.get("source", "detected")
+    if source not in ("detected", "clean"):
+        raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "
+                              f"(exact 2D: ground truth or hand-placed), got {source!r}")
+    return KeypointFile(keypoints=xy, format=fmt, image_size=image_size, focal=focal, principal_point=pp,
+                        warnings=tuple(notes), source=source)
+
+
+
+
+def write_json_atomic(path: str | Path, data: Any) -> Path:
+    """Write ``data`` as JSON to ``path`` through a temporary file in the same folder and a rename, so a full disk
+    or a crash never leaves a partial or empty file behind. Refuses to write through a symbolic link."""
+    path = Path(path)
+    if path.is_symlink():
+        raise PoseLifterError(f"{path}: is a symbolic link; refusing to write through it")
+    text = json.dumps(data, indent=1)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

@@ -1,0 +1,157 @@
+"""The shipped data: the weights registry and files, the 2D error-model fits and the demo samples.
+
+They are the package data of ``lifter.assets`` (the repository's ``assets/`` folder), read with
+:mod:`importlib.resources`, so an installed wheel works from any folder. ``$POSELIFTER_ASSETS`` points
+at another folder of the same layout instead.
+
+Registry (``models.json``)::
+
+    {"default": NAME, "models": {NAME: {"file": "weights/NAME.pt", "sha256": HEX, "description": ..., ...}}}
+
+Every shipped weights file has its sha256 there; :func:`weights_bytes` checks nothing itself, the
+checkpoint loader compares the hash before it reads the file (:func:`lifter.checkpoint.load_checkpoint`).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from importlib.abc import Traversable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._checks import PoseLifterError
+
+ENV_VAR = "POSELIFTER_ASSETS"
+REGISTRY = "models.json"
+
+
+def assets_root() -> Traversable:
+    """The folder holding the shipped data (``$POSELIFTER_ASSETS`` if set)."""
+    env = os.environ.get(ENV_VAR)
+    if env:
+        return Path(env)
+    try:
+        return resources.files("lifter.assets")
+    except ModuleNotFoundError:  # a source tree used without installing: assets/ beside lifter/
+        return Path(__file__).resolve().parent.parent / "assets"
+
+
+def asset(relative: str) -> Traversable:
+    """A shipped file by its path inside the assets folder (``"error_model/sh_mixture.json"``)."""
+    node = assets_root()
+    for part in Path(relative).parts:
+        node = node.joinpath(part)
+    return node
+
+
+def read_bytes(relative: str) -> bytes:
+    node = asset(relative)
+    if not node.is_file():
+        raise PoseLifterError(f"shipped file {relative!r} not found in {assets_root()} (a broken install? "
+                              f"reinstall poselifter, or set ${ENV_VAR} to an assets folder)")
+    return node.read_bytes()
+
+
+def _registry_text() -> str:
+    node = asset(REGISTRY)
+    if not node.is_file():
+        raise PoseLifterError(f"no shipped models: {REGISTRY} not found in {assets_root()} (reinstall poselifter, "
+                              f"or set ${ENV_VAR} to an assets folder)")
+    return node.read_text()
+
+
+@lru_cache(maxsize=4)
+def _parse_registry(text: str) -> dict[str, Any]:
+    try:
+        reg = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise PoseLifterError(f"{REGISTRY}: not valid JSON ({exc})") from None
+    if not isinstance(reg, dict) or not isinstance(reg.get("models"), dict) or reg.get("default") not in reg["models"]:
+        raise PoseLifterError(f"{REGISTRY}: expected {{'default': name, 'models': {{name: {{...}}}}}} with the default "
+                              "among the models")
+    return reg
+
+
+def registry() -> dict[str, Any]:
+    """The parsed ``models.json`` (read on every call, so ``$POSELIFTER_ASSETS`` changes are seen)."""
+    return _parse_registry(_registry_text())
+
+
+def model_names() -> list[str]:
+    return sorted(registry()["models"])
+
+
+def default_model_name() -> str:
+    return str(registry()["default"])
+
+
+def model_entry(name: str) -> dict[str, Any]:
+    reg = registry()
+    if name == "default":
+        name = reg["default"]
+    if name not in reg["models"]:
+        raise PoseLifterError(f"unknown model {name!r}; shipped models: {sorted(reg['models'])} or 'default' "
+                              "(to load your own checkpoint, pass its path: Lifter.load('path/to/model.pt'))")
+    return {"name": name, **reg["models"][name]}
+
+
+# ------------------------------------------------------------------------------------------------
+# Demo samples
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DemoSample:
+    """One shipped demo sample: an authored 3D pose rendered through a known camera (so its 2D is exact).
+
+    keypoints_2d: ``(17, 2)`` px, H36M joint order. pose_3d: ``(17, 3)`` mm, camera frame (OpenCV).
+    focal, principal_point: ``(2,)`` px. image_size: ``(width, height)`` px. R, t: world -> camera
+    (``X_cam = R X_world + t``, mm). image: the rendered photo as JPEG bytes.
+    """
+
+    name: str
+    keypoints_2d: np.ndarray
+    pose_3d: np.ndarray
+    focal: np.ndarray
+    principal_point: np.ndarray
+    image_size: tuple[int, int]
+    R: np.ndarray
+    t: np.ndarray
+    image: bytes
+
+
+@lru_cache(maxsize=1)
+def _demo_arrays() -> dict[str, np.ndarray]:
+    with np.load(io.BytesIO(read_bytes("demo/samples.npz"))) as d:
+        return {k: d[k] for k in d.files}
+
+
+def demo_sample_names() -> list[str]:
+    """Names of the shipped demo samples (``"walking"``, ...)."""
+    return [str(n) for n in _demo_arrays()["names"]]
+
+
+def demo_sample(name: str = "walking") -> DemoSample:
+    """A shipped demo sample by name (:func:`demo_sample_names`), e.g. to try the lifter without any data::
+
+        s = demo_sample("walking")
+        res = Lifter.from_pretrained().lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point,
+                                            source="clean")
+    """
+    names = demo_sample_names()
+    if name not in names:
+        raise PoseLifterError(f"unknown demo sample {name!r}; shipped: {names}")
+    d, i = _demo_arrays(), names.index(name)
+    w, h = (int(v) for v in d["image_size"][i])
+    return DemoSample(name=name, keypoints_2d=d["keypoints_2d"][i].astype(np.float64),
+                      pose_3d=d["pose_3d"][i].astype(np.float64), focal=d["focal"][i].astype(np.float64),
+                      principal_point=d["principal_point"][i].astype(np.float64), image_size=(w, h),
+                      R=d["R"][i].astype(np.float64), t=d["t"][i].astype(np.float64),
+                      image=read_bytes(f"demo/{name}.jpg"))

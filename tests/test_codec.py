@@ -1,0 +1,188 @@
+"""The codec's conventions: invariances that hold by construction, encode/decode round trips, flips,
+numpy/torch and dtype agreement, gradients, and shape checks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lifter import ModelConfig, PoseCodec
+from lifter.camera import flip_keypoints_2d, project, to_reference_camera
+from lifter.skeleton import mirror
+
+from conftest import random_pose_cam, tiny_lifter
+
+F = np.array([1145.0, 1143.0])
+C = np.array([512.0, 515.0])
+
+
+def _pose(seed: int = 0, n: int = 4) -> np.ndarray:
+    return random_pose_cam(np.random.default_rng(seed), n)
+
+
+def test_reference_camera_is_the_ray_times_f0():
+    pose = _pose()
+    kp = project(pose, focal=F, principal_point=C)
+    ref = to_reference_camera(kp, focal=F, principal_point=C)
+    np.testing.assert_allclose(ref, 1000.0 * pose[..., :2] / pose[..., 2:], rtol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(k=st.floats(0.1, 10.0), seed=st.integers(0, 10_000))
+def test_features_do_not_depend_on_image_resolution(k, seed):
+    """Scaling an image by k with its keypoints, focal length and principal point gives the same features."""
+    codec = PoseCodec(ModelConfig())
+    kp = project(_pose(seed), focal=F, principal_point=C)
+    a = codec.encode(kp, principal_point=C, focal=F).features
+    b = codec.encode(kp * k, principal_point=C * k, focal=F * k).features
+    np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(k=st.floats(0.25, 4.0), shift=st.tuples(st.floats(-400, 400), st.floats(-400, 400)), seed=st.integers(0, 10_000))
+def test_features_do_not_depend_on_focal_or_principal_point_for_the_same_scene(k, shift, seed):
+    """The same 3D seen by a camera of another focal length and principal point: identical features."""
+    codec = PoseCodec(ModelConfig())
+    pose = _pose(seed)
+    a = codec.encode(project(pose, focal=F, principal_point=C), principal_point=C, focal=F).features
+    c2 = C + np.asarray(shift)
+    b = codec.encode(project(pose, focal=F * k, principal_point=c2), principal_point=c2, focal=F * k).features
+    np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-10)
+
+
+def test_pixel_space_features_change_with_the_camera():
+    """The paper's layer reads pixels: a zoomed image gives other features (what zoom augmentation was for)."""
+    codec = PoseCodec(ModelConfig(input_space="pixel", conditioning="none"))
+    kp = project(_pose(), focal=F, principal_point=C)
+    a = codec.encode(kp, principal_point=C, focal=F).features
+    b = codec.encode(kp * 2, principal_point=C * 2, focal=F * 2).features
+    np.testing.assert_allclose(b[..., :34], a[..., :34], rtol=1e-9)  # the normalized pose is the same
+    np.testing.assert_allclose(b[..., 34:], 2 * a[..., 34:], rtol=1e-9)  # location and scale are not
+
+
+@pytest.mark.parametrize("space,target", [("camera", "canonical"), ("camera", "size"), ("pixel", "canonical"),
+                                          ("pixel", "absolute"), ("pixel", "size")])
+def test_targets_decode_back_to_the_3d(space, target):
+    """encode_targets then decode recovers the relative pose, the depth, the canonical depth and the root."""
+    codec = PoseCodec(ModelConfig(input_space=space, depth_target=target, conditioning="none"))
+    pose = _pose(n=6)
+    kp = project(pose, focal=F, principal_point=C)
+    enc = codec.encode(kp, principal_point=C, focal=F)
+    rel = pose - pose[:, :1]
+    raw = codec.encode_targets(rel, pose[:, 0, 2], enc)
+    assert raw.shape == (6, 49)
+    dec = codec.decode(raw, enc, root_2d=kp[:, 0], principal_point=C, focal=F)
+    np.testing.assert_allclose(dec.relative, rel, atol=1e-9)
+    np.testing.assert_allclose(dec.depth, pose[:, 0, 2], rtol=1e-12)
+    np.testing.assert_allclose(dec.canonical_depth, pose[:, 0, 2] * 1000.0 / np.sqrt(F.prod()), rtol=1e-12)
+    np.testing.assert_allclose(dec.root, pose[:, 0], rtol=1e-9)
+    np.testing.assert_allclose(codec.destandardize(codec.standardize(raw)), raw)
+
+
+def test_size_target_is_focal_invariant():
+    """``size`` = Z sigma / f: the same scene through another focal length has the same size target."""
+    codec = PoseCodec(ModelConfig(input_space="pixel", depth_target="size", conditioning="none"))
+    pose = _pose()
+    t = []
+    for k in (0.5, 1.0, 3.0):
+        kp = project(pose, focal=F * k, principal_point=C)
+        enc = codec.encode(kp, principal_point=C, focal=F * k)
+        t.append(codec.depth_parameter(pose[:, 0, 2], enc))
+    np.testing.assert_allclose(t[0], t[1], rtol=1e-9)
+    np.testing.assert_allclose(t[2], t[1], rtol=1e-9)
+
+
+def test_mirrored_input_has_the_image_flips_features():
+    """:meth:`PoseCodec.mirror_input` (about the principal point) and the image flip (x -> W - x, cx -> W - cx)
+    feed the network the same features, in both input spaces."""
+    kp = project(_pose(), focal=F, principal_point=C)
+    kp_f, c_f = flip_keypoints_2d(kp, image_width=1000, principal_point=C)
+    for cfg in (ModelConfig(), ModelConfig(input_space="pixel", conditioning="none")):
+        codec = PoseCodec(cfg)
+        a = codec.encode(PoseCodec.mirror_input(kp, C), principal_point=C, focal=F).features
+        b = codec.encode(kp_f, principal_point=c_f, focal=F).features
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9)
+
+
+def test_mirror_output_is_an_involution_on_poses():
+    raw = np.random.default_rng(0).normal(0, 300, (5, 49))
+    np.testing.assert_allclose(PoseCodec.mirror_output(PoseCodec.mirror_output(raw)), raw)
+    rel = np.concatenate([np.zeros((5, 1, 3)), raw[:, :48].reshape(5, 16, 3)], axis=1)
+    back = PoseCodec.mirror_output(raw)
+    np.testing.assert_allclose(back[:, :48].reshape(5, 16, 3), mirror(rel)[:, 1:])
+    np.testing.assert_array_equal(back[:, 48], raw[:, 48])
+
+
+def test_source_feature():
+    codec = PoseCodec(ModelConfig())
+    kp = project(_pose(), focal=F, principal_point=C)
+    d = codec.encode(kp, principal_point=C, focal=F).features
+    c = codec.encode(kp, principal_point=C, focal=F, source="clean").features
+    mixed = codec.encode(kp, principal_point=C, focal=F, source=np.array([True, False, True, False])).features
+    assert d.shape == (4, 38) and np.all(d[:, -1] == 0) and np.all(c[:, -1] == 1)
+    np.testing.assert_array_equal(mixed[:, -1], [1, 0, 1, 0])
+    np.testing.assert_array_equal(d[:, :-1], c[:, :-1])
+    with pytest.raises(ValueError, match="source must be one of"):
+        codec.encode(kp, principal_point=C, focal=F, source="gt")
+    assert PoseCodec(ModelConfig(conditioning="none")).encode(kp, principal_point=C, focal=F).features.shape == (4, 37)
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+def test_numpy_and_torch_agree(dtype):
+    codec = PoseCodec(ModelConfig(depth_target="size"), target_mean=np.arange(49.0), target_std=np.full(49, 3.0))
+    pose = _pose()
+    kp = project(pose, focal=F, principal_point=C)
+    enc_np = codec.encode(kp, principal_point=C, focal=F, source="clean")
+    t = lambda a: torch.tensor(a, dtype=dtype)  # noqa: E731
+    enc_t = codec.encode(t(kp), principal_point=t(C), focal=t(F), source="clean")
+    assert enc_t.features.dtype == dtype
+    tol = 1e-5 if dtype == torch.float32 else 1e-12
+    np.testing.assert_allclose(enc_t.features.numpy(), enc_np.features, rtol=tol, atol=tol)
+    raw = np.random.default_rng(1).normal(0, 1, (4, 49))
+    dec_np = codec.decode(codec.destandardize(raw), enc_np, root_2d=kp[:, 0], principal_point=C, focal=F)
+    dec_t = codec.decode(codec.destandardize(t(raw)), enc_t, root_2d=t(kp[:, 0]), principal_point=t(C), focal=t(F))
+    np.testing.assert_allclose(dec_t.root.numpy(), dec_np.root, rtol=max(tol, 1e-6), atol=1e-3)
+    np.testing.assert_allclose(dec_t.relative.numpy(), dec_np.relative, rtol=max(tol, 1e-6), atol=1e-4)
+
+
+def test_gradcheck_encode_and_decode():
+    """Encode and decode are differentiable (float64 gradcheck), e.g. for fitting 2D to a 3D target."""
+    codec = PoseCodec(ModelConfig(depth_target="size"))
+    kp = torch.tensor(project(_pose(n=2), focal=F, principal_point=C), dtype=torch.float64, requires_grad=True)
+    f = torch.tensor(F, dtype=torch.float64, requires_grad=True)
+    c = torch.tensor(C, dtype=torch.float64)
+    assert torch.autograd.gradcheck(lambda k, ff: codec.encode(k, principal_point=c, focal=ff).features, (kp, f))
+    raw = torch.randn(2, 49, dtype=torch.float64, requires_grad=True)
+
+    def dec(r: torch.Tensor, k: torch.Tensor) -> torch.Tensor:
+        enc = codec.encode(k, principal_point=c, focal=f)
+        return codec.decode(r, enc, root_2d=k[:, 0], principal_point=c, focal=f).root
+
+    assert torch.autograd.gradcheck(dec, (raw, kp))
+
+
+def test_shape_checks():
+    from lifter.normalization import pose_features
+
+    with pytest.raises(ValueError, match=r"\(\.\.\., J, 2\)"):
+        pose_features(np.zeros((17, 3)))
+    with pytest.raises(ValueError, match=r"\(\.\.\., 17, 2 or 3\)"):
+        mirror(np.zeros((16, 3)))
+    with pytest.raises(ValueError, match="target statistics"):
+        PoseCodec(ModelConfig(), target_mean=np.zeros(48))
+
+
+@settings(max_examples=25, deadline=None)
+@given(k=st.floats(0.1, 10.0), seed=st.integers(0, 1000))
+def test_lift_is_resolution_invariant(k, seed):
+    """The property the product promises: a scaled image with scaled intrinsics lifts to the same root and pose
+    (within 0.5 %; in practice float32 rounding)."""
+    lifter = tiny_lifter(64)
+    kp = project(_pose(seed, n=3), focal=F, principal_point=C)
+    a = lifter.lift(kp, focal=F, principal_point=C)
+    b = lifter.lift(kp * k, focal=F * k, principal_point=C * k)
+    np.testing.assert_allclose(b.root, a.root, rtol=5e-3)
+    np.testing.assert_allclose(b.relative, a.relative, rtol=5e-3, atol=0.05)
