@@ -17,9 +17,9 @@ to ``assets/demo/`` (``samples.npz`` + one JPEG per sample); :func:`load_demo_sa
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import cv2
 import numpy as np

@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 
 from lifter import Camera, DemoSample, PoseLifterError, demo_sample, demo_sample_names
-from lifter.keypoints import convert
 from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
+from lifter.keypoints import convert
 
 
 @dataclass(frozen=True)

@@ -26,20 +26,29 @@ import json
 import math
 import re
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Final
+from typing import Any, Final
 
 import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
-from lifter.detect import (DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, ExifCamera, LoadedImage, MissingDependencyError,
-                           PoseEstimator2D, guess_focal, load_image)
+from lifter.detect import (
+    DEFAULT_MAX_SIDE_PX,
+    IMAGE_SUFFIXES,
+    ExifCamera,
+    LoadedImage,
+    MissingDependencyError,
+    PoseEstimator2D,
+    guess_focal,
+    load_image,
+)
 from lifter.io import LiftRecord, parse_keypoint_json
-from lifter.pipeline import lift_image
 from lifter.keypoints import H36M17, convert
+from lifter.pipeline import lift_image
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .drawing import canvas

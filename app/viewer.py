@@ -26,9 +26,10 @@ import logging
 import threading
 import time
 import traceback
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator, NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 import viser
@@ -37,12 +38,26 @@ import viser.transforms as vtf
 from lifter import PoseLifterError
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
 
-from .core import (CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX, Frame, LifterPool,
-                   SessionState, clamp_focal, clamp_joint, clamp_noise, compute_frame, focal_max, readout_markdown)
+from . import upload as up
+from .core import (
+    CLOUD_SAMPLES,
+    DEFAULT_SEED,
+    FOCAL_MAX_PX,
+    FOCAL_MIN_PX,
+    NOISE_MAX,
+    Frame,
+    LifterPool,
+    SessionState,
+    clamp_focal,
+    clamp_joint,
+    clamp_noise,
+    compute_frame,
+    focal_max,
+    readout_markdown,
+)
 from .drawing import COLORS, overlay, scaled_base
 from .noise import ErrorModelLike, default_error_model, model_name
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
-from . import upload as up
 
 log = logging.getLogger("poselifter.app")
 
@@ -90,7 +105,7 @@ def control(func: Callable[..., Any]) -> Callable[..., bool]:
     the view sets a GUI value itself (:meth:`SessionView._set_gui`) are ignored."""
 
     @functools.wraps(func)
-    def wrapper(self: "SessionView", *args: Any, **kwargs: Any) -> bool:
+    def wrapper(self: SessionView, *args: Any, **kwargs: Any) -> bool:
         if self._suspend:  # a GUI echo of our own _set_gui, not a user action
             return True
         n = self._message_count
@@ -127,7 +142,7 @@ class SessionView:
     in code form; the GUI callbacks call them.
     """
 
-    def __init__(self, app: "PoseLifterApp", target: viser.ClientHandle | viser.ViserServer) -> None:
+    def __init__(self, app: PoseLifterApp, target: viser.ClientHandle | viser.ViserServer) -> None:
         self.app = app
         self.target = target
         self.gui = target.gui

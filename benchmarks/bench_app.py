@@ -34,7 +34,6 @@ def main() -> int:
 
     import torch
     import viser
-
     from poselifter_app.testing import FakeTab, local_server, wait_for
     from poselifter_app.viewer import PoseLifterApp
 

@@ -28,9 +28,9 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", str(_thread_args().threads))
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
+import lifter.api as api  # noqa: E402
 from lifter import Lifter  # noqa: E402
 from lifter.camera import project  # noqa: E402
-import lifter.api as api  # noqa: E402
 
 
 def flops_per_pose(net: torch.nn.Module) -> int:

@@ -8,7 +8,7 @@ Data flows one way: 2D keypoints (px) -> :mod:`lifter.codec` (reference camera, 
 
 from ._checks import CheckpointError, PoseLifterError
 from .analytic import analytic_root
-from .api import LiftResult, Lifter, available_models
+from .api import Lifter, LiftResult, available_models
 from .camera import (
     CANONICAL_FOCAL,
     DEFAULT_DIAGONAL_FOV_DEG,
@@ -29,8 +29,8 @@ from .keypoints import KEYPOINT_FORMATS, convert
 from .metrics import auc, mpjpe, pa_mpjpe, pck, root_errors
 from .model import ModelConfig, PoseLifterNet
 from .noise import ErrorModel
-from .resources import DemoSample, demo_sample, demo_sample_names
 from .normalization import location_and_scale, normalize_keypoints, pose_features, pose_scale
+from .resources import DemoSample, demo_sample, demo_sample_names
 from .skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, NUM_JOINTS, PARENTS, mirror
 
 __all__ = [

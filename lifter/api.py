@@ -126,17 +126,17 @@ class Lifter:
 
     # -- construction --------------------------------------------------------------------------------
     @classmethod
-    def _from(cls, ck: Checkpoint, name: str, quantize: bool) -> "Lifter":
+    def _from(cls, ck: Checkpoint, name: str, quantize: bool) -> Lifter:
         lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
-    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False) -> "Lifter":
+    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False) -> Lifter:
         """Load your own checkpoint file (``weights_only=True``; :mod:`lifter.checkpoint`)."""
         return cls._from(load_checkpoint(path), name or Path(path).stem, quantize)
 
     @classmethod
-    def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> "Lifter":
+    def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> Lifter:
         """Shipped weights by name (``"default"``, or one of :func:`available_models`), checked against their
         sha256; or a checkpoint path (``.pt``) of your own. ``quantize=True``: see :meth:`quantized`."""
         ref = str(name)
@@ -151,7 +151,7 @@ class Lifter:
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
 
-    def quantized(self) -> "Lifter":
+    def quantized(self) -> Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the
         block weight memory. It always runs the torch module. The stem and head stay float32."""
         net = copy.deepcopy(self.net)

@@ -243,7 +243,7 @@ class Camera:
             return project(points_cam, focal=self.focal, principal_point=self.principal_point, k=self.k, p=self.p)
         return project(points_cam, focal=self.focal, principal_point=self.principal_point)
 
-    def flipped(self) -> "Camera":
+    def flipped(self) -> Camera:
         """The mirror camera: ``cx -> W - cx`` and ``p2 -> -p2``, so that projecting a
         :func:`flip_pose_3d` pose gives exactly the :func:`flip_keypoints_2d` keypoints, with distortion."""
         return Camera(
@@ -258,7 +258,7 @@ class Camera:
             name=self.name + " (flipped)",
         )
 
-    def scaled(self, factor: float) -> "Camera":
+    def scaled(self, factor: float) -> Camera:
         """The camera with focal length and principal point (and image size) scaled by ``factor`` (zoom)."""
         return Camera(
             focal=(self.focal[0] * factor, self.focal[1] * factor),

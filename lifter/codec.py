@@ -114,7 +114,7 @@ class PoseCodec:
                 "target_std": torch.tensor(self.target_std, dtype=torch.float64)}
 
     @classmethod
-    def from_state_dict(cls, config: ModelConfig, state: dict[str, Any]) -> "PoseCodec":
+    def from_state_dict(cls, config: ModelConfig, state: dict[str, Any]) -> PoseCodec:
         return cls(config, target_mean=np.asarray(state["target_mean"]), target_std=np.asarray(state["target_std"]))
 
     # -- inputs ---------------------------------------------------------------------------------------

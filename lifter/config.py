@@ -172,12 +172,12 @@ class TrainConfig:
         return json.dumps(self.to_dict(), indent=1)
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "TrainConfig":
+    def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
         """Build from nested dicts (missing keys take their defaults; unknown keys are refused)."""
         return _build(cls, d, "train config")
 
     @classmethod
-    def load(cls, path: str | Path) -> "TrainConfig":
+    def load(cls, path: str | Path) -> TrainConfig:
         """A run's config from a JSON file or from a checkpoint (``.pt``) that stored one."""
         p = Path(path)
         if not p.is_file():

@@ -16,9 +16,9 @@ from __future__ import annotations
 import json
 import os
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Iterable, Sequence
 
 import numpy as np
 
@@ -112,14 +112,14 @@ class PoseSamples:
         """``(N,)`` mm at F0 = 1000 px: the canonical root depth target."""
         return canonical_depth_from_depth(self.pose_3d[:, 0, 2], focal=self.focal).astype(np.float32)
 
-    def subset(self, index: np.ndarray) -> "PoseSamples":
+    def subset(self, index: np.ndarray) -> PoseSamples:
         kw = {f.name: getattr(self, f.name) for f in fields(self)}
         for k, v in kw.items():
             if isinstance(v, np.ndarray):
                 kw[k] = v[index]
         return PoseSamples(**kw)
 
-    def with_keypoints(self, keypoints_2d: np.ndarray) -> "PoseSamples":
+    def with_keypoints(self, keypoints_2d: np.ndarray) -> PoseSamples:
         """A copy whose 2D inputs are replaced (e.g. by detections or noisy 2D)."""
         kw = {f.name: getattr(self, f.name) for f in fields(self)}
         kw["keypoints_2d"] = np.asarray(keypoints_2d, np.float32)

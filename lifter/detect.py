@@ -55,9 +55,10 @@ import math
 import os
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Final, Protocol, runtime_checkable
+from typing import Any, Final, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -138,7 +139,7 @@ class ExifCamera:
     pixel_y: int | None = None
 
     @classmethod
-    def from_pil(cls, img: Any) -> "ExifCamera":
+    def from_pil(cls, img: Any) -> ExifCamera:
         """Read the fields from a PIL image's EXIF (missing or malformed fields become None)."""
         try:
             ifd = img.getexif().get_ifd(_EXIF_IFD)
@@ -335,7 +336,7 @@ class Detection:
         """Box area, px^2."""
         return float(self.bbox_xywh[2] * self.bbox_xywh[3])
 
-    def scaled(self, factor: float) -> "Detection":
+    def scaled(self, factor: float) -> Detection:
         """The detection with coordinates multiplied by ``factor`` (to map a downscaled image back)."""
         return Detection(keypoints=self.keypoints * factor, scores=self.scores, bbox_xywh=self.bbox_xywh * factor,
                          keypoint_format=self.keypoint_format)
@@ -462,7 +463,7 @@ class BlazePoseEstimator:
     def close(self) -> None:
         self._pose.close()
 
-    def __enter__(self) -> "BlazePoseEstimator":
+    def __enter__(self) -> BlazePoseEstimator:
         return self
 
     def __exit__(self, *exc: Any) -> None:

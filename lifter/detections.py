@@ -8,15 +8,15 @@ Pixels; converted from the detector's 16 joints with :func:`lifter.keypoints.con
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
 from ._checks import PoseLifterError
-from .data import CAMERA_IDS, H36M, PoseSamples
+from .data import CAMERA_IDS, H36M
 from .keypoints import convert, get_format
-
 
 SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
 

@@ -91,8 +91,9 @@ a little differently, so treat its errors as indicative. The 84 frames are 5 sub
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Final, Sequence
+from typing import Any, Final
 
 import numpy as np
 

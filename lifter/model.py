@@ -88,7 +88,7 @@ class ModelConfig:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "ModelConfig":
+    def from_dict(cls, d: dict[str, Any]) -> ModelConfig:
         """Build from a dict, refusing unknown keys (all checks run before any network is built)."""
         if not isinstance(d, dict):
             raise PoseLifterError(f"model config must be a dict, got {type(d).__name__}")

@@ -56,7 +56,7 @@ import json
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -254,7 +254,7 @@ class ErrorModel:
 
     # -- construction ---------------------------------------------------------------------------
     @classmethod
-    def standin(cls) -> "ErrorModel":
+    def standin(cls) -> ErrorModel:
         """The documented stand-in: zero-mean Gaussian, 8 px per axis at scale 100 px, no outliers."""
         J = NUM_JOINTS
         return cls(gamma=np.ones(J), mu=np.zeros((J, 2)), sigma=np.full((J, 2), STANDIN_SIGMA_PX),
@@ -263,7 +263,7 @@ class ErrorModel:
                           "no outliers")
 
     @classmethod
-    def default(cls) -> "ErrorModel":
+    def default(cls) -> ErrorModel:
         """The shipped fit (``error_model/sh_mixture.json`` of :mod:`lifter.resources`), or :meth:`standin` if it is
         absent. A present but unreadable file is an error, not a silent fallback."""
         node = assets.asset(f"error_model/{DEFAULT_ASSET_NAME}")
@@ -272,7 +272,7 @@ class ErrorModel:
         return cls.standin()
 
     @classmethod
-    def shipped(cls, name: str) -> "ErrorModel":
+    def shipped(cls, name: str) -> ErrorModel:
         """A shipped fit by name (``"sh_mixture"``, ``"blazepose_demo"``, ...)."""
         node = assets.asset(f"error_model/{name}.json")
         if not node.is_file():
@@ -280,14 +280,14 @@ class ErrorModel:
         return cls.from_json(node.read_text())
 
     @classmethod
-    def resolve(cls, ref: str) -> "ErrorModel":
+    def resolve(cls, ref: str) -> ErrorModel:
         """A shipped fit name or a JSON file path."""
         if ref.endswith(".json") or Path(ref).is_file():
             return cls.load(ref)
         return cls.shipped(ref)
 
     @classmethod
-    def load(cls, path: str | Path) -> "ErrorModel":
+    def load(cls, path: str | Path) -> ErrorModel:
         try:
             text = Path(path).read_text()
         except (OSError, UnicodeDecodeError) as exc:
@@ -300,7 +300,7 @@ class ErrorModel:
         path.write_text(self.to_json())
         return path
 
-    def baseline(self) -> "ErrorModel":
+    def baseline(self) -> ErrorModel:
         """The single-Gaussian baseline as an :class:`ErrorModel` (gamma = 1: every joint gets
         ``N(gaussian_mu, gaussian_sigma^2)``), for the Table 3 "single Gaussian" row."""
         if self.gaussian_mu is None or self.gaussian_sigma is None:
@@ -336,7 +336,7 @@ class ErrorModel:
         return json.dumps(self.to_dict(), indent=1)
 
     @classmethod
-    def from_json(cls, text: str) -> "ErrorModel":
+    def from_json(cls, text: str) -> ErrorModel:
         try:
             d = json.loads(text)
         except json.JSONDecodeError as exc:

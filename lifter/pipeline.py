@@ -16,10 +16,9 @@ import numpy as np
 
 from ._checks import PoseLifterError, as_pair
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
-from .detect import (DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_pose, guess_focal, load_image)
+from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_pose, guess_focal, load_image
 from .io import LiftRecord, parse_keypoint_json
 from .keypoints import convert
-
 
 
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,

@@ -42,8 +42,7 @@ sys.path.insert(0, str(ROOT))
 from lifter.api import ASSETS_DIR, Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import DEFAULT_DIAGONAL_FOV_DEG, default_focal, get_estimator, load_image  # noqa: E402
-from lifter.keypoints import (BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES,  # noqa: E402
-                              convert)
+from lifter.keypoints import BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES, convert  # noqa: E402
 from lifter.metrics import joint_errors, mpjpe, pa_mpjpe, root_errors  # noqa: E402
 from lifter.noise import ErrorModel, fit_error_model, mixture_loglik, normalized_errors  # noqa: E402
 from lifter.skeleton import JOINT_NAMES  # noqa: E402

@@ -7,13 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from conftest import random_pose_cam, tiny_lifter
 
-from lifter import Lifter, LiftResult, ModelConfig, PoseLifterError, PoseLifterNet
+from lifter import Lifter, LiftResult, PoseLifterError
+from lifter._checks import CheckpointError
 from lifter.camera import project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
-from lifter._checks import CheckpointError
-
-from conftest import random_pose_cam, tiny_lifter, tiny_net
 
 
 @pytest.fixture(scope="module", params=["camera", "pixel"])

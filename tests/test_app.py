@@ -14,13 +14,10 @@ from lifter import project
 viser = pytest.importorskip("viser")
 
 from conftest import require_shipped_models  # noqa: E402
-
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
 from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, ZOOM_JOINT_RADIUS, PoseLifterApp, SessionView  # noqa: E402
-
-
 
 
 def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
@@ -382,9 +379,9 @@ def test_rejected_seed_puts_the_box_back(view: SessionView) -> None:
 
 
 def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp) -> None:
-    from lifter import PoseLifterError
-
     from poselifter_app.core import SessionState
+
+    from lifter import PoseLifterError
 
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
     assert view.state.input_kind == "detected" and view.input_dd.value == "detected"

@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-
 viser = pytest.importorskip("viser")
 
 
@@ -20,6 +19,7 @@ from poselifter_app import upload as up  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
+
 from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_available  # noqa: E402
 from lifter.io import LiftRecord  # noqa: E402
 
@@ -89,10 +89,10 @@ def test_noise_slider_uses_the_shipped_error_model(app: PoseLifterApp) -> None:
 
 
 def test_h36m_detections_use_the_library_converter() -> None:
-    from poselifter_app.samples import default_h36m_root, open_h36m
-    from lifter.keypoints import convert
-
     import poselifter_app.samples as samples
+    from poselifter_app.samples import default_h36m_root, open_h36m
+
+    from lifter.keypoints import convert
 
     assert not hasattr(samples, "sh16_to_h36m17") and not hasattr(samples, "SH16_TO_H36M17")
     root = default_h36m_root()

@@ -6,14 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from conftest import random_pose_cam, tiny_lifter
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lifter import ModelConfig, PoseCodec
 from lifter.camera import flip_keypoints_2d, project, to_reference_camera
 from lifter.skeleton import mirror
-
-from conftest import random_pose_cam, tiny_lifter
 
 F = np.array([1145.0, 1143.0])
 C = np.array([512.0, 515.0])

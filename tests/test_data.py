@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import H36M_DIR, requires_h36m
 
 from lifter.camera import flip_keypoints_2d, flip_pose_3d, project
 from lifter.data import ACTIONS, CAMERA_IDS, PROTOCOLS, action_of
-
-from conftest import H36M_DIR, requires_h36m
 
 
 def test_action_names():

@@ -11,14 +11,24 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import H36M_DIR
 
 from lifter import PoseLifterError
-from lifter.keypoints import (BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, HEAD_TOP_W, HIP_WIDEN, NECK_NOSE_W,
-                              OPENPOSE25_JOINT_NAMES, PELVIS_UP, SPINE_UP, THORAX_DOWN, convert, get_format,
-                              keypoint_formats)
+from lifter.keypoints import (
+    BLAZEPOSE33_JOINT_NAMES,
+    COCO17_JOINT_NAMES,
+    HEAD_TOP_W,
+    HIP_WIDEN,
+    NECK_NOSE_W,
+    OPENPOSE25_JOINT_NAMES,
+    PELVIS_UP,
+    SPINE_UP,
+    THORAX_DOWN,
+    convert,
+    get_format,
+    keypoint_formats,
+)
 from lifter.skeleton import JOINT_NAMES
-
-from conftest import H36M_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 FORMATS = {"blazepose33": BLAZEPOSE33_JOINT_NAMES, "coco17": COCO17_JOINT_NAMES, "openpose25": OPENPOSE25_JOINT_NAMES}

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import random_pose_cam
 
 from lifter import PoseLifterError
 from lifter.export import bvh_text, from_y_up, read_bvh, read_glb_joints, to_y_up, write_bvh, write_glb
 from lifter.skeleton import EDGES, JOINT_NAMES
-
-from conftest import random_pose_cam
 
 
 @pytest.fixture()

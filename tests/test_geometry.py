@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import random_pose_cam
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lifter import camera as cam
 from lifter.normalization import normalize_keypoints, pose_scale
 from lifter.skeleton import EDGES, FLIP_PERMUTATION, JOINT_NAMES, LEFT_RIGHT_PAIRS, PARENTS
-
-from conftest import random_pose_cam
 
 finite = dict(allow_nan=False, allow_infinity=False)
 

@@ -20,7 +20,6 @@ from lifter.keypoints import (
 )
 from lifter.skeleton import JOINT_NAMES
 
-
 SH = {n: i for i, n in enumerate(SH16_JOINT_NAMES)}
 H = {n: i for i, n in enumerate(JOINT_NAMES)}
 

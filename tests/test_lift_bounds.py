@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from conftest import random_pose_cam, tiny_lifter
 
 from lifter import Lifter, PoseLifterError
 from lifter.camera import project
-
-from conftest import random_pose_cam, tiny_lifter
 
 
 @pytest.fixture()

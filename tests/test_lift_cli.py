@@ -11,21 +11,28 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import random_pose_cam, tiny_lifter
 
 from lifter import Lifter, PoseLifterError
-from lifter.camera import project
-from lifter.checkpoint import save_checkpoint
-from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, project
 from lifter.camera import focal_from_fov as default_focal
-from lifter.detect import (Detection, ExifCamera, ImageError, bbox_of, detect_pose, focal_from_exif, image_from_array,
-                           load_image, register_estimator)
-from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
+from lifter.checkpoint import save_checkpoint
 from lifter.cli import main
 from lifter.cli.lift import output_names
+from lifter.detect import (
+    Detection,
+    ExifCamera,
+    ImageError,
+    bbox_of,
+    detect_pose,
+    focal_from_exif,
+    image_from_array,
+    load_image,
+    register_estimator,
+)
 from lifter.io import parse_keypoint_json
+from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
 from lifter.skeleton import JOINT_NAMES
-
-from conftest import random_pose_cam, tiny_lifter
 
 Image = pytest.importorskip("PIL.Image")
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import random_pose_cam
 
 from lifter.analytic import analytic_root
 from lifter.camera import project
 from lifter.metrics import auc, mpjpe, pa_mpjpe, pck, pck_curve, procrustes_align, root_errors
-
-from conftest import random_pose_cam
 
 
 def _rotation(rng):

@@ -8,6 +8,7 @@ import pytest
 import torch
 
 from lifter import PoseLifterError
+from lifter.detections import load_sh_detections
 from lifter.noise import (
     ErrorModel,
     fit_gaussian,
@@ -15,9 +16,7 @@ from lifter.noise import (
     mixture_loglik,
     outlier_probability,
 )
-from lifter.detections import load_sh_detections
 from lifter.normalization import pose_scale
-
 
 
 def synthetic_errors(rng: np.random.Generator, n: int, gamma: float, mu, sigma, box: float = 100.0) -> np.ndarray:

@@ -9,12 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from conftest import random_pose_cam
 
 from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet
 from lifter.camera import project
 from lifter.model import forward_numpy
-
-from conftest import random_pose_cam
 
 PP = (512.0, 515.0)
 

@@ -6,13 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import requires_h36m
 
 from lifter import CheckpointError, Lifter, available_models
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
 from lifter.resources import asset, registry
-
-from conftest import requires_h36m
 
 ROOT = Path(__file__).resolve().parents[1]
 # Tolerance: the slice is re-evaluated with the same weights; differences come only from float

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from conftest import random_pose_cam, requires_h36m
 
 from lifter.api import Lifter
 from lifter.codec import PoseCodec
@@ -23,10 +24,16 @@ from lifter.evaluate import evaluate_lifter
 from lifter.loss import poselifter_loss
 from lifter.model import ModelConfig
 from lifter.skeleton import mirror
-from lifter.train import (Dist, WeightAverage, flip_batch, make_batch, samples_to_tensors, target_statistics, train,
-                          validation_sets)
-
-from conftest import random_pose_cam, requires_h36m
+from lifter.train import (
+    Dist,
+    WeightAverage,
+    flip_batch,
+    make_batch,
+    samples_to_tensors,
+    target_statistics,
+    train,
+    validation_sets,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 from .._checks import PoseLifterError
 from . import evaluate, fit_noise, lift, train

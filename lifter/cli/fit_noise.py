@@ -80,8 +80,8 @@ def run_fit_noise(args: argparse.Namespace) -> int:
     import torch
 
     from ..data import H36M, PROTOCOLS
-    from ..keypoints import convert
     from ..detections import SH_DETECTIONS_FILE, detection_alignment_check, load_sh_detections
+    from ..keypoints import convert
     from ..noise import fit_error_model
 
     torch.set_num_threads(args.threads)

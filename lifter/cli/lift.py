@@ -53,7 +53,6 @@ from ..io import _camera_field, write_json_atomic
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
 
-
 # ------------------------------------------------------------------------------------------------
 # Batch
 # ------------------------------------------------------------------------------------------------
