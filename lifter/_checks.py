@@ -27,13 +27,27 @@ def _untorch(x: Any) -> Any:
     return x
 
 
+def _real_array(x: Any, *, name: str, what: str) -> np.ndarray:
+    """``x`` as float64, refusing complex numbers, booleans and anything non-numeric with a clear message."""
+    x = _untorch(x)
+    try:
+        raw = np.asarray(x)
+    except (TypeError, ValueError, RuntimeError) as exc:
+        raise PoseLifterError(f"{name}: could not convert to {what} ({exc})") from None
+    if np.iscomplexobj(raw):
+        raise PoseLifterError(f"{name}: complex numbers are not pixel coordinates; pass real values")
+    if raw.dtype == bool:
+        raise PoseLifterError(f"{name}: booleans are not pixel coordinates; pass numbers")
+    try:
+        return np.asarray(raw, dtype=np.float64)
+    except (TypeError, ValueError, RuntimeError) as exc:
+        raise PoseLifterError(f"{name}: could not convert to {what} ({exc})") from None
+
+
 def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
     """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error.
     Torch tensors are accepted (detached and copied to the CPU)."""
-    try:
-        arr = np.asarray(_untorch(x), dtype=np.float64)
-    except (TypeError, ValueError, RuntimeError) as exc:
-        raise PoseLifterError(f"{name}: could not convert to a numeric array ({exc})") from None
+    arr = _real_array(x, name=name, what="a numeric array")
     expected = f"(..., {num_joints if num_joints is not None else 'J'}, {dim})"
     if arr.ndim < 2 or arr.shape[-1] != dim or (num_joints is not None and arr.shape[-2] != num_joints):
         hint = ""
@@ -52,10 +66,7 @@ def check_finite(arr: np.ndarray, *, name: str) -> None:
 
 def as_pair(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
     """Return a scalar or a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``."""
-    try:
-        arr = np.asarray(_untorch(x), dtype=np.float64)
-    except (TypeError, ValueError, RuntimeError) as exc:
-        raise PoseLifterError(f"{name}: could not convert to a number or pair ({exc})") from None
+    arr = _real_array(x, name=name, what="a number or pair")
     if arr.ndim == 0:
         arr = np.stack([arr, arr])
     elif arr.shape[-1] == 1:

@@ -226,6 +226,27 @@ class LoadedImage:
     notes: tuple[str, ...] = ()
 
 
+def _to_rgb8(img: Any) -> Any:
+    """An 8-bit RGB copy of a PIL image. 16- and 32-bit greyscale (``I;16``, ``I``, ``F``) are rescaled from their
+    value range (Pillow's own ``convert("RGB")`` clips them, so a 16-bit PNG turns all white); alpha is
+    composited on white; palette, CMYK and the rest go through Pillow's conversion."""
+    from PIL import Image
+
+    if img.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
+        a = np.asarray(img, np.float64)
+        lo, hi = float(np.nanmin(a)), float(np.nanmax(a))
+        full = 65535.0 if img.mode.startswith("I;16") else (hi if hi > 255 else 255.0)
+        scale = 255.0 / full if hi <= full else 255.0 / max(hi - lo, 1e-9)
+        base = 0.0 if hi <= full else lo
+        g = np.clip((a - base) * scale, 0, 255).astype(np.uint8)
+        return Image.fromarray(np.stack([g, g, g], axis=-1), "RGB")
+    if img.mode in ("RGBA", "LA", "PA") or (img.mode == "P" and "transparency" in img.info):
+        rgba = img.convert("RGBA")
+        bg = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
+        return Image.alpha_composite(bg, rgba).convert("RGB")
+    return img if img.mode == "RGB" else img.convert("RGB")
+
+
 def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE_PX,
                max_pixels: int = MAX_IMAGE_PIXELS) -> LoadedImage:
     """Open and decode an image file, apply the EXIF orientation and downscale it so that its longer
@@ -273,8 +294,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     if orientation != 1:
         img = ImageOps.exif_transpose(img)
         notes.append(f"rotated upright per EXIF orientation {orientation}")
-    if img.mode != "RGB":
-        img = img.convert("RGB")
+    img = _to_rgb8(img)
     w, h = img.size
     if max(w, h) > max_side:
         s = max_side / max(w, h)

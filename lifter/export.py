@@ -27,6 +27,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError, as_points
+from .io import write_atomic
 from .skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, PARENTS, joint_side
 
 _Y_UP: Final[np.ndarray] = np.diag([1.0, -1.0, -1.0])
@@ -84,8 +85,7 @@ def write_glb(pose: Any, path: str | os.PathLike[str], **kwargs: Any) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     data = skeleton_scene(pose, **kwargs).export(file_type="glb")
-    path.write_bytes(data)
-    return path
+    return write_atomic(path, data)
 
 
 def read_glb_joints(path: str | os.PathLike[str]) -> np.ndarray:
@@ -157,8 +157,7 @@ def write_bvh(pose: Any, path: str | os.PathLike[str], *, units: str = "cm") -> 
     """Write ``pose`` ``(17, 3)`` mm (camera frame) as a BVH file (module docstring)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(bvh_text(pose, units=units))
-    return path
+    return write_atomic(path, bvh_text(pose, units=units))
 
 
 def _rot(axis: str, deg: float) -> np.ndarray:

@@ -96,24 +96,44 @@ class KeypointFile:
     source: str = "detected"
 
 
+MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
+"""Keypoint JSON files larger than this are refused before they are parsed."""
+
+
+def _is_row(v: Any) -> bool:
+    return isinstance(v, list) and len(v) in (2, 3) and all(_is_number(x) or x is None for x in v)
+
+
 def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
-    """``(J, 2)`` px and optional ``(J,)`` confidences from ``[[x, y(, c)], ...]`` or a flat list."""
-    try:
-        a = np.asarray(raw, np.float64)
-    except (TypeError, ValueError):
-        raise PoseLifterError(f"{where}: 'keypoints' must be numbers") from None
-    if a.ndim == 1:
-        if a.size % 3 == 0 and (a.size // 3) in FORMAT_BY_COUNT:
-            a = a.reshape(-1, 3)
-        elif a.size % 2 == 0 and (a.size // 2) in FORMAT_BY_COUNT:
-            a = a.reshape(-1, 2)
+    """``(J, 2)`` px and optional ``(J,)`` confidences from ``[[x, y(, c)], ...]`` or a flat list of numbers.
+    ``null`` coordinates mean a missing joint (NaN)."""
+    form = "a list of [x, y] or [x, y, confidence] rows, or a flat list of numbers"
+    if not isinstance(raw, list):
+        raise PoseLifterError(f"{where}: 'keypoints' must be {form}, got {type(raw).__name__} {_short(raw)}")
+    if raw and all(_is_number(v) or v is None for v in raw):
+        flat = np.array([np.nan if v is None else v for v in raw], np.float64)
+        n = flat.size
+        if n % 3 == 0 and (n // 3) in FORMAT_BY_COUNT:
+            a = flat.reshape(-1, 3)
+        elif n % 2 == 0 and (n // 2) in FORMAT_BY_COUNT:
+            a = flat.reshape(-1, 2)
         else:
-            raise PoseLifterError(f"{where}: a flat keypoint list of {a.size} numbers is not J x 2 or J x 3 for "
+            raise PoseLifterError(f"{where}: a flat keypoint list of {n} numbers is not J x 2 or J x 3 for "
                                   f"J in {sorted(FORMAT_BY_COUNT)}")
-    if a.ndim != 2 or a.shape[1] not in (2, 3):
-        raise PoseLifterError(f"{where}: keypoints must be rows of [x, y] or [x, y, confidence], got shape {a.shape}")
+    elif raw and all(_is_row(r) for r in raw):
+        if len({len(r) for r in raw}) != 1:
+            raise PoseLifterError(f"{where}: keypoint rows must all have 2 or all have 3 values")
+        a = np.array([[np.nan if v is None else v for v in r] for r in raw], np.float64)
+    else:
+        bad = next((r for r in raw if not (_is_row(r) or _is_number(r))), None) if raw else None
+        raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}")
     conf = a[:, 2] if a.shape[1] == 3 else None
     return a[:, :2], conf
+
+
+def _short(v: Any, n: int = 60) -> str:
+    text = json.dumps(v) if isinstance(v, (list, dict, str, int, float, bool)) or v is None else repr(v)
+    return text if len(text) <= n else text[: n - 3] + "..."
 
 
 MAX_IMAGE_SIDE_PX: Final[int] = 100_000
@@ -163,20 +183,36 @@ def _camera_field(raw: Any, *, name: str, where: str | None) -> np.ndarray:
     return arr
 
 
-def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
-    """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
-    p = Path(path)
+def _load_json(p: Path) -> Any:
     try:
-        d = json.loads(p.read_text())
+        size = p.stat().st_size
+    except OSError as exc:
+        raise PoseLifterError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if size > MAX_KEYPOINT_FILE_BYTES:
+        raise PoseLifterError(f"{p}: {size / 1e6:.0f} MB is more than the {MAX_KEYPOINT_FILE_BYTES / 1e6:.0f} MB a "
+                              "keypoint file may have")
+    try:
+        return json.loads(p.read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError) as exc:
         raise PoseLifterError(f"{p}: cannot read ({exc})") from None
     except json.JSONDecodeError as exc:
         raise PoseLifterError(f"{p}: not valid JSON ({exc})") from None
+    except RecursionError:
+        raise PoseLifterError(f"{p}: JSON nested too deeply to be a keypoint file") from None
+
+
+def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
+    """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
+    p = Path(path)
+    d = _load_json(p)
     notes: list[str] = []
     fmt = default_format
     people: list[Any]
     meta: dict[str, Any] = {}
     if isinstance(d, dict) and "people" in d:  # OpenPose output
+        if not isinstance(d["people"], list):
+            raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} objects, got "
+                                  f"{_short(d['people'])}")
         people = [q.get("pose_keypoints_2d") for q in d["people"] if isinstance(q, dict)]
         fmt = fmt or "openpose25"
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
@@ -186,12 +222,15 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         people = [d["keypoints"]]
         meta = d
         fmt = d.get("format") or fmt
+        if fmt is not None and not isinstance(fmt, str):
+            raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
+                                  f"{_short(fmt)}")
     elif isinstance(d, list):
         people = [d]
     else:
         raise PoseLifterError(f"{p}: expected an object with 'keypoints', a list of [x, y] rows, OpenPose "
                               "'people' or a list of people")
-    people = [q for q in people if q is not None and len(q) > 0]
+    people = [q for q in people if q is not None and q != []]
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
     parsed = []
@@ -242,21 +281,31 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
 
 
 
-def write_json_atomic(path: str | Path, data: Any) -> Path:
-    """Write ``data`` as JSON to ``path`` through a temporary file in the same folder and a rename, so a full disk
-    or a crash never leaves a partial or empty file behind. Refuses to write through a symbolic link."""
+def write_atomic(path: str | Path, data: bytes | str) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, ``fsync``, then a rename: a full disk
+    or a crash never leaves a partial or empty file behind (the temporary file is removed on failure). Refuses to
+    write through a symbolic link, so an existing link cannot redirect the write out of its folder."""
     path = Path(path)
     if path.is_symlink():
-        raise PoseLifterError(f"{path}: is a symbolic link; refusing to write through it")
-    text = json.dumps(data, indent=1)
+        raise PoseLifterError(f"{path}: exists as a symbolic link; refusing to write through it (remove it, or "
+                              "choose another output folder)")
+    raw = data.encode("utf-8") if isinstance(data, str) else data
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(raw)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise PoseLifterError(f"{path}: could not write ({exc.strerror or exc})") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def write_json_atomic(path: str | Path, data: Any) -> Path:
+    """``data`` as indented JSON through :func:`write_atomic`."""
+    return write_atomic(path, json.dumps(data, indent=1))

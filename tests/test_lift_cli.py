@@ -334,3 +334,81 @@ def test_missing_extra_message(tmp_path, weights, capsys):
 def _save_tiny(path, width: int):
     lf = tiny_lifter(width)
     return save_checkpoint(path, lf.net, lf.codec)
+
+
+# -- robustness: each case gets a clear message, the batch goes on, nothing half-written -------------------
+
+
+def _kp_json(path: Path, kp17: np.ndarray, **extra) -> Path:
+    path.write_text(json.dumps({"keypoints": kp17.tolist(), "image_size": [1280, 720], **extra}))
+    return path
+
+
+@pytest.mark.parametrize("content, expected", [
+    ({"keypoints": 5}, "'keypoints' must be a list of [x, y] or [x, y, confidence] rows"),
+    ({"people": 5}, "'people' must be a list of"),
+    ({"keypoints": [[True, False]] * 17}, "found [true, false]"),
+    ({"keypoints": [[1.0, 2.0]] * 17, "format": 7}, "'format' must be a string"),
+    ({"keypoints": [[1.0, 2.0]] * 17, "source": "gt"}, "'source' must be"),
+])
+def test_malformed_keypoint_files_get_clear_messages(tmp_path, weights, kp17, capsys, content, expected):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(content))
+    good = _kp_json(tmp_path / "good.json", kp17)
+    code, err = run([str(bad), str(good), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and expected in err and "unexpected" not in err
+    assert (tmp_path / "o" / "good.json").is_file() and not (tmp_path / "o" / "bad.json").exists()
+
+
+def test_deeply_nested_json(tmp_path, weights, capsys):
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 200_000 + "]" * 200_000)
+    code, err = run([str(deep), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1 and "nested too deeply" in err and "RecursionError" not in err
+
+
+def test_symlinks_are_not_followed_out_of_the_output_folder(tmp_path, weights, kp17, capsys):
+    outside = tmp_path / "precious.txt"
+    outside.write_text("keep me")
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "pose.json").symlink_to(outside)
+    code, err = run([str(_kp_json(tmp_path / "pose.json", kp17)), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 1 and "symbolic link" in err
+    assert outside.read_text() == "keep me" and (out / "pose.json").is_symlink()
+
+
+def test_dangling_symlinks_and_other_files_are_named(tmp_path, weights, kp17, capsys):
+    d = tmp_path / "in"
+    d.mkdir()
+    _kp_json(d / "a.json", kp17)
+    (d / "gone.json").symlink_to(tmp_path / "nowhere.json")
+    (d / "notes.txt").write_text("x")
+    (tmp_path / "b.png").symlink_to(tmp_path / "nowhere.png")
+    code, err = run([str(d), str(tmp_path / "b.png"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0
+    assert "gone.json: dangling symbolic link" in err and "b.png: dangling symbolic link" in err
+    assert "note:" in err and "notes.txt" in err and "lifted 1 of 3" in err
+
+
+def test_a_full_disk_leaves_no_partial_files(tmp_path, weights, kp17, capsys, monkeypatch):
+    import errno
+
+    import lifter.io
+
+    def no_space(fd: int) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(lifter.io.os, "fsync", no_space)
+    code, err = run([str(_kp_json(tmp_path / "pose.json", kp17)), "--out", str(tmp_path / "o"), "--weights",
+                     str(weights)], capsys)
+    assert code == 1 and "No space left on device" in err
+    assert list((tmp_path / "o").iterdir()) == []  # neither a 0-byte pose.json nor a temporary file
+
+
+def test_16_bit_greyscale_png_decodes_with_its_contrast(tmp_path):
+    ramp = np.linspace(0, 65535, 64 * 32).reshape(32, 64).astype(np.uint16)
+    Image.fromarray(ramp).save(tmp_path / "g16.png")
+    img = load_image(tmp_path / "g16.png")
+    assert img.rgb.dtype == np.uint8 and img.rgb.min() == 0 and img.rgb.max() == 255
+    assert 100 < img.rgb.mean() < 155  # a ramp, not all white

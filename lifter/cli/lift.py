@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -58,16 +59,33 @@ from ..pipeline import lift_image, lift_keypoint_file
 # ------------------------------------------------------------------------------------------------
 
 
-def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str]]:
-    """Files to process (folders expanded to their images and .json files, sorted, not recursive) and
-    messages for inputs that do not exist."""
+def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list[str]]:
+    """Files to process (folders expanded to their images, videos and .json files, sorted, not recursive) and a
+    message for every input that is skipped: missing files, dangling symbolic links, folders without inputs,
+    and entries of a folder that are neither files nor of a known kind (named, so nothing is skipped silently).
+    Returns ``(files, problems, notes)``: problems count as failed inputs, notes (other files in a folder) do not."""
     files: list[Path] = []
     problems: list[str] = []
+    notes: list[str] = []
     for raw in inputs:
         p = Path(raw)
-        if p.is_dir():
-            found = sorted(q for q in p.iterdir() if q.is_file() and (q.suffix.lower() in IMAGE_SUFFIXES or
-                                                                      q.suffix.lower() == ".json"))
+        if p.is_symlink() and not p.exists():
+            problems.append(f"{p}: dangling symbolic link (its target {os.readlink(p)!r} does not exist); skipped")
+        elif p.is_dir():
+            found, skipped = [], []
+            for q in sorted(p.iterdir()):
+                known = q.suffix.lower() in IMAGE_SUFFIXES or q.suffix.lower() == ".json"
+                if q.is_symlink() and not q.exists():
+                    if known:
+                        problems.append(f"{q}: dangling symbolic link (its target {os.readlink(q)!r} does not exist); "
+                                        "skipped")
+                elif q.is_file() and known:
+                    found.append(q)
+                elif q.is_file() and not q.name.startswith("."):
+                    skipped.append(q.name)
+            if skipped:
+                notes.append(f"{p}: skipped {len(skipped)} file(s) that are not images or .json: "
+                                + ", ".join(skipped[:5]) + (" ..." if len(skipped) > 5 else ""))
             if not found:
                 problems.append(f"{p}: folder has no images or .json files")
             files.extend(found)
@@ -75,7 +93,7 @@ def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str]]:
             files.append(p)
         else:
             problems.append(f"{p}: no such file or folder")
-    return files, problems
+    return files, problems, notes
 
 
 def output_names(files: list[Path], out_dir: Path) -> list[str]:
@@ -162,9 +180,11 @@ def run_lift(args: argparse.Namespace) -> int:
         get_format(args.format)
     focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True)
     pp = None if args.principal_point is None else np.asarray(args.principal_point, np.float64)
-    files, problems = expand_inputs(args.inputs)
+    files, problems, notes = expand_inputs(args.inputs)
     for msg in problems:
         print(f"error: {msg}", file=sys.stderr)
+    for msg in notes:
+        print(f"note: {msg}", file=sys.stderr)
     if not files:
         print("poselifter lift: no inputs to process", file=sys.stderr)
         return 1
