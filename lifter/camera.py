@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import numpy as np
-from array_api_compat import array_namespace
+from ._array import namespace as array_namespace
 
 from ._checks import PoseLifterError, as_pair
 from .skeleton import mirror

@@ -35,7 +35,7 @@ from typing import Any, Final, Generic, Literal, TypeVar
 
 import numpy as np
 import torch
-from array_api_compat import array_namespace
+from ._array import namespace as array_namespace
 
 from .camera import CANONICAL_FOCAL, backproject_generic, to_reference_camera
 from .model import NUM_OUTPUTS, ModelConfig

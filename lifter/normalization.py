@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from typing import Any, Final, Literal, TypeVar
 
-from array_api_compat import array_namespace
+from ._array import namespace as array_namespace
 
 NormMode = Literal["baseline", "location", "scale", "both"]
 ScaleDefinition = Literal["paper", "repo"]

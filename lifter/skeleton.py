@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from typing import Final, TypeVar
 
-from array_api_compat import array_namespace
+from ._array import namespace as array_namespace
 
 NUM_JOINTS: Final[int] = 17
 ROOT: Final[int] = 0
