@@ -111,7 +111,8 @@ class Lifter:
     """A trained network and its codec, numpy in / numpy out (module docstring)."""
 
     def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
-                 meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None) -> None:
+                 meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None,
+                 flip_test: bool = False) -> None:
         if net.config != codec.config:
             raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
         self.net = net.eval()
@@ -119,6 +120,9 @@ class Lifter:
         self.name = name
         self.meta = meta or {}
         self.train_config = train_config
+        self.flip_test = bool(flip_test)
+        """Default of :meth:`lift`'s ``flip_test``: the shipped default averages every pose with its mirror image,
+        so mirror equivariance holds exactly (checkpoints: ``meta["inference"]["flip_test"]``)."""
 
     @property
     def config(self) -> ModelConfig:
@@ -146,7 +150,7 @@ class Lifter:
         data = assets.read_bytes(entry["file"])
         ck = load_checkpoint(data, expected_sha256=entry.get("sha256"), name=f"shipped model {entry['name']!r} "
                              f"({entry['file']})")
-        return cls._from(ck, entry["name"], quantize)
+        return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"))
 
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
@@ -158,7 +162,8 @@ class Lifter:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
-        return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config)
+        return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
+                      flip_test=self.flip_test)
 
     # -- lifting -------------------------------------------------------------------------------------
     def lift(
@@ -169,7 +174,7 @@ class Lifter:
         principal_point: Any | None = None,
         image_size: Any | None = None,
         source: Source = "detected",
-        flip_test: bool = False,
+        flip_test: bool | None = None,
     ) -> LiftResult:
         """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order, :data:`lifter.JOINT_NAMES`) to absolute 3D.
 
@@ -181,8 +186,11 @@ class Lifter:
         image_size: ``(width, height)`` px, for the defaults above.
         source: ``"detected"`` (default): 2D from a detector; ``"clean"``: exact 2D (ground truth,
             hand-placed or dragged joints). The lifter uses what it was trained for on each.
-        flip_test: also lift the mirrored input and average (exactly mirror-equivariant; slower).
+        flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
+            None: the model's default (:attr:`flip_test`; on for the shipped default, at the cost of one more
+            network row per pose, which for a single pose costs almost nothing).
         """
+        flip_test = self.flip_test if flip_test is None else bool(flip_test)
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)

@@ -49,7 +49,7 @@ class Predictions:
     analytic_root: np.ndarray | None  # (N, 3) mm
 
 
-def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool = False, analytic: bool = False,
+def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = None, analytic: bool = False,
             batch_size: int = 8192, progress: bool = True, source: Source = "detected") -> Predictions:
     """Lift every sample (its own camera) told ``source``; optionally also the analytic root."""
     rel, root, aroot = [], [], []
@@ -85,7 +85,7 @@ def score(label: str, root_kind: str, rel: np.ndarray, root: np.ndarray, samples
                    auc=float(curve.mean()), per_action=per_action, pck_curve=[float(v) for v in curve])
 
 
-def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None = None, flip_test: bool = False,
+def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None = None, flip_test: bool | None = None,
                     analytic_root: bool = False, progress: bool = True, source: Source = "detected") -> list[EvalRow]:
     """Rows for the learned root and, optionally, the analytic weak-perspective root."""
     label = label or lifter.name
@@ -132,7 +132,7 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
 
 
 def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float],
-                principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool = False,
+                principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool | None = None,
                 source: Source = "clean") -> list[EvalRow]:
     """One row per focal factor (label ``"x<factor>"``) for virtual cameras of :func:`virtual_camera_samples`."""
     rows = []

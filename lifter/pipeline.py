@@ -48,13 +48,13 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
-def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool, source: str) -> Any:
+def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str) -> Any:
     return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
 
 
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
-                       flip_test: bool = False) -> LiftRecord:
+                       flip_test: bool | None = None) -> LiftRecord:
     """Lift one keypoint JSON file (module docstring)."""
     kf = parse_keypoint_json(path, default_format=default_format)
     kp17 = convert(kf.keypoints, src=kf.format)
@@ -73,7 +73,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,
                principal_point: Any | None = None, sensor_width_mm: float | None = None,
                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_side: int = DEFAULT_MAX_SIDE_PX,
-               flip_test: bool = False) -> LiftRecord:
+               flip_test: bool | None = None) -> LiftRecord:
     """Detect the (largest) person in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift
     them (module docstring)."""
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)

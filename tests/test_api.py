@@ -408,3 +408,20 @@ def test_three_column_keypoints_get_a_confidence_hint(small_lifter, keypoints):
     with pytest.raises(PoseLifterError) as exc:  # no hint where it does not apply
         small_lifter.lift(np.zeros((17, 4)), focal=1000.0, principal_point=(0, 0))
     assert "confidence" not in str(exc.value)
+
+
+def test_a_symmetric_default_is_mirror_equivariant_without_asking(camera_lifter, keypoints):
+    """``flip_test`` defaults to the model's setting; a model shipped with it on lifts a mirrored image to the
+    mirrored pose exactly, and ``flip_test=False`` still gives the plain network."""
+    from lifter.camera import flip_keypoints_2d, flip_pose_3d
+
+    sym = Lifter(camera_lifter.net, camera_lifter.codec, name="sym", flip_test=True)
+    c = np.array([512.0, 515.0])
+    kp_f, c_f = flip_keypoints_2d(keypoints, image_width=1000, principal_point=c)
+    a, b = sym.lift(keypoints, focal=1145.0, principal_point=c), sym.lift(kp_f, focal=1145.0, principal_point=c_f)
+    np.testing.assert_allclose(flip_pose_3d(b.absolute), a.absolute, atol=1e-2)
+    np.testing.assert_allclose(a.absolute, camera_lifter.lift(keypoints, focal=1145.0, principal_point=c,
+                                                              flip_test=True).absolute)
+    plain = sym.lift(keypoints, focal=1145.0, principal_point=c, flip_test=False)
+    assert np.abs(plain.absolute - a.absolute).max() > 1e-3
+    assert sym.quantized().flip_test

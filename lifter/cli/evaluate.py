@@ -71,7 +71,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "not with --analytic-root, --per-action, --pck-plot)")
     p.add_argument("--pp-shift", type=_pp_shift, default="0,0",
                    help="principal-point shift (px) of the virtual cameras, 'dx,dy' (with --focal-scales)")
-    p.add_argument("--flip-test", action="store_true", help="average with the mirrored input's prediction")
+    p.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
+                   help="average each pose with its mirror image's lift (default: the model's own setting; on for the "
+                        "shipped default)")
     p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
     p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None)

@@ -143,7 +143,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX, help="downscale larger images for detection")
     p.add_argument("--format", default=None, help="keypoint format of JSON files that name none "
                                                   f"(one of {', '.join(keypoint_formats())})")
-    p.add_argument("--flip-test", action="store_true", help="average with the mirrored input's prediction")
+    p.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
+                   help="average each pose with its mirror image's lift (default: the model's own setting; on for the "
+                        "shipped default)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_lift)
     return p
