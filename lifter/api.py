@@ -130,8 +130,11 @@ class Lifter:
 
     # -- construction --------------------------------------------------------------------------------
     @classmethod
-    def _from(cls, ck: Checkpoint, name: str, quantize: bool) -> Lifter:
-        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config)
+    def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None) -> Lifter:
+        inference = ck.meta.get("inference")
+        if flip_test is None:
+            flip_test = bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
+        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip_test)
         return lifter.quantized() if quantize else lifter
 
     @classmethod

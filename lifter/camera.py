@@ -23,11 +23,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
-from ._array import namespace as array_namespace
 
+from ._array import ArrayT
+from ._array import namespace as array_namespace
 from ._checks import PoseLifterError, as_pair
 from .skeleton import mirror
 
@@ -37,7 +38,6 @@ DEFAULT_DIAGONAL_FOV_DEG: float = 65.0
 """Diagonal field of view assumed when neither the user nor the image's EXIF data give a focal length:
 ``f = image_diagonal / (2 tan 32.5 deg) = 0.785 * diagonal`` (a 34 mm full-frame equivalent)."""
 
-ArrayT = TypeVar("ArrayT")
 
 
 def _last2(x: Any, *, name: str, positive: bool = False) -> np.ndarray:

@@ -35,8 +35,8 @@ from typing import Any, Final, Generic, Literal, TypeVar
 
 import numpy as np
 import torch
-from ._array import namespace as array_namespace
 
+from ._array import namespace as array_namespace
 from .camera import CANONICAL_FOCAL, backproject_generic, to_reference_camera
 from .model import NUM_OUTPUTS, ModelConfig
 from .normalization import location_and_scale, pose_features
@@ -47,7 +47,7 @@ SOURCES: Final[tuple[str, ...]] = ("detected", "clean")
 """What the 2D is: ``"detected"`` (a 2D detector's output, the default) or ``"clean"`` (exact: ground truth,
 hand-placed or dragged joints)."""
 
-A = TypeVar("A")
+A = TypeVar("A", np.ndarray, torch.Tensor)
 
 
 @dataclass(frozen=True)
@@ -145,7 +145,7 @@ class PoseCodec:
         if self.config.conditioning == "source":
             flag = self.source_flag(source, like=sigma)
             feats = xp.concat([feats, flag[..., None]], axis=-1)
-        return Encoded(features=feats, sigma_in=sigma, alpha_in=alpha_in, alpha=alpha)
+        return Encoded(features=feats, sigma_in=sigma, alpha_in=alpha_in, alpha=alpha)  # type: ignore[return-value]
 
     @staticmethod
     def source_flag(source: Any, *, like: A) -> A:

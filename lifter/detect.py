@@ -422,8 +422,8 @@ class BlazePoseEstimator:
     def __init__(self, *, model_complexity: int = 1, min_detection_confidence: float = 0.5,
                  max_people: int = 3) -> None:
         try:
-            import mediapipe as mp  # noqa: F401
-            from mediapipe.python.solutions import pose as mp_pose
+            import mediapipe as mp  # noqa: F401  # pyright: ignore[reportMissingImports]
+            from mediapipe.python.solutions import pose as mp_pose  # pyright: ignore[reportMissingImports]
         except ImportError as exc:
             raise MissingDependencyError(
                 "the BlazePose 2D detector needs the optional 'detect' extra: pip install -e \".[detect]\" "

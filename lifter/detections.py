@@ -15,13 +15,13 @@ from typing import Any
 import numpy as np
 
 from ._checks import PoseLifterError
-from .data import CAMERA_IDS, H36M
+from .data import CAMERA_IDS, H36M, PoseSamples
 from .keypoints import convert, get_format
 
 SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
 
 
-def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh16",
+def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: str = "sh16",
                        dst: str = "h36m17") -> tuple[np.ndarray, np.ndarray]:
     """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
 
@@ -64,14 +64,14 @@ def load_sh_detections(samples: Any, *, data: Any | None = None, fmt: str = "sh1
     return out, valid
 
 
-def with_sh_detections(samples: Any, *, data: Any | None = None) -> tuple[Any, int]:
+def with_sh_detections(samples: PoseSamples, *, data: H36M | None = None) -> tuple[Any, int]:
     """``samples`` with their 2D replaced by the real SH detections (converted to h36m17); samples without a
     detection are dropped. Returns ``(new samples, number dropped)``."""
     det, ok = load_sh_detections(samples, data=data)
     return samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok]), int((~ok).sum())
 
 
-def detection_alignment_check(data: Any | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),
+def detection_alignment_check(data: H36M | None = None, *, subject: int = 1, offsets: Sequence[int] = range(-3, 4),
                               camera: str | None = None) -> dict[int, float]:
     """Verify that detection row ``i`` is frame ``5 i`` for a training subject: the median 2D error (px) of
     the wrists, elbows, knees and ankles (fast-moving, directly mapped joints) when the detections are

@@ -67,14 +67,14 @@ def skeleton_scene(pose: Any, *, joint_radius_mm: float = 25.0, bone_radius_mm: 
     for j, name in enumerate(JOINT_NAMES):
         s = trimesh.creation.icosphere(subdivisions=2, radius=joint_radius_mm / 1000.0)
         s.apply_translation(p[j])
-        s.visual.face_colors = SIDE_COLORS[joint_side(j)]
+        s.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
         scene.add_geometry(s, node_name=f"joint_{name}", geom_name=f"joint_{name}")
     for a, b in EDGES:
         length = float(np.linalg.norm(p[b] - p[a]))
         if length < 1e-6:
             continue
         c = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, segment=np.stack([p[a], p[b]]), sections=12)
-        c.visual.face_colors = SIDE_COLORS[joint_side(b)]
+        c.visual.face_colors = SIDE_COLORS[joint_side(b)]  # type: ignore[union-attr]
         nm = f"bone_{JOINT_NAMES[a]}_{JOINT_NAMES[b]}"
         scene.add_geometry(c, node_name=nm, geom_name=nm)
     return scene
@@ -93,7 +93,7 @@ def read_glb_joints(path: str | os.PathLike[str]) -> np.ndarray:
     (the centres of the ``joint_<name>`` spheres)."""
     import trimesh
 
-    scene = trimesh.load(str(path), file_type="glb", force="scene")
+    scene: Any = trimesh.load(str(path), file_type="glb", force="scene")
     out = np.full((NUM_JOINTS, 3), np.nan)
     for node in scene.graph.nodes_geometry:
         transform, geom = scene.graph[node]

@@ -399,6 +399,7 @@ def convert(keypoints: Any, *, src: str, dst: str = H36M17) -> np.ndarray:
         return h36m
     if f_dst.from_h36m is None:
         raise PoseLifterError(f"keypoint format {dst!r} cannot be produced from h36m17 (it has joints H36M lacks)")
+    assert f_dst.from_matrix is not None  # (exists whenever from_h36m does)
     return np.einsum("jk,...kd->...jd", f_dst.from_matrix, h36m)
 
 

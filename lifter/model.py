@@ -165,7 +165,7 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
     eps = []
     for block in blocks._modules.values():
         body = block._modules.get("body") if block is not None else None
-        layers = list(body._modules.values()) if body is not None else []
+        layers: list[Any] = list(body._modules.values()) if body is not None else []
         if len(layers) != 8:
             return None
         bn1, drop1, act1, lin1, bn2, drop2, act2, lin2 = layers

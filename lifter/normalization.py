@@ -22,8 +22,9 @@ over leading dimensions and works on numpy arrays and torch tensors alike.
 
 from __future__ import annotations
 
-from typing import Any, Final, Literal, TypeVar
+from typing import Any, Final, Literal
 
+from ._array import ArrayT
 from ._array import namespace as array_namespace
 
 NormMode = Literal["baseline", "location", "scale", "both"]
@@ -34,7 +35,6 @@ SCALE_DEFINITIONS: Final[tuple[str, ...]] = ("paper", "repo")
 FEATURE_UNIT: Final[float] = 1e-3
 """Location and scale features are multiplied by this (px -> kilo-px)."""
 
-ArrayT = TypeVar("ArrayT")
 
 
 def num_features(mode: NormMode, num_joints: int = 17) -> int:

@@ -29,8 +29,9 @@ Joint order (index: name, index in the 32-joint H36M mocap skeleton):
 
 from __future__ import annotations
 
-from typing import Final, TypeVar
+from typing import Final
 
+from ._array import ArrayT
 from ._array import namespace as array_namespace
 
 NUM_JOINTS: Final[int] = 17
@@ -75,7 +76,6 @@ LEFT_JOINTS: Final[tuple[int, ...]] = tuple(left for left, _ in LEFT_RIGHT_PAIRS
 RIGHT_JOINTS: Final[tuple[int, ...]] = tuple(right for _, right in LEFT_RIGHT_PAIRS)
 
 
-ArrayT = TypeVar("ArrayT")
 
 
 def mirror(points: ArrayT) -> ArrayT:

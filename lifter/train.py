@@ -124,7 +124,7 @@ def samples_to_tensors(samples: PoseSamples, real_keypoints_2d: np.ndarray | Non
         if real.shape != samples.keypoints_2d.shape:
             raise PoseLifterError(f"real detections have shape {real.shape}; expected {samples.keypoints_2d.shape} "
                                   "(one row per training sample)")
-        ok = np.isfinite(real).all(axis=(1, 2))
+        ok = np.asarray(np.isfinite(real).all(axis=(1, 2)))
         T["real"] = torch.from_numpy(np.where(ok[:, None, None], real, 0.0).astype(np.float32))
         T["has_real"] = torch.from_numpy(ok)
     return T
@@ -336,7 +336,7 @@ def train(
         model = torch.nn.parallel.DistributedDataParallel(net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
     ema = WeightAverage(net, decay=cfg.optim.ema_decay) if cfg.optim.ema_decay is not None else None
-    eval_net = ema.module if ema is not None else net
+    eval_net: PoseLifterNet = ema.module if ema is not None else net  # type: ignore[assignment]
     val_dev = {k: {n: t.to(ctx.device) for n, t in v.items()} for k, v in val_sets.items()}
 
     n = len(train_samples)

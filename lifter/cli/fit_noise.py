@@ -89,7 +89,7 @@ def run_fit_noise(args: argparse.Namespace) -> int:
     subjects = PROTOCOLS[args.protocol][0]
     if not args.no_alignment_check:
         chk = detection_alignment_check(data, subject=subjects[0])
-        best = min(chk, key=chk.get)
+        best = min(chk, key=lambda o: chk[o])
         print(f"alignment check (S{subjects[0]}, camera 0, limbs): median error px by frame offset "
               + ", ".join(f"{o:+d}: {v:.2f}" for o, v in chk.items()) + f" -> best offset {best:+d}")
         if best != 0:

@@ -216,7 +216,7 @@ def run_lift(args: argparse.Namespace) -> int:
                         estimator = get_estimator(args.detector, **kw)
                     except (MissingDependencyError, PoseLifterError) as exc:
                         estimator_error = str(exc)
-                if estimator_error is not None:
+                if estimator_error is not None or estimator is None:
                     raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
                 rec = lift_image(img, lifter=lifter_for["image"], estimator=estimator, focal=focal, principal_point=pp,
                                  sensor_width_mm=args.sensor_width, fov_deg=args.fov, max_side=args.max_side,
