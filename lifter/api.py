@@ -112,9 +112,14 @@ class Lifter:
 
     def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
                  meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None,
-                 flip_test: bool = False) -> None:
+                 flip_test: bool = False, clean: Lifter | None = None) -> None:
         if net.config != codec.config:
             raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
+        if clean is not None and clean.clean is not None:
+            raise PoseLifterError("the clean-2D lifter of a Lifter cannot have one of its own")
+        self.clean = clean
+        """The network for ``source="clean"`` when this model has a separate one (:meth:`lift` routes by source);
+        None when one network (conditioned on the source, or not) serves both."""
         self.net = net.eval()
         self.codec = codec
         self.name = name
@@ -130,17 +135,24 @@ class Lifter:
 
     # -- construction --------------------------------------------------------------------------------
     @classmethod
-    def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None) -> Lifter:
+    def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None,
+              clean: Checkpoint | None = None) -> Lifter:
         inference = ck.meta.get("inference")
         if flip_test is None:
             flip_test = bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
-        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip_test)
+        clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)", meta=clean.meta,
+                                                       train_config=clean.train_config, flip_test=flip_test)
+        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip_test,
+                     clean=clean_lifter)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
-    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False) -> Lifter:
-        """Load your own checkpoint file (``weights_only=True``; :mod:`lifter.checkpoint`)."""
-        return cls._from(load_checkpoint(path), name or Path(path).stem, quantize)
+    def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False,
+                        clean: str | os.PathLike[str] | None = None) -> Lifter:
+        """Load your own checkpoint file (``weights_only=True``; :mod:`lifter.checkpoint`). ``clean``: a second
+        checkpoint used for ``source="clean"`` (the first then serves detected 2D)."""
+        return cls._from(load_checkpoint(path), name or Path(path).stem, quantize,
+                         clean=None if clean is None else load_checkpoint(clean))
 
     @classmethod
     def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> Lifter:
@@ -150,10 +162,13 @@ class Lifter:
         if ref != "default" and ref not in assets.model_names() and (ref.endswith(".pt") or Path(ref).is_file()):
             return cls.from_checkpoint(ref, quantize=quantize)  # shipped names win over same-named local files
         entry = assets.model_entry(ref)
-        data = assets.read_bytes(entry["file"])
-        ck = load_checkpoint(data, expected_sha256=entry.get("sha256"), name=f"shipped model {entry['name']!r} "
-                             f"({entry['file']})")
-        return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"))
+        ck = load_checkpoint(assets.read_bytes(entry["file"]), expected_sha256=entry.get("sha256"),
+                             name=f"shipped model {entry['name']!r} ({entry['file']})")
+        clean = None
+        if entry.get("clean_file"):
+            clean = load_checkpoint(assets.read_bytes(entry["clean_file"]), expected_sha256=entry.get("clean_sha256"),
+                                    name=f"shipped model {entry['name']!r} ({entry['clean_file']})")
+        return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean)
 
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
@@ -166,7 +181,7 @@ class Lifter:
             warnings.simplefilter("ignore")
             net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
         return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
-                      flip_test=self.flip_test)
+                      flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized())
 
     # -- lifting -------------------------------------------------------------------------------------
     def lift(
@@ -194,6 +209,9 @@ class Lifter:
             network row per pose, which for a single pose costs almost nothing).
         """
         flip_test = self.flip_test if flip_test is None else bool(flip_test)
+        if source == "clean" and self.clean is not None:
+            return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
+                                   source=source, flip_test=flip_test)
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
@@ -286,4 +304,5 @@ class Lifter:
     def __repr__(self) -> str:
         c = self.config
         return (f"Lifter(name={self.name!r}, input_space={c.input_space!r}, depth_target={c.depth_target!r}, "
-                f"conditioning={c.conditioning!r}, width={c.width})")
+                f"conditioning={c.conditioning!r}, width={c.width}, flip_test={self.flip_test}"
+                + (", separate clean-2D network" if self.clean is not None else "") + ")")

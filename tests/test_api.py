@@ -425,3 +425,23 @@ def test_a_symmetric_default_is_mirror_equivariant_without_asking(camera_lifter,
     plain = sym.lift(keypoints, focal=1145.0, principal_point=c, flip_test=False)
     assert np.abs(plain.absolute - a.absolute).max() > 1e-3
     assert sym.quantized().flip_test
+
+
+def test_a_separate_clean_network_serves_source_clean(tmp_path, keypoints):
+    """A model may keep a second network for exact 2D: ``source="clean"`` goes to it, the default to the first;
+    both load from checkpoints (a pair of files) and quantize together."""
+    det, cln = tiny_lifter(32, seed=1, name="det"), tiny_lifter(32, seed=2, name="cln")
+    pair = Lifter(det.net, det.codec, name="pair", clean=cln)
+    kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
+    np.testing.assert_array_equal(pair.lift(keypoints, **kw).absolute, det.lift(keypoints, **kw).absolute)
+    np.testing.assert_array_equal(pair.lift(keypoints, source="clean", **kw).absolute,
+                                  cln.lift(keypoints, source="clean", **kw).absolute)
+    p1 = save_checkpoint(tmp_path / "d.pt", det.net, det.codec)
+    p2 = save_checkpoint(tmp_path / "c.pt", cln.net, cln.codec)
+    loaded = Lifter.from_checkpoint(p1, clean=p2)
+    np.testing.assert_allclose(loaded.lift(keypoints, source="clean", **kw).absolute,
+                               cln.lift(keypoints, source="clean", **kw).absolute, atol=1e-3)
+    q = loaded.quantized()
+    assert q.clean is not None and "int8" in q.clean.name and "separate clean-2D network" in repr(loaded)
+    with pytest.raises(PoseLifterError, match="cannot have one of its own"):
+        Lifter(det.net, det.codec, clean=pair)
