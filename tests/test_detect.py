@@ -102,8 +102,8 @@ def test_missing_extra_is_a_clear_error(monkeypatch):
     from lifter.detect import BlazePoseEstimator, MissingDependencyError, get_estimator
 
     monkeypatch.setitem(sys.modules, "mediapipe", None)  # import mediapipe -> ImportError
-    monkeypatch.setitem(sys.modules, "mediapipe.python", None)
-    monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)
+    monkeypatch.setitem(sys.modules, "mediapipe.tasks", None)
+    monkeypatch.setitem(sys.modules, "mediapipe.tasks.python", None)
     with pytest.raises(MissingDependencyError, match=r'pip install -e "\.\[detect\]"'):
         BlazePoseEstimator()
     with pytest.raises(MissingDependencyError):
@@ -112,14 +112,68 @@ def test_missing_extra_is_a_clear_error(monkeypatch):
         get_estimator("nope")
 
 
+def test_task_bundle_is_stored_and_aligned(tmp_path):
+    """MediaPipe memory-maps the models out of the .task zip: members stored, data 64-byte aligned."""
+    import zipfile
+
+    from lifter.detect import _write_task_zip
+
+    members = {"pose_detector.tflite": b"a" * 1001, "pose_landmarks_detector.tflite": bytes(range(256)) * 7}
+    out = tmp_path / "x.task"
+    _write_task_zip(out, members)
+    raw = out.read_bytes()
+    with zipfile.ZipFile(out) as z:
+        assert z.testzip() is None
+        for info in z.infolist():
+            assert info.compress_type == zipfile.ZIP_STORED
+            start = info.header_offset + 30 + len(info.filename) + len(info.extra)
+            assert start % 64 == 0
+            assert raw[start:start + info.file_size] == members[info.filename] == z.read(info.filename)
+    assert not list(tmp_path.glob("*tmp*"))
+
+
+def test_bundle_errors_are_clear(tmp_path, monkeypatch):
+    from lifter.detect import POSE_TASK_ENV, MissingDependencyError, build_pose_task, ensure_pose_task
+
+    monkeypatch.setenv(POSE_TASK_ENV, str(tmp_path / "nope.task"))
+    with pytest.raises(MissingDependencyError, match="nope.task: no such file"):
+        ensure_pose_task()
+    monkeypatch.delenv(POSE_TASK_ENV)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    with pytest.raises(MissingDependencyError, match="not built yet"):
+        ensure_pose_task(build=False)
+    bad = tmp_path / "mediapipe-0.10.21-x.whl"
+    bad.write_bytes(b"not a zip")
+    with pytest.raises(MissingDependencyError, match="not a mediapipe==0.10.21 wheel"):
+        build_pose_task(tmp_path / "o.task", wheel=bad)
+    import zipfile
+
+    with zipfile.ZipFile(bad, "w") as z:  # right names, wrong content
+        z.writestr("mediapipe/modules/pose_detection/pose_detection.tflite", b"x")
+        z.writestr("mediapipe/modules/pose_landmark/pose_landmark_full.tflite", b"y")
+    with pytest.raises(MissingDependencyError, match="sha256 mismatch"):
+        build_pose_task(tmp_path / "o.task", wheel=bad)
+    assert not (tmp_path / "o.task").exists()
+
+
 # ------------------------------------------------------------------------------------------------
-# BlazePose (needs mediapipe)
+# BlazePose (needs mediapipe and the model bundle, built once by lifter.detect.ensure_pose_task)
 # ------------------------------------------------------------------------------------------------
+
+
+def _bundle_or_skip() -> None:
+    pytest.importorskip("mediapipe")
+    from lifter.detect import MissingDependencyError, ensure_pose_task
+
+    try:
+        ensure_pose_task(build=False)
+    except MissingDependencyError as exc:
+        pytest.skip(str(exc))
 
 
 @pytest.fixture(scope="module")
 def blazepose():
-    pytest.importorskip("mediapipe")
+    _bundle_or_skip()
     from lifter.detect import BlazePoseEstimator
 
     est = BlazePoseEstimator(max_people=3)
@@ -172,3 +226,38 @@ def test_blazepose_on_h36m_demo_frames(blazepose):
         det = detect_pose(H36M_DIR / "demo" / str(ann["image"][i]), estimator=blazepose)
         err = np.linalg.norm(det.keypoints_2d - ann["p2d_gt"][i], axis=-1)
         assert np.median(err) < 15, err
+
+
+def test_blazepose_is_quiet_on_stderr(tmp_path):
+    """MediaPipe's C++ log lines (absl / TFLite) do not reach the user's terminal."""
+    import subprocess
+
+    _bundle_or_skip()
+    code = ("import numpy as np\nfrom PIL import Image\nfrom lifter.detect import BlazePoseEstimator\n"
+            f"a = np.asarray(Image.open({str(ROOT / 'assets' / 'demo' / 'standing.jpg')!r}).convert('RGB'))\n"
+            "with BlazePoseEstimator(max_people=2) as e:\n    n = [len(e.detect(a)) for _ in range(3)]\n"
+            "print(n)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[1, 1, 1]"
+    assert proc.stderr == "", proc.stderr
+
+
+def test_blazepose_mask_mode_finds_two_tasks_mode_runs():
+    from PIL import Image
+
+    from lifter.detect import BlazePoseEstimator
+
+    _bundle_or_skip()
+    a = np.asarray(Image.open(ROOT / "assets" / "demo" / "standing.jpg").convert("RGB"))
+    b = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
+    pair = np.concatenate([a, b], axis=1)
+    with BlazePoseEstimator(max_people=3, multi="mask") as est:
+        dets = est.detect(pair)
+        assert len(est.detect(a)) == 1
+    centres = sorted(float(d.keypoints[:, 0].mean()) for d in dets)
+    assert len(dets) == 2 and centres[0] < a.shape[1] < centres[1], centres
+    with BlazePoseEstimator(max_people=3, multi="tasks") as est:  # MediaPipe's own num_poses: finds 1 of 2 here
+        dets = est.detect(pair)
+    assert 1 <= len(dets) <= 3 and all(d.keypoints.shape == (33, 2) for d in dets)
+    assert [d.area for d in dets] == sorted((d.area for d in dets), reverse=True)
