@@ -10,16 +10,18 @@
 #      SH fit, equal budget, so the effect of the *fit* is separated from extra training.
 # Then scripts/ship_model.py and scripts/eval_cascade.py (see the README).
 set -euo pipefail
+PAPER=(--input-space pixel --conditioning none --depth-target canonical)  # the paper's pixel-space layer (v1 runs)
 step=${1:-all}
-COMMON=(--noise mixture --no-outliers --zoom-aug --zoom-sigma 0.5 --zoom-clip 1.0 --ema 0.999 --threads 1 --eval-every 1000)
+COMMON=("${PAPER[@]}" --clean-prob 0 --noise mixture --no-noise-outliers --zoom --zoom-sigma 0.5 --zoom-clip 1.0
+        --ema-decay 0.999 --threads 1 --eval-every 1000)
 if [[ $step == all || $step == mix_long ]]; then
-  poselifter train --out runs/mix_long.pt --inputs mix --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 95
+  poselifter train --out runs/mix_long.pt --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 95
 fi
 if [[ $step == all || $step == mixture_long ]]; then
   poselifter train --out runs/mixture_long.pt "${COMMON[@]}" --epochs 200 --max-minutes 80
 fi
 if [[ $step == mix_reg ]]; then
-  poselifter train --out runs/sh_mix_reg.pt --inputs mix --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 60 \
+  poselifter train --out runs/sh_mix_reg.pt --real-prob 0.5 "${COMMON[@]}" --epochs 200 --max-minutes 60 \
     --dropout 0.5 --weight-decay 1e-3
 fi
 # Fine-tunes (OUT names the pair): shipped `blazepose` = INIT=mixture MINUTES=20 OUT=ft (runs/bp_ft.pt, control
