@@ -2,7 +2,9 @@
 
 The FLOP limit is measured in the same run: the machine's float32 matmul rate (GFLOP/s, a
 ``(B, W) @ (W, W)`` product at the model's width) divided by the FLOPs of one pose through the
-network (2 x multiply-adds of every Linear layer). Reported ratios are within one run, so they hold
+network (2 x multiply-adds of every Linear layer), times two when the model averages each pose with its
+mirror image by default (``Lifter.flip_test``: two network rows per pose). Reported ratios are within one
+run, so they hold
 on a shared, noisy machine; absolute times are indicative only.
 
     python benchmarks/bench_lift.py [--model default] [--threads 2] [--json out.json]
@@ -75,15 +77,17 @@ def main() -> None:
     pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500
     kp = project(pose, focal=1145.0, principal_point=(512.0, 515.0))
 
-    fpp = flops_per_pose(lifter.net)
+    rows = 2 if lifter.flip_test else 1  # network rows per pose: the mirror-image pass of the flip test
+    fpp = rows * flops_per_pose(lifter.net)
     gflops = matmul_gflops(lifter.config.width)
     limit = gflops * 1e9 / fpp
-    print(f"model {lifter.name}: width {lifter.config.width}, {fpp / 1e6:.2f} MFLOP/pose; "
+    print(f"model {lifter.name}: width {lifter.config.width}, {rows} network row(s) per pose "
+          f"(flip test {'on' if lifter.flip_test else 'off'}), {fpp / 1e6:.2f} MFLOP/pose; "
           f"matmul {gflops:.1f} GFLOP/s with {args.threads} threads -> FLOP limit {limit:,.0f} poses/s")
 
     single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
-    print(f"single pose Lifter.lift (float32, numpy path): median {p50:.3f} ms, p95 {p95:.3f} ms "
+    print(f"single pose Lifter.lift (float32, default path): median {p50:.3f} ms, p95 {p95:.3f} ms "
           f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
     default_max = api.NUMPY_MAX_BATCH
 
@@ -95,25 +99,27 @@ def main() -> None:
         finally:
             api.NUMPY_MAX_BATCH = default_max
 
-    u50 = lift_with(0, kp[0])
-    print(f"single pose through the torch module instead: median {u50:.3f} ms -> numpy path {u50 / p50:.2f}x faster")
-    two_torch, two_numpy = lift_with(1, kp[:2]), lift_with(2, kp[:2])
-    print(f"two poses: torch module {two_torch:.3f} ms, numpy {two_numpy:.3f} ms "
-          f"(numpy is used up to NUMPY_MAX_BATCH = {default_max} poses)")
+    u50, n50 = lift_with(0, kp[0]), lift_with(1 << 30, kp[0])
+    print(f"single pose, network rows all through the torch module: median {u50:.3f} ms; all through numpy: "
+          f"{n50:.3f} ms (the default sends up to NUMPY_MAX_BATCH = {default_max} row(s) to numpy)")
+    two_torch, two_numpy = lift_with(0, kp[:2]), lift_with(1 << 30, kp[:2])
+    print(f"two poses: torch module {two_torch:.3f} ms, numpy {two_numpy:.3f} ms")
     q = lifter.quantized()
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
           f"-> {p50 / q50:.2f}x faster")
-    results = {"model": lifter.name, "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
-               "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95, "single_torch_module_median_ms": u50,
+    results = {"model": lifter.name, "flip_test": lifter.flip_test, "rows_per_pose": rows,
+               "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
+               "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95,
+               "single_torch_module_median_ms": u50, "single_numpy_median_ms": n50,
                "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
     print(f"{'batch':>6} {'poses/s':>12} {'of FLOP limit':>14}")
     for b in (1, 16, 256, 2048, 8192):
         reps = max(3, int(20000 / b))
-        t = time_calls(lambda: lifter.lift(kp[:b], focal=1145.0, principal_point=(512.0, 515.0)), reps)
+        t = time_calls(lambda b=b: lifter.lift(kp[:b], focal=1145.0, principal_point=(512.0, 515.0)), reps)
         rate = b / np.median(t)
         results["batched"].append({"batch": b, "poses_per_s": rate, "fraction_of_limit": rate / limit})
         print(f"{b:>6} {rate:>12,.0f} {100 * rate / limit:>13.1f}%")

@@ -1,6 +1,11 @@
 """Copy a trained checkpoint into assets/weights/ and record its sha256 and measured metrics in assets/models.json.
 
     python scripts/ship_model.py runs/default.pt --name default_v2 --default --description "..."
+    python scripts/ship_model.py runs/detected.pt --clean runs/clean.pt --flip-test --name pair --default
+
+``--clean`` ships a second checkpoint that serves ``source="clean"`` (registry ``clean_file`` / ``clean_sha256``;
+the first then serves detected 2D); ``--flip-test`` makes flip averaging the model's default (registry
+``flip_test``), and the metrics are then measured with it.
 
 Metrics recorded (Protocol 1, S9 + S11, 4 cameras; S9 'Discussion 1' is missing from the data), each as
 ``metrics[KEY] = {"inputs", "source", "stride", "learned": {...}, "analytic_root": {...}}``:
@@ -38,7 +43,8 @@ def summary(row) -> dict:
     return {k: round(getattr(row, k), 3) for k in keys} | {"num_samples": row.num_samples}
 
 
-def measure(lifter: Lifter, data: H36M, *, keys: list[str], flip_test: bool = False) -> dict:
+def measure(lifter: Lifter, data: H36M, *, keys: list[str], flip_test: bool | None = None) -> dict:
+    """Evaluate ``keys`` of :data:`EVALUATIONS`; ``flip_test=None`` uses the model's own default."""
     out = {}
     for key in keys:
         inputs, source, stride = EVALUATIONS[key]
@@ -46,7 +52,8 @@ def measure(lifter: Lifter, data: H36M, *, keys: list[str], flip_test: bool = Fa
         if inputs == "sh":
             s, _ = with_sh_detections(s, data=data)
         learned, analytic = evaluate_lifter(lifter, s, analytic_root=True, source=source, flip_test=flip_test)
-        out[key] = {"inputs": inputs, "source": source, "stride": stride, "flip_test": flip_test,
+        used_flip = lifter.flip_test if flip_test is None else flip_test
+        out[key] = {"inputs": inputs, "source": source, "stride": stride, "flip_test": used_flip,
                     "learned": summary(learned), "analytic_root": summary(analytic)}
         print(key, json.dumps(out[key]["learned"]))
     return out
@@ -58,6 +65,8 @@ def main() -> None:
     ap.add_argument("--name", required=True)
     ap.add_argument("--description", default="")
     ap.add_argument("--default", action="store_true", help="make it the default model")
+    ap.add_argument("--clean", type=Path, default=None, help="a second checkpoint that serves source='clean'")
+    ap.add_argument("--flip-test", action="store_true", help="flip averaging on by default for this model")
     ap.add_argument("--skip-full", action="store_true", help="do not evaluate every 5th frame")
     ap.add_argument("--h36m", type=Path, default=None)
     args = ap.parse_args()
@@ -70,20 +79,39 @@ def main() -> None:
         src = args.checkpoint.with_suffix(ext)
         if src.is_file():
             shutil.copyfile(src, dst.with_suffix(ext))
-    lifter = Lifter.from_checkpoint(dst, name=args.name)
+    dst_clean = None
+    if args.clean is not None:
+        dst_clean = root / "weights" / f"{args.name}_clean.pt"
+        shutil.copyfile(args.clean, dst_clean)
+        for ext in (".curve.json", ".curve.png"):
+            src = args.clean.with_suffix(ext)
+            if src.is_file():
+                shutil.copyfile(src, dst_clean.with_suffix(ext))
+    lifter = Lifter.from_checkpoint(dst, name=args.name, clean=dst_clean)
+    if args.flip_test:
+        lifter.flip_test = True
+        if lifter.clean is not None:
+            lifter.clean.flip_test = True
     keys = [k for k in EVALUATIONS if not (args.skip_full and EVALUATIONS[k][2] == 5)]
     metrics = measure(lifter, H36M(args.h36m), keys=keys)
     reg_path = root / "models.json"
     reg = json.loads(reg_path.read_text()) if reg_path.is_file() else {"default": args.name, "models": {}}
-    reg["models"][args.name] = {
+    entry = {
         "file": f"weights/{args.name}.pt",
         "sha256": sha256_file(dst),
         "description": args.description,
         "train_command": lifter.meta.get("command", ""),
         "train_minutes": round(float(lifter.meta.get("minutes", 0.0)), 1),
         "samples_seen": lifter.meta.get("samples_seen"),
-        "metrics": metrics,
     }
+    if dst_clean is not None and lifter.clean is not None:
+        entry |= {"clean_file": f"weights/{dst_clean.name}", "clean_sha256": sha256_file(dst_clean),
+                  "clean_train_command": lifter.clean.meta.get("command", ""),
+                  "clean_train_minutes": round(float(lifter.clean.meta.get("minutes", 0.0)), 1),
+                  "clean_samples_seen": lifter.clean.meta.get("samples_seen")}
+    if args.flip_test:
+        entry["flip_test"] = True
+    reg["models"][args.name] = entry | {"metrics": metrics}
     if args.default:
         reg["default"] = args.name
     tmp = reg_path.with_suffix(".json.tmp")
