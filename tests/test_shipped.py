@@ -5,10 +5,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import requires_h36m
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from lifter import CheckpointError, Lifter, available_models
+from lifter import CheckpointError, Lifter, available_models, demo_sample
+from lifter.camera import CANONICAL_FOCAL, project
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
 from lifter.resources import asset, registry
@@ -18,6 +22,15 @@ ROOT = Path(__file__).resolve().parents[1]
 # summation order (threads, BLAS), far below these bounds.
 TOL_MM = 0.3
 MAX_WEIGHTS_BYTES = 40e6
+_F, _C = 1145.0, np.array([512.0, 515.0])
+_DEMO = demo_sample("walking")
+_LIFTERS: dict[str, Lifter] = {}
+
+
+def _default() -> Lifter:
+    if "default" not in _LIFTERS:
+        _LIFTERS["default"] = Lifter.from_pretrained()
+    return _LIFTERS["default"]
 
 
 def _slices() -> list[tuple[str, str]]:
@@ -73,3 +86,36 @@ def test_shipped_weights_reproduce_recorded_metrics(h36m, name, key):
     for k in ("mpjpe", "pa_mpjpe", "mrpe"):
         assert getattr(learned, k) == pytest.approx(rec["learned"][k], abs=TOL_MM), k
         assert getattr(analytic, k) == pytest.approx(rec["analytic_root"][k], abs=TOL_MM), k
+
+
+@settings(max_examples=20, deadline=None)
+@given(k=st.floats(0.1, 10.0), shift=st.tuples(st.floats(-300, 300), st.floats(-300, 300)),
+       source=st.sampled_from(["clean", "detected"]))
+def test_default_is_invariant_to_image_scale_and_principal_point(k, shift, source):
+    """The shipped default, on the issue's property: the same physical camera imaged at k x the resolution
+    (keypoints, focal and principal point scaled together), or with the principal point and the 2D moved
+    together, gives the same root and pose within 0.5 % (camera-space input: exact up to float32 rounding)."""
+    lifter = _default()
+    if lifter.config.input_space != "camera":
+        pytest.skip("the default reads pixels; only reference-camera models are invariant by construction")
+    pose = _DEMO.pose_3d
+    kp = project(pose, focal=_F, principal_point=_C)
+    a = lifter.lift(kp, focal=_F, principal_point=_C, source=source)
+    b = lifter.lift(kp * k, focal=_F * k, principal_point=_C * k, source=source)
+    d = np.asarray(shift)
+    c = lifter.lift(kp + d, focal=_F, principal_point=_C + d, source=source)
+    for other in (b, c):
+        np.testing.assert_allclose(other.root, a.root, rtol=5e-3)
+        np.testing.assert_allclose(other.relative, a.relative, atol=5e-3 * np.abs(a.relative).max())
+
+
+def test_default_knows_the_root_only_up_to_z_over_f_without_a_focal():
+    """Unknown focal (paper Eq. 5-6): the lift assumes the reference camera and says so; what it states is Z/f
+    (the canonical depth / F0), and the root lies on the ray of the 2D root through that camera."""
+    lifter = _default()
+    kp = project(_DEMO.pose_3d, focal=_F, principal_point=_C)
+    res = lifter.lift(kp, principal_point=_C)
+    assert not res.metric_depth and res.focal_source == "reference"
+    f = res.focal[..., 0]
+    assert res.root[2] / f == pytest.approx(res.canonical_depth / CANONICAL_FOCAL, rel=1e-6)
+    np.testing.assert_allclose(project(res.root[None], focal=f, principal_point=_C)[0], kp[0], atol=1e-3)
