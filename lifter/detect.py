@@ -771,32 +771,60 @@ class DetectedPose:
     warnings: tuple[str, ...] = ()
 
 
+def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D) -> list[DetectedPose]:
+    """Everyone ``estimator`` finds in a loaded image, largest (box area) first, each converted to H36M-17
+    in px of the upright full-resolution image. An empty list when nobody is found."""
+    t0 = time.perf_counter()
+    found = estimator.detect(image.rgb)
+    dt = time.perf_counter() - t0
+    found = sorted(found, key=lambda d: d.area, reverse=True)
+    out = []
+    for det in found:
+        d = det.scaled(1.0 / image.scale) if image.scale != 1.0 else det
+        fmt = get_format(d.keypoint_format)
+        kp17 = convert(d.keypoints, src=d.keypoint_format)
+        scores = np.array([min(float(d.scores[k]) for k, _ in rule) for rule in fmt.to_h36m])
+        out.append(DetectedPose(keypoints_2d=kp17, scores=scores, raw=d, num_people=len(found),
+                                image_size=image.size, seconds=dt, warnings=tuple(image.notes)))
+    return out
+
+
+def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseEstimator2D,
+                  max_side: int = DEFAULT_MAX_SIDE_PX, max_people: int | None = None) -> list[DetectedPose]:
+    """Everyone in an image (a path or a :class:`LoadedImage`), largest first, in H36M-17 (see
+    :func:`people_h36m`); at most ``max_people`` (the largest), with a warning on the first person when more
+    were found. Raises :class:`ImageError` or :class:`NoPersonError`."""
+    img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
+    people = people_h36m(img, estimator=estimator)
+    if not people:
+        where = f"{img.path}: " if img.path is not None else ""
+        extra = f" (searched a copy downscaled by {img.scale:.3g})" if img.scale < 1.0 else ""
+        raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
+    if max_people is not None and len(people) > max_people:
+        from dataclasses import replace
+
+        note = f"{len(people)} people found; the {max_people} largest are lifted (max_people)"
+        people = [replace(q, warnings=q.warnings + (note,)) for q in people[:max_people]]
+    return people
+
+
 def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseEstimator2D,
                 max_side: int = DEFAULT_MAX_SIDE_PX) -> DetectedPose:
     """Run ``estimator`` on an image (a path or a :class:`LoadedImage`), pick the largest person and
     convert their keypoints to H36M-17. Raises :class:`ImageError` or :class:`NoPersonError`."""
-    img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
-    t0 = time.perf_counter()
-    people = estimator.detect(img.rgb)
-    dt = time.perf_counter() - t0
-    where = f"{img.path}: " if img.path is not None else ""
-    if not people:
-        extra = f" (searched a copy downscaled by {img.scale:.3g})" if img.scale < 1.0 else ""
-        raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
-    people = sorted(people, key=lambda d: d.area, reverse=True)
-    chosen = people[0].scaled(1.0 / img.scale) if img.scale != 1.0 else people[0]
-    notes = list(img.notes)
+    people = detect_people(image, estimator=estimator, max_side=max_side)
+    chosen = people[0]
     if len(people) > 1:
-        notes.append(f"{len(people)} people found; using the largest (box {chosen.bbox_xywh[2]:.0f} x "
-                     f"{chosen.bbox_xywh[3]:.0f} px)")
-    fmt = get_format(chosen.keypoint_format)
-    kp17 = convert(chosen.keypoints, src=chosen.keypoint_format)
-    scores = np.array([min(float(chosen.scores[k]) for k, _ in rule) for rule in fmt.to_h36m])
-    return DetectedPose(keypoints_2d=kp17, scores=scores, raw=chosen, num_people=len(people), image_size=img.size,
-                        seconds=dt, warnings=tuple(notes))
+        from dataclasses import replace
+
+        box = chosen.raw.bbox_xywh
+        chosen = replace(chosen, warnings=chosen.warnings + (
+            f"{len(people)} people found; using the largest (box {box[2]:.0f} x {box[3]:.0f} px)",))
+    return chosen
 
 
 __all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
            "ExifCamera", "FocalGuess", "ImageError", "LoadedImage", "MissingDependencyError", "NoPersonError",
-           "PoseEstimator2D", "available_estimators", "guess_focal", "detect_pose", "focal_from_exif",
+           "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",
+           "ensure_pose_task", "people_h36m", "focal_from_exif",
            "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

@@ -58,47 +58,67 @@ def _pose(pose: Any) -> np.ndarray:
 # ------------------------------------------------------------------------------------------------
 
 
+def _poses(pose: Any) -> np.ndarray:
+    """One ``(17, 3)`` pose or several ``(n, 17, 3)`` as ``(n, 17, 3)`` float64 mm."""
+    p = as_points(pose, name="pose", dim=3, num_joints=NUM_JOINTS)
+    if p.ndim == 2:
+        return p[None]
+    if p.ndim != 3 or len(p) == 0:
+        raise PoseLifterError(f"pose: expected (17, 3) or (n, 17, 3) mm, got {tuple(p.shape)}")
+    return p
+
+
+def person_prefix(k: int) -> str:
+    """Node-name prefix of person ``k`` (0-based) in a scene: '' for the first, ``person<k+1>_`` after."""
+    return "" if k == 0 else f"person{k + 1}_"
+
+
 def skeleton_scene(pose: Any, *, joint_radius_mm: float = 25.0, bone_radius_mm: float = 12.0) -> Any:
-    """A ``trimesh.Scene`` of the skeleton of ``pose`` ``(17, 3)`` mm (camera frame), in metres, y-up."""
+    """A ``trimesh.Scene`` of the skeleton of ``pose`` ``(17, 3)`` mm (camera frame), in metres, y-up; several
+    people ``(n, 17, 3)`` go into one scene, person ``k``'s nodes prefixed by :func:`person_prefix`."""
     import trimesh
 
-    p = to_y_up(_pose(pose)) / 1000.0
     scene = trimesh.Scene()
-    for j, name in enumerate(JOINT_NAMES):
-        s = trimesh.creation.icosphere(subdivisions=2, radius=joint_radius_mm / 1000.0)
-        s.apply_translation(p[j])
-        s.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
-        scene.add_geometry(s, node_name=f"joint_{name}", geom_name=f"joint_{name}")
-    for a, b in EDGES:
-        length = float(np.linalg.norm(p[b] - p[a]))
-        if length < 1e-6:
-            continue
-        c = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, segment=np.stack([p[a], p[b]]), sections=12)
-        c.visual.face_colors = SIDE_COLORS[joint_side(b)]  # type: ignore[union-attr]
-        nm = f"bone_{JOINT_NAMES[a]}_{JOINT_NAMES[b]}"
-        scene.add_geometry(c, node_name=nm, geom_name=nm)
+    for k, one in enumerate(_poses(pose)):
+        p = to_y_up(one) / 1000.0
+        pre = person_prefix(k)
+        for j, name in enumerate(JOINT_NAMES):
+            s = trimesh.creation.icosphere(subdivisions=2, radius=joint_radius_mm / 1000.0)
+            s.apply_translation(p[j])
+            s.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
+            scene.add_geometry(s, node_name=f"{pre}joint_{name}", geom_name=f"{pre}joint_{name}")
+        for a, b in EDGES:
+            length = float(np.linalg.norm(p[b] - p[a]))
+            if length < 1e-6:
+                continue
+            c = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, segment=np.stack([p[a], p[b]]), sections=12)
+            c.visual.face_colors = SIDE_COLORS[joint_side(b)]  # type: ignore[union-attr]
+            nm = f"{pre}bone_{JOINT_NAMES[a]}_{JOINT_NAMES[b]}"
+            scene.add_geometry(c, node_name=nm, geom_name=nm)
     return scene
 
 
 def write_glb(pose: Any, path: str | os.PathLike[str], **kwargs: Any) -> Path:
-    """Write the skeleton of ``pose`` ``(17, 3)`` mm (camera frame) as a binary glTF; see :func:`skeleton_scene`."""
+    """Write the skeleton of ``pose`` ``(17, 3)`` mm (camera frame), or of several people ``(n, 17, 3)`` in one
+    scene, as a binary glTF; see :func:`skeleton_scene`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     data = skeleton_scene(pose, **kwargs).export(file_type="glb")
     return write_atomic(path, data)
 
 
-def read_glb_joints(path: str | os.PathLike[str]) -> np.ndarray:
-    """Joint positions ``(17, 3)`` mm, camera frame, from a GLB written by :func:`write_glb`
-    (the centres of the ``joint_<name>`` spheres)."""
+def read_glb_joints(path: str | os.PathLike[str], *, person: int = 0) -> np.ndarray:
+    """Joint positions ``(17, 3)`` mm, camera frame, of person ``person`` (0 = the first) from a GLB written by
+    :func:`write_glb` (the centres of its ``joint_<name>`` spheres)."""
     import trimesh
 
     scene: Any = trimesh.load(str(path), file_type="glb", force="scene")
     out = np.full((NUM_JOINTS, 3), np.nan)
+    pre = person_prefix(person) + "joint_"
     for node in scene.graph.nodes_geometry:
         transform, geom = scene.graph[node]
-        name = str(node).removeprefix("joint_")
-        if not str(node).startswith("joint_") or name not in JOINT_NAMES:
+        name = str(node).removeprefix(pre)
+        if not str(node).startswith(pre) or name not in JOINT_NAMES:
             continue
         v = np.asarray(scene.geometry[geom].vertices, np.float64)
         v = v @ transform[:3, :3].T + transform[:3, 3]
@@ -106,6 +126,173 @@ def read_glb_joints(path: str | os.PathLike[str]) -> np.ndarray:
     if np.isnan(out).any():
         raise PoseLifterError(f"{path}: not a poselifter skeleton GLB (joint spheres missing)")
     return from_y_up(out * 1000.0)
+
+
+def _quat_z_to(d: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(..., 4)`` (x, y, z, w) turning +z onto the unit vectors ``d (..., 3)``."""
+    z = np.array([0.0, 0.0, 1.0])
+    q = np.concatenate([np.cross(z, d), (1.0 + d @ z)[..., None]], axis=-1)
+    flip = q[..., 3] < 1e-9  # d = -z: half a turn about x
+    q[flip] = [1.0, 0.0, 0.0, 0.0]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathLike[str], *, fps: float,
+                        joint_radius_mm: float = 25.0, bone_radius_mm: float = 12.0) -> Path:
+    """An animated binary glTF of several tracked people: ``tracks[track_id] = (frame_indices (n,), poses
+    (n, 17, 3) mm camera frame)``; frame ``i`` is at ``i / fps`` s. Metres, y-up, like :func:`write_glb`.
+
+    trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
+    spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
+    gets translation / rotation / scale channels sampled at every frame of the clip (LINEAR); in a frame
+    without the person, their nodes are scaled to zero (hidden). :func:`read_glb_animation` reads it back.
+    """
+    import json
+    import struct
+
+    import trimesh
+
+    if not (math.isfinite(fps) and fps > 0):
+        raise PoseLifterError(f"fps must be > 0, got {fps}")
+    if not tracks:
+        raise PoseLifterError("write_glb_animation: no tracks")
+    clean: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for tid, (idx, poses) in tracks.items():
+        P = as_points(poses, name=f"track {tid} poses", dim=3, num_joints=NUM_JOINTS)
+        ii = np.asarray(idx, np.int64).reshape(-1)
+        if P.ndim != 3 or len(P) != len(ii) or len(ii) == 0 or np.any(np.diff(ii) <= 0):
+            raise PoseLifterError(f"track {tid}: expected increasing frame indices (n,) and poses (n, 17, 3), got "
+                                  f"{ii.shape} and {tuple(P.shape)}")
+        clean[int(tid)] = (ii, to_y_up(P) / 1000.0)
+    first = min(int(i[0]) for i, _ in clean.values())
+    last = max(int(i[-1]) for i, _ in clean.values())
+    frames = np.arange(first, last + 1)
+    T = len(frames)
+    scene = trimesh.Scene()
+    channels: list[tuple[str, str, np.ndarray]] = []  # node name, path, (T, 3|4) values
+    for tid, (ii, p) in sorted(clean.items()):
+        present = np.isin(frames, ii)
+        full = np.zeros((T, NUM_JOINTS, 3))
+        full[present] = p
+        # hold the nearest seen pose where absent (hidden by a zero scale there)
+        seen = np.flatnonzero(present)
+        nearest = seen[np.clip(np.searchsorted(seen, np.arange(T)), 0, len(seen) - 1)]
+        full[~present] = full[nearest[~present]]
+        vis = present.astype(np.float64)[:, None]
+        pre = f"track{tid}_"
+        for j, name in enumerate(JOINT_NAMES):
+            sph = trimesh.creation.icosphere(subdivisions=2, radius=joint_radius_mm / 1000.0)
+            sph.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
+            nm = f"{pre}joint_{name}"
+            scene.add_geometry(sph, node_name=nm, geom_name=nm)
+            channels += [(nm, "translation", full[:, j]), (nm, "scale", np.repeat(vis, 3, axis=1))]
+        for a_, b_ in EDGES:
+            cyl = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, height=1.0, sections=12)
+            cyl.apply_translation([0.0, 0.0, 0.5])  # from the origin along +z, unit length
+            cyl.visual.face_colors = SIDE_COLORS[joint_side(b_)]  # type: ignore[union-attr]
+            nm = f"{pre}bone_{JOINT_NAMES[a_]}_{JOINT_NAMES[b_]}"
+            scene.add_geometry(cyl, node_name=nm, geom_name=nm)
+            v = full[:, b_] - full[:, a_]
+            length = np.linalg.norm(v, axis=-1)
+            d = v / np.maximum(length, 1e-9)[:, None]
+            d[length < 1e-9] = [0.0, 0.0, 1.0]
+            scale = np.stack([vis[:, 0], vis[:, 0], length * vis[:, 0]], axis=1)
+            channels += [(nm, "translation", full[:, a_]), (nm, "rotation", _quat_z_to(d)), (nm, "scale", scale)]
+    glb = scene.export(file_type="glb")
+    if not isinstance(glb, bytes):  # pragma: no cover -- trimesh returns bytes for glb
+        raise PoseLifterError("GLB export: trimesh returned no bytes")
+    # ---- add the animation to trimesh's glTF
+    json_len = struct.unpack_from("<I", glb, 12)[0]
+    gltf = json.loads(glb[20:20 + json_len].decode())
+    off = 20 + json_len
+    bin_len = struct.unpack_from("<I", glb, off)[0]
+    blob = bytearray(glb[off + 8:off + 8 + bin_len])
+    views, accessors = gltf.setdefault("bufferViews", []), gltf.setdefault("accessors", [])
+
+    def add(arr: np.ndarray, kind: str, minmax: bool = False) -> int:
+        while len(blob) % 4:
+            blob.append(0)
+        data = np.ascontiguousarray(arr, np.float32)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes})
+        blob.extend(data.tobytes())
+        acc: dict[str, Any] = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data), "type": kind}
+        if minmax:
+            acc["min"], acc["max"] = [float(data.min())], [float(data.max())]
+        accessors.append(acc)
+        return len(accessors) - 1
+
+    node_of = {n.get("name"): i for i, n in enumerate(gltf["nodes"])}
+    time_acc = add((frames / fps).astype(np.float32), "SCALAR", minmax=True)
+    samplers, chans = [], []
+    for nm, what, values in channels:
+        node = node_of.get(nm)
+        if node is None:  # pragma: no cover -- trimesh names nodes as given
+            raise PoseLifterError(f"GLB export: node {nm} missing")
+        gltf["nodes"][node].pop("matrix", None)
+        gltf["nodes"][node][what] = [float(x) for x in values[0]]
+        samplers.append({"input": time_acc, "output": add(values, "VEC4" if what == "rotation" else "VEC3"),
+                         "interpolation": "LINEAR"})
+        chans.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": what}})
+    gltf["animations"] = [{"name": "poselifter", "samplers": samplers, "channels": chans}]
+    while len(blob) % 4:
+        blob.append(0)
+    gltf["buffers"] = [{"byteLength": len(blob)}]
+    js = json.dumps(gltf, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    total = 12 + 8 + len(js) + 8 + len(blob)
+    out = (struct.pack("<III", 0x46546C67, 2, total) + struct.pack("<II", len(js), 0x4E4F534A) + js
+           + struct.pack("<II", len(blob), 0x004E4942) + bytes(blob))
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_atomic(path, out)
+
+
+def read_glb_animation(path: str | os.PathLike[str]) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """``(times (T,) s, {track_id: joints (T, 17, 3) mm camera frame, NaN where the person is hidden})`` from a
+    GLB written by :func:`write_glb_animation` (the joint spheres' animated translations)."""
+    import json
+    import re
+    import struct
+
+    raw = Path(path).read_bytes()
+    if raw[:4] != b"glTF":
+        raise PoseLifterError(f"{path}: not a binary glTF")
+    json_len = struct.unpack_from("<I", raw, 12)[0]
+    gltf = json.loads(raw[20:20 + json_len].decode())
+    off = 20 + json_len
+    blob = raw[off + 8:off + 8 + struct.unpack_from("<I", raw, off)[0]]
+
+    def read(acc_i: int) -> np.ndarray:
+        acc = gltf["accessors"][acc_i]
+        view = gltf["bufferViews"][acc["bufferView"]]
+        width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[acc["type"]]
+        start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+        return np.frombuffer(blob, np.float32, acc["count"] * width, start).reshape(acc["count"], width)
+
+    anims = gltf.get("animations") or []
+    if not anims:
+        raise PoseLifterError(f"{path}: no animation in this GLB")
+    times: np.ndarray | None = None
+    joints: dict[int, np.ndarray] = {}
+    scales: dict[tuple[int, int], np.ndarray] = {}
+    for ch in anims[0]["channels"]:
+        name = gltf["nodes"][ch["target"]["node"]].get("name", "")
+        m = re.fullmatch(r"track(\d+)_joint_(\w+)", name)
+        if not m or m.group(2) not in JOINT_NAMES:
+            continue
+        smp = anims[0]["samplers"][ch["sampler"]]
+        times = read(smp["input"])[:, 0].astype(np.float64)
+        vals = read(smp["output"]).astype(np.float64)
+        tid, j = int(m.group(1)), JOINT_NAMES.index(m.group(2))
+        if ch["target"]["path"] == "translation":
+            joints.setdefault(tid, np.full((len(vals), NUM_JOINTS, 3), np.nan))[:, j] = vals
+        elif ch["target"]["path"] == "scale":
+            scales[(tid, j)] = vals[:, 0]
+    if times is None:
+        raise PoseLifterError(f"{path}: no animated joints")
+    for (tid, j), sc in scales.items():
+        joints[tid][sc < 0.5, j] = np.nan
+    return times, {tid: from_y_up(v * 1000.0) for tid, v in joints.items()}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -142,7 +329,8 @@ def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) ->
         for c in kids:
             emit(c, depth + 1)
         if not kids:
-            lines.extend([f"{ind}  End Site", f"{ind}  {{", f"{ind}    OFFSET 0.000000 0.000000 0.000000", f"{ind}  }}"])
+            lines.extend([f"{ind}  End Site", f"{ind}  {{", f"{ind}    OFFSET 0.000000 0.000000 0.000000",
+                          f"{ind}  }}"])
         lines.append(f"{ind}}}")
 
     emit(0, 0)
@@ -151,6 +339,65 @@ def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) ->
     motion[:3] = p[0]
     lines += ["MOTION", "Frames: 1", f"Frame Time: {frame_time:.6f}", fmt(motion)]
     return "\n".join(lines) + "\n"
+
+
+def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
+    """A BVH animation of one person over ``T`` frames, ``poses (T, 17, 3)`` mm (camera frame), ``fps`` frames/s.
+
+    A lifted pose's bone lengths change a little from frame to frame, so the animation is exact by
+    translation, not rotation: each OFFSET is the bone vector averaged over the frames, every joint has the
+    channels ``Xposition Yposition Zposition Zrotation Xrotation Yrotation``, the root's position is its
+    location in each frame and a joint's position channels hold its bone vector's change from the OFFSET
+    (added to it), with zero rotations. :func:`read_bvh_frames` reads it back exactly; an importer that ignores
+    position channels on non-root joints shows the average-length bones moving with the root.
+    """
+    if units not in UNITS_MM:
+        raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
+    if not (math.isfinite(fps) and fps > 0):
+        raise PoseLifterError(f"fps must be > 0, got {fps}")
+    P = as_points(poses, name="poses", dim=3, num_joints=NUM_JOINTS)
+    if P.ndim != 3 or len(P) == 0:
+        raise PoseLifterError(f"poses: expected (T, 17, 3) mm with T >= 1, got {tuple(P.shape)}")
+    p = to_y_up(P) / UNITS_MM[units]
+    par = np.array([max(q, 0) for q in PARENTS])
+    bones = p - p[:, par]
+    bones[:, 0] = p[:, 0]
+    offsets = bones.mean(0)
+    offsets[0] = 0.0
+    lines: list[str] = ["HIERARCHY"]
+
+    def fmt(v: np.ndarray) -> str:
+        return " ".join(f"{x:.5f}" for x in v)
+
+    order: list[int] = []
+
+    def emit(j: int, depth: int) -> None:
+        ind = "  " * depth
+        lines.append(f"ROOT {JOINT_NAMES[j]}" if j == 0 else f"{ind}JOINT {JOINT_NAMES[j]}")
+        order.append(j)
+        lines.extend([f"{ind}{{", f"{ind}  OFFSET {fmt(offsets[j])}",
+                      f"{ind}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"])
+        kids = _children(j)
+        for c in kids:
+            emit(c, depth + 1)
+        if not kids:
+            lines.extend([f"{ind}  End Site", f"{ind}  {{", f"{ind}    OFFSET 0.000000 0.000000 0.000000",
+                          f"{ind}  }}"])
+        lines.append(f"{ind}}}")
+
+    emit(0, 0)
+    lines += ["MOTION", f"Frames: {len(p)}", f"Frame Time: {1.0 / fps:.6f}"]
+    zeros = np.zeros(3)
+    for t in range(len(p)):
+        lines.append(" ".join(fmt(np.r_[bones[t, j] - offsets[j], zeros]) for j in order))
+    return "\n".join(lines) + "\n"
+
+
+def write_bvh_animation(poses: Any, path: str | os.PathLike[str], *, fps: float, units: str = "cm") -> Path:
+    """Write ``poses (T, 17, 3)`` mm (camera frame) as a BVH animation (:func:`bvh_animation_text`)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_atomic(path, bvh_animation_text(poses, fps=fps, units=units))
 
 
 def write_bvh(pose: Any, path: str | os.PathLike[str], *, units: str = "cm") -> Path:
@@ -169,10 +416,11 @@ def _rot(axis: str, deg: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
-    """Forward kinematics of the first frame of a BVH file (any joint names/channels; Euler angles in
-    the listed channel order, intrinsic). Returns the positions of the joints named like the H36M
-    joints, ``(17, 3)`` mm, camera frame (the inverse of :func:`write_bvh`)."""
+def read_bvh_frames(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
+    """Forward kinematics of every frame of a BVH file (any joint names/channels; Euler angles in the listed
+    channel order, intrinsic; position channels add to a joint's OFFSET). Returns the positions of the joints
+    named like the H36M joints, ``(T, 17, 3)`` mm, camera frame (the inverse of :func:`write_bvh` and
+    :func:`write_bvh_animation`)."""
     tokens = Path(path).read_text().split()
     i = 0
     joints: list[tuple[str, int, np.ndarray, list[str]]] = []  # name, parent, offset, channels
@@ -211,36 +459,51 @@ def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
             break
         else:
             i += 1
-    # MOTION: Frames: N  Frame Time: dt  values...
-    while i < len(tokens) and tokens[i] != "Time:":
-        i += 1
-    values = [float(x) for x in tokens[i + 2:]]
-    pos = np.zeros((len(joints), 3))
-    rot = [np.eye(3)] * len(joints)
-    k = 0
-    for j, (_, par, off, ch) in enumerate(joints):
-        R = np.eye(3)
-        trans = np.zeros(3)
-        for c in ch:
-            v = values[k]
-            k += 1
-            if c.endswith("position"):
-                trans["XYZ".index(c[0])] = v
-            else:
-                R = R @ _rot(c[0], v)
-        if par < 0:
-            pos[j] = off + trans
-            rot[j] = R
-        else:
-            pos[j] = pos[par] + rot[par] @ off
-            rot[j] = rot[par] @ R
     names = [n for n, *_ in joints]
     missing = [n for n in JOINT_NAMES if n not in names]
     if missing:
         raise PoseLifterError(f"{path}: BVH lacks the H36M joints {missing}")
-    out = np.stack([pos[names.index(n)] for n in JOINT_NAMES])
+    # MOTION: Frames: N  Frame Time: dt  values...
+    n_frames = 1
+    while i < len(tokens) and tokens[i] != "Time:":
+        if tokens[i] == "Frames:":
+            n_frames = int(tokens[i + 1])
+        i += 1
+    values = np.array([float(x) for x in tokens[i + 2:]])
+    n_ch = sum(len(ch) for *_, ch in joints)
+    if n_ch == 0 or len(values) < n_frames * n_ch:
+        raise PoseLifterError(f"{path}: BVH MOTION has {len(values)} values, expected {n_frames} x {n_ch}")
+    out = np.empty((n_frames, NUM_JOINTS, 3))
+    for f in range(n_frames):
+        row = values[f * n_ch:(f + 1) * n_ch]
+        pos = np.zeros((len(joints), 3))
+        rot = [np.eye(3)] * len(joints)
+        k = 0
+        for j, (_, par, off, ch) in enumerate(joints):
+            R = np.eye(3)
+            trans = np.zeros(3)
+            for c in ch:
+                v = row[k]
+                k += 1
+                if c.endswith("position"):
+                    trans["XYZ".index(c[0])] = v
+                else:
+                    R = R @ _rot(c[0], v)
+            if par < 0:
+                pos[j] = off + trans
+                rot[j] = R
+            else:
+                pos[j] = pos[par] + rot[par] @ (off + trans)
+                rot[j] = rot[par] @ R
+        out[f] = np.stack([pos[names.index(n)] for n in JOINT_NAMES])
     return from_y_up(out * UNITS_MM[units])
 
 
-__all__ = ["bvh_text", "from_y_up", "read_bvh", "read_glb_joints", "skeleton_scene", "to_y_up", "write_bvh",
-           "write_glb"]
+def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
+    """The first frame of :func:`read_bvh_frames`: ``(17, 3)`` mm, camera frame (the inverse of :func:`write_bvh`)."""
+    return read_bvh_frames(path, units=units)[0]
+
+
+__all__ = ["bvh_animation_text", "bvh_text", "from_y_up", "person_prefix", "read_bvh", "read_bvh_frames",
+           "read_glb_animation", "read_glb_joints", "skeleton_scene", "to_y_up", "write_bvh", "write_bvh_animation",
+           "write_glb", "write_glb_animation"]

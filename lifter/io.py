@@ -36,12 +36,33 @@ FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose2
 
 
 @dataclass(frozen=True)
+class PersonResult:
+    """One lifted person of an image or keypoint file: keypoints_2d ``(17, 2)`` px, absolute / relative
+    ``(17, 3)`` mm, root ``(3,)`` mm, canonical_depth mm, scores ``(17,)`` or None."""
+
+    keypoints_2d: np.ndarray
+    absolute: np.ndarray
+    relative: np.ndarray
+    root: np.ndarray
+    canonical_depth: float
+    scores: np.ndarray | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
+        return {"keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
+                "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
+                "scores": None if self.scores is None else r(self.scores, 3)}
+
+
+@dataclass(frozen=True)
 class LiftRecord:
     """The result for one input; :meth:`to_json` is what ``DIR/<name>.json`` holds.
 
     keypoints_2d: ``(17, 2)`` px (H36M order); absolute, relative: ``(17, 3)`` mm camera frame;
     root: ``(3,)`` mm; canonical_depth: mm (at a 1000-px focal); focal: ``(fx, fy)`` px;
     principal_point: ``(cx, cy)`` px; image_size: ``(W, H)`` px or None; scores: ``(17,)`` or None.
+    The top-level pose fields describe the largest person; ``people`` holds everyone lifted, largest first
+    (``people[0]`` is the top-level person).
     """
 
     input: str
@@ -62,6 +83,7 @@ class LiftRecord:
     detector: str | None = None
     warnings: tuple[str, ...] = field(default=())
     source: str = "detected"
+    people: tuple[PersonResult, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
@@ -78,6 +100,7 @@ class LiftRecord:
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
             "num_people": self.num_people,
             "scores": None if self.scores is None else r(self.scores, 3), "warnings": list(self.warnings),
+            "people": [q.to_json() for q in self.people],
         }
 
 
@@ -94,6 +117,8 @@ class KeypointFile:
     principal_point: np.ndarray | None = None
     warnings: tuple[str, ...] = ()
     source: str = "detected"
+    people: tuple[np.ndarray, ...] = ()
+    """Everyone in the file, ``(J, 2)`` px each, largest (box area) first; ``keypoints`` is ``people[0]``."""
 
 
 MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
@@ -201,20 +226,26 @@ def _load_json(p: Path) -> Any:
         raise PoseLifterError(f"{p}: JSON nested too deeply to be a keypoint file") from None
 
 
-def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
-    """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
-    p = Path(path)
-    d = _load_json(p)
-    notes: list[str] = []
-    fmt = default_format
-    people: list[Any]
+def _people_of(d: Any, p: Path, fmt: str | None) -> tuple[list[Any], str | None, dict[str, Any]]:
+    """The raw keypoint lists of the people in one decoded frame object, the format it implies and its
+    camera fields (module docstring layouts)."""
     meta: dict[str, Any] = {}
-    if isinstance(d, dict) and "people" in d:  # OpenPose output
+    if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
         if not isinstance(d["people"], list):
-            raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} objects, got "
-                                  f"{_short(d['people'])}")
-        people = [q.get("pose_keypoints_2d") for q in d["people"] if isinstance(q, dict)]
-        fmt = fmt or "openpose25"
+            raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} or "
+                                  f"{{\"keypoints\": [...]}} objects, got {_short(d['people'])}")
+        people = []
+        for q in d["people"]:
+            if isinstance(q, dict) and "pose_keypoints_2d" in q:
+                people.append(q["pose_keypoints_2d"])
+                fmt = fmt or "openpose25"
+            elif isinstance(q, dict):
+                people.append(q.get("keypoints"))
+            else:
+                people.append(q)
+        meta = {k: v for k, v in d.items() if k != "people"}
+        if isinstance(meta.get("format"), str):
+            fmt = meta["format"]
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
         people = [q.get("keypoints") for q in d]
         fmt = fmt or "coco17"
@@ -222,17 +253,19 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         people = [d["keypoints"]]
         meta = d
         fmt = d.get("format") or fmt
-        if fmt is not None and not isinstance(fmt, str):
-            raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
-                                  f"{_short(fmt)}")
     elif isinstance(d, list):
         people = [d]
     else:
         raise PoseLifterError(f"{p}: expected an object with 'keypoints', a list of [x, y] rows, OpenPose "
                               "'people' or a list of people")
-    people = [q for q in people if q is not None and q != []]
-    if not people:
-        raise PoseLifterError(f"{p}: no person in the keypoint file")
+    if fmt is not None and not isinstance(fmt, str):
+        raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
+                              f"{_short(fmt)}")
+    return [q for q in people if q is not None and q != []], fmt, meta
+
+
+def _people_arrays(people: list[Any], p: Path, fmt: str | None, notes: list[str]) -> tuple[list[np.ndarray], str]:
+    """Each person as ``(J, 2)`` px, largest (box area) first, checked against the format."""
     parsed = []
     for q in people:
         xy, conf = _rows(q, str(p))
@@ -240,16 +273,16 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         if conf is not None:
             missing |= conf <= 0  # OpenPose / COCO mark undetected joints with confidence 0
         parsed.append((xy, missing))
-    if len(parsed) > 1:
-        def area(item: tuple[np.ndarray, np.ndarray]) -> float:
-            xy, miss = item
-            ok = xy[~miss]
-            return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
+    if not parsed:
+        return [], fmt or H36M17
 
-        parsed.sort(key=area, reverse=True)
-        notes.append(f"{len(parsed)} people in the file; using the largest")
-    xy, missing = parsed[0]
-    J = len(xy)
+    def area(item: tuple[np.ndarray, np.ndarray]) -> float:
+        xy, miss = item
+        ok = xy[~miss]
+        return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
+
+    parsed.sort(key=area, reverse=True)
+    J = len(parsed[0][0])
     if fmt is None:
         if J not in FORMAT_BY_COUNT:
             raise PoseLifterError(f"{p}: {J} joints; give 'format' (one of {list(keypoint_formats())})")
@@ -257,16 +290,24 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         if J == 17:
             notes.append("17 joints without 'format': assumed H36M order (use --format coco17 for COCO keypoints)")
     f = get_format(fmt)
-    if J != f.num_joints:
-        raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {J}")
-    if missing.any():
-        # only the joints a rule uses are needed
-        used = sorted({k for rule in f.to_h36m for k, _ in rule})
-        bad = [f.joint_names[k] for k in used if missing[k]]
-        if bad:
-            raise PoseLifterError(f"{p}: joint(s) {bad} missing (confidence 0 or not finite); every joint the "
-                                  f"{fmt} -> h36m17 rules use must be given")
-        xy = np.where(missing[:, None], 0.0, xy)
+    out = []
+    for xy, missing in parsed:
+        if len(xy) != f.num_joints:
+            raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}")
+        if missing.any():
+            # only the joints a rule uses are needed
+            used = sorted({k for rule in f.to_h36m for k, _ in rule})
+            bad = [f.joint_names[k] for k in used if missing[k]]
+            if bad:
+                raise PoseLifterError(f"{p}: joint(s) {bad} missing (confidence 0 or not finite); every joint the "
+                                      f"{fmt} -> h36m17 rules use must be given")
+            xy = np.where(missing[:, None], 0.0, xy)
+        out.append(xy)
+    return out, fmt
+
+
+def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
+                                                          np.ndarray | None, str]:
     image_size = _image_size_field(meta.get("image_size"), where=str(p))
     focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
     pp = None if meta.get("principal_point") is None else \
@@ -275,10 +316,94 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     if source not in ("detected", "clean"):
         raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "
                               f"(exact 2D: ground truth or hand-placed), got {source!r}")
-    return KeypointFile(keypoints=xy, format=fmt, image_size=image_size, focal=focal, principal_point=pp,
-                        warnings=tuple(notes), source=source)
+    return image_size, focal, pp, source
 
 
+def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
+    """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
+    p = Path(path)
+    d = _load_json(p)
+    notes: list[str] = []
+    if isinstance(d, dict) and "frames" in d:
+        raise PoseLifterError(f"{p}: a keypoint sequence ('frames'); read it with parse_keypoint_sequence")
+    people, fmt, meta = _people_of(d, p, default_format)
+    if not people:
+        raise PoseLifterError(f"{p}: no person in the keypoint file")
+    arrays, fmt = _people_arrays(people, p, fmt, notes)
+    if len(arrays) > 1:
+        notes.append(f"{len(arrays)} people in the file; each is lifted (largest first)")
+    image_size, focal, pp, source = _camera_meta(meta, p)
+    return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
+                        warnings=tuple(notes), source=source, people=tuple(arrays))
+
+
+MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
+"""Keypoint sequences with more frames are refused."""
+
+
+@dataclass(frozen=True)
+class KeypointSequence:
+    """A parsed keypoint sequence: per frame a list of people ``(J, 2)`` px (largest first) in ``format``,
+    the frame rate ``fps`` and the camera fields of the whole sequence."""
+
+    frames: list[list[np.ndarray]]
+    format: str
+    fps: float
+    image_size: tuple[int, int] | None = None
+    focal: np.ndarray | None = None
+    principal_point: np.ndarray | None = None
+    warnings: tuple[str, ...] = ()
+    source: str = "detected"
+
+
+def is_keypoint_sequence(path: str | Path) -> bool:
+    """Whether a JSON file holds a keypoint sequence (an object with ``frames``); False when unreadable."""
+    try:
+        d = _load_json(Path(path))
+    except PoseLifterError:
+        return False
+    return isinstance(d, dict) and "frames" in d
+
+
+def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None) -> KeypointSequence:
+    """Read a keypoint sequence: ``{"frames": [FRAME, ...], "fps": 50, "format": ..., "image_size": ...,
+    "focal": ..., "principal_point": ..., "source": ...}`` where each FRAME is any single-frame layout of
+    the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
+    or an empty list / ``{"people": []}`` for a frame with nobody. ``fps`` is required (frames/s, in (0, 1000])."""
+    p = Path(path)
+    d = _load_json(p)
+    if not (isinstance(d, dict) and "frames" in d):
+        raise PoseLifterError(f"{p}: a keypoint sequence is an object with 'frames' (a list of frames)")
+    raw = d["frames"]
+    if not isinstance(raw, list):
+        raise PoseLifterError(f"{p}: 'frames' must be a list of frames, got {_short(raw)}")
+    if not raw:
+        raise PoseLifterError(f"{p}: 'frames' is empty (a zero-length sequence)")
+    if len(raw) > MAX_SEQUENCE_FRAMES:
+        raise PoseLifterError(f"{p}: {len(raw)} frames is more than the {MAX_SEQUENCE_FRAMES} a sequence may have")
+    fps: Any = d.get("fps")
+    if not (_is_number(fps) and math.isfinite(fps) and 0 < fps <= 1000):
+        raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(fps)}")
+    fmt = d.get("format") or default_format
+    if fmt is not None and not isinstance(fmt, str):
+        raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
+    notes: list[str] = []
+    frames: list[list[np.ndarray]] = []
+    for i, fr in enumerate(raw):
+        where = Path(f"{p} frame {i}")
+        if fr == [] or fr is None or (isinstance(fr, dict) and fr.get("people") == []):
+            frames.append([])
+            continue
+        people, f_fmt, _ = _people_of(fr, where, fmt)
+        arrays, f_fmt = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [])
+        if fmt is None:
+            fmt = f_fmt
+        elif f_fmt != fmt:
+            raise PoseLifterError(f"{where}: format {f_fmt!r} differs from the sequence's {fmt!r}")
+        frames.append(arrays)
+    image_size, focal, pp, source = _camera_meta(d, p)
+    return KeypointSequence(frames=frames, format=fmt or H36M17, fps=float(fps), image_size=image_size, focal=focal,
+                            principal_point=pp, warnings=tuple(notes), source=source)
 
 
 def write_atomic(path: str | Path, data: bytes | str) -> Path:

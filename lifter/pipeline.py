@@ -1,5 +1,7 @@
 """The cascade of the paper, image -> 2D estimator -> lifter, for one input: a photo (:func:`lift_image`) or a
 keypoint JSON file (:func:`lift_keypoint_file`), and the camera each is lifted with (:func:`resolve_camera`).
+Everyone found is lifted, in one batch, into the same camera space (largest first); videos and keypoint
+sequences are in :mod:`lifter.video`.
 
 Camera, in this order: a focal length / principal point the caller gives; a keypoint file's own; for photos the
 EXIF focal length (:func:`lifter.detect.focal_from_exif`); else the default diagonal field of view of the image
@@ -16,8 +18,8 @@ import numpy as np
 
 from ._checks import PoseLifterError, as_pair
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
-from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_pose, guess_focal, load_image
-from .io import LiftRecord, parse_keypoint_json
+from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
+from .io import LiftRecord, PersonResult, parse_keypoint_json
 from .keypoints import convert
 
 
@@ -48,46 +50,72 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
-def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str) -> Any:
+def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None,
+          source: str) -> Any:
     return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
+
+
+def _people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
+            scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
+    """Lift ``(n, 17, 2)`` people in one batch; one :class:`PersonResult` each, in the same order."""
+    res = _lift(lifter, kp17, f, pp, flip_test=flip_test, source=source)
+    cd = np.asarray(res.canonical_depth).reshape(-1)
+    return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
+                              relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],
+                              canonical_depth=float(cd[i]), scores=None if scores is None else scores[i])
+                 for i in range(len(kp17)))
 
 
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
-                       flip_test: bool | None = None) -> LiftRecord:
-    """Lift one keypoint JSON file (module docstring)."""
+                       flip_test: bool | None = None, max_people: int | None = None) -> LiftRecord:
+    """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring)."""
     kf = parse_keypoint_json(path, default_format=default_format)
-    kp17 = convert(kf.keypoints, src=kf.format)
-    f, src, pp, notes = resolve_camera(user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
-                                user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-                                file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
-                                sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
-    res = _lift(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
-    return LiftRecord(input=str(path), kind="keypoints", keypoints_2d=kp17, absolute=res.absolute,
-                      relative=res.relative, root=res.root, canonical_depth=float(res.canonical_depth),
+    notes = list(kf.warnings)
+    people = kf.people or (kf.keypoints,)
+    if max_people is not None and len(people) > max_people:
+        notes.append(f"{len(people)} people in the file; the {max_people} largest are lifted (max_people)")
+        people = people[:max_people]
+    kp17 = convert(np.stack(people), src=kf.format)
+    f, src, pp, cam_notes = resolve_camera(
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
+        file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
+    lifted = _people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
+    top = lifted[0]
+    return LiftRecord(input=str(path), kind="keypoints", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
+                      relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=kf.image_size, model=lifter.name, source_format=kf.format,
-                      warnings=kf.warnings + tuple(notes), source=kf.source)
+                      num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
+                      people=lifted)
 
 
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,
                principal_point: Any | None = None, sensor_width_mm: float | None = None,
                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_side: int = DEFAULT_MAX_SIDE_PX,
-               flip_test: bool | None = None) -> LiftRecord:
-    """Detect the (largest) person in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift
-    them (module docstring)."""
+               flip_test: bool | None = None, max_people: int | None = None) -> LiftRecord:
+    """Detect everyone in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift them all into one
+    camera space, largest first (at most ``max_people``); the top-level fields are the largest person's
+    (module docstring)."""
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
     path = img.path if img.path is not None else "<image>"
-    det = detect_pose(img, estimator=estimator)
-    f, src, pp, notes = resolve_camera(user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
-                                user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-                                file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
-                                sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
-    res = _lift(lifter, det.keypoints_2d, f, pp, flip_test=flip_test, source="detected")
-    return LiftRecord(input=str(path), kind="image", keypoints_2d=det.keypoints_2d, absolute=res.absolute,
-                      relative=res.relative, root=res.root, canonical_depth=float(res.canonical_depth),
+    dets = detect_people(img, estimator=estimator, max_people=max_people)
+    f, src, pp, notes = resolve_camera(
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
+        file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
+        sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
+    lifted = _people(lifter, np.stack([d.keypoints_2d for d in dets]), f, pp, flip_test=flip_test, source="detected",
+                     scores=np.stack([d.scores for d in dets]))
+    top, det = lifted[0], dets[0]
+    warn = list(det.warnings)
+    if det.num_people > 1:
+        warn.append(f"{det.num_people} people found; {len(dets)} lifted into one camera space ('people', largest "
+                    "first; the top-level fields are the largest)")
+    return LiftRecord(input=str(path), kind="image", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
+                      relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=img.size, model=lifter.name, scores=det.scores, source_format=det.raw.keypoint_format,
-                      num_people=det.num_people, detector=estimator.name, warnings=det.warnings + tuple(notes))
-
-
+                      num_people=det.num_people, detector=estimator.name, warnings=tuple(warn + notes), people=lifted)

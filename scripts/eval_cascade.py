@@ -67,8 +67,18 @@ INLIER_MEDIAN_PX = 15.0
 RULE_JOINTS = ("pelvis", "r_hip", "l_hip", "spine", "thorax", "neck_nose", "head_top")
 BP = {n: i for i, n in enumerate(BLAZEPOSE33_JOINT_NAMES)}
 H = {n: i for i, n in enumerate(JOINT_NAMES)}
-LIMBS = ("r_knee", "r_ankle", "l_knee", "l_ankle", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow",
-         "r_wrist")
+LIMBS = (
+    "r_knee",
+    "r_ankle",
+    "l_knee",
+    "l_ankle",
+    "l_shoulder",
+    "l_elbow",
+    "l_wrist",
+    "r_shoulder",
+    "r_elbow",
+    "r_wrist",
+)
 
 
 def blazepose_as(fmt: str, kp33: np.ndarray) -> np.ndarray:
@@ -78,9 +88,14 @@ def blazepose_as(fmt: str, kp33: np.ndarray) -> np.ndarray:
         return kp33
     if fmt == "coco17":
         return np.stack([kp33[:, BP[n]] for n in COCO17_JOINT_NAMES], 1)
-    extra = {"neck": mid("l_shoulder", "r_shoulder"), "mid_hip": mid("l_hip", "r_hip"),
-             "l_big_toe": kp33[:, BP["l_foot_index"]], "r_big_toe": kp33[:, BP["r_foot_index"]],
-             "l_small_toe": kp33[:, BP["l_foot_index"]], "r_small_toe": kp33[:, BP["r_foot_index"]]}
+    extra = {
+        "neck": mid("l_shoulder", "r_shoulder"),
+        "mid_hip": mid("l_hip", "r_hip"),
+        "l_big_toe": kp33[:, BP["l_foot_index"]],
+        "r_big_toe": kp33[:, BP["r_foot_index"]],
+        "l_small_toe": kp33[:, BP["l_foot_index"]],
+        "r_small_toe": kp33[:, BP["r_foot_index"]],
+    }
     return np.stack([extra[n] if n in extra else kp33[:, BP[n]] for n in OPENPOSE25_JOINT_NAMES], 1)
 
 
@@ -88,9 +103,15 @@ def naive(kp33: np.ndarray) -> dict[str, np.ndarray]:
     """The obvious mappings the rules replace: mid-hips, the detector's hips, mid-shoulders, nose,
     and for the head top the mid-ears."""
     mid = lambda a, b: 0.5 * (kp33[:, BP[a]] + kp33[:, BP[b]])  # noqa: E731
-    return {"pelvis": mid("l_hip", "r_hip"), "r_hip": kp33[:, BP["r_hip"]], "l_hip": kp33[:, BP["l_hip"]],
-            "spine": 0.5 * (mid("l_hip", "r_hip") + mid("l_shoulder", "r_shoulder")),
-            "thorax": mid("l_shoulder", "r_shoulder"), "neck_nose": kp33[:, BP["nose"]], "head_top": mid("l_ear", "r_ear")}
+    return {
+        "pelvis": mid("l_hip", "r_hip"),
+        "r_hip": kp33[:, BP["r_hip"]],
+        "l_hip": kp33[:, BP["l_hip"]],
+        "spine": 0.5 * (mid("l_hip", "r_hip") + mid("l_shoulder", "r_shoulder")),
+        "thorax": mid("l_shoulder", "r_shoulder"),
+        "neck_nose": kp33[:, BP["nose"]],
+        "head_top": mid("l_ear", "r_ear"),
+    }
 
 
 def stats(e: np.ndarray) -> dict[str, float]:
@@ -132,26 +153,34 @@ def apply_weights(kp33: np.ndarray, w: dict[str, Any]) -> dict[str, np.ndarray]:
     MH, MS, ME, N = mid("l_hip", "r_hip"), mid("l_shoulder", "r_shoulder"), mid("l_ear", "r_ear"), kp33[:, BP["nose"]]
     T = MS - MH
     b = w["hip_up (shipped: PELVIS_UP)"]
-    return {"pelvis": MH + w["PELVIS_UP"] * T,
-            "r_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["r_hip"]] - MH) + b * T,
-            "l_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["l_hip"]] - MH) + b * T,
-            "spine": MH + w["SPINE_UP"] * T, "thorax": MS - w["THORAX_DOWN"] * T,
-            "neck_nose": MS + w["NECK_NOSE_W"][0] * (N - MS) + w["NECK_NOSE_W"][1] * (ME - MS),
-            "head_top": ME + w["HEAD_TOP_W"][0] * (ME - N) + w["HEAD_TOP_W"][1] * (ME - MS)}
+    return {
+        "pelvis": MH + w["PELVIS_UP"] * T,
+        "r_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["r_hip"]] - MH) + b * T,
+        "l_hip": MH + w["HIP_WIDEN"] * (kp33[:, BP["l_hip"]] - MH) + b * T,
+        "spine": MH + w["SPINE_UP"] * T,
+        "thorax": MS - w["THORAX_DOWN"] * T,
+        "neck_nose": MS + w["NECK_NOSE_W"][0] * (N - MS) + w["NECK_NOSE_W"][1] * (ME - MS),
+        "head_top": ME + w["HEAD_TOP_W"][0] * (ME - N) + w["HEAD_TOP_W"][1] * (ME - MS),
+    }
 
 
 def pose_metrics(pred_abs: np.ndarray, gt_abs: np.ndarray) -> dict[str, Any]:
     mrpe, _ = root_errors(pred_abs[:, 0], gt_abs[:, 0])
     je = joint_errors(pred_abs, gt_abs)
-    return {"n": int(len(gt_abs)), "mpjpe": round(float(mpjpe(pred_abs, gt_abs).mean()), 1),
-            "pa_mpjpe": round(float(pa_mpjpe(pred_abs, gt_abs).mean()), 1), "mrpe": round(float(mrpe.mean()), 1),
-            "mrpe_median": round(float(np.median(mrpe)), 1),
-            "mrpe_xyz": np.round(np.abs(pred_abs[:, 0] - gt_abs[:, 0]).mean(0), 1).tolist(),
-            "per_joint_mpjpe": {n: round(float(v), 1) for n, v in zip(JOINT_NAMES, je.mean(0))}}
+    return {
+        "n": int(len(gt_abs)),
+        "mpjpe": round(float(mpjpe(pred_abs, gt_abs).mean()), 1),
+        "pa_mpjpe": round(float(pa_mpjpe(pred_abs, gt_abs).mean()), 1),
+        "mrpe": round(float(mrpe.mean()), 1),
+        "mrpe_median": round(float(np.median(mrpe)), 1),
+        "mrpe_xyz": np.round(np.abs(pred_abs[:, 0] - gt_abs[:, 0]).mean(0), 1).tolist(),
+        "per_joint_mpjpe": {n: round(float(v), 1) for n, v in zip(JOINT_NAMES, je.mean(0))},
+    }
 
 
-def detect_demo(demo: Path, images: np.ndarray, *, redetect: bool = False, cache_dir: Path = CACHE_DIR,
-                max_people: int = 3) -> dict[str, np.ndarray]:
+def detect_demo(
+    demo: Path, images: np.ndarray, *, redetect: bool = False, cache_dir: Path = CACHE_DIR, max_people: int = 3
+) -> dict[str, np.ndarray]:
     """BlazePose on the demo photos: ``kp33 (N, 33, 2)`` px of the largest person (NaN where none),
     ``scores (N, 33)``, ``people (N,)`` found, per-image ``t_load`` / ``t_det`` seconds. Cached in
     ``cache_dir`` (git-ignored runs/cache) under the model bundle's sha256 and the image list."""
@@ -160,7 +189,10 @@ def detect_demo(demo: Path, images: np.ndarray, *, redetect: bool = False, cache
     cache = cache_dir / f"blazepose_demo_{key.hexdigest()[:16]}.npz"
     if cache.is_file() and not redetect:
         with np.load(cache) as z:
-            print(f"BlazePose detections from the cache {cache.relative_to(ROOT) if cache.is_relative_to(ROOT) else cache}")
+            print(
+                "BlazePose detections from the cache "
+                f"{cache.relative_to(ROOT) if cache.is_relative_to(ROOT) else cache}"
+            )
             return {k: z[k] for k in z.files}
     n = len(images)
     kp33, scores = np.full((n, 33, 2), np.nan), np.full((n, 33), np.nan)
@@ -186,12 +218,23 @@ def detect_demo(demo: Path, images: np.ndarray, *, redetect: bool = False, cache
     return out
 
 
-def quick_table(refs: list[str], det17: np.ndarray, ok: np.ndarray, sh17: np.ndarray, gt2d: np.ndarray,
-                gt3d: np.ndarray, focal: np.ndarray, pp: np.ndarray) -> str:
+def quick_table(
+    refs: list[str],
+    det17: np.ndarray,
+    ok: np.ndarray,
+    sh17: np.ndarray,
+    gt2d: np.ndarray,
+    gt3d: np.ndarray,
+    focal: np.ndarray,
+    pp: np.ndarray,
+) -> str:
     """MPJPE / PA-MPJPE / MRPE of each lifter on BlazePose, SH and GT 2D of the detected frames (true camera)."""
-    L = [f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm",
-         "", "| lifter | BlazePose 2D: MPJPE / PA / MRPE | SH 2D (same frames) | GT 2D (same frames, clean) |",
-         "|---|---|---|---|"]
+    L = [
+        f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm",
+        "",
+        "| lifter | BlazePose 2D: MPJPE / PA / MRPE | SH 2D (same frames) | GT 2D (same frames, clean) |",
+        "|---|---|---|---|",
+    ]
     for ref in refs:
         lf = Lifter.load(ref)
         cells = []
@@ -205,20 +248,33 @@ def quick_table(refs: list[str], det17: np.ndarray, ok: np.ndarray, sh17: np.nda
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
-    ap.add_argument("--model", "--weights", dest="weights", default="default",
-                    help="shipped model name or checkpoint .pt")
-    ap.add_argument("--full", action="store_true", help="the full report (JSON, timing, keypoint rules, error "
-                                                        "models written to assets/error_model); default: quick table")
+    ap.add_argument(
+        "--model", "--weights", dest="weights", default="default", help="shipped model name or checkpoint .pt"
+    )
+    ap.add_argument(
+        "--full",
+        action="store_true",
+        help="the full report (JSON, timing, keypoint rules, error "
+        "models written to assets/error_model); default: quick table",
+    )
     ap.add_argument("--redetect", action="store_true", help="run BlazePose again instead of using the cache")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "cascade" / "eval_cascade.json")
     ap.add_argument("--error-model-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo.json")
-    ap.add_argument("--holdout-camera", default="55011271",
-                    help="a second error model is fitted without this camera's frames (for training a lifter), and "
-                         "lifters are compared on those held-out frames")
-    ap.add_argument("--error-model-train-out", type=Path,
-                    default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo_train.json")
-    ap.add_argument("--compare", nargs="*", default=[],
-                    help="more lifters (names or .pt) to compare on BlazePose 2D, all frames and held-out camera")
+    ap.add_argument(
+        "--holdout-camera",
+        default="55011271",
+        help="a second error model is fitted without this camera's frames (for training a lifter), and "
+        "lifters are compared on those held-out frames",
+    )
+    ap.add_argument(
+        "--error-model-train-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo_train.json"
+    )
+    ap.add_argument(
+        "--compare",
+        nargs="*",
+        default=[],
+        help="more lifters (names or .pt) to compare on BlazePose 2D, all frames and held-out camera",
+    )
     ap.add_argument("--threads", type=int, default=1)
     args = ap.parse_args()
     import torch
@@ -242,8 +298,18 @@ def main() -> int:
     print(f"detected a person in {ok.sum()} of {n_all} frames; several people reported in {(people > 1).sum()}")
     sh17 = convert(ann["sh_det"].astype(np.float64), src="sh16")
     if not args.full:
-        print(quick_table(list(dict.fromkeys([args.weights, *args.compare])), convert(kp33[ok], src="blazepose33"),
-                          ok, sh17, gt2d, gt3d, focal, pp))
+        print(
+            quick_table(
+                list(dict.fromkeys([args.weights, *args.compare])),
+                convert(kp33[ok], src="blazepose33"),
+                ok,
+                sh17,
+                gt2d,
+                gt3d,
+                focal,
+                pp,
+            )
+        )
         return 0
 
     lifter = Lifter.load(args.weights)
@@ -253,14 +319,17 @@ def main() -> int:
         t3 = time.perf_counter()
         lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i])
         t_lift[i] = time.perf_counter() - t3
-    timing = {"decode_ms": round(1e3 * float(np.median(t_load)), 1), "detect_ms": round(1e3 * float(np.median(t_det)), 1),
-              "convert_lift_ms": round(1e3 * float(np.nanmedian(t_lift)), 1),
-              "total_ms": round(1e3 * float(np.nanmedian(t_load + t_det + t_lift)), 1),
-              "detect_ms_mean": round(1e3 * float(np.mean(t_det)), 1),
-              "note": "medians over the 84 frames, one process, torch 1 thread, 1000 x 1000 px JPEGs, 2 shared CPU "
-                      "cores (training jobs running alongside); detection includes the passes that look "
-                      "for further people (max_people=3); decode and detect times are those of the run that "
-                      "filled the detection cache (--redetect to re-time)"}
+    timing = {
+        "decode_ms": round(1e3 * float(np.median(t_load)), 1),
+        "detect_ms": round(1e3 * float(np.median(t_det)), 1),
+        "convert_lift_ms": round(1e3 * float(np.nanmedian(t_lift)), 1),
+        "total_ms": round(1e3 * float(np.nanmedian(t_load + t_det + t_lift)), 1),
+        "detect_ms_mean": round(1e3 * float(np.mean(t_det)), 1),
+        "note": "medians over the 84 frames, one process, torch 1 thread, 1000 x 1000 px JPEGs, 2 shared CPU "
+        "cores (training jobs running alongside); detection includes the passes that look "
+        "for further people (max_people=3); decode and detect times are those of the run that "
+        "filled the detection cache (--redetect to re-time)",
+    }
 
     # ---------------------------------------------------------------- lifting metrics
     det17 = convert(kp33[ok], src="blazepose33")
@@ -269,34 +338,51 @@ def main() -> int:
     rows["BlazePose 2D, true focal"] = pose_metrics(res.absolute, gt3d[ok])
     f_def = np.array([focal_from_fov(tuple(s)) for s in sizes[ok]])[:, None].repeat(2, 1)
     res_nf = lifter.lift(det17, focal=f_def, principal_point=sizes[ok] / 2.0)
-    rows[f"BlazePose 2D, default {DEFAULT_DIAGONAL_FOV_DEG:g} deg FOV, image centre"] = pose_metrics(res_nf.absolute, gt3d[ok])
+    rows[f"BlazePose 2D, default {DEFAULT_DIAGONAL_FOV_DEG:g} deg FOV, image centre"] = pose_metrics(
+        res_nf.absolute, gt3d[ok]
+    )
     rows["SH detections 2D (same frames), true focal"] = pose_metrics(
-        lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok])
+        lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok]
+    )
     rows["ground-truth 2D (same frames), true focal"] = pose_metrics(
-        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok])
+        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok]
+    )
     rows["ground-truth 2D, all 84 frames"] = pose_metrics(
-        lifter.lift(gt2d, focal=focal, principal_point=pp).absolute, gt3d)
+        lifter.lift(gt2d, focal=focal, principal_point=pp).absolute, gt3d
+    )
     rows["SH detections 2D, all 84 frames"] = pose_metrics(
-        lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d)
+        lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d
+    )
     held = ann["camera"][ok] == args.holdout_camera
     if not held.any() or held.all():
-        raise SystemExit(f"--holdout-camera {args.holdout_camera}: must name one of the demo cameras "
-                         f"{sorted(set(ann['camera'].tolist()))}, leaving frames on both sides")
+        raise SystemExit(
+            f"--holdout-camera {args.holdout_camera}: must name one of the demo cameras "
+            f"{sorted(set(ann['camera'].tolist()))}, leaving frames on both sides"
+        )
     comparison: dict[str, Any] = {}
     for ref in dict.fromkeys([args.weights, *args.compare]):
         lf = lifter if ref == args.weights else Lifter.load(ref)
         a = lf.lift(det17, focal=focal[ok], principal_point=pp[ok]).absolute
-        comparison[ref if ref.endswith(".pt") else lf.name] = {"all detected frames": pose_metrics(a, gt3d[ok]),
-                               f"held-out camera {args.holdout_camera}": pose_metrics(a[held], gt3d[ok][held])}
-    default_fov_focal = {"mean_px": round(float(f_def[:, 0].mean()), 1), "true_mean_px": round(float(np.sqrt(focal[ok].prod(1)).mean()), 1)}
+        comparison[ref if ref.endswith(".pt") else lf.name] = {
+            "all detected frames": pose_metrics(a, gt3d[ok]),
+            f"held-out camera {args.holdout_camera}": pose_metrics(a[held], gt3d[ok][held]),
+        }
+    default_fov_focal = {
+        "mean_px": round(float(f_def[:, 0].mean()), 1),
+        "true_mean_px": round(float(np.sqrt(focal[ok].prod(1)).mean()), 1),
+    }
 
     # ---------------------------------------------------------------- converter rules
     k = kp33[ok]
     g = gt2d[ok]
     limb_err = np.linalg.norm(k[:, [BP[n] for n in LIMBS]] - g[:, [H[n] for n in LIMBS]], axis=-1)
     inl = np.median(limb_err, axis=1) < INLIER_MEDIAN_PX
-    conv: dict[str, Any] = {"inlier_rule": f"median limb-joint error < {INLIER_MEDIAN_PX:g} px",
-                            "n_detected": int(ok.sum()), "n_inlier": int(inl.sum()), "formats": {}}
+    conv: dict[str, Any] = {
+        "inlier_rule": f"median limb-joint error < {INLIER_MEDIAN_PX:g} px",
+        "n_detected": int(ok.sum()),
+        "n_inlier": int(inl.sum()),
+        "formats": {},
+    }
     nv = naive(k)
     for fmt in ("blazepose33", "coco17", "openpose25"):
         out17 = convert(blazepose_as(fmt, k), src=fmt)
@@ -304,9 +390,16 @@ def main() -> int:
         conv["formats"][fmt] = {
             "per_joint_all": {n: stats(e[:, H[n]]) for n in JOINT_NAMES},
             "per_joint_inliers": {n: stats(e[inl, H[n]]) for n in JOINT_NAMES},
-            "mean_all_joints": stats(e), "mean_all_joints_inliers": stats(e[inl])}
-    conv["naive"] = {n: {"all": stats(np.linalg.norm(nv[n] - g[:, H[n]], axis=-1)),
-                         "inliers": stats(np.linalg.norm(nv[n][inl] - g[inl, H[n]], axis=-1))} for n in RULE_JOINTS}
+            "mean_all_joints": stats(e),
+            "mean_all_joints_inliers": stats(e[inl]),
+        }
+    conv["naive"] = {
+        n: {
+            "all": stats(np.linalg.norm(nv[n] - g[:, H[n]], axis=-1)),
+            "inliers": stats(np.linalg.norm(nv[n][inl] - g[inl, H[n]], axis=-1)),
+        }
+        for n in RULE_JOINTS
+    }
     w_all = refit_weights(k[inl], g[inl])
     conv["refit_on_inliers"] = {kk: np.round(v, 3).tolist() for kk, v in w_all.items()}
     cam_ids = ann["camera"][ok]
@@ -317,56 +410,100 @@ def main() -> int:
             continue
         wc = refit_weights(k[tr], g[tr])
         pred = apply_weights(k[te], wc)
-        cross[f"test camera {c} (n={int(te.sum())})"] = {n: stats(np.linalg.norm(pred[n] - g[te, H[n]], axis=-1))
-                                                         for n in RULE_JOINTS}
+        cross[f"test camera {c} (n={int(te.sum())})"] = {
+            n: stats(np.linalg.norm(pred[n] - g[te, H[n]], axis=-1)) for n in RULE_JOINTS
+        }
     conv["cross_camera"] = cross
 
     # ---------------------------------------------------------------- error model
     sh_model = ErrorModel.load(Path(ASSETS_DIR) / "error_model" / "sh_mixture.json")
-    meta = {"data": "84 H36M demo frames (../shared/data/h36m/demo), " f"{int(ok.sum())} with a detection",
-            "detector": "MediaPipe BlazePose full (Tasks PoseLandmarker, models of the mediapipe 0.10.21 wheel), converted "
-                        "with lifter.keypoints 'blazepose33'",
-            "caveat": "84 frames, 5 subjects, mostly S9 'Posing' from 2 cameras: the fit is indicative only"}
-    bp_model = fit_error_model(det17, g, source="MediaPipe BlazePose detections vs distorted GT projection, "
-                               "84 H36M demo frames", progress=False, meta=meta)
+    meta = {
+        "data": f"84 H36M demo frames (../shared/data/h36m/demo), {int(ok.sum())} with a detection",
+        "detector": "MediaPipe BlazePose full (Tasks PoseLandmarker, models of the mediapipe 0.10.21 wheel), converted "
+        "with lifter.keypoints 'blazepose33'",
+        "caveat": "84 frames, 5 subjects, mostly S9 'Posing' from 2 cameras: the fit is indicative only",
+    }
+    bp_model = fit_error_model(
+        det17,
+        g,
+        source="MediaPipe BlazePose detections vs distorted GT projection, 84 H36M demo frames",
+        progress=False,
+        meta=meta,
+    )
     args.error_model_out.parent.mkdir(parents=True, exist_ok=True)
     bp_model.save(args.error_model_out)
-    meta_train = dict(meta, data=f"the 84 H36M demo frames without camera {args.holdout_camera} "
-                                 f"({int((~held).sum())} with a detection); held out for evaluating lifters trained on it")
-    bp_train = fit_error_model(det17[~held], g[~held], source="MediaPipe BlazePose detections vs distorted GT "
-                               f"projection, H36M demo frames without camera {args.holdout_camera}", progress=False,
-                               meta=meta_train)
+    meta_train = dict(
+        meta,
+        data=f"the 84 H36M demo frames without camera {args.holdout_camera} "
+        f"({int((~held).sum())} with a detection); held out for evaluating lifters trained on it",
+    )
+    bp_train = fit_error_model(
+        det17[~held],
+        g[~held],
+        source="MediaPipe BlazePose detections vs distorted GT "
+        f"projection, H36M demo frames without camera {args.holdout_camera}",
+        progress=False,
+        meta=meta_train,
+    )
     bp_train.save(args.error_model_train_out)
     sh_demo = fit_error_model(sh17[ok], g, progress=False)
     e_bp, _, _ = normalized_errors(det17, g, reference_scale=sh_model.reference_scale)
     e_sh, _, _ = normalized_errors(sh17[ok], g, reference_scale=sh_model.reference_scale)
 
     def nll(m: ErrorModel, e: np.ndarray) -> float:
-        return float(np.mean([-mixture_loglik(e[:, j], m.gamma[j], m.mu[j], m.sigma[j], v=m.v).mean() for j in range(17)]))
+        return float(
+            np.mean([-mixture_loglik(e[:, j], m.gamma[j], m.mu[j], m.sigma[j], v=m.v).mean() for j in range(17)])
+        )
 
     def summ(m: ErrorModel) -> dict[str, Any]:
-        return {"reference_scale_px": round(m.reference_scale, 1), "gamma_mean": round(float(m.gamma.mean()), 3),
-                "sigma_mean_px": np.round(m.sigma.mean(0), 2).tolist(), "mu_mean_px": np.round(m.mu.mean(0), 2).tolist(),
-                "gaussian_sigma_mean_px": np.round(m.gaussian_sigma.mean(0), 2).tolist() if m.gaussian_sigma is not None else None,
-                "gamma": np.round(m.gamma, 3).tolist(), "sigma": np.round(m.sigma, 2).tolist(), "n": m.n_samples}
+        return {
+            "reference_scale_px": round(m.reference_scale, 1),
+            "gamma_mean": round(float(m.gamma.mean()), 3),
+            "sigma_mean_px": np.round(m.sigma.mean(0), 2).tolist(),
+            "mu_mean_px": np.round(m.mu.mean(0), 2).tolist(),
+            "gaussian_sigma_mean_px": np.round(m.gaussian_sigma.mean(0), 2).tolist()
+            if m.gaussian_sigma is not None
+            else None,
+            "gamma": np.round(m.gamma, 3).tolist(),
+            "sigma": np.round(m.sigma, 2).tolist(),
+            "n": m.n_samples,
+        }
 
-    noise = {"blazepose_demo": summ(bp_model), f"blazepose_demo_train (without camera {args.holdout_camera})": summ(bp_train),
-             "sh_shipped (S1,5,6,7,8 training, 293k)": summ(sh_model),
-             "sh_demo (same frames)": summ(sh_demo),
-             "nll_blazepose_errors": {"under blazepose_demo fit (in-sample)": round(nll(bp_model, e_bp), 3),
-                                      "under shipped SH fit": round(nll(sh_model, e_bp), 3)},
-             "nll_sh_errors_same_frames": {"under shipped SH fit": round(nll(sh_model, e_sh), 3),
-                                           "under blazepose_demo fit": round(nll(bp_model, e_sh), 3)},
-             "raw_error_px_same_frames": {"blazepose": stats(np.linalg.norm(det17 - g, axis=-1)),
-                                          "sh": stats(np.linalg.norm(sh17[ok] - g, axis=-1))},
-             "nll_note": "mean over joints of the mean NLL (nats per 2D error), errors rescaled to the SH reference scale"}
+    noise = {
+        "blazepose_demo": summ(bp_model),
+        f"blazepose_demo_train (without camera {args.holdout_camera})": summ(bp_train),
+        "sh_shipped (S1,5,6,7,8 training, 293k)": summ(sh_model),
+        "sh_demo (same frames)": summ(sh_demo),
+        "nll_blazepose_errors": {
+            "under blazepose_demo fit (in-sample)": round(nll(bp_model, e_bp), 3),
+            "under shipped SH fit": round(nll(sh_model, e_bp), 3),
+        },
+        "nll_sh_errors_same_frames": {
+            "under shipped SH fit": round(nll(sh_model, e_sh), 3),
+            "under blazepose_demo fit": round(nll(bp_model, e_sh), 3),
+        },
+        "raw_error_px_same_frames": {
+            "blazepose": stats(np.linalg.norm(det17 - g, axis=-1)),
+            "sh": stats(np.linalg.norm(sh17[ok] - g, axis=-1)),
+        },
+        "nll_note": "mean over joints of the mean NLL (nats per 2D error), errors rescaled to the SH reference scale",
+    }
 
-    report = {"lifter": {"name": lifter.name, "repr": repr(lifter)}, "frames": n_all,
-              "frames_with_detection": int(ok.sum()), "frames_several_people": int((people > 1).sum()),
-              "frames_without_detection": [str(x) for x in ann["image"][~ok]],
-              "lifting": rows, "comparison": comparison, "holdout_camera": args.holdout_camera,
-              "default_fov_focal": default_fov_focal, "timing": timing, "converter": conv,
-              "error_model": noise, "error_model_file": str(args.error_model_out)}
+    report = {
+        "lifter": {"name": lifter.name, "repr": repr(lifter)},
+        "frames": n_all,
+        "frames_with_detection": int(ok.sum()),
+        "frames_several_people": int((people > 1).sum()),
+        "frames_without_detection": [str(x) for x in ann["image"][~ok]],
+        "lifting": rows,
+        "comparison": comparison,
+        "holdout_camera": args.holdout_camera,
+        "default_fov_focal": default_fov_focal,
+        "timing": timing,
+        "converter": conv,
+        "error_model": noise,
+        "error_model_file": str(args.error_model_out),
+    }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=1))
     print(f"wrote {args.out}, {args.error_model_out} and {args.error_model_train_out}")
@@ -375,52 +512,97 @@ def main() -> int:
 
 
 def markdown(r: dict[str, Any]) -> str:
-    L = [f"Cascade on the {r['frames']} H36M demo frames (BlazePose found a person in {r['frames_with_detection']}; "
-         f"lifter `{r['lifter']['name']}`; camera intrinsics of each frame unless stated):", "",
-         "| 2D input | frames | MPJPE | PA-MPJPE | MRPE | MRPE x / y / z |", "|---|---|---|---|---|---|"]
+    L = [
+        f"Cascade on the {r['frames']} H36M demo frames (BlazePose found a person in {r['frames_with_detection']}; "
+        f"lifter `{r['lifter']['name']}`; camera intrinsics of each frame unless stated):",
+        "",
+        "| 2D input | frames | MPJPE | PA-MPJPE | MRPE | MRPE x / y / z |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, m in r["lifting"].items():
-        L.append(f"| {name} | {m['n']} | {m['mpjpe']:.1f} | {m['pa_mpjpe']:.1f} | {m['mrpe']:.1f} | "
-                 + " / ".join(f"{v:.0f}" for v in m["mrpe_xyz"]) + " |")
-    L += ["", "Per joint MPJPE (mm):", "", "| joint | " + " | ".join(r["lifting"].keys()) + " |",
-          "|---|" + "---|" * len(r["lifting"])]
+        L.append(
+            f"| {name} | {m['n']} | {m['mpjpe']:.1f} | {m['pa_mpjpe']:.1f} | {m['mrpe']:.1f} | "
+            + " / ".join(f"{v:.0f}" for v in m["mrpe_xyz"])
+            + " |"
+        )
+    L += [
+        "",
+        "Per joint MPJPE (mm):",
+        "",
+        "| joint | " + " | ".join(r["lifting"].keys()) + " |",
+        "|---|" + "---|" * len(r["lifting"]),
+    ]
     for j in JOINT_NAMES:
         L.append(f"| {j} | " + " | ".join(f"{m['per_joint_mpjpe'][j]:.1f}" for m in r["lifting"].values()) + " |")
-    L += ["", "Lifters compared on BlazePose 2D (true focal), MPJPE / PA-MPJPE / MRPE (mm):", "",
-          "| lifter | " + " | ".join(f"{k} (n)" for k in next(iter(r["comparison"].values()))) + " |",
-          "|---|" + "---|" * len(next(iter(r["comparison"].values())))]
+    L += [
+        "",
+        "Lifters compared on BlazePose 2D (true focal), MPJPE / PA-MPJPE / MRPE (mm):",
+        "",
+        "| lifter | " + " | ".join(f"{k} (n)" for k in next(iter(r["comparison"].values()))) + " |",
+        "|---|" + "---|" * len(next(iter(r["comparison"].values()))),
+    ]
     for name, sets in r["comparison"].items():
-        L.append(f"| {name} | " + " | ".join(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['n']})"
-                                           for m in sets.values()) + " |")
+        L.append(
+            f"| {name} | "
+            + " | ".join(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['n']})" for m in sets.values())
+            + " |"
+        )
     t = r["timing"]
-    L += ["", f"Time per image (median): decode {t['decode_ms']} ms + BlazePose {t['detect_ms']} ms + convert & lift "
-              f"{t['convert_lift_ms']} ms = {t['total_ms']} ms ({t['note']}).", ""]
+    L += [
+        "",
+        f"Time per image (median): decode {t['decode_ms']} ms + BlazePose {t['detect_ms']} ms + convert & lift "
+        f"{t['convert_lift_ms']} ms = {t['total_ms']} ms ({t['note']}).",
+        "",
+    ]
     c = r["converter"]
-    L += [f"Keypoint rules, pixel error vs ground-truth 2D (mean / median px; all {c['n_detected']} detected frames | "
-          f"{c['n_inlier']} inlier frames, {c['inlier_rule']}):", "",
-          "| joint | naive mapping | blazepose33 | coco17 | openpose25 |", "|---|---|---|---|---|"]
+    L += [
+        f"Keypoint rules, pixel error vs ground-truth 2D (mean / median px; all {c['n_detected']} detected frames | "
+        f"{c['n_inlier']} inlier frames, {c['inlier_rule']}):",
+        "",
+        "| joint | naive mapping | blazepose33 | coco17 | openpose25 |",
+        "|---|---|---|---|---|",
+    ]
     for j in RULE_JOINTS:
         nv = c["naive"][j]
-        cells = [f"{nv['all']['mean_px']:.1f} / {nv['all']['median_px']:.1f} \\| {nv['inliers']['mean_px']:.1f} / {nv['inliers']['median_px']:.1f}"]
+        cells = [
+            f"{nv['all']['mean_px']:.1f} / {nv['all']['median_px']:.1f} \\| "
+            f"{nv['inliers']['mean_px']:.1f} / {nv['inliers']['median_px']:.1f}"
+        ]
         for fmt in ("blazepose33", "coco17", "openpose25"):
             a, b = c["formats"][fmt]["per_joint_all"][j], c["formats"][fmt]["per_joint_inliers"][j]
             cells.append(f"{a['mean_px']:.1f} / {a['median_px']:.1f} \\| {b['mean_px']:.1f} / {b['median_px']:.1f}")
         L.append(f"| {j} | " + " | ".join(cells) + " |")
-    L += ["", "Cross-camera check (rule weights fitted on one camera's inlier frames, error on the other's, mean / median px):", ""]
+    L += [
+        "",
+        "Cross-camera check (rule weights fitted on one camera's inlier frames, error on the other's, "
+        "mean / median px):",
+        "",
+    ]
     for k, v in c["cross_camera"].items():
         L.append(f"- {k}: " + ", ".join(f"{j} {s['mean_px']:.1f} / {s['median_px']:.1f}" for j, s in v.items()))
     e = r["error_model"]
-    L += ["", "Mixture error model (px at the fit's reference 2D scale): BlazePose on the demo frames vs Stacked Hourglass:", "",
-          "| fit | n per joint | ref. scale px | mean gamma | mean sigma x, y px | mean single-Gaussian sigma x, y px |",
-          "|---|---|---|---|---|---|"]
+    L += [
+        "",
+        "Mixture error model (px at the fit's reference 2D scale): BlazePose on the demo frames vs Stacked Hourglass:",
+        "",
+        "| fit | n per joint | ref. scale px | mean gamma | mean sigma x, y px | mean single-Gaussian sigma x, y px |",
+        "|---|---|---|---|---|---|",
+    ]
     for name in e:
         if not isinstance(e[name], dict) or "gamma_mean" not in e[name]:
             continue
         m = e[name]
         gs = m["gaussian_sigma_mean_px"]
-        L.append(f"| {name} | {m['n']} | {m['reference_scale_px']} | {m['gamma_mean']:.3f} | {m['sigma_mean_px'][0]:.2f}, "
-                 f"{m['sigma_mean_px'][1]:.2f} | {gs[0]:.2f}, {gs[1]:.2f} |")
-    L += ["", f"NLL of BlazePose's errors: {e['nll_blazepose_errors']}; of SH's errors on the same frames: "
-              f"{e['nll_sh_errors_same_frames']} ({e['nll_note']}). Raw 2D error, same frames: {e['raw_error_px_same_frames']}."]
+        L.append(
+            f"| {name} | {m['n']} | {m['reference_scale_px']} | {m['gamma_mean']:.3f} | {m['sigma_mean_px'][0]:.2f}, "
+            f"{m['sigma_mean_px'][1]:.2f} | {gs[0]:.2f}, {gs[1]:.2f} |"
+        )
+    L += [
+        "",
+        f"NLL of BlazePose's errors: {e['nll_blazepose_errors']}; of SH's errors on the same frames: "
+        f"{e['nll_sh_errors_same_frames']} ({e['nll_note']}). Raw 2D error, same frames: "
+        f"{e['raw_error_px_same_frames']}.",
+    ]
     return "\n".join(L)
 
 

@@ -7,7 +7,18 @@ import pytest
 from conftest import random_pose_cam
 
 from lifter import PoseLifterError
-from lifter.export import bvh_text, from_y_up, read_bvh, read_glb_joints, to_y_up, write_bvh, write_glb
+from lifter.export import (
+    bvh_animation_text,
+    bvh_text,
+    from_y_up,
+    read_bvh,
+    read_bvh_frames,
+    read_glb_joints,
+    to_y_up,
+    write_bvh,
+    write_bvh_animation,
+    write_glb,
+)
 from lifter.skeleton import EDGES, JOINT_NAMES
 
 
@@ -62,7 +73,53 @@ def test_bvh_reader_applies_rotations(tmp_path, pose):
 def test_bad_pose():
     with pytest.raises(PoseLifterError, match="expected shape"):
         bvh_text(np.zeros((16, 3)))
-    with pytest.raises(PoseLifterError, match="one pose"):
-        write_glb(np.zeros((2, 17, 3)), "/nonexistent/x.glb")
+    with pytest.raises(PoseLifterError, match=r"\(n, 17, 3\)"):
+        write_glb(np.zeros((2, 2, 17, 3)), "/nonexistent/x.glb")
+    with pytest.raises(PoseLifterError, match="fps"):
+        bvh_animation_text(np.zeros((3, 17, 3)), fps=0)
     with pytest.raises(PoseLifterError, match="units"):
         bvh_text(np.zeros((17, 3)), units="inch")
+
+
+def test_glb_several_people_in_one_scene(tmp_path):
+    poses = random_pose_cam(np.random.default_rng(5), 3)
+    p = write_glb(poses, tmp_path / "three.glb")
+    for k in range(3):
+        np.testing.assert_allclose(read_glb_joints(p, person=k), poses[k], atol=1e-3)
+    with pytest.raises(PoseLifterError, match="joint spheres missing"):
+        read_glb_joints(p, person=3)
+
+
+def test_bvh_animation_round_trip(tmp_path):
+    """Every frame comes back exactly, bone lengths changing from frame to frame included."""
+    rng = np.random.default_rng(7)
+    poses = random_pose_cam(rng, 1)[0][None] + np.cumsum(rng.normal(0, 8, (40, 17, 3)), axis=0)
+    p = write_bvh_animation(poses, tmp_path / "walk.bvh", fps=25.0)
+    text = p.read_text()
+    assert "Frames: 40" in text and "Frame Time: 0.040000" in text
+    np.testing.assert_allclose(read_bvh_frames(p), poses, atol=1e-3)
+    np.testing.assert_allclose(read_bvh(p), poses[0], atol=1e-3)
+    one = write_bvh(poses[3], tmp_path / "one.bvh")  # the single-pose writer still reads back
+    np.testing.assert_allclose(read_bvh_frames(one)[0], poses[3], atol=1e-3)
+
+
+def test_glb_animation_round_trip(tmp_path):
+    """Two tracks over a clip: every joint of every frame comes back; a person is hidden where absent."""
+    import trimesh
+
+    from lifter.export import read_glb_animation, write_glb_animation
+
+    rng = np.random.default_rng(11)
+    a = random_pose_cam(rng, 1)[0][None] + np.cumsum(rng.normal(0, 10, (12, 17, 3)), axis=0)
+    b = random_pose_cam(rng, 1)[0][None] + np.array([800.0, 0, 500]) + rng.normal(0, 5, (5, 17, 3))
+    p = write_glb_animation({1: (np.arange(12), a), 4: (np.array([3, 4, 5, 9, 10]), b)}, tmp_path / "clip.glb",
+                            fps=25.0)
+    times, joints = read_glb_animation(p)
+    np.testing.assert_allclose(times, np.arange(12) / 25.0, atol=1e-6)
+    np.testing.assert_allclose(joints[1], a, atol=0.05)
+    np.testing.assert_allclose(joints[4][[3, 4, 5, 9, 10]], b, atol=0.05)
+    assert np.isnan(joints[4][[0, 1, 2, 6, 7, 8, 11]]).all()
+    scene = trimesh.load(str(p), file_type="glb", force="scene")  # a valid glTF for another reader too
+    assert len(scene.geometry) == 2 * (17 + 16)
+    with pytest.raises(PoseLifterError, match="increasing frame indices"):
+        write_glb_animation({1: (np.array([2, 1]), a[:2])}, tmp_path / "x.glb", fps=25.0)

@@ -88,7 +88,16 @@ def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     assert code == 1 and "no focal length and no image size" in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
                      "--weights", str(weights)], capsys)
-    assert code == 0 and "2 people in the file; using the largest" in err
+    assert code == 0 and "2 people in the file; each is lifted (largest first)" in err
+    c = json.loads((out / "c.json").read_text())
+    assert c["num_people"] == 2 and len(c["people"]) == 2
+    assert c["people"][0]["absolute"] == c["absolute"] and c["people"][0]["keypoints_2d"] == c["keypoints_2d"]
+    spans = [np.ptp(np.array(q["keypoints_2d"]), axis=0).prod() for q in c["people"]]
+    assert spans[0] > spans[1]  # largest first
+    # both lifted in one camera space: each root projects back onto its own 2D pelvis
+    for q in c["people"]:
+        np.testing.assert_allclose(project(np.array(q["root"])[None], focal=1000.0, principal_point=(640, 360))[0],
+                                   q["keypoints_2d"][0], atol=0.05)
     a = json.loads((out / "a.json").read_text())
     assert np.array(a["keypoints_2d"]).shape == (17, 2) and np.array(a["absolute"]).shape == (17, 3)
     assert np.array(a["root"]).shape == (3,) and a["focal"] == [1000.0, 1000.0] and a["focal_source"] == "keypoint-file"

@@ -1,10 +1,24 @@
-"""``poselifter lift``: photos or 2D keypoint files in, absolute 3D poses out.
+"""``poselifter lift``: photos, videos or 2D keypoint files in, absolute 3D poses out.
 
 Registered in :mod:`lifter.cli` by :func:`add_parser`. Usage::
 
     poselifter lift INPUT... [--focal FX [FY]] [--principal-point CX CY] --out DIR [--glb] [--bvh]
+                    [--max-people 3] [--smoothing 1] [--max-seconds 600]
 
-INPUT: image files, folders (their images and ``.json`` files, not recursive) or keypoint JSON files.
+INPUT: image files, videos (anything OpenCV reads: .mp4, .mov, .avi, ...), folders (their images, videos and
+``.json`` files, not recursive) or keypoint JSON files (one frame, or a sequence with ``frames``).
+
+Several people: everyone found (at most ``--max-people``, the largest) is lifted into one camera space;
+``people`` lists them, largest first, and the top-level fields describe the largest. ``--glb`` puts
+everyone in one scene; ``--bvh`` writes ``<name>.bvh`` for the largest and ``<name>_person<k>.bvh`` for the others.
+
+Videos and keypoint sequences (:mod:`lifter.video`): ``DIR/<name>.json`` has ``fps``, ``tracks`` and
+``frames: [{"index", "time_s", "people": [{"track_id", "keypoints_2d", "absolute", "root", ...}]}]``; people
+are tracked with a stable ``track_id`` and their root and pose smoothed by a causal One-Euro filter of
+strength ``--smoothing`` (0 = off). ``--bvh`` writes one BVH animation per track (``<name>_track<ID>.bvh``),
+``--glb`` an animated scene (:func:`lifter.export.write_glb_animation`). A progress bar counts frames; a bad
+frame (undecodable, or of another size than the first) is reported and skipped; a video longer than
+``--max-seconds`` is lifted up to that duration.
 For every input it writes ``DIR/<name>.json`` (``<name>`` = the file name without its suffix; a
 clash gets ``_<suffix>`` or a number appended) with ``keypoints_2d`` (17 x 2 px, H36M order),
 ``absolute`` (17 x 3 mm, camera frame: OpenCV, +x right, +y down, +z forward), ``relative``,
@@ -50,9 +64,17 @@ import numpy as np
 from .._checks import PoseLifterError, as_pair
 from ..camera import DEFAULT_DIAGONAL_FOV_DEG
 from ..detect import DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, MissingDependencyError, load_image
-from ..io import _camera_field, write_json_atomic
+from ..io import LiftRecord, _camera_field, is_keypoint_sequence, write_json_atomic
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
+from ..video import (
+    DEFAULT_MAX_PEOPLE,
+    DEFAULT_MAX_SECONDS,
+    VIDEO_SUFFIXES,
+    SequenceRecord,
+    lift_keypoint_sequence,
+    lift_video,
+)
 
 # ------------------------------------------------------------------------------------------------
 # Batch
@@ -74,7 +96,8 @@ def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list
         elif p.is_dir():
             found, skipped = [], []
             for q in sorted(p.iterdir()):
-                known = q.suffix.lower() in IMAGE_SUFFIXES or q.suffix.lower() == ".json"
+                sfx = q.suffix.lower()
+                known = sfx in IMAGE_SUFFIXES or sfx in VIDEO_SUFFIXES or sfx == ".json"
                 if q.is_symlink() and not q.exists():
                     if known:
                         problems.append(f"{q}: dangling symbolic link (its target {os.readlink(q)!r} does not exist); "
@@ -84,10 +107,10 @@ def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list
                 elif q.is_file() and not q.name.startswith("."):
                     skipped.append(q.name)
             if skipped:
-                notes.append(f"{p}: skipped {len(skipped)} file(s) that are not images or .json: "
+                notes.append(f"{p}: skipped {len(skipped)} file(s) that are not images, videos or .json: "
                                 + ", ".join(skipped[:5]) + (" ..." if len(skipped) > 5 else ""))
             if not found:
-                problems.append(f"{p}: folder has no images or .json files")
+                problems.append(f"{p}: folder has no images, videos or .json files")
             files.extend(found)
         elif p.is_file():
             files.append(p)
@@ -119,11 +142,13 @@ def output_names(files: list[Path], out_dir: Path) -> list[str]:
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register the ``lift`` sub-command on an ``add_subparsers()`` object."""
     p = sub.add_parser(
-        "lift", help="lift photos or 2D keypoint files to absolute 3D poses (JSON, optional GLB / BVH)",
-        description="Photos (2D detector: MediaPipe BlazePose, the 'detect' extra) or keypoint JSON files in, "
-                    "absolute 3D poses out. Exit code 0 if at least one input was lifted, 1 if all failed.",
+        "lift", help="lift photos, videos or 2D keypoint files to absolute 3D poses (JSON, optional GLB / BVH)",
+        description="Photos and videos (2D detector: MediaPipe BlazePose, the 'detect' extra) or keypoint JSON files "
+                    "in, absolute 3D poses of everyone found out. Exit code 0 if at least one input was lifted, 1 if "
+                    "all failed.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("inputs", nargs="+", metavar="INPUT", help="images, folders of images, keypoint .json files")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="images, videos, folders of them, keypoint .json files (one frame, or 'frames')")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--focal", type=float, nargs="+", metavar="F", default=None,
                    help="focal length FX [FY] in px for every input (default: per input, EXIF or --fov)")
@@ -133,13 +158,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="diagonal field of view (deg) assumed when no focal length is known")
     p.add_argument("--sensor-width", type=float, default=None, metavar="MM",
                    help="camera sensor width (long side) in mm, for EXIF focal lengths in mm")
-    p.add_argument("--glb", action="store_true", help="also write <name>.glb (skeleton mesh, metres, y-up)")
-    p.add_argument("--bvh", action="store_true", help="also write <name>.bvh (cm, y-up)")
+    p.add_argument("--glb", action="store_true", help="also write <name>.glb (skeleton meshes of everyone, metres, "
+                                                       "y-up; animated for videos)")
+    p.add_argument("--bvh", action="store_true", help="also write <name>.bvh (cm, y-up; for videos an animation per "
+                                                       "track, <name>_track<ID>.bvh)")
     p.add_argument("--weights", default="default",
                    help="lifter: 'default' (one model for every input: images are lifted as detector output, keypoint "
                         "files as their 'source' field says), another shipped name or a checkpoint .pt")
     p.add_argument("--detector", default="blazepose", help="2D estimator for images")
-    p.add_argument("--max-people", type=int, default=3, help="people the detector looks for (the largest is lifted)")
+    p.add_argument("--max-people", type=int, default=DEFAULT_MAX_PEOPLE,
+                   help="people lifted per image or frame at most (the largest; a crowd bound)")
+    p.add_argument("--smoothing", type=float, default=1.0,
+                   help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
+                        "(0 = off, 2 = twice as smooth)")
+    p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
+                   help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX, help="downscale larger images for detection")
     p.add_argument("--format", default=None, help="keypoint format of JSON files that name none "
                                                   f"(one of {', '.join(keypoint_formats())})")
@@ -168,6 +201,10 @@ def check_lift_options(args: argparse.Namespace) -> None:
     for opt, value in (("--max-side", args.max_side), ("--max-people", args.max_people)):
         if value < 1:
             raise PoseLifterError(f"{opt} must be >= 1, got {value}")
+    if not (math.isfinite(args.smoothing) and args.smoothing >= 0):
+        raise PoseLifterError(f"--smoothing must be a strength >= 0 (0 = off, 1 = default), got {args.smoothing:g}")
+    if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
+        raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
 
@@ -200,48 +237,111 @@ def run_lift(args: argparse.Namespace) -> int:
     estimator: Any = None
     estimator_error: str | None = None
     ok, failed = 0, len(problems)
-    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=args.no_progress, file=sys.stderr)
+    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=args.no_progress, file=sys.stderr,
+               position=0)
+
+    def say(msg: str) -> None:  # a message on its own line, never glued onto a progress bar
+        tqdm.write(msg, file=sys.stderr)
+
+    def get_estimator_once(path: Path) -> Any:
+        nonlocal estimator, estimator_error
+        if estimator is None and estimator_error is None:
+            try:
+                from ..detect import get_estimator
+
+                kw = {"max_people": args.max_people, "log": say} if args.detector == "blazepose" else {}
+                estimator = get_estimator(args.detector, **kw)
+            except (MissingDependencyError, PoseLifterError) as exc:
+                estimator_error = str(exc)
+        if estimator_error is not None or estimator is None:
+            raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
+        return estimator
+
+    seq_kw = {"smoothing": args.smoothing, "max_people": args.max_people, "max_seconds": args.max_seconds,
+              "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp}
     for path, name in bar:
         try:
-            if path.suffix.lower() == ".json":
+            sfx = path.suffix.lower()
+            seq: SequenceRecord | None = None
+            rec: LiftRecord | None = None
+            if sfx == ".json" and is_keypoint_sequence(path):
+                seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
+                                             **seq_kw)
+            elif sfx == ".json":
                 rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
-                                         default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test)
+                                         default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
+                                         max_people=args.max_people)
+            elif sfx in VIDEO_SUFFIXES:
+                est = get_estimator_once(path)
+                with tqdm(desc=f"  {path.name}", unit="frame", disable=args.no_progress, file=sys.stderr,
+                          position=1, leave=False) as fbar:
+                    def progress(done: int, total: int | None, fbar: Any = fbar) -> None:
+                        if total is not None and fbar.total != total:
+                            fbar.total = total
+                        fbar.update(done - fbar.n)
+
+                    seq = lift_video(path, lifter=lifter_for["image"], estimator=est, max_side=args.max_side,
+                                     progress=progress, **seq_kw)
             else:
                 img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
-                if estimator is None and estimator_error is None:
-                    try:
-                        from ..detect import get_estimator
+                rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path), focal=focal,
+                                 principal_point=pp, sensor_width_mm=args.sensor_width, fov_deg=args.fov,
+                                 max_side=args.max_side, flip_test=args.flip_test, max_people=args.max_people)
+            if seq is not None:
+                write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
+                for b in seq.bad_frames[:20]:
+                    say(f"{path}: frame {b['index']}: {b['error']}")
+                for msg in seq.warnings:
+                    say(f"{path}: note: {msg}")
+            elif rec is not None:
+                write_json_atomic(args.out / f"{name}.json", rec.to_json())
+                poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
+                if args.glb:
+                    from ..export import write_glb
 
-                        kw = {"max_people": args.max_people} if args.detector == "blazepose" else {}
-                        estimator = get_estimator(args.detector, **kw)
-                    except (MissingDependencyError, PoseLifterError) as exc:
-                        estimator_error = str(exc)
-                if estimator_error is not None or estimator is None:
-                    raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
-                rec = lift_image(img, lifter=lifter_for["image"], estimator=estimator, focal=focal, principal_point=pp,
-                                 sensor_width_mm=args.sensor_width, fov_deg=args.fov, max_side=args.max_side,
-                                 flip_test=args.flip_test)
-            write_json_atomic(args.out / f"{name}.json", rec.to_json())
-            if args.glb:
-                from ..export import write_glb
+                    write_glb(poses, args.out / f"{name}.glb")
+                if args.bvh:
+                    from ..export import write_bvh
 
-                write_glb(rec.absolute, args.out / f"{name}.glb")
-            if args.bvh:
-                from ..export import write_bvh
-
-                write_bvh(rec.absolute, args.out / f"{name}.bvh")
-            for msg in rec.warnings:
-                tqdm.write(f"{path}: note: {msg}", file=sys.stderr)
+                    for k, pose in enumerate(poses):
+                        write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
+                for msg in rec.warnings:
+                    say(f"{path}: note: {msg}")
             ok += 1
         except PoseLifterError as exc:
             msg = str(exc)
-            tqdm.write(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}", file=sys.stderr)
+            say(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}")
             failed += 1
         except Exception as exc:  # noqa: BLE001 -- one bad input must not stop the batch
-            tqdm.write(f"error: {path}: unexpected {type(exc).__name__}: {exc}", file=sys.stderr)
+            say(f"error: {path}: unexpected {type(exc).__name__}: {exc}")
             failed += 1
+    if estimator is not None and hasattr(estimator, "close"):
+        estimator.close()
     bar.close()
     total = ok + failed
-    print(f"lifted {ok} of {total} input(s) into {args.out}" + (f"; {failed} failed (see the messages above)" if failed else ""),
-          file=sys.stderr)
+    print(f"lifted {ok} of {total} input(s) into {args.out}"
+          + (f"; {failed} failed (see the messages above)" if failed else ""), file=sys.stderr)
     return 0 if ok else 1
+
+
+def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
+                           say: Any = print) -> None:
+    """``out/<name>.json`` for a lifted video or keypoint sequence; with ``bvh`` one animation per track
+    (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``."""
+    write_json_atomic(out / f"{name}.json", seq.to_json())
+    tracks = seq.tracks()
+    if bvh:
+        from ..export import write_bvh_animation
+
+        for tid, seen in sorted(tracks.items()):
+            write_bvh_animation(np.stack([p.absolute for _, p in seen]), out / f"{name}_track{tid}.bvh", fps=seq.fps)
+        if not tracks:
+            say(f"{seq.input}: note: nobody in any frame; no BVH written")
+    if glb:
+        from ..export import write_glb_animation
+
+        if tracks:
+            write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
+                                 for tid, seen in tracks.items()}, out / f"{name}.glb", fps=seq.fps)
+        else:
+            say(f"{seq.input}: note: nobody in any frame; no GLB written")

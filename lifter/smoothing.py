@@ -1,0 +1,117 @@
+"""Causal smoothing of lifted poses over time: the One-Euro filter (Casiez, Roussel & Vogel, CHI 2012).
+
+The One-Euro filter is an exponential low-pass whose cutoff frequency rises with the signal's speed:
+``fc = min_cutoff + beta * |dx/dt|`` (Hz), so a still pose is smoothed hard (jitter removed) and a fast one
+lightly (little lag). It is causal: the output at time ``t`` uses only inputs up to ``t``, so it runs online
+(video, a live camera). Speeds are per point: for ``(..., 3)`` arrays the norm of each point's velocity sets its
+cutoff.
+
+:class:`PoseSmoother` smooths what the lifter returns for one tracked person: the **root** (camera frame, mm;
+its depth is what jitters most) and the **root-relative pose**, each with its own filter. ``strength`` scales
+the smoothing: 0 = off (output = input), 1 = the default (:data:`ROOT_MIN_CUTOFF_HZ` etc., chosen on the SH
+detections of S9 at 50 fps, see the README), 2 = twice as smooth (cutoffs halved), and so on.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numpy as np
+
+from ._checks import PoseLifterError
+
+ROOT_MIN_CUTOFF_HZ: Final[float] = 0.3
+"""Root filter: cutoff (Hz) of a still root at strength 1."""
+ROOT_BETA: Final[float] = 0.004
+"""Root filter: extra cutoff (Hz) per mm/s of root speed at strength 1."""
+POSE_MIN_CUTOFF_HZ: Final[float] = 1.5
+"""Pose filter (root-relative joints): cutoff (Hz) of a still joint at strength 1."""
+POSE_BETA: Final[float] = 0.01
+"""Pose filter: extra cutoff (Hz) per mm/s of joint speed at strength 1."""
+D_CUTOFF_HZ: Final[float] = 1.0
+"""Cutoff (Hz) of the speed estimate that drives the adaptive cutoff."""
+
+
+def _alpha(cutoff: np.ndarray | float, dt: float) -> np.ndarray | float:
+    tau = 1.0 / (2.0 * math.pi * np.asarray(cutoff))
+    return 1.0 / (1.0 + tau / dt)
+
+
+class OneEuroFilter:
+    """A One-Euro filter over arrays of points ``(..., D)``; the speed of each point (norm over the last axis)
+    sets its cutoff. Call with the sample and its time (s); times must increase. ``reset()`` forgets the past."""
+
+    def __init__(self, *, min_cutoff: float, beta: float, d_cutoff: float = D_CUTOFF_HZ) -> None:
+        for name, v in (("min_cutoff", min_cutoff), ("d_cutoff", d_cutoff)):
+            if not (math.isfinite(v) and v > 0):
+                raise PoseLifterError(f"{name} must be a positive frequency in Hz, got {v}")
+        if not (math.isfinite(beta) and beta >= 0):
+            raise PoseLifterError(f"beta must be >= 0, got {beta}")
+        self.min_cutoff, self.beta, self.d_cutoff = float(min_cutoff), float(beta), float(d_cutoff)
+        self.reset()
+
+    def reset(self) -> None:
+        self._x: np.ndarray | None = None
+        self._dx: np.ndarray | None = None
+        self._t: float | None = None
+
+    def __call__(self, x: np.ndarray, t: float) -> np.ndarray:
+        x = np.asarray(x, np.float64)
+        if self._x is None or self._t is None or self._dx is None or self._x.shape != x.shape:
+            self._x, self._dx, self._t = x.copy(), np.zeros_like(x), float(t)
+            return x.copy()
+        dt = float(t) - self._t
+        if not dt > 0:
+            raise PoseLifterError(f"smoothing: sample times must increase, got {t} after {self._t}")
+        dx = (x - self._x) / dt
+        self._dx = self._dx + _alpha(self.d_cutoff, dt) * (dx - self._dx)
+        speed = np.linalg.norm(self._dx, axis=-1, keepdims=True)
+        a = _alpha(self.min_cutoff + self.beta * speed, dt)
+        self._x = self._x + a * (x - self._x)
+        self._t = float(t)
+        return self._x.copy()
+
+
+class PoseSmoother:
+    """Causal smoothing of one person's lifted root ``(3,)`` mm and root-relative pose ``(J, 3)`` mm
+    (module docstring). ``strength`` >= 0: 0 = off; the cutoffs are divided by it."""
+
+    def __init__(self, strength: float = 1.0) -> None:
+        if not (math.isfinite(strength) and strength >= 0):
+            raise PoseLifterError(f"smoothing strength must be >= 0 (0 = off, 1 = default), got {strength}")
+        self.strength = float(strength)
+        s = max(self.strength, 1e-9)
+        self._root = OneEuroFilter(min_cutoff=ROOT_MIN_CUTOFF_HZ / s, beta=ROOT_BETA / s)
+        self._pose = OneEuroFilter(min_cutoff=POSE_MIN_CUTOFF_HZ / s, beta=POSE_BETA / s)
+
+    def __call__(self, root: np.ndarray, relative: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The smoothed ``(root, relative)`` at time ``t`` (s)."""
+        if self.strength == 0:
+            return np.asarray(root, np.float64).copy(), np.asarray(relative, np.float64).copy()
+        r = self._root(np.asarray(root, np.float64)[None], t)[0]
+        rel = self._pose(relative, t)
+        rel[..., 0, :] = 0.0  # the root row of a root-relative pose stays zero
+        return r, rel
+
+    def reset(self) -> None:
+        self._root.reset()
+        self._pose.reset()
+
+
+def smooth_sequence(root: np.ndarray, relative: np.ndarray, times: np.ndarray, *,
+                    strength: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Run a :class:`PoseSmoother` over a whole sequence: ``root (T, 3)``, ``relative (T, J, 3)`` mm at
+    ``times (T,)`` s. Causal: row ``t`` of the output depends on rows ``<= t`` only."""
+    root, relative, times = np.asarray(root, np.float64), np.asarray(relative, np.float64), np.asarray(times)
+    if root.ndim != 2 or root.shape[1] != 3 or relative.shape[:1] != root.shape[:1] or times.shape != root.shape[:1]:
+        raise PoseLifterError(f"smooth_sequence: expected root (T, 3), relative (T, J, 3), times (T,), got "
+                              f"{root.shape}, {relative.shape}, {times.shape}")
+    sm = PoseSmoother(strength)
+    out_r, out_rel = np.empty_like(root), np.empty_like(relative)
+    for i in range(len(root)):
+        out_r[i], out_rel[i] = sm(root[i], relative[i], float(times[i]))
+    return out_r, out_rel
+
+
+__all__ = ["OneEuroFilter", "PoseSmoother", "smooth_sequence"]

@@ -1,0 +1,380 @@
+"""Several people over time: video files and keypoint sequences in, tracked and smoothed absolute 3D out.
+
+* :class:`SequenceTracker` is the temporal core: per frame it takes the lifted people (2D keypoints, root,
+  root-relative pose), gives each a stable ``track_id`` (:class:`lifter.tracking.Tracker`) and smooths each
+  track's root and pose causally (:class:`lifter.smoothing.PoseSmoother`). Lifting is not part of it, so a
+  keypoint sequence can be lifted in one batch and then tracked.
+* :func:`lift_video` reads a video with OpenCV frame by frame, detects everyone in each frame (a
+  :class:`lifter.detect.PoseEstimator2D`), lifts them and tracks them. Bad input gets a clear message and
+  the rest is still lifted: a file OpenCV cannot open or decode (:class:`VideoError`), a zero-length video
+  (:class:`VideoError`), a frame that cannot be decoded or whose size differs from the first frame (reported
+  in ``bad_frames`` and skipped), a frame with nobody in it (an empty ``people`` list, counted in the
+  warnings), more people than ``max_people`` (the largest are kept) and a video longer than ``max_seconds``
+  (only its first ``max_seconds`` are lifted, with a warning).
+* :func:`lift_keypoint_sequence` does the same for a keypoint JSON with ``frames`` (see :mod:`lifter.io`).
+
+The camera is resolved once per video (from the first frame's size, :func:`lifter.pipeline.resolve_camera`).
+Units: px and mm, seconds; camera frame OpenCV (+x right, +y down, +z forward).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+
+from ._checks import PoseLifterError, as_pair
+from .camera import DEFAULT_DIAGONAL_FOV_DEG
+from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, image_from_array, people_h36m
+from .io import parse_keypoint_sequence
+from .keypoints import convert
+from .skeleton import JOINT_NAMES
+from .smoothing import PoseSmoother
+from .tracking import Tracker
+
+VIDEO_SUFFIXES: Final[frozenset[str]] = frozenset(
+    {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp", ".ts"})
+"""File suffixes treated as videos (a folder's videos are lifted too)."""
+
+DEFAULT_MAX_SECONDS: Final[float] = 600.0
+"""Videos and keypoint sequences longer than this are lifted up to this duration only."""
+
+DEFAULT_MAX_PEOPLE: Final[int] = 3
+"""People looked for per image / frame by default (the largest are kept)."""
+
+
+class VideoError(PoseLifterError):
+    """A video file cannot be opened or decoded, or has no frames."""
+
+
+@dataclass
+class PersonState:
+    """One person in one frame. keypoints_2d ``(17, 2)`` px; root ``(3,)``, relative / absolute ``(17, 3)`` mm
+    (smoothed when the tracker smooths); root_raw / absolute_raw: the per-frame lift before smoothing;
+    canonical_depth: mm at a 1000-px focal (of the smoothed root); scores ``(17,)`` or None."""
+
+    track_id: int
+    keypoints_2d: np.ndarray
+    root: np.ndarray
+    relative: np.ndarray
+    root_raw: np.ndarray
+    relative_raw: np.ndarray
+    canonical_depth: float
+    scores: np.ndarray | None = None
+
+    @property
+    def absolute(self) -> np.ndarray:
+        return self.root[None, :] + self.relative
+
+    @property
+    def absolute_raw(self) -> np.ndarray:
+        return self.root_raw[None, :] + self.relative_raw
+
+    def to_json(self) -> dict[str, Any]:
+        r = lambda a, d=1: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
+        return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, 2), "absolute": r(self.absolute),
+                "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 1),
+                "root_unsmoothed": r(self.root_raw),
+                "scores": None if self.scores is None else r(self.scores, 3)}
+
+
+class SequenceTracker:
+    """Track ids and causal smoothing for the lifted people of consecutive frames (module docstring).
+
+    smoothing: :class:`lifter.smoothing.PoseSmoother` strength (0 = off). fps: frame rate, for the track
+    timeout ``max_missed_s`` (a track unseen that long ends; a person coming back gets a new id).
+    """
+
+    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = 1.0) -> None:
+        if not (math.isfinite(fps) and fps > 0):
+            raise PoseLifterError(f"fps must be > 0, got {fps}")
+        PoseSmoother(smoothing)  # validates the strength
+        self.fps, self.smoothing = float(fps), float(smoothing)
+        self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
+        self._smoothers: dict[int, PoseSmoother] = {}
+        self._focal_geo: float | None = None
+
+    def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
+             focal: np.ndarray, scores: np.ndarray | None = None) -> list[PersonState]:
+        """The people of frame number ``frame`` at ``t`` s: ``keypoints_2d (n, 17, 2)``, ``root (n, 3)``,
+        ``relative (n, 17, 3)``, the frame's ``focal (2,)`` px; ``scores (n, 17)`` or None."""
+        ids = self.tracker.update(frame, list(keypoints_2d))
+        for tid in list(self._smoothers):
+            if tid not in self.tracker.tracks:
+                del self._smoothers[tid]  # ended tracks
+        f_geo = float(np.sqrt(np.prod(np.asarray(focal, np.float64))))
+        out = []
+        for i, tid in enumerate(ids):
+            sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))
+            r, rel = sm(root[i], relative[i], t)
+            out.append(PersonState(track_id=tid, keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
+                                   relative=rel, root_raw=np.asarray(root[i], np.float64),
+                                   relative_raw=np.asarray(relative[i], np.float64),
+                                   canonical_depth=float(r[2]) * 1000.0 / f_geo,
+                                   scores=None if scores is None else np.asarray(scores[i], np.float64)))
+        return out
+
+
+@dataclass
+class FrameResult:
+    """One frame: its number, time (s) and the people in it, largest first."""
+
+    index: int
+    time_s: float
+    people: list[PersonState]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
+
+
+@dataclass
+class SequenceRecord:
+    """A lifted video or keypoint sequence; :meth:`to_json` is what ``DIR/<name>.json`` holds."""
+
+    input: str
+    kind: str
+    model: str
+    fps: float
+    image_size: tuple[int, int] | None
+    focal: tuple[float, float]
+    focal_source: str
+    principal_point: tuple[float, float]
+    smoothing: float
+    frames: list[FrameResult]
+    num_frames_in_file: int | None = None
+    bad_frames: list[dict[str, Any]] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    detector: str | None = None
+    seconds_per_frame: float | None = None
+    source: str = "detected"
+
+    def tracks(self) -> dict[int, list[tuple[int, PersonState]]]:
+        """``track_id -> [(frame index, person), ...]`` in frame order."""
+        out: dict[int, list[tuple[int, PersonState]]] = {}
+        for fr in self.frames:
+            for p in fr.people:
+                out.setdefault(p.track_id, []).append((fr.index, p))
+        return out
+
+    def to_json(self) -> dict[str, Any]:
+        tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen)}
+                  for tid, seen in sorted(self.tracks().items())]
+        return {
+            "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
+            "units": {"keypoints_2d": "px", "absolute": "mm", "root": "mm", "canonical_depth": "mm", "focal": "px",
+                      "principal_point": "px", "time_s": "s", "fps": "frames/s"},
+            "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the full-resolution frame",
+            "fps": round(self.fps, 4), "num_frames": len(self.frames), "num_frames_in_file": self.num_frames_in_file,
+            "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
+            "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
+            "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
+            "detector": self.detector, "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
+            "seconds_per_frame": None if self.seconds_per_frame is None else round(self.seconds_per_frame, 4),
+            "tracks": tracks, "bad_frames": self.bad_frames, "warnings": self.warnings,
+            "frames": [f.to_json() for f in self.frames],
+        }
+
+
+def _frames_summary(idx: list[int], n: int = 8) -> str:
+    return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
+
+
+def _check_common(smoothing: float, max_people: int, max_seconds: float) -> None:
+    PoseSmoother(smoothing)
+    if max_people < 1:
+        raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
+    if not (max_seconds > 0):
+        raise PoseLifterError(f"max_seconds must be > 0, got {max_seconds}")
+
+
+def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,
+               principal_point: Any | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
+               smoothing: float = 1.0, max_people: int = DEFAULT_MAX_PEOPLE,
+               max_seconds: float = DEFAULT_MAX_SECONDS, max_side: int = DEFAULT_MAX_SIDE_PX,
+               flip_test: bool | None = None,
+               progress: Callable[[int, int | None], None] | None = None) -> SequenceRecord:
+    """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
+    is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None).
+    Raises :class:`VideoError` for a file that cannot be opened or has no decodable frame."""
+    import cv2
+
+    from .pipeline import resolve_camera
+
+    _check_common(smoothing, max_people, max_seconds)
+    p = Path(path)
+    if not p.is_file():
+        raise VideoError(f"{p}: no such file")
+    if p.stat().st_size == 0:
+        raise VideoError(f"{p}: empty file (zero-length video)")
+    cap = cv2.VideoCapture(str(p))
+    try:
+        if not cap.isOpened():
+            raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        warnings: list[str] = []
+        if not (math.isfinite(fps) and 0 < fps <= 1000):
+            warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
+            fps = 30.0
+        declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        limit = int(math.floor(max_seconds * fps + 1e-9))
+        total = min(declared, limit) if declared > 0 else None
+        if declared > limit:
+            warnings.append(f"the video is {declared / fps:.1f} s long; only its first {max_seconds:g} s "
+                            f"({limit} frames) are lifted (the duration bound, --max-seconds)")
+        frames: list[FrameResult] = []
+        bad: list[dict[str, Any]] = []
+        nobody: list[int] = []
+        crowded: list[int] = []
+        size: tuple[int, int] | None = None
+        cam: tuple[np.ndarray, str, np.ndarray] | None = None
+        seq: SequenceTracker | None = None
+        t_total, n_done = 0.0, 0
+        index = -1
+        failures_in_a_row = 0
+        while index + 1 < limit:
+            ok, bgr = cap.read()
+            index += 1
+            if not ok or bgr is None:
+                if declared > 0 and index < declared and failures_in_a_row < 10:
+                    # OpenCV may fail a damaged frame and go on with the next one
+                    bad.append({"index": index, "error": "frame could not be decoded; skipped"})
+                    failures_in_a_row += 1
+                    continue
+                index -= 1 + failures_in_a_row
+                bad = bad[: len(bad) - failures_in_a_row]
+                break
+            failures_in_a_row = 0
+            t0 = time.perf_counter()
+            H, W = bgr.shape[:2]
+            if size is None:
+                size = (W, H)
+                f, src, pp, notes = resolve_camera(
+                    user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+                    user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
+                    file_focal=None, file_pp=None, image_size=size, exif=None, sensor_width_mm=None,
+                    fov_deg=fov_deg, where=str(p))
+                cam = (f, src, pp)
+                warnings.extend(notes)
+                seq = SequenceTracker(fps=fps, smoothing=smoothing)
+            elif (W, H) != size:
+                bad.append({"index": index, "error": f"frame size {W} x {H} px differs from the first frame's "
+                                                     f"{size[0]} x {size[1]} px; skipped"})
+                continue
+            assert cam is not None and seq is not None
+            try:
+                img = image_from_array(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), max_side=max_side)
+                people = people_h36m(img, estimator=estimator)
+            except PoseLifterError as exc:
+                bad.append({"index": index, "error": f"{exc}; skipped"})
+                continue
+            if len(people) > max_people:
+                crowded.append(index)
+                people = people[:max_people]
+            t_s = index / fps
+            if not people:
+                nobody.append(index)
+                states: list[PersonState] = []
+            else:
+                kp = np.stack([q.keypoints_2d for q in people])
+                res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected")
+                states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
+                                  np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
+                                  scores=np.stack([q.scores for q in people]))
+            frames.append(FrameResult(index=index, time_s=t_s, people=states))
+            t_total += time.perf_counter() - t0
+            n_done += 1
+            if progress is not None:
+                progress(n_done, total)
+    finally:
+        cap.release()
+    if size is None or cam is None:
+        why = "no frame could be decoded" if bad else "the video has no frames (zero-length)"
+        raise VideoError(f"{p}: {why}")
+    if declared > 0 and index + 1 < min(declared, limit):
+        warnings.append(f"decoding stopped after frame {index} of the {declared} the file declares; the rest "
+                        "could not be read")
+    if nobody:
+        warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
+    if crowded:
+        warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
+                        f"the {max_people} largest were lifted (--max-people)")
+    if bad:
+        warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
+    f, src, pp = cam
+    return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
+                          focal=(float(f[0]), float(f[1])), focal_source=src,
+                          principal_point=(float(pp[0]), float(pp[1])),
+                          smoothing=float(smoothing), frames=frames, num_frames_in_file=declared or None,
+                          bad_frames=bad, warnings=warnings, detector=estimator.name,
+                          seconds_per_frame=t_total / max(n_done, 1))
+
+
+def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
+                 fps: float, focal: np.ndarray, smoothing: float = 1.0) -> list[FrameResult]:
+    """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
+    relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place)."""
+    seq = SequenceTracker(fps=fps, smoothing=smoothing)
+    out = []
+    for index, t, kp, root, rel, sc in lifted:
+        states = seq.step(index, t, kp, root, rel, focal, scores=sc) if len(kp) else []
+        out.append(FrameResult(index=index, time_s=t, people=states))
+    return out
+
+
+def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None = None,
+                           principal_point: Any | None = None, default_format: str | None = None,
+                           fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
+                           max_people: int = DEFAULT_MAX_PEOPLE, max_seconds: float = DEFAULT_MAX_SECONDS,
+                           flip_test: bool | None = None) -> SequenceRecord:
+    """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
+    person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
+    from .pipeline import resolve_camera
+
+    _check_common(smoothing, max_people, max_seconds)
+    ks = parse_keypoint_sequence(path, default_format=default_format)
+    warnings = list(ks.warnings)
+    f, src, pp, notes = resolve_camera(
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
+        file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
+    warnings.extend(notes)
+    frames = ks.frames
+    limit = int(math.floor(max_seconds * ks.fps + 1e-9))
+    if len(frames) > limit:
+        warnings.append(f"the sequence has {len(frames)} frames ({len(frames) / ks.fps:.1f} s); only the first "
+                        f"{max_seconds:g} s ({limit} frames) are lifted (the duration bound, --max-seconds)")
+        frames = frames[:limit]
+    crowded = [i for i, fr in enumerate(frames) if len(fr) > max_people]
+    if crowded:
+        warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
+                        f"the {max_people} largest were lifted (--max-people)")
+    frames = [fr[:max_people] for fr in frames]
+    counts = [len(fr) for fr in frames]
+    nobody = [i for i, c in enumerate(counts) if c == 0]
+    if nobody:
+        warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
+    kp_all = [convert(k, src=ks.format) for fr in frames for k in fr]
+    if not kp_all:
+        raise PoseLifterError(f"{path}: no person in any frame")
+    res = lifter.lift(np.stack(kp_all), focal=f, principal_point=pp, flip_test=flip_test, source=ks.source)
+    root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
+    kp17 = np.stack(kp_all)
+    lifted, k = [], 0
+    for i, c in enumerate(counts):
+        lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
+        k += c
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
+    return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
+                          image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
+                          principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
+                          num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source)
+
+
+__all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "FrameResult", "PersonState", "SequenceRecord",
+           "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "lift_keypoint_sequence", "lift_video", "track_lifted"]

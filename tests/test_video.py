@@ -1,0 +1,285 @@
+"""Several people over time (lifter.video, lifter.tracking, lifter.smoothing) and ``poselifter lift`` on videos
+and keypoint sequences. The detector is a scripted stub (no mediapipe); the clips are written at run time."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import random_pose_cam, tiny_lifter
+
+from lifter import PoseLifterError
+from lifter.camera import project
+from lifter.cli import main
+from lifter.detect import Detection, bbox_of, register_estimator
+from lifter.smoothing import OneEuroFilter, PoseSmoother, smooth_sequence
+from lifter.tracking import Tracker
+from lifter.video import VideoError, lift_keypoint_sequence, lift_video
+
+cv2 = pytest.importorskip("cv2")
+
+W, H, F = 320, 240, 300.0
+
+
+@pytest.fixture(scope="module")
+def lifter():
+    return tiny_lifter(32)
+
+
+def _person(rng: np.random.Generator, x0: float) -> np.ndarray:
+    """A 2D pose (17, 2) px around x = x0 in a 320 x 240 frame."""
+    kp = project(random_pose_cam(rng, 1)[0], focal=F, principal_point=(W / 2, H / 2))
+    kp = (kp - kp.mean(0)) * (90.0 / np.ptp(kp[:, 1])) + [x0, H / 2]
+    return kp
+
+
+class ScriptedEstimator:
+    """Returns, for the n-th frame it is given, the n-th entry of ``script`` (a list of (17, 2) px poses)."""
+
+    name = "scripted"
+    keypoint_format = "h36m17"
+
+    def __init__(self, script: list[list[np.ndarray]]) -> None:
+        self.script, self.n = script, 0
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        people = self.script[self.n] if self.n < len(self.script) else []
+        self.n += 1
+        return [Detection(keypoints=k, scores=np.ones(17), bbox_xywh=bbox_of(k), keypoint_format="h36m17")
+                for k in people]
+
+
+def _script(n: int, *, nobody: tuple[int, ...] = ()) -> list[list[np.ndarray]]:
+    """Two people walking towards each other (left one larger), with 2D jitter; nobody in frames ``nobody``."""
+    rng = np.random.default_rng(1)
+    a, b = _person(rng, 80), _person(rng, 240) * 0.8
+    b += [240 - b[:, 0].mean(), 0]
+    out = []
+    for i in range(n):
+        if i in nobody:
+            out.append([])
+            continue
+        ja, jb = rng.normal(0, 0.8, (2, 17, 2))
+        out.append([a + [2.0 * i, 0] + ja, b - [2.0 * i, 0] + jb])
+    return out
+
+
+def _write_clip(path: Path, n: int, fps: float = 25.0, size: tuple[int, int] = (W, H)) -> Path:
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, size)
+    assert vw.isOpened()
+    for i in range(n):
+        vw.write(np.full((size[1], size[0], 3), 40 + 5 * i % 200, np.uint8))
+    vw.release()
+    return path
+
+
+# ------------------------------------------------------------------------------------------------ smoothing
+
+
+def test_one_euro_is_causal_and_smooths():
+    rng = np.random.default_rng(0)
+    t = np.arange(200) / 50.0
+    truth = np.stack([np.sin(t), np.cos(t), 5 + 0 * t], 1) * 1000
+    noisy = truth + rng.normal(0, 40, truth.shape)
+    rel = np.zeros((200, 17, 3))
+    r0, _ = smooth_sequence(noisy, rel, t, strength=0)
+    np.testing.assert_array_equal(r0, noisy)  # strength 0 = off
+    r1, _ = smooth_sequence(noisy, rel, t, strength=1)
+    acc = lambda x: np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1).mean()  # noqa: E731
+    assert acc(r1) < 0.5 * acc(noisy)  # a fast root (1 m/s): the filter opens up, still halves the jitter
+    assert np.linalg.norm(r1 - truth, axis=-1).mean() < np.linalg.norm(noisy - truth, axis=-1).mean()
+    later = noisy.copy()
+    later[120:] += 500.0  # the future does not change the past
+    r2, _ = smooth_sequence(later, rel, t, strength=1)
+    np.testing.assert_array_equal(r2[:120], r1[:120])
+    r4, _ = smooth_sequence(noisy, rel, t, strength=4)
+    assert acc(r4) < acc(r1)  # stronger = smoother
+
+
+def test_smoothing_errors():
+    with pytest.raises(PoseLifterError, match="strength must be >= 0"):
+        PoseSmoother(-1)
+    f = OneEuroFilter(min_cutoff=1.0, beta=0.0)
+    f(np.zeros(3), 1.0)
+    with pytest.raises(PoseLifterError, match="times must increase"):
+        f(np.zeros(3), 1.0)
+    with pytest.raises(PoseLifterError, match="positive frequency"):
+        OneEuroFilter(min_cutoff=0.0, beta=0.0)
+
+
+# ------------------------------------------------------------------------------------------------ tracking
+
+
+def test_tracker_keeps_ids_through_a_gap_and_ends_tracks():
+    script = _script(30, nobody=(10, 11, 12))
+    tr = Tracker(max_missed=5)
+    ids = [tr.update(i, people) for i, people in enumerate(script)]
+    assert all(x == [1, 2] for i, x in enumerate(ids) if i not in (10, 11, 12))  # same order as given
+    # order of the people in a frame does not matter
+    assert tr.update(30, [script[29][1] - [2, 0], script[29][0] + [2, 0]]) == [2, 1]
+    # unseen for longer than max_missed frames: ended; a person there later gets a new id
+    assert tr.update(40, []) == [] and not tr.tracks
+    assert tr.update(41, [script[29][0]]) == [3]
+    assert [t.track_id for t in tr.all_tracks()] == [1, 2, 3]
+
+
+# ------------------------------------------------------------------------------------------------ video
+
+
+def test_video_two_people_tracked_and_smoothed(tmp_path, lifter):
+    clip = _write_clip(tmp_path / "walk.avi", 20)
+    est = ScriptedEstimator(_script(20, nobody=(7,)))
+    seen: list[tuple[int, int | None]] = []
+    rec = lift_video(clip, lifter=lifter, estimator=est, focal=F, smoothing=1.0,
+                     progress=lambda d, t: seen.append((d, t)))
+    assert rec.fps == pytest.approx(25.0) and rec.image_size == (W, H) and len(rec.frames) == 20
+    assert seen[-1] == (20, 20)
+    d = rec.to_json()
+    assert [f["index"] for f in d["frames"]] == list(range(20))
+    assert d["frames"][3]["time_s"] == pytest.approx(3 / 25.0)
+    assert d["frames"][7]["people"] == [] and any("no person found in 1 of 20 frames: 7" in w for w in rec.warnings)
+    ids = [[p["track_id"] for p in f["people"]] for f in d["frames"] if f["people"]]
+    assert all(x == [1, 2] for x in ids)
+    assert [t["track_id"] for t in d["tracks"]] == [1, 2] and d["tracks"][0]["num_frames"] == 19
+    # smoothing changed the root, and the unsmoothed one is kept; both people lifted in one camera space
+    p = d["frames"][10]["people"][0]
+    assert p["root"] != p["root_unsmoothed"]
+    assert d["frames"][0]["people"][0]["root"] == d["frames"][0]["people"][0]["root_unsmoothed"]  # first frame
+    for q in d["frames"][0]["people"]:  # each root lies on the ray of its own 2D pelvis
+        assert np.sign(q["root"][0]) == np.sign(q["keypoints_2d"][0][0] - W / 2)
+    areas = [np.prod(np.ptp(np.array(q["keypoints_2d"]), axis=0)) for q in d["frames"][0]["people"]]
+    assert areas[0] > areas[1]  # largest first
+
+
+def test_video_max_people_and_duration_bound(tmp_path, lifter):
+    clip = _write_clip(tmp_path / "c.avi", 30, fps=10.0)
+    rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_people=1,
+                     max_seconds=2.0)
+    assert len(rec.frames) == 20 and all(len(f.people) == 1 for f in rec.frames)
+    assert any("only its first 2 s (20 frames)" in w for w in rec.warnings)
+    assert any("more than 1 people in 20 frames" in w for w in rec.warnings)
+
+
+class _FakeCapture:
+    """A cv2.VideoCapture stand-in: frames of a given size list (None = a frame that fails to decode)."""
+
+    def __init__(self, sizes: list[tuple[int, int] | None]) -> None:
+        self.sizes, self.i = sizes, 0
+
+    def isOpened(self) -> bool:  # noqa: N802 -- OpenCV's name
+        return True
+
+    def get(self, prop: int) -> float:
+        return {cv2.CAP_PROP_FPS: 25.0, cv2.CAP_PROP_FRAME_COUNT: float(len(self.sizes))}.get(prop, 0.0)
+
+    def read(self) -> tuple[bool, np.ndarray | None]:
+        if self.i >= len(self.sizes):
+            return False, None
+        s = self.sizes[self.i]
+        self.i += 1
+        return (False, None) if s is None else (True, np.zeros((s[1], s[0], 3), np.uint8))
+
+    def release(self) -> None:
+        pass
+
+
+def test_video_bad_and_resized_frames_are_reported_and_skipped(tmp_path, lifter, monkeypatch):
+    clip = tmp_path / "odd.mp4"
+    clip.write_bytes(b"x")
+    sizes: list[tuple[int, int] | None] = [(W, H)] * 4 + [(W // 2, H // 2), None] + [(W, H)] * 4
+    monkeypatch.setattr(cv2, "VideoCapture", lambda *_: _FakeCapture(sizes))
+    rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(10)), focal=F)
+    assert [f.index for f in rec.frames] == [0, 1, 2, 3, 6, 7, 8, 9]
+    errors = {b["index"]: b["error"] for b in rec.bad_frames}
+    assert "frame size 160 x 120 px differs from the first frame's 320 x 240 px" in errors[4]
+    assert "could not be decoded" in errors[5]
+    assert any("2 bad frame(s) skipped: 4, 5" in w for w in rec.warnings)
+
+
+def test_video_errors(tmp_path, lifter):
+    est = ScriptedEstimator([])
+    (tmp_path / "empty.mp4").write_bytes(b"")
+    with pytest.raises(VideoError, match="empty file \\(zero-length video\\)"):
+        lift_video(tmp_path / "empty.mp4", lifter=lifter, estimator=est)
+    (tmp_path / "junk.mp4").write_bytes(b"this is not a video" * 100)
+    with pytest.raises(VideoError, match="cannot open as a video|no frame could be decoded|has no frames"):
+        lift_video(tmp_path / "junk.mp4", lifter=lifter, estimator=est)
+    with pytest.raises(VideoError, match="no such file"):
+        lift_video(tmp_path / "nope.mp4", lifter=lifter, estimator=est)
+
+
+# ------------------------------------------------------------------------------------------------ sequences
+
+
+def _sequence_json(path: Path, n: int = 12, **extra) -> Path:
+    frames = [{"people": [{"keypoints": k.tolist()} for k in people]} for people in _script(n, nobody=(4,))]
+    path.write_text(json.dumps({"fps": 30, "format": "h36m17", "image_size": [W, H], "focal": F, "frames": frames,
+                                **extra}))
+    return path
+
+
+def test_keypoint_sequence(tmp_path, lifter):
+    rec = lift_keypoint_sequence(_sequence_json(tmp_path / "s.json"), lifter=lifter, smoothing=1.0)
+    d = rec.to_json()
+    assert d["kind"] == "keypoint-sequence" and d["fps"] == 30 and len(d["frames"]) == 12
+    assert d["frames"][4]["people"] == [] and [t["track_id"] for t in d["tracks"]] == [1, 2]
+    # the same 2D lifted one frame at a time (smoothing off) gives the same per-frame roots
+    raw = lift_keypoint_sequence(tmp_path / "s.json", lifter=lifter, smoothing=0.0)
+    for fr in raw.frames:
+        for p in fr.people:
+            np.testing.assert_allclose(p.root, p.root_raw)
+    first = raw.frames[0].people[0]
+    single = lifter.lift(first.keypoints_2d, focal=F, principal_point=(W / 2, H / 2))
+    np.testing.assert_allclose(first.root, single.root, atol=1e-3)
+
+
+@pytest.mark.parametrize(("body", "match"), [
+    ({"frames": [], "fps": 30}, "zero-length sequence"),
+    ({"frames": [[[0, 0]] * 17]}, "'fps' must be the frame rate"),
+    ({"frames": 3, "fps": 30}, "'frames' must be a list"),
+    ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}, {"keypoints": [[1, 1]] * 16}], "fps": 30,
+      "format": "h36m17"}, "frame 1: format 'h36m17' has 17 joints, the file has 16"),
+])
+def test_keypoint_sequence_errors(tmp_path, lifter, body, match):
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps(body))
+    with pytest.raises(PoseLifterError, match=match):
+        lift_keypoint_sequence(p, lifter=lifter, principal_point=(100, 100), focal=F)
+
+
+# ------------------------------------------------------------------------------------------------ CLI
+
+
+def test_cli_video_and_sequence(tmp_path, lifter, capsys):
+    from lifter.checkpoint import save_checkpoint
+
+    weights = tmp_path / "tiny.pt"
+    save_checkpoint(weights, lifter.net, lifter.codec, meta={"name": "tiny"})
+    register_estimator("_scripted_video", lambda **kw: ScriptedEstimator(_script(15, nobody=(2,))), overwrite=True)
+    clip = _write_clip(tmp_path / "clip.avi", 15)
+    seq = _sequence_json(tmp_path / "seq.json")
+    (tmp_path / "broken.mp4").write_bytes(b"\0" * 64)
+    out = tmp_path / "out"
+    code = main(["lift", "--no-progress", str(clip), str(seq), str(tmp_path / "broken.mp4"), "--out", str(out),
+                 "--detector", "_scripted_video", "--weights", str(weights), "--focal", str(F), "--bvh", "--glb",
+                 "--smoothing", "2"])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "lifted 2 of 3" in err and "broken.mp4: cannot open as a video" in err
+    assert "clip.avi: note: no person found in 1 of 15 frames: 2" in err
+    d = json.loads((out / "clip.json").read_text())
+    assert d["fps"] == pytest.approx(25.0) and len(d["frames"]) == 15 and d["smoothing"]["strength"] == 2.0
+    from lifter.export import read_bvh_frames, read_glb_animation
+
+    for name in ("clip", "seq"):
+        assert {p.name for p in out.glob(f"{name}_track*.bvh")} == {f"{name}_track1.bvh", f"{name}_track2.bvh"}
+    bvh = read_bvh_frames(out / "clip_track1.bvh")
+    want = np.array([f["people"][0]["absolute"] for f in d["frames"] if f["people"]])
+    np.testing.assert_allclose(bvh, want, atol=0.2)
+    times, joints = read_glb_animation(out / "clip.glb")
+    assert len(times) == 15 and set(joints) == {1, 2} and np.isnan(joints[1][2]).all()
+    np.testing.assert_allclose(joints[2][0], d["frames"][0]["people"][1]["absolute"], atol=0.2)
+    code = main(["lift", "--no-progress", str(seq), "--out", str(out), "--smoothing", "-1"])
+    assert code == 2 and "--smoothing must be a strength >= 0" in capsys.readouterr().err
