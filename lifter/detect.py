@@ -51,14 +51,16 @@ Focal length from EXIF
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
 import time
 import warnings
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Final, Protocol, runtime_checkable
+from typing import Any, Final, Protocol, cast, runtime_checkable
 
 import numpy as np
 
@@ -85,6 +87,17 @@ BOX_GROW: Final[float] = 0.15
 
 MIN_EXTRA_VISIBILITY: Final[float] = 0.5
 """A second, third, ... person must have at least this mean landmark visibility to count."""
+
+WINDOW_FRACTION: Final[float] = 0.5
+"""``multi="windows"``: the search windows are this fraction of the image's longer side wide (full height)."""
+WINDOW_MIN_INSIDE: Final[float] = 0.8
+"""``multi="windows"``: a person found in a window must have this share of landmarks inside it (not cut off)."""
+MAX_COVERED: Final[float] = 0.5
+"""``multi="windows"``: a candidate whose box is covered more than this by the boxes of people already kept is a
+part or a merge of them, not another person."""
+SAME_PERSON: Final[float] = 0.1
+"""Two detections are the same person when their median landmark distance is below this share of the larger
+box diagonal, or when each one's pelvis lies in the other's box."""
 
 _EXIF_IFD: Final[int] = 0x8769
 _TAG_FOCAL_LENGTH: Final[int] = 37386
@@ -613,31 +626,67 @@ def _import_mediapipe() -> Any:
     return mp
 
 
+_LIVE_ESTIMATORS: weakref.WeakSet[Any] = weakref.WeakSet()
+
+
+@atexit.register
+def _close_live_estimators() -> None:
+    """Close landmarkers still open at exit: MediaPipe's own finalizer fails once the interpreter is shutting down
+    ("Exception ignored in PoseLandmarker.__del__")."""
+    for est in list(_LIVE_ESTIMATORS):
+        try:
+            est.close()
+        except Exception:  # noqa: BLE001 -- best effort at exit
+            pass
+
+
+def _pelvis(d: Detection) -> np.ndarray:
+    return convert(d.keypoints, src=d.keypoint_format)[0]
+
+
+def _in_box(box: np.ndarray, p: np.ndarray) -> bool:
+    x, y, w, h = box
+    return bool(x <= p[0] <= x + w and y <= p[1] <= y + h)
+
+
+def _cells(box: np.ndarray, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
+    """A box ``(x, y, w, h)`` px as cell ranges of a 1/4-resolution coverage grid of ``shape``."""
+    x, y, w, h = (float(v) / 4.0 for v in box)
+    return (int(np.clip(math.floor(x), 0, shape[1])), int(np.clip(math.floor(y), 0, shape[0])),
+            int(np.clip(math.ceil(x + w), 0, shape[1])), int(np.clip(math.ceil(y + h), 0, shape[0])))
+
+
 class BlazePoseEstimator:
     """MediaPipe BlazePose (full model, 33 landmarks, ``"blazepose33"``) through the Tasks API's
     ``PoseLandmarker``, from the bundle of :func:`ensure_pose_task` (built once from the 0.10.21 wheel's models).
 
     min_detection_confidence: the person detector's threshold. max_people: how many people to look for.
-    multi: how further people are found. ``"mask"``: one person per pass; the person found is masked
-    (their landmark box, grown by 15 % per side, filled with the image's mean colour) and the landmarker runs
-    again, up to ``max_people`` passes; ``"tasks"``: one pass with the landmarker's own ``num_poses=max_people``
-    (faster, misses more; see the README). A new detection whose box centre falls inside an earlier person's
-    grown box is a remnant of that person and is dropped, and so is a further "person" whose mean landmark
-    visibility is below :data:`MIN_EXTRA_VISIBILITY` or with fewer than half of its landmarks inside the image.
+    multi: how several people are found (BlazePose's landmark model sees one person per region of interest).
+    ``"windows"`` (default): the whole image and 3 overlapping windows (each :data:`WINDOW_FRACTION` of the longer
+    side wide, full height) are searched, one person each; a person found in a window must lie inside it
+    (:data:`WINDOW_MIN_INSIDE`), the candidates are kept by mean visibility, and a candidate is dropped when it is
+    the same person as one kept (:data:`SAME_PERSON`) or its box is mostly covered by kept people's boxes
+    (:data:`MAX_COVERED`: a body part, or two people merged). ``"mask"``: one person per pass; the person found
+    is masked (their landmark box, grown by 15 % per side, filled with the image's mean colour) and the
+    landmarker runs again, up to ``max_people`` passes (a new detection whose box centre falls inside an earlier
+    person's grown box is a remnant of that person). ``"tasks"``: one pass with the landmarker's own
+    ``num_poses=max_people``. In every mode a further "person" needs a mean landmark visibility of at least
+    :data:`MIN_EXTRA_VISIBILITY` and half of its landmarks inside the image. The README compares the modes on
+    two-person photos; :meth:`detect_near` searches only around given boxes (video tracking).
     task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 
     name = "blazepose"
     keypoint_format = "blazepose33"
 
-    def __init__(self, *, min_detection_confidence: float = 0.5, max_people: int = 3, multi: str = "mask",
+    def __init__(self, *, min_detection_confidence: float = 0.5, max_people: int = 3, multi: str = "windows",
                  task_path: str | os.PathLike[str] | None = None,
                  log: Callable[[str], None] | None = None) -> None:
         mp = _import_mediapipe()
         if max_people < 1:
             raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
-        if multi not in ("mask", "tasks"):
-            raise PoseLifterError(f"multi must be 'mask' or 'tasks', got {multi!r}")
+        if multi not in ("windows", "mask", "tasks"):
+            raise PoseLifterError(f"multi must be 'windows', 'mask' or 'tasks', got {multi!r}")
         self.max_people = int(max_people)
         self.multi = multi
         self._mp = mp
@@ -648,23 +697,24 @@ class BlazePoseEstimator:
             base_options=BaseOptions(model_asset_path=str(path)), running_mode=vision.RunningMode.IMAGE,
             num_poses=self.max_people if multi == "tasks" else 1,
             min_pose_detection_confidence=min_detection_confidence)
-        self._silent_calls = 1  # the first detection still logs (TFLite delegate set-up): keep it quiet too
+        self._quiet_until_found = True  # the first detections that reach the landmark model still log: keep quiet
         with _StderrSilenced():
             try:
                 self._landmarker = vision.PoseLandmarker.create_from_options(opts)
             except (RuntimeError, ValueError) as exc:
                 raise MissingDependencyError(f"{path}: MediaPipe cannot load this pose model bundle ({exc}); "
                                              "delete it to rebuild") from None
+        _LIVE_ESTIMATORS.add(self)
 
     def _run(self, image: np.ndarray) -> list[Detection]:
         mp, landmarker = self._mp, self._landmarker
         if landmarker is None:
             raise PoseLifterError("this BlazePose estimator is closed")
         frame = mp.Image(image_format=mp.ImageFormat.SRGB, data=np.ascontiguousarray(image))
-        if self._silent_calls > 0:
-            self._silent_calls -= 1
+        if self._quiet_until_found:
             with _StderrSilenced():
                 res = landmarker.detect(frame)
+            self._quiet_until_found = not res.pose_landmarks
         else:
             res = landmarker.detect(frame)
         H, W = image.shape[:2]
@@ -685,6 +735,50 @@ class BlazePoseEstimator:
         inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
         return float(det.scores.mean()) >= MIN_EXTRA_VISIBILITY and inside >= 0.5
 
+    @staticmethod
+    def _same(a: Detection, b: Detection) -> bool:
+        diag = max(math.hypot(*a.bbox_xywh[2:]), math.hypot(*b.bbox_xywh[2:]), 1.0)
+        if float(np.median(np.linalg.norm(a.keypoints - b.keypoints, axis=-1))) < SAME_PERSON * diag:
+            return True
+        pa, pb = _pelvis(a), _pelvis(b)
+        return _in_box(a.bbox_xywh, pb) and _in_box(b.bbox_xywh, pa)
+
+    def _select(self, cands: list[Detection], W: int, H: int) -> list[Detection]:
+        """Candidates from several searches -> distinct people (class docstring), largest first."""
+        kept: list[Detection] = []
+        cover = np.zeros((max(1, H // 4), max(1, W // 4)), bool)
+        for d in sorted(cands, key=lambda d: float(d.scores.mean()), reverse=True):
+            if kept:
+                k = d.keypoints
+                inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
+                if float(d.scores.mean()) < MIN_EXTRA_VISIBILITY or inside < 0.5:
+                    continue
+                if any(self._same(d, e) for e in kept):
+                    continue
+                x0, y0, x1, y1 = _cells(d.bbox_xywh, cover.shape)
+                if x1 > x0 and y1 > y0 and float(cover[y0:y1, x0:x1].mean()) > MAX_COVERED:
+                    continue
+            kept.append(d)
+            x0, y0, x1, y1 = _cells(d.bbox_xywh, cover.shape)
+            cover[y0:y1, x0:x1] = True
+            if len(kept) == self.max_people:
+                break
+        return sorted(kept, key=lambda d: d.area, reverse=True)
+
+    def _in_crop(self, img: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> list[Detection]:
+        """People found in ``img[y0:y1, x0:x1]`` that lie inside it, in full-image px."""
+        out = []
+        W, H = img.shape[1], img.shape[0]
+        for d in self._run(np.ascontiguousarray(img[y0:y1, x0:x1])):
+            k = d.keypoints
+            inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < x1 - x0) & (k[:, 1] >= 0) & (k[:, 1] < y1 - y0)))
+            if inside < WINDOW_MIN_INSIDE and (x1 - x0, y1 - y0) != (W, H):
+                continue
+            k = k + [x0, y0]
+            out.append(Detection(keypoints=k, scores=d.scores, bbox_xywh=bbox_of(np.clip(k, 0.0, [W, H])),
+                                 keypoint_format=d.keypoint_format))
+        return out
+
     def detect(self, image: np.ndarray) -> list[Detection]:
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
         if img.ndim != 3 or img.shape[-1] != 3:
@@ -697,6 +791,15 @@ class BlazePoseEstimator:
             x, y, w, h = d.bbox_xywh
             return np.array([x - BOX_GROW * w, y - BOX_GROW * h, x + (1 + BOX_GROW) * w, y + (1 + BOX_GROW) * h])
 
+        if self.multi == "windows":
+            cands = self._run(img)
+            if self.max_people > 1:
+                ww = round(WINDOW_FRACTION * max(W, H))
+                if ww < 0.95 * W:
+                    n = math.ceil((W - ww) / (ww / 2)) + 1
+                    for x0 in np.linspace(0, W - ww, n).round().astype(int):
+                        cands += self._in_crop(img, int(x0), 0, int(x0) + ww, H)
+            return self._select(cands, W, H)
         if self.multi == "tasks":
             for det in sorted(self._run(img), key=lambda d: d.area, reverse=True):
                 if not found or self._plausible_extra(det, grown, W, H):
@@ -723,6 +826,23 @@ class BlazePoseEstimator:
                 work = img.copy()
             work[y0:y1, x0:x1] = fill
         return found
+
+    def detect_near(self, image: np.ndarray, boxes: list[np.ndarray], *, grow: float = 0.3) -> list[Detection]:
+        """People near the given ``(x, y, w, h)`` boxes only (e.g. where tracked people were in the previous video
+        frame): one landmarker pass on a crop around each box (grown by ``grow`` per side, at least as wide as it
+        is tall). Cheaper than :meth:`detect` for a few people; finds nobody new."""
+        img = np.ascontiguousarray(np.asarray(image, np.uint8))
+        H, W = img.shape[:2]
+        cands: list[Detection] = []
+        for b in boxes:
+            x, y, w, h = (float(v) for v in b)
+            side_w = max(w, h) * (1 + 2 * grow)
+            cx, cy = x + w / 2, y + h / 2
+            x0, x1 = int(max(0, cx - side_w / 2)), int(min(W, cx + side_w / 2))
+            y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
+            if x1 - x0 >= 8 and y1 - y0 >= 8:
+                cands += self._in_crop(img, x0, y0, x1, y1)
+        return self._select(cands, W, H)
 
     def close(self) -> None:
         lm = getattr(self, "_landmarker", None)
@@ -771,11 +891,19 @@ class DetectedPose:
     warnings: tuple[str, ...] = ()
 
 
-def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D) -> list[DetectedPose]:
+def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
+                near: list[np.ndarray] | None = None) -> list[DetectedPose]:
     """Everyone ``estimator`` finds in a loaded image, largest (box area) first, each converted to H36M-17
-    in px of the upright full-resolution image. An empty list when nobody is found."""
+    in px of the upright full-resolution image. An empty list when nobody is found. ``near``: boxes
+    ``(x, y, w, h)`` in full-resolution px; an estimator with a ``detect_near`` method (BlazePose) then searches
+    only around them (video tracking)."""
     t0 = time.perf_counter()
-    found = estimator.detect(image.rgb)
+    detect_near = getattr(estimator, "detect_near", None)
+    found: list[Detection]
+    if near is not None and callable(detect_near):
+        found = cast("list[Detection]", detect_near(image.rgb, [np.asarray(b, np.float64) * image.scale for b in near]))
+    else:
+        found = estimator.detect(image.rgb)
     dt = time.perf_counter() - t0
     found = sorted(found, key=lambda d: d.area, reverse=True)
     out = []

@@ -47,6 +47,9 @@ DEFAULT_MAX_SECONDS: Final[float] = 600.0
 DEFAULT_MAX_PEOPLE: Final[int] = 3
 """People looked for per image / frame by default (the largest are kept)."""
 
+DEFAULT_SEARCH_EVERY_S: Final[float] = 0.5
+"""Videos: the whole frame is searched for (new) people at least this often, in seconds."""
+
 
 class VideoError(PoseLifterError):
     """A video file cannot be opened or decoded, or has no frames."""
@@ -196,11 +199,16 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                principal_point: Any | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
                smoothing: float = 1.0, max_people: int = DEFAULT_MAX_PEOPLE,
                max_seconds: float = DEFAULT_MAX_SECONDS, max_side: int = DEFAULT_MAX_SIDE_PX,
-               flip_test: bool | None = None,
+               flip_test: bool | None = None, search_every_s: float = DEFAULT_SEARCH_EVERY_S,
                progress: Callable[[int, int | None], None] | None = None) -> SequenceRecord:
     """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
     is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None).
-    Raises :class:`VideoError` for a file that cannot be opened or has no decodable frame."""
+    Raises :class:`VideoError` for a file that cannot be opened or has no decodable frame.
+
+    Detection: the whole frame is searched (the estimator's ``detect``) every ``search_every_s`` seconds, and
+    whenever fewer people are found than in the previous frame or nobody is tracked; in between, an estimator
+    with ``detect_near`` (BlazePose) searches only around the people seen since the last full search (their last
+    boxes), which is what makes video fast (``search_every_s=0``: a full search in every frame)."""
     import cv2
 
     from .pipeline import resolve_camera
@@ -236,6 +244,11 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
         t_total, n_done = 0.0, 0
         index = -1
         failures_in_a_row = 0
+        recent: dict[int, tuple[int, np.ndarray]] = {}  # track id -> (frame last seen, box in full-res px)
+        prev_count = 0
+        last_search = -(10**9)
+        search_every = max(1, round(search_every_s * fps)) if search_every_s > 0 else 1
+        can_track = callable(getattr(estimator, "detect_near", None))
         while index + 1 < limit:
             ok, bgr = cap.read()
             index += 1
@@ -268,7 +281,15 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
             assert cam is not None and seq is not None
             try:
                 img = image_from_array(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), max_side=max_side)
-                people = people_h36m(img, estimator=estimator)
+                people = None
+                boxes = [b for seen, b in recent.values() if index - seen <= search_every]
+                if can_track and boxes and index - last_search < search_every:
+                    people = people_h36m(img, estimator=estimator, near=boxes)
+                    if len(people) < prev_count:
+                        people = None  # someone was lost: search the whole frame
+                if people is None:
+                    people = people_h36m(img, estimator=estimator)
+                    last_search = index
             except PoseLifterError as exc:
                 bad.append({"index": index, "error": f"{exc}; skipped"})
                 continue
@@ -286,6 +307,10 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
             frames.append(FrameResult(index=index, time_s=t_s, people=states))
+            prev_count = len(states)
+            for st, q in zip(states, people):
+                recent[st.track_id] = (index, q.raw.bbox_xywh)
+            recent = {tid: v for tid, v in recent.items() if index - v[0] <= search_every}
             t_total += time.perf_counter() - t0
             n_done += 1
             if progress is not None:

@@ -261,3 +261,18 @@ def test_blazepose_mask_mode_finds_two_tasks_mode_runs():
         dets = est.detect(pair)
     assert 1 <= len(dets) <= 3 and all(d.keypoints.shape == (33, 2) for d in dets)
     assert [d.area for d in dets] == sorted((d.area for d in dets), reverse=True)
+
+
+def test_blazepose_detect_near_finds_only_the_person_in_the_box(blazepose):
+    from PIL import Image
+
+    a = np.asarray(Image.open(ROOT / "assets" / "demo" / "standing.jpg").convert("RGB"))
+    b = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
+    pair = np.concatenate([a, b], axis=1)
+    both = blazepose.detect(pair)
+    assert len(both) == 2
+    for d in both:
+        near = blazepose.detect_near(pair, [d.bbox_xywh])
+        assert len(near) == 1
+        assert np.median(np.linalg.norm(near[0].keypoints - d.keypoints, axis=-1)) < 10
+    assert blazepose.detect_near(pair, [np.array([0.0, 0.0, 40.0, 40.0])]) == []

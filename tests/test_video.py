@@ -283,3 +283,54 @@ def test_cli_video_and_sequence(tmp_path, lifter, capsys):
     np.testing.assert_allclose(joints[2][0], d["frames"][0]["people"][1]["absolute"], atol=0.2)
     code = main(["lift", "--no-progress", str(seq), "--out", str(out), "--smoothing", "-1"])
     assert code == 2 and "--smoothing must be a strength >= 0" in capsys.readouterr().err
+
+
+class FrameIndexedEstimator:
+    """Knows the frame from the image (``_write_clip`` paints frame i grey level 40 + 5 i): ``detect`` returns the
+    frame's scripted people, ``detect_near`` (as BlazePose) only those whose pelvis is in one of the boxes; both
+    record which search each frame got."""
+
+    name = "indexed"
+    keypoint_format = "h36m17"
+
+    def __init__(self, script: list[list[np.ndarray]]) -> None:
+        self.script = script
+        self.calls: list[tuple[str, int]] = []
+
+    def _frame(self, image: np.ndarray) -> int:
+        return int(round((float(image.mean()) - 40) / 5))
+
+    @staticmethod
+    def _dets(people: list[np.ndarray]) -> list[Detection]:
+        return [Detection(keypoints=k, scores=np.ones(17), bbox_xywh=bbox_of(k), keypoint_format="h36m17")
+                for k in people]
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        i = self._frame(image)
+        self.calls.append(("full", i))
+        return self._dets(self.script[i])
+
+    def detect_near(self, image: np.ndarray, boxes: list[np.ndarray]) -> list[Detection]:
+        i = self._frame(image)
+        self.calls.append(("near", i))
+        return self._dets([k for k in self.script[i]
+                           if any(b[0] <= k[0, 0] <= b[0] + b[2] and b[1] <= k[0, 1] <= b[1] + b[3] for b in boxes)])
+
+
+def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lifter):
+    """A full search every search_every_s, a crop search in between, and a full search of the same frame when
+    someone tracked is lost."""
+    clip = _write_clip(tmp_path / "t.avi", 12, fps=10.0)
+    script = _script(12)
+    script[7] = script[7][:1]  # one person missing in frame 7
+    est = FrameIndexedEstimator(script)
+    rec = lift_video(clip, lifter=lifter, estimator=est, focal=F, search_every_s=0.5)
+    assert [len(f.people) for f in rec.frames] == [2] * 7 + [1] + [2] * 4
+    full = [i for kind, i in est.calls if kind == "full"]
+    near = [i for kind, i in est.calls if kind == "near"]
+    assert full == [0, 5, 7], est.calls  # every 5 frames, and frame 7 again after the loss
+    assert near == [1, 2, 3, 4, 6, 7, 8, 9, 10, 11], est.calls  # 8: near both people's last boxes
+    assert all([p.track_id for p in f.people] == [1, 2] for f in rec.frames if len(f.people) == 2)
+    every = FrameIndexedEstimator(_script(12))
+    lift_video(clip, lifter=lifter, estimator=every, focal=F, search_every_s=0)
+    assert [k for k, _ in every.calls] == ["full"] * 12
