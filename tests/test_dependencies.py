@@ -1,0 +1,70 @@
+"""Dependencies point one way: the library never imports its CLI, the error model knows nothing of the API or
+the dataset, and the numpy-only modules import without torch."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+LIFTER = Path(__file__).resolve().parent.parent / "lifter"
+
+
+def _imports(path: Path) -> set[str]:
+    """Absolute names of the lifter modules ``path`` imports (anywhere in the file)."""
+    rel = path.relative_to(LIFTER.parent).with_suffix("")
+    package = list(rel.parts[:-1])  # the package a relative import starts from (also for __init__.py)
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            out.add(mod)
+            out.update(f"{mod}.{a.name}" for a in node.names)
+    return {m for m in out if m == "lifter" or m.startswith("lifter.")}
+
+
+def test_the_library_never_imports_its_cli():
+    """Only the CLI package itself and ``python -m lifter`` (lifter/__main__.py, the CLI's entry point) may."""
+    offenders = [str(p.relative_to(LIFTER)) for p in LIFTER.rglob("*.py")
+                 if "cli" not in p.relative_to(LIFTER).parts and p.name != "__main__.py"
+                 and any(m == "lifter.cli" or m.startswith("lifter.cli.") for m in _imports(p))]
+    assert not offenders, offenders
+
+
+def test_the_import_check_sees_relative_imports():
+    assert "lifter.api" in _imports(LIFTER / "cli" / "lift.py") or "lifter.api.Lifter" in _imports(LIFTER / "cli" / "lift.py")
+    assert "lifter.normalization" in _imports(LIFTER / "noise.py")
+
+
+def test_noise_imports_neither_api_nor_data():
+    bad = {m for m in _imports(LIFTER / "noise.py")
+           if m.split(".")[:2] in (["lifter", "api"], ["lifter", "data"], ["lifter", "train"])}
+    assert not bad, bad
+
+
+@pytest.mark.parametrize("module", ["lifter.metrics", "lifter.camera", "lifter.keypoints", "lifter.normalization",
+                                    "lifter.skeleton", "lifter.analytic", "lifter.resources"])
+def test_numpy_modules_import_without_torch(module):
+    code = ("import sys; sys.modules['torch'] = None\n"  # any `import torch` now raises ImportError
+            f"import {module}\n"
+            "import lifter, numpy as np\n"
+            "s = lifter.demo_sample('walking')\n"
+            "assert float(lifter.mpjpe(s.pose_3d + 1.0, s.pose_3d)) == 0.0\n"
+            "assert lifter.mirror(lifter.mirror(s.keypoints_2d)).tolist() == s.keypoints_2d.tolist()\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_torch_names_still_resolve_lazily():
+    import lifter
+
+    assert lifter.Lifter.__name__ == "Lifter"
+    assert callable(lifter.checkpoint.save_checkpoint)
+    with pytest.raises(AttributeError):
+        lifter.no_such_name  # noqa: B018
