@@ -17,7 +17,7 @@ decreases the likelihood. The single Gaussian ``N(mu, diag sigma^2)`` is kept as
 Units and the scale rule
 ------------------------
 Errors are in **image pixels** of a person of the **reference 2D scale** ``sigma_ref`` (px): the median
-of the fitted samples' 2D scale ``sigma`` (:func:`lifter.normalization.pose_scale_np`, the paper's RMS
+of the fitted samples' 2D scale ``sigma`` (:func:`lifter.normalization.pose_scale`, the paper's RMS
 radius of the ground-truth 2D pose). A detector works on a person-sized crop, so its error in image
 pixels grows with the person's size. Hence, when fitting, every error is first rescaled to the reference
 size, ``e * sigma_ref / sigma_i``; when sampling for a pose of scale ``sigma`` every noise component (the
@@ -46,8 +46,11 @@ Sampling and the ``level`` knob
 
 So ``level = 0`` returns the input unchanged, ``level = 1`` samples the fitted model, and ``level > 1``
 exaggerates it (wider, more biased inliers and proportionally more outliers, capped at 50 %).
-The outlier box does not grow with ``level``. :meth:`ErrorModel.torch_augmenter` is the same sampler in
-torch with the training hook's signature (:data:`lifter.train.Augment2D`).
+The outlier box does not grow with ``level``. :meth:`ErrorModel.sample_torch` is the sampler (torch, any
+device, used by training); :meth:`ErrorModel.sample` is its numpy front end.
+
+Fitting the model to H36M's real detections (data loading, the converter report, the figures) is
+:mod:`lifter.noise_fit`; this module knows nothing of the dataset or the API.
 """
 
 from __future__ import annotations
@@ -60,6 +63,7 @@ from typing import Any
 
 import numpy as np
 import torch
+from tqdm.auto import tqdm
 
 from . import resources as assets
 from ._checks import PoseLifterError, as_points
@@ -436,8 +440,6 @@ def fit_error_model(detections: np.ndarray, ground_truth: np.ndarray, *, source:
                     meta: dict[str, Any] | None = None) -> ErrorModel:
     """Fit the mixture and the single-Gaussian baseline per joint to detections vs ground truth, both
     ``(N, 17, 2)`` px in the H36M joint order, with the scale rule of the module docstring."""
-    from tqdm.auto import tqdm
-
     e, _, ref = normalized_errors(detections, ground_truth)
     J = NUM_JOINTS
     gamma, iters = np.zeros(J), np.zeros(J, int)

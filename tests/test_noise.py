@@ -253,7 +253,8 @@ def test_missing_detections_are_flagged(h36m):
 def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     import argparse
 
-    from lifter.cli.fit_noise import add_parser, format_table, plot_error_histograms
+    from lifter.cli.fit_noise import add_parser
+    from lifter.noise_fit import format_error_table, plot_error_histograms
 
     parser = argparse.ArgumentParser(prog="poselifter")
     add_parser(parser.add_subparsers(dest="command", required=True))
@@ -267,7 +268,34 @@ def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     det = gt + synthetic_errors(rng, 400 * 17, 0.9, (0, 0), (4, 4)).reshape(400, 17, 2)
     m = fit_error_model(det, gt, source="synthetic", progress=False)
     assert m.n_samples == 400 and np.all(m.nll_mixture <= m.nll_gaussian + 1e-9)
-    table = format_table(m)
+    table = format_error_table(m)
     assert "r_wrist" in table and "mean" in table
     e = (det - gt) * (m.reference_scale / pose_scale(gt))[:, None, None]
     assert plot_error_histograms(e, m, tmp_path / "h.png", bins=21, dpi=20).stat().st_size > 1000
+
+
+def test_converter_report_recovers_the_sh16_rules_and_describe_fit_reports():
+    """sh16 joints made from GT by the inverse rules: the report measures zero error for spine and head top and
+    re-fits the shipped weights; describe_fit names the alignment, the converter and the scale dependence."""
+    from lifter.keypoints import SH16_HEAD_WEIGHT, SH16_SPINE_WEIGHT, convert
+    from lifter.noise import fit_error_model
+    from lifter.noise_fit import SHNoiseFit, converter_report, describe_fit, scale_dependence
+
+    rng = np.random.default_rng(1)
+    gt = rng.normal(500, 60, (300, 17, 2))
+    det16 = convert(gt, src="h36m17", dst="sh16")
+    rep = converter_report(gt, det16)
+    for name, w in (("spine", SH16_SPINE_WEIGHT), ("head_top", SH16_HEAD_WEIGHT)):
+        assert rep[name]["mean_px_median_px"][0] < 1e-6
+        assert rep[name]["w_refit"] == pytest.approx(w, abs=1e-6)
+        assert rep[name]["direct_mean_px_median_px"][0] > 1.0
+    det = gt + synthetic_errors(rng, 300 * 17, 0.9, (0, 0), (4, 4)).reshape(300, 17, 2)
+    scale = pose_scale(gt)
+    dep = scale_dependence(det - gt, scale, bins=3)
+    assert len(dep) == 3 and dep[0]["median_scale_px"] < dep[-1]["median_scale_px"]
+    m = fit_error_model(det, gt, progress=False)
+    fit = SHNoiseFit(model=m, errors=det - gt, scale=scale, subjects=(1, 5), skipped=2, alignment={-1: 9.0, 0: 3.0, 1: 8.0},
+                     converter=rep, scale_dependence=dep)
+    text = "\n".join(describe_fit(fit))
+    assert "best offset +0" in text and "WARNING" not in text and "2 training samples" in text
+    assert "neck_nose = thorax + 0.222" in text and "scale dependence" in text
