@@ -7,7 +7,7 @@ within each action.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -15,6 +15,7 @@ from tqdm.auto import tqdm
 
 from .analytic import analytic_root
 from .api import Lifter
+from .camera import project
 from .codec import Source
 from .data import ACTIONS, PoseSamples
 from .metrics import AUC_THRESHOLDS_MM, mpjpe, pa_mpjpe, pck, pck_curve, root_errors
@@ -119,10 +120,6 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
                            principal_shift: tuple[float, float] = (0.0, 0.0)) -> PoseSamples:
     """The test poses seen through virtual pinhole cameras: focal ``x focal_scale``, principal point shifted
     by ``principal_shift`` px. The 3D (camera frame) is unchanged; the 2D is re-projected without distortion."""
-    from dataclasses import replace
-
-    from .camera import project
-
     f = samples.focal.astype(np.float64) * focal_scale
     c = samples.principal_point.astype(np.float64) + np.asarray(principal_shift, np.float64)
     kp = project(samples.pose_3d.astype(np.float64), focal=f, principal_point=c)

@@ -11,8 +11,14 @@ import json
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from .._checks import PoseLifterError
+from ..api import Lifter
+from ..data import H36M
+from ..detections import with_sh_detections
+from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
+from ..metrics import AUC_THRESHOLDS_MM
 
 
 def _positive_int(text: str) -> int:
@@ -108,12 +114,6 @@ def check_evaluate_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_evaluate_options(args)
-    import torch
-
-    from ..api import Lifter
-    from ..data import H36M
-    from ..evaluate import evaluate_lifter, format_per_action, format_table
-
     torch.set_num_threads(args.threads)
     lifters = []
     for spec in args.weights:
@@ -127,8 +127,6 @@ def run(args: argparse.Namespace) -> int:
                                  max_frames_per_sequence=args.max_frames_per_sequence)
     note = ""
     if args.inputs == "sh":
-        from ..detections import with_sh_detections
-
         samples, dropped = with_sh_detections(samples, data=data)
         note = f"; real SH detections, {dropped} samples without a detection dropped"
     source = args.source or ("clean" if args.inputs == "gt" else "detected")
@@ -136,8 +134,6 @@ def run(args: argparse.Namespace) -> int:
           f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note}); "
           f"source={source!r}")
     if args.focal_scales:
-        from ..evaluate import focal_sweep, format_focal_table
-
         factors = list(args.focal_scales)
         shift = tuple(args.pp_shift)
         sweep = {label: focal_sweep(lifter, samples, factors=factors, principal_shift=shift, flip_test=args.flip_test,
@@ -159,8 +155,7 @@ def run(args: argparse.Namespace) -> int:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps([r.to_dict() for r in rows], indent=1))
     if args.pck_plot:
-        from ..metrics import AUC_THRESHOLDS_MM
-        from ..plots import plot_pck_curves
+        from ..plots import plot_pck_curves  # matplotlib only when a figure is asked for (~0.5 s to import)
 
         plot_pck_curves({r.label: (AUC_THRESHOLDS_MM, np.asarray(r.pck_curve)) for r in rows if r.root == "learned"},
                         args.pck_plot)

@@ -16,7 +16,15 @@ import json
 import sys
 from pathlib import Path
 
+import torch
+import torch.distributed as dist
+
+from .._checks import PoseLifterError
+from ..api import Lifter
 from ..config import TrainConfig, add_config_arguments, config_from_args
+from ..data import H36M
+from ..detections import SH_DETECTIONS_FILE, load_sh_detections
+from ..train import init_distributed, save_training_outputs, train, validation_sets
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -35,8 +43,6 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .._checks import PoseLifterError
-
     base = TrainConfig.load(args.config) if args.config is not None else None
     cfg = config_from_args(args, base)
     if args.print_config:
@@ -48,14 +54,6 @@ def run(args: argparse.Namespace) -> int:
         raise PoseLifterError(f"--out {args.out} is a folder; give the checkpoint file path (e.g. runs/model.pt)")
     if args.threads is not None and args.threads < 1:
         raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
-
-    import torch
-    import torch.distributed as dist
-
-    from ..api import Lifter
-    from ..data import H36M
-    from ..detections import SH_DETECTIONS_FILE, load_sh_detections
-    from ..train import init_distributed, save_training_outputs, train, validation_sets
 
     ctx = init_distributed()
     if args.threads:
