@@ -234,8 +234,17 @@ class Camera:
         """``sqrt(fx * fy)`` in px."""
         return float(np.sqrt(self.focal[0] * self.focal[1]))
 
+    @property
+    def centre(self) -> np.ndarray:
+        """The camera centre (the projection centre) in world coordinates ``(3,)`` mm: ``-R^T t``."""
+        return camera_to_world(np.zeros(3), self.R, self.t)
+
     def world_to_camera(self, points_world: np.ndarray) -> np.ndarray:
         return world_to_camera(points_world, self.R, self.t)
+
+    def camera_to_world(self, points_cam: np.ndarray) -> np.ndarray:
+        """Camera-frame points ``(..., 3)`` mm in world coordinates (:func:`camera_to_world`)."""
+        return camera_to_world(points_cam, self.R, self.t)
 
     def project(self, points_cam: np.ndarray, *, distortion: bool = True) -> np.ndarray:
         """Project camera-frame mm to px, with this camera's lens distortion unless disabled."""

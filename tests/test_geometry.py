@@ -164,3 +164,17 @@ def test_principal_point_subtraction():
     a = normalize_keypoints(kp, (500, 500))
     b = normalize_keypoints(kp + 100, (600, 600))
     np.testing.assert_allclose(a, b, atol=1e-5)
+
+
+def test_camera_centre_is_where_camera_frame_origin_lies_in_the_world():
+    """Camera.centre is -R^T t: the world point that maps to the camera-frame origin; camera_to_world inverts
+    world_to_camera."""
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    R = q * np.sign(np.linalg.det(q))
+    c = cam.Camera(focal=(1000.0, 1000.0), principal_point=(500.0, 500.0), width=1000, height=1000, R=R,
+                   t=rng.normal(0, 2000, 3))
+    np.testing.assert_allclose(c.world_to_camera(c.centre), np.zeros(3), atol=1e-9)
+    np.testing.assert_allclose(c.centre, -R.T @ c.t, atol=1e-9)
+    pts = rng.normal(0, 1000, (4, 17, 3))
+    np.testing.assert_allclose(c.camera_to_world(c.world_to_camera(pts)), pts, atol=1e-9)
