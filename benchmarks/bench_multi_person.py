@@ -131,7 +131,7 @@ def single_baseline(lifter: Lifter, est: BlazePoseEstimator, demo: Path, ann: An
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--models", nargs="+", default=["blazepose", "default"])
     ap.add_argument("--multi", nargs="+", default=["windows", "mask", "tasks"], choices=["windows", "mask", "tasks"])
     ap.add_argument("--json", type=Path, default=None)

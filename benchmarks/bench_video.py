@@ -52,11 +52,13 @@ def build_clips(demo: Path, ann: Any, out: Path, fps: float = FPS) -> list[tuple
             continue
         path = out / f"S9_Posing_1_{cam}_{fps:g}fps.avi"
         if not path.is_file():
-            first = cv2.imread(str(demo / str(ann["image"][idx[0]])))
-            h, w = first.shape[:2]
-            vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (w, h))
-            for i in idx:
-                vw.write(cv2.imread(str(demo / str(ann["image"][i]))))
+            frames = [cv2.imread(str(demo / str(ann["image"][i]))) for i in idx]
+            if any(f is None for f in frames):
+                raise SystemExit(f"cannot read the demo frames of camera {cam}")
+            h, w = frames[0].shape[:2]  # type: ignore[union-attr]
+            vw = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), fps, (w, h))
+            for f in frames:
+                vw.write(f)  # type: ignore[arg-type]
             vw.release()
         clips.append((path, idx))
     return clips
@@ -79,7 +81,7 @@ def metrics(root: np.ndarray, rel: np.ndarray, gt: np.ndarray) -> dict[str, floa
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--model", default="blazepose")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
@@ -117,13 +119,14 @@ def main() -> int:
             rows["per image (lift_image)"] = dict(metrics(root, rel, gt),
                                                   ms_per_frame=1e3 * (time.perf_counter() - t0) / len(idx))
             fast_path = next(p for p, ii in fast.items() if ii == idx)
-            for label, clip, kw in (
+            runs: tuple[tuple[str, Path, dict[str, Any]], ...] = (
                     ("video, smoothing 0", path, {"smoothing": 0.0}),
                     ("video, smoothing 1", path, {"smoothing": 1.0}),
                     ("same frames labelled 25 frame/s: crop tracking, full search every 0.5 s", fast_path,
                      {"smoothing": 1.0}),
                     ("same frames labelled 25 frame/s: full search every frame", fast_path,
-                     {"smoothing": 1.0, "search_every_s": 0.0})):
+                     {"smoothing": 1.0, "search_every_s": 0.0}))
+            for label, clip, kw in runs:
                 t0 = time.perf_counter()
                 vrec = lift_video(clip, lifter=lifter, estimator=est, focal=f, principal_point=pp, **kw)
                 dt = time.perf_counter() - t0

@@ -95,7 +95,7 @@ def run(lifter: Lifter, data: H36M, subjects: list[int], cameras: list[str], str
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--model", default="default")
     ap.add_argument("--strengths", type=float, nargs="+", default=[0.0, 0.5, 1.0, 2.0])
     ap.add_argument("--subjects", type=int, nargs="+", default=[9, 11])

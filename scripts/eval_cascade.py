@@ -43,7 +43,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -241,7 +241,12 @@ def quick_table(
     for ref in refs:
         lf = Lifter.load(ref)
         cells = []
-        for kp, src in ((det17, "detected"), (sh17[ok], "detected"), (gt2d[ok], "clean")):
+        inputs: tuple[tuple[np.ndarray, Literal["detected", "clean"]], ...] = (
+            (det17, "detected"),
+            (sh17[ok], "detected"),
+            (gt2d[ok], "clean"),
+        )
+        for kp, src in inputs:
             m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src).absolute, gt3d[ok])
             cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f}")
         L.append(f"| {ref if ref.endswith('.pt') else lf.name} | " + " | ".join(cells) + " |")
@@ -249,7 +254,7 @@ def quick_table(
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument(
         "--model", "--weights", dest="weights", default="default", help="shipped model name or checkpoint .pt"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from conftest import random_pose_cam
@@ -42,7 +44,7 @@ def test_glb_round_trip(tmp_path, pose):
     path = write_glb(pose, tmp_path / "p.glb")
     assert path.read_bytes()[:4] == b"glTF"
     np.testing.assert_allclose(read_glb_joints(path), pose, atol=0.05)  # mm; float32 vertices
-    scene = trimesh.load(str(path), force="scene")
+    scene: Any = trimesh.load(str(path), force="scene")
     assert len(scene.geometry) == len(JOINT_NAMES) + len(EDGES)
     # metres, y-up: the scene's extent is a human's, not a thousand times more
     assert 0.3 < float(np.max(scene.extents)) < 5.0
@@ -119,7 +121,7 @@ def test_glb_animation_round_trip(tmp_path):
     np.testing.assert_allclose(joints[1], a, atol=0.05)
     np.testing.assert_allclose(joints[4][[3, 4, 5, 9, 10]], b, atol=0.05)
     assert np.isnan(joints[4][[0, 1, 2, 6, 7, 8, 11]]).all()
-    scene = trimesh.load(str(p), file_type="glb", force="scene")  # a valid glTF for another reader too
+    scene: Any = trimesh.load(str(p), file_type="glb", force="scene")  # a valid glTF for another reader too
     assert len(scene.geometry) == 2 * (17 + 16)
     with pytest.raises(PoseLifterError, match="increasing frame indices"):
         write_glb_animation({1: (np.array([2, 1]), a[:2])}, tmp_path / "x.glb", fps=25.0)

@@ -328,12 +328,11 @@ def test_images_are_lifted_as_detections_and_keypoint_files_say_what_they_are(tm
     assert "'source' must be" in err and not (tmp_path / "o" / "bad.json").exists()
 
 
-def test_missing_extra_message(tmp_path, weights, capsys):
-    pytest.importorskip("PIL")
-    from lifter.detect import mediapipe_available
+def test_missing_extra_message(tmp_path, weights, capsys, monkeypatch):
+    import sys
 
-    if mediapipe_available():
-        pytest.skip("mediapipe is installed")
+    pytest.importorskip("PIL")
+    monkeypatch.setitem(sys.modules, "mediapipe", None)  # as without the extra, installed or not
     p = tmp_path / "photo.png"
     Image.new("RGB", (64, 64)).save(p)
     code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
