@@ -1,4 +1,7 @@
-"""``python -m lifter ...`` is ``poselifter ...`` (e.g. under ``torchrun``: ``torchrun --nproc_per_node 2 -m lifter train ...``)."""
+"""``python -m lifter ...`` is ``poselifter ...``.
+
+E.g. under ``torchrun``: ``torchrun --nproc_per_node 2 -m lifter train ...``.
+"""
 
 import sys
 

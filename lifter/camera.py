@@ -145,7 +145,8 @@ def backproject(uv: np.ndarray, depth: np.ndarray, *, focal: Any, principal_poin
     Inverse of :func:`project` without distortion: ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``.
     """
     return backproject_generic(np.asarray(uv, np.float64), np.asarray(depth, np.float64),
-                               as_pair(focal, name="focal", positive=True), as_pair(principal_point, name="principal_point"))
+                               as_pair(focal, name="focal", positive=True),
+                               as_pair(principal_point, name="principal_point"))
 
 
 def canonical_depth_from_depth(depth_mm: Any, *, focal: Any) -> np.ndarray:

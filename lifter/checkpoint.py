@@ -114,14 +114,15 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         if not path.is_file():
             raise CheckpointError(f"weights file not found: {where}")
         if path.stat().st_size > MAX_CHECKPOINT_BYTES:
-            raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger than "
-                                  f"{MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")
+            raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger "
+                                  f"than {MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")
         data = path.read_bytes()
     if expected_sha256 is not None:
         got = hashlib.sha256(data).hexdigest()
         if got != expected_sha256:
-            raise CheckpointError(f"weights file {where} is damaged or was replaced: its sha256 is {got[:16]}..., the "
-                                  f"registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore the file)")
+            raise CheckpointError(f"weights file {where} is damaged or was replaced: its sha256 is {got[:16]}..., "
+                                  f"the registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore "
+                                  "the file)")
     try:
         payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
@@ -161,7 +162,8 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         codec_state = payload.get("codec")
         if not isinstance(codec_state, dict):
             raise ValueError("missing codec statistics")
-        codec = PoseCodec.from_state_dict(config, {k: torch.as_tensor(v).double().numpy() for k, v in codec_state.items()})
+        stats = {k: torch.as_tensor(v).double().numpy() for k, v in codec_state.items()}
+        codec = PoseCodec.from_state_dict(config, stats)
     except (KeyError, TypeError, ValueError) as exc:
         raise CheckpointError(f"{where}: bad codec statistics: {exc}") from None
     net = PoseLifterNet(config)

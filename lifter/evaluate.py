@@ -57,8 +57,8 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
     n = len(samples)
     for s in tqdm(range(0, n, batch_size), disable=not progress, desc=f"lifting ({lifter.name})", unit="batch"):
         sl = slice(s, min(n, s + batch_size))
-        res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl], principal_point=samples.principal_point[sl],
-                          flip_test=flip_test, source=source)
+        res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
+                          principal_point=samples.principal_point[sl], flip_test=flip_test, source=source)
         rel.append(res.relative)
         root.append(res.root)
         if analytic:
@@ -143,8 +143,8 @@ def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tupl
     """MRPE (mm) per model and focal factor, with the ratio to the x1 factor."""
     first = next(iter(sweep.values()))
     head = f"{'model':<28} " + " ".join(f"{r.label:>15}" for r in first)
-    lines = [f"MRPE (mm) and ratio to x1 on virtual cameras (focal x factor, principal point shifted by {principal_shift} px)",
-             head, "-" * len(head)]
+    lines = ["MRPE (mm) and ratio to x1 on virtual cameras (focal x factor, principal point shifted by "
+             f"{principal_shift} px)", head, "-" * len(head)]
     for label, rows in sweep.items():
         ref = next((r.mrpe for r in rows if r.label == "x1"), None)
         cells = [f"{r.mrpe:7.1f} ({r.mrpe / ref:4.2f})" if ref else f"{r.mrpe:15.1f}" for r in rows]
@@ -152,5 +152,5 @@ def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tupl
     return "\n".join(lines)
 
 
-__all__ = ["virtual_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score", "evaluate_lifter", "format_table", "format_per_action",
-           "AUC_THRESHOLDS_MM"]
+__all__ = ["virtual_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score",
+           "evaluate_lifter", "format_table", "format_per_action", "AUC_THRESHOLDS_MM"]

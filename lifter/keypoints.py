@@ -315,7 +315,8 @@ def _rule(c: _Combo) -> Rule:
     return tuple(items)
 
 
-def body_rules(idx: dict[str, int], *, mid_hip: _Combo | None = None, mid_shoulder: _Combo | None = None) -> tuple[Rule, ...]:
+def body_rules(idx: dict[str, int], *, mid_hip: _Combo | None = None,
+               mid_shoulder: _Combo | None = None) -> tuple[Rule, ...]:
     """The 17 H36M rules for a detector with ``nose``, ``l_ear``/``r_ear``, shoulders, elbows, wrists,
     hips, knees and ankles (``idx``: name -> index). ``mid_hip`` / ``mid_shoulder`` default to the
     midpoints of the hips / shoulders (OpenPose passes its own MidHip / Neck joints)."""

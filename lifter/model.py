@@ -72,7 +72,8 @@ class ModelConfig:
                               ("input_space", get_args(InputSpace)), ("depth_target", get_args(DepthTarget)),
                               ("conditioning", get_args(Conditioning))):
             if getattr(self, name) not in allowed:
-                raise PoseLifterError(f"model config: {name} is {getattr(self, name)!r}; expected one of {list(allowed)}")
+                raise PoseLifterError(f"model config: {name} is {getattr(self, name)!r}; expected one of "
+                                      f"{list(allowed)}")
         if self.input_space == "camera" and self.depth_target == "absolute":
             raise PoseLifterError("model config: in the reference camera the canonical depth is the absolute depth; "
                                   "use depth_target='canonical' (or 'size') with input_space='camera'")

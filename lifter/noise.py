@@ -160,7 +160,7 @@ def fit_mixture(
     history = [ll]
     converged = False
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 - `it` is the iteration count reported after the loop
         # E-step: responsibilities of the Gaussian
         lg = np.log(gamma) + gaussian_loglik(e, mu, sigma)
         lo = np.log(max(1.0 - gamma, 1e-300)) - np.log(v)
@@ -395,8 +395,9 @@ class ErrorModel:
         gen = torch.Generator().manual_seed(int(rng.integers(0, 2**62)))
         lead = kp.shape[:-2]
         sc = None if scale is None else torch.from_numpy(np.broadcast_to(np.asarray(scale, np.float64), lead).copy())
-        out = self.sample_torch(torch.from_numpy(np.array(kp)), level=torch.from_numpy(np.broadcast_to(lv, lead).copy()),
-                                generator=gen, outliers=outliers, scale=sc)
+        levels = torch.from_numpy(np.broadcast_to(lv, lead).copy())
+        out = self.sample_torch(torch.from_numpy(np.array(kp)), level=levels, generator=gen, outliers=outliers,
+                                scale=sc)
         return out.numpy()
 
     def sample_torch(self, keypoints: torch.Tensor, *, level: Any = 1.0, generator: torch.Generator | None = None,

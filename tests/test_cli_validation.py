@@ -41,8 +41,10 @@ def evaluate_usage_error(argv: list[str], capsys) -> str:
         (["--focal-scales", "0,1"], "argument --focal-scales: focal factors must be > 0, got '0,1'"),
         (["--focal-scales", "-1"], "argument --focal-scales: focal factors must be > 0"),
         (["--focal-scales", "nan,1"], "argument --focal-scales: values must be finite"),
-        (["--focal-scales", "1", "--pp-shift", "5"], "argument --pp-shift: expected two numbers 'dx,dy' (px), got 1 value(s)"),
-        (["--focal-scales", "1", "--pp-shift", "1,2,3"], "argument --pp-shift: expected two numbers 'dx,dy' (px), got 3"),
+        (["--focal-scales", "1", "--pp-shift", "5"],
+         "argument --pp-shift: expected two numbers 'dx,dy' (px), got 1 value(s)"),
+        (["--focal-scales", "1", "--pp-shift", "1,2,3"],
+         "argument --pp-shift: expected two numbers 'dx,dy' (px), got 3"),
         (["--focal-scales", "1", "--pp-shift", "inf,0"], "argument --pp-shift: values must be finite"),
     ],
 )
@@ -54,11 +56,13 @@ def test_evaluate_rejects_bad_option_values(argv, expected, capsys):
 
 def test_train_rejects_bad_config_values(capsys, tmp_path):
     """Every option is a validated config field: bad values exit 2 naming the field, before any data is read."""
-    for argv, expected in ((["--max-frames-per-sequence", "0"], "max_frames_per_sequence must be an integer > 0, got 0"),
+    for argv, expected in ((["--max-frames-per-sequence", "0"],
+                            "max_frames_per_sequence must be an integer > 0, got 0"),
                            (["--train-stride", "0"], "train_stride must be an integer > 0, got 0"),
                            (["--flip-prob", "1.5"], "flip_prob must be a probability in [0, 1], got 1.5"),
                            (["--ema-decay", "1"], "ema_decay must be in [0, 1), got 1.0"),
-                           (["--noise-level-min", "2", "--noise-level-max", "1"], "noise_level_min 2.0 > noise_level_max")):
+                           (["--noise-level-min", "2", "--noise-level-max", "1"],
+                            "noise_level_min 2.0 > noise_level_max")):
         assert main(["train", "--out", str(tmp_path / "m.pt"), *argv]) == 2
         assert expected in capsys.readouterr().err
     for argv, expected in ((["--epochs", "nan"], "expected a finite number"), (["--width", "x"], "expected int"),
@@ -129,7 +133,8 @@ def test_lift_out_is_an_existing_file(tmp_path, weights, kp_file, capsys):
     afile.write_text("keep me")
     code, err = lift([str(kp_file), "--out", str(afile), "--weights", str(weights)], capsys)
     assert code == 2
-    assert err.strip() == f"poselifter lift: error: --out {afile}: exists and is not a folder; --out names the output folder"
+    assert err.strip() == (f"poselifter lift: error: --out {afile}: exists and is not a folder; --out names the "
+                           "output folder")
     assert afile.read_text() == "keep me"
     # a folder below a regular file cannot be created either
     code, err = lift([str(kp_file), "--out", str(afile / "sub"), "--weights", str(weights)], capsys)
@@ -179,7 +184,8 @@ def test_lift_rejects_bad_global_options_up_front(tmp_path, weights, kp_file, ar
         ({"focal": [1000, -5]}, "focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1000.0, -5.0]"),
         ({"focal": [1000, 1000, 1000]}, "focal must be a number or [fx, fy] in px"),
         ({"focal": "wide"}, "focal must be a number or [fx, fy] in px, each in (0, 1e+06), got 'wide'"),
-        ({"principal_point": [1e30, 0]}, "principal_point must be [cx, cy] in px, each finite with magnitude below 1e+06"),
+        ({"principal_point": [1e30, 0]},
+         "principal_point must be [cx, cy] in px, each finite with magnitude below 1e+06"),
         ({"principal_point": [640]}, "principal_point must be [cx, cy] in px"),
     ],
 )

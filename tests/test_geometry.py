@@ -129,7 +129,8 @@ def test_world_camera_round_trip():
 
 
 @settings(max_examples=50, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), shift=st.tuples(st.floats(-2000, 2000, **finite), st.floats(-2000, 2000, **finite)),
+@given(seed=st.integers(0, 2**31 - 1),
+       shift=st.tuples(st.floats(-2000, 2000, **finite), st.floats(-2000, 2000, **finite)),
        s=st.floats(0.1, 10, **finite), definition=st.sampled_from(["paper", "repo"]))
 def test_normalization_invariance(seed, shift, s, definition):
     """Translating/scaling the 2D pose leaves the normalized pose unchanged; location and scale features move."""
@@ -147,7 +148,8 @@ def test_normalization_invariance(seed, shift, s, definition):
 
 def test_normalization_features_by_mode():
     kp = np.random.default_rng(0).uniform(0, 1000, (3, 17, 2))
-    sizes = {m: normalize_keypoints(kp, (500, 500), mode=m).shape[-1] for m in ("baseline", "location", "scale", "both")}
+    sizes = {m: normalize_keypoints(kp, (500, 500), mode=m).shape[-1]
+             for m in ("baseline", "location", "scale", "both")}
     assert sizes == {"baseline": 34, "location": 36, "scale": 35, "both": 37}
     f = normalize_keypoints(kp, (500, 500), mode="both")
     # normalized pose has zero mean and (paper definition) unit RMS radius

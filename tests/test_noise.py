@@ -294,8 +294,8 @@ def test_converter_report_recovers_the_sh16_rules_and_describe_fit_reports():
     dep = scale_dependence(det - gt, scale, bins=3)
     assert len(dep) == 3 and dep[0]["median_scale_px"] < dep[-1]["median_scale_px"]
     m = fit_error_model(det, gt, progress=False)
-    fit = SHNoiseFit(model=m, errors=det - gt, scale=scale, subjects=(1, 5), skipped=2, alignment={-1: 9.0, 0: 3.0, 1: 8.0},
-                     converter=rep, scale_dependence=dep)
+    fit = SHNoiseFit(model=m, errors=det - gt, scale=scale, subjects=(1, 5), skipped=2,
+                     alignment={-1: 9.0, 0: 3.0, 1: 8.0}, converter=rep, scale_dependence=dep)
     text = "\n".join(describe_fit(fit))
     assert "best offset +0" in text and "WARNING" not in text and "2 training samples" in text
     assert "neck_nose = thorax + 0.222" in text and "scale dependence" in text

@@ -85,7 +85,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None)
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
     p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
-    p.add_argument("--quantize", action="store_true", help="also evaluate each model with int8 block weights (Lifter.quantized)")
+    p.add_argument("--quantize", action="store_true",
+                   help="also evaluate each model with int8 block weights (Lifter.quantized)")
     p.add_argument("--source", default=None, choices=("clean", "detected"),
                    help="what the lifter is told the 2D is (default: clean for --inputs gt, detected for --inputs sh)")
     p.add_argument("--threads", type=_positive_int, default=2)
