@@ -406,6 +406,15 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                             principal_point=pp, warnings=tuple(notes), source=source)
 
 
+def _read_umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+_UMASK: Final[int] = _read_umask()
+
+
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder, ``fsync``, then a rename: a full disk
     or a crash never leaves a partial or empty file behind (the temporary file is removed on failure). Refuses to
@@ -420,6 +429,7 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
         with os.fdopen(fd, "wb") as f:
             f.write(raw)
             f.flush()
+            os.fchmod(f.fileno(), 0o666 & ~_UMASK)  # mkstemp makes 0600; a new file normally follows the umask
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except OSError as exc:

@@ -52,3 +52,15 @@ def test_non_finite_outputs_are_an_error(lifter, kp, n):
         lifter.net.head.bias[5] = float("inf")
     with pytest.raises(PoseLifterError, match="non-finite outputs"):
         lifter.lift(kp[:n], focal=1145.0, principal_point=(512.0, 515.0))
+
+
+def test_written_files_follow_the_umask(tmp_path):
+    """Atomic writes go through a private temporary file but end with the usual permissions (0666 & ~umask)."""
+    import os
+
+    from lifter.io import write_atomic
+
+    mask = os.umask(0o022)
+    os.umask(mask)
+    p = write_atomic(tmp_path / "x.json", "{}")
+    assert (p.stat().st_mode & 0o777) == (0o666 & ~mask)
