@@ -22,10 +22,12 @@ All functions are pure and batched over leading dimensions: points are ``(..., J
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._array import ArrayT
 from ._array import namespace as array_namespace
@@ -40,12 +42,12 @@ DEFAULT_DIAGONAL_FOV_DEG: float = 65.0
 
 
 
-def _last2(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
+def _last2(x: ArrayLike, *, name: str, positive: bool = False) -> np.ndarray:
     """A ``(..., 2)`` pair expanded to broadcast against ``(..., J, 2)``."""
     return as_pair(x, name=name, positive=positive)[..., None, :]
 
 
-def focal_alpha(focal: Any) -> np.ndarray:
+def focal_alpha(focal: ArrayLike) -> np.ndarray:
     """``alpha = sqrt(fx * fy)`` for a scalar or ``(..., 2)`` focal length (px). Returns ``(...)``."""
     f = as_pair(focal, name="focal", positive=True)
     return np.sqrt(f[..., 0] * f[..., 1])
@@ -63,7 +65,7 @@ def camera_to_world(points_cam: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.
     return np.einsum("ji,...j->...i", np.asarray(R, np.float64), np.asarray(points_cam, np.float64) - np.asarray(t))
 
 
-def distort(xy: np.ndarray, k: Any, p: Any) -> np.ndarray:
+def distort(xy: np.ndarray, k: ArrayLike, p: ArrayLike) -> np.ndarray:
     """Apply the H36M / Brown-Conrady lens distortion to normalized image points ``(..., 2)``.
 
     ``k = (k1, k2, k3)`` radial and ``p = (p1, p2)`` tangential coefficients, in the H36M form:
@@ -81,10 +83,10 @@ def distort(xy: np.ndarray, k: Any, p: Any) -> np.ndarray:
 def project(
     points_cam: np.ndarray,
     *,
-    focal: Any,
-    principal_point: Any,
-    k: Any | None = None,
-    p: Any | None = None,
+    focal: ArrayLike,
+    principal_point: ArrayLike,
+    k: ArrayLike | None = None,
+    p: ArrayLike | None = None,
 ) -> np.ndarray:
     """Project camera-frame points ``(..., J, 3)`` (mm, z > 0) to pixels ``(..., J, 2)``.
 
@@ -139,7 +141,7 @@ def backproject_generic(uv: ArrayT, depth: Any, focal: Any, principal_point: Any
     return xp.concat([xy, z], axis=-1)
 
 
-def backproject(uv: np.ndarray, depth: np.ndarray, *, focal: Any, principal_point: Any) -> np.ndarray:
+def backproject(uv: ArrayLike, depth: ArrayLike, *, focal: ArrayLike, principal_point: ArrayLike) -> np.ndarray:
     """Pinhole back-projection of pixels ``(..., 2)`` at depth ``(...)`` mm to camera-frame ``(..., 3)``.
 
     Inverse of :func:`project` without distortion: ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``.
@@ -149,18 +151,18 @@ def backproject(uv: np.ndarray, depth: np.ndarray, *, focal: Any, principal_poin
                                as_pair(principal_point, name="principal_point"))
 
 
-def canonical_depth_from_depth(depth_mm: Any, *, focal: Any) -> np.ndarray:
+def canonical_depth_from_depth(depth_mm: ArrayLike, *, focal: ArrayLike) -> np.ndarray:
     """PoseLifter Eq. 5: ``Z_canonical = Z * F0 / alpha`` (mm at a 1000-px focal length)."""
     return np.asarray(depth_mm, np.float64) * CANONICAL_FOCAL / focal_alpha(focal)
 
 
-def depth_from_canonical_depth(canonical_depth: Any, *, focal: Any) -> np.ndarray:
+def depth_from_canonical_depth(canonical_depth: ArrayLike, *, focal: ArrayLike) -> np.ndarray:
     """Inverse of Eq. 5: ``Z = Z_canonical * alpha / F0`` in mm."""
     return np.asarray(canonical_depth, np.float64) * focal_alpha(focal) / CANONICAL_FOCAL
 
 
 def root_from_canonical_depth(
-    root_2d: np.ndarray, canonical_depth: Any, *, focal: Any, principal_point: Any
+    root_2d: ArrayLike, canonical_depth: ArrayLike, *, focal: ArrayLike, principal_point: ArrayLike
 ) -> np.ndarray:
     """PoseLifter Eq. 6: the absolute root ``(..., 3)`` mm from its 2D position ``(..., 2)`` px.
 
@@ -172,7 +174,7 @@ def root_from_canonical_depth(
     return backproject(root_2d, z, focal=focal, principal_point=principal_point)
 
 
-def focal_from_fov(image_size: Any, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
+def focal_from_fov(image_size: Sequence[float] | np.ndarray, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
     """The focal length (px) that gives a diagonal field of view ``fov_deg`` to an image of
     ``image_size = (W, H)`` px: ``hypot(W, H) / (2 tan(fov / 2))``. Scales with the image."""
     if not (math.isfinite(fov_deg) and 0 < fov_deg < 180):
@@ -189,7 +191,7 @@ def focal_from_fov(image_size: Any, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG
 
 
 def flip_keypoints_2d(
-    keypoints: np.ndarray, *, image_width: Any, principal_point: Any
+    keypoints: ArrayLike, *, image_width: ArrayLike, principal_point: ArrayLike
 ) -> tuple[np.ndarray, np.ndarray]:
     """Mirror a 2D pose ``(..., 17, 2)`` px about the image's vertical centre line.
 
@@ -205,7 +207,7 @@ def flip_keypoints_2d(
     return mirror(kp - c[..., None, :]) + c_out[..., None, :], c_out
 
 
-def flip_pose_3d(points_cam: np.ndarray) -> np.ndarray:
+def flip_pose_3d(points_cam: ArrayLike) -> np.ndarray:
     """Mirror a camera-frame 3D pose ``(..., 17, 3)``: negate X and swap left/right joints
     (:func:`lifter.skeleton.mirror`)."""
     return mirror(np.asarray(points_cam, np.float64))

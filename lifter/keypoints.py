@@ -93,9 +93,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._checks import PoseLifterError
 from .skeleton import JOINT_NAMES, NUM_JOINTS
@@ -370,7 +371,7 @@ KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
 
-def convert(keypoints: Any, *, src: str, dst: str = H36M17) -> np.ndarray:
+def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
     """Convert keypoints ``(..., J_src, D)`` (D = 2 px or 3 mm) from format ``src`` to ``dst``.
 
     Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules; ``h36m17 ->

@@ -59,13 +59,15 @@ import json
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 import torch
+from numpy.typing import ArrayLike
 from tqdm.auto import tqdm
 
 from . import resources as assets
+from ._array import ArrayT
 from ._checks import PoseLifterError, as_points
 from .normalization import pose_scale
 from .skeleton import JOINT_NAMES, NUM_JOINTS
@@ -107,7 +109,7 @@ class MixtureFit:
     history: tuple[float, ...]
 
 
-def _check_errors(errors: Any) -> np.ndarray:
+def _check_errors(errors: ArrayLike) -> np.ndarray:
     e = np.asarray(errors, np.float64)
     if e.ndim != 2 or e.shape[1] != 2 or e.shape[0] < 2:
         raise PoseLifterError(f"errors: expected shape (N >= 2, 2) px, got {tuple(e.shape)}")
@@ -122,7 +124,7 @@ def gaussian_loglik(errors: np.ndarray, mu: np.ndarray, sigma: np.ndarray) -> np
     return -0.5 * (z**2).sum(-1) - np.log(sigma).sum() - _LOG_2PI
 
 
-def fit_gaussian(errors: Any) -> tuple[np.ndarray, np.ndarray, float]:
+def fit_gaussian(errors: ArrayLike) -> tuple[np.ndarray, np.ndarray, float]:
     """Single-Gaussian ML fit of errors ``(N, 2)`` px: ``mu (2,)``, ``sigma (2,)`` (std about the mean,
     ddof 0) and the mean NLL (nats). The authors' code uses the RMS about zero instead (spec §7)."""
     e = _check_errors(errors)
@@ -140,7 +142,7 @@ def mixture_loglik(errors: np.ndarray, gamma: float, mu: np.ndarray, sigma: np.n
 
 
 def fit_mixture(
-    errors: Any,
+    errors: ArrayLike,
     *,
     v: float = OUTLIER_VOLUME_PX2,
     init_gamma: float = INIT_GAMMA,
@@ -204,7 +206,11 @@ def shipped_error_models() -> list[str]:
     return sorted(p.name[:-5] for p in node.iterdir() if p.name.endswith(".json")) if node.is_dir() else []
 
 
-def outlier_probability(gamma: Any, level: Any) -> Any:
+@overload
+def outlier_probability(gamma: ArrayLike, level: torch.Tensor) -> torch.Tensor: ...
+@overload
+def outlier_probability(gamma: ArrayLike, level: float | np.ndarray) -> np.ndarray: ...
+def outlier_probability(gamma: ArrayLike, level: float | np.ndarray | torch.Tensor) -> np.ndarray | torch.Tensor:
     """``p_out = min((1 - gamma) * level, max(0.5, 1 - gamma))`` per joint (module docstring); numpy or torch,
     ``gamma`` ``(17,)`` broadcast against ``level``."""
     if isinstance(level, torch.Tensor):
@@ -360,19 +366,19 @@ class ErrorModel:
         """Half the side of the outlier box, px at the reference scale (50 px for v = 100^2)."""
         return 0.5 * math.sqrt(self.v)
 
-    def scale_factor(self, keypoints: Any) -> Any:
+    def scale_factor(self, keypoints: ArrayT) -> ArrayT:
         """``s = sigma_pose / reference_scale`` ``(...)`` for clean keypoints ``(..., 17, 2)`` px (numpy or torch):
         the factor every noise component is multiplied by (module docstring, "scale rule")."""
         return pose_scale(keypoints) / self.reference_scale
 
     def sample(
         self,
-        keypoints: Any,
+        keypoints: ArrayLike,
         *,
-        level: Any = 1.0,
+        level: ArrayLike = 1.0,
         rng: np.random.Generator | int | None = None,
         outliers: bool = True,
-        scale: Any | None = None,
+        scale: ArrayLike | None = None,
     ) -> np.ndarray:
         """Noisy copies of clean keypoints ``(..., 17, 2)`` px, same shape, float64 (numpy front end of
         :meth:`sample_torch`, the one sampler).
@@ -400,8 +406,9 @@ class ErrorModel:
                                 scale=sc)
         return out.numpy()
 
-    def sample_torch(self, keypoints: torch.Tensor, *, level: Any = 1.0, generator: torch.Generator | None = None,
-                     outliers: bool = True, scale: torch.Tensor | None = None) -> torch.Tensor:
+    def sample_torch(self, keypoints: torch.Tensor, *, level: float | torch.Tensor = 1.0,
+                     generator: torch.Generator | None = None, outliers: bool = True,
+                     scale: torch.Tensor | None = None) -> torch.Tensor:
         """The sampler: noisy copies of clean keypoints ``(..., 17, 2)`` px (any float dtype, any device).
 
         Per joint independently, an outlier with probability ``min((1 - gamma) * level, max(0.5, 1 - gamma))``

@@ -22,7 +22,7 @@ from functools import lru_cache
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
-from typing import Any
+from typing import Any, Required, TypedDict, cast
 
 import numpy as np
 
@@ -67,8 +67,37 @@ def _registry_text() -> str:
     return node.read_text()
 
 
+class ModelEntry(TypedDict, total=False):
+    """One shipped model of the registry (``models.json``), as :func:`model_entry` returns it."""
+
+    name: Required[str]
+    """The registry key (added by :func:`model_entry`)."""
+    file: Required[str]
+    """Weights file, relative to the assets folder (``"weights/sh_mix.pt"``)."""
+    sha256: str
+    """Hex sha256 of ``file``; the loader refuses the file unless it matches."""
+    clean_file: str
+    """A second network for ``source="clean"`` (optional), with its ``clean_sha256``."""
+    clean_sha256: str
+    flip_test: bool
+    """The model's default for :meth:`lifter.Lifter.lift`'s ``flip_test``."""
+    description: str
+    train_command: str
+    train_minutes: float
+    samples_seen: int
+    metrics: dict[str, Any]
+    """Recorded evaluation slices (see ``tests/test_shipped.py``)."""
+
+
+class Registry(TypedDict):
+    """``models.json``: the default model's name and the models by name."""
+
+    default: str
+    models: dict[str, ModelEntry]
+
+
 @lru_cache(maxsize=4)
-def _parse_registry(text: str) -> dict[str, Any]:
+def _parse_registry(text: str) -> Registry:
     try:
         reg = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -76,10 +105,13 @@ def _parse_registry(text: str) -> dict[str, Any]:
     if not isinstance(reg, dict) or not isinstance(reg.get("models"), dict) or reg.get("default") not in reg["models"]:
         raise PoseLifterError(f"{REGISTRY}: expected {{'default': name, 'models': {{name: {{...}}}}}} with the default "
                               "among the models")
-    return reg
+    for key, entry in reg["models"].items():
+        if not isinstance(entry, dict) or not isinstance(entry.get("file"), str):
+            raise PoseLifterError(f"{REGISTRY}: model {key!r} needs a 'file' (weights path inside the assets folder)")
+    return cast(Registry, reg)
 
 
-def registry() -> dict[str, Any]:
+def registry() -> Registry:
     """The parsed ``models.json`` (read on every call, so ``$POSELIFTER_ASSETS`` changes are seen)."""
     return _parse_registry(_registry_text())
 
@@ -93,13 +125,17 @@ def default_model_name() -> str:
 
 
 def model_entry(name: str) -> dict[str, Any]:
+    """The registry entry of a shipped model (a :class:`ModelEntry`) with its ``name``; ``"default"`` is the default.
+
+    Typed as a plain dict until :meth:`lifter.Lifter.from_pretrained` reads the optional ``clean_file`` through
+    ``.get`` only (pyright does not narrow ``entry["clean_file"]`` after ``entry.get("clean_file")``)."""
     reg = registry()
     if name == "default":
         name = reg["default"]
     if name not in reg["models"]:
         raise PoseLifterError(f"unknown model {name!r}; shipped models: {sorted(reg['models'])} or 'default' "
                               "(to load your own checkpoint, pass its path: Lifter.load('path/to/model.pt'))")
-    return {"name": name, **reg["models"][name]}
+    return dict(reg["models"][name], name=name)
 
 
 # ------------------------------------------------------------------------------------------------
