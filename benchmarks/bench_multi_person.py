@@ -35,6 +35,7 @@ from lifter import Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import BlazePoseEstimator, image_from_array, load_image  # noqa: E402
 from lifter.pipeline import lift_image  # noqa: E402
+from lifter.video import limit_blas_threads  # noqa: E402
 
 FOUND_PX = 40.0
 GROW = 0.10
@@ -152,7 +153,7 @@ def main() -> int:
     results: dict[str, Any] = {"photos": len(pairs), "found_px": FOUND_PX, "rows": {}}
     image_from_array(np.zeros((8, 8, 3), np.uint8))
     for multi in args.multi:
-        with BlazePoseEstimator(max_people=3, multi=multi) as est:
+        with BlazePoseEstimator(max_people=3, multi=multi) as est, limit_blas_threads(1):  # as poselifter lift
             est.detect(np.zeros((64, 64, 3), np.uint8))
             for name in args.models:
                 lf = Lifter.load(name)

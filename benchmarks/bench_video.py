@@ -5,7 +5,8 @@
 The 80 S9 "Posing 1" demo frames (two cameras, every 50th frame) become two clips, one per camera, written at
 run time into the git-ignored ``runs/cache/clips/`` (MJPG .avi, H36M-derived, never committed) at their true
 spacing: 1 frame/s. Each clip goes through :func:`lifter.video.lift_video` (BlazePose, tracking, One-Euro filter,
-the camera's true focal length and principal point) with smoothing off (0) and on (1), and the same frames are
+the camera's true focal length and principal point; one BLAS thread, as ``poselifter lift``) with smoothing off
+(0) and on (1), and the same frames are
 lifted one image at a time (:func:`lifter.pipeline.lift_image` on the original JPEGs) for comparison. Reported:
 per-frame MPJPE (root-aligned) and MRPE (mm) over the frames where the person was found, the acceleration
 error (mm/frame^2) of the root and of the root-relative joints, and the time per frame: the whole of
@@ -35,7 +36,7 @@ from lifter import Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import BlazePoseEstimator, load_image  # noqa: E402
 from lifter.pipeline import lift_image  # noqa: E402
-from lifter.video import lift_video  # noqa: E402
+from lifter.video import lift_video, limit_blas_threads  # noqa: E402
 
 FPS = 1.0  # every 50th frame of a 50-fps sequence
 
@@ -108,6 +109,8 @@ def main() -> int:
             # one image at a time
             root, rel = np.full((len(idx), 3), np.nan), np.full((len(idx), 17, 3), np.nan)
             t0 = time.perf_counter()
+            blas = limit_blas_threads(1)  # as poselifter lift does
+            blas.__enter__()
             for n, i in enumerate(idx):
                 try:
                     rec = lift_image(load_image(demo / str(ann["image"][i])), lifter=lifter, estimator=est, focal=f,
@@ -116,6 +119,7 @@ def main() -> int:
                     continue
                 if np.linalg.norm(rec.keypoints_2d[0] - gt2[n, 0]) <= 40:
                     root[n], rel[n] = rec.root, rec.relative
+            blas.__exit__(None, None, None)
             rows["per image (lift_image)"] = dict(metrics(root, rel, gt),
                                                   ms_per_frame=1e3 * (time.perf_counter() - t0) / len(idx))
             fast_path = next(p for p, ii in fast.items() if ii == idx)

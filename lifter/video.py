@@ -200,6 +200,7 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                smoothing: float = 1.0, max_people: int = DEFAULT_MAX_PEOPLE,
                max_seconds: float = DEFAULT_MAX_SECONDS, max_side: int = DEFAULT_MAX_SIDE_PX,
                flip_test: bool | None = None, search_every_s: float = DEFAULT_SEARCH_EVERY_S,
+               blas_threads: int | None = 1,
                progress: Callable[[int, int | None], None] | None = None) -> SequenceRecord:
     """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
     is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None).
@@ -208,7 +209,44 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     Detection: the whole frame is searched (the estimator's ``detect``) every ``search_every_s`` seconds, and
     whenever fewer people are found than in the previous frame or nobody is tracked; in between, an estimator
     with ``detect_near`` (BlazePose) searches only around the people seen since the last full search (their last
-    boxes), which is what makes video fast (``search_every_s=0``: a full search in every frame)."""
+    boxes), which is what makes video fast (``search_every_s=0``: a full search in every frame).
+
+    blas_threads: numpy's BLAS runs with this many threads during the video (``threadpoolctl``, installed with
+    the ``detect`` extra; None = unchanged). One lift is a few small matrix products, and BLAS threads that
+    spin beside MediaPipe's own threads cost more than they give (see the README's timings).
+    """
+    with limit_blas_threads(blas_threads):
+        return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
+                           fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
+                           max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress)
+
+
+class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
+    """``with limit_blas_threads(1): ...`` limits numpy's BLAS threads (``threadpoolctl.threadpool_limits(n, "blas")``)
+    when threadpoolctl is installed and ``n`` is not None; otherwise does nothing."""
+
+    def __init__(self, n: int | None) -> None:
+        self.n: int | None = n
+        self._ctx: Any = None
+
+    def __enter__(self) -> None:
+        if self.n is None:
+            return
+        try:
+            from threadpoolctl import threadpool_limits  # pyright: ignore[reportMissingImports]
+        except ImportError:
+            return
+        self._ctx = threadpool_limits(limits=self.n, user_api="blas")
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._ctx is not None:
+            self._ctx.restore_original_limits()
+
+
+def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None,
+                principal_point: Any | None, fov_deg: float, smoothing: float, max_people: int,
+                max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
+                progress: Callable[[int, int | None], None] | None) -> SequenceRecord:
     import cv2
 
     from .pipeline import resolve_camera
@@ -402,4 +440,5 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "FrameResult", "PersonState", "SequenceRecord",
-           "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "lift_keypoint_sequence", "lift_video", "track_lifted"]
+           "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "lift_keypoint_sequence", "lift_video",
+           "limit_blas_threads", "track_lifted"]

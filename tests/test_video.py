@@ -334,3 +334,18 @@ def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lift
     every = FrameIndexedEstimator(_script(12))
     lift_video(clip, lifter=lifter, estimator=every, focal=F, search_every_s=0)
     assert [k for k, _ in every.calls] == ["full"] * 12
+
+
+def test_limit_blas_threads():
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    from lifter.video import limit_blas_threads
+
+    def blas() -> list[int]:
+        return [i["num_threads"] for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
+
+    before = blas()
+    with limit_blas_threads(1):
+        assert blas() and all(n == 1 for n in blas())
+    assert blas() == before
+    with limit_blas_threads(None):
+        assert blas() == before
