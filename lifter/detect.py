@@ -931,7 +931,7 @@ def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: Pos
     if max_people is not None and len(people) > max_people:
         from dataclasses import replace
 
-        note = f"{len(people)} people found; the {max_people} largest are lifted (max_people)"
+        note = f"more than {max_people} people found; the {max_people} largest are lifted (max_people)"
         people = [replace(q, warnings=q.warnings + (note,)) for q in people[:max_people]]
     return people
 

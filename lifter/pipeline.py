@@ -111,9 +111,9 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                      scores=np.stack([d.scores for d in dets]))
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
-    if det.num_people > 1:
-        warn.append(f"{det.num_people} people found; {len(dets)} lifted into one camera space ('people', largest "
-                    "first; the top-level fields are the largest)")
+    if len(dets) > 1:
+        warn.append(f"{len(dets)} people lifted into one camera space ('people', largest first; the top-level "
+                    "fields are the largest)")
     return LiftRecord(input=str(path), kind="image", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),

@@ -349,3 +349,31 @@ def test_limit_blas_threads():
     assert blas() == before
     with limit_blas_threads(None):
         assert blas() == before
+
+
+def test_cli_photo_crowd_bound_and_everyone_in_one_scene(tmp_path, lifter, capsys):
+    """A photo with three people and --max-people 2: the two largest are lifted, the crowd is reported, and the
+    GLB holds both; a photo with nobody is a clear error and the batch goes on."""
+    from PIL import Image
+
+    from lifter.checkpoint import save_checkpoint
+    from lifter.export import read_bvh, read_glb_joints
+
+    weights = tmp_path / "tiny.pt"
+    save_checkpoint(weights, lifter.net, lifter.codec, meta={"name": "tiny"})
+    rng = np.random.default_rng(4)
+    three = [_person(rng, 60), _person(rng, 160) * 0.9, _person(rng, 260) * 0.8]
+    register_estimator("_three", lambda **kw: FrameIndexedEstimator([three, [], []]), overwrite=True)
+    for i, name in enumerate(("crowd", "empty")):  # grey levels 40 and 45: frames 0 and 1 of the script
+        Image.new("RGB", (W, H), (40 + 5 * i,) * 3).save(tmp_path / f"{name}.png")
+    out = tmp_path / "o"
+    code = main(["lift", "--no-progress", str(tmp_path / "crowd.png"), str(tmp_path / "empty.png"), "--out", str(out),
+                 "--detector", "_three", "--weights", str(weights), "--max-people", "2", "--glb", "--bvh"])
+    err = capsys.readouterr().err
+    assert code == 0 and "lifted 1 of 2" in err
+    assert "more than 2 people found; the 2 largest are lifted" in err and "empty.png: no person found" in err
+    d = json.loads((out / "crowd.json").read_text())
+    assert len(d["people"]) == 2
+    for k, q in enumerate(d["people"]):
+        np.testing.assert_allclose(read_glb_joints(out / "crowd.glb", person=k), q["absolute"], atol=0.1)
+    np.testing.assert_allclose(read_bvh(out / "crowd_person2.bvh"), d["people"][1]["absolute"], atol=0.1)

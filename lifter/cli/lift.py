@@ -250,7 +250,8 @@ def run_lift(args: argparse.Namespace) -> int:
             try:
                 from ..detect import get_estimator
 
-                kw = {"max_people": args.max_people, "log": say} if args.detector == "blazepose" else {}
+                # one more than lifted, so that a crowd is noticed and reported (the search costs the same)
+                kw = {"max_people": args.max_people + 1, "log": say} if args.detector == "blazepose" else {}
                 estimator = get_estimator(args.detector, **kw)
             except (MissingDependencyError, PoseLifterError) as exc:
                 estimator_error = str(exc)
