@@ -24,3 +24,17 @@ def test_readme_library_example_runs_as_written(tmp_path):
     mpjpe = float(re.search(r"MPJPE ([\d.]+) mm", proc.stdout).group(1))  # type: ignore[union-attr]
     assert 0 < mpjpe < 150, proc.stdout
     assert (tmp_path / "my.pt").is_file()
+
+
+def test_documented_checkpoint_loading_errors(tmp_path, monkeypatch):
+    """What the README says of your own checkpoint: a missing path is a CheckpointError naming the file; a name
+    that is neither shipped nor a file says how to load a checkpoint."""
+    import pytest
+
+    from lifter import CheckpointError, Lifter, PoseLifterError
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(CheckpointError, match="weights file not found: my.pt"):
+        Lifter.from_pretrained("my.pt")
+    with pytest.raises(PoseLifterError, match="unknown model 'mine'.*pass its path"):
+        Lifter.from_pretrained("mine")
