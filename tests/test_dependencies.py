@@ -37,6 +37,17 @@ def test_the_library_never_imports_its_cli():
     assert not offenders, offenders
 
 
+def test_the_app_never_imports_the_cli():
+    app = LIFTER.parent / "app"
+    offenders = []
+    for p in app.rglob("*.py"):
+        for node in ast.walk(ast.parse(p.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            offenders += [f"{p.name}: {n}" for n in names if n == "lifter.cli" or n.startswith("lifter.cli.")]
+    assert not offenders, offenders
+
+
 def test_the_import_check_sees_relative_imports():
     assert "lifter.api" in _imports(LIFTER / "cli" / "evaluate.py")
     assert "lifter.normalization" in _imports(LIFTER / "noise.py")
