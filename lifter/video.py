@@ -288,6 +288,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         search_every = max(1, round(search_every_s * fps)) if search_every_s > 0 else 1
         can_track = callable(getattr(estimator, "detect_near", None))
         while index + 1 < limit:
+            t0 = time.perf_counter()
             ok, bgr = cap.read()
             index += 1
             if not ok or bgr is None:
@@ -300,7 +301,6 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 bad = bad[: len(bad) - failures_in_a_row]
                 break
             failures_in_a_row = 0
-            t0 = time.perf_counter()
             H, W = bgr.shape[:2]
             if size is None:
                 size = (W, H)
