@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import math
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from typing import Any, Literal
 
 import numpy as np
 
@@ -27,8 +28,9 @@ NOISE_MAX: float = 3.0
 CLOUD_SAMPLES: int = 64
 """Default number of noisy 2D draws lifted for the uncertainty cloud."""
 DEFAULT_SEED: int = 0
-DRAG_MARGIN: float = 1.0
-"""A dragged joint is clamped to the image grown by this fraction of its size on every side."""
+JOINT_MARGIN: float = 0.25
+"""A dragged or typed 2D joint must lie in the image grown by this fraction of its size on every side;
+farther out it is refused (the previous pose is kept), never clamped and lifted."""
 
 
 class LifterPool:
@@ -97,6 +99,14 @@ class SessionState:
                                   "uploaded one")
         return np.asarray(self.sample.keypoints_2d, np.float64)
 
+    def evolve(self, **changes: Any) -> SessionState:
+        """A copy with ``changes`` applied (the keypoints array and the dragged set are copied, never shared)."""
+        kw: dict[str, Any] = {f.name: getattr(self, f.name) for f in fields(self)}
+        kw["keypoints"] = np.array(self.keypoints, np.float64, copy=True)
+        kw["dragged"] = set(self.dragged)
+        kw.update(changes)
+        return SessionState(**kw)
+
     @property
     def focal(self) -> tuple[float, float]:
         """``(fx, fy)`` px used for lifting: the camera's, scaled to ``alpha = focal_px``."""
@@ -137,19 +147,54 @@ def clamp_noise(value: float) -> tuple[float, str | None]:
     return v, None
 
 
-def clamp_joint(uv: np.ndarray, *, size: tuple[int, int]) -> tuple[np.ndarray, str | None]:
-    """Clamp a dragged 2D joint (px) to the image grown by :data:`DRAG_MARGIN` on every side."""
-    uv = np.asarray(uv, np.float64).reshape(2)
+def check_joint(uv: Any, *, size: tuple[int, int]) -> np.ndarray:
+    """A dragged / typed 2D joint ``(2,)`` px, checked: finite and inside the image grown by
+    :data:`JOINT_MARGIN` on every side. Raises :class:`PoseLifterError` (naming the allowed range) otherwise."""
+    try:
+        p = np.asarray(uv, np.float64).reshape(2)
+    except (TypeError, ValueError):
+        raise PoseLifterError(f"joint position must be (u, v) px, got {uv!r}") from None
     W, H = size
-    if not np.all(np.isfinite(uv)):
-        return np.array([W / 2.0, H / 2.0]), "dragged joint position is not finite; moved to the image centre"
-    lo = np.array([-DRAG_MARGIN * W, -DRAG_MARGIN * H])
-    hi = np.array([(1 + DRAG_MARGIN) * W, (1 + DRAG_MARGIN) * H])
-    c = np.clip(uv, lo, hi)
-    if np.any(c != uv):
-        return c, (f"joint dragged far outside the image ({uv[0]:.0f}, {uv[1]:.0f}) px; "
-                   f"clamped to ({c[0]:.0f}, {c[1]:.0f}) px")
-    return c, None
+    if not np.all(np.isfinite(p)):
+        raise PoseLifterError(f"joint position {tuple(p)} is not finite; type a pixel position such as ({W / 2:.0f}, "
+                              f"{H / 2:.0f})")
+    lo = np.array([-JOINT_MARGIN * W, -JOINT_MARGIN * H])
+    hi = np.array([(1 + JOINT_MARGIN) * W, (1 + JOINT_MARGIN) * H])
+    if np.any(p < lo) or np.any(p > hi):
+        raise PoseLifterError(
+            f"joint position ({p[0]:.0f}, {p[1]:.0f}) px is far outside the {W} x {H} px image; keep it within "
+            f"u in [{lo[0]:.0f}, {hi[0]:.0f}], v in [{lo[1]:.0f}, {hi[1]:.0f}] px. The previous pose is kept")
+    return p
+
+
+@dataclass(frozen=True)
+class Spread:
+    """Spread of the lifted noisy draws (the uncertainty cloud), mm, camera frame.
+
+    mean: ``(17, 3)`` mean joint positions. cov: ``(17, 3, 3)`` per-joint covariance (absolute positions).
+    root_std: ``(3,)`` standard deviation of the root X, Y, Z. joint_depth_std: ``(17,)`` standard deviation of
+    each joint's depth *relative to the root* (the pose's own depth uncertainty; 0 for the root).
+    draws: number of draws.
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+    root_std: np.ndarray
+    joint_depth_std: np.ndarray
+    draws: int
+
+
+def cloud_spread(cloud: np.ndarray) -> Spread:
+    """:class:`Spread` of lifted draws ``(N, 17, 3)`` mm (N >= 2)."""
+    c = np.asarray(cloud, np.float64)
+    if c.ndim != 3 or c.shape[1:] != (NUM_JOINTS, 3) or c.shape[0] < 2:
+        raise PoseLifterError(f"cloud must be (N >= 2, 17, 3) mm, got {c.shape}")
+    mean = c.mean(axis=0)
+    d = c - mean
+    cov = np.einsum("nja,njb->jab", d, d) / (c.shape[0] - 1)
+    rel_z = c[:, :, 2] - c[:, :1, 2]
+    return Spread(mean=mean, cov=cov, root_std=c[:, 0, :].std(axis=0, ddof=1), joint_depth_std=rel_z.std(axis=0, ddof=1),
+                  draws=int(c.shape[0]))
 
 
 @dataclass(frozen=True)
@@ -158,6 +203,7 @@ class Frame:
 
     lifted: ``(17, 3)`` the lift of ``noisy_2d`` (= the current 2D when the noise level is 0).
     cloud: ``(N, 17, 3)`` lifted noisy draws, or None at noise level 0.
+    spread: :class:`Spread` of the cloud (at least 2 draws), else None.
     analytic: ``(17, 3)`` the lifted relative pose at the analytic weak-perspective root, or None.
     metrics: MPJPE, PA-MPJPE, root error (mm) against the ground truth, when known.
     """
@@ -173,6 +219,12 @@ class Frame:
     analytic: np.ndarray | None
     gt_3d: np.ndarray | None
     metrics: dict[str, float]
+    spread: Spread | None = None
+
+    @property
+    def alpha(self) -> float:
+        """The focal length the pose was lifted with, ``sqrt(fx fy)`` px."""
+        return math.sqrt(self.focal[0] * self.focal[1])
 
 
 def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLike) -> Frame:
@@ -213,11 +265,12 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         metrics["root error"] = float(np.linalg.norm(lifted[0] - gt[0]))
         if analytic is not None:
             metrics["analytic root error"] = float(np.linalg.norm(analytic[0] - gt[0]))
+    spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
-                 focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics)
+                 focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread)
 
 
-def lift_source(state: SessionState) -> str:
+def lift_source(state: SessionState) -> Literal["clean", "detected"]:
     """What the lifted 2D is, for :meth:`lifter.Lifter.lift`: ``"clean"`` for ground-truth and demo 2D (dragged
     joints included: they are placed by hand) without synthetic noise; ``"detected"`` for detections, photos,
     keypoint uploads that do not say ``"source": "clean"``, and any 2D with mixture noise on it."""
@@ -234,7 +287,7 @@ def _focal_origin(state: SessionState) -> str:
     if up is None:
         return "camera"
     return {"exif-35mm": "EXIF 35 mm equiv.", "exif-focal-plane": "EXIF", "exif-sensor-width": "EXIF",
-            "default-fov": "default field of view", "keypoint-file": "keypoint file"}.get(up.focal_source, up.focal_source)
+            "default-fov": "default field of view", "keypoint-file": "keypoint file"}.get(up.focal_source, str(up.focal_source))
 
 
 def input_name(state: SessionState) -> str:
@@ -258,16 +311,38 @@ def input_line(state: SessionState) -> str:
     return " · ".join(parts)
 
 
+def spread_line(spread: Spread) -> str:
+    """The readout's line on the uncertainty cloud: the root's spread and the joints' depth spread relative to
+    the root (median and largest, with the joint's name)."""
+    from lifter.skeleton import JOINT_NAMES
+
+    rx, ry, rz = spread.root_std
+    rel = spread.joint_depth_std[1:]
+    worst = int(np.argmax(rel)) + 1
+    return (f"**Spread** ({spread.draws} draws) root σ X {rx:.0f} · Y {ry:.0f} · **Z {rz:.0f}** mm · joint depth σ "
+            f"(relative to the root) median {float(np.median(rel)):.0f}, max {float(rel.max()):.0f} mm "
+            f"({JOINT_NAMES[worst]})")
+
+
+def spread_details(spread: Spread) -> str:
+    """Every joint's depth spread (σ of Z relative to the root, mm) and the root's own σ Z, small print."""
+    from lifter.skeleton import JOINT_NAMES
+
+    parts = [f"root σZ {spread.root_std[2]:.0f}"]
+    parts += [f"{JOINT_NAMES[j]} {spread.joint_depth_std[j]:.0f}" for j in range(1, NUM_JOINTS)]
+    return "<small>**Depth σ per joint** (mm; joints relative to the root): " + " · ".join(parts) + "</small>"
+
+
 def readout_markdown(frame: Frame, state: SessionState) -> str:
-    """The readout panel: canonical depth, root X/Y/Z, the ambiguity ``Z / f``, which 2D was lifted
-    (:func:`input_line`), and metrics."""
+    """The readout panel (numbers without thousands separators): ``Focal N px`` (the focal length this frame
+    was lifted with, and the camera's), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, which 2D was
+    lifted (:func:`input_line`), the spread of the uncertainty cloud (:func:`spread_line`) and the metrics."""
     X, Y, Z = frame.root
-    alpha = math.sqrt(frame.focal[0] * frame.focal[1])
+    alpha = frame.alpha
     lines = [
-        f"**Canonical depth** {frame.canonical_depth:,.0f} mm (at f = 1000 px)",
-        f"**Root** X {X:,.0f} · Y {Y:,.0f} · **Z {Z:,.0f}** mm",
-        f"**Focal** {alpha:,.0f} px ({_focal_origin(state)}: {state.sample.camera.alpha:,.0f} px) · "
-        f"Z/f = {Z / alpha:.3f} mm/px",
+        f"**Focal {alpha:.0f} px** ({_focal_origin(state)}: {state.sample.camera.alpha:.0f} px)",
+        f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm",
+        f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px",
     ]
     lines.append(input_line(state))
     up = state.sample.upload
@@ -275,12 +350,17 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         people = f" · {up.num_people} people found, largest used" if (up.num_people or 0) > 1 else ""
         lines.append(f"**Input** {up.name} ({'photo, ' + str(up.detector) if up.kind == 'image' else 'keypoint file, ' + up.source_format})"
                      f"{people}")
+    if frame.spread is not None:
+        lines.append(spread_line(frame.spread))
     if frame.metrics:
         m = frame.metrics
         lines.append(f"**MPJPE** {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
                      f"**root error** {m['root error']:.0f} mm")
-        if "analytic root error" in m:
-            lines.append(f"**analytic root error** {m['analytic root error']:.0f} mm")
     else:
         lines.append("_no 3D ground truth for this sample_")
+    if frame.analytic is not None:
+        a = frame.analytic[0]
+        err = frame.metrics.get("analytic root error")
+        lines.append(f"**Analytic root** Z {a[2]:.0f} mm ({a[2] - Z:+.0f} mm from the lifted root)"
+                     + (f" · error {err:.0f} mm" if err is not None else ""))
     return "  \n".join(lines)

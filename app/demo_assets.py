@@ -1,3 +1,5 @@
+# pyright: reportAttributeAccessIssue=false, reportOptionalMemberAccess=false, reportIndexIssue=false, reportReturnType=false, reportArgumentType=false
+# (trimesh / numpy stubs)
 """The embedded demo samples: authored 3D poses, a trimesh mannequin, rendered with OpenCV.
 
 Nothing here comes from Human3.6M. Each sample is made from scratch:

@@ -19,6 +19,15 @@ COLORS: dict[str, tuple[int, int, int]] = {
 }
 SIDE_COLORS: dict[str, tuple[int, int, int]] = {"left": (30, 110, 255), "right": (255, 60, 160), "center": (250, 250, 250)}
 """Left joints blue ring, right joints pink ring (subject's own sides)."""
+JOINT_RGB: np.ndarray = np.array([
+    (90, 90, 90), (200, 40, 40), (235, 95, 35), (250, 150, 50),  # pelvis, r_hip, r_knee, r_ankle
+    (30, 70, 190), (40, 120, 240), (90, 170, 255),  # l_hip, l_knee, l_ankle
+    (110, 110, 110), (60, 60, 60), (130, 130, 130), (40, 40, 40),  # spine, thorax, neck_nose, head_top
+    (0, 90, 150), (0, 150, 200), (40, 205, 225),  # l_shoulder, l_elbow, l_wrist
+    (160, 20, 90), (215, 50, 130), (255, 105, 170),  # r_shoulder, r_elbow, r_wrist
+], np.uint8)
+"""Each joint's own colour (lifted joints, their uncertainty clouds, the draggable 2D joints): the subject's left
+in blues, right in reds / oranges, centre in greys; lighter towards the end of each limb."""
 
 
 def canvas(width: int, height: int) -> np.ndarray:
@@ -33,6 +42,7 @@ def canvas(width: int, height: int) -> np.ndarray:
 
 def draw_pose(img: np.ndarray, kp: np.ndarray, color: tuple[int, int, int], *, scale: float = 1.0,
               thickness: int = 2, radius: int = 4, selected: int | None = None) -> None:
+    """(The current pose, ``selected`` not None, fills its joints with :data:`JOINT_RGB`.)"""
     """Draw a 17-joint 2D pose ``kp (17, 2)`` px (in the original image's pixels) in place."""
     pts = np.asarray(kp, np.float64) * scale
     if not np.all(np.isfinite(pts)):
@@ -47,9 +57,10 @@ def draw_pose(img: np.ndarray, kp: np.ndarray, color: tuple[int, int, int], *, s
     for j in range(NUM_JOINTS):
         c = tuple(ip[j])
         cv2.circle(img, c, (radius + 2) * 16, SIDE_COLORS[joint_side(j)], -1, cv2.LINE_AA, shift=4)
-        cv2.circle(img, c, radius * 16, color, -1, cv2.LINE_AA, shift=4)
+        fill = tuple(int(x) for x in JOINT_RGB[j]) if selected is not None else color
+        cv2.circle(img, c, radius * 16, fill, -1, cv2.LINE_AA, shift=4)
         if selected == j:
-            cv2.circle(img, c, (radius + 6) * 16, (255, 255, 0), 2, cv2.LINE_AA, shift=4)
+            cv2.circle(img, c, (radius + 6) * 16, (255, 220, 0), max(2, radius // 2), cv2.LINE_AA, shift=4)
 
 
 def scaled_base(base: np.ndarray | None, *, size: tuple[int, int], max_width: int = 480) -> tuple[np.ndarray, float]:
@@ -71,9 +82,52 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
     ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize."""
     small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
     img = small.copy()
+    k = max(1.0, img.shape[1] / 320.0)  # marks grow with the inset (readable on 1000-px frames)
     for key in ("gt", "detected", "noisy", "current"):
         kp = poses.get(key)
         if kp is not None:
-            draw_pose(img, kp, COLORS[key], scale=s, thickness=2 if key == "current" else 1,
-                      radius=3 if key == "current" else 2, selected=selected if key == "current" else None)
+            cur = key == "current"
+            draw_pose(img, kp, COLORS[key], scale=s, thickness=round(k * (2 if cur else 1.5)),
+                      radius=round(k * (3 if cur else 2)), selected=selected if cur else None)
+    return img
+
+
+def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | None = None,
+                   cloud: np.ndarray | None = None, size: tuple[int, int] = (360, 150)) -> np.ndarray:
+    """Two small views of the lifted pose (mm, camera frame), drawn with OpenCV: **side** (depth Z to the right,
+    height -Y up) and **top** (depth Z to the right, X down), each a 2.4 m window centred on the root, with the
+    distance to the camera. The 3D response in sight while the 3D view looks head-on at the image plane."""
+    W, H = size
+    img = np.full((H, W, 3), 250, np.uint8)
+    half = W // 2
+    win = 2400.0
+    sc = (min(half, H) - 16) / win
+    P = np.asarray(lifted, np.float64)
+    r = np.asarray(root, np.float64)
+    for v, (title, ax) in enumerate((("side", 1), ("top", 0))):
+        x0 = v * half
+        cv2.rectangle(img, (x0 + 1, 1), (x0 + half - 2, H - 2), (200, 200, 200), 1)
+        cx, cy = x0 + half / 2.0, H / 2.0 + 6
+
+        def to_px(p: np.ndarray, ax: int = ax, cx: float = cx, cy: float = cy) -> np.ndarray:
+            sign = -1.0 if ax == 1 else 1.0  # side: image up is -Y
+            return np.stack([cx + (p[..., 2] - r[2]) * sc, cy + sign * (p[..., ax] - r[ax]) * sc], -1)
+
+        if cloud is not None and len(cloud):
+            pts = to_px(np.asarray(cloud, np.float64))
+            cols = np.broadcast_to(JOINT_RGB, pts.shape[:-1] + (3,)).reshape(-1, 3)
+            uv = pts.reshape(-1, 2)
+            ok = np.all(np.isfinite(uv), axis=1)
+            ok[ok] = (uv[ok, 0] >= x0) & (uv[ok, 0] < x0 + half) & (uv[ok, 1] >= 0) & (uv[ok, 1] < H)
+            iu = uv[ok].astype(np.int64)
+            img[iu[:, 1], iu[:, 0]] = cols[ok]
+        for pose, col in ((gt, COLORS["gt"]), (P, None)):
+            if pose is None:
+                continue
+            q = np.round(to_px(np.asarray(pose, np.float64)) * 16).astype(np.int64)
+            for a, b in EDGES:
+                c = col if col is not None else tuple(int(x) for x in JOINT_RGB[b])
+                cv2.line(img, tuple(q[a]), tuple(q[b]), c, 2 if col is None else 1, cv2.LINE_AA, shift=4)
+        cv2.putText(img, f"{title}  camera {r[2] / 1000:.1f} m <-", (x0 + 5, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.36,
+                    (60, 60, 60), 1, cv2.LINE_AA)
     return img

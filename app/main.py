@@ -9,19 +9,56 @@ from __future__ import annotations
 
 import argparse
 import logging
+import socket
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
 from .samples import default_h36m_root
 
+START_TIMEOUT_S: float = 15.0
+"""The server must be listening within this many seconds, else the app exits with an error."""
+
+
+def _port(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"port {v} is outside 0-65535 (0 = any free port)")
+    return v
+
+
+def check_bind(host: str, port: int) -> str | None:
+    """None when ``host`` resolves and a socket can listen on it (``port``, or the next one viser would try when
+    it is busy); otherwise the reason, for the user."""
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError, OSError) as exc:
+        return f"cannot use --host {host!r}: {exc}"
+    errors = []
+    for family, _, _, _, addr in infos:
+        for p in ([port] if port == 0 else [port, port + 1]):
+            if p > 65535:
+                continue
+            with socket.socket(family, socket.SOCK_STREAM) as s:
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                try:
+                    s.bind((addr[0], p) + tuple(addr[2:]))
+                    return None
+                except OSError as exc:
+                    errors.append(f"{addr[0]}:{p}: {exc.strerror or exc}")
+    return f"cannot listen on --host {host!r} --port {port}: " + "; ".join(errors[:3])
+
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="poselifter-app", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
-    p.add_argument("--port", type=int, default=8080, help="port (0 = any free port)")
+    p.add_argument("--port", type=_port, default=8080, help="port 0-65535 (0 = any free port; a busy port: the next free one)")
     p.add_argument("--h36m", type=Path, default=None,
                    help="Human3.6M folder (default: ../shared/data/h36m or $POSELIFTER_H36M when present)")
     p.add_argument("--no-h36m", action="store_true", help="demo samples only, even if Human3.6M is present")
@@ -45,7 +82,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.h36m is not None and not (args.h36m / "poses3d_world_17j_mm.npz").is_file():
             print(f"error: no Human3.6M data at {args.h36m} (expected poses3d_world_17j_mm.npz)", file=sys.stderr)
             return 2
-    server = viser.ViserServer(host=args.host, port=args.port, label="poselifter", verbose=False)
+    problem = check_bind(args.host, args.port)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
+    started: list[viser.ViserServer] = []
+    failed: list[BaseException] = []
+
+    def start() -> None:
+        try:
+            started.append(viser.ViserServer(host=args.host, port=args.port, label="poselifter", verbose=False))
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            failed.append(exc)
+
+    t = threading.Thread(target=start, daemon=True)  # viser waits forever when it cannot bind
+    t.start()
+    t.join(START_TIMEOUT_S)
+    if not started:
+        why = f"{type(failed[0]).__name__}: {failed[0]}" if failed else f"not listening after {START_TIMEOUT_S:g} s"
+        print(f"error: could not start the server on {args.host}:{args.port} ({why})", file=sys.stderr, flush=True)
+        import os
+
+        os._exit(2)  # (a server thread may still be trying: do not wait for it)
+    server = started[0]
     try:
         app = PoseLifterApp(server, h36m_root=h36m, default_model=args.model)
     except Exception as exc:  # noqa: BLE001

@@ -1,25 +1,24 @@
-"""The viser app: one :class:`SessionView` (GUI + 3D scene + state) per browser tab.
+"""The viser app: one :class:`SessionView` per browser tab, on :class:`PoseLifterApp`.
 
-Scene layout (viser world: **metres**, z up; Human3.6M's world is z up with the floor at z = 0, and the
-demo samples are authored the same way):
+A view owns its tab's typed GUI groups (:mod:`.gui`), scene groups (:mod:`.scene`) and
+:class:`~poselifter_app.core.SessionState`; what the state becomes after an action is decided by the pure
+transitions of :mod:`.session`, the lift by :func:`~poselifter_app.core.compute_frame`.
 
-* ``/floor``: the floor grid (z = 0);
-* ``/cam``: the sample's camera, posed by its extrinsics (``X_world = R^T (X_cam - t)``). Everything
-  below it is in the **OpenCV camera frame** (+x right, +y down, +z forward), metres:
-  the frustum and the image plane at depth :data:`IMAGE_PLANE_DEPTH_M` (its field of view follows the
-  focal slider), the draggable 2D joints on that plane, the lifted skeleton at its absolute position,
-  the ground truth, the analytic-root skeleton, the uncertainty cloud and the root's viewing ray.
+**Last value wins.** viser runs GUI callbacks on a thread pool, in any order. No callback here applies "its"
+value: each one only asks for a :meth:`SessionView._sync` pass (:class:`LatestWins`: at most one pass runs, and
+a request that arrives during a pass makes it run once more). A pass reads what the GUI holds *now* (viser stores
+values in the order they arrive) and makes the state, the scene and the readout match it. So after any burst the
+last pass sees the last value of every control, in every tab.
 
-The "Your photo" folder uploads a photo (2D joints by :mod:`lifter.detect`, largest person, EXIF or
-default-FOV focal) or a keypoint JSON (:mod:`app.upload`) into the tab as a sample without 3D ground
-truth, and downloads the current result as the JSON ``poselifter lift`` writes, or as a GLB.
-
-Every callback goes through :meth:`SessionView._guard`: invalid input shows a message in the status
-panel (and a notification in a real browser) and never propagates into viser's threads.
+Every callback and every public control goes through one error wrapper (:meth:`SessionView._guarded`): a
+:class:`lifter.PoseLifterError` becomes a message in the readout panel (and a notification in a real tab),
+refused values are put back in their control, and nothing propagates into viser's threads. viser internals
+are used only in :mod:`.viser_hooks`.
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import functools
 import logging
@@ -29,100 +28,95 @@ import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 import viser
-import viser.transforms as vtf
 
 from lifter import PoseLifterError
-from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, edge_side, joint_side
+from lifter.skeleton import JOINT_NAMES
 
+from . import framing
+from . import session as ss
 from . import upload as up
-from .core import (
-    CLOUD_SAMPLES,
-    DEFAULT_SEED,
-    FOCAL_MAX_PX,
-    FOCAL_MIN_PX,
-    NOISE_MAX,
-    Frame,
-    LifterPool,
-    SessionState,
-    clamp_focal,
-    clamp_joint,
-    clamp_noise,
-    compute_frame,
-    focal_max,
-    readout_markdown,
-)
-from .drawing import COLORS, overlay, scaled_base
+from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, readout_markdown, spread_details
+from .drawing import overlay, response_image, scaled_base
+from .gui import SOURCE_LABELS, Gui, build_gui
 from .noise import ErrorModelLike, default_error_model, model_name
+from .playback import DISPLAY_FPS, DemoMotion, H36MSequence, PlayClock, SequenceSource
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
+from .scene import (
+    HEAD_ON_JOINT_RADIUS,
+    IMAGE_PLANE_DEPTH_M,
+    JOINT_RADIUS_M,
+    Scene,
+    build_scene,
+    draw_2d,
+    draw_camera,
+    draw_pose,
+    draw_trail,
+    frustum_corners,
+    image_plane,
+    set_joint_radius,
+)
+from .viser_hooks import limit_uploads, report_rejected_values
 
 log = logging.getLogger("poselifter.app")
-
-IMAGE_PLANE_DEPTH_M: float = 1.0
-"""Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
-VIEW_ZOOM: float = 0.85
-"""Initial viewpoint: how close to the person the viewer starts (1 = the frustum and the person small)."""
-JOINT_RADIUS_M: float = 0.022
-"""Radius (m) of the draggable 2D joint spheres on the image plane in the overview (easy to grab from afar)."""
-ZOOM_JOINT_RADIUS: float = 0.02
-""""zoom to 2D joints": sphere radius as a fraction of the 2D joints' extent on the image plane (small
-enough not to hide neighbouring joints up close); the overview restores :data:`JOINT_RADIUS_M`."""
-ZOOM_FILL: float = 0.8
-""""zoom to 2D joints": the fraction of the view the 2D joints' bounding box fills."""
-ZOOM_DEFAULT_FOV_DEG: float = 50.0
-"""Vertical field of view assumed when the viewer's is unknown (the server target)."""
-SIDE_RGB: dict[str, tuple[int, int, int]] = {"left": (40, 110, 255), "right": (255, 60, 60), "center": (70, 70, 70)}
-"""Lifted skeleton: subject's left blue, right red, centre dark grey."""
-GT_RGB = COLORS["gt"]
-ANALYTIC_RGB = (255, 170, 0)
-CLOUD_RGB = (170, 80, 230)
-RAY_RGB = (250, 210, 0)
-FRUSTUM_RGB = (30, 30, 30)
-SOURCES = ("demo", "h36m", "upload")
+LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
 
 
-def _edges_points(P: np.ndarray) -> np.ndarray:
-    """``(16, 2, 3)`` bone segments of a ``(17, 3)`` pose."""
-    return np.stack([np.stack([P[a], P[b]]) for a, b in EDGES])
+class LatestWins:
+    """Runs ``work`` when asked, never twice at once; a request made while it runs makes it run once more
+    afterwards (in the thread that is running it). The caller of :meth:`request` returns at once when another
+    thread is running ``work``; when no one is, it runs ``work`` itself before returning. :meth:`holding` keeps
+    ``work`` from running during a block (requests made meanwhile run at its end)."""
 
+    def __init__(self, work: Callable[[], None]) -> None:
+        self._work = work
+        self._run_lock = threading.Lock()
+        self._flag_lock = threading.Lock()
+        self._pending = False
+        self._owner: int | None = None
 
-def _side_colors() -> np.ndarray:
-    c = np.array([SIDE_RGB[edge_side(e)] for e in EDGES], np.uint8)
-    return np.repeat(c[:, None, :], 2, axis=1)
+    def request(self) -> None:
+        with self._flag_lock:
+            self._pending = True
+        if self._owner == threading.get_ident():
+            return  # inside our own pass / holding block: it runs again at the end
+        while True:
+            if not self._run_lock.acquire(blocking=False):
+                return  # the running pass will run again
+            self._owner = threading.get_ident()
+            try:
+                while True:
+                    with self._flag_lock:
+                        if not self._pending:
+                            break
+                        self._pending = False
+                    self._work()
+            finally:
+                self._owner = None
+                self._run_lock.release()
+            with self._flag_lock:  # a request between our last check and the release
+                if not self._pending:
+                    return
 
-
-def _set_disabled(handle: Any, disabled: bool) -> None:
-    if handle is not None and handle.disabled != disabled:
-        handle.disabled = disabled
-
-
-def control(func: Callable[..., Any]) -> Callable[..., bool]:
-    """Decorator for :class:`SessionView` controls: returns True on success; on invalid input shows the
-    message in the status panel and returns False (never raises into viser's threads). Calls made while
-    the view sets a GUI value itself (:meth:`SessionView._set_gui`) are ignored."""
-
-    @functools.wraps(func)
-    def wrapper(self: SessionView, *args: Any, **kwargs: Any) -> bool:
-        if self._suspend:  # a GUI echo of our own _set_gui, not a user action
-            return True
-        n = self._message_count
-        try:
-            func(self, *args, **kwargs)
-        except PoseLifterError as exc:
-            self.show_message(str(exc), error=True)
-            return False
-        except Exception as exc:  # noqa: BLE001 - never let a control kill the session
-            log.error("control %s failed:\n%s", func.__name__, traceback.format_exc())
-            self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
-            return False
-        if self._message_count == n and getattr(self, "status_md", None) is not None and self.status_md.content:
-            self.status_md.content = ""
-        return True
-
-    return wrapper
+    @contextlib.contextmanager
+    def holding(self) -> Iterator[None]:
+        """No pass runs inside this block (it waits for a running one); what was asked meanwhile runs after it."""
+        if self._owner == threading.get_ident():
+            yield
+            return
+        with self._run_lock:
+            self._owner = threading.get_ident()
+            try:
+                yield
+            finally:
+                self._owner = None
+        with self._flag_lock:
+            pending = self._pending
+        if pending:
+            self.request()
 
 
 @dataclass
@@ -134,672 +128,808 @@ class Timing:
     total_ms: float = 0.0
 
 
+def control(func: Callable[..., Any]) -> Callable[..., bool]:
+    """A public control of :class:`SessionView` (tests drive these): runs through :meth:`SessionView._guarded`,
+    returns True on success, False after showing the problem."""
+
+    @functools.wraps(func)
+    def wrapper(self: SessionView, *args: Any, **kwargs: Any) -> bool:
+        return self._guarded(func, self, *args, **kwargs)
+
+    return wrapper
+
+
 class SessionView:
     """GUI, scene and state of one browser tab (or of the server itself, for headless tests).
 
-    ``target`` is a :class:`viser.ClientHandle` (per-tab, the normal case) or a :class:`viser.ViserServer`
-    (shared; used by tests and benchmarks that run without a browser). Public methods are the controls
-    in code form; the GUI callbacks call them.
+    ``target`` is a :class:`viser.ClientHandle` (per tab, the normal case) or a :class:`viser.ViserServer` (shared;
+    tests and benchmarks without a browser). Public methods are the controls in code form.
     """
 
     def __init__(self, app: PoseLifterApp, target: viser.ClientHandle | viser.ViserServer) -> None:
         self.app = app
         self.target = target
-        self.gui = target.gui
-        self.scene = target.scene
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self._message_count = 0
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
-        self._pending: dict[int, np.ndarray] = {}
-        self._pending_lock = threading.Lock()
-        self._drag_lock = threading.Lock()
-        self._tls = threading.local()
+        self.selected = 0
+        self._input_pref = "gt"
+        self._drags: dict[int, np.ndarray] = {}
+        self._reset_request = False
+        self._redraw_request = False
+        self._flags = threading.Lock()
+        self._last_plane: np.ndarray | None = None
         self._base_key: str | None = None
         self._base: tuple[np.ndarray, float] | None = None
-        self._last_upload: Sample | None = None
+        self._view_key: tuple | None = None
+        self._close_up = False
         self._sample_gen = 0
         self._drag_gen: int | None = None
+        self._last_upload: Sample | None = None
+        self._last_h36m: str | None = None
+        """Key of the last Human3.6M sample shown (coming back to Human3.6M goes back to that frame)."""
         self._photo: up.Photo | None = None
-        self._input_pref = "gt"
-        """The 2D input the user chose (:meth:`set_input_kind`); the effective ``state.input_kind`` follows it
-        whenever the sample has that 2D (uploads, without ground-truth 2D, always use their detection)."""
-        self._view_key: tuple | None = None
-        """Source and camera pose the 3D view was last framed for (:meth:`_sync_sample`)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
-        sample = app.demo.get(app.demo.names[0])
-        self.state = SessionState(sample=sample, model=app.default_model)
-        self._build_gui()
-        self._build_scene()
+        self.trail: dict[int, np.ndarray] = {}
+        self._trail_key: tuple | None = None
+        self.play_ms: collections.deque[float] = collections.deque(maxlen=5000)
+        """Server-side time of each frame shown by playback (ms)."""
+        self.play_shown: collections.deque[float] = collections.deque(maxlen=5000)
+        """perf_counter() time at which each playback frame was shown."""
+        self._playing = threading.Event()
+        self._player: threading.Thread | None = None
+        self._runner = LatestWins(self._sync)
+
+        h = app.h36m
+        self.gui: Gui = build_gui(
+            target.gui, demo_names=list(app.demo.names), sources=app.sources, models=list(app.pool.names),
+            model=app.default_model, h36m=h, error_model_name=model_name(app.error_model),
+            max_upload_mib=app.max_upload_bytes // 2**20)
+        self.scene: Scene = build_scene(target.scene, on_drag=lambda j, ev: self._do(self.on_joint_drag, j, ev))
+        first = app.demo.get(app.demo.names[0])
+        self.state = SessionState(sample=first, model=app.default_model)
         with self.lock:
-            self._set_sample(sample)  # (frames the 3D view: a new camera)
-
-    @property
-    def _suspend(self) -> bool:
-        """True while this thread sets GUI values programmatically (their callbacks are then ignored)."""
-        return bool(getattr(self._tls, "suspend", False))
-
-    @_suspend.setter
-    def _suspend(self, value: bool) -> None:
-        self._tls.suspend = value
+            if h is not None:  # with Human3.6M the app opens on it
+                s, q = int(self._gui_subject()[1:]), self._gui_sequence()
+                first = h.get(s, q, h.camera_ids[0], 0)
+            self._show_sample(first, reframe=True)
+        self._wire()
+        client_id = target.client_id if isinstance(target, viser.ClientHandle) else None
+        limit_uploads(target.gui, self.gui.files.upload, max_bytes=app.max_upload_bytes, client_id=client_id,
+                      refuse=lambda name, size: self.show_message(
+                          up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True))
+        report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
 
     # ------------------------------------------------------------------------------------------
-    # Error handling
+    # The one error wrapper, messages
     # ------------------------------------------------------------------------------------------
-    def _guard(self, func: Callable[..., Any]) -> Callable[..., Any]:
-        """Wrap a callback: errors become a status message; the server keeps running."""
-
-        @functools.wraps(func)
-        def wrapper(*args: Any, **kwargs: Any) -> Any:
-            try:
-                return func(*args, **kwargs)
-            except PoseLifterError as exc:
-                self.show_message(str(exc), error=True)
-            except Exception as exc:  # noqa: BLE001 - never let a callback kill the session
-                log.error("callback %s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
-                self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
-            return None
-
-        return wrapper
+    def _guarded(self, func: Callable[..., Any], *args: Any, **kwargs: Any) -> bool:
+        """Run ``func``: True on success; a :class:`PoseLifterError` (or any other error, logged) becomes a
+        message and False. Never raises (callbacks run in viser's threads). A success that showed no message
+        clears the status line."""
+        n = self._message_count
+        try:
+            func(*args, **kwargs)
+        except PoseLifterError as exc:
+            self.show_message(str(exc), error=True)
+            return False
+        except Exception as exc:  # noqa: BLE001 - never let a control kill the session
+            log.error("%s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
+            self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
+            return False
+        if self._message_count == n and self.gui.readout.status.content:
+            self.gui.readout.status.content = ""
+        return True
 
     def show_message(self, text: str, *, error: bool = False) -> None:
-        """Show ``text`` in the status panel (and as a browser notification for a real tab)."""
+        """Show ``text`` in the readout panel (and as a browser notification in a real tab)."""
         self.messages.append(text)
         self.messages = self.messages[-20:]
         self._message_count += 1
         try:
-            self.status_md.content = ("⚠️ " if error else "ℹ️ ") + text
+            self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
-                self.target.add_notification(title="poselifter" if not error else "Input problem", body=text,
+                self.target.add_notification(title="Input problem" if error else "poselifter", body=text,
                                              auto_close_seconds=6.0, color="red" if error else "blue")
         except Exception:  # noqa: BLE001
             log.exception("could not show message %r", text)
 
-    def clear_message(self) -> None:
-        self.status_md.content = ""
+    # ------------------------------------------------------------------------------------------
+    # Callbacks: every value control only asks for a sync pass
+    # ------------------------------------------------------------------------------------------
+    def _do(self, func: Callable[..., Any], *args: Any) -> None:
+        """Run ``func(*args)`` through :meth:`_guarded` (for callbacks, which return nothing)."""
+        self._guarded(func, *args)
+
+    def _on(self, func: Callable[..., Any], *args: Any) -> Callable[[Any], None]:
+        """A GUI callback running ``func(*args)`` through :meth:`_guarded`."""
+        return lambda _event: self._do(func, *args)
+
+    def _wire(self) -> None:
+        g = self.gui
+        sync = self._on(self._runner.request)
+        for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame, *g.value_handles()]:
+            h.on_update(sync)
+        g.lift.gt.on_update(self._on(self._request_redraw))
+        g.play.trail.on_update(self._on(self._request_redraw))
+        g.lift.focal_reset.on_click(self._on(self.reset_focal))
+        g.noise.resample.on_click(self._on(self.resample))
+        g.joints.joint.on_update(self._on(self._on_joint_selected))
+        g.joints.uv.on_update(self._on(self._on_joint_uv))
+        g.joints.reset.on_click(self._on(self.reset_joints))
+        g.joints.head_on.on_click(self._on(self.head_on_view))
+        g.lift.overview.on_click(self._on(self.overview))
+        g.lift.auto_frame.on_update(self._on(self._auto_frame))
+        g.play.play.on_click(self._on(self.toggle_play))
+        g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name, g.files.upload.value.content)))
+        g.files.download_json.on_click(self._on(self.download, "json"))
+        g.files.download_glb.on_click(self._on(self.download, "glb"))
+
+    def _request_redraw(self) -> None:
+        with self._flags:
+            self._redraw_request = True
+        self._runner.request()
 
     # ------------------------------------------------------------------------------------------
-    # GUI
+    # The sync pass
     # ------------------------------------------------------------------------------------------
-    def _build_gui(self) -> None:
-        gui = self.gui
-        app = self.app
-        self.image_gui = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
-        self.legend_md = gui.add_markdown(
-            "<small>2D: <b style='color:#28c83c'>ground truth</b> · <b style='color:#f09600'>detected / uploaded</b> · "
-            "<b style='color:#a03cdc'>noisy (lifted)</b> · <b style='color:#e61e1e'>current / dragged</b>; "
-            "rings <b style='color:#1e6eff'>left</b> / <b style='color:#ff3ca0'>right</b>. "
-            "3D: lifted (left blue, right red), <b style='color:#28c83c'>ground truth</b>, "
-            "<b style='color:#ffaa00'>analytic root</b>, <b style='color:#aa50e6'>noise cloud</b>, "
-            "<b style='color:#c8a800'>root ray</b>.</small>")
-        self.readout_md = gui.add_markdown("")
-        self.status_md = gui.add_markdown("")
-
-        with gui.add_folder("Sample"):
-            sources = ["demo"] + (["h36m"] if app.h36m is not None else [])
-            self.source_dd = gui.add_dropdown("source", sources, initial_value="demo",
-                                              hint="embedded demo renders, or Human3.6M (--h36m)")
-            self.demo_dd = gui.add_dropdown("demo sample", list(app.demo.names), initial_value=app.demo.names[0])
-            self.input_dd = gui.add_dropdown("2D input", ["gt", "detected"], initial_value="gt",
-                                             hint="ground-truth 2D, or the Stacked-Hourglass detection (H36M only)")
-            if app.h36m is not None:
-                h = app.h36m
-                subj = [f"S{s}" for s in h.subjects]
-                self.subject_dd = gui.add_dropdown("subject", subj, initial_value=subj[-2] if len(subj) > 1 else subj[0])
-                seqs = h.sequences(int(self.subject_dd.value[1:]))
-                self.sequence_dd = gui.add_dropdown("sequence", seqs, initial_value=seqs[0])
-                self.camera_dd = gui.add_dropdown("camera", list(h.camera_ids), initial_value=h.camera_ids[0])
-                n = h.num_frames(int(self.subject_dd.value[1:]), self.sequence_dd.value)
-                self.frame_slider = gui.add_slider("frame", 0, max(n - 1, 1), 1, 0)
-                photos = ["(none)"] + [f"S{s} {q} {c} {f}" for s, q, c, f in h.photo_frames()]
-                self.photo_dd = gui.add_dropdown("frame with photo", photos, initial_value="(none)")
-            else:
-                self.subject_dd = self.sequence_dd = self.camera_dd = self.frame_slider = self.photo_dd = None  # type: ignore[assignment]
-
-        with gui.add_folder("Your photo"):
-            self.upload_btn = gui.add_upload_button(
-                "upload photo or keypoint JSON", icon=viser.Icon.UPLOAD, mime_type="image/*,.json,application/json",
-                hint=f"a photo (2D joints by MediaPipe BlazePose, draggable) or a 2D keypoint JSON as `poselifter lift` "
-                     f"reads it; at most {up.MAX_UPLOAD_BYTES // 2**20} MiB")
-            self.download_btn = gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
-                                               hint="the current lift with the same fields as `poselifter lift` writes")
-            self.download_glb_btn = gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
-                                                   hint="the lifted skeleton as a mesh (metres, y-up)")
-        with gui.add_folder("Lifting"):
-            models = app.pool.names or ["(none)"]
-            self.model_dd = gui.add_dropdown("model", models, initial_value=app.default_model or models[0],
-                                             hint="shipped weights (assets/models.json)")
-            self.focal_slider = gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
-                                               hint="alpha = sqrt(fx fy); the root slides along its ray, Z ∝ f")
-            self.focal_reset = gui.add_button("reset focal to camera")
-            self.analytic_cb = gui.add_checkbox("analytic root", False,
-                                                hint="also show the weak-perspective analytic root (baseline)")
-            self.gt_cb = gui.add_checkbox("show ground truth", True)
-        with gui.add_folder("Noise"):
-            self.noise_slider = gui.add_slider("mixture-noise level", 0.0, NOISE_MAX, 0.05, 0.0,
-                                               hint="0 clean · 1 as fitted · 3 exaggerated")
-            self.cloud_num = gui.add_slider("cloud samples", 0, 256, 1, CLOUD_SAMPLES)
-            self.seed_num = gui.add_number("seed", DEFAULT_SEED, step=1)
-            self.resample_btn = gui.add_button("resample noise")
-            gui.add_markdown(f"<small>error model: {model_name(app.error_model)}</small>")
-        with gui.add_folder("Joints"):
-            self.joint_dd = gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0],
-                                             hint="drag the red spheres on the image plane; or nudge here")
-            self.joint_uv = gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0)
-            self.reset_btn = gui.add_button("reset dragged joints")
-            self.view_btn = gui.add_button("reset 3D view")
-            self.zoom_btn = gui.add_button("zoom to 2D joints", icon=viser.Icon.ZOOM_IN,
-                                           hint="look head-on at the 2D joints on the image plane, for precise dragging")
-
-        g = self._guard
-        self.source_dd.on_update(g(lambda _: self.set_source(self.source_dd.value)))
-        self.demo_dd.on_update(g(lambda _: self.select_demo(self.demo_dd.value)))
-        self.input_dd.on_update(g(lambda _: self.set_input_kind(self.input_dd.value)))
-        if self.subject_dd is not None:
-            self.subject_dd.on_update(g(lambda _: self._on_subject()))
-            self.sequence_dd.on_update(g(lambda _: self._on_h36m_change(reset_frame=True)))
-            self.camera_dd.on_update(g(lambda _: self._on_h36m_change()))
-            self.frame_slider.on_update(g(lambda _: self._on_h36m_change()))
-            self.photo_dd.on_update(g(lambda _: self._on_photo()))
-        self.model_dd.on_update(g(lambda _: self.set_model(self.model_dd.value)))
-        self.focal_slider.on_update(g(lambda _: self.set_focal(self.focal_slider.value)))
-        self.focal_reset.on_click(g(lambda _: self.set_focal(self.state.sample.camera.alpha)))
-        self.analytic_cb.on_update(g(lambda _: self.set_analytic(self.analytic_cb.value)))
-        self.gt_cb.on_update(g(lambda _: self._redraw()))
-        self.noise_slider.on_update(g(lambda _: self.set_noise(self.noise_slider.value)))
-        self.cloud_num.on_update(g(lambda _: self.set_cloud_samples(self.cloud_num.value)))
-        self.seed_num.on_update(g(lambda _: self.set_seed(self.seed_num.value)))
-        self.resample_btn.on_click(g(lambda _: self.resample()))
-        self.joint_dd.on_update(g(lambda _: self._on_joint_selected()))
-        self.joint_uv.on_update(g(lambda _: self._on_joint_uv()))
-        self.reset_btn.on_click(g(lambda _: self.reset_joints()))
-        self.view_btn.on_click(g(lambda _: self.set_initial_view()))
-        self.zoom_btn.on_click(g(lambda _: self.zoom_to_2d_joints()))
-        self.upload_btn.on_upload(g(lambda _: self.load_upload(self.upload_btn.value.name, self.upload_btn.value.content)))
-        self.download_btn.on_click(g(lambda _: self.download("json")))
-        self.download_glb_btn.on_click(g(lambda _: self.download("glb")))
-        self._install_upload_limit()
-
-    def _commit(self, name: str, value: Any, handle: Any, *, message: str = "", camera: bool = False) -> None:
-        """Set ``state.<name>``, mirror it in its GUI ``handle``, show ``message`` (clamping notes) and redraw
-        (``camera``: the frustum too). The one path by which value controls change the session state."""
+    def _sync(self) -> None:
+        """Make the state, scene and readout match what the GUI holds now (see the module docstring)."""
         with self.lock:
-            setattr(self.state, name, value)
-            self._set_gui(handle, value)
-            if message:
-                self.show_message(message, error=True)
-            if camera:
-                self._update_camera_geometry()
-            self._redraw()
+            try:
+                req = self._requested_sample()
+            except PoseLifterError as exc:
+                self._show_sample_controls(self.state)  # the pickers show the sample in use again
+                self.show_message(str(exc), error=True)
+                req = None
+            if req is not None and req.key != self.state.sample.key:
+                try:
+                    self._show_sample(req, reframe=False)
+                except PoseLifterError as exc:
+                    self._show_sample_controls(self.state)
+                    self.show_message(str(exc), error=True)
+            old = self.state
+            values = self._control_values()
+            st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
+            with self._flags:
+                drags, self._drags = self._drags, {}
+                reset, self._reset_request = self._reset_request, False
+                redraw, self._redraw_request = self._redraw_request, False
+            notes: list[str] = [r.message for r in rejected]
+            if reset:
+                st = ss.reset_joints(st)
+            for j, uv in drags.items():
+                try:
+                    st = ss.with_joint(st, j, uv)
+                except PoseLifterError as exc:
+                    notes.append(str(exc))
+            for r in rejected:
+                self._set_control(r.control, r.value)
+            if st.input_kind != old.input_kind and st.sample.has_gt_2d:
+                self._input_pref = st.input_kind
+            if ss.same_lift(st, old) and not redraw and not drags and not reset:
+                for n in notes:
+                    self.show_message(n, error=True)
+                return
+            try:
+                self._apply(st)
+            except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
+                notes.append(str(exc))
+                self._show_controls(old)
+                self._draw_2d(old.keypoints)
+            for n in notes:
+                self.show_message(n, error=True)
 
-    def _reject(self, handle: Any, name: str, message: str) -> NoReturn:
-        """Refuse a value control's input: its GUI ``handle`` shows ``state.<name>`` (the value in use) again,
-        and :class:`PoseLifterError` ``message`` is raised."""
-        with self.lock:
-            self._set_gui(handle, getattr(self.state, name))
-        raise PoseLifterError(message)
+    def _control_values(self) -> ss.ControlValues:
+        g = self.gui
+        return ss.ControlValues(model=g.lift.model.value, input_kind=g.sample.input.value,
+                                focal_px=g.lift.focal.value, noise_level=g.noise.level.value, seed=g.noise.seed.value,
+                                cloud_samples=g.noise.cloud.value, analytic=g.lift.analytic.value)
 
-    def _set_gui(self, handle: Any, value: Any) -> None:
-        """Set a GUI value without triggering our own callbacks."""
-        if handle is None:
-            return
-        with self._quiet():
+    def _set_control(self, name: str, value: Any) -> None:
+        g = self.gui
+        handle = {"model": g.lift.model, "input_kind": g.sample.input, "focal_px": g.lift.focal,
+                  "noise_level": g.noise.level, "seed": g.noise.seed, "cloud_samples": g.noise.cloud,
+                  "analytic": g.lift.analytic}[name]
+        if name == "focal_px":
+            value = float(round(value))
+        if handle.value != value:
             handle.value = value
 
-    @contextlib.contextmanager
-    def _quiet(self) -> Iterator[None]:
-        """Change GUI handles inside this block without triggering our own callbacks (nests)."""
-        before = self._suspend
-        self._suspend = True
-        try:
-            yield
-        finally:
-            self._suspend = before
+    def _show_controls(self, st: SessionState) -> None:
+        """Every value control shows ``st``."""
+        for name in ("model", "input_kind", "focal_px", "noise_level", "seed", "cloud_samples", "analytic"):
+            self._set_control(name, getattr(st, name))
+
+    def _apply(self, st: SessionState, *, new_sample: bool = False) -> None:
+        """Lift ``st`` and, if that works, make it the tab's state and draw it (raises, changing nothing, if not)."""
+        t0 = time.perf_counter()
+        frame = compute_frame(st, self.app.pool.get(st.model), self.app.error_model)
+        t1 = time.perf_counter()
+        focal_changed = st.focal_px != self.state.focal_px or new_sample
+        self.state = st
+        self.frame = frame
+        self._push(frame, new_sample=new_sample, focal_changed=focal_changed)
+        t2 = time.perf_counter()
+        self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
+        self.update_count += 1
 
     # ------------------------------------------------------------------------------------------
-    # Scene
+    # Samples and sequences
     # ------------------------------------------------------------------------------------------
-    def _build_scene(self) -> None:
-        sc = self.scene
-        self.floor = sc.add_grid("/floor", width=12.0, height=12.0, plane="xy", cell_size=0.5, section_size=1.0)
-        self.cam_frame = sc.add_frame("/cam", show_axes=True, axes_length=0.15, axes_radius=0.006)
-        z = np.zeros((1, 2, 3))
-        self.frustum = sc.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=0.006)
-        self.image_node = sc.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg",
-                                       cast_shadow=False, receive_shadow=False)
-        self.bones2d = sc.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), COLORS["current"], thickness=0.004)
-        self.joint_nodes = []
-        for j in range(NUM_JOINTS):
-            h = sc.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=JOINT_RADIUS_M, subdivisions=2,
-                                 color=SIDE_RGB[joint_side(j)] if joint_side(j) != "center" else COLORS["current"])
-            h.on_drag(self._guard(functools.partial(self.on_joint_drag, j)))
-            self.joint_nodes.append(h)
-        self.lifted_lines = sc.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _side_colors(), thickness=0.035)
-        self.lifted_joints = sc.add_point_cloud(
-            "/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)),
-            np.array([SIDE_RGB[joint_side(j)] for j in range(NUM_JOINTS)], np.uint8), point_size=0.045, point_shape="circle")
-        self.gt_lines = sc.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.012)
-        self.analytic_lines = sc.add_line_segments("/cam/analytic", np.zeros((16, 2, 3)), ANALYTIC_RGB, thickness=0.015,
-                                                   visible=False)
-        self.cloud_node = sc.add_point_cloud("/cam/cloud", np.zeros((1, 3)), CLOUD_RGB, point_size=0.014,
-                                             point_shape="circle", visible=False)
-        self.ray = sc.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=0.01)
-        self.root_marker = sc.add_icosphere("/cam/root", radius=0.05, color=RAY_RGB)
-        self.root_label = sc.add_label("/cam/root/label", "root")
+    def _gui_subject(self) -> str:
+        assert self.gui.sample.subject is not None
+        return self.gui.sample.subject.value
 
-    def _image_plane(self, uv: np.ndarray) -> np.ndarray:
-        """Pixels ``(..., 2)`` -> points on the image plane ``(..., 3)`` m, camera frame, current focal."""
-        f = np.asarray(self.state.focal)
-        c = np.asarray(self.state.sample.camera.principal_point)
-        d = IMAGE_PLANE_DEPTH_M
-        xy = (np.asarray(uv, np.float64) - c) / f * d
-        return np.concatenate([xy, np.full(xy.shape[:-1] + (1,), d)], axis=-1)
+    def _gui_sequence(self) -> str:
+        assert self.gui.sample.sequence is not None
+        return self.gui.sample.sequence.value
 
-    def _update_camera_geometry(self) -> None:
-        """Frustum and image plane for the current focal length (the field of view follows the slider)."""
-        W, H = self.state.image_size
-        corners = self._image_plane(np.array([[0, 0], [W, 0], [W, H], [0, H]], np.float64))
-        segs = [np.stack([np.zeros(3), c]) for c in corners]
-        segs += [np.stack([corners[i], corners[(i + 1) % 4]]) for i in range(4)]
-        self.frustum.points = np.stack(segs)
-        center = self._image_plane(np.array([W / 2.0, H / 2.0]))
-        f = self.state.focal
-        self.image_node.position = tuple(center + np.array([0, 0, 0.002]))
-        self.image_node.render_width = W / f[0] * IMAGE_PLANE_DEPTH_M
-        self.image_node.render_height = H / f[1] * IMAGE_PLANE_DEPTH_M
+    def _effective_source(self) -> str:
+        """The source asked for: the source dropdown's, unless a picker of another source was changed after it."""
+        g = self.gui.sample
+        label = g.source.value
+        if label not in LABEL_SOURCES or LABEL_SOURCES[label] not in self.app.sources:
+            raise PoseLifterError(f"unknown sample source {label[:40]!r}; expected one of "
+                                  f"{[SOURCE_LABELS[s] for s in self.app.sources]}")
+        cands = [(g.source.update_timestamp, LABEL_SOURCES[label]), (g.demo.update_timestamp, "demo")]
+        if g.h36m_pickers:
+            cands.append((max(h.update_timestamp for h in g.h36m_pickers), "h36m"))
+        return max(cands, key=lambda c: c[0])[1]
+
+    def _requested_sample(self) -> Sample | None:
+        """The sample the pickers ask for (None: the one shown). Raises for values that name nothing."""
+        g = self.gui.sample
+        src = self._effective_source()
+        shown = self.state.sample.key
+        if src == "demo":
+            name = g.demo.value
+            return None if shown == f"demo/{name}" else self.app.demo.get(name)
+        if src == "motion":
+            i = int(self.gui.play.frame.value) if shown.startswith("motion/") else 0
+            return None if shown == f"motion/{i % self.app.motion.num_frames}" else self.app.motion.frame(i).people[0]
+        if src == "upload":
+            if self._last_upload is None:
+                raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
+            return None if shown == self._last_upload.key else self._last_upload
+        h = self.app.h36m
+        assert h is not None and g.subject is not None and g.sequence is not None and g.camera is not None
+        if g.photo is not None and g.photo.value != "(none)" and g.photo.update_timestamp >= max(
+                p.update_timestamp for p in (g.subject, g.sequence, g.camera, self.gui.play.frame)):
+            s, rest = g.photo.value.split(" ", 1)
+            seq, cam, fr = rest.rsplit(" ", 2)
+            subject, sequence, camera, frame = int(s[1:]), seq, cam, int(fr)
+        else:
+            if g.subject.value not in [f"S{s}" for s in h.subjects]:
+                raise PoseLifterError(f"unknown subject {g.subject.value[:20]!r}")
+            subject = int(g.subject.value[1:])
+            seqs = h.sequences(subject)
+            sequence = g.sequence.value if g.sequence.value in seqs else seqs[0]
+            camera = g.camera.value
+            last = shown if shown.startswith("h36m/") else self._last_h36m
+            parts = last.split("/") if last else []
+            same_seq = bool(parts) and parts[1] == f"S{subject}" and parts[2] == sequence
+            frame = (int(self.gui.play.frame.value) if shown.startswith("h36m/") else int(parts[4])) if same_seq else 0
+            frame = min(frame, h.num_frames(subject, sequence) - 1)
+        key = f"h36m/S{subject}/{sequence}/{camera}/{frame}"
+        return None if shown == key else h.get(subject, sequence, camera, frame)
+
+    def sequence(self) -> SequenceSource | None:
+        """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""
+        key = self.state.sample.key
+        if key.startswith("motion/"):
+            return self.app.motion
+        if key.startswith("h36m/") and self.app.h36m is not None:
+            _, subj, seq, cam, _ = key.split("/")
+            return self.app.h36m_sequence(int(subj[1:]), seq, cam)
+        return None
+
+    def _frame_index(self) -> int | None:
+        key = self.state.sample.key
+        return int(key.rsplit("/", 1)[1]) if key.startswith(("motion/", "h36m/")) else None
+
+    def _show_sample(self, sample: Sample, *, reframe: bool) -> None:
+        """Show ``sample`` now (drags reset; focal to its camera's unless the camera is the same one; model, noise,
+        toggles kept). Raises, changing nothing, when it cannot be lifted."""
+        old = self.state
+        st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
+        same_camera = sample.camera is old.sample.camera or (
+            sample.camera.name == old.sample.camera.name and sample.key.split("/")[0] == old.sample.key.split("/")[0])
+        if same_camera and sample.key.split("/")[0] in ("h36m", "motion"):
+            st = st.evolve(focal_px=old.focal_px)
+        self._sample_gen += 1
+        self._apply(st, new_sample=True)
+        if sample.key.startswith("h36m/"):
+            self._last_h36m = sample.key
+        self._show_sample_controls(st)
+        if note:
+            self.show_message(note)
+        cam = sample.camera
+        view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
+        if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)
+            self._view_key = view_key
+            self._reframe()
+
+    def _show_sample_controls(self, st: SessionState) -> None:
+        """Pickers, 2D-input options, focal range and frame slider for ``st`` (the source dropdown last)."""
+        g, p = self.gui.sample, self.gui.play
+        sample = st.sample
+        src = sample.key.split("/")[0]
+        opts = ss.input_options(sample)
+        if list(g.input.options) != opts:
+            g.input.options = opts
+        if g.input.value != st.input_kind:
+            g.input.value = st.input_kind
+        hi = focal_max(sample)
+        if self.gui.lift.focal.max != hi:
+            self.gui.lift.focal.max = hi
+        self._set_control("focal_px", st.focal_px)
+        if src == "demo":
+            g.demo.value = sample.key.split("/", 1)[1]
+        seq = self.sequence()
+        idx = self._frame_index()
+        if seq is not None and idx is not None:
+            if p.frame.max != seq.num_frames - 1:
+                p.frame.max = seq.num_frames - 1
+            if p.frame.value != idx:
+                p.frame.value = idx
+            p.info.content = f"<small>{seq.label}: frame {idx + 1} / {seq.num_frames} ({seq.fps:g} fps)</small>"
+        else:
+            p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
+                if src == "demo" else "<small>a still upload (video: issue 14)</small>"
+        p.frame.disabled = seq is None
+        if src == "h36m" and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
+                and g.camera is not None and g.photo is not None:
+            _, subj, sequence, camera, frame = sample.key.split("/")
+            seqs = self.app.h36m.sequences(int(subj[1:]))
+            if list(g.sequence.options) != seqs:
+                g.sequence.options = seqs
+            g.subject.value = subj
+            g.sequence.value = sequence
+            g.camera.value = camera
+            entry = f"{subj} {sequence} {camera} {frame}"
+            g.photo.value = entry if entry in g.photo.options else "(none)"
+        if src == "upload" and SOURCE_LABELS["upload"] not in g.source.options:
+            g.source.options = [*g.source.options, SOURCE_LABELS["upload"]]
+        g.source.value = SOURCE_LABELS[src]
+
+    # ------------------------------------------------------------------------------------------
+    # Drawing
+    # ------------------------------------------------------------------------------------------
+    def _draw_2d(self, kp: np.ndarray, noisy: np.ndarray | None = None) -> None:
+        """The 2D inset, the joints on the image plane and the (u, v) box of the selected joint."""
+        st = self.state
+        s = st.sample
+        uv = (float(round(kp[self.selected, 0], 1)), float(round(kp[self.selected, 1], 1)))
+        if tuple(float(v) for v in self.gui.joints.uv.value) != uv:
+            self.gui.joints.uv.value = uv
+        poses = {"gt": s.keypoints_2d if (self.gui.lift.gt.value and s.has_gt_2d) else None,
+                 "detected": s.detected_2d, "noisy": noisy if st.noise_level > 0 else None, "current": kp}
+        if self._base_key != s.key:
+            self._base = scaled_base(s.image, size=st.image_size)
+            self._base_key = s.key
+        self.gui.sample.image.image = overlay(s.image, size=st.image_size, poses=poses, selected=self.selected,
+                                              prescaled=self._base)
+        self._last_plane = draw_2d(self.scene.pose, st, kp, self._last_plane)
+
+    def _push(self, fr: Frame, *, new_sample: bool, focal_changed: bool) -> None:
+        st = self.state
+        with self.target.atomic():
+            if new_sample or focal_changed:
+                draw_camera(self.scene.camera, st, new_sample=new_sample)
+                self._last_plane = None  # the plane moved: every joint sphere
+            self._draw_2d(fr.current_2d, fr.noisy_2d)
+            draw_pose(self.scene.pose, self.scene.camera, fr, show_gt=bool(self.gui.lift.gt.value))
+            self._update_trail(fr)
+        ro = self.gui.readout
+        ro.readout.content = readout_markdown(fr, st)
+        ro.spread.content = spread_details(fr.spread) if fr.spread is not None else ""
+        ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
+                                           cloud=fr.cloud)
+        if self.gui.lift.auto_frame.value and not self._close_up:
+            self._keep_in_view(fr)
+
+    def _update_trail(self, fr: Frame) -> None:
+        st = self.state
+        seq, idx = self.sequence(), self._frame_index()
+        if seq is None or idx is None:
+            self.trail = {}
+            self._trail_key = None
+        else:
+            key = (seq.key, st.model, st.focal_px, st.input_kind, st.noise_level, st.seed, st.analytic)
+            if key != self._trail_key:
+                self.trail, self._trail_key = {}, key
+            if not st.dragged:
+                self.trail[idx] = np.asarray(fr.root, np.float64).copy()
+        draw_trail(self.scene.camera, self.trail, visible=bool(self.gui.play.trail.value))
+
+    # ------------------------------------------------------------------------------------------
+    # Viewpoints
+    # ------------------------------------------------------------------------------------------
+    def _camera_world(self) -> tuple[np.ndarray, np.ndarray]:
+        cam = self.state.sample.camera
+        R = np.asarray(cam.R, np.float64)
+        return R, -R.T @ np.asarray(cam.t, np.float64) / 1000.0
+
+    def framing_points(self) -> np.ndarray:
+        """World points (m) the overview keeps in view: the camera centre, its frustum at the image plane, the
+        lifted skeleton and the ground truth."""
+        R, C = self._camera_world()
+        pts = [np.zeros((1, 3)), frustum_corners(self.state)]
+        if self.frame is not None:
+            pts.append(self.frame.lifted / 1000.0)
+            if self.frame.gt_3d is not None:
+                pts.append(self.frame.gt_3d / 1000.0)
+        cam_pts = np.concatenate(pts)
+        return cam_pts @ R + C  # R^T x + C, row-wise
+
+    def viewer(self) -> tuple[framing.Viewpoint, float, float]:
+        """This tab's viewer camera ``(viewpoint, vertical fov rad, aspect)``; for the server target (or before a
+        tab reported its camera) the initial camera, :data:`framing.DEFAULT_FOV_Y_RAD` and a square view."""
+        fov, aspect = framing.DEFAULT_FOV_Y_RAD, 1.0
+        if isinstance(self.target, viser.ClientHandle):
+            try:
+                c = self.target.camera
+                if 0.05 < float(c.fov) < 3.0:
+                    fov = float(c.fov)
+                if c.image_width > 0 and c.image_height > 0:
+                    aspect = c.image_width / c.image_height
+                vp = framing.Viewpoint(np.asarray(c.position, np.float64), np.asarray(c.look_at, np.float64),
+                                       np.asarray(c.up_direction, np.float64))
+                return vp, fov, aspect
+            except (AssertionError, AttributeError, TypeError, ValueError):
+                pass
+        ic = self.app.server.initial_camera if isinstance(self.target, viser.ClientHandle) else self.target.initial_camera
+        up_ = np.asarray(ic.up if ic.up is not None else (0.0, 0.0, 1.0), np.float64).reshape(-1)
+        vp = framing.Viewpoint(np.asarray(ic.position, np.float64), np.asarray(ic.look_at, np.float64),
+                               up_ if up_.shape == (3,) else np.array([0.0, 0.0, 1.0]))
+        return vp, fov, aspect
+
+    def _set_viewpoint(self, vp: framing.Viewpoint) -> None:
+        """Move this tab's viewer camera; for the server target, its initial camera (new tabs, "reset view")."""
+        if isinstance(self.target, viser.ClientHandle):
+            c = self.target.camera
+            c.up_direction = tuple(vp.up)
+            c.position = tuple(vp.eye)
+            c.look_at = tuple(vp.look_at)
+        else:
+            ic = self.target.initial_camera
+            ic.position = tuple(vp.eye)
+            ic.look_at = tuple(vp.look_at)
+            ic.up = tuple(vp.up)
+
+    def overview_viewpoint(self) -> framing.Viewpoint:
+        R, C = self._camera_world()
+        pts = self.framing_points()
+        _, fov, aspect = self.viewer()
+        person = pts[5:].mean(axis=0) if len(pts) > 5 else C + R.T @ np.array([0.0, 0.0, 4.0])
+        return framing.fit(pts, direction=framing.overview_direction(C, person), up=np.array([0.0, 0.0, 1.0]),
+                           fov_y=fov, aspect=aspect)
 
     @control
-    def set_initial_view(self) -> None:
-        """A good initial viewpoint: behind, above and to the side of the camera, looking at the person."""
-        self._frame_view()
-
-    def _frame_view(self) -> None:
-        """:meth:`set_initial_view` (for use inside other controls)."""
-        cam = self.state.sample.camera
-        R, t = np.asarray(cam.R), np.asarray(cam.t)
-        C = -R.T @ t / 1000.0
-        if self.state.sample.pose_3d is not None:
-            target_cam = self.state.sample.pose_3d[0] / 1000.0
-        elif self.frame is not None and np.all(np.isfinite(self.frame.root)) and self.frame.root[2] > 0:
-            target_cam = np.asarray(self.frame.root) / 1000.0
-        else:
-            target_cam = np.array([0, 0, 4.0])
-        target = R.T @ target_cam + C
-        fwd = target - C
-        side = np.cross(fwd, [0, 0, 1.0])
-        side /= max(np.linalg.norm(side), 1e-9)
-        d = float(np.linalg.norm(fwd))
-        mid = 0.3 * C + 0.7 * target
-        eye = C - 0.1 * fwd + 0.6 * d * side + np.array([0, 0, 1.5])
-        right = np.cross(mid - eye, [0, 0, 1.0])
-        mid = mid + 0.35 * right / max(np.linalg.norm(right), 1e-9)  # the GUI panel covers the right of the canvas
-        eye = mid + VIEW_ZOOM * (eye - mid)
-        self._set_close_up(None)
-        self._set_viewpoint(eye, mid, np.array([0.0, 0.0, 1.0]))
-
-    def _set_close_up(self, radius: float | None) -> None:
-        """Close-up look of the 2D joints (``radius`` m) or, with None, the overview's: the joint spheres'
-        radius, and the root ray, which passes next to a close-up eye and would cover the joints."""
-        r = JOINT_RADIUS_M if radius is None else radius
-        for h in getattr(self, "joint_nodes", []):
-            if abs(h.radius - r) > 1e-9:
-                h.radius = r
-        if hasattr(self, "ray"):
-            self.ray.visible = radius is None
+    def overview(self) -> None:
+        """The default view: camera, frustum and person in view, from behind, above and beside the camera."""
+        with self.lock:
+            self._close_up = False
+            set_joint_radius(self.scene.pose, JOINT_RADIUS_M)
+            self.scene.camera.ray.visible = True
+            self._set_viewpoint(self.overview_viewpoint())
 
     def _reframe(self) -> None:
-        """:meth:`_frame_view` after a sample change: a failure is logged, never fails the change itself."""
         try:
-            self._frame_view()
+            self.overview()
         except Exception:  # noqa: BLE001 - a viewpoint is cosmetic
             log.exception("could not frame the 3D view")
 
-    def _set_viewpoint(self, eye: np.ndarray, look_at: np.ndarray, up: np.ndarray) -> None:
-        """Move this tab's viewer camera (world, m); for the server target, its initial camera (new tabs and
-        the viewer's "reset view")."""
-        if isinstance(self.target, viser.ClientHandle):
-            cam_h = self.target.camera
-            cam_h.up_direction = tuple(up)
-            cam_h.position = tuple(eye)
-            cam_h.look_at = tuple(look_at)
-        else:
-            ic = self.target.initial_camera
-            ic.position = tuple(eye)
-            ic.look_at = tuple(look_at)
-            ic.up = tuple(up)
+    def _keep_in_view(self, fr: Frame) -> None:
+        """Auto reframing: when the lifted skeleton (or the camera) leaves the view, fit them again, keeping the
+        viewing direction."""
+        vp, fov, aspect = self.viewer()
+        pts = self.framing_points()
+        if framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98):
+            return
+        up_ = vp.up if np.linalg.norm(vp.up) > 0 else np.array([0.0, 0.0, 1.0])
+        self._set_viewpoint(framing.fit(pts, direction=vp.look_at - vp.eye, up=up_, fov_y=fov, aspect=aspect))
 
-    def _viewer_fov(self) -> tuple[float, float]:
-        """``(vertical field of view (rad), aspect width / height)`` of this tab's viewer; without a browser
-        (or before it reported its camera) :data:`ZOOM_DEFAULT_FOV_DEG` and a square view."""
-        fov, aspect = np.radians(ZOOM_DEFAULT_FOV_DEG), 1.0
-        if isinstance(self.target, viser.ClientHandle):
-            try:
-                cam_h = self.target.camera
-                if 0.05 < float(cam_h.fov) < 3.0:
-                    fov = float(cam_h.fov)
-                if cam_h.image_width > 0 and cam_h.image_height > 0:
-                    aspect = cam_h.image_width / cam_h.image_height
-            except (AssertionError, AttributeError, TypeError, ValueError):  # no camera message yet
-                pass
-        return fov, aspect
+    def _auto_frame(self) -> None:
+        if self.gui.lift.auto_frame.value and self.frame is not None:
+            with self.lock:
+                self._keep_in_view(self.frame)
 
     @control
-    def zoom_to_2d_joints(self) -> None:
-        """Look head-on at the image plane from the camera's side, centred on the bounding box of the current
-        2D joints, close enough that the box fills most of the view (:data:`ZOOM_FILL`), with the image's up
-        (the camera's -y axis) up: the 2D joints can then be dragged precisely."""
+    def head_on_view(self) -> None:
+        """Look straight at the image plane from the camera's side, centred on the current 2D joints, which fill
+        most of the view, image up = up: the joints can be dragged precisely (the readout's side / top views show
+        the 3D response). Joint spheres shrink with the joints' extent; "reset 3D view" goes back."""
         with self.lock:
             kp = np.asarray(self.state.keypoints, np.float64)
-            cam = self.state.sample.camera
             lo, hi = kp.min(axis=0), kp.max(axis=0)
-            centre = self._image_plane((lo + hi) / 2.0)  # camera frame, on the plane (z = IMAGE_PLANE_DEPTH_M)
-            w, h = np.abs(self._image_plane(hi) - self._image_plane(lo))[:2]  # box size on the plane (m)
-            R = np.asarray(cam.R)
-            C = -R.T @ np.asarray(cam.t) / 1000.0
-        fov, aspect = self._viewer_fov()
-        half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
-        dist = half / (ZOOM_FILL * np.tan(fov / 2.0))
-        eye = centre - np.array([0.0, 0.0, dist])  # in front of the plane, on the camera's side
-        self._set_close_up(float(np.clip(ZOOM_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M)))
-        self._set_viewpoint(R.T @ eye + C, R.T @ centre + C, R.T @ np.array([0.0, -1.0, 0.0]))
+            centre = image_plane(self.state, (lo + hi) / 2.0)
+            w, h = np.abs(image_plane(self.state, hi) - image_plane(self.state, lo))[:2]
+            R, C = self._camera_world()
+            _, fov, aspect = self.viewer()
+            half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
+            self._close_up = True
+            set_joint_radius(self.scene.pose, float(np.clip(HEAD_ON_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M)))
+            self.scene.camera.ray.visible = False  # it would pass next to the eye and cover the joints
+            self._set_viewpoint(framing.head_on(centre_cam=centre, half_extent=half, R=R, C=C, fov_y=fov))
 
     # ------------------------------------------------------------------------------------------
-    # Controls (public: tests drive these, the GUI callbacks call them)
+    # Controls in code form (the GUI does the same; each ends in a sync pass)
     # ------------------------------------------------------------------------------------------
     @control
     def set_source(self, source: str) -> None:
-        """``"demo"`` or ``"h36m"``."""
-        if source not in SOURCES or (source == "h36m" and self.app.h36m is None):
-            raise PoseLifterError(f"unknown sample source {source!r}" + ("" if self.app.h36m else " (no Human3.6M folder)"))
-        if source == "demo":
-            self.select_demo(self.demo_dd.value)
-        elif source == "upload":
-            if self._last_upload is None:
-                self._set_gui(self.source_dd, self.state.sample.key.split("/")[0])
-                raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button")
-            with self.lock:
-                self._set_sample(self._last_upload)
-        else:
-            self._on_h36m_change()
+        """``"demo"``, ``"motion"``, ``"h36m"`` or ``"upload"``."""
+        if source not in self.app.sources:
+            raise PoseLifterError(f"unknown sample source {source!r}; available: {self.app.sources}")
+        label = SOURCE_LABELS[source]
+        if source == "upload" and label not in self.gui.sample.source.options:
+            raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
+        self._set_and_check(self.gui.sample.source, label, lambda: self.state.sample.key.split("/")[0] == source)
 
     @control
     def select_demo(self, name: str) -> None:
         """Show the embedded demo sample ``name``."""
-        sample = self.app.demo.get(name)
-        with self.lock:
-            self._set_sample(sample)  # (the source and demo pickers follow: _sync_sample)
+        self.app.demo.get(name)  # raises for unknown names
+        with self._runner.holding():
+            self.gui.sample.demo.value = name
+            self.gui.sample.source.value = SOURCE_LABELS["demo"]
+        self._runner.request()
+        if self.state.sample.key != f"demo/{name}":
+            raise PoseLifterError(self.messages[-1] if self.messages else f"could not show demo sample {name!r}")
 
     @control
     def select_h36m(self, *, subject: int, sequence: str, camera: str, frame: int) -> None:
         """Show a Human3.6M view (``camera`` is the camera id, ``frame`` the 0-based 50-fps row)."""
         if self.app.h36m is None:
             raise PoseLifterError("no Human3.6M folder was given (--h36m)")
-        sample = self.app.h36m.get(subject, sequence, camera, frame)
-        with self.lock:
-            self._set_sample(sample)  # (the pickers follow the shown sample: _sync_sample)
+        sample = self.app.h36m.get(subject, sequence, camera, frame)  # raises for unknown ones
+        with self._runner.holding(), self.lock:
+            if sample.key != self.state.sample.key:
+                self._show_sample(sample, reframe=False)
 
-    def _on_subject(self) -> None:
-        if self._suspend:
-            return
-        subject = int(self.subject_dd.value[1:])
-        seqs = self.app.h36m.sequences(subject)
-        with self._quiet():
-            self.sequence_dd.options = seqs
-            self.sequence_dd.value = seqs[0]
-        self._on_h36m_change(reset_frame=True)
-
-    def _on_h36m_change(self, *, reset_frame: bool = False) -> None:
-        if self._suspend:
-            return
-        frame = 0 if reset_frame else int(self.frame_slider.value)
-        self.select_h36m(subject=int(self.subject_dd.value[1:]), sequence=self.sequence_dd.value,
-                         camera=self.camera_dd.value, frame=frame)
-
-    def _on_photo(self) -> None:
-        if self._suspend:
-            return
-        if self.photo_dd.value == "(none)":  # nothing to show: the dropdown keeps saying what is shown
-            with self.lock:
-                self._sync_pickers(self.state.sample)
-            return
-        s, rest = self.photo_dd.value.split(" ", 1)
-        seq, cam, fr = rest.rsplit(" ", 2)
-        self.select_h36m(subject=int(s[1:]), sequence=seq, camera=cam, frame=int(fr))
-
-    def _set_sample(self, sample: Sample, *, model: str | None = None) -> None:
-        """Show ``sample`` (drags reset; focal to its camera's; noise, seed, toggles and, unless ``model`` is
-        given, the model kept). If it cannot be lifted the previous state is restored and the error raised.
-
-        2D input: the user's choice (:attr:`_input_pref`) when the sample has it, else ground truth (with a
-        message when the detection is lost); an upload (no ground-truth 2D) always uses its own 2D. The lifter
-        is told whether that 2D is exact or detected (:func:`poselifter_app.core.lift_source`)."""
-        st = self.state
-        if not sample.has_gt_2d:
-            kind = "detected"
-        elif self._input_pref == "detected" and sample.detected_2d is None:
-            kind = "gt"
-            if st.input_kind == "detected" and st.sample.has_gt_2d:  # (leaving an upload: silently)
-                self.show_message(f"no 2D detection for {sample.label}; using ground-truth 2D "
-                                  "(the detection is used again where there is one)")
-        else:
-            kind = self._input_pref
-        self._apply_state(SessionState(sample=sample, model=model or st.model, input_kind=kind, noise_level=st.noise_level,
-                                       seed=st.seed, cloud_samples=st.cloud_samples, analytic=st.analytic))
-
-    def _apply_state(self, state: SessionState) -> None:
-        """Make ``state`` the tab's state and redraw everything; on :class:`PoseLifterError` (e.g. a
-        degenerate uploaded pose) put the previous state back and re-raise."""
-        old = self.state
-        self.state = state
-        try:
-            self._sync_sample()
-        except PoseLifterError:
-            self.state = old
-            self._sync_sample()
-            raise
-
-    def _sync_sample(self) -> None:
-        """Push the sample-dependent GUI values, camera pose, image and frustum of :attr:`state`, and redraw."""
-        st = self.state
-        sample = st.sample
-        self._sample_gen += 1
-        src = sample.key.split("/")[0]
-        if src in SOURCES and src in self.source_dd.options:
-            self._set_gui(self.source_dd, src)
-        self._sync_pickers(sample)
-        self._set_gui(self.input_dd, st.input_kind)
-        self._set_gui(self.model_dd, st.model)
-        hi = focal_max(sample)
-        if self.focal_slider.max != hi:
-            self.focal_slider.max = hi
-        self._set_gui(self.focal_slider, float(np.clip(round(st.focal_px), FOCAL_MIN_PX, hi)))
-        R = np.asarray(sample.camera.R)
-        self.cam_frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
-        self.cam_frame.position = tuple(-R.T @ np.asarray(sample.camera.t) / 1000.0)
-        img = sample.image
-        from .drawing import canvas
-
-        self.image_node.image = img if img is not None else canvas(sample.camera.width, sample.camera.height)
-        self._update_camera_geometry()
-        self._redraw()
-        view_key = (src, R.tobytes(), np.asarray(sample.camera.t, np.float64).tobytes())
-        if view_key != self._view_key:  # a new camera (not a new frame of the same one): frame the view
-            self._view_key = view_key
-            self._reframe()
-
-    def _sync_pickers(self, sample: Sample) -> None:
-        """The Sample panel's pickers for ``sample``: those of the other sources disabled; for a Human3.6M
-        sample, subject / sequence / camera / frame and the "frame with photo" entry (or "(none)")."""
-        src = sample.key.split("/")[0]
-        _set_disabled(self.demo_dd, src != "demo")
-        h36m = [self.subject_dd, self.sequence_dd, self.camera_dd, self.frame_slider, self.photo_dd]
-        for h in h36m:
-            _set_disabled(h, src != "h36m")
-        if src == "demo":
-            self._set_gui(self.demo_dd, sample.key.split("/", 1)[1])
-        if src != "h36m" or self.app.h36m is None:
-            return
-        _, subj, sequence, camera, frame = sample.key.split("/")
-        subject, frame_i = int(subj[1:]), int(frame)
-        seqs = self.app.h36m.sequences(subject)
-        self._set_gui(self.subject_dd, subj)
-        if list(self.sequence_dd.options) != seqs:
-            with self._quiet():
-                self.sequence_dd.options = seqs
-        self._set_gui(self.sequence_dd, sequence)
-        self._set_gui(self.camera_dd, camera)
-        hi = max(self.app.h36m.num_frames(subject, sequence) - 1, 1)
-        if self.frame_slider.max != hi:
-            with self._quiet():
-                self.frame_slider.max = hi
-        self._set_gui(self.frame_slider, frame_i)
-        entry = f"{subj} {sequence} {camera} {frame_i}"
-        self._set_gui(self.photo_dd, entry if entry in self.photo_dd.options else "(none)")
+    def _set_and_check(self, handle: Any, value: Any, done: Callable[[], bool]) -> None:
+        if handle.value != value:
+            handle.value = value
+        self._runner.request()
+        if not done():
+            raise PoseLifterError(self.messages[-1] if self.messages else f"could not set {value!r}")
 
     @control
     def set_input_kind(self, kind: str) -> None:
-        """2D input: ``"gt"`` (ground truth; not for uploads) or ``"detected"`` (Stacked-Hourglass, H36M only;
-        an upload's own 2D). Resets drags. The choice is kept for the next samples (:meth:`_set_sample`)."""
-        if kind not in ("gt", "detected"):
-            self._reject(self.input_dd, "input_kind", f"unknown 2D input {kind!r}")
-        with self.lock:
-            old = self.state.input_kind
-            self.state.input_kind = kind
-            try:
-                self.state.keypoints = self.state.base_keypoints().copy()
-            except PoseLifterError:
-                self.state.input_kind = old
-                self._set_gui(self.input_dd, old)
-                raise
-            if self.state.sample.has_gt_2d:  # (an upload has no choice: that is no preference)
-                self._input_pref = kind
-            self._set_gui(self.input_dd, kind)
-            self.state.dragged.clear()
-            self._redraw()
+        """2D input ``"gt"`` or ``"detected"``; the choice is kept for the next samples that have it."""
+        self._set_value("input_kind", kind)
 
     @control
     def set_model(self, name: str) -> None:
-        """Switch the lifting model (a name from ``assets/models.json``)."""
-        try:
-            self.app.pool.get(name)  # raises for unknown names, before touching the state
-        except PoseLifterError as exc:
-            self._reject(self.model_dd, "model", str(exc))
-        self._commit("model", name, self.model_dd)
+        self._set_value("model", name)
 
     @control
     def set_focal(self, value: float) -> None:
-        """Focal length ``alpha`` (px) used to lift: the pose keeps its shape and the root moves along its
-        viewing ray with ``Z ∝ f`` (canonical depth fixed); the frustum's field of view follows."""
-        v, msg = clamp_focal(value, hi=focal_max(self.state.sample))
-        self._commit("focal_px", v, self.focal_slider, message=msg, camera=True)
+        """Focal length ``alpha`` (px): the root slides along its viewing ray with ``Z ∝ f``."""
+        self._set_value("focal_px", value)
 
     @control
     def set_noise(self, level: float) -> None:
-        """Mixture-noise level (0 clean … 1 as fitted … 3): the lifted pose is that of a noisy draw and the
-        cloud shows :attr:`SessionState.cloud_samples` more lifted draws."""
-        v, msg = clamp_noise(level)
-        self._commit("noise_level", v, self.noise_slider, message=msg)
+        self._set_value("noise_level", level)
 
     @control
-    def set_cloud_samples(self, n: int) -> None:
-        try:
-            n_ = int(n)
-        except (TypeError, ValueError, OverflowError):
-            self._reject(self.cloud_num, "cloud_samples", f"cloud samples must be an integer, got {n!r}")
-        if not 0 <= n_ <= 1024:
-            self._reject(self.cloud_num, "cloud_samples", f"cloud samples must be in [0, 1024], got {n}")
-        self._commit("cloud_samples", n_, self.cloud_num)
+    def set_seed(self, seed: Any) -> None:
+        self._set_value("seed", seed)
 
     @control
-    def set_seed(self, seed: float) -> None:
+    def set_cloud_samples(self, n: Any) -> None:
+        self._set_value("cloud_samples", n)
+
+    @control
+    def set_analytic(self, on: bool) -> None:
+        self._set_value("analytic", bool(on))
+
+    def _set_value(self, name: str, value: Any) -> None:
+        """Put ``value`` in its control as the browser would (values viser cannot hold are refused here) and sync;
+        raises with the message when the value was refused."""
+        n = self._message_count
+        handle = {"model": self.gui.lift.model, "input_kind": self.gui.sample.input, "focal_px": self.gui.lift.focal,
+                  "noise_level": self.gui.noise.level, "seed": self.gui.noise.seed,
+                  "cloud_samples": self.gui.noise.cloud, "analytic": self.gui.lift.analytic}[name]
         try:
-            s = int(seed)
+            typed = type(handle.value)(value)
         except (TypeError, ValueError, OverflowError):
-            self._reject(self.seed_num, "seed", f"seed must be an integer, got {seed!r}")
-        if s < 0:
-            self._reject(self.seed_num, "seed", f"seed must be >= 0, got {s}")
-        self._commit("seed", s, self.seed_num)
+            raise PoseLifterError(f"{name.replace('_', ' ')}: {value!r} is not a valid value") from None
+        if name in ("seed", "cloud_samples") and isinstance(value, float) and value != int(value):
+            raise PoseLifterError(f"{name.replace('_', ' ')} must be an integer, got {value!r}")
+        handle.value = typed
+        self._runner.request()
+        if self._message_count != n and not self.messages[-1].startswith(("focal length", "noise level")):
+            raise PoseLifterError(self.messages[-1])
+
+    @control
+    def reset_focal(self) -> None:
+        self.set_focal(self.state.sample.camera.alpha)
 
     @control
     def resample(self) -> None:
         """New noise draws (seed + 1)."""
-        with self.lock:  # read-increment-write as one step
-            self._commit("seed", self.state.seed + 1, self.seed_num)
-
-    @control
-    def set_analytic(self, on: bool) -> None:
-        """Toggle the analytic weak-perspective root skeleton (orange)."""
-        self._commit("analytic", bool(on), self.analytic_cb)
+        with self.lock:
+            self.gui.noise.seed.value = int(self.state.seed) + 1
 
     @control
     def reset_joints(self) -> None:
         """Undo all joint drags."""
-        with self.lock:
-            self.state.keypoints = self.state.base_keypoints().copy()
-            self.state.dragged.clear()
-            self._redraw()
+        with self._flags:
+            self._reset_request = True
+            self._drags.clear()
+        self._runner.request()
 
     @control
-    def move_joint(self, joint: int, uv: Any) -> None:
-        """Put 2D joint ``joint`` at pixel ``uv`` (clamped near the image) and re-lift. The joint becomes the
-        selected one (highlighted; its position in the "joint (u, v) px" box)."""
-        if not 0 <= int(joint) < NUM_JOINTS:
-            raise PoseLifterError(f"joint index {joint} out of range [0, {NUM_JOINTS})")
-        try:
-            p = np.asarray(uv, np.float64).reshape(2)
-        except (TypeError, ValueError):
-            raise PoseLifterError(f"joint position must be (u, v) px, got {uv!r}") from None
-        p, msg = clamp_joint(p, size=self.state.image_size)
-        with self.lock:
-            self._set_gui(self.joint_dd, JOINT_NAMES[int(joint)])
-            old = self.state.keypoints.copy()
-            self.state.keypoints = old.copy()
-            self.state.keypoints[int(joint)] = p
-            self.state.dragged.add(int(joint))
-            try:
-                self._redraw()
-            except PoseLifterError:
-                self.state.keypoints = old
-                self._redraw_2d_only()
-                raise
-            if msg:
-                self.show_message(msg, error=True)
+    def move_joint(self, joint: Any, uv: Any) -> None:
+        """Put 2D joint ``joint`` (index or name) at pixel ``uv`` and lift; refused far outside the image. The
+        joint becomes the selected one."""
+        j = ss.joint_index(joint)
+        n = self._message_count
+        self._queue_drag(j, uv)
+        if self._message_count != n:
+            raise PoseLifterError(self.messages[-1])
 
     @control
     def set_keypoints(self, keypoints: Any) -> None:
-        """Replace the whole current 2D pose ``(17, 2)`` px (e.g. a pasted pose). Invalid poses raise
-        :class:`PoseLifterError` and leave the previous pose in place."""
-        kp = np.asarray(keypoints, np.float64)
-        if kp.shape != (NUM_JOINTS, 2) or not np.all(np.isfinite(kp)):
-            raise PoseLifterError(f"keypoints must be finite with shape (17, 2) px, got {kp.shape}")
-        with self.lock:
-            old = self.state.keypoints
-            self.state.keypoints = kp.copy()
-            try:
-                self._redraw()
-            except PoseLifterError:
-                self.state.keypoints = old
-                self._redraw_2d_only()
-                raise
+        """Replace the whole current 2D pose ``(17, 2)`` px. Invalid poses are refused; the previous pose stays."""
+        with self._runner.holding(), self.lock:
+            st = ss.with_keypoints(self.state, keypoints)
+            self._apply(st)
+
+    def _queue_drag(self, joint: int, uv: Any) -> None:
+        with self._flags:
+            self._drags[joint] = np.asarray(uv, dtype=np.float64).reshape(2) if _is_numeric_pair(uv) else uv
+        if self.selected != joint:
+            self.selected = joint
+            if self.gui.joints.joint.value != JOINT_NAMES[joint]:
+                self.gui.joints.joint.value = JOINT_NAMES[joint]
+        self._runner.request()
 
     def _on_joint_selected(self) -> None:
-        if self._suspend:
-            return
-        self._redraw_2d_only()  # the highlight and the (u, v) box follow the selection
+        name = self.gui.joints.joint.value
+        try:
+            j = ss.joint_index(name)
+        except PoseLifterError:
+            self.gui.joints.joint.value = JOINT_NAMES[self.selected]
+            raise
+        with self.lock:
+            if j != self.selected:
+                self.selected = j
+                self._draw_2d(self.state.keypoints, self.frame.noisy_2d if self.frame is not None else None)
 
     def _on_joint_uv(self) -> None:
-        if self._suspend:
-            return
-        self.move_joint(JOINT_NAMES.index(self.joint_dd.value), self.joint_uv.value)
+        uv = np.asarray(self.gui.joints.uv.value, np.float64)
+        with self.lock:
+            cur = np.round(self.state.keypoints[self.selected], 1)
+            if np.allclose(uv, cur, atol=0.05):
+                return  # our own echo of the joint's position
+            self.move_joint(self.selected, uv)
 
-    # -- upload / download -----------------------------------------------------------------------
+    def drag_to_pixel(self, event: Any) -> np.ndarray:
+        """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)
+        intersected with the image plane; without the viewer's camera, the central projection of
+        ``end_position`` through the sample camera."""
+        R, C = self._camera_world()
+        end_c = R @ (np.asarray(event.end_position, np.float64) - C)
+        d = IMAGE_PLANE_DEPTH_M
+        p = None
+        client = getattr(event, "client", None)
+        if client is not None:
+            o_c = R @ (np.asarray(client.camera.position, np.float64) - C)
+            ray = end_c - o_c
+            if abs(ray[2]) > 1e-9:
+                s = (d - o_c[2]) / ray[2]
+                if s > 0:
+                    p = o_c + s * ray
+        if p is None:
+            if end_c[2] <= 1e-6:
+                raise PoseLifterError("joint dragged behind the camera; ignored")
+            p = end_c * (d / end_c[2])
+        f = np.asarray(self.state.focal)
+        return p[:2] / d * f + np.asarray(self.state.sample.camera.principal_point)
+
+    def on_joint_drag(self, joint: int, event: Any) -> None:
+        """Drag callback of 2D joint ``joint`` (a :class:`viser.SceneNodeDragEvent`). Events of a drag that began
+        on another sample (late events after the sample changed mid-drag) are ignored."""
+        phase = getattr(event, "phase", "update")
+        with self.lock:
+            if phase == "start":
+                self._drag_gen = self._sample_gen
+            elif self._drag_gen is not None and self._drag_gen != self._sample_gen:
+                return
+            uv = self.drag_to_pixel(event)
+        self._queue_drag(int(joint), uv)
+
+    # ------------------------------------------------------------------------------------------
+    # Playback
+    # ------------------------------------------------------------------------------------------
+    @property
+    def playing(self) -> bool:
+        return self._playing.is_set()
+
+    @control
+    def toggle_play(self) -> None:
+        """Play / pause the shown sequence; on a demo still, play the demo motion. Uploads are stills (video
+        playback comes with issue 14)."""
+        if self.playing:
+            self.stop_playback()
+            return
+        with self.lock:
+            if self.sequence() is None:
+                if self.state.sample.upload is not None:
+                    raise PoseLifterError("an uploaded photo or keypoint file is a single frame: nothing to play")
+                self.gui.sample.source.value = SOURCE_LABELS["motion"]
+                self._runner.request()
+            if self.sequence() is None:
+                raise PoseLifterError("nothing to play")
+        self._playing.set()
+        self.gui.play.play.label, self.gui.play.play.icon = "pause", viser.Icon.PLAYER_PAUSE
+        self._player = threading.Thread(target=self._play_loop, name="poselifter-play", daemon=True)
+        self._player.start()
+
+    def stop_playback(self, *, wait: bool = True) -> None:
+        self._playing.clear()
+        t = self._player
+        if wait and t is not None and t is not threading.current_thread():
+            t.join(timeout=5.0)
+        self._player = None
+        try:
+            self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
+        except Exception:  # noqa: BLE001 - the tab may be gone
+            pass
+
+    def _play_loop(self) -> None:
+        """Show the frame :class:`PlayClock` says, :data:`DISPLAY_FPS` times a second (frames are skipped, never
+        slowed down, when a redraw is late). Stops when the tab shows something that is not a sequence."""
+        period = 1.0 / DISPLAY_FPS
+        clock: PlayClock | None = None
+        key, shown, speed = None, -1, None
+        next_t = time.perf_counter()
+        try:
+            while self._playing.is_set():
+                seq, idx = self.sequence(), self._frame_index()
+                if seq is None or idx is None:
+                    break
+                now = time.perf_counter()
+                sp = float(self.gui.play.speed.value)
+                if clock is None or seq.key != key or idx != shown or sp != speed:  # new sequence / scrubbed / speed
+                    clock = PlayClock(fps=seq.fps, num_frames=seq.num_frames, speed=sp)
+                    clock.restart(index=idx, now=now)
+                    key, shown, speed = seq.key, idx, sp
+                target = clock.index(now)
+                if target != shown:
+                    t0 = time.perf_counter()
+                    self.gui.play.frame.value = target  # a sync pass shows it (here, or in a running pass)
+                    self.play_ms.append(1e3 * (time.perf_counter() - t0))
+                    self.play_shown.append(time.perf_counter())
+                    shown = self._frame_index() if self._frame_index() is not None else target
+                    if shown != target:
+                        clock.restart(index=shown if shown is not None else target, now=time.perf_counter())
+                next_t += period
+                delay = next_t - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+                else:
+                    next_t = time.perf_counter()
+        except Exception:  # noqa: BLE001
+            log.error("playback failed:\n%s", traceback.format_exc())
+        finally:
+            if self._playing.is_set():
+                self.stop_playback(wait=False)
+
+    # ------------------------------------------------------------------------------------------
+    # Upload / download
+    # ------------------------------------------------------------------------------------------
     @control
     def load_upload(self, name: str, content: bytes) -> None:
-        """An uploaded file: a photo (2D joints by the app's detector, the largest person) or a keypoint
-        JSON (:mod:`app.upload`). On any problem a message is shown and the tab's state is left as it was."""
+        """An uploaded file: a photo (2D joints by the app's detector, the largest person) or a keypoint JSON
+        (:mod:`app.upload`). On any problem a message is shown and the tab's state is left as it was."""
         name = up.safe_name(name)
         content = bytes(content or b"")
         up.check_upload(name, content, max_bytes=self.app.max_upload_bytes)
@@ -816,17 +946,14 @@ class SessionView:
             with self.app.detect_lock:
                 sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(self.state.model),
                                          estimator=estimator)
-        with self.lock:
-            try:  # restores the previous state if the pose cannot be lifted
-                self._set_sample(sample)
+        if self.playing:
+            self.stop_playback()
+        with self._runner.holding(), self.lock:
+            try:
+                self._show_sample(sample, reframe=True)  # (a new photo: a new person to look at)
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{name}: {exc}") from None
             self._last_upload = sample
-            if "upload" not in self.source_dd.options:
-                with self._quiet():
-                    self.source_dd.options = list(self.source_dd.options) + ["upload"]
-            self._set_gui(self.source_dd, "upload")
-            self._reframe()  # (a new photo: a new person to look at, whatever the camera)
         info = sample.upload
         what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
                 if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
@@ -835,8 +962,8 @@ class SessionView:
                           + ("".join(f" Note: {n}." for n in notes)))
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
-        """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the
-        current clean 2D, dragged joints included, lifted at the current focal length) or ``"glb"``."""
+        """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current
+        clean 2D, dragged joints included, lifted at the current focal length) or ``"glb"``."""
         if fmt not in ("json", "glb"):
             raise PoseLifterError(f"unknown download format {fmt!r}; expected 'json' or 'glb'")
         with self.lock:
@@ -856,163 +983,13 @@ class SessionView:
         if isinstance(self.target, viser.ClientHandle):
             self.target.send_file_download(name, data, save_immediately=True)
 
-    def _install_upload_limit(self) -> None:
-        """Stop an upload larger than the app's limit as soon as the browser announces its size, so viser
-        does not buffer it (viser 1.1.1 has no limit of its own). Best effort: uses viser internals and
-        silently does nothing if they change; :meth:`load_upload` checks the size again in any case."""
-        gui = self.gui
-        iface = getattr(gui, "_websock_interface", None)
-        states = getattr(gui, "_current_file_upload_states", None)
-        uuid = getattr(getattr(self.upload_btn, "_impl", None), "uuid", None)
-        if iface is None or not isinstance(states, dict) or uuid is None:
-            return
-        from viser import _messages
 
-        def on_start(client_id: int, msg: Any) -> None:
-            try:
-                if msg.source_component_uuid != uuid or msg.size_bytes <= self.app.max_upload_bytes:
-                    return
-                if isinstance(self.target, viser.ClientHandle) and client_id != self.target.client_id:
-                    return
-                states.pop(msg.transfer_uuid, None)  # later parts are ignored by viser
-                iface.queue_message(_messages.FileTransferPartAck(  # ends the browser's progress bar
-                    source_component_uuid=uuid, transfer_uuid=msg.transfer_uuid, transferred_bytes=msg.size_bytes,
-                    total_bytes=msg.size_bytes))
-                self.show_message(up.oversize_message(msg.filename, msg.size_bytes, max_bytes=self.app.max_upload_bytes),
-                                  error=True)
-            except Exception:  # noqa: BLE001 - never break viser's message loop
-                log.exception("upload size check failed")
-
-        iface.register_handler(_messages.FileTransferStartUpload, on_start)
-
-    # -- dragging -------------------------------------------------------------------------------
-    def drag_to_pixel(self, event: Any) -> np.ndarray:
-        """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)
-        intersected with the image plane; without the viewer's camera, the central projection of
-        ``end_position`` through the sample camera."""
-        cam = self.state.sample.camera
-        R = np.asarray(cam.R)
-        C = -R.T @ np.asarray(cam.t) / 1000.0
-        end_c = R @ (np.asarray(event.end_position, np.float64) - C)
-        d = IMAGE_PLANE_DEPTH_M
-        p = None
-        client = getattr(event, "client", None)
-        if client is not None:
-            o_c = R @ (np.asarray(client.camera.position, np.float64) - C)
-            ray = end_c - o_c
-            if abs(ray[2]) > 1e-9:
-                s = (d - o_c[2]) / ray[2]
-                if s > 0:
-                    p = o_c + s * ray
-        if p is None:
-            if end_c[2] <= 1e-6:
-                raise PoseLifterError("joint dragged behind the camera; ignored")
-            p = end_c * (d / end_c[2])
-        f = np.asarray(self.state.focal)
-        return p[:2] / d * f + np.asarray(cam.principal_point)
-
-    @control
-    def on_joint_drag(self, joint: int, event: Any) -> None:
-        """Drag callback of 2D joint ``joint`` (a :class:`viser.SceneNodeDragEvent`). Latest position wins:
-        events arriving while a lift is running are merged into the next one. Events of a drag that began
-        on another sample (late events after the sample changed mid-drag) are ignored."""
-        phase = getattr(event, "phase", "update")
-        if phase == "start":
-            self._drag_gen = self._sample_gen
-        elif self._drag_gen is not None and self._drag_gen != self._sample_gen:
-            return
-        uv = self.drag_to_pixel(event)
-        with self._pending_lock:
-            self._pending[joint] = uv
-        while True:
-            if not self._drag_lock.acquire(blocking=False):
-                return  # the running worker picks the pending position up
-            try:
-                while True:
-                    with self._pending_lock:
-                        todo, self._pending = self._pending, {}
-                    if not todo:
-                        break
-                    for j, p in todo.items():
-                        if j == max(todo):
-                            self.move_joint(j, p)
-                        else:
-                            with self.lock:
-                                self.state.keypoints[j] = clamp_joint(p, size=self.state.image_size)[0]
-                                self.state.dragged.add(j)
-            finally:
-                self._drag_lock.release()
-            with self._pending_lock:
-                if not self._pending:
-                    return
-
-    # ------------------------------------------------------------------------------------------
-    # Redraw
-    # ------------------------------------------------------------------------------------------
-    def _redraw(self) -> None:
-        """Recompute the lift and push the scene + GUI (under :attr:`lock`)."""
-        with self.lock:
-            t0 = time.perf_counter()
-            lifter = self.app.pool.get(self.state.model)
-            frame = compute_frame(self.state, lifter, self.app.error_model)
-            t1 = time.perf_counter()
-            self.frame = frame
-            self._push(frame)
-            t2 = time.perf_counter()
-            self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
-            self.update_count += 1
-
-    def _redraw_2d_only(self) -> None:
-        with self.lock:
-            self._push_2d(self.state.keypoints, None)
-
-    def _push_2d(self, kp: np.ndarray, noisy: np.ndarray | None) -> None:
-        """The 2D view (GUI image, joints and bones on the image plane) and the "joint (u, v) px" box of
-        the current 2D ``kp`` (so the box always shows the selected joint where it is)."""
-        st = self.state
-        s = st.sample
-        sel = JOINT_NAMES.index(self.joint_dd.value)
-        uv = tuple(float(v) for v in np.round(kp[sel], 1))
-        if tuple(float(v) for v in self.joint_uv.value) != uv:
-            self._set_gui(self.joint_uv, uv)
-        poses = {"gt": s.keypoints_2d if (self.gt_cb.value and s.has_gt_2d) else None, "detected": s.detected_2d,
-                 "noisy": noisy if st.noise_level > 0 else None, "current": kp}
-        if self._base_key != s.key:
-            self._base = scaled_base(s.image, size=st.image_size)
-            self._base_key = s.key
-        self.image_gui.image = overlay(s.image, size=st.image_size, poses=poses, selected=sel, prescaled=self._base)
-        plane = self._image_plane(kp)
-        self.bones2d.points = _edges_points(plane)
-        last = getattr(self, "_last_plane", None)
-        for j, h in enumerate(self.joint_nodes):  # only the joints that moved (a drag moves one)
-            if last is None or not np.array_equal(last[j], plane[j]):
-                h.position = tuple(plane[j])
-        self._last_plane = plane
-
-    def _push(self, fr: Frame) -> None:
-        st = self.state
-        with self.target.atomic():
-            self._push_2d(fr.current_2d, fr.noisy_2d)
-            m = 1e-3
-            self.lifted_lines.points = _edges_points(fr.lifted * m)
-            self.lifted_joints.points = (fr.lifted * m).astype(np.float32)
-            show_gt = fr.gt_3d is not None and bool(self.gt_cb.value)
-            if fr.gt_3d is not None:
-                self.gt_lines.points = _edges_points(fr.gt_3d * m)
-            self.gt_lines.visible = show_gt
-            if fr.analytic is not None:
-                self.analytic_lines.points = _edges_points(fr.analytic * m)
-            self.analytic_lines.visible = fr.analytic is not None
-            if fr.cloud is not None and len(fr.cloud):
-                self.cloud_node.points = (fr.cloud.reshape(-1, 3) * m).astype(np.float32)
-                self.cloud_node.visible = True
-            else:
-                self.cloud_node.visible = False
-            root = fr.root * m
-            self.ray.points = np.stack([np.stack([np.zeros(3), root * 1.25])])
-            self.root_marker.position = tuple(root)
-            self.root_label.text = f"root Z {fr.root[2] / 1000:.2f} m"
-        self.readout_md.content = readout_markdown(fr, st)
+def _is_numeric_pair(uv: Any) -> bool:
+    try:
+        a = np.asarray(uv, dtype=np.float64)
+    except (TypeError, ValueError):
+        return False
+    return a.size == 2
 
 
 def _default_estimator() -> Any:
@@ -1041,7 +1018,10 @@ class PoseLifterApp:
         """Serialises 2D detection (one shared MediaPipe graph)."""
         self._upload_ids = 0
         self.demo = DemoCatalog(demo_dir) if demo_dir is not None else DemoCatalog()
+        self.motion = DemoMotion(self.demo)
         self.h36m: H36MCatalog | None = open_h36m(str(h36m_root)) if h36m_root is not None else None
+        self.sources: list[str] = ["demo", "motion"] + (["h36m"] if self.h36m is not None else []) + ["upload"]
+        self._sequences: dict[tuple[int, str, str], H36MSequence] = {}
         self.pool = LifterPool(models)
         if self.pool.error:
             log.error("no models: %s", self.pool.error)
@@ -1060,6 +1040,14 @@ class PoseLifterApp:
         server.on_client_connect(self._on_connect)
         server.on_client_disconnect(self._on_disconnect)
 
+    def h36m_sequence(self, subject: int, sequence: str, camera: str) -> H36MSequence:
+        assert self.h36m is not None
+        k = (subject, sequence, camera)
+        with self._lock:
+            if k not in self._sequences:
+                self._sequences[k] = H36MSequence(self.h36m, subject, sequence, camera)
+            return self._sequences[k]
+
     def _on_connect(self, client: viser.ClientHandle) -> None:
         try:
             view = SessionView(self, client)
@@ -1071,7 +1059,9 @@ class PoseLifterApp:
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
-            self.views.pop(client.client_id, None)
+            view = self.views.pop(client.client_id, None)
+        if view is not None:
+            view.stop_playback(wait=False)
 
     def estimator(self) -> Any:
         """The shared 2D estimator for photo uploads (built on first use); raises

@@ -16,8 +16,10 @@ viser = pytest.importorskip("viser")
 from conftest import require_shipped_models  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
+from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
 from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
-from poselifter_app.viewer import IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, ZOOM_JOINT_RADIUS, PoseLifterApp, SessionView  # noqa: E402
+from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
+from poselifter_app.viser_hooks import drag_callback  # noqa: E402
 
 
 def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
@@ -25,9 +27,9 @@ def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
     cam = view.state.sample.camera
     R = np.asarray(cam.R)
     C = -R.T @ np.asarray(cam.t) / 1000.0
-    p_cam = view._image_plane(np.asarray(uv, float))
+    p_cam = image_plane(view.state, np.asarray(uv, float))
     p_world = R.T @ p_cam + C
-    return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.joint_nodes[joint], phase="update",
+    return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.scene.pose.joints2d[joint], phase="update",
                                     instance_index=None, start_position=tuple(p_world), start_screen_pos=(0.5, 0.5),
                                     end_position=tuple(p_world), end_screen_pos=(0.5, 0.5), button="left", modifier=None)
 
@@ -84,17 +86,17 @@ def test_initial_view_shows_everything(view: SessionView) -> None:
     fr = view.frame
     assert fr.lifted.shape == (17, 3) and np.all(fr.lifted[:, 2] > 0)
     assert {"MPJPE", "PA-MPJPE", "root error"} <= set(fr.metrics)
-    assert "Canonical depth" in view.readout_md.content and "MPJPE" in view.readout_md.content
-    assert view.gt_lines.visible and not view.cloud_node.visible and not view.analytic_lines.visible
-    assert view.image_gui.image.shape[2] == 3
-    np.testing.assert_allclose(np.asarray(view.lifted_joints.points), fr.lifted / 1000, atol=2e-3)
+    assert "Canonical depth" in view.gui.readout.readout.content and "MPJPE" in view.gui.readout.readout.content
+    assert view.scene.pose.gt.visible and not view.scene.pose.cloud.visible and not view.scene.pose.analytic.visible
+    assert view.gui.sample.image.image.shape[2] == 3
+    np.testing.assert_allclose(np.asarray(view.scene.pose.lifted_joints.points), fr.lifted / 1000, atol=2e-3)
 
 
 def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     f0 = view.state.sample.camera.alpha
     before = view.frame
-    width_before = np.ptp(np.asarray(view.frustum.points)[:, :, 0])
-    view.focal_slider.value = 2.0 * f0
+    width_before = np.ptp(np.asarray(view.scene.camera.frustum.points)[:, :, 0])
+    view.gui.lift.focal.value = 2.0 * f0
     after = view.frame
     assert view.state.focal_px == pytest.approx(2 * f0)
     assert after.canonical_depth == pytest.approx(before.canonical_depth, rel=1e-6)
@@ -103,32 +105,32 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     # the root stays on the viewing ray of its pixel (for the current focal length), drawn as /cam/ray
     uv, c, f = after.current_2d[0], np.asarray(after.principal_point), np.asarray(after.focal)
     np.testing.assert_allclose(after.root[:2] / after.root[2], (uv - c) / f, atol=1e-9)
-    np.testing.assert_allclose(np.asarray(view.ray.points)[0, 1], 1.25 * after.root / 1000, rtol=1e-3)
+    np.testing.assert_allclose(np.asarray(view.scene.camera.ray.points)[0, 1], 1.25 * after.root / 1000, rtol=1e-3)
     np.testing.assert_allclose(after.lifted - after.root, before.lifted - before.root, atol=1e-6)  # same shape
-    assert np.ptp(np.asarray(view.frustum.points)[:, :, 0]) == pytest.approx(width_before / 2, rel=1e-6)  # FOV follows
-    assert "Z/f" in view.readout_md.content
-    view.focal_reset.value = True  # button click
+    assert np.ptp(np.asarray(view.scene.camera.frustum.points)[:, :, 0]) == pytest.approx(width_before / 2, rel=1e-6)  # FOV follows
+    assert "Z/f" in view.gui.readout.readout.content
+    view.gui.lift.focal_reset.value = True  # button click
     assert view.state.focal_px == pytest.approx(f0)
 
 
 def test_noise_slider_cloud_seed_and_resample(view: SessionView) -> None:
     clean = view.frame.lifted.copy()
-    view.noise_slider.value = 1.0
+    view.gui.noise.level.value = 1.0
     fr = view.frame
-    assert fr.cloud is not None and fr.cloud.shape == (64, 17, 3) and view.cloud_node.visible
+    assert fr.cloud is not None and fr.cloud.shape == (64, 17, 3) and view.scene.pose.cloud.visible
     assert not np.allclose(fr.noisy_2d, fr.current_2d)
     assert not np.allclose(fr.lifted, clean)
     assert view.state.seed == 0
     view.set_noise(1.0 + 1e-9)
     np.testing.assert_allclose(view.frame.noisy_2d, fr.noisy_2d, rtol=0, atol=1e-6)  # fixed seed: reproducible
-    view.resample_btn.value = True
+    view.gui.noise.resample.value = True
     assert view.state.seed == 1 and not np.allclose(view.frame.noisy_2d, fr.noisy_2d)
-    view.cloud_num.value = 8
+    view.gui.noise.cloud.value = 8
     assert view.frame.cloud.shape == (8, 17, 3)
-    view.seed_num.value = 5
+    view.gui.noise.seed.value = 5
     assert view.state.seed == 5
-    view.noise_slider.value = 0.0
-    assert view.frame.cloud is None and not view.cloud_node.visible
+    view.gui.noise.level.value = 0.0
+    assert view.frame.cloud is None and not view.scene.pose.cloud.visible
     np.testing.assert_allclose(view.frame.lifted, clean, atol=1e-9)
 
 
@@ -136,12 +138,12 @@ def test_joint_drag_callback_relifts(view: SessionView) -> None:
     j = 13  # l_wrist
     before = view.frame.lifted.copy()
     target = view.state.keypoints[j] + np.array([60.0, -80.0])
-    cb = view.joint_nodes[j]._impl.drag_cb[0].callback
+    cb = drag_callback(view.scene.pose.joints2d[j])
     cb(_drag_event(view, j, target))
     np.testing.assert_allclose(view.state.keypoints[j], target, atol=1e-6)
     assert j in view.state.dragged
     assert not np.allclose(view.frame.lifted, before)
-    plane = np.asarray(view.joint_nodes[j].position)
+    plane = np.asarray(view.scene.pose.joints2d[j].position)
     assert plane[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)  # the sphere stays on the image plane
 
     class _Cam:  # a viewer looking along the camera's optical axis from behind it
@@ -156,40 +158,40 @@ def test_joint_drag_callback_relifts(view: SessionView) -> None:
     cb(_drag_event(view, j, target2, client=_Client()))
     np.testing.assert_allclose(view.state.keypoints[j], target2, atol=1e-6)
 
-    view.reset_btn.value = True
+    view.gui.joints.reset.value = True
     np.testing.assert_allclose(view.state.keypoints, view.state.sample.keypoints_2d)
     np.testing.assert_allclose(view.frame.lifted, before, atol=1e-9)
 
 
 def test_joint_nudge_via_gui(view: SessionView) -> None:
-    view.joint_dd.value = "r_wrist"
-    uv = view.joint_uv.value
-    view.joint_uv.value = (uv[0] + 25.0, uv[1])
+    view.gui.joints.joint.value = "r_wrist"
+    uv = view.gui.joints.uv.value
+    view.gui.joints.uv.value = (uv[0] + 25.0, uv[1])
     assert view.state.keypoints[16][0] == pytest.approx(uv[0] + 25.0)
 
 
 def test_analytic_toggle_and_gt_checkbox(view: SessionView) -> None:
-    view.analytic_cb.value = True
-    assert view.frame.analytic is not None and view.analytic_lines.visible
+    view.gui.lift.analytic.value = True
+    assert view.frame.analytic is not None and view.scene.pose.analytic.visible
     assert "analytic root error" in view.frame.metrics
     np.testing.assert_allclose(view.frame.analytic - view.frame.analytic[0], view.frame.lifted - view.frame.lifted[0],
                                atol=1e-6)
-    view.analytic_cb.value = False
-    assert not view.analytic_lines.visible
-    view.gt_cb.value = False
-    assert not view.gt_lines.visible
-    view.gt_cb.value = True
+    view.gui.lift.analytic.value = False
+    assert not view.scene.pose.analytic.visible
+    view.gui.lift.gt.value = False
+    assert not view.scene.pose.gt.visible
+    view.gui.lift.gt.value = True
 
 
 def test_sample_and_model_dropdowns(view: SessionView, app: PoseLifterApp) -> None:
     names = app.demo.names
-    view.demo_dd.value = names[2]
+    view.gui.sample.demo.value = names[2]
     assert view.state.sample.key == f"demo/{names[2]}"
     assert view.state.focal_px == pytest.approx(view.state.sample.camera.alpha)
     models = app.pool.names
-    view.model_dd.value = models[-1]
+    view.gui.lift.model.value = models[-1]
     assert view.state.model == models[-1]
-    view.input_dd.value = "detected"  # demo samples have no detection
+    view.gui.sample.input.value = "detected"  # demo samples have no detection
     assert view.state.input_kind == "gt" and "no 2D detection" in view.messages[-1]
 
 
@@ -202,19 +204,19 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     good = view.frame
     assert view.select_demo("no-such-sample") is False and "unknown demo sample" in view.messages[-1]
     assert view.set_model("no-such-model") is False and "unknown model" in view.messages[-1]
-    assert view.model_dd.value == view.state.model  # the picker shows the model in use again
+    assert view.gui.lift.model.value == view.state.model  # the picker shows the model in use again
     assert view.set_input_kind("bogus") is False and "unknown 2D input" in view.messages[-1]
-    assert view.input_dd.value == view.state.input_kind
-    view.focal_slider.value = 1e9
+    assert view.gui.sample.input.value == view.state.input_kind
+    view.gui.lift.focal.value = 1e9
     assert "clamped" in view.messages[-1] and view.state.focal_px == 6000.0 and np.isfinite(view.frame.root).all()
-    view.focal_slider.value = float("nan")
+    view.gui.lift.focal.value = float("nan")
     assert "not a finite" in view.messages[-1]
-    view.focal_slider.value = -5.0
+    view.gui.lift.focal.value = -5.0
     assert view.state.focal_px == 100.0
-    view.noise_slider.value = 99.0
+    view.gui.noise.level.value = 99.0
     assert view.state.noise_level == 3.0 and "clamped" in view.messages[-1]
-    view.noise_slider.value = 0.0
-    cb = view.joint_nodes[3]._impl.drag_cb[0].callback
+    view.gui.noise.level.value = 0.0
+    cb = drag_callback(view.scene.pose.joints2d[3])
     cb(_drag_event(view, 3, np.array([1e7, -1e7])))
     assert "far outside" in view.messages[-1]
     assert np.all(np.abs(view.state.keypoints[3]) <= 2 * 800)
@@ -233,7 +235,7 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     with urllib.request.urlopen(f"http://127.0.0.1:{app.server.get_port()}/", timeout=10) as r:
         assert r.status == 200
     assert view.reset_joints() is True and view.select_demo(app.demo.names[0]) is True
-    assert view.status_md.content == "" and good is not None
+    assert view.gui.readout.status.content == "" and good is not None
 
 
 # ----------------------------------------------------------------------------------------------
@@ -249,15 +251,15 @@ def test_each_tab_has_its_own_state(app: PoseLifterApp) -> None:
         new = [v for k, v in app.views.items()][-2:]
         a, b = new
         za = a.frame.root[2]
-        a.focal_slider.value = 3.0 * a.state.sample.camera.alpha
+        a.gui.lift.focal.value = 3.0 * a.state.sample.camera.alpha
         assert a.frame.root[2] == pytest.approx(3 * za, rel=1e-6)
-        a.noise_slider.value = 1.0
+        a.gui.noise.level.value = 1.0
         assert b.state.focal_px == pytest.approx(b.state.sample.camera.alpha) and b.state.noise_level == 0.0
         assert b.frame.root[2] == pytest.approx(za, rel=1e-6)
-        cb = b.joint_nodes[5]._impl.drag_cb[0].callback
+        cb = drag_callback(b.scene.pose.joints2d[5])
         cb(_drag_event(b, 5, b.state.keypoints[5] + 40))
         assert 5 in b.state.dragged and 5 not in a.state.dragged
-        assert a.focal_slider is not b.focal_slider
+        assert a.gui.lift.focal is not b.gui.lift.focal
     finally:
         for t in tabs:
             t.close()
@@ -276,21 +278,21 @@ def test_h36m_browsing() -> None:
     try:
         app = PoseLifterApp(server, h36m_root=default_h36m_root())
         v = app.headless_view()
-        v.source_dd.value = "h36m"
+        v.gui.sample.source.value = "Human3.6M"
         photos = app.h36m.photo_frames()
         assert len(photos) == 84
         choice = next(p for p in photos if p[0] == 9)
-        v.photo_dd.value = f"S{choice[0]} {choice[1]} {choice[2]} {choice[3]}"
+        v.gui.sample.photo.value = f"S{choice[0]} {choice[1]} {choice[2]} {choice[3]}"
         s = v.state.sample
         assert s.image is not None and s.image.shape[:2] == (s.camera.height, s.camera.width)
         assert s.detected_2d is not None
-        v.input_dd.value = "detected"
-        assert v.state.input_kind == "detected" and "MPJPE" in v.readout_md.content
-        v.frame_slider.value = choice[3] + 1  # no photo: plain canvas of the camera's size
+        v.gui.sample.input.value = "detected"
+        assert v.state.input_kind == "detected" and "MPJPE" in v.gui.readout.readout.content
+        v.gui.play.frame.value = choice[3] + 1  # no photo: plain canvas of the camera's size
         assert v.state.sample.image is None and v.frame is not None
-        v.camera_dd.value = app.h36m.camera_ids[2]
+        v.gui.sample.camera.value = app.h36m.camera_ids[2]
         assert v.state.sample.camera.name.endswith(app.h36m.camera_ids[2])
-        v.subject_dd.value = "S11"
+        v.gui.sample.subject.value = "S11"
         assert v.state.sample.key.startswith("h36m/S11/")
         assert v.select_h36m(subject=9, sequence="Posing 1", camera="54138969", frame=10**7) is False
         assert "out of range" in v.messages[-1]
@@ -317,13 +319,13 @@ def h36m_app():
 
 
 def _uv_box(view: SessionView) -> np.ndarray:
-    return np.asarray(view.joint_uv.value, float)
+    return np.asarray(view.gui.joints.uv.value, float)
 
 
 def _selected(view: SessionView) -> int:
     from lifter.skeleton import JOINT_NAMES
 
-    return JOINT_NAMES.index(view.joint_dd.value)
+    return JOINT_NAMES.index(view.gui.joints.joint.value)
 
 
 def _json_upload(view: SessionView, sample) -> bool:
@@ -337,26 +339,26 @@ def _json_upload(view: SessionView, sample) -> bool:
 def test_joint_uv_box_shows_the_selected_joint(view: SessionView, app: PoseLifterApp) -> None:
     # from the start, not (0, 0)
     np.testing.assert_allclose(_uv_box(view), view.state.keypoints[_selected(view)], atol=0.05)
-    view.joint_dd.value = "r_wrist"
+    view.gui.joints.joint.value = "r_wrist"
     np.testing.assert_allclose(_uv_box(view), view.state.keypoints[16], atol=0.05)
     # editing one coordinate moves the joint by that much only (it is not thrown to the image edge)
     uv = _uv_box(view)
-    view.joint_uv.value = (float(uv[0]), float(uv[1]) + 7.0)
+    view.gui.joints.uv.value = (float(uv[0]), float(uv[1]) + 7.0)
     np.testing.assert_allclose(view.state.keypoints[16], uv + [0.0, 7.0], atol=1e-9)
-    assert view.status_md.content == ""
+    assert view.gui.readout.status.content == ""
     # a new sample: the box shows its joint
     view.select_demo(app.demo.names[1])
     np.testing.assert_allclose(_uv_box(view), view.state.keypoints[16], atol=0.05)
     # a drag selects the dragged joint, and the box follows it
     j = 13
     target = view.state.keypoints[j] + np.array([30.0, -20.0])
-    view.joint_nodes[j]._impl.drag_cb[0].callback(_drag_event(view, j, target))
+    drag_callback(view.scene.pose.joints2d[j])(_drag_event(view, j, target))
     assert _selected(view) == j
     np.testing.assert_allclose(_uv_box(view), target, atol=0.05)
     assert view.move_joint(5, view.state.keypoints[5] + 11.0) is True
     assert _selected(view) == 5
     np.testing.assert_allclose(_uv_box(view), view.state.keypoints[5], atol=0.05)
-    view.reset_btn.value = True
+    view.gui.joints.reset.value = True
     np.testing.assert_allclose(_uv_box(view), view.state.sample.keypoints_2d[5], atol=0.05)
     assert view.set_keypoints(view.state.keypoints + 4.0) is True
     np.testing.assert_allclose(_uv_box(view), view.state.sample.keypoints_2d[5] + 4.0, atol=0.05)
@@ -370,12 +372,12 @@ def test_joint_uv_box_shows_the_selected_joint(view: SessionView, app: PoseLifte
 
 
 def test_rejected_seed_puts_the_box_back(view: SessionView) -> None:
-    view.seed_num.value = 3
+    view.gui.noise.seed.value = 3
     assert view.state.seed == 3
-    view.seed_num.value = -5
-    assert view.state.seed == 3 and view.seed_num.value == 3 and "seed must be >= 0" in view.messages[-1]
-    assert view.set_seed("abc") is False and view.seed_num.value == 3
-    view.seed_num.value = 0
+    view.gui.noise.seed.value = -5
+    assert view.state.seed == 3 and view.gui.noise.seed.value == 3 and "seed must be >= 0" in view.messages[-1]
+    assert view.set_seed("abc") is False and view.gui.noise.seed.value == 3
+    view.gui.noise.seed.value = 0
 
 
 def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp) -> None:
@@ -384,10 +386,10 @@ def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp
     from lifter import PoseLifterError
 
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
-    assert view.state.input_kind == "detected" and view.input_dd.value == "detected"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected"
     kp = view.state.keypoints.copy()
-    view.input_dd.value = "gt"
-    assert view.state.input_kind == "detected" and view.input_dd.value == "detected"
+    view.gui.sample.input.value = "gt"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected"
     assert "no ground-truth 2D" in view.messages[-1]
     np.testing.assert_array_equal(view.state.keypoints, kp)
     with pytest.raises(PoseLifterError, match="no ground-truth 2D"):
@@ -397,24 +399,24 @@ def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp
 
 
 def test_readout_names_the_lifted_2d(view: SessionView, app: PoseLifterApp) -> None:
-    md = view.readout_md.content
+    md = view.gui.readout.readout.content
     assert "**2D input** ground truth" in md and "dragged" not in md and "noisy draw" not in md
     view.move_joint(16, view.state.keypoints[16] + 20.0)
     view.move_joint(13, view.state.keypoints[13] + 20.0)
-    assert "2 joints dragged" in view.readout_md.content
-    view.seed_num.value = 4
-    view.noise_slider.value = 1.5
-    md = view.readout_md.content
+    assert "2 joints dragged" in view.gui.readout.readout.content
+    view.gui.noise.seed.value = 4
+    view.gui.noise.level.value = 1.5
+    md = view.gui.readout.readout.content
     assert "one noisy draw at level 1.5 (seed 4)" in md and "metrics refer to that draw" in md
-    view.noise_slider.value = 0.0
-    view.seed_num.value = 0
+    view.gui.noise.level.value = 0.0
+    view.gui.noise.seed.value = 0
     view.reset_joints()
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
-    assert "**2D input** uploaded detection" in view.readout_md.content
+    assert "**2D input** uploaded detection" in view.gui.readout.readout.content
     view.select_demo(app.demo.names[0])
 
 
-def test_zoom_to_2d_joints(view: SessionView, app: PoseLifterApp) -> None:
+def test_head_on_view(view: SessionView, app: PoseLifterApp) -> None:
     view.select_demo(app.demo.names[1])
     cam = view.state.sample.camera
     R, t = np.asarray(cam.R), np.asarray(cam.t)
@@ -422,7 +424,7 @@ def test_zoom_to_2d_joints(view: SessionView, app: PoseLifterApp) -> None:
     f, c = np.asarray(view.state.focal), np.asarray(cam.principal_point)
 
     def zoom() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        view.zoom_btn.value = True  # the button
+        view.gui.joints.head_on.value = True  # the button
         ic = app.server.initial_camera
         eye_c = R @ (np.asarray(ic.position) - C)
         look_c = R @ (np.asarray(ic.look_at) - C)
@@ -447,21 +449,21 @@ def test_zoom_to_2d_joints(view: SessionView, app: PoseLifterApp) -> None:
     assert look2[2] - eye2[2] == pytest.approx(2 * d0, rel=1e-6)
     # up close the joint spheres shrink with the joints' extent (not hiding their neighbours); the overview
     # restores them
-    r = view.joint_nodes[0].radius
-    assert r < JOINT_RADIUS_M and r == pytest.approx(ZOOM_JOINT_RADIUS * 2.0 * max(ext), rel=1e-6)
-    assert not view.ray.visible  # the root ray would pass next to the eye and cover the joints
-    assert view.set_initial_view() is True
-    assert all(h.radius == JOINT_RADIUS_M for h in view.joint_nodes) and view.ray.visible
+    r = view.scene.pose.joints2d[0].radius
+    assert r <= JOINT_RADIUS_M and r == pytest.approx(min(HEAD_ON_JOINT_RADIUS * 2.0 * max(ext), JOINT_RADIUS_M), rel=1e-6)
+    assert not view.scene.camera.ray.visible  # the root ray would pass next to the eye and cover the joints
+    assert view.overview() is True
+    assert all(h.radius == JOINT_RADIUS_M for h in view.scene.pose.joints2d) and view.scene.camera.ray.visible
     view.select_demo(app.demo.names[0])
 
 
-def test_zoom_to_2d_joints_moves_a_tabs_camera(app: PoseLifterApp) -> None:
+def test_head_on_view_moves_a_tabs_camera(app: PoseLifterApp) -> None:
     n0 = len(app.views)
     tab = FakeTab(app.server)
     try:
         assert wait_for(lambda: len(app.views) == n0 + 1)
         v = list(app.views.values())[-1]
-        assert v.zoom_to_2d_joints() is True
+        assert v.head_on_view() is True
         cam = v.state.sample.camera
         R = np.asarray(cam.R)
         C = -R.T @ np.asarray(cam.t) / 1000.0
@@ -481,23 +483,23 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v = h36m_app.headless_view()
     seq = "Directions 1"
     assert v.select_h36m(subject=1, sequence=seq, camera="54138969", frame=5) is True  # training: every 5th frame
-    v.input_dd.value = "detected"
+    v.gui.sample.input.value = "detected"
     assert v.state.input_kind == "detected"
     np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
-    v.frame_slider.value = 6  # no detection: ground truth, with a message
-    assert v.state.input_kind == "gt" and v.input_dd.value == "gt" and "no 2D detection" in v.messages[-1]
+    v.gui.play.frame.value = 6  # no detection: ground truth, with a message
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "gt" and "no 2D detection" in v.messages[-1]
     np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
-    v.frame_slider.value = 7
+    v.gui.play.frame.value = 7
     assert v.state.input_kind == "gt"
-    v.frame_slider.value = 10  # a detection again: the user's choice is back
-    assert v.state.input_kind == "detected" and v.input_dd.value == "detected"
+    v.gui.play.frame.value = 10  # a detection again: the user's choice is back
+    assert v.state.input_kind == "detected" and v.gui.sample.input.value == "detected"
     np.testing.assert_allclose(v.state.keypoints, v.state.sample.detected_2d)
     # an upload forces "detected" without changing the preference; choosing gt does
     assert _json_upload(v, h36m_app.demo.get("standing")) is True and v.state.input_kind == "detected"
-    v.source_dd.value = "h36m"
+    v.gui.sample.source.value = "Human3.6M"
     assert v.state.input_kind == "detected" and v.state.sample.key.endswith("/10")
-    v.input_dd.value = "gt"
-    v.frame_slider.value = 15
+    v.gui.sample.input.value = "gt"
+    v.gui.play.frame.value = 15
     assert v.state.input_kind == "gt"
 
 
@@ -506,31 +508,33 @@ def test_photo_dropdown_follows_the_frame(h36m_app: PoseLifterApp) -> None:
     photos = h36m_app.h36m.photo_frames()
     s, q, c, f = next(p for p in photos if p[0] == 9)
     entry = f"S{s} {q} {c} {f}"
-    v.photo_dd.value = entry
+    v.gui.sample.photo.value = entry
     assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}"
-    v.frame_slider.value = f + 1
-    assert v.photo_dd.value == "(none)"
-    v.photo_dd.value = entry  # picking it again works
+    v.gui.play.frame.value = f + 1
+    assert v.gui.sample.photo.value == "(none)"
+    v.gui.sample.photo.value = entry  # picking it again works
     assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}" and v.state.sample.image is not None
-    v.photo_dd.value = "(none)"  # (no change of sample)
-    assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}" and v.photo_dd.value == entry
+    v.gui.sample.photo.value = "(none)"  # (no change of sample)
+    assert v.state.sample.key == f"h36m/S{s}/{q}/{c}/{f}"
     s2, q2, c2, f2 = next(p for p in photos if p[0] == 7)
     assert v.select_h36m(subject=s2, sequence=q2, camera=c2, frame=f2) is True
-    assert v.photo_dd.value == f"S{s2} {q2} {c2} {f2}"
-    assert v.sequence_dd.value == q2 and q2 in v.sequence_dd.options and v.subject_dd.value == f"S{s2}"
+    assert v.gui.sample.photo.value == f"S{s2} {q2} {c2} {f2}"
+    assert v.gui.sample.sequence.value == q2 and q2 in v.gui.sample.sequence.options and v.gui.sample.subject.value == f"S{s2}"
 
 
-def test_pickers_of_the_other_source_are_disabled(h36m_app: PoseLifterApp) -> None:
+def test_h36m_pickers_are_live_and_switch_the_source(h36m_app: PoseLifterApp) -> None:
+    """The Human3.6M pickers are never greyed out: using one shows Human3.6M (from a demo sample too)."""
     v = h36m_app.headless_view()
-    h36m_pickers = [v.subject_dd, v.sequence_dd, v.camera_dd, v.frame_slider, v.photo_dd]
-    assert v.state.sample.key.startswith("demo/")
-    assert not v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
-    v.source_dd.value = "h36m"
-    assert v.demo_dd.disabled and not any(h.disabled for h in h36m_pickers)
+    assert v.state.sample.key.startswith("h36m/")  # with the data present the app opens on it
+    assert v.select_demo("standing") is True and v.state.sample.key == "demo/standing"
+    assert not any(h.disabled for h in v.gui.sample.h36m_pickers) and not v.gui.sample.demo.disabled
+    assert v.gui.play.frame.disabled  # a still demo sample has no frames
+    v.gui.sample.subject.value = "S11"
+    assert v.state.sample.key.startswith("h36m/S11/") and v.gui.sample.source.value == "Human3.6M"
+    assert not v.gui.play.frame.disabled
     assert _json_upload(v, h36m_app.demo.get("standing")) is True
-    assert v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
-    v.source_dd.value = "demo"
-    assert not v.demo_dd.disabled and all(h.disabled for h in h36m_pickers)
+    v.gui.sample.camera.value = h36m_app.h36m.camera_ids[1]
+    assert v.state.sample.key.startswith("h36m/S11/") and v.state.sample.key.split("/")[3] == h36m_app.h36m.camera_ids[1]
 
 
 def test_3d_view_reframed_on_a_new_camera_only(h36m_app: PoseLifterApp) -> None:
@@ -540,20 +544,229 @@ def test_3d_view_reframed_on_a_new_camera_only(h36m_app: PoseLifterApp) -> None:
     def pose() -> np.ndarray:
         return np.concatenate([np.asarray(ic.position, float), np.asarray(ic.look_at, float)])
 
-    v.source_dd.value = "h36m"
+    v.gui.sample.source.value = "Human3.6M"
     p_h36m = pose()
-    v.frame_slider.value = int(v.frame_slider.value) + 40  # scrubbing: the view stays
+    v.gui.play.frame.value = int(v.gui.play.frame.value) + 40  # scrubbing: the view stays
     np.testing.assert_array_equal(pose(), p_h36m)
-    v.camera_dd.value = h36m_app.h36m.camera_ids[1]  # another camera: re-framed
+    v.gui.sample.camera.value = h36m_app.h36m.camera_ids[1]  # another camera: re-framed
     p_cam1 = pose()
     assert not np.allclose(p_cam1, p_h36m)
-    v.frame_slider.value = int(v.frame_slider.value) + 40
+    v.gui.play.frame.value = int(v.gui.play.frame.value) + 40
     np.testing.assert_array_equal(pose(), p_cam1)
-    v.subject_dd.value = "S11"  # another subject: its own calibration
+    v.gui.sample.subject.value = "S11"  # another subject: its own calibration
     assert not np.allclose(pose(), p_cam1)
     p_s11 = pose()
-    v.source_dd.value = "demo"
+    v.gui.sample.source.value = "demo sample"
     assert not np.allclose(pose(), p_s11)
     p_demo = pose()
-    v.demo_dd.value = h36m_app.demo.names[1]
+    v.gui.sample.demo.value = h36m_app.demo.names[1]
     assert not np.allclose(pose(), p_demo)
+
+
+# ----------------------------------------------------------------------------------------------
+# Issue 13: last value wins, readable uncertainty, framing, playback, robustness
+# ----------------------------------------------------------------------------------------------
+
+
+def _send_value(tab: FakeTab, handle, value) -> None:
+    from viser import _messages
+
+    tab.send(_messages.GuiUpdateMessage(handle._impl.uuid, {"value": value}))
+
+
+def _focal_in_readout(view: SessionView) -> int:
+    import re
+
+    m = re.search(r"\*\*Focal (\d+) px\*\*", view.gui.readout.readout.content)
+    assert m, view.gui.readout.readout.content
+    return int(m.group(1))
+
+
+def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
+    """Bursts of values with no spacing, to two tabs at once: the state, the scene and the readout end on the last
+    value of every control, in each tab (viser runs the callbacks on a thread pool, in any order)."""
+    n0 = len(app.views)
+    tabs = [FakeTab(app.server), FakeTab(app.server)]
+    try:
+        assert wait_for(lambda: len(app.views) == n0 + 2)
+        views = list(app.views.values())[-2:]
+        models = app.pool.names
+        for rep in range(3):
+            for k, (tab, v) in enumerate(zip(tabs, views)):
+                for i in range(40):
+                    _send_value(tab, v.gui.lift.focal, float(1000 + 10 * i + 3 * k + rep))
+                    _send_value(tab, v.gui.noise.level, round(0.05 * (i % 20), 2))
+                    _send_value(tab, v.gui.noise.seed, i + k)
+                _send_value(tab, v.gui.lift.model, models[(rep + k) % len(models)])
+            for k, v in enumerate(views):
+                f_last = 1000 + 10 * 39 + 3 * k + rep
+                ok = wait_for(lambda v=v, f=f_last, k=k: v.state.focal_px == f and v.state.noise_level == 0.95
+                              and v.state.seed == 39 + k and _focal_in_readout(v) == f, timeout=30)
+                assert ok, (v.state.focal_px, v.state.noise_level, v.state.seed, v.gui.readout.readout.content[:60])
+                assert v.gui.lift.focal.value == f_last and v.state.model == models[(rep + k) % len(models)]
+                assert v.frame.alpha == pytest.approx(f_last) and v.frame.cloud is not None
+                z_scene = float(np.asarray(v.scene.camera.root.position)[2]) * 1000
+                assert z_scene == pytest.approx(v.frame.root[2], rel=1e-5)
+    finally:
+        for t in tabs:
+            t.close()
+    assert wait_for(lambda: len(app.views) == n0)
+
+
+def test_session_transitions_without_a_view(app: PoseLifterApp) -> None:
+    from poselifter_app import session as ss
+    from poselifter_app.core import SessionState
+
+    from lifter import PoseLifterError
+
+    demo = app.demo.get("walking")
+    st = SessionState(sample=demo, model=app.default_model)
+    assert ss.input_options(demo) == ["gt"]  # demo samples have no detection
+    new, note = ss.with_focal(st, 1e9)
+    assert new.focal_px == 6000.0 and "clamped" in note and st.focal_px == demo.camera.alpha  # st unchanged
+    with pytest.raises(PoseLifterError, match="not a finite"):
+        ss.with_focal(st, float("nan"))
+    with pytest.raises(PoseLifterError, match="far outside"):
+        ss.with_joint(st, 3, (1e5, 10.0))  # refused, never clamped and lifted
+    moved = ss.with_joint(st, 3, st.keypoints[3] + 5)
+    assert moved.dragged == {3} and not st.dragged and not np.array_equal(moved.keypoints, st.keypoints)
+    with pytest.raises(PoseLifterError, match="no 2D detection"):
+        ss.with_input(st, "detected")
+    with pytest.raises(PoseLifterError, match="unknown joint"):
+        ss.joint_index("<script>")
+    vals = ss.ControlValues(model="nope", input_kind="gt", focal_px=2000.0, noise_level=9.0, seed=-1, cloud_samples=8,
+                            analytic=True)
+    out, rej = ss.apply_controls(st, vals, known_model=app.pool.get)
+    assert out.model == st.model and out.focal_px == 2000.0 and out.noise_level == 3.0 and out.seed == st.seed
+    assert out.cloud_samples == 8 and out.analytic
+    assert {r.control for r in rej} == {"model", "noise_level", "seed"}
+    assert [r.refused for r in rej if r.control == "noise_level"] == [False]
+    up_state, note = ss.for_sample(out, demo, input_pref="detected")
+    assert up_state.input_kind == "gt" and "no 2D detection" in note and up_state.focal_px == demo.camera.alpha
+
+
+def test_per_joint_clouds_and_spread_readout(view: SessionView) -> None:
+    from poselifter_app.drawing import JOINT_RGB
+
+    view.gui.noise.cloud.value = 32
+    view.gui.noise.level.value = 1.0
+    fr = view.frame
+    colors = np.asarray(view.scene.pose.cloud.colors)
+    assert colors.shape == (32 * 17, 3)
+    np.testing.assert_array_equal(colors.reshape(32, 17, 3), np.broadcast_to(JOINT_RGB, (32, 17, 3)))
+    np.testing.assert_allclose(np.asarray(view.scene.pose.cloud.points, np.float64).reshape(32, 17, 3), fr.cloud / 1000, atol=4e-3)  # (float16)
+    np.testing.assert_array_equal(np.asarray(view.scene.pose.lifted_joints.colors), JOINT_RGB)
+    assert len({tuple(c) for c in JOINT_RGB}) == 17  # every joint its own colour
+    sp = fr.spread
+    np.testing.assert_allclose(sp.root_std, fr.cloud[:, 0].std(axis=0, ddof=1))
+    rel = fr.cloud[:, :, 2] - fr.cloud[:, :1, 2]
+    np.testing.assert_allclose(sp.joint_depth_std, rel.std(axis=0, ddof=1))
+    md = view.gui.readout.readout.content
+    assert f"**Z {sp.root_std[2]:.0f}** mm" in md and "joint depth σ" in md
+    assert f"r_wrist {sp.joint_depth_std[16]:.0f}" in view.gui.readout.spread.content
+    view.gui.noise.level.value = 0.0
+    assert view.frame.spread is None and not view.scene.pose.cloud.visible and view.gui.readout.spread.content == ""
+
+
+def _overview_sees_everything(view: SessionView, server) -> None:
+    from poselifter_app import framing
+
+    ic = server.initial_camera
+    vp = framing.Viewpoint(np.asarray(ic.position), np.asarray(ic.look_at), np.asarray(ic.up))
+    pts = view.framing_points()
+    R = np.asarray(view.state.sample.camera.R)
+    C = -R.T @ np.asarray(view.state.sample.camera.t) / 1000
+    assert np.allclose(pts[0], C)  # the camera centre (the frustum's apex) is one of them
+    assert framing.in_view(pts, vp, fov_y=framing.DEFAULT_FOV_Y_RAD, aspect=1.0), view.state.sample.key
+
+
+def test_default_view_shows_camera_and_person_for_every_demo_sample(view: SessionView, app: PoseLifterApp) -> None:
+    for name in app.demo.names:
+        assert view.select_demo(name) is True
+        _overview_sees_everything(view, app.server)
+
+
+def test_auto_reframing_keeps_the_skeleton_in_view(view: SessionView, app: PoseLifterApp) -> None:
+    from poselifter_app import framing
+
+    assert view.select_demo("walking") is True and view.gui.lift.auto_frame.value
+    for f in (100.0, 6000.0, 350.0, 4000.0):
+        view.gui.lift.focal.value = f
+        ic = app.server.initial_camera
+        vp = framing.Viewpoint(np.asarray(ic.position), np.asarray(ic.look_at), np.asarray(ic.up))
+        assert framing.in_view(view.framing_points(), vp, fov_y=framing.DEFAULT_FOV_Y_RAD, aspect=1.0), f
+    view.gui.lift.auto_frame.value = False
+    before = np.asarray(app.server.initial_camera.position).copy()
+    view.gui.lift.focal.value = 100.0
+    np.testing.assert_array_equal(np.asarray(app.server.initial_camera.position), before)  # off: the view stays
+    view.gui.lift.auto_frame.value = True
+    view.reset_focal()
+
+
+def test_playback_of_the_demo_motion_draws_the_root_trajectory(app: PoseLifterApp) -> None:
+    import time
+
+    n0 = len(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(app.views) == n0 + 1)
+        v = list(app.views.values())[-1]
+        v.gui.play.play.value = True  # click: a still demo sample plays the demo motion
+        assert v.playing and v.state.sample.key.startswith("motion/")
+        time.sleep(2.0)
+        assert v.playing and len(v.play_shown) >= 20  # ~25 fps (loaded machine: at least 10 fps)
+        assert v.state.sample.pose_3d is not None
+        assert len(v.trail) >= 10 and v.scene.camera.trail.visible
+        seg = np.asarray(v.scene.camera.trail.points)
+        assert seg.shape[1:] == (2, 3) and np.all(seg[:, :, 2] > 1.0)  # camera frame, in front of the camera
+        roots = np.array([v.trail[k] for k in sorted(v.trail)])
+        assert np.ptp(roots[:, 0]) > 50  # the root moves
+        v.gui.play.speed.value = 2.0
+        time.sleep(0.5)
+        v.gui.play.play.value = True  # pause
+        assert wait_for(lambda: not v.playing, timeout=5)
+        k = v.state.sample.key
+        time.sleep(0.3)
+        assert v.state.sample.key == k and v.gui.play.frame.value == int(k.split("/")[1])
+        v.gui.lift.focal.value = 2 * v.state.focal_px  # a new focal: a new trajectory
+        assert len(v.trail) == 1
+    finally:
+        tab.close()
+    assert wait_for(lambda: len(app.views) == n0)
+
+
+def test_rejected_and_crafted_gui_values_are_reported(app: PoseLifterApp) -> None:
+    n0 = len(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(app.views) == n0 + 1)
+        v = list(app.views.values())[-1]
+        f0 = v.state.focal_px
+        _send_value(tab, v.gui.lift.focal, "abc")  # viser cannot cast it
+        assert wait_for(lambda: any("'focal length (px)' was refused" in m for m in v.messages))
+        assert v.state.focal_px == f0
+        _send_value(tab, v.gui.joints.joint, "no_such_joint")  # a crafted dropdown value
+        assert wait_for(lambda: any("unknown joint" in m for m in v.messages))
+        assert wait_for(lambda: v.gui.joints.joint.value in v.gui.joints.joint.options)
+        _send_value(tab, v.gui.lift.focal, 2 * f0)  # the tab still works
+        assert wait_for(lambda: v.state.focal_px == 2 * f0)
+        _send_value(tab, v.gui.sample.input, "detected")  # not offered for demo samples
+        assert wait_for(lambda: v.gui.sample.input.value == "gt" and any("no 2D detection" in m for m in v.messages))
+        assert list(v.gui.sample.input.options) == ["gt"]
+    finally:
+        tab.close()
+
+
+@pytest.mark.parametrize("args, expect", [(["--port", "99999"], "outside 0-65535"), (["--port", "-1"], "outside"),
+                                          (["--host", "no.such.host.invalid"], "cannot use --host"),
+                                          (["--host", "203.0.113.7"], "cannot listen")])
+def test_bad_port_or_host_exits_quickly(args, expect) -> None:
+    import subprocess
+    import sys
+    import time
+
+    t0 = time.time()
+    r = subprocess.run([sys.executable, "-m", "poselifter_app.main", "--no-h36m", *args], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 2 and expect in r.stderr and "Traceback" not in r.stderr
+    assert time.time() - t0 < 30

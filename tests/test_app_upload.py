@@ -17,8 +17,10 @@ viser = pytest.importorskip("viser")
 
 from poselifter_app import upload as up  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
+from poselifter_app.scene import image_plane  # noqa: E402
 from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
+from poselifter_app.viser_hooks import drag_callback  # noqa: E402
 
 from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_available  # noqa: E402
 from lifter.io import LiftRecord  # noqa: E402
@@ -122,12 +124,12 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
         small = coco.copy()
         small[:, :2] = 0.2 * coco[:, :2] + 10
         content = json.dumps([{"keypoints": small.ravel().tolist()}, {"keypoints": coco.ravel().tolist()}]).encode()
-        tab.upload(v.upload_btn, "two_people.json", content)
+        tab.upload(v.gui.files.upload, "two_people.json", content)
         # a COCO file carries no image size: refused with the reason, the tab keeps its sample
         assert wait_for(lambda: "image_size" in (v.messages[-1] if v.messages else ""))
         assert v.state.sample.key.startswith("demo/")
         content = json.dumps({"keypoints": coco.tolist(), "format": "coco17", "image_size": [800, 600]}).encode()
-        tab.upload(v.upload_btn, "pose.json", content)
+        tab.upload(v.gui.files.upload, "pose.json", content)
         assert wait_for(lambda: v.state.sample.key.startswith("upload/") and "coco17 keypoints" in v.messages[-1])
         st = v.state
         assert st.sample.pose_3d is None and not st.sample.has_gt_2d and st.input_kind == "detected"
@@ -137,17 +139,17 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
 
         assert st.focal_px == pytest.approx(default_focal((800, 600)))  # the stated default field of view
         assert "coco17" in v.messages[-1] and "field of view" in v.messages[-1]
-        assert v.source_dd.value == "upload" and "upload" in v.source_dd.options
-        assert "pose.json" in v.readout_md.content and np.all(v.frame.lifted[:, 2] > 0)
+        assert v.gui.sample.source.value == "upload" and "upload" in v.gui.sample.source.options
+        assert "pose.json" in v.gui.readout.readout.content and np.all(v.frame.lifted[:, 2] > 0)
         # the 2D joints are draggable and the focal slider still works
         assert v.move_joint(13, st.keypoints[13] + 30.0) is True and 13 in v.state.dragged
         z = v.frame.root[2]
-        v.focal_slider.value = 2 * v.state.focal_px
+        v.gui.lift.focal.value = 2 * v.state.focal_px
         assert v.frame.root[2] == pytest.approx(2 * z, rel=1e-6)
         # back to a demo sample and to the upload again
-        v.source_dd.value = "demo"
+        v.gui.sample.source.value = "demo sample"
         assert v.state.sample.key.startswith("demo/")
-        v.source_dd.value = "upload"
+        v.gui.sample.source.value = "upload"
         assert v.state.sample.key.startswith("upload/")
     finally:
         tab.close()
@@ -268,9 +270,16 @@ def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
         assert v.load_upload("huge.jpg", big) is False and "more than the 20 MiB" in v.messages[-1]
         _assert_unchanged(v, snap)
         # and refused as soon as the browser announces the size: viser does not buffer the rest
-        states = v.gui._current_file_upload_states
-        tab.upload(v.upload_btn, "huge2.jpg", big[: 3 * 512 * 1024], declared_size=len(big), max_parts=3)
+        states = v.target.gui._current_file_upload_states
+        tab.upload(v.gui.files.upload, "huge2.jpg", big[: 3 * 512 * 1024], declared_size=len(big), max_parts=3)
         assert wait_for(lambda: "huge2.jpg" in (v.messages[-1] if v.messages else ""))
+        assert "more than the 20 MiB" in v.messages[-1] and not states
+        _assert_unchanged(v, snap)
+        # a client that announces 1 KiB and then sends more is stopped by the bytes received: viser never holds
+        # more than the limit and one part of it
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "liar.jpg", big, declared_size=1024, max_parts=45)
+        assert wait_for(lambda: len(v.messages) > n_msgs and "liar.jpg" in v.messages[-1])
         assert "more than the 20 MiB" in v.messages[-1] and not states
         _assert_unchanged(v, snap)
     finally:
@@ -320,8 +329,8 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         v = a.headless_view()
         assert v.load_upload("two.jpg", _jpeg(rgb)) is True
         np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)  # the largest person
-        assert "2 people found; using the largest" in v.messages[-1]
-        assert "2 people found" in v.readout_md.content or "2 people" in v.readout_md.content
+        assert "found 2 people" in v.messages[-1]
+        assert "2 people found" in v.gui.readout.readout.content or "2 people" in v.gui.readout.readout.content
         # nobody
         est.people = []
         snap = _snapshot(v)
@@ -334,7 +343,7 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert max(est.seen[-1]) <= 2048 and "downscaled 3200 x 2400" in v.messages[-1]
         np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d * 4, atol=3.0)
         assert v.state.sample.camera.width == 3200 and max(v.state.sample.image.shape[:2]) <= up.DISPLAY_MAX_SIDE
-        assert v.focal_slider.max >= v.state.focal_px
+        assert v.gui.lift.focal.max >= v.state.focal_px
         # EXIF 35-mm-equivalent focal length, as `poselifter lift` reads it
         from PIL import Image
 
@@ -344,9 +353,9 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert v.load_upload("phone.jpg", _jpeg(rgb, exif=exif.tobytes())) is True
         f35 = 26 * np.hypot(800, 600) / np.hypot(36, 24)
         assert v.state.focal_px == pytest.approx(f35, rel=1e-6)
-        assert v.state.sample.upload.focal_source == "exif-35mm" and "EXIF" in v.readout_md.content
+        assert v.state.sample.upload.focal_source == "exif-35mm" and "EXIF" in v.gui.readout.readout.content
         z = v.frame.root[2]
-        v.focal_slider.value = 1.5 * f35
+        v.gui.lift.focal.value = 1.5 * f35
         assert v.frame.root[2] == pytest.approx(1.5 * z, rel=1e-3)
     finally:
         server.stop()
@@ -392,8 +401,8 @@ def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
                                                      "image_size": [800, 600], "focal": 1000}).encode())
         v.move_joint(16, v.state.keypoints[16] + np.array([25.0, -10.0]))
         v.set_noise(1.0)  # the download is the clean lift of the current 2D, not a noisy draw
-        v.focal_slider.value = 1200.0
-        v.download_btn.value = True  # click
+        v.gui.lift.focal.value = 1200.0
+        v.gui.files.download_json.value = True  # click
         assert sent and sent[-1][0] == "sitting_kp_lifted.json" and sent[-1][2].get("save_immediately") is True
         d = json.loads(sent[-1][1])
         assert LIFT_FIELDS <= set(d) and set(d) == set(_record_keys())
@@ -407,13 +416,13 @@ def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
         assert d["canonical_depth"] == pytest.approx(float(ref.canonical_depth), abs=0.01)
         assert d["focal_source"] == "app-slider" and any("r_wrist" in w for w in d["warnings"])
         assert d["kind"] == "keypoints" and d["image_size"] == [800, 600] and d["model"] == v.state.model
-        v.download_glb_btn.value = True
+        v.gui.files.download_glb.value = True
         assert sent[-1][0] == "sitting_kp_lifted.glb"
         path = tmp_path / "skeleton.glb"
         path.write_bytes(sent[-1][1])
         np.testing.assert_allclose(read_glb_joints(path), ref.absolute, atol=1.0)
         # a demo sample downloads too (its calibrated camera)
-        v.source_dd.value = "demo"
+        v.gui.sample.source.value = "demo sample"
         name, data = v.download_payload("json")
         d = json.loads(data)
         assert name.startswith("demo_") and d["kind"] == "sample" and d["focal_source"] == "calibrated-camera"
@@ -439,7 +448,7 @@ def test_photo_upload_with_blazepose(app: PoseLifterApp) -> None:
     tab, v = _open_tab(app)
     try:
         s = app.demo.get("standing")
-        tab.upload(v.upload_btn, "standing.jpg", (DEMO_DIR / "standing.jpg").read_bytes())
+        tab.upload(v.gui.files.upload, "standing.jpg", (DEMO_DIR / "standing.jpg").read_bytes())
         assert wait_for(lambda: v.state.sample.key.startswith("upload/") and bool(v.messages)
                         and "found" in v.messages[-1], timeout=60), v.messages[-1:]
         st = v.state
@@ -465,13 +474,13 @@ def test_late_drag_events_after_a_sample_change_are_ignored(view: SessionView, a
         cam = v.state.sample.camera
         R = np.asarray(cam.R)
         C = -R.T @ np.asarray(cam.t) / 1000.0
-        p = tuple(R.T @ v._image_plane(np.asarray(uv, float)) + C)
-        return viser.SceneNodeDragEvent(client=None, client_id=0, target=v.joint_nodes[joint], phase=phase,
+        p = tuple(R.T @ image_plane(v.state, np.asarray(uv, float)) + C)
+        return viser.SceneNodeDragEvent(client=None, client_id=0, target=v.scene.pose.joints2d[joint], phase=phase,
                                         instance_index=None, start_position=p, start_screen_pos=(0.5, 0.5),
                                         end_position=p, end_screen_pos=(0.5, 0.5), button="left", modifier=None)
 
     j = 16
-    cb = view.joint_nodes[j]._impl.drag_cb[0].callback
+    cb = drag_callback(view.scene.pose.joints2d[j])
     ev_start = _drag_event(view, j, view.state.keypoints[j] + 30.0, "start")
     cb(ev_start)
     assert j in view.state.dragged

@@ -1,0 +1,215 @@
+"""Typed groups of GUI handles, one per part of the panel, and the builder of a tab's panels.
+
+Layout (made for 1400 x 900 and larger): the controls in the main panel, docked right, as tabs
+(**Lift** — model, focal, noise; **Sample** — source, pickers, playback; **Drag** — 2D joints; **File** —
+upload / download); the numbers in a second panel docked above it (**Readout**), which never scrolls with the
+controls: the readout (``Focal N px``, root, canonical depth, spread, errors), status messages and a small
+side / top view of the lifted pose (the 3D response while dragging head-on).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, cast
+
+import numpy as np
+import viser
+
+from lifter.skeleton import JOINT_NAMES
+
+from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX
+
+SOURCE_LABELS: dict[str, str] = {"demo": "demo sample", "motion": "demo motion", "h36m": "Human3.6M",
+                                 "upload": "upload"}
+"""Sample sources (keys of :attr:`SampleGui.source` options are the labels' keys)."""
+SPEED_MIN, SPEED_MAX = 0.1, 4.0
+LEGEND = ("<small>3D: lifted joints and their uncertainty clouds in each joint's colour (subject's left blue, "
+          "right red/orange, centre grey) · <b style='color:#28c83c'>ground truth</b> · "
+          "<b style='color:#ff8c00'>analytic root</b> · <b style='color:#c8a800'>root ray / trajectory</b>. "
+          "2D: <b style='color:#28c83c'>ground truth</b> · <b style='color:#f09600'>detected</b> · "
+          "<b style='color:#a03cdc'>noisy (lifted)</b> · current joints in their joint colours.</small>")
+
+
+@dataclass
+class ReadoutGui:
+    """The readout panel: numbers, messages and the side / top view of the lifted pose."""
+
+    panel: Any
+    readout: viser.GuiMarkdownHandle
+    status: viser.GuiMarkdownHandle
+    response: viser.GuiImageHandle
+    spread: viser.GuiMarkdownHandle
+
+
+@dataclass
+class SampleGui:
+    source: viser.GuiDropdownHandle[str]
+    demo: viser.GuiDropdownHandle[str]
+    input: viser.GuiDropdownHandle[str]
+    image: viser.GuiImageHandle
+    subject: viser.GuiDropdownHandle[str] | None
+    sequence: viser.GuiDropdownHandle[str] | None
+    camera: viser.GuiDropdownHandle[str] | None
+    photo: viser.GuiDropdownHandle[str] | None
+
+    @property
+    def h36m_pickers(self) -> list[Any]:
+        return [h for h in (self.subject, self.sequence, self.camera, self.photo) if h is not None]
+
+
+@dataclass
+class PlayGui:
+    frame: viser.GuiSliderHandle[int]
+    play: viser.GuiButtonHandle
+    speed: viser.GuiSliderHandle[float]
+    trail: viser.GuiCheckboxHandle
+    info: viser.GuiMarkdownHandle
+
+
+@dataclass
+class LiftGui:
+    model: viser.GuiDropdownHandle[str]
+    focal: viser.GuiSliderHandle[float]
+    focal_reset: viser.GuiButtonHandle
+    auto_frame: viser.GuiCheckboxHandle
+    analytic: viser.GuiCheckboxHandle
+    gt: viser.GuiCheckboxHandle
+    overview: viser.GuiButtonHandle
+
+
+@dataclass
+class NoiseGui:
+    level: viser.GuiSliderHandle[float]
+    cloud: viser.GuiSliderHandle[int]
+    seed: viser.GuiNumberHandle[int]
+    resample: viser.GuiButtonHandle
+
+
+@dataclass
+class JointGui:
+    joint: viser.GuiDropdownHandle[str]
+    uv: viser.GuiVector2Handle
+    head_on: viser.GuiButtonHandle
+    reset: viser.GuiButtonHandle
+
+
+@dataclass
+class FileGui:
+    upload: viser.GuiUploadButtonHandle
+    download_json: viser.GuiButtonHandle
+    download_glb: viser.GuiButtonHandle
+
+
+@dataclass
+class Gui:
+    """All GUI handles of one tab."""
+
+    readout: ReadoutGui
+    sample: SampleGui
+    play: PlayGui
+    lift: LiftGui
+    noise: NoiseGui
+    joints: JointGui
+    files: FileGui
+
+    def value_handles(self) -> list[Any]:
+        """The value controls whose last value :func:`poselifter_app.session.apply_controls` applies."""
+        return [self.lift.model, self.sample.input, self.lift.focal, self.noise.level, self.noise.seed,
+                self.noise.cloud, self.lift.analytic]
+
+
+def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], models: list[str], model: str,
+              h36m: Any | None, error_model_name: str, max_upload_mib: int) -> Gui:
+    """Build a tab's panels (see the module docstring) on ``gui`` (a client's or the server's GUI)."""
+    main = gui.main_panel
+    main.dock_right()
+    main.set_width(400)
+    panel = gui.add_panel()
+    with panel.add_tab("Readout", viser.Icon.GAUGE):
+        readout = ReadoutGui(
+            panel=panel,
+            readout=gui.add_markdown(""),
+            status=gui.add_markdown(""),
+            response=gui.add_image(np.full((120, 360, 3), 255, np.uint8), label=None, format="jpeg", jpeg_quality=80),
+            spread=gui.add_markdown(""),
+        )
+        gui.add_markdown(LEGEND)
+    panel.dock_above(main)
+
+    tabs = gui.add_tab_group()
+    with tabs.add_tab("Lift", viser.Icon.ADJUSTMENTS):
+        lift = LiftGui(
+            model=gui.add_dropdown("model", models or ["(none)"], initial_value=model or (models or ["(none)"])[0],
+                                   hint="shipped weights (assets/models.json)"),
+            focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
+                                 marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
+                                 hint="alpha = sqrt(fx fy); the root slides along its ray, Z ∝ f"),
+            focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
+            auto_frame=gui.add_checkbox("keep skeleton in view", True,
+                                        hint="reframe the 3D view when the lifted skeleton leaves it"),
+            analytic=gui.add_checkbox("analytic root", False,
+                                      hint="also show the weak-perspective analytic-root skeleton (dashed orange)"),
+            gt=gui.add_checkbox("show ground truth", True),
+            overview=gui.add_button("reset 3D view", icon=viser.Icon.HOME,
+                                    hint="camera and person in view, from behind the camera"),
+        )
+        noise = NoiseGui(
+            level=gui.add_slider("noise level", 0.0, NOISE_MAX, 0.05, 0.0, marks=((0.0, "0"), (1.0, "1"), (3.0, "3")),
+                                 hint="mixture 2D noise: 0 clean · 1 as fitted · 3 exaggerated"),
+            cloud=gui.add_slider("cloud samples", 0, 256, 1, CLOUD_SAMPLES, marks=((0, "0"), (256, "256")),
+                                 hint="noisy 2D draws lifted for the per-joint uncertainty clouds"),
+            seed=gui.add_number("seed", DEFAULT_SEED, step=1, min=0),
+            resample=gui.add_button("resample noise", hint="seed + 1"),
+        )
+        gui.add_markdown(f"<small>error model: {error_model_name}</small>")
+    with tabs.add_tab("Sample", viser.Icon.PHOTO):
+        src_opts = [SOURCE_LABELS[s] for s in sources]
+        source = gui.add_dropdown("source", src_opts, initial_value=src_opts[0])
+        demo = gui.add_dropdown("demo sample", demo_names, initial_value=demo_names[0])
+        if h36m is not None:
+            subj = [f"S{s}" for s in h36m.subjects]
+            subject = gui.add_dropdown("subject", subj, initial_value=subj[-2] if len(subj) > 1 else subj[0])
+            seqs = h36m.sequences(int(subject.value[1:]))
+            sequence = gui.add_dropdown("sequence", seqs, initial_value=seqs[0])
+            camera = gui.add_dropdown("camera", list(h36m.camera_ids), initial_value=h36m.camera_ids[0])
+            photos = ["(none)"] + [f"S{s} {q} {c} {f}" for s, q, c, f in h36m.photo_frames()]
+            photo = gui.add_dropdown("frame with photo", photos, initial_value="(none)")
+        else:
+            subject = sequence = camera = photo = None
+        play = PlayGui(
+            frame=gui.add_slider("frame", 0, 1, 1, 0, hint="frame of the sequence (Human3.6M at 50 fps, demo motion "
+                                 "at 25 fps)"),
+            play=gui.add_button("play", icon=viser.Icon.PLAYER_PLAY, hint="play / pause the sequence"),
+            speed=gui.add_slider("speed", SPEED_MIN, SPEED_MAX, 0.05, 1.0, marks=((SPEED_MIN, "0.1×"), (1.0, "1×"),
+                                                                                   (SPEED_MAX, "4×"))),
+            trail=gui.add_checkbox("root trajectory", True, hint="draw the lifted root's path in camera space"),
+            info=gui.add_markdown(""),
+        )
+        inp = gui.add_dropdown("2D input", ["gt", "detected"], initial_value="gt",
+                               hint="ground-truth 2D, or the Stacked-Hourglass detection (Human3.6M frames that have one)")
+        image = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
+        sample = SampleGui(source=source, demo=demo, input=cast(viser.GuiDropdownHandle[str], inp), image=image, subject=subject, sequence=sequence,
+                           camera=camera, photo=photo)
+    with tabs.add_tab("Drag", viser.Icon.HAND_FINGER):
+        gui.add_markdown("<small>Drag the joints on the image plane in the 3D view. <b>head-on image view</b> looks "
+                         "straight at them for precise dragging; the readout's side / top views show the 3D "
+                         "response.</small>")
+        joints = JointGui(
+            head_on=gui.add_button("head-on image view", icon=viser.Icon.ZOOM_IN,
+                                   hint="look straight at the 2D joints on the image plane"),
+            joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
+            uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0, hint="type a position to move the joint"),
+            reset=gui.add_button("reset dragged joints"),
+        )
+    with tabs.add_tab("File", viser.Icon.FILE):
+        files = FileGui(
+            upload=gui.add_upload_button(
+                "upload photo or keypoint JSON", icon=viser.Icon.UPLOAD, mime_type="image/*,.json,application/json",
+                hint=f"a photo (2D joints by MediaPipe BlazePose, draggable) or a 2D keypoint JSON as `poselifter "
+                     f"lift` reads it; at most {max_upload_mib} MiB"),
+            download_json=gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
+                                         hint="the current lift with the fields `poselifter lift` writes"),
+            download_glb=gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
+                                        hint="the lifted skeleton as a mesh (metres, y-up)"),
+        )
+    return Gui(readout=readout, sample=sample, play=play, lift=lift, noise=noise, joints=joints, files=files)

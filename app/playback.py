@@ -1,0 +1,141 @@
+"""Sequences the app plays, and the playback clock (pure; the view runs it on a thread).
+
+A :class:`SequenceSource` gives, per frame index, a :class:`SequenceFrame`: the :class:`Sample` of every person
+in that frame (same camera). The app shows and lifts ``people[0]`` today; a video source (decoded frames,
+several people per frame from :mod:`lifter.detect`) plugs in by implementing the same protocol.
+
+Sources here: a Human3.6M sequence seen by one camera (50 fps) and :class:`DemoMotion`, a 10-s sequence made
+from the demo samples' authored 3D poses (blended one into the next while the body walks a loop in front of the
+``walking`` sample's camera; exact 2D, 3D ground truth), so playback works without Human3.6M.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from lifter import Camera
+
+from .samples import DemoCatalog, H36MCatalog, Sample
+
+DISPLAY_FPS: float = 25.0
+"""Playback redraws per second."""
+
+
+@dataclass(frozen=True)
+class SequenceFrame:
+    people: tuple[Sample, ...]
+
+
+class SequenceSource(Protocol):
+    key: str
+    label: str
+    fps: float
+    num_frames: int
+
+    def frame(self, index: int) -> SequenceFrame: ...
+
+
+@dataclass
+class H36MSequence:
+    catalog: H36MCatalog
+    subject: int
+    sequence: str
+    camera: str
+    fps: float = 50.0
+    key: str = field(init=False)
+    label: str = field(init=False)
+    num_frames: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.key = f"h36m/S{self.subject}/{self.sequence}/{self.camera}"
+        self.label = f"S{self.subject} {self.sequence} cam {self.camera}"
+        self.num_frames = self.catalog.num_frames(self.subject, self.sequence)
+
+    def frame(self, index: int) -> SequenceFrame:
+        return SequenceFrame((self.catalog.get(self.subject, self.sequence, self.camera, index),))
+
+
+def _smoothstep(t: float) -> float:
+    return t * t * (3.0 - 2.0 * t)
+
+
+class DemoMotion:
+    """The demo samples' poses blended in turn (``frames_per_pose`` frames each, looping), walking an ellipse of
+    ``radius`` m (x) by half that (depth) around the ``walking`` sample's root, facing where it goes, seen by
+    the ``walking`` camera. 25 fps."""
+
+    fps: float = 25.0
+
+    def __init__(self, demo: DemoCatalog, *, frames_per_pose: int = 50, radius: float = 0.9,
+                 camera_sample: str = "walking") -> None:
+        self.key = "motion"
+        self.label = "demo motion"
+        base = demo.get(camera_sample if camera_sample in demo.names else demo.names[0])
+        self.camera: Camera = base.camera
+        rel = []
+        for name in demo.names:
+            s = demo.get(name)
+            assert s.pose_3d is not None
+            w = s.camera.camera_to_world(s.pose_3d)  # world mm, z up
+            r = w - w[0]
+            # face +x in the world: rotate about z so that the hips' left-right axis is the world's y axis
+            hip = r[4] - r[1]
+            a = math.atan2(hip[1], hip[0]) - math.pi / 2
+            c, s_ = math.cos(-a), math.sin(-a)
+            Rz = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+            rel.append((r @ Rz.T, w[0, 2]))
+        self._poses = rel
+        assert base.pose_3d is not None
+        self._centre = self.camera.camera_to_world(base.pose_3d[:1])[0]
+        self.frames_per_pose = int(frames_per_pose)
+        self.num_frames = self.frames_per_pose * len(rel)
+        self.radius = float(radius)
+
+    def world_pose(self, index: int) -> np.ndarray:
+        """``(17, 3)`` world mm of frame ``index``."""
+        i = int(index) % self.num_frames
+        k, t = divmod(i, self.frames_per_pose)
+        t = _smoothstep(t / self.frames_per_pose)
+        (a, za), (b, zb) = self._poses[k], self._poses[(k + 1) % len(self._poses)]
+        rel = (1 - t) * a + t * b
+        phase = 2 * math.pi * i / self.num_frames
+        x, y = 1000 * self.radius * math.cos(phase), 500 * self.radius * math.sin(phase)
+        heading = math.atan2(500 * self.radius * math.cos(phase), -1000 * self.radius * math.sin(phase))
+        c, s = math.cos(heading), math.sin(heading)
+        Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        root = np.array([self._centre[0] + x, self._centre[1] + y, (1 - t) * za + t * zb])
+        return rel @ Rz.T + root
+
+    def frame(self, index: int) -> SequenceFrame:
+        i = int(index) % self.num_frames
+        p3 = self.camera.world_to_camera(self.world_pose(i))
+        kp = self.camera.project(p3)
+        s = Sample(key=f"motion/{i}", label=f"demo motion frame {i}", keypoints_2d=kp, pose_3d=p3, detected_2d=None,
+                   camera=self.camera, image=None)
+        return SequenceFrame((s,))
+
+
+@dataclass
+class PlayClock:
+    """Which frame to show at time ``now`` (s) while playing: ``index0`` at ``t0``, advancing at ``fps * speed``
+    frames per second, looping over ``num_frames``. Re-anchor (:meth:`restart`) when the speed or the frame
+    changes by hand."""
+
+    fps: float
+    num_frames: int
+    speed: float = 1.0
+    index0: int = 0
+    t0: float = 0.0
+
+    def restart(self, *, index: int, now: float, speed: float | None = None) -> None:
+        self.index0, self.t0 = int(index), float(now)
+        if speed is not None:
+            self.speed = float(speed)
+
+    def index(self, now: float) -> int:
+        steps = math.floor((now - self.t0) * self.fps * self.speed + 1e-9)
+        return (self.index0 + steps) % max(self.num_frames, 1)

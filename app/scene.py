@@ -1,0 +1,218 @@
+"""Typed groups of 3D scene handles and the functions that draw into them (viser world: metres, z up).
+
+* ``/floor``: the floor grid (z = 0; hidden for uploads, whose camera height is a guess);
+* ``/cam``: the sample's camera, posed by its extrinsics (``X_world = R^T (X_cam - t)``). Everything below it is
+  in the **OpenCV camera frame** (+x right, +y down, +z forward), metres: the frustum and the image plane at depth
+  :data:`IMAGE_PLANE_DEPTH_M` (its field of view follows the focal slider), the draggable 2D joints on that plane,
+  the lifted skeleton at its absolute position, the per-joint uncertainty clouds, the ground truth, the
+  analytic-root skeleton, the root's viewing ray and the lifted root's trajectory during playback.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import viser
+import viser.transforms as vtf
+
+from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
+
+from .core import Frame, SessionState
+from .drawing import COLORS, JOINT_RGB, canvas
+
+IMAGE_PLANE_DEPTH_M: float = 1.0
+"""Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
+JOINT_RADIUS_M: float = 0.012
+"""Radius (m) of the draggable 2D joint spheres on the image plane in the overview."""
+HEAD_ON_JOINT_RADIUS: float = 0.02
+"""Head-on image view: sphere radius as a fraction of the 2D joints' extent on the image plane."""
+GT_RGB = COLORS["gt"]
+ANALYTIC_RGB = (255, 140, 0)
+RAY_RGB = (250, 210, 0)
+FRUSTUM_RGB = (30, 30, 30)
+MAX_TRAIL_GAP: int = 12
+"""Trajectory: recorded frames further apart than this are not joined."""
+
+
+def edges_points(P: np.ndarray) -> np.ndarray:
+    """``(16, 2, 3)`` bone segments of a ``(17, 3)`` pose."""
+    P = np.asarray(P)
+    return np.stack([P[[a for a, _ in EDGES]], P[[b for _, b in EDGES]]], axis=1)
+
+
+def _bone_colors() -> np.ndarray:
+    c = JOINT_RGB[[b for _, b in EDGES]]
+    return np.repeat(c[:, None, :], 2, axis=1)
+
+
+def _dashed(P: np.ndarray, n: int = 4) -> np.ndarray:
+    """Bones of ``P`` cut into ``n`` dashes each, ``(16 n, 2, 3)`` (every other piece of ``2 n``)."""
+    seg = edges_points(P)
+    t = np.linspace(0.0, 1.0, 2 * n + 1)
+    a, b = seg[:, 0], seg[:, 1]
+    pts = a[:, None] + (b - a)[:, None] * t[None, :, None]  # (16, 2n+1, 3)
+    return np.stack([pts[:, 0:-1:2], pts[:, 1::2]], axis=2).reshape(-1, 2, 3)
+
+
+@dataclass
+class CameraNodes:
+    """The sample's camera: its pose, frustum, image plane, the root ray and the trajectory."""
+
+    floor: viser.GridHandle
+    frame: viser.FrameHandle
+    frustum: viser.LineSegmentsHandle
+    image: viser.ImageHandle
+    ray: viser.LineSegmentsHandle
+    root: viser.IcosphereHandle
+    root_label: viser.LabelHandle
+    trail: viser.LineSegmentsHandle
+
+
+@dataclass
+class PoseNodes:
+    """The 2D joints on the image plane and the 3D poses."""
+
+    bones2d: viser.LineSegmentsHandle
+    joints2d: list[viser.IcosphereHandle]
+    lifted_bones: viser.LineSegmentsHandle
+    lifted_joints: viser.PointCloudHandle
+    cloud: viser.PointCloudHandle
+    gt: viser.LineSegmentsHandle
+    analytic: viser.LineSegmentsHandle
+    analytic_root: viser.IcosphereHandle
+
+
+@dataclass
+class Scene:
+    camera: CameraNodes
+    pose: PoseNodes
+
+
+def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -> Scene:
+    """The scene nodes of a tab; ``on_drag(joint, event)`` is called for drags of the 2D joint spheres."""
+    z = np.zeros((1, 2, 3))
+    cam = CameraNodes(
+        floor=scene.add_grid("/floor", width=12.0, height=12.0, plane="xy", cell_size=0.5, section_size=1.0),
+        frame=scene.add_frame("/cam", show_axes=True, axes_length=0.15, axes_radius=0.006),
+        frustum=scene.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=0.006),
+        image=scene.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg",
+                              cast_shadow=False, receive_shadow=False),
+        ray=scene.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=0.01),
+        root=scene.add_icosphere("/cam/root", radius=0.05, color=RAY_RGB),
+        root_label=scene.add_label("/cam/root/label", "root"),
+        trail=scene.add_line_segments("/cam/trail", np.zeros((1, 2, 3)), RAY_RGB, thickness=0.02, visible=False),
+    )
+    joints2d = []
+    for j in range(NUM_JOINTS):
+        h = scene.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=JOINT_RADIUS_M, subdivisions=2,
+                                color=(int(JOINT_RGB[j, 0]), int(JOINT_RGB[j, 1]), int(JOINT_RGB[j, 2])))
+        h.on_drag(lambda event, j=j: on_drag(j, event))
+        joints2d.append(h)
+    pose = PoseNodes(
+        bones2d=scene.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), _bone_colors(), thickness=0.004),
+        joints2d=joints2d,
+        lifted_bones=scene.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _bone_colors(),
+                                             thickness=0.03),
+        lifted_joints=scene.add_point_cloud("/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)), JOINT_RGB,
+                                            point_size=0.05, point_shape="circle"),
+        cloud=scene.add_point_cloud("/cam/cloud", np.zeros((1, 3)), (0, 0, 0), point_size=0.018,
+                                    point_shape="circle", visible=False),
+        gt=scene.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.012),
+        analytic=scene.add_line_segments("/cam/analytic", np.zeros((64, 2, 3)), ANALYTIC_RGB, thickness=0.045,
+                                         visible=False),
+        analytic_root=scene.add_icosphere("/cam/analytic_root", radius=0.06, color=ANALYTIC_RGB, visible=False),
+    )
+    return Scene(camera=cam, pose=pose)
+
+
+def image_plane(state: SessionState, uv: np.ndarray) -> np.ndarray:
+    """Pixels ``(..., 2)`` -> points on the image plane ``(..., 3)`` m, camera frame, at the state's focal."""
+    f = np.asarray(state.focal)
+    c = np.asarray(state.sample.camera.principal_point)
+    d = IMAGE_PLANE_DEPTH_M
+    xy = (np.asarray(uv, np.float64) - c) / f * d
+    return np.concatenate([xy, np.full(xy.shape[:-1] + (1,), d)], axis=-1)
+
+
+def frustum_corners(state: SessionState) -> np.ndarray:
+    """The image's corners on the image plane ``(4, 3)`` m, camera frame."""
+    W, H = state.image_size
+    return image_plane(state, np.array([[0, 0], [W, 0], [W, H], [0, H]], np.float64))
+
+
+def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool) -> None:
+    """Pose, image and floor (``new_sample``), and frustum / image plane for the current focal length."""
+    cam = state.sample.camera
+    if new_sample:
+        R = np.asarray(cam.R)
+        nodes.frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
+        nodes.frame.position = tuple(-R.T @ np.asarray(cam.t) / 1000.0)
+        img = state.sample.image
+        nodes.image.image = img if img is not None else canvas(cam.width, cam.height)
+        nodes.floor.visible = state.sample.upload is None  # an upload's camera height is a guess
+    corners = frustum_corners(state)
+    segs = [np.stack([np.zeros(3), c]) for c in corners]
+    segs += [np.stack([corners[i], corners[(i + 1) % 4]]) for i in range(4)]
+    nodes.frustum.points = np.stack(segs).astype(np.float32)
+    W, H = state.image_size
+    f = state.focal
+    nodes.image.position = tuple(image_plane(state, np.array([W / 2.0, H / 2.0])) + np.array([0, 0, 0.002]))
+    nodes.image.render_width = W / f[0] * IMAGE_PLANE_DEPTH_M
+    nodes.image.render_height = H / f[1] * IMAGE_PLANE_DEPTH_M
+
+
+def draw_2d(nodes: PoseNodes, state: SessionState, kp: np.ndarray, last: np.ndarray | None) -> np.ndarray:
+    """The 2D joints and bones on the image plane; only spheres that moved are updated. Returns the plane points."""
+    plane = image_plane(state, kp)
+    nodes.bones2d.points = edges_points(plane)
+    for j, h in enumerate(nodes.joints2d):
+        if last is None or not np.array_equal(last[j], plane[j]):
+            h.position = tuple(plane[j])
+    return plane
+
+
+def draw_pose(nodes: PoseNodes, cam: CameraNodes, fr: Frame, *, show_gt: bool) -> None:
+    """The lifted skeleton, its per-joint clouds (each joint's draws in its own colour), ground truth, analytic
+    root (dashed, with its root marker) and the root ray."""
+    m = 1e-3
+    nodes.lifted_bones.points = edges_points(fr.lifted * m)
+    nodes.lifted_joints.points = (fr.lifted * m).astype(np.float32)
+    if fr.gt_3d is not None:
+        nodes.gt.points = edges_points(fr.gt_3d * m)
+    nodes.gt.visible = show_gt and fr.gt_3d is not None
+    if fr.analytic is not None:
+        nodes.analytic.points = _dashed(fr.analytic * m)
+        nodes.analytic_root.position = tuple(fr.analytic[0] * m)
+    nodes.analytic.visible = nodes.analytic_root.visible = fr.analytic is not None
+    if fr.cloud is not None and len(fr.cloud):
+        n = fr.cloud.shape[0]
+        nodes.cloud.points = (fr.cloud.reshape(-1, 3) * m).astype(np.float32)
+        nodes.cloud.colors = np.tile(JOINT_RGB, (n, 1))
+        nodes.cloud.visible = True
+    else:
+        nodes.cloud.visible = False
+    root = fr.root * m
+    cam.ray.points = np.stack([np.stack([np.zeros(3), root * 1.25])]).astype(np.float32)
+    cam.root.position = tuple(root)
+    cam.root_label.text = f"root Z {fr.root[2] / 1000:.2f} m"
+
+
+def draw_trail(cam: CameraNodes, roots: dict[int, np.ndarray], *, visible: bool) -> None:
+    """The lifted root's trajectory (camera frame): consecutive recorded frames joined (gaps over
+    :data:`MAX_TRAIL_GAP` frames left open)."""
+    idx = sorted(roots)
+    segs = [np.stack([roots[a], roots[b]]) * 1e-3 for a, b in zip(idx, idx[1:]) if b - a <= MAX_TRAIL_GAP]
+    if not segs or not visible:
+        cam.trail.visible = False
+        return
+    cam.trail.points = np.stack(segs).astype(np.float32)
+    cam.trail.visible = True
+
+
+def set_joint_radius(nodes: PoseNodes, radius: float) -> None:
+    for h in nodes.joints2d:
+        if abs(h.radius - radius) > 1e-9:
+            h.radius = radius

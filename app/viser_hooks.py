@@ -1,0 +1,130 @@
+"""Everything of the app that touches viser 1.1.1 internals (private attributes and its message protocol), in one
+place. Each hook is best effort: when viser's internals change it does nothing (and logs why) rather than fail.
+
+* :func:`limit_uploads`: an upload is stopped as soon as the size the browser announces, or the bytes actually
+  received so far, exceed the app's limit (viser itself buffers uploads of any size);
+* :func:`report_rejected_values`: a GUI value that viser cannot cast to the control's type (e.g. text for a
+  slider) is reported to the user and the control shows the value in use again (viser alone only logs an
+  asyncio traceback);
+* :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import viser
+
+log = logging.getLogger("poselifter.app")
+
+
+def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max_bytes: int,
+                  refuse: Callable[[str, int], None], client_id: int | None = None) -> bool:
+    """Refuse uploads through ``button`` larger than ``max_bytes``: on the announced size, and on the bytes
+    received (checked before viser buffers each part). ``refuse(file name, bytes)`` is called once per refused
+    upload. ``client_id``: only that client's uploads (None: any). Returns False when the hook could not be
+    installed."""
+    try:
+        from viser import _messages
+
+        iface = gui._websock_interface
+        states: dict[str, Any] = gui._current_file_upload_states
+        handlers: dict[Any, list[Any]] = iface._incoming_handlers
+        uuid = button._impl.uuid
+    except AttributeError as exc:
+        log.warning("upload size limit not installed (viser internals changed: %s)", exc)
+        return False
+    received: dict[str, tuple[str, int]] = {}
+    lock = threading.Lock()
+
+    def stop(transfer: str, name: str, size: int, total: int) -> None:
+        states.pop(transfer, None)  # later parts are ignored by viser
+        iface.queue_message(_messages.FileTransferPartAck(  # ends the browser's progress bar
+            source_component_uuid=uuid, transfer_uuid=transfer, transferred_bytes=total, total_bytes=total))
+        refuse(name, size)
+
+    def ours(cid: int, msg: Any) -> bool:
+        return msg.source_component_uuid == uuid and (client_id is None or cid == client_id)
+
+    def on_start(cid: int, msg: Any) -> None:
+        try:
+            if not ours(cid, msg):
+                return
+            if msg.size_bytes > max_bytes:
+                stop(msg.transfer_uuid, msg.filename, msg.size_bytes, msg.size_bytes)
+                return
+            with lock:
+                received[msg.transfer_uuid] = (msg.filename, 0)
+        except Exception:  # noqa: BLE001 - never break viser's message loop
+            log.exception("upload size check failed")
+
+    def on_part(cid: int, msg: Any) -> None:
+        try:
+            if not ours(cid, msg):
+                return
+            with lock:
+                if msg.transfer_uuid not in received:
+                    return
+                name, n = received[msg.transfer_uuid]
+                n += len(msg.content)
+                received[msg.transfer_uuid] = (name, n)
+                if msg.transfer_uuid not in states:  # finished or dropped
+                    received.pop(msg.transfer_uuid, None)
+                    return
+                over = n > max_bytes
+                if over:
+                    received.pop(msg.transfer_uuid, None)
+            if over:
+                stop(msg.transfer_uuid, name, n, states.get(msg.transfer_uuid, {}).get("total_bytes", n))
+        except Exception:  # noqa: BLE001
+            log.exception("upload size check failed")
+
+    # Ours run before viser's own handlers, so a part over the limit is never buffered.
+    handlers.setdefault(_messages.FileTransferStartUpload, []).insert(0, on_start)
+    handlers.setdefault(_messages.FileTransferPart, []).insert(0, on_part)
+    return True
+
+
+def report_rejected_values(gui: viser.GuiApi, report: Callable[[str], None]) -> bool:
+    """Wrap viser's GUI-update handler of ``gui``: a value it cannot cast to the control's type is reported with
+    ``report(message)`` and the control is sent its current value again. Returns False if not installed."""
+    try:
+        from viser import _messages
+
+        handlers: list[Any] = gui._websock_interface._incoming_handlers[_messages.GuiUpdateMessage]
+        if any(getattr(h, "_poselifter_checked", False) for h in handlers):
+            return True  # (the server's GUI, shared by headless views: the first one reports)
+        original = gui._handle_gui_updates
+        lookup: dict[str, Any] = gui._gui_input_handle_from_uuid
+        i = handlers.index(original)
+    except (AttributeError, KeyError, ValueError) as exc:
+        log.warning("GUI value checks not installed (viser internals changed: %s)", exc)
+        return False
+
+    async def checked(client_id: Any, message: Any) -> None:
+        try:
+            await original(client_id, message)
+        except Exception as exc:  # noqa: BLE001 - viser could not cast / apply the value
+            handle = lookup.get(message.uuid)
+            label = getattr(handle, "label", "a control") if handle is not None else "a control"
+            shown = repr(message.updates.get("value", message.updates))[:60]
+            report(f"the value {shown} for '{label}' was refused ({type(exc).__name__}: {str(exc)[:80]}); "
+                   "the control shows the value in use")
+            if handle is not None:
+                try:
+                    gui._websock_interface.queue_message(_messages.GuiUpdateMessage(message.uuid,
+                                                                                    {"value": handle.value}))
+                except Exception:  # noqa: BLE001
+                    log.exception("could not restore a refused GUI value")
+
+    checked._poselifter_checked = True  # type: ignore[attr-defined]
+    handlers[i] = checked
+    return True
+
+
+def drag_callback(node: Any) -> Callable[[Any], None]:
+    """The first drag callback registered on a scene node (``node.on_drag``)."""
+    return node._impl.drag_cb[0].callback
