@@ -77,7 +77,7 @@ def overview_direction(camera_centre: np.ndarray, target: np.ndarray) -> np.ndar
         flat = np.array([1.0, 0.0, 0.0])
     flat /= np.linalg.norm(flat)
     side = np.cross(flat, [0.0, 0.0, 1.0])
-    d = flat + 0.75 * side - np.array([0.0, 0.0, 0.45])
+    d = flat + 0.5 * side - np.array([0.0, 0.0, 0.4])
     return d / np.linalg.norm(d)
 
 

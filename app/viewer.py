@@ -617,6 +617,7 @@ class SessionView:
             self._close_up = False
             set_joint_radius(self.scene.pose, JOINT_RADIUS_M)
             self.scene.camera.ray.visible = True
+            self.scene.camera.root_label.visible = True
             self._set_viewpoint(self.overview_viewpoint())
 
     def _reframe(self) -> None:
@@ -656,6 +657,7 @@ class SessionView:
             self._close_up = True
             set_joint_radius(self.scene.pose, float(np.clip(HEAD_ON_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M)))
             self.scene.camera.ray.visible = False  # it would pass next to the eye and cover the joints
+            self.scene.camera.root_label.visible = False  # (drawn on top of everything)
             self._set_viewpoint(framing.head_on(centre_cam=centre, half_extent=half, R=R, C=C, fov_y=fov))
 
     # ------------------------------------------------------------------------------------------

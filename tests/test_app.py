@@ -770,3 +770,38 @@ def test_bad_port_or_host_exits_quickly(args, expect) -> None:
                        text=True, timeout=60)
     assert r.returncode == 2 and expect in r.stderr and "Traceback" not in r.stderr
     assert time.time() - t0 < 30
+
+
+def test_default_view_shows_camera_and_person_for_h36m_frames(h36m_app: PoseLifterApp) -> None:
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    for subject in (9, 11, 1):
+        seq = h.sequences(subject)[0]
+        n = h.num_frames(subject, seq)
+        for cam in h.camera_ids:
+            for frame in (0, n // 2):
+                assert v.select_h36m(subject=subject, sequence=seq, camera=cam, frame=frame) is True
+                v.overview()
+                _overview_sees_everything(v, h36m_app.server)
+    # the photo frames too
+    for s, q, c, f in h.photo_frames()[::7]:
+        assert v.select_h36m(subject=s, sequence=q, camera=c, frame=f) is True
+        v.overview()
+        _overview_sees_everything(v, h36m_app.server)
+
+
+def test_h36m_sequence_plays_at_display_rate(h36m_app: PoseLifterApp) -> None:
+    import time
+
+    v = h36m_app.headless_view()
+    assert v.select_h36m(subject=9, sequence="Walking 1", camera=h36m_app.h36m.camera_ids[0], frame=0) is True
+    v.gui.play.play.value = True
+    try:
+        time.sleep(2.0)
+        shown = np.array(v.play_shown)
+        assert len(shown) >= 20 and v.state.sample.key.startswith("h36m/S9/Walking 1/")
+        k = int(v.state.sample.key.rsplit("/", 1)[1])
+        assert 40 <= k <= 220  # 50-fps frames at speed 1: about 100 in 2 s (frames skipped, never slowed down)
+        assert len(v.trail) >= 10
+    finally:
+        v.stop_playback()
