@@ -82,7 +82,7 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
     ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize."""
     small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
     img = small.copy()
-    k = max(1.0, img.shape[1] / 320.0)  # marks grow with the inset (readable on 1000-px frames)
+    k = max(1.0, img.shape[1] / 240.0)  # marks grow with the inset (readable on 1000-px frames)
     for key in ("gt", "detected", "noisy", "current"):
         kp = poses.get(key)
         if kp is not None:

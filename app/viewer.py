@@ -302,16 +302,21 @@ class SessionView:
             notes: list[str] = [r.message for r in rejected]
             if reset:
                 st = ss.reset_joints(st)
+            refused_drag = False
             for j, uv in drags.items():
                 try:
                     st = ss.with_joint(st, j, uv)
                 except PoseLifterError as exc:
                     notes.append(str(exc))
+                    refused_drag = True
             for r in rejected:
                 self._set_control(r.control, r.value)
             if st.input_kind != old.input_kind and st.sample.has_gt_2d:
                 self._input_pref = st.input_kind
-            if ss.same_lift(st, old) and not redraw and not drags and not reset:
+            if ss.same_lift(st, old) and not redraw and not reset:
+                if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
+                    self._last_plane = None
+                    self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
                 for n in notes:
                     self.show_message(n, error=True)
                 return

@@ -82,8 +82,9 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
         except Exception:  # noqa: BLE001
             log.exception("upload size check failed")
 
-    # Ours run before viser's own handlers, so a part over the limit is never buffered.
-    handlers.setdefault(_messages.FileTransferStartUpload, []).insert(0, on_start)
+    # The start check runs after viser's own handler (which creates the transfer we drop); the part check before
+    # it, so a part over the limit is never buffered.
+    handlers.setdefault(_messages.FileTransferStartUpload, []).append(on_start)
     handlers.setdefault(_messages.FileTransferPart, []).insert(0, on_part)
     return True
 

@@ -168,6 +168,14 @@ def test_joint_nudge_via_gui(view: SessionView) -> None:
     uv = view.gui.joints.uv.value
     view.gui.joints.uv.value = (uv[0] + 25.0, uv[1])
     assert view.state.keypoints[16][0] == pytest.approx(uv[0] + 25.0)
+    # typed far outside the image: refused (not clamped and lifted), the box and the sphere show the joint again
+    kp, fr = view.state.keypoints.copy(), view.frame
+    view.gui.joints.uv.value = (5000.0, 5000.0)
+    assert "far outside" in view.messages[-1] and view.frame is fr
+    np.testing.assert_array_equal(view.state.keypoints, kp)
+    np.testing.assert_allclose(view.gui.joints.uv.value, kp[16], atol=0.05)
+    np.testing.assert_allclose(view.scene.pose.joints2d[16].position, image_plane(view.state, kp[16]), atol=1e-6)
+    view.reset_joints()
 
 
 def test_analytic_toggle_and_gt_checkbox(view: SessionView) -> None:
