@@ -867,12 +867,14 @@ class SessionView:
         if self.playing:
             self.stop_playback()
             return
-        with self.lock:
-            if self.sequence() is None:
-                if self.state.sample.upload is not None:
-                    raise PoseLifterError("an uploaded photo or keypoint file is a single frame: nothing to play")
-                self.gui.sample.source.value = SOURCE_LABELS["motion"]
-                self._runner.request()
+        if self.sequence() is None:
+            if self.state.sample.upload is not None:
+                raise PoseLifterError("an uploaded photo or keypoint file is a single frame: nothing to play")
+            self.gui.sample.source.value = SOURCE_LABELS["motion"]
+            self._runner.request()
+            end = time.perf_counter() + 5.0
+            while self.sequence() is None and time.perf_counter() < end:  # (a pass in another thread shows it)
+                time.sleep(0.01)
             if self.sequence() is None:
                 raise PoseLifterError("nothing to play")
         self._playing.set()

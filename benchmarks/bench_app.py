@@ -9,8 +9,9 @@ root off, metrics, the 2D panel image, the per-joint clouds, the readout with it
 scene update queued for the client.
 
 Playback: the demo motion (17 joints, no Human3.6M needed) is played on the same tab for ``--play-seconds`` at
-25 redraws per second (noise level 0, and again at noise level 1 with the cloud); reported: frames shown per
-second and the server-side time of each frame (sample, lift, scene, readout).
+25 redraws per second (noise level 0, and again at noise level 1 with the cloud), and, where the data are present,
+Human3.6M S9 "Walking 1" (50-fps frames, every 2nd shown) on a headless view; reported: frames shown per second and
+the server-side time of each frame (sample, lift, scene, readout).
 
 Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--json out.json]``
 Exit status 1 when the drag p95 exceeds the target or playback shows fewer than 24 frames per second (unless
@@ -35,6 +36,7 @@ def main() -> int:
     p.add_argument("--cloud", type=int, default=64)
     p.add_argument("--target-ms", type=float, default=25.0)
     p.add_argument("--play-seconds", type=float, default=8.0)
+    p.add_argument("--no-h36m", action="store_true", help="skip the Human3.6M playback run even if the data are present")
     p.add_argument("--no-check", action="store_true")
     p.add_argument("--json", default=None, help="also write the result to this JSON file")
     args = p.parse_args()
@@ -79,18 +81,30 @@ def main() -> int:
                 times.append(1e3 * dt)
         t = np.array(times)
         play = {}
-        for level in (0.0, 1.0):
-            view.select_demo("walking")
-            view.gui.noise.level.value = level
-            view.play_ms.clear()
-            view.play_shown.clear()
-            view.gui.play.play.value = True  # click: plays the demo motion
+        from poselifter_app.samples import default_h36m_root
+
+        runs: list[tuple[str, float]] = [("demo_motion", 0.0), ("demo_motion", 1.0)]
+        h_app = None
+        if default_h36m_root() is not None and not args.no_h36m:  # (read at run time, never copied)
+            h_app = PoseLifterApp(server, h36m_root=default_h36m_root())
+            runs.append(("h36m_S9_Walking_1", 0.0))
+        for name, level in runs:
+            if name.startswith("h36m") and h_app is not None:
+                pv = h_app.headless_view()
+                pv.select_h36m(subject=9, sequence="Walking 1", camera=h_app.h36m.camera_ids[0], frame=0)
+            else:
+                pv = view
+                pv.select_demo("walking")
+            pv.gui.noise.level.value = level
+            pv.play_ms.clear()
+            pv.play_shown.clear()
+            pv.gui.play.play.value = True  # click: plays the demo motion
             time.sleep(args.play_seconds)
-            view.gui.play.play.value = True  # pause
-            shown = np.array(view.play_shown)
-            ms = np.array(view.play_ms)
+            pv.gui.play.play.value = True  # pause
+            shown = np.array(pv.play_shown)
+            ms = np.array(pv.play_ms)
             span = shown[-1] - shown[0] if len(shown) > 1 else float("nan")
-            play[f"noise_{level:g}"] = {"frames": int(len(ms)), "fps": round(float((len(shown) - 1) / span), 2),
+            play[f"{name}_noise_{level:g}"] = {"frames": int(len(ms)), "fps": round(float((len(shown) - 1) / span), 2),
                                         "frame_ms_p50": round(float(np.percentile(ms, 50)), 2),
                                         "frame_ms_p95": round(float(np.percentile(ms, 95)), 2),
                                         "frame_ms_max": round(float(ms.max()), 2)}

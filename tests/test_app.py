@@ -813,3 +813,48 @@ def test_h36m_sequence_plays_at_display_rate(h36m_app: PoseLifterApp) -> None:
         assert len(v.trail) >= 10
     finally:
         v.stop_playback()
+
+
+def test_latest_wins_runs_after_the_last_request() -> None:
+    """:class:`LatestWins` under concurrent requests: never two passes at once, and a pass starts after the last
+    request (so it sees the last value)."""
+    import threading
+    import time
+
+    from poselifter_app.viewer import LatestWins
+
+    value = {"v": 0}
+    seen: list[int] = []
+    running = threading.Lock()
+    overlaps = []
+
+    def work() -> None:
+        if not running.acquire(blocking=False):
+            overlaps.append(1)
+            return
+        try:
+            v = value["v"]
+            time.sleep(0.002)
+            seen.append(v)
+        finally:
+            running.release()
+
+    lw = LatestWins(work)
+
+    def client(k: int) -> None:
+        for i in range(200):
+            value["v"] = k * 1000 + i
+            lw.request()
+
+    threads = [threading.Thread(target=client, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    final = value["v"]
+    assert not overlaps and seen and seen[-1] == final and len(seen) < 800  # coalesced, and ends on the last value
+    with lw.holding():  # no pass inside the block; the request made in it runs at its end
+        value["v"] = -1
+        lw.request()
+        assert seen[-1] == final
+    assert seen[-1] == -1
