@@ -143,16 +143,18 @@ def frustum_corners(state: SessionState) -> np.ndarray:
     return image_plane(state, np.array([[0, 0], [W, 0], [W, H], [0, H]], np.float64))
 
 
-def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool) -> None:
-    """Pose, image and floor (``new_sample``), and frustum / image plane for the current focal length."""
+def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool, new_image: bool = True) -> None:
+    """Pose and floor (``new_sample``), image (``new_image``; frames of a sequence without photos share their
+    canvas), and frustum / image plane for the current focal length."""
     cam = state.sample.camera
     if new_sample:
         R = np.asarray(cam.R)
         nodes.frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
         nodes.frame.position = tuple(-R.T @ np.asarray(cam.t) / 1000.0)
+        nodes.floor.visible = state.sample.upload is None  # an upload's camera height is a guess
+    if new_sample and new_image:
         img = state.sample.image
         nodes.image.image = img if img is not None else canvas(cam.width, cam.height)
-        nodes.floor.visible = state.sample.upload is None  # an upload's camera height is a guess
     corners = frustum_corners(state)
     segs = [np.stack([np.zeros(3), c]) for c in corners]
     segs += [np.stack([corners[i], corners[(i + 1) % 4]]) for i in range(4)]

@@ -162,7 +162,8 @@ class SessionView:
         self._redraw_request = False
         self._flags = threading.Lock()
         self._last_plane: np.ndarray | None = None
-        self._base_key: str | None = None
+        self._base_key: tuple | None = None
+        self._image_key: tuple | None = None
         self._base: tuple[np.ndarray, float] | None = None
         self._view_key: tuple | None = None
         self._close_up = False
@@ -514,9 +515,10 @@ class SessionView:
             self.gui.joints.uv.value = uv
         poses = {"gt": s.keypoints_2d if (self.gui.lift.gt.value and s.has_gt_2d) else None,
                  "detected": s.detected_2d, "noisy": noisy if st.noise_level > 0 else None, "current": kp}
-        if self._base_key != s.key:
+        base_key = (id(s.image) if s.image is not None else None, st.image_size)  # (sequence frames share a canvas)
+        if self._base_key != base_key:
             self._base = scaled_base(s.image, size=st.image_size)
-            self._base_key = s.key
+            self._base_key = base_key
         self.gui.sample.image.image = overlay(s.image, size=st.image_size, poses=poses, selected=self.selected,
                                               prescaled=self._base)
         self._last_plane = draw_2d(self.scene.pose, st, kp, self._last_plane)
@@ -525,7 +527,11 @@ class SessionView:
         st = self.state
         with self.target.atomic():
             if new_sample or focal_changed:
-                draw_camera(self.scene.camera, st, new_sample=new_sample)
+                s = st.sample
+                image_key = (id(s.image) if s.image is not None else None, st.image_size, s.camera.name,
+                             s.upload is None)
+                draw_camera(self.scene.camera, st, new_sample=new_sample, new_image=image_key != self._image_key)
+                self._image_key = image_key
                 self._last_plane = None  # the plane moved: every joint sphere
             self._draw_2d(fr.current_2d, fr.noisy_2d)
             draw_pose(self.scene.pose, self.scene.camera, fr, show_gt=bool(self.gui.lift.gt.value))
