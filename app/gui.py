@@ -134,6 +134,9 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             spread=gui.add_markdown(""),
         )
         gui.add_markdown(LEGEND)
+        # The slider's value bubble covers the field above it while dragging; the number box beside each slider
+        # shows the value already (viser's client renders HTML as given: this style applies to the page).
+        gui.add_html("<style>.mantine-Slider-label{display:none !important}</style>")
     panel.dock_above(main)
 
     tabs = gui.add_tab_group()

@@ -194,9 +194,10 @@ class SessionView:
         first = app.demo.get(app.demo.names[0])
         self.state = SessionState(sample=first, model=app.default_model)
         with self.lock:
-            if h is not None:  # with Human3.6M the app opens on it
-                s, q = int(self._gui_subject()[1:]), self._gui_sequence()
-                first = h.get(s, q, h.camera_ids[0], 0)
+            if h is not None:  # with Human3.6M the app opens on it: a frame with a photo when there is one
+                s = int(self._gui_subject()[1:])
+                photos = [p for p in h.photo_frames() if p[0] == s] or h.photo_frames()
+                first = h.get(*photos[0]) if photos else h.get(s, self._gui_sequence(), h.camera_ids[0], 0)
             self._show_sample(first, reframe=True)
         self._wire()
         client_id = target.client_id if isinstance(target, viser.ClientHandle) else None
@@ -483,7 +484,7 @@ class SessionView:
                 p.frame.max = seq.num_frames - 1
             if p.frame.value != idx:
                 p.frame.value = idx
-            p.info.content = f"<small>{seq.label}: frame {idx + 1} / {seq.num_frames} ({seq.fps:g} fps)</small>"
+            p.info.content = f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)</small>"
         else:
             p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
                 if src == "demo" else "<small>a still upload (video: issue 14)</small>"

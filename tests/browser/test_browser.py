@@ -201,6 +201,19 @@ def test_drag_playback_upload_download() -> None:
         colours = len(np.unique((img // 16).reshape(-1, 3), axis=0))
         assert float(img.std()) > 8.0 and colours > 20, f"WebGL canvas looks blank (std {img.std():.1f}, {colours} colours)"
 
+        # 1b. a slider's value bubble does not cover the fields around it while dragging (the box shows the value)
+        thumb = _focal_slider(page)
+        tb = thumb.bounding_box()
+        page.mouse.move(tb["x"] + tb["width"] / 2, tb["y"] + tb["height"] / 2)
+        page.mouse.down()
+        page.mouse.move(tb["x"] + 40, tb["y"] + tb["height"] / 2, steps=4)
+        time.sleep(0.3)
+        bubbles = page.locator(".mantine-Slider-label").all()
+        assert not any(b.is_visible() for b in bubbles)
+        page.mouse.up()
+        assert _wait(lambda: view.state.focal_px != view.state.sample.camera.alpha, 30)  # the drag did move it
+        view.reset_focal()
+
         # 2. README screenshot: the overview with a light noise cloud
         view.select_demo("walking")
         view.gui.noise.cloud.value = 24
