@@ -22,6 +22,7 @@ import collections
 import contextlib
 import functools
 import logging
+import math
 import threading
 import time
 import traceback
@@ -184,6 +185,8 @@ class SessionView:
         self._playing = threading.Event()
         self._player: threading.Thread | None = None
         self._runner = LatestWins(self._sync)
+        self._pass_t0 = math.inf
+        """Start of the running sync pass (time.time()); a control updated after it is not overwritten (:meth:`_put`)."""
 
         h = app.h36m
         self.gui: Gui = build_gui(
@@ -282,54 +285,68 @@ class SessionView:
     def _sync(self) -> None:
         """Make the state, scene and readout match what the GUI holds now (see the module docstring)."""
         with self.lock:
+            self._pass_t0 = time.time()  # (before reading any control)
             try:
-                req = self._requested_sample()
+                self._sync_pass()
+            finally:
+                self._pass_t0 = math.inf
+
+    def _put(self, handle: Any, value: Any) -> None:
+        """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
+        pass its callback asked for applies it)."""
+        if handle.value != value and handle.update_timestamp <= self._pass_t0:
+            handle.value = value
+
+    def _sync_pass(self) -> None:
+        """One pass of :meth:`_sync` (under :attr:`lock`)."""
+        try:
+            req = self._requested_sample()
+        except PoseLifterError as exc:
+            self._show_sample_controls(self.state)  # the pickers show the sample in use again
+            self.show_message(str(exc), error=True)
+            req = None
+        if req is not None and req.key != self.state.sample.key:
+            try:
+                self._show_sample(req, reframe=False)
             except PoseLifterError as exc:
-                self._show_sample_controls(self.state)  # the pickers show the sample in use again
+                self._show_sample_controls(self.state)
                 self.show_message(str(exc), error=True)
-                req = None
-            if req is not None and req.key != self.state.sample.key:
-                try:
-                    self._show_sample(req, reframe=False)
-                except PoseLifterError as exc:
-                    self._show_sample_controls(self.state)
-                    self.show_message(str(exc), error=True)
-            old = self.state
-            values = self._control_values()
-            st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
-            with self._flags:
-                drags, self._drags = self._drags, {}
-                reset, self._reset_request = self._reset_request, False
-                redraw, self._redraw_request = self._redraw_request, False
-            notes: list[str] = [r.message for r in rejected]
-            if reset:
-                st = ss.reset_joints(st)
-            refused_drag = False
-            for j, uv in drags.items():
-                try:
-                    st = ss.with_joint(st, j, uv)
-                except PoseLifterError as exc:
-                    notes.append(str(exc))
-                    refused_drag = True
-            for r in rejected:
-                self._set_control(r.control, r.value)
-            if st.input_kind != old.input_kind and st.sample.has_gt_2d:
-                self._input_pref = st.input_kind
-            if ss.same_lift(st, old) and not redraw and not reset:
-                if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
-                    self._last_plane = None
-                    self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
-                for n in notes:
-                    self.show_message(n, error=True)
-                return
+        old = self.state
+        values = self._control_values()
+        st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
+        with self._flags:
+            drags, self._drags = self._drags, {}
+            reset, self._reset_request = self._reset_request, False
+            redraw, self._redraw_request = self._redraw_request, False
+        notes: list[str] = [r.message for r in rejected]
+        if reset:
+            st = ss.reset_joints(st)
+        refused_drag = False
+        for j, uv in drags.items():
             try:
-                self._apply(st)
-            except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
+                st = ss.with_joint(st, j, uv)
+            except PoseLifterError as exc:
                 notes.append(str(exc))
-                self._show_controls(old)
-                self._draw_2d(old.keypoints)
+                refused_drag = True
+        for r in rejected:
+            self._set_control(r.control, r.value)
+        if st.input_kind != old.input_kind and st.sample.has_gt_2d:
+            self._input_pref = st.input_kind
+        if ss.same_lift(st, old) and not redraw and not reset:
+            if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
+                self._last_plane = None
+                self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
             for n in notes:
                 self.show_message(n, error=True)
+            return
+        try:
+            self._apply(st)
+        except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
+            notes.append(str(exc))
+            self._show_controls(old)
+            self._draw_2d(old.keypoints)
+        for n in notes:
+            self.show_message(n, error=True)
 
     def _control_values(self) -> ss.ControlValues:
         g = self.gui
@@ -344,8 +361,7 @@ class SessionView:
                   "analytic": g.lift.analytic}[name]
         if name == "focal_px":
             value = float(round(value))
-        if handle.value != value:
-            handle.value = value
+        self._put(handle, value)
 
     def _show_controls(self, st: SessionState) -> None:
         """Every value control shows ``st``."""
@@ -396,8 +412,9 @@ class SessionView:
         if src == "demo":
             name = g.demo.value
             return None if shown == f"demo/{name}" else self.app.demo.get(name)
-        if src == "motion":
-            i = int(self.gui.play.frame.value) if shown.startswith("motion/") else 0
+        fr = self.gui.play.frame
+        if src == "motion":  # the frame slider's value, unless it was set before switching to the motion
+            i = int(fr.value) if shown.startswith("motion/") or fr.update_timestamp > g.source.update_timestamp else 0
             return None if shown == f"motion/{i % self.app.motion.num_frames}" else self.app.motion.frame(i).people[0]
         if src == "upload":
             if self._last_upload is None:
@@ -406,7 +423,7 @@ class SessionView:
         h = self.app.h36m
         assert h is not None and g.subject is not None and g.sequence is not None and g.camera is not None
         if g.photo is not None and g.photo.value != "(none)" and g.photo.update_timestamp >= max(
-                p.update_timestamp for p in (g.subject, g.sequence, g.camera, self.gui.play.frame)):
+                p.update_timestamp for p in (g.subject, g.sequence, g.camera, fr)):
             s, rest = g.photo.value.split(" ", 1)
             seq, cam, fr = rest.rsplit(" ", 2)
             subject, sequence, camera, frame = int(s[1:]), seq, cam, int(fr)
@@ -420,7 +437,13 @@ class SessionView:
             last = shown if shown.startswith("h36m/") else self._last_h36m
             parts = last.split("/") if last else []
             same_seq = bool(parts) and parts[1] == f"S{subject}" and parts[2] == sequence
-            frame = (int(self.gui.play.frame.value) if shown.startswith("h36m/") else int(parts[4])) if same_seq else 0
+            if same_seq and shown.startswith("h36m/"):
+                frame = int(fr.value)
+            elif same_seq:  # back to Human3.6M: its last frame, unless the slider was moved since
+                frame = int(fr.value) if fr.update_timestamp > g.source.update_timestamp else int(parts[4])
+            else:  # another sequence: its start, unless the slider was moved since it was picked
+                frame = int(fr.value) if fr.update_timestamp > max(g.subject.update_timestamp,
+                                                                   g.sequence.update_timestamp) else 0
             frame = min(frame, h.num_frames(subject, sequence) - 1)
         key = f"h36m/S{subject}/{sequence}/{camera}/{frame}"
         return None if shown == key else h.get(subject, sequence, camera, frame)
@@ -469,21 +492,19 @@ class SessionView:
         opts = ss.input_options(sample)
         if list(g.input.options) != opts:
             g.input.options = opts
-        if g.input.value != st.input_kind:
-            g.input.value = st.input_kind
+        self._put(g.input, st.input_kind)
         hi = focal_max(sample)
         if self.gui.lift.focal.max != hi:
             self.gui.lift.focal.max = hi
         self._set_control("focal_px", st.focal_px)
         if src == "demo":
-            g.demo.value = sample.key.split("/", 1)[1]
+            self._put(g.demo, sample.key.split("/", 1)[1])
         seq = self.sequence()
         idx = self._frame_index()
         if seq is not None and idx is not None:
             if p.frame.max != seq.num_frames - 1:
                 p.frame.max = seq.num_frames - 1
-            if p.frame.value != idx:
-                p.frame.value = idx
+            self._put(p.frame, idx)
             p.info.content = f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)</small>"
         else:
             p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
@@ -495,14 +516,14 @@ class SessionView:
             seqs = self.app.h36m.sequences(int(subj[1:]))
             if list(g.sequence.options) != seqs:
                 g.sequence.options = seqs
-            g.subject.value = subj
-            g.sequence.value = sequence
-            g.camera.value = camera
+            self._put(g.subject, subj)
+            self._put(g.sequence, sequence)
+            self._put(g.camera, camera)
             entry = f"{subj} {sequence} {camera} {frame}"
-            g.photo.value = entry if entry in g.photo.options else "(none)"
+            self._put(g.photo, entry if entry in g.photo.options else "(none)")
         if src == "upload" and SOURCE_LABELS["upload"] not in g.source.options:
             g.source.options = [*g.source.options, SOURCE_LABELS["upload"]]
-        g.source.value = SOURCE_LABELS[src]
+        self._put(g.source, SOURCE_LABELS[src])
 
     # ------------------------------------------------------------------------------------------
     # Drawing

@@ -181,6 +181,10 @@ def test_joint_nudge_via_gui(view: SessionView) -> None:
 def test_analytic_toggle_and_gt_checkbox(view: SessionView) -> None:
     view.gui.lift.analytic.value = True
     assert view.frame.analytic is not None and view.scene.pose.analytic.visible
+    # dashed (4 dashes a bone, not hidden under the lifted bones) and its root marked
+    assert np.asarray(view.scene.pose.analytic.points).shape == (16 * 4, 2, 3) and view.scene.pose.analytic_root.visible
+    np.testing.assert_allclose(view.scene.pose.analytic_root.position, view.frame.analytic[0] / 1000, atol=1e-6)
+    assert "**Analytic root** Z" in view.gui.readout.readout.content
     assert "analytic root error" in view.frame.metrics
     np.testing.assert_allclose(view.frame.analytic - view.frame.analytic[0], view.frame.lifted - view.frame.lifted[0],
                                atol=1e-6)
@@ -594,10 +598,13 @@ def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
     """Bursts of values with no spacing, to two tabs at once: the state, the scene and the readout end on the last
     value of every control, in each tab (viser runs the callbacks on a thread pool, in any order)."""
     n0 = len(app.views)
-    tabs = [FakeTab(app.server), FakeTab(app.server)]
+    tabs, views = [], []
     try:
-        assert wait_for(lambda: len(app.views) == n0 + 2)
-        views = list(app.views.values())[-2:]
+        for _ in range(2):  # one at a time, so each fake tab is paired with its own view
+            before = set(app.views)
+            tabs.append(FakeTab(app.server))
+            assert wait_for(lambda before=before: len(set(app.views) - before) == 1)
+            views.append(app.views[next(iter(set(app.views) - before))])
         models = app.pool.names
         for rep in range(3):
             for k, (tab, v) in enumerate(zip(tabs, views)):
@@ -615,6 +622,23 @@ def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
                 assert v.frame.alpha == pytest.approx(f_last) and v.frame.cloud is not None
                 z_scene = float(np.asarray(v.scene.camera.root.position)[2]) * 1000
                 assert z_scene == pytest.approx(v.frame.root[2], rel=1e-5)
+        # the sample pickers too: a burst over the demo samples, then over the demo motion's frames
+        names = list(app.demo.names)
+        for k, (tab, v) in enumerate(zip(tabs, views)):
+            for i in range(30):
+                _send_value(tab, v.gui.sample.demo, names[(i + k) % len(names)])
+        for k, v in enumerate(views):
+            last = names[(29 + k) % len(names)]
+            assert wait_for(lambda v=v, last=last: v.state.sample.key == f"demo/{last}", timeout=30), v.state.sample.key
+            assert v.gui.sample.demo.value == last and v.frame.gt_3d is not None
+            np.testing.assert_allclose(v.frame.gt_3d, app.demo.get(last).pose_3d)
+        for k, (tab, v) in enumerate(zip(tabs, views)):
+            _send_value(tab, v.gui.sample.source, "demo motion")
+            for i in range(40):
+                _send_value(tab, v.gui.play.frame, 3 * i + k)
+        for k, v in enumerate(views):
+            assert wait_for(lambda v=v, k=k: v.state.sample.key == f"motion/{3 * 39 + k}", timeout=30), v.state.sample.key
+            np.testing.assert_allclose(v.frame.gt_3d, app.motion.frame(3 * 39 + k).people[0].pose_3d)
     finally:
         for t in tabs:
             t.close()
