@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -220,3 +221,86 @@ def same_lift(a: SessionState, b: SessionState) -> bool:
     return (a.sample is b.sample and a.model == b.model and a.input_kind == b.input_kind and a.focal_px == b.focal_px
             and a.noise_level == b.noise_level and a.seed == b.seed and a.cloud_samples == b.cloud_samples
             and a.analytic == b.analytic and np.array_equal(a.keypoints, b.keypoints))
+
+
+@dataclass(frozen=True)
+class Pick:
+    """A picker's value and when it was last set (``time.time()``; 0 = never)."""
+
+    value: Any
+    t: float = 0.0
+
+
+@dataclass(frozen=True)
+class Picks:
+    """The Sample tab's pickers: ``source`` is a key of :data:`SOURCES`; the Human3.6M ones are None without the
+    data."""
+
+    source: Pick
+    demo: Pick
+    frame: Pick
+    subject: Pick | None = None
+    sequence: Pick | None = None
+    camera: Pick | None = None
+    photo: Pick | None = None
+
+
+SOURCES: tuple[str, ...] = ("demo", "motion", "h36m", "upload")
+
+
+def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: str | None, sources: list[str],
+                  h36m: Any | None, motion_frames: int) -> str:
+    """The key of the sample the pickers ask for (``demo/<name>``, ``motion/<i>``, ``h36m/S<s>/<seq>/<cam>/<f>`` or
+    the last upload's key), given the key ``shown`` now. The sample rules:
+
+    * the source is the source picker's, unless a picker of another source (demo sample; subject, sequence,
+      camera or frame with photo) was set after it: using a picker shows its source;
+    * the frame slider counts for the shown sequence, or when it was moved after the source / sequence was picked;
+      otherwise the motion starts at 0, a new Human3.6M sequence at 0, and coming back to Human3.6M returns to the
+      last frame shown there (``last_h36m``);
+    * a "frame with photo" entry set after the other Human3.6M pickers names its frame.
+
+    Raises :class:`PoseLifterError` for values that name nothing (crafted values, nothing uploaded yet).
+    """
+    if p.source.value not in sources:
+        raise PoseLifterError(f"unknown sample source {str(p.source.value)[:40]!r}; expected one of {sources}")
+    cands = [(p.source.t, str(p.source.value)), (p.demo.t, "demo")]
+    h_picks = [q for q in (p.subject, p.sequence, p.camera, p.photo) if q is not None]
+    if h_picks and "h36m" in sources:
+        cands.append((max(q.t for q in h_picks), "h36m"))
+    src = max(cands, key=lambda c: c[0])[1]
+    fr = p.frame
+    if src == "demo":
+        return f"demo/{p.demo.value}"
+    if src == "motion":
+        i = int(fr.value) if shown.startswith("motion/") or fr.t > p.source.t else 0
+        return f"motion/{i % max(motion_frames, 1)}"
+    if src == "upload":
+        if last_upload is None:
+            raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
+        return last_upload
+    assert h36m is not None and p.subject is not None and p.sequence is not None and p.camera is not None
+    if p.photo is not None and p.photo.value != "(none)" and p.photo.t >= max(
+            q.t for q in (p.subject, p.sequence, p.camera, fr)):
+        try:
+            s, rest = str(p.photo.value).split(" ", 1)
+            seq, cam, f = rest.rsplit(" ", 2)
+            return f"h36m/{s}/{seq}/{cam}/{int(f)}"
+        except ValueError:
+            raise PoseLifterError(f"unknown frame with photo {str(p.photo.value)[:60]!r}") from None
+    if p.subject.value not in [f"S{s}" for s in h36m.subjects]:
+        raise PoseLifterError(f"unknown subject {str(p.subject.value)[:20]!r}")
+    subject = int(p.subject.value[1:])
+    seqs = h36m.sequences(subject)
+    sequence = p.sequence.value if p.sequence.value in seqs else seqs[0]
+    last = shown if shown.startswith("h36m/") else last_h36m
+    parts = last.split("/") if last else []
+    same_seq = bool(parts) and parts[1] == f"S{subject}" and parts[2] == sequence
+    if same_seq and shown.startswith("h36m/"):
+        frame = int(fr.value)
+    elif same_seq:  # back to Human3.6M: its last frame, unless the slider was moved since
+        frame = int(fr.value) if fr.t > p.source.t else int(parts[4])
+    else:  # another sequence: its start, unless the slider was moved since it was picked
+        frame = int(fr.value) if fr.t > max(p.subject.t, p.sequence.t) else 0
+    frame = min(frame, h36m.num_frames(subject, sequence) - 1)
+    return f"h36m/S{subject}/{sequence}/{p.camera.value}/{frame}"

@@ -392,61 +392,29 @@ class SessionView:
         assert self.gui.sample.sequence is not None
         return self.gui.sample.sequence.value
 
-    def _effective_source(self) -> str:
-        """The source asked for: the source dropdown's, unless a picker of another source was changed after it."""
+    def _picks(self) -> ss.Picks:
         g = self.gui.sample
-        label = g.source.value
-        if label not in LABEL_SOURCES or LABEL_SOURCES[label] not in self.app.sources:
-            raise PoseLifterError(f"unknown sample source {label[:40]!r}; expected one of "
-                                  f"{[SOURCE_LABELS[s] for s in self.app.sources]}")
-        cands = [(g.source.update_timestamp, LABEL_SOURCES[label]), (g.demo.update_timestamp, "demo")]
-        if g.h36m_pickers:
-            cands.append((max(h.update_timestamp for h in g.h36m_pickers), "h36m"))
-        return max(cands, key=lambda c: c[0])[1]
+
+        def pick(h: Any) -> ss.Pick | None:
+            return None if h is None else ss.Pick(h.value, h.update_timestamp)
+
+        src = g.source.value
+        return ss.Picks(source=ss.Pick(LABEL_SOURCES.get(src, src), g.source.update_timestamp),
+                        demo=ss.Pick(g.demo.value, g.demo.update_timestamp),
+                        frame=ss.Pick(self.gui.play.frame.value, self.gui.play.frame.update_timestamp),
+                        subject=pick(g.subject), sequence=pick(g.sequence), camera=pick(g.camera), photo=pick(g.photo))
 
     def _requested_sample(self) -> Sample | None:
-        """The sample the pickers ask for (None: the one shown). Raises for values that name nothing."""
-        g = self.gui.sample
-        src = self._effective_source()
+        """The sample the pickers ask for (:func:`poselifter_app.session.requested_key`); None: the one shown."""
         shown = self.state.sample.key
-        if src == "demo":
-            name = g.demo.value
-            return None if shown == f"demo/{name}" else self.app.demo.get(name)
-        fr = self.gui.play.frame
-        if src == "motion":  # the frame slider's value, unless it was set before switching to the motion
-            i = int(fr.value) if shown.startswith("motion/") or fr.update_timestamp > g.source.update_timestamp else 0
-            return None if shown == f"motion/{i % self.app.motion.num_frames}" else self.app.motion.frame(i).people[0]
-        if src == "upload":
-            if self._last_upload is None:
-                raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
-            return None if shown == self._last_upload.key else self._last_upload
-        h = self.app.h36m
-        assert h is not None and g.subject is not None and g.sequence is not None and g.camera is not None
-        if g.photo is not None and g.photo.value != "(none)" and g.photo.update_timestamp >= max(
-                p.update_timestamp for p in (g.subject, g.sequence, g.camera, fr)):
-            s, rest = g.photo.value.split(" ", 1)
-            seq, cam, fr = rest.rsplit(" ", 2)
-            subject, sequence, camera, frame = int(s[1:]), seq, cam, int(fr)
-        else:
-            if g.subject.value not in [f"S{s}" for s in h.subjects]:
-                raise PoseLifterError(f"unknown subject {g.subject.value[:20]!r}")
-            subject = int(g.subject.value[1:])
-            seqs = h.sequences(subject)
-            sequence = g.sequence.value if g.sequence.value in seqs else seqs[0]
-            camera = g.camera.value
-            last = shown if shown.startswith("h36m/") else self._last_h36m
-            parts = last.split("/") if last else []
-            same_seq = bool(parts) and parts[1] == f"S{subject}" and parts[2] == sequence
-            if same_seq and shown.startswith("h36m/"):
-                frame = int(fr.value)
-            elif same_seq:  # back to Human3.6M: its last frame, unless the slider was moved since
-                frame = int(fr.value) if fr.update_timestamp > g.source.update_timestamp else int(parts[4])
-            else:  # another sequence: its start, unless the slider was moved since it was picked
-                frame = int(fr.value) if fr.update_timestamp > max(g.subject.update_timestamp,
-                                                                   g.sequence.update_timestamp) else 0
-            frame = min(frame, h.num_frames(subject, sequence) - 1)
-        key = f"h36m/S{subject}/{sequence}/{camera}/{frame}"
-        return None if shown == key else h.get(subject, sequence, camera, frame)
+        key = ss.requested_key(self._picks(), shown=shown, last_h36m=self._last_h36m,
+                               last_upload=self._last_upload.key if self._last_upload is not None else None,
+                               sources=self.app.sources, h36m=self.app.h36m, motion_frames=self.app.motion.num_frames)
+        if key == shown:
+            return None
+        if self._last_upload is not None and key == self._last_upload.key:
+            return self._last_upload
+        return self.app.sample(key)
 
     def sequence(self) -> SequenceSource | None:
         """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""
@@ -1076,6 +1044,20 @@ class PoseLifterApp:
         server.gui.configure_theme(control_width="large", dark_mode=False)
         server.on_client_connect(self._on_connect)
         server.on_client_disconnect(self._on_disconnect)
+
+    def sample(self, key: str) -> Sample:
+        """The demo, demo-motion or Human3.6M sample of ``key`` (see :func:`poselifter_app.session.requested_key`);
+        raises :class:`PoseLifterError` for keys that name nothing."""
+        src, _, rest = key.partition("/")
+        if src == "demo":
+            return self.demo.get(rest)
+        if src == "motion" and rest.isdigit():
+            return self.motion.frame(int(rest)).people[0]
+        if src == "h36m" and self.h36m is not None:
+            parts = rest.split("/")
+            if len(parts) == 4 and parts[0][:1] == "S" and parts[0][1:].isdigit() and parts[3].lstrip("-").isdigit():
+                return self.h36m.get(int(parts[0][1:]), parts[1], parts[2], int(parts[3]))
+        raise PoseLifterError(f"no sample {key[:80]!r}")
 
     def h36m_sequence(self, subject: int, sequence: str, camera: str) -> H36MSequence:
         assert self.h36m is not None

@@ -882,3 +882,49 @@ def test_latest_wins_runs_after_the_last_request() -> None:
         lw.request()
         assert seen[-1] == final
     assert seen[-1] == -1
+
+
+def test_sample_rules_without_a_view() -> None:
+    """:func:`requested_key`: the picker set last names the source; the frame slider's rules."""
+    from poselifter_app.session import Pick, Picks, requested_key
+
+    from lifter import PoseLifterError
+
+    class H:  # a stand-in catalog: two subjects, 100-frame sequences
+        subjects = (9, 11)
+
+        def sequences(self, s: int) -> list[str]:
+            return ["Walking 1", "Posing 1"]
+
+        def num_frames(self, s: int, q: str) -> int:
+            return 100
+
+    kw = dict(last_h36m="h36m/S9/Walking 1/c1/40", last_upload=None, sources=["demo", "motion", "h36m", "upload"],
+              h36m=H(), motion_frames=250)
+    base = dict(demo=Pick("walking", 1.0), frame=Pick(7, 2.0), subject=Pick("S9", 1.0), sequence=Pick("Walking 1", 1.0),
+                camera=Pick("c1", 1.0), photo=Pick("(none)", 1.0))
+    assert requested_key(Picks(source=Pick("demo", 5.0), **base), shown="h36m/S9/Walking 1/c1/7", **kw) == "demo/walking"
+    # a Human3.6M picker set after the source picker shows Human3.6M (never greyed out)
+    b = dict(base, camera=Pick("c2", 6.0))
+    assert requested_key(Picks(source=Pick("demo", 5.0), **b), shown="demo/walking", **kw) == "h36m/S9/Walking 1/c2/40"
+    # the frame slider moved after the switch counts; a new sequence starts at 0; frames are clamped
+    b = dict(base, frame=Pick(77, 9.0))
+    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="demo/walking", **kw) == "h36m/S9/Walking 1/c1/77"
+    b = dict(base, sequence=Pick("Posing 1", 6.0))
+    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="h36m/S9/Walking 1/c1/7", **kw) == "h36m/S9/Posing 1/c1/0"
+    b = dict(base, frame=Pick(10**6, 9.0))
+    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="h36m/S9/Walking 1/c1/7", **kw).endswith("/99")
+    # the motion: from its start when switched to, else the slider (wrapped)
+    assert requested_key(Picks(source=Pick("motion", 5.0), **base), shown="demo/walking", **kw) == "motion/0"
+    b = dict(base, frame=Pick(260, 9.0))
+    assert requested_key(Picks(source=Pick("motion", 5.0), **b), shown="motion/3", **kw) == "motion/10"
+    # a photo entry set last names its frame
+    b = dict(base, photo=Pick("S11 Posing 1 c3 20", 9.0))
+    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="demo/walking", **kw) == "h36m/S11/Posing 1/c3/20"
+    for bad in (dict(base, subject=Pick("S99", 9.0)), dict(base, photo=Pick("garbage", 9.0))):
+        with pytest.raises(PoseLifterError):
+            requested_key(Picks(source=Pick("h36m", 5.0), **bad), shown="demo/walking", **kw)
+    with pytest.raises(PoseLifterError, match="nothing uploaded"):
+        requested_key(Picks(source=Pick("upload", 5.0), **base), shown="demo/walking", **kw)
+    with pytest.raises(PoseLifterError, match="unknown sample source"):
+        requested_key(Picks(source=Pick("<b>x</b>", 5.0), **base), shown="demo/walking", **kw)
