@@ -11,7 +11,13 @@ from the demo samples' authored 3D poses (blended one into the next while the bo
 
 from __future__ import annotations
 
+import collections
+import logging
 import math
+import threading
+import time
+import traceback
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -20,6 +26,8 @@ import numpy as np
 from lifter import Camera
 
 from .samples import DemoCatalog, H36MCatalog, Sample
+
+log = logging.getLogger("poselifter.app")
 
 DISPLAY_FPS: float = 25.0
 """Playback redraws per second."""
@@ -139,3 +147,74 @@ class PlayClock:
     def index(self, now: float) -> int:
         steps = math.floor((now - self.t0) * self.fps * self.speed + 1e-9)
         return (self.index0 + steps) % max(self.num_frames, 1)
+
+
+class Player:
+    """Plays on a thread, :data:`DISPLAY_FPS` times a second: ``position()`` says which sequence and frame are shown
+    (None stops), ``speed()`` the speed; the frame :class:`PlayClock` gives is passed to ``show(index)``; frames are
+    skipped, never slowed down, when a redraw is late. A change of sequence, frame (scrubbing) or speed re-anchors
+    the clock. ``on_stop()`` runs when playback ends by itself. Server-side time of each ``show`` (ms) and the
+    time it was shown are kept in :attr:`frame_ms` and :attr:`shown_at`."""
+
+    def __init__(self, *, position: Callable[[], tuple[SequenceSource, int] | None], speed: Callable[[], float],
+                 show: Callable[[int], None], on_stop: Callable[[], None], fps: float = DISPLAY_FPS) -> None:
+        self._position, self._speed, self._show, self._on_stop = position, speed, show, on_stop
+        self.period = 1.0 / fps
+        self._playing = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.frame_ms: collections.deque[float] = collections.deque(maxlen=5000)
+        self.shown_at: collections.deque[float] = collections.deque(maxlen=5000)
+
+    @property
+    def playing(self) -> bool:
+        return self._playing.is_set()
+
+    def start(self) -> None:
+        if self.playing:
+            return
+        self._playing.set()
+        self._thread = threading.Thread(target=self._loop, name="poselifter-play", daemon=True)
+        self._thread.start()
+
+    def stop(self, *, wait: bool = True) -> None:
+        self._playing.clear()
+        t = self._thread
+        if wait and t is not None and t is not threading.current_thread():
+            t.join(timeout=5.0)
+
+    def _loop(self) -> None:
+        clock: PlayClock | None = None
+        key, shown, speed = None, -1, None
+        next_t = time.perf_counter()
+        try:
+            while self._playing.is_set():
+                pos = self._position()
+                if pos is None:
+                    break
+                seq, idx = pos
+                now = time.perf_counter()
+                sp = float(self._speed())
+                if clock is None or seq.key != key or idx != shown or sp != speed:
+                    clock = PlayClock(fps=seq.fps, num_frames=seq.num_frames, speed=sp)
+                    clock.restart(index=idx, now=now)
+                    key, shown, speed = seq.key, idx, sp
+                target = clock.index(now)
+                if target != shown:
+                    t0 = time.perf_counter()
+                    self._show(target)
+                    t1 = time.perf_counter()
+                    self.frame_ms.append(1e3 * (t1 - t0))
+                    self.shown_at.append(t1)
+                    shown = target
+                next_t += self.period
+                delay = next_t - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+                else:
+                    next_t = time.perf_counter()
+        except Exception:  # noqa: BLE001 - a failed frame ends playback, never the server
+            log.error("playback failed:\n%s", traceback.format_exc())
+        finally:
+            if self._playing.is_set():
+                self._playing.clear()
+                self._on_stop()

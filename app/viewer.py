@@ -18,7 +18,6 @@ are used only in :mod:`.viser_hooks`.
 
 from __future__ import annotations
 
-import collections
 import contextlib
 import functools
 import logging
@@ -44,7 +43,7 @@ from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, rea
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
 from .noise import ErrorModelLike, default_error_model, model_name
-from .playback import DISPLAY_FPS, DemoMotion, H36MSequence, PlayClock, SequenceSource
+from .playback import DemoMotion, H36MSequence, Player, SequenceSource
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
 from .scene import (
     HEAD_ON_JOINT_RADIUS,
@@ -178,12 +177,12 @@ class SessionView:
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         self.trail: dict[int, np.ndarray] = {}
         self._trail_key: tuple | None = None
-        self.play_ms: collections.deque[float] = collections.deque(maxlen=5000)
+        self.player = Player(position=self._play_position, speed=lambda: float(self.gui.play.speed.value),
+                             show=self._show_frame, on_stop=self._player_stopped)
+        self.play_ms = self.player.frame_ms
         """Server-side time of each frame shown by playback (ms)."""
-        self.play_shown: collections.deque[float] = collections.deque(maxlen=5000)
+        self.play_shown = self.player.shown_at
         """perf_counter() time at which each playback frame was shown."""
-        self._playing = threading.Event()
-        self._player: threading.Thread | None = None
         self._runner = LatestWins(self._sync)
         self._pass_t0 = math.inf
         """Start of the running sync pass (time.time()); a control updated after it is not overwritten (:meth:`_put`)."""
@@ -854,7 +853,20 @@ class SessionView:
     # ------------------------------------------------------------------------------------------
     @property
     def playing(self) -> bool:
-        return self._playing.is_set()
+        return self.player.playing
+
+    def _play_position(self) -> tuple[SequenceSource, int] | None:
+        seq = self.sequence()
+        return None if seq is None else (seq, int(self.gui.play.frame.value))
+
+    def _show_frame(self, index: int) -> None:
+        self.gui.play.frame.value = index  # a sync pass shows it (here, or in the pass running now)
+
+    def _player_stopped(self) -> None:
+        try:
+            self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
+        except Exception:  # noqa: BLE001 - the tab may be gone
+            pass
 
     @control
     def toggle_play(self) -> None:
@@ -873,60 +885,12 @@ class SessionView:
                 time.sleep(0.01)
             if self.sequence() is None:
                 raise PoseLifterError("nothing to play")
-        self._playing.set()
         self.gui.play.play.label, self.gui.play.play.icon = "pause", viser.Icon.PLAYER_PAUSE
-        self._player = threading.Thread(target=self._play_loop, name="poselifter-play", daemon=True)
-        self._player.start()
+        self.player.start()
 
     def stop_playback(self, *, wait: bool = True) -> None:
-        self._playing.clear()
-        t = self._player
-        if wait and t is not None and t is not threading.current_thread():
-            t.join(timeout=5.0)
-        self._player = None
-        try:
-            self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
-        except Exception:  # noqa: BLE001 - the tab may be gone
-            pass
-
-    def _play_loop(self) -> None:
-        """Show the frame :class:`PlayClock` says, :data:`DISPLAY_FPS` times a second (frames are skipped, never
-        slowed down, when a redraw is late). Stops when the tab shows something that is not a sequence."""
-        period = 1.0 / DISPLAY_FPS
-        clock: PlayClock | None = None
-        key, shown, speed = None, -1, None
-        next_t = time.perf_counter()
-        try:
-            while self._playing.is_set():
-                seq, idx = self.sequence(), self._frame_index()
-                if seq is None or idx is None:
-                    break
-                now = time.perf_counter()
-                sp = float(self.gui.play.speed.value)
-                if clock is None or seq.key != key or idx != shown or sp != speed:  # new sequence / scrubbed / speed
-                    clock = PlayClock(fps=seq.fps, num_frames=seq.num_frames, speed=sp)
-                    clock.restart(index=idx, now=now)
-                    key, shown, speed = seq.key, idx, sp
-                target = clock.index(now)
-                if target != shown:
-                    t0 = time.perf_counter()
-                    self.gui.play.frame.value = target  # a sync pass shows it (here, or in a running pass)
-                    self.play_ms.append(1e3 * (time.perf_counter() - t0))
-                    self.play_shown.append(time.perf_counter())
-                    shown = self._frame_index() if self._frame_index() is not None else target
-                    if shown != target:
-                        clock.restart(index=shown if shown is not None else target, now=time.perf_counter())
-                next_t += period
-                delay = next_t - time.perf_counter()
-                if delay > 0:
-                    time.sleep(delay)
-                else:
-                    next_t = time.perf_counter()
-        except Exception:  # noqa: BLE001
-            log.error("playback failed:\n%s", traceback.format_exc())
-        finally:
-            if self._playing.is_set():
-                self.stop_playback(wait=False)
+        self.player.stop(wait=wait)
+        self._player_stopped()
 
     # ------------------------------------------------------------------------------------------
     # Upload / download

@@ -615,9 +615,11 @@ def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
                 _send_value(tab, v.gui.lift.model, models[(rep + k) % len(models)])
             for k, v in enumerate(views):
                 f_last = 1000 + 10 * 39 + 3 * k + rep
-                ok = wait_for(lambda v=v, f=f_last, k=k: v.state.focal_px == f and v.state.noise_level == 0.95
-                              and v.state.seed == 39 + k and _focal_in_readout(v) == f, timeout=30)
-                assert ok, (v.state.focal_px, v.state.noise_level, v.state.seed, v.gui.readout.readout.content[:60])
+                m_last = models[(rep + k) % len(models)]
+                ok = wait_for(lambda v=v, f=f_last, k=k, m=m_last: v.state.focal_px == f and v.state.noise_level == 0.95
+                              and v.state.seed == 39 + k and v.state.model == m and _focal_in_readout(v) == f, timeout=30)
+                assert ok, (v.state.focal_px, v.state.noise_level, v.state.seed, v.state.model,
+                            v.gui.readout.readout.content[:60])
                 assert v.gui.lift.focal.value == f_last and v.state.model == models[(rep + k) % len(models)]
                 assert v.frame.alpha == pytest.approx(f_last) and v.frame.cloud is not None
                 z_scene = float(np.asarray(v.scene.camera.root.position)[2]) * 1000
@@ -928,3 +930,39 @@ def test_sample_rules_without_a_view() -> None:
         requested_key(Picks(source=Pick("upload", 5.0), **base), shown="demo/walking", **kw)
     with pytest.raises(PoseLifterError, match="unknown sample source"):
         requested_key(Picks(source=Pick("<b>x</b>", 5.0), **base), shown="demo/walking", **kw)
+
+
+def test_player_keeps_real_time_without_a_view() -> None:
+    """:class:`Player` shows frames at 25 per second, keeps the sequence's real time (50-fps frames: every 2nd
+    at speed 1, every 4th at speed 2), follows scrubbing and stops when there is nothing to play."""
+    import time
+
+    from poselifter_app.playback import Player
+
+    class Seq:
+        key, label, fps, num_frames = "s", "s", 50.0, 10_000
+
+    cur = {"i": 0, "speed": 1.0, "seq": Seq()}
+    shown: list[int] = []
+    stopped = []
+
+    def show(i: int) -> None:
+        cur["i"] = i
+        shown.append(i)
+
+    p = Player(position=lambda: None if cur["seq"] is None else (cur["seq"], cur["i"]), speed=lambda: cur["speed"],
+               show=show, on_stop=lambda: stopped.append(1))
+    p.start()
+    time.sleep(1.0)
+    n1, i1 = len(shown), cur["i"]
+    assert 15 <= n1 <= 30 and 35 <= i1 <= 60, (n1, i1)  # ~25 redraws, ~50 frames of a 50-fps sequence
+    assert all(b - a in (1, 2, 3) for a, b in zip(shown, shown[1:]))
+    cur["speed"] = 2.0
+    time.sleep(1.0)
+    assert 80 <= cur["i"] - i1 <= 120, cur["i"] - i1
+    cur["i"] = 5000  # scrubbed
+    time.sleep(0.3)
+    assert 5000 < cur["i"] < 5100
+    cur["seq"] = None  # nothing to play: stops by itself
+    assert wait_for(lambda: not p.playing, timeout=5) and stopped == [1]
+    assert len(p.frame_ms) == len(shown) == len(p.shown_at)
