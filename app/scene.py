@@ -20,6 +20,7 @@ import viser.transforms as vtf
 
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
 
+from . import framing
 from .core import Frame, SessionState
 from .drawing import COLORS, JOINT_RGB, canvas
 
@@ -218,3 +219,83 @@ def set_joint_radius(nodes: PoseNodes, radius: float) -> None:
     for h in nodes.joints2d:
         if abs(h.radius - radius) > 1e-9:
             h.radius = radius
+
+
+def camera_world(state: SessionState) -> tuple[np.ndarray, np.ndarray]:
+    """``(R, C)``: the sample camera's rotation (world -> camera) and centre (world, m)."""
+    cam = state.sample.camera
+    R = np.asarray(cam.R, np.float64)
+    return R, -R.T @ np.asarray(cam.t, np.float64) / 1000.0
+
+
+def framing_points(state: SessionState, frame: Frame | None) -> np.ndarray:
+    """World points (m) the overview keeps in view: the camera centre first, its frustum at the image plane, the
+    lifted skeleton and the ground truth."""
+    R, C = camera_world(state)
+    pts = [np.zeros((1, 3)), frustum_corners(state)]
+    if frame is not None:
+        pts.append(frame.lifted / 1000.0)
+        if frame.gt_3d is not None:
+            pts.append(frame.gt_3d / 1000.0)
+    return np.concatenate(pts) @ R + C  # R^T x + C, row-wise
+
+
+def overview(state: SessionState, frame: Frame | None, *, fov_y: float, aspect: float) -> framing.Viewpoint:
+    """The default view: camera, frustum and person fitted into the view from behind, above and beside the camera."""
+    R, C = camera_world(state)
+    pts = framing_points(state, frame)
+    person = pts[5:].mean(axis=0) if len(pts) > 5 else C + R.T @ np.array([0.0, 0.0, 4.0])
+    return framing.fit(pts, direction=framing.overview_direction(C, person), up=np.array([0.0, 0.0, 1.0]),
+                       fov_y=fov_y, aspect=aspect)
+
+
+def head_on(state: SessionState, *, fov_y: float, aspect: float) -> tuple[framing.Viewpoint, float]:
+    """The head-on image view of the current 2D joints and the joint-sphere radius for it (m)."""
+    kp = np.asarray(state.keypoints, np.float64)
+    lo, hi = kp.min(axis=0), kp.max(axis=0)
+    centre = image_plane(state, (lo + hi) / 2.0)
+    w, h = np.abs(image_plane(state, hi) - image_plane(state, lo))[:2]
+    R, C = camera_world(state)
+    half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
+    radius = float(np.clip(HEAD_ON_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M))
+    return framing.head_on(centre_cam=centre, half_extent=half, R=R, C=C, fov_y=fov_y), radius
+
+
+class ViewerCamera:
+    """A tab's 3D viewer camera, or, for the server target (headless views), the initial camera new tabs get."""
+
+    def __init__(self, target: viser.ClientHandle | viser.ViserServer, server: viser.ViserServer) -> None:
+        self.target, self.server = target, server
+
+    def get(self) -> tuple[framing.Viewpoint, float, float]:
+        """``(viewpoint, vertical fov rad, aspect)``; before a tab reported its camera (and for the server target)
+        the initial camera, :data:`framing.DEFAULT_FOV_Y_RAD` and a square view."""
+        fov, aspect = framing.DEFAULT_FOV_Y_RAD, 1.0
+        if isinstance(self.target, viser.ClientHandle):
+            try:
+                c = self.target.camera
+                if 0.05 < float(c.fov) < 3.0:
+                    fov = float(c.fov)
+                if c.image_width > 0 and c.image_height > 0:
+                    aspect = c.image_width / c.image_height
+                return framing.Viewpoint(np.asarray(c.position, np.float64), np.asarray(c.look_at, np.float64),
+                                         np.asarray(c.up_direction, np.float64)), fov, aspect
+            except (AssertionError, AttributeError, TypeError, ValueError):
+                pass
+        ic = self.server.initial_camera
+        up_ = np.asarray(ic.up if ic.up is not None else (0.0, 0.0, 1.0), np.float64).reshape(-1)
+        vp = framing.Viewpoint(np.asarray(ic.position, np.float64), np.asarray(ic.look_at, np.float64),
+                               up_ if up_.shape == (3,) else np.array([0.0, 0.0, 1.0]))
+        return vp, fov, aspect
+
+    def set(self, vp: framing.Viewpoint) -> None:
+        if isinstance(self.target, viser.ClientHandle):
+            c = self.target.camera
+            c.up_direction = tuple(vp.up)
+            c.position = tuple(vp.eye)
+            c.look_at = tuple(vp.look_at)
+        else:
+            ic = self.target.initial_camera
+            ic.position = tuple(vp.eye)
+            ic.look_at = tuple(vp.look_at)
+            ic.up = tuple(vp.up)

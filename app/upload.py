@@ -362,3 +362,47 @@ __all__ = ["CAMERA_HEIGHT_MM", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingD
            "UploadInfo", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
            "keypoint_sample", "missing_detector_message", "oversize_message", "photo_sample", "result_record",
            "safe_name", "upload_camera"]
+
+
+def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, max_bytes: int,
+                  estimator: Callable[[], Any], lifter: Any, detect_lock: Any) -> tuple[Sample, Photo | None]:
+    """The upload rules: ``(sample, photo)`` for an uploaded file — a keypoint JSON (drawn on ``photo``, the photo
+    uploaded before, when the sizes agree) or a photo (the largest person by ``estimator()``'s detector, lifted by
+    ``lifter`` for its focal; ``detect_lock`` serialises detection). ``photo`` comes back updated: a decodable photo
+    is kept for a keypoint JSON uploaded next, even when detection then fails. Raises :class:`PoseLifterError`
+    with a message for the user (too large, not an image, nobody found, the detector extra missing, ...)."""
+    name = safe_name(name)
+    content = bytes(content or b"")
+    check_upload(name, content, max_bytes=max_bytes)
+    if is_json_upload(name, content):
+        return keypoint_sample(name, content, key=key, photo=photo), photo
+    new_photo, img = decode_photo(name, content)  # not-an-image / truncated / too many pixels raise here
+    try:
+        est = estimator()
+    except MissingDependencyError as exc:
+        raise UploadFailed(missing_detector_message(name, exc), photo=new_photo) from None
+    except PoseLifterError as exc:
+        raise UploadFailed(str(exc), photo=new_photo) from None
+    with detect_lock:
+        try:
+            return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est), new_photo
+        except PoseLifterError as exc:
+            raise UploadFailed(str(exc), photo=new_photo) from None
+
+
+class UploadFailed(PoseLifterError):
+    """An upload that failed after its photo was decoded: ``photo`` is kept for a keypoint JSON uploaded next."""
+
+    def __init__(self, message: str, *, photo: Photo) -> None:
+        super().__init__(message)
+        self.photo = photo
+
+
+def upload_message(sample: Sample) -> str:
+    """What the readout says after an upload: what was found, how to correct it, the focal and any notes."""
+    info = sample.upload
+    what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
+            if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
+    notes = [n for n in info.warnings if n != info.focal_detail]
+    return (f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
+            + "".join(f" Note: {n}." for n in notes))

@@ -46,19 +46,21 @@ from .noise import ErrorModelLike, default_error_model, model_name
 from .playback import DemoMotion, H36MSequence, Player, SequenceSource
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
 from .scene import (
-    HEAD_ON_JOINT_RADIUS,
     IMAGE_PLANE_DEPTH_M,
     JOINT_RADIUS_M,
     Scene,
+    ViewerCamera,
     build_scene,
+    camera_world,
     draw_2d,
     draw_camera,
     draw_pose,
     draw_trail,
-    frustum_corners,
-    image_plane,
+    framing_points,
     set_joint_radius,
 )
+from .scene import head_on as scene_head_on
+from .scene import overview as scene_overview
 from .viser_hooks import limit_uploads, report_rejected_values
 
 log = logging.getLogger("poselifter.app")
@@ -192,6 +194,7 @@ class SessionView:
             target.gui, demo_names=list(app.demo.names), sources=app.sources, models=list(app.pool.names),
             model=app.default_model, h36m=h, error_model_name=model_name(app.error_model),
             max_upload_mib=app.max_upload_bytes // 2**20)
+        self.camera = ViewerCamera(target, app.server)
         self.scene: Scene = build_scene(target.scene, on_drag=lambda j, ev: self._do(self.on_joint_drag, j, ev))
         first = app.demo.get(app.demo.names[0])
         self.state = SessionState(sample=first, model=app.default_model)
@@ -531,7 +534,7 @@ class SessionView:
         ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
                                            cloud=fr.cloud)
         if self.gui.lift.auto_frame.value and not self._close_up:
-            self._keep_in_view(fr)
+            self._keep_in_view()
 
     def _update_trail(self, fr: Frame) -> None:
         st = self.state
@@ -550,65 +553,12 @@ class SessionView:
     # ------------------------------------------------------------------------------------------
     # Viewpoints
     # ------------------------------------------------------------------------------------------
-    def _camera_world(self) -> tuple[np.ndarray, np.ndarray]:
-        cam = self.state.sample.camera
-        R = np.asarray(cam.R, np.float64)
-        return R, -R.T @ np.asarray(cam.t, np.float64) / 1000.0
-
     def framing_points(self) -> np.ndarray:
-        """World points (m) the overview keeps in view: the camera centre, its frustum at the image plane, the
-        lifted skeleton and the ground truth."""
-        R, C = self._camera_world()
-        pts = [np.zeros((1, 3)), frustum_corners(self.state)]
-        if self.frame is not None:
-            pts.append(self.frame.lifted / 1000.0)
-            if self.frame.gt_3d is not None:
-                pts.append(self.frame.gt_3d / 1000.0)
-        cam_pts = np.concatenate(pts)
-        return cam_pts @ R + C  # R^T x + C, row-wise
+        """World points (m) the overview keeps in view (:func:`poselifter_app.scene.framing_points`)."""
+        return framing_points(self.state, self.frame)
 
     def viewer(self) -> tuple[framing.Viewpoint, float, float]:
-        """This tab's viewer camera ``(viewpoint, vertical fov rad, aspect)``; for the server target (or before a
-        tab reported its camera) the initial camera, :data:`framing.DEFAULT_FOV_Y_RAD` and a square view."""
-        fov, aspect = framing.DEFAULT_FOV_Y_RAD, 1.0
-        if isinstance(self.target, viser.ClientHandle):
-            try:
-                c = self.target.camera
-                if 0.05 < float(c.fov) < 3.0:
-                    fov = float(c.fov)
-                if c.image_width > 0 and c.image_height > 0:
-                    aspect = c.image_width / c.image_height
-                vp = framing.Viewpoint(np.asarray(c.position, np.float64), np.asarray(c.look_at, np.float64),
-                                       np.asarray(c.up_direction, np.float64))
-                return vp, fov, aspect
-            except (AssertionError, AttributeError, TypeError, ValueError):
-                pass
-        ic = self.app.server.initial_camera if isinstance(self.target, viser.ClientHandle) else self.target.initial_camera
-        up_ = np.asarray(ic.up if ic.up is not None else (0.0, 0.0, 1.0), np.float64).reshape(-1)
-        vp = framing.Viewpoint(np.asarray(ic.position, np.float64), np.asarray(ic.look_at, np.float64),
-                               up_ if up_.shape == (3,) else np.array([0.0, 0.0, 1.0]))
-        return vp, fov, aspect
-
-    def _set_viewpoint(self, vp: framing.Viewpoint) -> None:
-        """Move this tab's viewer camera; for the server target, its initial camera (new tabs, "reset view")."""
-        if isinstance(self.target, viser.ClientHandle):
-            c = self.target.camera
-            c.up_direction = tuple(vp.up)
-            c.position = tuple(vp.eye)
-            c.look_at = tuple(vp.look_at)
-        else:
-            ic = self.target.initial_camera
-            ic.position = tuple(vp.eye)
-            ic.look_at = tuple(vp.look_at)
-            ic.up = tuple(vp.up)
-
-    def overview_viewpoint(self) -> framing.Viewpoint:
-        R, C = self._camera_world()
-        pts = self.framing_points()
-        _, fov, aspect = self.viewer()
-        person = pts[5:].mean(axis=0) if len(pts) > 5 else C + R.T @ np.array([0.0, 0.0, 4.0])
-        return framing.fit(pts, direction=framing.overview_direction(C, person), up=np.array([0.0, 0.0, 1.0]),
-                           fov_y=fov, aspect=aspect)
+        return self.camera.get()
 
     @control
     def overview(self) -> None:
@@ -616,9 +566,9 @@ class SessionView:
         with self.lock:
             self._close_up = False
             set_joint_radius(self.scene.pose, JOINT_RADIUS_M)
-            self.scene.camera.ray.visible = True
-            self.scene.camera.root_label.visible = True
-            self._set_viewpoint(self.overview_viewpoint())
+            self.scene.camera.ray.visible = self.scene.camera.root_label.visible = True
+            _, fov, aspect = self.camera.get()
+            self.camera.set(scene_overview(self.state, self.frame, fov_y=fov, aspect=aspect))
 
     def _reframe(self) -> None:
         try:
@@ -626,20 +576,19 @@ class SessionView:
         except Exception:  # noqa: BLE001 - a viewpoint is cosmetic
             log.exception("could not frame the 3D view")
 
-    def _keep_in_view(self, fr: Frame) -> None:
+    def _keep_in_view(self) -> None:
         """Auto reframing: when the lifted skeleton (or the camera) leaves the view, fit them again, keeping the
         viewing direction."""
-        vp, fov, aspect = self.viewer()
+        vp, fov, aspect = self.camera.get()
         pts = self.framing_points()
-        if framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98):
-            return
-        up_ = vp.up if np.linalg.norm(vp.up) > 0 else np.array([0.0, 0.0, 1.0])
-        self._set_viewpoint(framing.fit(pts, direction=vp.look_at - vp.eye, up=up_, fov_y=fov, aspect=aspect))
+        if not framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98):
+            up_ = vp.up if np.linalg.norm(vp.up) > 0 else np.array([0.0, 0.0, 1.0])
+            self.camera.set(framing.fit(pts, direction=vp.look_at - vp.eye, up=up_, fov_y=fov, aspect=aspect))
 
     def _auto_frame(self) -> None:
         if self.gui.lift.auto_frame.value and self.frame is not None:
             with self.lock:
-                self._keep_in_view(self.frame)
+                self._keep_in_view()
 
     @control
     def head_on_view(self) -> None:
@@ -647,18 +596,13 @@ class SessionView:
         most of the view, image up = up: the joints can be dragged precisely (the readout's side / top views show
         the 3D response). Joint spheres shrink with the joints' extent; "reset 3D view" goes back."""
         with self.lock:
-            kp = np.asarray(self.state.keypoints, np.float64)
-            lo, hi = kp.min(axis=0), kp.max(axis=0)
-            centre = image_plane(self.state, (lo + hi) / 2.0)
-            w, h = np.abs(image_plane(self.state, hi) - image_plane(self.state, lo))[:2]
-            R, C = self._camera_world()
-            _, fov, aspect = self.viewer()
-            half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
+            _, fov, aspect = self.camera.get()
+            vp, radius = scene_head_on(self.state, fov_y=fov, aspect=aspect)
             self._close_up = True
-            set_joint_radius(self.scene.pose, float(np.clip(HEAD_ON_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M)))
+            set_joint_radius(self.scene.pose, radius)
             self.scene.camera.ray.visible = False  # it would pass next to the eye and cover the joints
             self.scene.camera.root_label.visible = False  # (drawn on top of everything)
-            self._set_viewpoint(framing.head_on(centre_cam=centre, half_extent=half, R=R, C=C, fov_y=fov))
+            self.camera.set(vp)
 
     # ------------------------------------------------------------------------------------------
     # Controls in code form (the GUI does the same; each ends in a sync pass)
@@ -817,7 +761,7 @@ class SessionView:
         """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)
         intersected with the image plane; without the viewer's camera, the central projection of
         ``end_position`` through the sample camera."""
-        R, C = self._camera_world()
+        R, C = camera_world(self.state)
         end_c = R @ (np.asarray(event.end_position, np.float64) - C)
         d = IMAGE_PLANE_DEPTH_M
         p = None
@@ -899,36 +843,23 @@ class SessionView:
     def load_upload(self, name: str, content: bytes) -> None:
         """An uploaded file: a photo (2D joints by the app's detector, the largest person) or a keypoint JSON
         (:mod:`app.upload`). On any problem a message is shown and the tab's state is left as it was."""
-        name = up.safe_name(name)
-        content = bytes(content or b"")
-        up.check_upload(name, content, max_bytes=self.app.max_upload_bytes)
-        key = f"upload/{self.app.next_upload_id()}/{name}"
-        if up.is_json_upload(name, content):
-            sample = up.keypoint_sample(name, content, key=key, photo=self._photo)
-        else:
-            photo, img = up.decode_photo(name, content)  # not-an-image / truncated / too many pixels raise here
-            self._photo = photo  # kept for a keypoint JSON uploaded next, even if detection fails below
-            try:
-                estimator = self.app.estimator()
-            except up.MissingDependencyError as exc:
-                raise PoseLifterError(up.missing_detector_message(name, exc)) from None
-            with self.app.detect_lock:
-                sample = up.photo_sample(photo, img, key=key, lifter=self.app.pool.get(self.state.model),
-                                         estimator=estimator)
+        try:
+            sample, self._photo = up.upload_sample(
+                name, content, key=f"upload/{self.app.next_upload_id()}/{up.safe_name(name)}", photo=self._photo,
+                max_bytes=self.app.max_upload_bytes, estimator=self.app.estimator,
+                lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock)
+        except up.UploadFailed as exc:
+            self._photo = exc.photo
+            raise
         if self.playing:
             self.stop_playback()
         with self._runner.holding(), self.lock:
             try:
                 self._show_sample(sample, reframe=True)  # (a new photo: a new person to look at)
             except PoseLifterError as exc:
-                raise PoseLifterError(f"{name}: {exc}") from None
+                raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
             self._last_upload = sample
-        info = sample.upload
-        what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
-                if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
-        notes = [n for n in info.warnings if n != info.focal_detail]
-        self.show_message(f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
-                          + ("".join(f" Note: {n}." for n in notes)))
+        self.show_message(up.upload_message(sample))
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current
