@@ -4,9 +4,10 @@ A :class:`SequenceSource` gives, per frame index, a :class:`SequenceFrame`: the 
 in that frame (same camera). The app shows and lifts ``people[0]`` today; a video source (decoded frames,
 several people per frame from :mod:`lifter.detect`) plugs in by implementing the same protocol.
 
-Sources here: a Human3.6M sequence seen by one camera (50 fps) and :class:`DemoMotion`, a 10-s sequence made
-from the demo samples' authored 3D poses (blended one into the next while the body walks a loop in front of the
-``walking`` sample's camera; exact 2D, 3D ground truth), so playback works without Human3.6M.
+Sources here: a Human3.6M sequence seen by one camera (50 fps) and :class:`DemoMotion`, a 10-s walk made from the
+demo samples' authored 3D poses (the walking pose, standing and the mirrored walking pose blended in turn while
+the body walks a loop in front of the ``walking`` sample's camera; exact 2D, 3D ground truth), so playback works
+without Human3.6M.
 """
 
 from __future__ import annotations
@@ -71,36 +72,45 @@ def _smoothstep(t: float) -> float:
     return t * t * (3.0 - 2.0 * t)
 
 
+_MIRROR = (0, 4, 5, 6, 1, 2, 3, 7, 8, 9, 10, 14, 15, 16, 11, 12, 13)
+"""Joint order of the left-right mirrored pose (H36M-17)."""
+
+
 class DemoMotion:
-    """The demo samples' poses blended in turn (``frames_per_pose`` frames each, looping), walking an ellipse of
-    ``radius`` m (x) by half that (depth) around the ``walking`` sample's root, facing where it goes, seen by
-    the ``walking`` camera. 25 fps."""
+    """A walk made from the demo samples (no Human3.6M needed): the ``walking`` pose, ``standing``, the mirrored
+    ``walking`` pose (the other leg forward), ``standing`` again, blended in turn (``frames_per_pose`` frames
+    each) for ``cycles`` gait cycles, while the body walks an ellipse of ``radius`` m by half that (depth) around
+    the ``walking`` sample's root, facing where it goes, seen by the ``walking`` camera. Exact 2D and 3D ground
+    truth; 25 fps."""
 
     fps: float = 25.0
 
-    def __init__(self, demo: DemoCatalog, *, frames_per_pose: int = 50, radius: float = 0.9,
-                 camera_sample: str = "walking") -> None:
+    def __init__(self, demo: DemoCatalog, *, frames_per_pose: int = 8, cycles: int = 8, radius: float = 0.9) -> None:
         self.key = "motion"
         self.label = "demo motion"
-        base = demo.get(camera_sample if camera_sample in demo.names else demo.names[0])
+        names = [n for n in ("walking", "standing") if n in demo.names] or [demo.names[0]]
+        base = demo.get(names[0])
         self.camera: Camera = base.camera
-        rel = []
-        for name in demo.names:
+
+        def aligned(name: str) -> tuple[np.ndarray, float]:
+            """Root-relative world pose facing +x (left along +y), and the root's height (mm)."""
             s = demo.get(name)
             assert s.pose_3d is not None
             w = s.camera.camera_to_world(s.pose_3d)  # world mm, z up
             r = w - w[0]
-            # face +x in the world: rotate about z so that the hips' left-right axis is the world's y axis
-            hip = r[4] - r[1]
+            hip = r[4] - r[1]  # right hip -> left hip
             a = math.atan2(hip[1], hip[0]) - math.pi / 2
             c, s_ = math.cos(-a), math.sin(-a)
-            Rz = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
-            rel.append((r @ Rz.T, w[0, 2]))
-        self._poses = rel
+            return r @ np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]).T, float(w[0, 2])
+
+        walk, z_walk = aligned(names[0])
+        stand, z_stand = aligned(names[-1])
+        mirrored = walk[list(_MIRROR)] * np.array([1.0, -1.0, 1.0])
+        self._poses = [(walk, z_walk), (stand, z_stand), (mirrored, z_walk), (stand, z_stand)]
         assert base.pose_3d is not None
         self._centre = self.camera.camera_to_world(base.pose_3d[:1])[0]
         self.frames_per_pose = int(frames_per_pose)
-        self.num_frames = self.frames_per_pose * len(rel)
+        self.num_frames = self.frames_per_pose * len(self._poses) * int(cycles)
         self.radius = float(radius)
 
     def world_pose(self, index: int) -> np.ndarray:
@@ -108,7 +118,8 @@ class DemoMotion:
         i = int(index) % self.num_frames
         k, t = divmod(i, self.frames_per_pose)
         t = _smoothstep(t / self.frames_per_pose)
-        (a, za), (b, zb) = self._poses[k], self._poses[(k + 1) % len(self._poses)]
+        n = len(self._poses)
+        (a, za), (b, zb) = self._poses[k % n], self._poses[(k + 1) % n]
         rel = (1 - t) * a + t * b
         phase = 2 * math.pi * i / self.num_frames
         x, y = 1000 * self.radius * math.cos(phase), 500 * self.radius * math.sin(phase)

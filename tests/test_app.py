@@ -966,3 +966,22 @@ def test_player_keeps_real_time_without_a_view() -> None:
     cur["seq"] = None  # nothing to play: stops by itself
     assert wait_for(lambda: not p.playing, timeout=5) and stopped == [1]
     assert len(p.frame_ms) == len(shown) == len(p.shown_at)
+
+
+def test_demo_motion_is_a_plausible_walk(app: PoseLifterApp) -> None:
+    """The demo motion: exact 2D inside the image, rigid bones, the root walking a loop, both legs forward in turn."""
+    from lifter.skeleton import EDGES
+
+    m = app.motion
+    frames = [m.frame(i).people[0] for i in range(0, m.num_frames, 2)]
+    bones = np.array([[np.linalg.norm(s.pose_3d[a] - s.pose_3d[b]) for a, b in EDGES] for s in frames])
+    assert (bones.std(0) / bones.mean(0)).max() < 0.05
+    for s in frames:
+        kp = project(s.pose_3d, focal=s.camera.focal, principal_point=s.camera.principal_point)
+        np.testing.assert_allclose(kp, s.keypoints_2d, atol=1e-6)
+        assert np.all(kp >= 0) and np.all(kp <= [s.camera.width, s.camera.height])
+    roots = np.array([s.pose_3d[0] for s in frames])
+    assert np.ptp(roots[:, 0]) > 1000 and np.ptp(roots[:, 2]) > 500  # a loop in front of the camera
+    w = [m.world_pose(i) for i in range(0, m.num_frames)]
+    lead = [np.dot(p[3] - p[6], p[0] - m.world_pose(i - 1)[0]) for i, p in enumerate(w)]  # right vs left ankle, along the walk
+    assert min(lead) < -50 and max(lead) > 50  # each leg leads in turn
