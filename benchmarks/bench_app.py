@@ -21,6 +21,7 @@ Exit status 1 when the drag p95 exceeds the target or a noise-free playback show
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import platform
 import time
@@ -52,6 +53,7 @@ def main() -> int:
     server = local_server()
     app = PoseLifterApp(server, h36m_root=None)
     tab = FakeTab(server)
+    gc.freeze()  # as poselifter-app does after startup (app/main.py)
     try:
         assert wait_for(lambda: len(app.views) == 1), "fake tab did not connect"
         view = next(iter(app.views.values()))
@@ -94,7 +96,8 @@ def main() -> int:
                 return {"frames": int(len(ms)), "fps": 0.0}
             return {"frames": int(len(ms)), "fps": round(float((len(shown) - 1) / (shown[-1] - shown[0])), 2),
                     "frame_ms_p50": round(float(np.percentile(ms, 50)), 2),
-                    "frame_ms_p95": round(float(np.percentile(ms, 95)), 2), "frame_ms_max": round(float(ms.max()), 2)}
+                    "frame_ms_p95": round(float(np.percentile(ms, 95)), 2), "frame_ms_max": round(float(ms.max()), 2),
+                    "slowest_frame": int(np.argmax(ms)), "first_frame_ms": round(float(ms[0]), 2)}
 
         for level in (0.0, 1.0):
             view.select_demo("walking")
