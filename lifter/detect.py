@@ -56,7 +56,6 @@ import math
 import os
 import time
 import warnings
-import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -626,16 +625,26 @@ def _import_mediapipe() -> Any:
     return mp
 
 
-_LIVE_ESTIMATORS: weakref.WeakSet[Any] = weakref.WeakSet()
+# Every open MediaPipe landmarker, held strongly until it is closed. A landmarker must never be finalized by the
+# cyclic garbage collector: its dispatcher's thread pool sits in the same garbage, its worker thread has already
+# exited when the finalizer runs, and close() then waits forever (a hang at the end of a pytest session). Held
+# here, a landmarker stays reachable, so close() -- explicit, from an estimator's __del__, or at exit -- can finish.
+_OPEN_LANDMARKERS: dict[int, Any] = {}
+
+
+def _close_landmarker(key: int) -> None:
+    lm = _OPEN_LANDMARKERS.pop(key, None)
+    if lm is not None:
+        lm.close()
 
 
 @atexit.register
-def _close_live_estimators() -> None:
+def _close_open_landmarkers() -> None:
     """Close landmarkers still open at exit: MediaPipe's own finalizer fails once the interpreter is shutting down
     ("Exception ignored in PoseLandmarker.__del__")."""
-    for est in list(_LIVE_ESTIMATORS):
+    for key in list(_OPEN_LANDMARKERS):
         try:
-            est.close()
+            _close_landmarker(key)
         except Exception:  # noqa: BLE001 -- best effort at exit
             pass
 
@@ -704,7 +713,7 @@ class BlazePoseEstimator:
             except (RuntimeError, ValueError) as exc:
                 raise MissingDependencyError(f"{path}: MediaPipe cannot load this pose model bundle ({exc}); "
                                              "delete it to rebuild") from None
-        _LIVE_ESTIMATORS.add(self)
+        _OPEN_LANDMARKERS[id(self._landmarker)] = self._landmarker
 
     def _run(self, image: np.ndarray) -> list[Detection]:
         mp, landmarker = self._mp, self._landmarker
@@ -845,10 +854,11 @@ class BlazePoseEstimator:
         return self._select(cands, W, H)
 
     def close(self) -> None:
+        """Release the MediaPipe landmarker now (also on ``with`` exit, on garbage collection, and at exit)."""
         lm = getattr(self, "_landmarker", None)
         if lm is not None:
             self._landmarker = None
-            lm.close()
+            _close_landmarker(id(lm))
 
     def __enter__(self) -> BlazePoseEstimator:
         return self

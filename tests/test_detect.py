@@ -181,6 +181,28 @@ def blazepose():
     est.close()
 
 
+def test_unclosed_estimator_in_a_cycle_is_collected_without_hanging():
+    """An estimator dropped without close(), inside a reference cycle, is finalized by the cyclic collector. That
+    used to hang forever (MediaPipe's close() waited on a thread pool that was garbage itself): run the collection
+    in a thread and require it to finish."""
+    _bundle_or_skip()
+    import gc
+    import threading
+
+    from lifter.detect import _OPEN_LANDMARKERS, BlazePoseEstimator
+
+    est = BlazePoseEstimator(max_people=1)
+    est.detect(np.zeros((64, 64, 3), np.uint8))
+    est.cycle = est  # type: ignore[attr-defined]
+    before = len(_OPEN_LANDMARKERS)
+    del est
+    t = threading.Thread(target=gc.collect, daemon=True)
+    t.start()
+    t.join(timeout=60)
+    assert not t.is_alive(), "garbage-collecting an unclosed BlazePoseEstimator hung"
+    assert len(_OPEN_LANDMARKERS) == before - 1, "the landmarker was not closed when its estimator was collected"
+
+
 @pytest.fixture(scope="module")
 def mannequins():
     p = ROOT / "assets" / "demo" / "samples.npz"
