@@ -20,6 +20,7 @@ from typing import Any, Final, Literal
 
 import numpy as np
 import torch
+from numpy.typing import ArrayLike
 
 from . import resources as assets
 from ._checks import PoseLifterError, as_pair, as_points
@@ -165,9 +166,9 @@ class Lifter:
         ck = load_checkpoint(assets.read_bytes(entry["file"]), expected_sha256=entry.get("sha256"),
                              name=f"shipped model {entry['name']!r} ({entry['file']})")
         clean = None
-        if entry.get("clean_file"):
-            clean = load_checkpoint(assets.read_bytes(entry["clean_file"]), expected_sha256=entry.get("clean_sha256"),
-                                    name=f"shipped model {entry['name']!r} ({entry['clean_file']})")
+        if clean_file := entry.get("clean_file"):
+            clean = load_checkpoint(assets.read_bytes(clean_file), expected_sha256=entry.get("clean_sha256"),
+                                    name=f"shipped model {entry['name']!r} ({clean_file})")
         return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean)
 
     load = from_pretrained
@@ -186,11 +187,11 @@ class Lifter:
     # -- lifting -------------------------------------------------------------------------------------
     def lift(
         self,
-        keypoints: Any,
+        keypoints: ArrayLike,
         *,
-        focal: Any | None = None,
-        principal_point: Any | None = None,
-        image_size: Any | None = None,
+        focal: ArrayLike | None = None,
+        principal_point: ArrayLike | None = None,
+        image_size: ArrayLike | None = None,
         source: Source = "detected",
         flip_test: bool | None = None,
     ) -> LiftResult:

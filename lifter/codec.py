@@ -158,23 +158,22 @@ class PoseCodec:
         return xp.broadcast_to(_like(source, like), like.shape)  # type: ignore[attr-defined]
 
     # -- targets --------------------------------------------------------------------------------------
-    def depth_parameter(self, depth: A, enc: Encoded[A]) -> A:
-        """The network's depth output for root depth Z ``(...)`` mm (:class:`~lifter.model.ModelConfig`)."""
+    def _mm_per_parameter(self, enc: Encoded[A]) -> A | float:
+        """``dZ / dparameter``: mm of root depth per unit of the network's depth output (the map is linear)."""
         t = self.config.depth_target
         if t == "canonical":
-            return depth * (self.reference_focal / enc.alpha_in)  # type: ignore[operator]
+            return enc.alpha_in / self.reference_focal  # type: ignore[operator]
         if t == "absolute":
-            return depth
-        return depth * enc.sigma_in / enc.alpha_in  # type: ignore[operator]
+            return 1.0
+        return enc.alpha_in / enc.sigma_in  # type: ignore[operator]
+
+    def depth_parameter(self, depth: A, enc: Encoded[A]) -> A:
+        """The network's depth output for root depth Z ``(...)`` mm (:class:`~lifter.model.ModelConfig`)."""
+        return depth / self._mm_per_parameter(enc)  # type: ignore[operator, return-value]
 
     def depth_from_parameter(self, param: A, enc: Encoded[A]) -> A:
         """Inverse of :meth:`depth_parameter`: root depth Z ``(...)`` mm."""
-        t = self.config.depth_target
-        if t == "canonical":
-            return param * (enc.alpha_in / self.reference_focal)  # type: ignore[operator]
-        if t == "absolute":
-            return param
-        return param * enc.alpha_in / enc.sigma_in  # type: ignore[operator]
+        return param * self._mm_per_parameter(enc)  # type: ignore[operator, return-value]
 
     def depth_loss_scale(self, enc: Encoded[A]) -> A:
         """``(...)`` factor turning an error in the depth parameter into the canonical-depth error

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args, get_origin
 
 from ._checks import PoseLifterError
+from .checkpoint import load_checkpoint
 from .model import ModelConfig
 
 
@@ -183,8 +184,6 @@ class TrainConfig:
         if not p.is_file():
             raise PoseLifterError(f"--config {p}: no such file")
         if p.suffix == ".pt":
-            from .checkpoint import load_checkpoint
-
             ck = load_checkpoint(p)
             if ck.train_config is None:
                 raise PoseLifterError(f"--config {p}: this checkpoint stores no training config (an older file)")

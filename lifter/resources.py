@@ -124,18 +124,15 @@ def default_model_name() -> str:
     return str(registry()["default"])
 
 
-def model_entry(name: str) -> dict[str, Any]:
-    """The registry entry of a shipped model (a :class:`ModelEntry`) with its ``name``; ``"default"`` is the default.
-
-    Typed as a plain dict until :meth:`lifter.Lifter.from_pretrained` reads the optional ``clean_file`` through
-    ``.get`` only (pyright does not narrow ``entry["clean_file"]`` after ``entry.get("clean_file")``)."""
+def model_entry(name: str) -> ModelEntry:
+    """The registry entry of a shipped model with its ``name``; ``"default"`` is the default model."""
     reg = registry()
     if name == "default":
         name = reg["default"]
     if name not in reg["models"]:
         raise PoseLifterError(f"unknown model {name!r}; shipped models: {sorted(reg['models'])} or 'default' "
                               "(to load your own checkpoint, pass its path: Lifter.load('path/to/model.pt'))")
-    return dict(reg["models"][name], name=name)
+    return {**reg["models"][name], "name": name}
 
 
 # ------------------------------------------------------------------------------------------------

@@ -135,8 +135,7 @@ def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torc
     """Mirror the samples where ``mask`` ``(B,)`` is true: the 2D about its principal point (the same network
     input as the image flip ``x -> W - x``, ``cx -> W - cx``) and the root-relative 3D; depth is unchanged."""
     m = mask[:, None, None]
-    c = pp[:, None, :]
-    return torch.where(m, c + mirror(kp - c), kp), torch.where(m, mirror(rel), rel)
+    return torch.where(m, PoseCodec.mirror_input(kp, pp), kp), torch.where(m, mirror(rel), rel)
 
 
 def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
@@ -425,6 +424,7 @@ def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = 
     tmp = curve_path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps({"train_config": result.config.to_dict(), "curve": result.curve}, indent=1))
     os.replace(tmp, curve_path)
+    # matplotlib only when a curve is drawn: `import lifter.train` (every `poselifter` command) stays ~0.5 s faster
     from .plots import plot_learning_curve
 
     plot_learning_curve(result.curve, out.with_suffix(".curve.png"), title=out.stem)
