@@ -31,11 +31,11 @@ from .model import ModelConfig, PoseLifterNet, forward_numpy
 from .normalization import pose_scale
 from .skeleton import NUM_JOINTS
 
-NUMPY_MAX_BATCH: Final[int] = 1
-"""Batches up to this many network rows run in numpy (:func:`~lifter.model.forward_numpy`), larger ones
-through the torch module. One row is a chain of matrix-vector products, where numpy's BLAS has less
-overhead than torch; from two rows on, torch's kernels are much faster than OpenBLAS's small-matrix
-path (``benchmarks/bench_lift.py`` times both)."""
+NUMPY_MAX_BATCH: Final[int] = 2
+"""Batches up to this many network rows run in numpy (:func:`~lifter.model.forward_numpy`, one matrix-vector
+chain per row), larger ones through the torch module. Two rows are one pose with flip-test averaging; a
+matrix-vector product in numpy's BLAS has less overhead than torch's kernels, and from a few rows on the torch
+module's matrix products win (``benchmarks/bench_lift.py`` times both)."""
 CHUNK_SIZE: Final[int] = 32768
 """Poses per network pass in :meth:`Lifter.lift`: larger batches are lifted in chunks of this size, so
 memory stays bounded (the result is the same as one pass)."""

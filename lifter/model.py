@@ -213,6 +213,16 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
         cached = (key, [t.detach().numpy() for t in tensors])
         _NUMPY_VIEWS[net] = cached  # one assignment: concurrent readers see the old or the new pair
     v = cached[1]
+    if len(features) > 1:
+        # Row by row: OpenBLAS runs a (1, W) @ (W, W) product as a matrix-vector product, but a (2, W) one as a
+        # general product that first packs the whole weight matrix (about 5x slower than two rows on their own;
+        # benchmarks/bench_lift.py). Flip-test averaging sends two rows for one pose.
+        return np.concatenate([_forward_numpy_rows(v, eps, features[i:i + 1]) for i in range(len(features))])
+    return _forward_numpy_rows(v, eps, features)
+
+
+def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
+    """The chain of :func:`forward_numpy` on ``features`` ``(B, F)`` with the weight views ``v``."""
     h = features @ v[0].T + v[1]
     i, k = 2, 0
     while i < len(v) - 2:

@@ -62,7 +62,7 @@ def _module(lifter: Lifter, kp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _assert_lift_matches_module(lifter: Lifter, kp: np.ndarray) -> None:
     rel, depth = _module(lifter, kp)
-    res = lifter.lift(kp, focal=1145.0, principal_point=PP)
+    res = lifter.lift(kp, focal=1145.0, principal_point=PP, flip_test=False)
     np.testing.assert_allclose(res.relative.reshape(rel.shape), rel, rtol=1e-5, atol=2e-3)
     np.testing.assert_allclose(res.canonical_depth.reshape(depth.shape), depth, rtol=1e-5, atol=2e-2)
 
@@ -173,3 +173,7 @@ def test_shipped_default_single_pose_matches_module(kp):
     lifter = Lifter.from_pretrained("default")
     _assert_lift_matches_module(lifter, kp[:16])
     _assert_lift_matches_module(lifter, kp[3])
+    # the default's flip-test averaging: one pose (two rows, numpy row by row) equals the same pose in a batch
+    one = lifter.lift(kp[3], focal=1145.0, principal_point=PP, flip_test=True)
+    batch = lifter.lift(kp[3:6], focal=1145.0, principal_point=PP, flip_test=True)
+    np.testing.assert_allclose(one.absolute, batch.absolute[0], rtol=1e-5, atol=1e-2)
