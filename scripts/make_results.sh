@@ -40,3 +40,12 @@ ev sh_mix_regularized "sh_mix + dropout 0.5, wd 1e-3, 60 min=runs/sh_mix_reg.pt"
 # How much of the SH-detection error is the detector's: inputs gt + alpha (det - gt), and MPJPE by frame 2D error.
 python scripts/sh_error_scaling.py --stride 50 --models sh_mix,mixture,gt --out "$OUT/sh_error_scaling" \
   | tee "$OUT/sh_error_scaling.txt"
+
+# The default (issue 11): clean GT 2D (source="clean"), the focal sweep, real SH detections (no source given:
+# "detected"), resolution invariance against a pixel-space model, and the 84 demo photos through BlazePose.
+ev universal_gt2d universal --analytic-root --per-action --stride 5
+ev focal_sweep_universal universal --focal-scales 0.5,0.7,1,1.4,2 --stride 50
+ev universal_sh_s5 universal sh_mix --inputs sh --stride 5 --analytic-root
+python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/bench_invariance.json" \
+  | tee "$OUT/bench_invariance.txt"
+python scripts/eval_cascade.py --model universal --compare sh_mix blazepose gt | tee "$OUT/cascade_universal.txt"
