@@ -151,7 +151,7 @@ def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool, ne
     if new_sample:
         R = np.asarray(cam.R)
         nodes.frame.wxyz = vtf.SO3.from_matrix(R.T).wxyz
-        nodes.frame.position = tuple(-R.T @ np.asarray(cam.t) / 1000.0)
+        nodes.frame.position = tuple(cam.centre / 1000.0)
         nodes.floor.visible = state.sample.upload is None  # an upload's camera height is a guess
     if new_sample and new_image:
         img = state.sample.image
@@ -225,7 +225,7 @@ def camera_world(state: SessionState) -> tuple[np.ndarray, np.ndarray]:
     """``(R, C)``: the sample camera's rotation (world -> camera) and centre (world, m)."""
     cam = state.sample.camera
     R = np.asarray(cam.R, np.float64)
-    return R, -R.T @ np.asarray(cam.t, np.float64) / 1000.0
+    return R, cam.centre / 1000.0
 
 
 def framing_points(state: SessionState, frame: Frame | None) -> np.ndarray:

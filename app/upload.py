@@ -1,17 +1,17 @@
 """Uploads and downloads of the app, headless (no viser here).
 
 Upload: a **photo** (any format Pillow reads) goes through :mod:`lifter.detect` and
-:func:`lifter.lift_cli.lift_image` exactly as ``poselifter lift`` does: EXIF orientation, downscaling of
+:func:`lifter.pipeline.lift_image` exactly as ``poselifter lift`` does: EXIF orientation, downscaling of
 huge images for detection (keypoints stay in full-resolution px), the largest person when there are
 several, and the focal length from EXIF (:func:`lifter.detect.focal_from_exif`) or the default diagonal
 field of view (:data:`lifter.detect.DEFAULT_DIAGONAL_FOV_DEG`); the principal point is the image centre.
-A **keypoint JSON** (every layout ``poselifter lift`` accepts, :func:`lifter.lift_cli.parse_keypoint_json`,
+A **keypoint JSON** (every layout ``poselifter lift`` accepts, :func:`lifter.io.parse_keypoint_json`,
 converted with :func:`lifter.keypoints.convert`) is drawn on a plain canvas of its ``image_size``, or on
 the photo uploaded just before when the sizes agree (so a photo + keypoints work without MediaPipe).
 Both become a :class:`app.samples.Sample` without 3D ground truth whose 2D is the detected / given one.
 
 Download: :func:`result_record` lifts the tab's current (possibly dragged) clean 2D at the current focal
-length and returns a :class:`lifter.lift_cli.LiftRecord`; its ``to_json()`` has the same fields as the
+length and returns a :class:`lifter.io.LiftRecord`; its ``to_json()`` has the same fields as the
 files ``poselifter lift`` writes (``keypoints_2d``, ``absolute``, ``root``, ``canonical_depth``, ``focal``,
 ``principal_point``, ...). :func:`glb_bytes` is the skeleton as a binary glTF (:mod:`lifter.export`).
 

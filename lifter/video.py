@@ -29,7 +29,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair
-from .camera import DEFAULT_DIAGONAL_FOV_DEG
+from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, image_from_array, people_h36m
 from .io import parse_keypoint_sequence
 from .keypoints import convert
@@ -110,7 +110,6 @@ class SequenceTracker:
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks:
                 del self._smoothers[tid]  # ended tracks
-        f_geo = float(np.sqrt(np.prod(np.asarray(focal, np.float64))))
         out = []
         for i, tid in enumerate(ids):
             sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))
@@ -118,7 +117,7 @@ class SequenceTracker:
             out.append(PersonState(track_id=tid, keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
                                    relative=rel, root_raw=np.asarray(root[i], np.float64),
                                    relative_raw=np.asarray(relative[i], np.float64),
-                                   canonical_depth=float(r[2]) * 1000.0 / f_geo,
+                                   canonical_depth=float(canonical_depth_from_depth(r[2], focal=focal)),
                                    scores=None if scores is None else np.asarray(scores[i], np.float64)))
         return out
 

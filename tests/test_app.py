@@ -26,7 +26,7 @@ def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
     """A SceneNodeDragEvent whose pointer lies on the image plane at pixel ``uv``."""
     cam = view.state.sample.camera
     R = np.asarray(cam.R)
-    C = -R.T @ np.asarray(cam.t) / 1000.0
+    C = cam.centre / 1000.0
     p_cam = image_plane(view.state, np.asarray(uv, float))
     p_world = R.T @ p_cam + C
     return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.scene.pose.joints2d[joint], phase="update",
@@ -449,8 +449,8 @@ def test_readout_names_the_lifted_2d(view: SessionView, app: PoseLifterApp) -> N
 def test_head_on_view(view: SessionView, app: PoseLifterApp) -> None:
     view.select_demo(app.demo.names[1])
     cam = view.state.sample.camera
-    R, t = np.asarray(cam.R), np.asarray(cam.t)
-    C = -R.T @ t / 1000.0
+    R = np.asarray(cam.R)
+    C = cam.centre / 1000.0
     f, c = np.asarray(view.state.focal), np.asarray(cam.principal_point)
 
     def zoom() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -496,7 +496,7 @@ def test_head_on_view_moves_a_tabs_camera(app: PoseLifterApp) -> None:
         assert v.head_on_view() is True
         cam = v.state.sample.camera
         R = np.asarray(cam.R)
-        C = -R.T @ np.asarray(cam.t) / 1000.0
+        C = cam.centre / 1000.0
         look = R @ (np.asarray(v.target.camera.look_at) - C)
         eye = R @ (np.asarray(v.target.camera.position) - C)
         kp = v.state.keypoints
