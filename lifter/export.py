@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Final
 
@@ -304,27 +305,23 @@ def _children(j: int) -> list[int]:
     return [c for c, p in enumerate(PARENTS) if p == j]
 
 
-def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) -> str:
-    """The BVH file for ``pose`` ``(17, 3)`` mm (camera frame); see the module docstring."""
-    if units not in UNITS_MM:
-        raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
-    p = to_y_up(_pose(pose)) / UNITS_MM[units]
-    lines: list[str] = ["HIERARCHY"]
+_CHANNELS_6: Final[str] = "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"
+_CHANNELS_3: Final[str] = "CHANNELS 3 Zrotation Xrotation Yrotation"
 
-    def fmt(v: np.ndarray) -> str:
-        return " ".join(f"{x:.6f}" for x in v)
+
+def _bvh_hierarchy(offsets: np.ndarray, fmt: Callable[[np.ndarray], str],
+                   channels: Callable[[int], str]) -> tuple[list[str], list[int]]:
+    """The ``HIERARCHY`` lines of the H36M skeleton, depth first from the root, with each joint's OFFSET
+    ``offsets[j]`` (``(17, 3)``, BVH units) and CHANNELS line ``channels(j)``; and the joints in that order (the
+    order of the MOTION channels)."""
+    lines: list[str] = ["HIERARCHY"]
+    order: list[int] = []
 
     def emit(j: int, depth: int) -> None:
         ind = "  " * depth
-        if j == 0:
-            lines.append(f"ROOT {JOINT_NAMES[j]}")
-            off = np.zeros(3)
-            chans = "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"
-        else:
-            lines.append(f"{ind}JOINT {JOINT_NAMES[j]}")
-            off = p[j] - p[PARENTS[j]]
-            chans = "CHANNELS 3 Zrotation Xrotation Yrotation"
-        lines.extend([f"{ind}{{", f"{ind}  OFFSET {fmt(off)}", f"{ind}  {chans}"])
+        lines.append(f"ROOT {JOINT_NAMES[j]}" if j == 0 else f"{ind}JOINT {JOINT_NAMES[j]}")
+        order.append(j)
+        lines.extend([f"{ind}{{", f"{ind}  OFFSET {fmt(offsets[j])}", f"{ind}  {channels(j)}"])
         kids = _children(j)
         for c in kids:
             emit(c, depth + 1)
@@ -334,6 +331,21 @@ def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) ->
         lines.append(f"{ind}}}")
 
     emit(0, 0)
+    return lines, order
+
+
+def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) -> str:
+    """The BVH file for ``pose`` ``(17, 3)`` mm (camera frame); see the module docstring."""
+    if units not in UNITS_MM:
+        raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
+    p = to_y_up(_pose(pose)) / UNITS_MM[units]
+
+    def fmt(v: np.ndarray) -> str:
+        return " ".join(f"{x:.6f}" for x in v)
+
+    offsets = p - p[np.array([max(q, 0) for q in PARENTS])]
+    offsets[0] = 0.0
+    lines, _ = _bvh_hierarchy(offsets, fmt, lambda j: _CHANNELS_6 if j == 0 else _CHANNELS_3)
     n_channels = 6 + 3 * (NUM_JOINTS - 1)
     motion = np.zeros(n_channels)
     motion[:3] = p[0]
@@ -364,28 +376,11 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     bones[:, 0] = p[:, 0]
     offsets = bones.mean(0)
     offsets[0] = 0.0
-    lines: list[str] = ["HIERARCHY"]
 
     def fmt(v: np.ndarray) -> str:
         return " ".join(f"{x:.5f}" for x in v)
 
-    order: list[int] = []
-
-    def emit(j: int, depth: int) -> None:
-        ind = "  " * depth
-        lines.append(f"ROOT {JOINT_NAMES[j]}" if j == 0 else f"{ind}JOINT {JOINT_NAMES[j]}")
-        order.append(j)
-        lines.extend([f"{ind}{{", f"{ind}  OFFSET {fmt(offsets[j])}",
-                      f"{ind}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"])
-        kids = _children(j)
-        for c in kids:
-            emit(c, depth + 1)
-        if not kids:
-            lines.extend([f"{ind}  End Site", f"{ind}  {{", f"{ind}    OFFSET 0.000000 0.000000 0.000000",
-                          f"{ind}  }}"])
-        lines.append(f"{ind}}}")
-
-    emit(0, 0)
+    lines, order = _bvh_hierarchy(offsets, fmt, lambda j: _CHANNELS_6)
     lines += ["MOTION", f"Frames: {len(p)}", f"Frame Time: {1.0 / fps:.6f}"]
     zeros = np.zeros(3)
     for t in range(len(p)):
