@@ -656,7 +656,8 @@ class SessionView:
 
     @control
     def set_focal(self, value: float) -> None:
-        """Focal length ``alpha`` (px): the root slides along its viewing ray with ``Z ∝ f``."""
+        """Focal length ``alpha`` (px): the root slides along its viewing ray (``Z ∝ f`` exactly for a pixel-space
+        model; the default reads the rays too, so its Z/f moves a little)."""
         self._set_value("focal_px", value)
 
     @control
