@@ -66,7 +66,10 @@ class LifterPool:
 @dataclass
 class SessionState:
     """Everything one browser tab controls. Focal ``focal_px`` is ``alpha`` in px; the x/y ratio of the
-    sample's camera is kept. ``keypoints`` is the current (possibly dragged) clean 2D, ``(17, 2)`` px."""
+    sample's camera is kept. ``keypoints`` is the current (possibly dragged) clean 2D, ``(17, 2)`` px, of the
+    selected person ``person`` (0: the sample's own, k: ``sample.others_2d[k - 1]``); ``others`` holds the current
+    2D of every other person of the image (person index -> ``(17, 2)`` px; their drags are kept while another person
+    is selected) and ``others_dragged`` their dragged joints."""
 
     sample: Sample
     model: str
@@ -78,16 +81,30 @@ class SessionState:
     cloud_samples: int = CLOUD_SAMPLES
     analytic: bool = False
     dragged: set[int] = field(default_factory=set)
+    person: int = 0
+    others: dict[int, np.ndarray] = field(default_factory=dict)
+    others_dragged: dict[int, frozenset[int]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        n = self.sample.num_people
+        if not 0 <= self.person < n:
+            raise PoseLifterError(f"person {self.person} out of range: {self.sample.label} has {n} "
+                                  f"{'person' if n == 1 else 'people'}")
         if self.keypoints is None:
             self.keypoints = self.base_keypoints().copy()
         if not self.focal_px:
             self.focal_px = self.sample.camera.alpha
+        for k in range(n):
+            if k != self.person and k not in self.others:
+                self.others[k] = self.base_keypoints(k).copy()
 
-    def base_keypoints(self) -> np.ndarray:
-        """The un-dragged 2D input: ground truth, or the detection when ``input_kind == "detected"``. Raises
-        :class:`PoseLifterError` when the sample has no such 2D (no detection; no ground truth for an upload)."""
+    def base_keypoints(self, person: int | None = None) -> np.ndarray:
+        """The un-dragged 2D input of ``person`` (default: the selected one): ground truth, or the detection when
+        ``input_kind == "detected"``; another person's detected / uploaded 2D. Raises :class:`PoseLifterError`
+        when the sample has no such 2D (no detection; no ground truth for an upload)."""
+        k = self.person if person is None else int(person)
+        if k > 0:
+            return np.asarray(self.sample.others_2d[k - 1], np.float64)
         if self.input_kind == "detected":
             if self.sample.detected_2d is None:
                 raise PoseLifterError(f"no 2D detection for {self.sample.label}")
@@ -104,6 +121,8 @@ class SessionState:
         kw: dict[str, Any] = {f.name: getattr(self, f.name) for f in fields(self)}
         kw["keypoints"] = np.array(self.keypoints, np.float64, copy=True)
         kw["dragged"] = set(self.dragged)
+        kw["others"] = dict(self.others)  # (their arrays are never changed in place)
+        kw["others_dragged"] = dict(self.others_dragged)
         kw.update(changes)
         return SessionState(**kw)
 
@@ -116,6 +135,11 @@ class SessionState:
     @property
     def image_size(self) -> tuple[int, int]:
         return (self.sample.camera.width, self.sample.camera.height)
+
+    def people_2d(self) -> list[np.ndarray]:
+        """The current 2D of every person of the image, ``(17, 2)`` px each, in the sample's order (largest
+        first), the selected person's included."""
+        return [self.keypoints if k == self.person else self.others[k] for k in range(self.sample.num_people)]
 
 
 def focal_max(sample: Sample) -> float:
@@ -198,6 +222,17 @@ def cloud_spread(cloud: np.ndarray) -> Spread:
 
 
 @dataclass(frozen=True)
+class PersonLift:
+    """Another person of the image: ``person`` (index in the sample, 0 = largest), current 2D ``(17, 2)`` px,
+    lifted pose ``(17, 3)`` mm and root ``(3,)`` mm, camera frame."""
+
+    person: int
+    keypoints_2d: np.ndarray
+    lifted: np.ndarray
+    root: np.ndarray
+
+
+@dataclass(frozen=True)
 class Frame:
     """The result of one redraw. 3D in mm, camera frame; 2D in px.
 
@@ -220,6 +255,8 @@ class Frame:
     gt_3d: np.ndarray | None
     metrics: dict[str, float]
     spread: Spread | None = None
+    others: tuple[PersonLift, ...] = ()
+    """The other people of the image, lifted at the same focal length into the same camera space."""
 
     @property
     def alpha(self) -> float:
@@ -248,15 +285,22 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     else:
         noisy = kp.copy()
         batch = kp[None]
+    n_main = batch.shape[0]
+    ids = [k for k in range(state.sample.num_people) if k != state.person]
+    if ids:  # everyone else, in the same batch: same focal length, same camera space
+        batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
     res = lifter.lift(batch, focal=f, principal_point=pp, source=lift_source(state))
+    others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
+                              root=res.root[n_main + i]) for i, k in enumerate(ids))
+    res_abs, res_rel = res.absolute[:n_main], res.relative[:n_main]
     if not (np.all(np.isfinite(res.absolute)) and np.all(np.isfinite(res.root))):
         raise PoseLifterError("the lift is not finite (extreme 2D coordinates or focal length); input ignored")
-    lifted = res.absolute[0]
-    cloud = res.absolute[1:] if batch.shape[0] > 1 else None
+    lifted = res_abs[0]
+    cloud = res_abs[1:] if n_main > 1 else None
     analytic = None
     if state.analytic:
-        root_a = analytic_root(noisy, res.relative[0], focal=f, principal_point=pp)
-        analytic = root_a[None, :] + res.relative[0]
+        root_a = analytic_root(noisy, res_rel[0], focal=f, principal_point=pp)
+        analytic = root_a[None, :] + res_rel[0]
     metrics: dict[str, float] = {}
     gt = state.sample.pose_3d
     if gt is not None:
@@ -267,7 +311,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
             metrics["analytic root error"] = float(np.linalg.norm(analytic[0] - gt[0]))
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
-                 focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread)
+                 focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
+                 others=others)
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:
@@ -347,9 +392,9 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     lines.append(input_line(state))
     up = state.sample.upload
     if up is not None:
-        people = f" · {up.num_people} people found, largest used" if (up.num_people or 0) > 1 else ""
-        lines.append(f"**Input** {up.name} ({'photo, ' + str(up.detector) if up.kind == 'image' else 'keypoint file, ' + up.source_format})"
-                     f"{people}")
+        lines.append(f"**Input** {up.name} ({'photo, ' + str(up.detector) if up.kind == 'image' else 'keypoint file, ' + up.source_format})")
+    if frame.others:
+        lines.append(people_line(frame, state))
     if frame.spread is not None:
         lines.append(spread_line(frame.spread))
     if frame.metrics:
@@ -364,3 +409,17 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         lines.append(f"**Analytic root** Z {a[2]:.0f} mm ({a[2] - Z:+.0f} mm from the lifted root)"
                      + (f" · error {err:.0f} mm" if err is not None else ""))
     return "  \n".join(lines)
+
+
+def people_line(frame: Frame, state: SessionState) -> str:
+    """The readout's line on the people of the image: the selected one (draggable) and, for each other person, the
+    root and the distance between roots (mm, camera frame)."""
+    n = state.sample.num_people
+    me = np.asarray(frame.root, np.float64)
+    parts = [f"**People** {n} in one camera space · **person {state.person + 1}** selected (drag its joints; the "
+             "person picker selects another)"]
+    for o in frame.others:
+        X, Y, Z = o.root
+        parts.append(f"person {o.person + 1}: root X {X:.0f} · Y {Y:.0f} · Z {Z:.0f} mm, "
+                     f"{float(np.linalg.norm(np.asarray(o.root) - me)):.0f} mm from person {state.person + 1}")
+    return "  \n".join(parts)

@@ -6,6 +6,8 @@ dashed-looking (thinner, lighter) on the right side, and joints carry a side-col
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import cv2
 import numpy as np
 
@@ -16,6 +18,7 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "detected": (240, 150, 0),  # orange: 2D detector
     "noisy": (160, 60, 220),  # purple: input + noise (what is lifted)
     "current": (230, 30, 30),  # red: the current / dragged 2D
+    "other": (0, 150, 150),  # teal: the other people of the image (select one with the person picker)
 }
 SIDE_COLORS: dict[str, tuple[int, int, int]] = {"left": (30, 110, 255), "right": (255, 60, 160), "center": (250, 250, 250)}
 """Left joints blue ring, right joints pink ring (subject's own sides)."""
@@ -76,13 +79,21 @@ def scaled_base(base: np.ndarray | None, *, size: tuple[int, int], max_width: in
 
 def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, np.ndarray | None],
             max_width: int = 480, selected: int | None = None,
-            prescaled: tuple[np.ndarray, float] | None = None) -> np.ndarray:
+            prescaled: tuple[np.ndarray, float] | None = None,
+            others: Sequence[tuple[int, np.ndarray]] = ()) -> np.ndarray:
     """The image (or a canvas of ``size = (W, H)``) downscaled to at most ``max_width`` px wide, with the
-    given poses (keys of :data:`COLORS`, ``(17, 2)`` px in full-resolution pixels) drawn on it. RGB uint8.
+    given poses (keys of :data:`COLORS`, ``(17, 2)`` px in full-resolution pixels) drawn on it, and the other
+    people ``others`` (``(person index, (17, 2) px)``, numbered from 1 at their head). RGB uint8.
     ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize."""
     small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
     img = small.copy()
     k = max(1.0, img.shape[1] / 240.0)  # marks grow with the inset (readable on 1000-px frames)
+    for person, kp in others:
+        draw_pose(img, kp, COLORS["other"], scale=s, thickness=round(k * 1.5), radius=round(k * 2))
+        top = np.asarray(kp, np.float64)[10] * s
+        if np.all(np.isfinite(top)):
+            cv2.putText(img, str(person + 1), (int(top[0]) + 4, int(top[1]) - 4), cv2.FONT_HERSHEY_SIMPLEX,
+                        0.35 * k, COLORS["other"], max(1, round(k)), cv2.LINE_AA)
     for key in ("gt", "detected", "noisy", "current"):
         kp = poses.get(key)
         if kp is not None:

@@ -87,6 +87,8 @@ class NoiseGui:
 
 @dataclass
 class JointGui:
+    person: viser.GuiDropdownHandle[str]
+    """Which person of the image is draggable (``"person 1"`` = the largest); disabled with one person."""
     joint: viser.GuiDropdownHandle[str]
     uv: viser.GuiVector2Handle
     head_on: viser.GuiButtonHandle
@@ -115,7 +117,7 @@ class Gui:
     def value_handles(self) -> list[Any]:
         """The value controls whose last value :func:`poselifter_app.session.apply_controls` applies."""
         return [self.lift.model, self.sample.input, self.lift.focal, self.noise.level, self.noise.seed,
-                self.noise.cloud, self.lift.analytic]
+                self.noise.cloud, self.lift.analytic, self.joints.person]
 
 
 def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], models: list[str], model: str,
@@ -200,6 +202,10 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         joints = JointGui(
             head_on=gui.add_button("head-on image view", icon=viser.Icon.ZOOM_IN,
                                    hint="look straight at the 2D joints on the image plane"),
+            person=cast(viser.GuiDropdownHandle[str], gui.add_dropdown(
+                "person", ["person 1"], initial_value="person 1", disabled=True,
+                hint="photos with several people: whose joints are draggable (1 = largest); everyone is lifted "
+                     "into the same camera space")),
             joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
             uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0, hint="type a position to move the joint"),
             reset=gui.add_button("reset dragged joints"),

@@ -34,6 +34,9 @@ class Sample:
         downscaled copy (uploads): 2D coordinates always refer to ``camera.width x camera.height``.
     has_gt_2d: False when ``keypoints_2d`` is not ground truth (uploads: the detected / given 2D).
     upload: provenance of an uploaded sample (:class:`app.upload.UploadInfo`), else None.
+    others_2d: the other people in the same image, ``(17, 2)`` px each, largest first (a photo or a keypoint
+        file with several people; video frames). They are lifted into the same camera space; the app's person
+        picker makes any of them the draggable one.
     """
 
     key: str
@@ -45,6 +48,12 @@ class Sample:
     image: np.ndarray | None
     has_gt_2d: bool = True
     upload: Any = None
+    others_2d: tuple[np.ndarray, ...] = ()
+
+    @property
+    def num_people(self) -> int:
+        """People in the image: this one and :attr:`others_2d`."""
+        return 1 + len(self.others_2d)
 
 
 def _read_rgb(path: Path) -> np.ndarray | None:

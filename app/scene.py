@@ -34,6 +34,9 @@ GT_RGB = COLORS["gt"]
 ANALYTIC_RGB = (255, 140, 0)
 RAY_RGB = (250, 210, 0)
 FRUSTUM_RGB = (30, 30, 30)
+OTHER_RGB = (0, 150, 150)
+MAX_PEOPLE_LABELS: int = 8
+"""Labels drawn for at most this many other people (their skeletons are all drawn)."""
 MAX_TRAIL_GAP: int = 12
 """Trajectory: recorded frames further apart than this are not joined."""
 
@@ -84,6 +87,11 @@ class PoseNodes:
     gt: viser.LineSegmentsHandle
     analytic: viser.LineSegmentsHandle
     analytic_root: viser.IcosphereHandle
+    others_bones2d: viser.LineSegmentsHandle
+    others_bones: viser.LineSegmentsHandle
+    others_joints: viser.PointCloudHandle
+    others_labels: list[viser.LabelHandle]
+    """The other people of the image: their 2D on the image plane, lifted skeletons and a label each."""
 
 
 @dataclass
@@ -125,6 +133,13 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
         analytic=scene.add_line_segments("/cam/analytic", np.zeros((64, 2, 3)), ANALYTIC_RGB, thickness=0.045,
                                          visible=False),
         analytic_root=scene.add_icosphere("/cam/analytic_root", radius=0.06, color=ANALYTIC_RGB, visible=False),
+        others_bones2d=scene.add_line_segments("/cam/others/bones2d", np.zeros((16, 2, 3)), OTHER_RGB,
+                                               thickness=0.003, visible=False),
+        others_bones=scene.add_line_segments("/cam/others/bones", np.zeros((16, 2, 3)), OTHER_RGB, thickness=0.02,
+                                             visible=False),
+        others_joints=scene.add_point_cloud("/cam/others/joints", np.zeros((NUM_JOINTS, 3)), OTHER_RGB,
+                                            point_size=0.04, point_shape="circle", visible=False),
+        others_labels=[scene.add_label(f"/cam/others/label{k}", "", visible=False) for k in range(MAX_PEOPLE_LABELS)],
     )
     return Scene(camera=cam, pose=pose)
 
@@ -197,10 +212,44 @@ def draw_pose(nodes: PoseNodes, cam: CameraNodes, fr: Frame, *, show_gt: bool) -
         nodes.cloud.visible = True
     else:
         nodes.cloud.visible = False
+    draw_others(nodes, fr)
     root = fr.root * m
     cam.ray.points = np.stack([np.stack([np.zeros(3), root * 1.25])]).astype(np.float32)
     cam.root.position = tuple(root)
     cam.root_label.text = f"root Z {fr.root[2] / 1000:.2f} m"
+
+
+def draw_others(nodes: PoseNodes, fr: Frame) -> None:
+    """The other people of the image, lifted into the same camera space (teal), each labelled with its number
+    and root depth."""
+    m = 1e-3
+    if not fr.others:
+        nodes.others_bones.visible = nodes.others_joints.visible = False
+        for h in nodes.others_labels:
+            h.visible = False
+        return
+    P = np.stack([o.lifted for o in fr.others]) * m
+    nodes.others_bones.points = np.concatenate([edges_points(p) for p in P]).astype(np.float32)
+    nodes.others_joints.points = P.reshape(-1, 3).astype(np.float32)
+    nodes.others_bones.visible = nodes.others_joints.visible = True
+    for k, h in enumerate(nodes.others_labels):
+        if k < len(fr.others):
+            o = fr.others[k]
+            h.position = tuple(o.lifted[10] * m + np.array([0.0, -0.12, 0.0]))
+            h.text = f"person {o.person + 1} · Z {o.root[2] / 1000:.2f} m"
+            h.visible = True
+        else:
+            h.visible = False
+
+
+def draw_others_2d(nodes: PoseNodes, state: SessionState, others: list[np.ndarray]) -> None:
+    """The other people's current 2D on the image plane."""
+    if not others:
+        nodes.others_bones2d.visible = False
+        return
+    nodes.others_bones2d.points = np.concatenate([edges_points(image_plane(state, kp)) for kp in others]).astype(
+        np.float32)
+    nodes.others_bones2d.visible = True
 
 
 def draw_trail(cam: CameraNodes, roots: dict[int, np.ndarray], *, visible: bool) -> None:
@@ -230,11 +279,12 @@ def camera_world(state: SessionState) -> tuple[np.ndarray, np.ndarray]:
 
 def framing_points(state: SessionState, frame: Frame | None) -> np.ndarray:
     """World points (m) the overview keeps in view: the camera centre first, its frustum at the image plane, the
-    lifted skeleton and the ground truth."""
+    lifted skeleton (everyone's) and the ground truth."""
     R, C = camera_world(state)
     pts = [np.zeros((1, 3)), frustum_corners(state)]
     if frame is not None:
         pts.append(frame.lifted / 1000.0)
+        pts += [o.lifted / 1000.0 for o in frame.others]
         if frame.gt_3d is not None:
             pts.append(frame.gt_3d / 1000.0)
     return np.concatenate(pts) @ R + C  # R^T x + C, row-wise

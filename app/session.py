@@ -140,7 +140,43 @@ def with_keypoints(state: SessionState, keypoints: object) -> SessionState:
 
 
 def reset_joints(state: SessionState) -> SessionState:
+    """Undo the selected person's drags."""
     return state.evolve(keypoints=state.base_keypoints().copy(), dragged=set())
+
+
+def person_label(k: int) -> str:
+    """The person picker's label of person index ``k`` (0 = largest): ``"person 1"``, ..."""
+    return f"person {int(k) + 1}"
+
+
+def person_index(value: object) -> int:
+    """A person index from an index or a picker label ``"person k"``."""
+    if isinstance(value, str):
+        head, _, num = value.strip().partition(" ")
+        if head != "person" or not num.isdigit() or int(num) < 1:
+            raise PoseLifterError(f"unknown person {value[:40]!r}; expected 'person 1', 'person 2', ...")
+        return int(num) - 1
+    return _integer(value, "person")
+
+
+def with_person(state: SessionState, person: object) -> SessionState:
+    """Select person ``person`` (index, 0 = largest) of the image: their joints become the draggable ones. Every
+    person's current 2D and drags are kept. Raises for an index the sample does not have."""
+    k = _integer(person, "person")
+    n = state.sample.num_people
+    if not 0 <= k < n:
+        raise PoseLifterError(f"person {k + 1} does not exist: {state.sample.label} has {n} "
+                              f"{'person' if n == 1 else 'people'}")
+    if k == state.person:
+        return state
+    others = dict(state.others)
+    others[state.person] = np.array(state.keypoints, np.float64, copy=True)
+    dragged = dict(state.others_dragged)
+    dragged[state.person] = frozenset(state.dragged)
+    kp = others.pop(k)
+    mine = dragged.pop(k, frozenset())
+    return state.evolve(person=k, keypoints=np.array(kp, np.float64, copy=True), dragged=set(mine), others=others,
+                        others_dragged=dragged)
 
 
 def joint_index(joint: object) -> int:
@@ -169,6 +205,8 @@ class ControlValues:
     seed: object
     cloud_samples: object
     analytic: bool
+    person: object = 0
+    """The person picker: an index (0 = largest) or its label ``"person k"`` (k from 1)."""
 
 
 @dataclass(frozen=True)
@@ -211,6 +249,7 @@ def apply_controls(state: SessionState, values: ControlValues, *,
     attempt("noise_level", lambda s: with_noise(s, values.noise_level), state.noise_level)
     attempt("seed", lambda s: with_seed(s, values.seed), state.seed)
     attempt("cloud_samples", lambda s: with_cloud_samples(s, values.cloud_samples), state.cloud_samples)
+    attempt("person", lambda s: with_person(s, person_index(values.person)), state.person)
     if bool(values.analytic) != st.analytic:
         st = st.evolve(analytic=bool(values.analytic))
     return st, out
@@ -220,7 +259,9 @@ def same_lift(a: SessionState, b: SessionState) -> bool:
     """True when ``a`` and ``b`` give the same lift (nothing to recompute)."""
     return (a.sample is b.sample and a.model == b.model and a.input_kind == b.input_kind and a.focal_px == b.focal_px
             and a.noise_level == b.noise_level and a.seed == b.seed and a.cloud_samples == b.cloud_samples
-            and a.analytic == b.analytic and np.array_equal(a.keypoints, b.keypoints))
+            and a.analytic == b.analytic and np.array_equal(a.keypoints, b.keypoints) and a.person == b.person
+            and a.others.keys() == b.others.keys()
+            and all(np.array_equal(a.others[k], b.others[k]) for k in a.others))
 
 
 @dataclass(frozen=True)

@@ -46,7 +46,7 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, parse_keypoint_json
+from lifter.io import LiftRecord, PersonResult, parse_keypoint_json
 from lifter.keypoints import H36M17, convert
 from lifter.pipeline import lift_image
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
@@ -66,6 +66,8 @@ along the world's +y axis (world z up), so the 3D view has the usual floor grid.
 MIN_FOCAL_PX: Final[float] = 1.0
 MAX_FOCAL_PX: Final[float] = 1e6
 """Focal lengths (px) outside this range in a keypoint file are refused."""
+MAX_PEOPLE: Final[int] = 6
+"""People looked for in an uploaded photo / kept from a keypoint file (the largest first)."""
 INSTALL_HINT: Final[str] = 'pip install -e ".[detect]"'
 DEFAULT_DETECTOR: Final[str] = "blazepose"
 
@@ -223,11 +225,13 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
 
 
 def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estimator: PoseEstimator2D,
-                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
-    """Detect the largest person on an uploaded photo and make it a sample (:func:`lifter.pipeline.lift_image`:
-    raises :class:`lifter.detect.NoPersonError` when nobody is found)."""
-    rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg)
+                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_people: int = MAX_PEOPLE) -> Sample:
+    """Detect everyone on an uploaded photo (at most ``max_people``, largest first) and make it a sample: the
+    largest person's 2D, the others in ``others_2d`` (:func:`lifter.pipeline.lift_image`: raises
+    :class:`lifter.detect.NoPersonError` when nobody is found)."""
+    rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg, max_people=max_people)
     kp = _check_2d(rec.keypoints_2d, photo.name)  # (detections may be extrapolated outside the image)
+    others = tuple(_check_2d(p.keypoints_2d, f"{photo.name}, person {i + 2}") for i, p in enumerate(rec.people[1:]))
     detail = next((w for w in rec.warnings if "px" in w and ("EXIF" in w or "field of view" in w)), rec.focal_source)
     info = UploadInfo(name=photo.name, kind="image", focal_source=rec.focal_source, focal_detail=detail,
                       scores=None if rec.scores is None else np.asarray(rec.scores, np.float64),
@@ -235,7 +239,7 @@ def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estim
                       warnings=tuple(rec.warnings))
     cam = upload_camera(rec.focal, rec.principal_point, photo.size, photo.name)
     return Sample(key=key, label=f"upload: {photo.name}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(),
-                  camera=cam, image=photo.display, has_gt_2d=False, upload=info)
+                  camera=cam, image=photo.display, has_gt_2d=False, upload=info, others_2d=others)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -262,9 +266,14 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise UploadError(f"{nm}: not valid JSON ({exc}); expected a keypoint file as `poselifter lift` reads it") from None
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
     kp = _check_2d(convert(kf.keypoints, src=kf.format), nm)
+    notes = list(kf.warnings)
+    people = list(kf.people[1:])
+    if len(people) + 1 > MAX_PEOPLE:
+        notes.append(f"{len(people) + 1} people in the file; the {MAX_PEOPLE} largest are shown")
+        people = people[:MAX_PEOPLE - 1]
+    others = tuple(_check_2d(convert(p, src=kf.format), f"{nm}, person {i + 2}") for i, p in enumerate(people))
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
-    notes = list(kf.warnings)
     size = kf.image_size
     use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
     if size is None and use_photo:
@@ -277,7 +286,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                           "add it, or upload the photo first")
     if min(size) <= 0 or max(size) > MAX_CANVAS_SIDE:
         raise UploadError(f"{nm}: image_size {list(size)} px is not plausible")
-    _check_2d(kp, nm, size)
+    for i, q in enumerate((kp, *others)):
+        _check_2d(q, nm if i == 0 else f"{nm}, person {i + 1}", size)
     if use_photo:
         notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
     if kf.focal is not None:
@@ -289,12 +299,11 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
         else (size[0] / 2.0, size[1] / 2.0)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
-                      source=kf.source,
-                      warnings=tuple(notes))
+                      source=kf.source, num_people=1 + len(others), warnings=tuple(notes))
     image = photo.display if use_photo else _display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
-                  image=image, has_gt_2d=False, upload=info)
+                  image=image, has_gt_2d=False, upload=info, others_2d=others)
 
 
 def missing_detector_message(name: str, exc: Exception) -> str:
@@ -311,27 +320,45 @@ def missing_detector_message(name: str, exc: Exception) -> str:
 
 
 def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: tuple[float, float],
-                  dragged: set[int] | frozenset[int] = frozenset(), focal_changed: bool = False) -> Any:
+                  dragged: set[int] | frozenset[int] = frozenset(), focal_changed: bool = False,
+                  people: list[np.ndarray] | None = None, people_dragged: dict[int, frozenset[int]] | None = None
+                  ) -> Any:
     """The tab's result as a :class:`lifter.io.LiftRecord`: the current clean 2D (``(17, 2)`` px,
-    dragged joints included, no noise) lifted at ``focal`` and the sample's principal point."""
-    kp = _check_2d(keypoints, sample.label)
+    dragged joints included, no noise) lifted at ``focal`` and the sample's principal point.
+
+    With several people, ``people`` is everyone's current 2D in the sample's order (largest first) and
+    ``people_dragged`` their dragged joints (person index -> joints); they are lifted in one batch into
+    ``people`` of the record, and the top-level fields are the largest person's, as ``poselifter lift`` writes
+    them (``keypoints`` and ``dragged`` are then not used)."""
     cam = sample.camera
     pp = (float(cam.principal_point[0]), float(cam.principal_point[1]))
     info: UploadInfo | None = sample.upload
     source = "clean" if info is None or info.source == "clean" else "detected"
-    res = lifter.lift(kp, focal=focal, principal_point=pp, source=source)
+    if people is None:
+        people, people_dragged = [keypoints], {0: frozenset(dragged)}
+    kp_all = np.stack([_check_2d(q, sample.label if i == 0 else f"{sample.label}, person {i + 1}")
+                       for i, q in enumerate(people)])
+    res = lifter.lift(kp_all, focal=focal, principal_point=pp, source=source)
     warnings = list(info.warnings) if info is not None else []
-    if dragged:
-        warnings.append("2D joints corrected in the app: " + ", ".join(JOINT_NAMES[j] for j in sorted(dragged)))
+    for k, joints in sorted((people_dragged or {}).items()):
+        if joints:
+            who = f" (person {k + 1})" if len(people) > 1 else ""
+            warnings.append(f"2D joints corrected in the app{who}: " + ", ".join(JOINT_NAMES[j] for j in sorted(joints)))
     if focal_changed:
         src = "app-slider"
         warnings.append(f"focal length set with the app's slider to {math.sqrt(focal[0] * focal[1]):.1f} px")
     else:
         src = info.focal_source if info is not None else "calibrated-camera"
+    scores = None if info is None else info.scores
+    lifted = tuple(PersonResult(keypoints_2d=kp_all[i], absolute=np.asarray(res.absolute[i]),
+                                relative=np.asarray(res.relative[i]), root=np.asarray(res.root[i]),
+                                canonical_depth=float(res.canonical_depth[i]), scores=scores if i == 0 else None)
+                   for i in range(len(kp_all)))
+    top = lifted[0]
     return LiftRecord(input=info.name if info is not None else sample.label,
                       kind=info.kind if info is not None else "sample",
-                      keypoints_2d=kp, absolute=np.asarray(res.absolute), relative=np.asarray(res.relative),
-                      root=np.asarray(res.root), canonical_depth=float(res.canonical_depth),
+                      keypoints_2d=top.keypoints_2d, absolute=top.absolute, relative=top.relative,
+                      root=top.root, canonical_depth=top.canonical_depth, people=lifted,
                       focal=(float(focal[0]), float(focal[1])), focal_source=src, principal_point=pp,
                       image_size=(int(cam.width), int(cam.height)), model=str(getattr(lifter, "name", "custom")),
                       scores=None if info is None else info.scores,
@@ -401,8 +428,12 @@ class UploadFailed(PoseLifterError):
 def upload_message(sample: Sample) -> str:
     """What the readout says after an upload: what was found, how to correct it, the focal and any notes."""
     info = sample.upload
-    what = (f"{info.name}: {info.detector} found {info.num_people} {'person' if info.num_people == 1 else 'people'}"
-            if info.kind == "image" else f"{info.name}: {info.source_format} keypoints")
+    n = sample.num_people
+    what = (f"{info.name}: {info.detector} found {n} {'person' if n == 1 else 'people'}"
+            if info.kind == "image" else f"{info.name}: {info.source_format} keypoints"
+            + (f" of {n} people" if n > 1 else ""))
+    if n > 1:
+        what += ", all lifted into one camera space (the Drag tab's person picker selects whose joints to drag)"
     notes = [n for n in info.warnings if n != info.focal_detail]
     return (f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
             + "".join(f" Note: {n}." for n in notes))

@@ -54,6 +54,7 @@ from .scene import (
     camera_world,
     draw_2d,
     draw_camera,
+    draw_others_2d,
     draw_pose,
     draw_trail,
     framing_points,
@@ -354,20 +355,23 @@ class SessionView:
         g = self.gui
         return ss.ControlValues(model=g.lift.model.value, input_kind=g.sample.input.value,
                                 focal_px=g.lift.focal.value, noise_level=g.noise.level.value, seed=g.noise.seed.value,
-                                cloud_samples=g.noise.cloud.value, analytic=g.lift.analytic.value)
+                                cloud_samples=g.noise.cloud.value, analytic=g.lift.analytic.value,
+                                person=g.joints.person.value)
 
     def _set_control(self, name: str, value: Any) -> None:
         g = self.gui
         handle = {"model": g.lift.model, "input_kind": g.sample.input, "focal_px": g.lift.focal,
                   "noise_level": g.noise.level, "seed": g.noise.seed, "cloud_samples": g.noise.cloud,
-                  "analytic": g.lift.analytic}[name]
+                  "analytic": g.lift.analytic, "person": g.joints.person}[name]
         if name == "focal_px":
             value = float(round(value))
+        if name == "person":
+            value = ss.person_label(int(value))
         self._put(handle, value)
 
     def _show_controls(self, st: SessionState) -> None:
         """Every value control shows ``st``."""
-        for name in ("model", "input_kind", "focal_px", "noise_level", "seed", "cloud_samples", "analytic"):
+        for name in ("model", "input_kind", "focal_px", "noise_level", "seed", "cloud_samples", "analytic", "person"):
             self._set_control(name, getattr(st, name))
 
     def _apply(self, st: SessionState, *, new_sample: bool = False) -> None:
@@ -463,6 +467,12 @@ class SessionView:
         if list(g.input.options) != opts:
             g.input.options = opts
         self._put(g.input, st.input_kind)
+        people = [ss.person_label(k) for k in range(sample.num_people)]
+        pick = self.gui.joints.person
+        if list(pick.options) != people:
+            pick.options = people
+        pick.disabled = len(people) == 1
+        self._set_control("person", st.person)
         hi = focal_max(sample)
         if self.gui.lift.focal.max != hi:
             self.gui.lift.focal.max = hi
@@ -511,9 +521,11 @@ class SessionView:
         if self._base_key != base_key:
             self._base = scaled_base(s.image, size=st.image_size)
             self._base_key = base_key
+        others = [(k, st.others[k]) for k in sorted(st.others)]
         self.gui.sample.image.image = overlay(s.image, size=st.image_size, poses=poses, selected=self.selected,
-                                              prescaled=self._base)
+                                              prescaled=self._base, others=others)
         self._last_plane = draw_2d(self.scene.pose, st, kp, self._last_plane)
+        draw_others_2d(self.scene.pose, st, [o for _, o in others])
 
     def _push(self, fr: Frame, *, new_sample: bool, focal_changed: bool) -> None:
         st = self.state
@@ -869,8 +881,11 @@ class SessionView:
             raise PoseLifterError(f"unknown download format {fmt!r}; expected 'json' or 'glb'")
         with self.lock:
             st = self.state
+            dragged = dict(st.others_dragged)
+            dragged[st.person] = frozenset(st.dragged)
             rec = up.result_record(st.sample, st.keypoints, lifter=self.app.pool.get(st.model), focal=st.focal,
-                                   dragged=set(st.dragged), focal_changed=abs(st.focal_px - st.sample.camera.alpha) > 0.5)
+                                   focal_changed=abs(st.focal_px - st.sample.camera.alpha) > 0.5,
+                                   people=st.people_2d(), people_dragged=dragged)
             stem = up.download_stem(st.sample)
         if fmt == "json":
             return f"{stem}.json", up.json_bytes(rec)

@@ -353,10 +353,10 @@ def main() -> int:
         lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok]
     )
     rows["ground-truth 2D (same frames), true focal"] = pose_metrics(
-        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok]
+        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok], source="clean").absolute, gt3d[ok]
     )
     rows["ground-truth 2D, all 84 frames"] = pose_metrics(
-        lifter.lift(gt2d, focal=focal, principal_point=pp).absolute, gt3d
+        lifter.lift(gt2d, focal=focal, principal_point=pp, source="clean").absolute, gt3d
     )
     rows["SH detections 2D, all 84 frames"] = pose_metrics(
         lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d

@@ -1003,3 +1003,43 @@ def test_demo_motion_is_a_plausible_walk(app: PoseLifterApp) -> None:
     w = [m.world_pose(i) for i in range(0, m.num_frames)]
     lead = [np.dot(p[3] - p[6], p[0] - m.world_pose(i - 1)[0]) for i, p in enumerate(w)]  # right vs left ankle, along the walk
     assert min(lead) < -50 and max(lead) > 50  # each leg leads in turn
+
+
+def test_person_selection_is_a_pure_transition(app: PoseLifterApp) -> None:
+    """Several people: with_person keeps every person's current 2D and drags; bad picks are refused with the
+    previous state kept (apply_controls reports them with the value the picker must show again)."""
+    from dataclasses import replace
+
+    import poselifter_app.session as ss
+    from poselifter_app.core import SessionState
+
+    from lifter import PoseLifterError
+
+    demo = app.demo.get("walking")
+    two = replace(demo, key="test/two", has_gt_2d=False, detected_2d=demo.keypoints_2d,
+                  others_2d=(demo.keypoints_2d * 0.5 + 100.0,), pose_3d=None)
+    st = SessionState(sample=two, model=app.default_model, input_kind="detected")
+    assert two.num_people == 2 and st.person == 0 and list(st.others) == [1]
+    moved = ss.with_joint(st, 3, st.keypoints[3] + 7)
+    second = ss.with_person(moved, 1)
+    assert second.person == 1 and second.dragged == set() and second.others_dragged == {0: frozenset({3})}
+    np.testing.assert_allclose(second.keypoints, two.others_2d[0])
+    np.testing.assert_allclose(second.others[0], moved.keypoints)
+    assert [p.shape for p in second.people_2d()] == [(17, 2), (17, 2)]
+    np.testing.assert_allclose(second.people_2d()[0], moved.keypoints)
+    back = ss.with_person(ss.reset_joints(second), 0)
+    np.testing.assert_allclose(back.keypoints, moved.keypoints)  # person 1's drag kept while person 2 was picked
+    assert back.dragged == {3} and 1 in back.others and not back.others_dragged.get(1)
+    assert ss.with_person(back, 0) is back
+    assert not ss.same_lift(back, ss.with_person(back, 1))
+    for bad, msg in ((2, "does not exist"), (-1, "does not exist"), ("person 0", "unknown person"),
+                     ("someone", "unknown person"), (1.5, "integer")):
+        with pytest.raises(PoseLifterError, match=msg):
+            ss.with_person(back, ss.person_index(bad))
+    assert ss.person_index("person 2") == 1 and ss.person_label(1) == "person 2"
+    vals = ss.ControlValues(model=st.model, input_kind="detected", focal_px=st.focal_px, noise_level=0.0, seed=0,
+                            cloud_samples=st.cloud_samples, analytic=False, person="person 7")
+    out, rej = ss.apply_controls(back, vals, known_model=app.pool.get)
+    assert out.person == 0 and [(r.control, r.value) for r in rej] == [("person", 0)]
+    with pytest.raises(PoseLifterError, match="out of range"):
+        SessionState(sample=demo, model=app.default_model, person=1)

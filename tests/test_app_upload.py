@@ -332,7 +332,8 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert v.load_upload("two.jpg", _jpeg(rgb)) is True
         np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)  # the largest person
         assert "found 2 people" in v.messages[-1]
-        assert "2 people found" in v.gui.readout.readout.content or "2 people" in v.gui.readout.readout.content
+        assert "**People** 2 in one camera space" in v.gui.readout.readout.content
+        assert "person 2: root" in v.gui.readout.readout.content
         # nobody
         est.people = []
         snap = _snapshot(v)
@@ -493,3 +494,101 @@ def test_late_drag_events_after_a_sample_change_are_ignored(view: SessionView, a
     assert not view.state.dragged
     cb(_drag_event(view, j, view.state.keypoints[j] + 20.0, "start"))  # a new drag works
     assert j in view.state.dragged
+
+
+def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLifterApp) -> None:
+    """Issue 14, app: every person of an uploaded photo is lifted into one camera space, shown (2D, 3D, label,
+    readout) and draggable through the person picker; each person's drags are kept, and the download has them all."""
+    s = app.demo.get("standing")
+    server = local_server()
+    try:
+        other = 0.7 * (s.keypoints_2d - s.keypoints_2d.mean(0)) + np.array([150.0, 380.0])
+        third = 0.5 * (s.keypoints_2d - s.keypoints_2d.mean(0)) + np.array([650.0, 330.0])
+        est = FakeEstimator([other, s.keypoints_2d, third], full_width=800)
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+        v = a.headless_view()
+        assert v.load_upload("three.jpg", _jpeg(s.image)) is True
+        st, fr = v.state, v.frame
+        assert st.sample.num_people == 3 and st.person == 0 and sorted(st.others) == [1, 2]
+        np.testing.assert_allclose(st.keypoints, s.keypoints_2d, atol=1e-6)  # largest first
+        np.testing.assert_allclose(st.others[1], other, atol=1e-6)
+        np.testing.assert_allclose(st.others[2], third, atol=1e-6)
+        # everyone lifted at the tab's focal length, as the library lifts them one by one
+        lf = a.pool.get(st.model)
+        for o in fr.others:
+            ref = lf.lift(st.others[o.person], focal=st.focal, principal_point=st.sample.camera.principal_point)
+            np.testing.assert_allclose(o.lifted, ref.absolute, atol=0.05)
+        # smaller people are further away (same body size, smaller in the image)
+        assert fr.root[2] < fr.others[0].root[2] < fr.others[1].root[2]
+        ro = v.gui.readout.readout.content
+        assert "**People** 3" in ro and "person 2: root" in ro and "person 3: root" in ro
+        dist = np.linalg.norm(fr.others[0].root - fr.root)
+        assert f"{dist:.0f} mm from person 1" in ro
+        nodes = v.scene.pose
+        assert nodes.others_bones.visible and nodes.others_bones.points.shape == (32, 2, 3)
+        assert [h.text.split(" ·")[0] for h in nodes.others_labels if h.visible] == ["person 2", "person 3"]
+        assert nodes.others_bones2d.visible
+        pick = v.gui.joints.person
+        assert list(pick.options) == ["person 1", "person 2", "person 3"] and not pick.disabled
+        # select person 2 and drag one of its joints
+        pick.value = "person 2"
+        assert wait_for(lambda: v.state.person == 1)
+        np.testing.assert_allclose(v.state.keypoints, other, atol=1e-6)
+        np.testing.assert_allclose(v.state.others[0], s.keypoints_2d, atol=1e-6)
+        moved = other[13] + np.array([25.0, -10.0])
+        assert v.move_joint("l_wrist", moved) is True
+        assert wait_for(lambda: np.allclose(v.state.keypoints[13], moved))
+        assert v.state.dragged == {13}
+        z_main = v.frame.others[0].root[2]  # person 1, now one of the others
+        np.testing.assert_allclose(z_main, fr.root[2], atol=1e-6)
+        # back to person 1: its 2D as it was, person 2's drag kept
+        pick.value = "person 1"
+        assert wait_for(lambda: v.state.person == 0)
+        np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)
+        np.testing.assert_allclose(v.state.others[1][13], moved)
+        assert v.state.others_dragged[1] == frozenset({13}) and not v.state.dragged
+        # a longer lens moves everyone away along their rays, all in the same camera space
+        roots = np.stack([v.frame.root] + [o.root for o in v.frame.others])
+        v.gui.lift.focal.value = round(1.5 * v.state.focal_px)
+        assert wait_for(lambda: v.frame.root[2] > roots[0, 2] * 1.2)
+        new = np.stack([v.frame.root] + [o.root for o in v.frame.others])
+        assert np.all(new[:, 2] > 1.05 * roots[:, 2])  # (off-centre people less: the default reads the rays)
+        # the download has everyone, the largest at the top level, person 2's corrected joint named
+        name, data = v.download_payload("json")
+        rec = json.loads(data)
+        assert len(rec["people"]) == 3 and rec["num_people"] == 3
+        np.testing.assert_allclose(rec["keypoints_2d"], s.keypoints_2d, atol=0.01)
+        np.testing.assert_allclose(rec["people"][1]["keypoints_2d"][13], moved, atol=0.01)
+        assert any("(person 2): l_wrist" in w for w in rec["warnings"])
+        # a one-person photo: the picker goes back to one entry, disabled; nothing of the others is left
+        est.people = [s.keypoints_2d]
+        assert v.load_upload("one.jpg", _jpeg(s.image)) is True
+        assert v.state.sample.num_people == 1 and not v.state.others and v.frame.others == ()
+        assert list(pick.options) == ["person 1"] and pick.disabled
+        assert not v.scene.pose.others_bones.visible and not any(h.visible for h in v.scene.pose.others_labels)
+        assert "**People**" not in v.gui.readout.readout.content
+    finally:
+        server.stop()
+
+
+def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
+    """A keypoint file with several people: all of them in the sample (largest first), at most MAX_PEOPLE."""
+    from lifter.keypoints import convert
+
+    s = app.demo.get(app.demo.names[1])
+    coco = _coco_from_h36m(s.keypoints_2d)
+    small = 0.5 * coco + 40.0
+    doc = {"people": [{"keypoints": small.tolist()}, {"keypoints": coco.tolist()}], "format": "coco17",
+           "image_size": [800, 600]}
+    sample = up.keypoint_sample("two.json", json.dumps(doc).encode(), key="upload/t/two.json")
+    assert sample.num_people == 2 and sample.upload.num_people == 2
+    np.testing.assert_allclose(sample.keypoints_2d, convert(coco, src="coco17"))
+    np.testing.assert_allclose(sample.others_2d[0], convert(small, src="coco17"))
+    doc["people"] = [{"keypoints": (coco * (1 - 0.05 * k) + 10 * k).tolist()} for k in range(up.MAX_PEOPLE + 2)]
+    crowd = up.keypoint_sample("crowd.json", json.dumps(doc).encode(), key="upload/t/crowd.json")
+    assert crowd.num_people == up.MAX_PEOPLE
+    assert any(f"the {up.MAX_PEOPLE} largest are shown" in w for w in crowd.upload.warnings)
+    # a person far outside the image is named in the refusal
+    doc["people"] = [{"keypoints": coco.tolist()}, {"keypoints": (coco + 5000.0).tolist()}]
+    with pytest.raises(up.UploadError, match="person 2"):
+        up.keypoint_sample("far.json", json.dumps(doc).encode(), key="upload/t/far.json")
