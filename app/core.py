@@ -339,7 +339,8 @@ def input_name(state: SessionState) -> str:
     """Which 2D is lifted: the ground truth, the Stacked-Hourglass detection (H36M) or an upload's 2D."""
     up = state.sample.upload
     if up is not None:
-        return "uploaded detection" + (f" ({up.detector} on the photo)" if up.kind == "image" else " (keypoint file)")
+        where = {"image": f" ({up.detector} on the photo)", "video": f" ({up.detector} on the video frame)"}
+        return "uploaded detection" + where.get(up.kind, " (keypoint file)")
     return "ground truth" if state.input_kind == "gt" else "Stacked-Hourglass detection"
 
 
@@ -392,7 +393,9 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     lines.append(input_line(state))
     up = state.sample.upload
     if up is not None:
-        lines.append(f"**Input** {up.name} ({'photo, ' + str(up.detector) if up.kind == 'image' else 'keypoint file, ' + up.source_format})")
+        what = {"image": f"photo, {up.detector}", "video": f"video, {up.detector}"}.get(up.kind,
+                                                                                     f"keypoint file, {up.source_format}")
+        lines.append(f"**Input** {up.name} ({what})")
     if frame.others:
         lines.append(people_line(frame, state))
     if frame.spread is not None:

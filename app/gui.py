@@ -18,6 +18,7 @@ import viser
 from lifter.skeleton import JOINT_NAMES
 
 from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX
+from .video import VIDEO_MAX_SECONDS
 
 SOURCE_LABELS: dict[str, str] = {"demo": "demo sample", "motion": "demo motion", "h36m": "Human3.6M",
                                  "upload": "upload"}
@@ -213,9 +214,12 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
     with tabs.add_tab("File", viser.Icon.FILE):
         files = FileGui(
             upload=gui.add_upload_button(
-                "upload photo or keypoint JSON", icon=viser.Icon.UPLOAD, mime_type="image/*,.json,application/json",
-                hint=f"a photo (2D joints by MediaPipe BlazePose, draggable) or a 2D keypoint JSON as `poselifter "
-                     f"lift` reads it; at most {max_upload_mib} MiB"),
+                "upload photo, video or keypoint JSON", icon=viser.Icon.UPLOAD,
+                mime_type="image/*,video/*,.json,application/json",
+                hint=f"a photo (everyone's 2D joints by MediaPipe BlazePose, draggable), a short video (played with "
+                     f"every person's skeleton and root trajectory; the first {VIDEO_MAX_SECONDS:g} s) or a 2D "
+                     f"keypoint JSON (one pose, several people or 'frames') as `poselifter lift` reads it; at most "
+                     f"{max_upload_mib} MiB"),
             download_json=gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
                                          hint="the current lift with the fields `poselifter lift` writes"),
             download_glb=gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,

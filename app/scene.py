@@ -255,8 +255,16 @@ def draw_others_2d(nodes: PoseNodes, state: SessionState, others: list[np.ndarra
 def draw_trail(cam: CameraNodes, roots: dict[int, np.ndarray], *, visible: bool) -> None:
     """The lifted root's trajectory (camera frame): consecutive recorded frames joined (gaps over
     :data:`MAX_TRAIL_GAP` frames left open)."""
-    idx = sorted(roots)
-    segs = [np.stack([roots[a], roots[b]]) * 1e-3 for a, b in zip(idx, idx[1:]) if b - a <= MAX_TRAIL_GAP]
+    draw_tracks(cam, [roots], visible=visible)
+
+
+def draw_tracks(cam: CameraNodes, tracks: list[dict[int, np.ndarray]], *, visible: bool) -> None:
+    """Root trajectories (camera frame, mm), one ``{frame index: root}`` per person or track, each drawn as
+    :func:`draw_trail` draws one."""
+    segs = []
+    for roots in tracks:
+        idx = sorted(roots)
+        segs += [np.stack([roots[a], roots[b]]) * 1e-3 for a, b in zip(idx, idx[1:]) if b - a <= MAX_TRAIL_GAP]
     if not segs or not visible:
         cam.trail.visible = False
         return

@@ -290,7 +290,7 @@ SOURCES: tuple[str, ...] = ("demo", "motion", "h36m", "upload")
 
 
 def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: str | None, sources: list[str],
-                  h36m: Any | None, motion_frames: int) -> str:
+                  h36m: Any | None, motion_frames: int, upload_frames: int | None = None) -> str:
     """The key of the sample the pickers ask for (``demo/<name>``, ``motion/<i>``, ``h36m/S<s>/<seq>/<cam>/<f>`` or
     the last upload's key), given the key ``shown`` now. The sample rules:
 
@@ -298,7 +298,8 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
       camera or frame with photo) was set after it: using a picker shows its source;
     * the frame slider counts for the shown sequence, or when it was moved after the source / sequence was picked;
       otherwise the motion starts at 0, a new Human3.6M sequence at 0, and coming back to Human3.6M returns to the
-      last frame shown there (``last_h36m``);
+      last frame shown there (``last_h36m``); an uploaded video (``last_upload`` a frame ``video/<id>/<name>/<i>``
+      of ``upload_frames`` frames) likewise;
     * a "frame with photo" entry set after the other Human3.6M pickers names its frame.
 
     Raises :class:`PoseLifterError` for values that name nothing (crafted values, nothing uploaded yet).
@@ -318,7 +319,12 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         return f"motion/{i % max(motion_frames, 1)}"
     if src == "upload":
         if last_upload is None:
-            raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
+            raise PoseLifterError("nothing uploaded yet: use the 'upload photo, video or keypoint JSON' button (File "
+                                  "tab)")
+        if last_upload.startswith("video/") and upload_frames:
+            base, _, last = last_upload.rpartition("/")
+            i = int(fr.value) if shown.startswith(base + "/") or fr.t > p.source.t else int(last)
+            return f"{base}/{min(max(i, 0), upload_frames - 1)}"
         return last_upload
     assert h36m is not None and p.subject is not None and p.sequence is not None and p.camera is not None
     if p.photo is not None and p.photo.value != "(none)" and p.photo.t >= max(

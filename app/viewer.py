@@ -39,6 +39,7 @@ from lifter.skeleton import JOINT_NAMES
 from . import framing
 from . import session as ss
 from . import upload as up
+from . import video as vid
 from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, readout_markdown, spread_details
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
@@ -56,12 +57,14 @@ from .scene import (
     draw_camera,
     draw_others_2d,
     draw_pose,
+    draw_tracks,
     draw_trail,
     framing_points,
     set_joint_radius,
 )
 from .scene import head_on as scene_head_on
 from .scene import overview as scene_overview
+from .video import VideoSequence
 from .viser_hooks import limit_uploads, report_rejected_values
 
 log = logging.getLogger("poselifter.app")
@@ -176,6 +179,8 @@ class SessionView:
         self._last_h36m: str | None = None
         """Key of the last Human3.6M sample shown (coming back to Human3.6M goes back to that frame)."""
         self._photo: up.Photo | None = None
+        self._video: VideoSequence | None = None
+        """The last uploaded video / keypoint sequence (its frames are the samples ``video/<id>/<name>/<i>``)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         self.trail: dict[int, np.ndarray] = {}
@@ -413,13 +418,17 @@ class SessionView:
     def _requested_sample(self) -> Sample | None:
         """The sample the pickers ask for (:func:`poselifter_app.session.requested_key`); None: the one shown."""
         shown = self.state.sample.key
+        video = self._video
         key = ss.requested_key(self._picks(), shown=shown, last_h36m=self._last_h36m,
                                last_upload=self._last_upload.key if self._last_upload is not None else None,
-                               sources=self.app.sources, h36m=self.app.h36m, motion_frames=self.app.motion.num_frames)
+                               sources=self.app.sources, h36m=self.app.h36m, motion_frames=self.app.motion.num_frames,
+                               upload_frames=video.num_frames if video is not None else None)
         if key == shown:
             return None
         if self._last_upload is not None and key == self._last_upload.key:
             return self._last_upload
+        if video is not None and (i := video.index_of(key)) is not None:
+            return video.sample(i)
         return self.app.sample(key)
 
     def sequence(self) -> SequenceSource | None:
@@ -427,6 +436,8 @@ class SessionView:
         key = self.state.sample.key
         if key.startswith("motion/"):
             return self.app.motion
+        if key.startswith("video/") and self._video is not None and self._video.index_of(key) is not None:
+            return self._video
         if key.startswith("h36m/") and self.app.h36m is not None:
             _, subj, seq, cam, _ = key.split("/")
             return self.app.h36m_sequence(int(subj[1:]), seq, cam)
@@ -434,7 +445,7 @@ class SessionView:
 
     def _frame_index(self) -> int | None:
         key = self.state.sample.key
-        return int(key.rsplit("/", 1)[1]) if key.startswith(("motion/", "h36m/")) else None
+        return int(key.rsplit("/", 1)[1]) if key.startswith(("motion/", "h36m/", "video/")) else None
 
     def _show_sample(self, sample: Sample, *, reframe: bool) -> None:
         """Show ``sample`` now (drags reset; focal to its camera's unless the camera is the same one; model, noise,
@@ -443,12 +454,14 @@ class SessionView:
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         same_camera = sample.camera is old.sample.camera or (
             sample.camera.name == old.sample.camera.name and sample.key.split("/")[0] == old.sample.key.split("/")[0])
-        if same_camera and sample.key.split("/")[0] in ("h36m", "motion"):
+        if same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video"):
             st = st.evolve(focal_px=old.focal_px)
         self._sample_gen += 1
         self._apply(st, new_sample=True)
         if sample.key.startswith("h36m/"):
             self._last_h36m = sample.key
+        if sample.key.startswith("video/"):
+            self._last_upload = sample  # (coming back to the upload returns to this frame)
         self._show_sample_controls(st)
         if note:
             self.show_message(note)
@@ -488,7 +501,7 @@ class SessionView:
             p.info.content = f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)</small>"
         else:
             p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
-                if src == "demo" else "<small>a still upload (video: issue 14)</small>"
+                if src == "demo" else "<small>a still upload (upload a video or a keypoint sequence to play it)</small>"
         p.frame.disabled = seq is None
         if src == "h36m" and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
                 and g.camera is not None and g.photo is not None:
@@ -501,9 +514,10 @@ class SessionView:
             self._put(g.camera, camera)
             entry = f"{subj} {sequence} {camera} {frame}"
             self._put(g.photo, entry if entry in g.photo.options else "(none)")
-        if src == "upload" and SOURCE_LABELS["upload"] not in g.source.options:
-            g.source.options = [*g.source.options, SOURCE_LABELS["upload"]]
-        self._put(g.source, SOURCE_LABELS[src])
+        label = SOURCE_LABELS["upload" if src == "video" else src]
+        if label == SOURCE_LABELS["upload"] and label not in g.source.options:
+            g.source.options = [*g.source.options, label]
+        self._put(g.source, label)
 
     # ------------------------------------------------------------------------------------------
     # Drawing
@@ -551,6 +565,11 @@ class SessionView:
     def _update_trail(self, fr: Frame) -> None:
         st = self.state
         seq, idx = self.sequence(), self._frame_index()
+        if isinstance(seq, VideoSequence):  # every track's smoothed path, for the model and focal length in use
+            self.trail, self._trail_key = {}, None
+            tracks = seq.trajectories(self.app.pool.get(st.model), st.focal)
+            draw_tracks(self.scene.camera, tracks, visible=bool(self.gui.play.trail.value))
+            return
         if seq is None or idx is None:
             self.trail = {}
             self._trail_key = None
@@ -854,8 +873,14 @@ class SessionView:
     # ------------------------------------------------------------------------------------------
     @control
     def load_upload(self, name: str, content: bytes) -> None:
-        """An uploaded file: a photo (2D joints by the app's detector, the largest person) or a keypoint JSON
-        (:mod:`app.upload`). On any problem a message is shown and the tab's state is left as it was."""
+        """An uploaded file: a photo (2D joints of everyone by the app's detector) or a keypoint JSON
+        (:mod:`app.upload`), a video or a keypoint sequence JSON with ``frames`` (:mod:`app.video`: lifted,
+        tracked and smoothed, then played like a sequence). On any problem a message is shown and the tab's state
+        is left as it was."""
+        content = bytes(content or b"")
+        if vid.is_video_upload(name) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
+            self._load_video(name, content)
+            return
         try:
             sample, self._photo = up.upload_sample(
                 name, content, key=f"upload/{self.app.next_upload_id()}/{up.safe_name(name)}", photo=self._photo,
@@ -873,6 +898,45 @@ class SessionView:
                 raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
             self._last_upload = sample
         self.show_message(up.upload_message(sample))
+
+    def _load_video(self, name: str, content: bytes) -> None:
+        """A video or keypoint sequence: lifted with a progress note (one notification, updated), then shown."""
+        nm = up.safe_name(name)
+        note: Any = None
+        if isinstance(self.target, viser.ClientHandle):
+            note = self.target.add_notification(title="poselifter", body=f"{nm}: detecting and lifting ...",
+                                                loading=True, with_close_button=False)
+        last = [0.0]
+
+        def progress(done: int, total: int | None) -> None:
+            now = time.perf_counter()
+            if now - last[0] < 0.5:
+                return
+            last[0] = now
+            text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
+            self.gui.readout.status.content = "⏳ " + text
+            if note is not None:
+                note.body = text
+
+        try:
+            seq = vid.video_sequence(name, content, key=f"video/{self.app.next_upload_id()}/{nm}",
+                                     lifter=self.app.pool.get(self.state.model), estimator=self.app.estimator,
+                                     max_bytes=self.app.max_upload_bytes, detect_lock=self.app.detect_lock,
+                                     progress=progress)
+        finally:
+            if note is not None:
+                note.remove()
+        if self.playing:
+            self.stop_playback()
+        with self._runner.holding(), self.lock:
+            old = self._video
+            self._video = seq
+            try:
+                self._show_sample(seq.sample(0), reframe=True)
+            except PoseLifterError as exc:
+                self._video = old
+                raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
+        self.show_message(vid.video_message(seq))
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current

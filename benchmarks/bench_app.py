@@ -13,7 +13,10 @@ Playback: the demo motion (17 joints, no Human3.6M needed) is played on the same
 Human3.6M S9 "Walking 1" (50-fps frames, every 2nd shown) on a headless view; reported: frames shown per second and
 the server-side time of each frame (sample, lift, scene, readout).
 
-Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--json out.json]``
+Video (``--video clip.mp4``): the clip is uploaded on the same tab (the real BlazePose detector: lifted, tracked,
+smoothed) and played; the upload's time per frame and the playback are reported, not checked.
+
+Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--video clip.mp4] [--json out.json]``
 Exit status 1 when the drag p95 exceeds the target or a noise-free playback shows fewer than 24 frames per second
 (unless ``--no-check``; the noise-1 playback, 65 poses lifted per frame, is reported only).
 """
@@ -39,6 +42,8 @@ def main() -> int:
     p.add_argument("--play-seconds", type=float, default=8.0)
     p.add_argument("--no-h36m", action="store_true", help="skip the Human3.6M playback run even if the data are present")
     p.add_argument("--no-check", action="store_true")
+    p.add_argument("--video", default=None, help="also upload this video on the tab (the real detector, the `detect` "
+                   "extra) and play it: upload time per frame and playback are reported (not checked)")
     p.add_argument("--json", default=None, help="also write the result to this JSON file")
     args = p.parse_args()
 
@@ -103,6 +108,19 @@ def main() -> int:
             view.select_demo("walking")
             view.gui.noise.level.value = level
             play[f"demo_motion_noise_{level:g}"] = play_for(view, args.play_seconds)
+        if args.video:
+            from pathlib import Path
+
+            view.gui.noise.level.value = 0.0
+            t0 = time.perf_counter()
+            ok = view.load_upload(Path(args.video).name, Path(args.video).read_bytes())
+            up_s = time.perf_counter() - t0
+            assert ok, view.messages[-1]
+            seq = view.sequence()
+            play["video_upload"] = {"file": Path(args.video).name, "frames": seq.num_frames,
+                                    "upload_s": round(up_s, 2), "upload_ms_per_frame": round(1e3 * up_s / seq.num_frames, 1),
+                                    "pipeline_ms_per_frame": round(1e3 * (seq.record.seconds_per_frame or 0), 1),
+                                    "playback": play_for(view, args.play_seconds)}
         if default_h36m_root() is not None and not args.no_h36m:  # (read at run time, never copied)
             h_server = local_server()
             h_tab = None

@@ -1,0 +1,250 @@
+"""Uploaded videos and keypoint sequences as playable sequences (headless; no viser here).
+
+An uploaded video goes through :func:`lifter.video.lift_video` exactly as ``poselifter lift clip.mp4`` does:
+everyone detected in every frame, lifted, tracked (stable ``track_id``) and smoothed over time (causal
+One-Euro filter); a keypoint JSON with ``frames`` through :func:`lifter.video.lift_keypoint_sequence`. The result
+is a :class:`VideoSequence`, a :class:`app.playback.SequenceSource` the app plays like a Human3.6M sequence: each
+frame is a :class:`app.samples.Sample` with the frame's people (ordered by track id, so "person k" stays the same
+person while the same people are in view), drawn on the frame itself (kept as small JPEGs) or on a plain canvas.
+
+Per frame the app lifts the frame's 2D itself (so the focal slider, the model and joint drags act on it); the
+root trajectories it draws are the tracked, smoothed ones of :meth:`VideoSequence.trajectories`, recomputed for
+the model and focal length in use. Units: px, mm, seconds; camera frame OpenCV.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tempfile
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import cv2
+import numpy as np
+
+from lifter import PoseLifterError
+from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence, lift_video, track_lifted
+
+from .drawing import canvas
+from .samples import Sample
+from .upload import MAX_PEOPLE, UploadError, UploadInfo, check_upload, safe_name, upload_camera
+
+VIDEO_MAX_SECONDS: Final[float] = 20.0
+"""Uploaded videos and keypoint sequences are lifted up to this duration (the rest is dropped, with a note)."""
+VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
+"""Frames are kept for display downscaled to this longer side, as JPEG."""
+
+
+def is_video_upload(name: str) -> bool:
+    """A file name with a video suffix (:data:`lifter.video.VIDEO_SUFFIXES`)."""
+    return Path(safe_name(name)).suffix.lower() in VIDEO_SUFFIXES
+
+
+def is_sequence_json(content: bytes) -> bool:
+    """A keypoint JSON with ``frames`` (a keypoint sequence)."""
+    try:
+        doc = json.loads(content.decode("utf-8-sig"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return False
+    return isinstance(doc, dict) and "frames" in doc
+
+
+@dataclass
+class VideoSequence:
+    """A lifted video or keypoint sequence the app can play (:class:`app.playback.SequenceSource`).
+
+    key: ``video/<id>/<name>``; frame ``i`` (0 .. num_frames - 1: the lifted frames with someone in them, in order;
+    bad frames of the file and frames with nobody are left out) is the sample ``<key>/<i>``. record: the
+    :class:`lifter.video.SequenceRecord` of the upload. jpegs: those frames for display (None: a keypoint
+    sequence, drawn on a canvas).
+    """
+
+    key: str
+    label: str
+    record: SequenceRecord
+    info: UploadInfo
+    jpegs: list[bytes] | None
+    fps: float = field(init=False)
+    num_frames: int = field(init=False)
+    _traj: tuple[tuple, list[dict[int, np.ndarray]]] | None = field(default=None, init=False, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.fps = float(self.record.fps)
+        self.frames = [fr for fr in self.record.frames if fr.people]
+        self.num_frames = len(self.frames)
+        size = self.record.image_size or (1000, 1000)
+        self.camera = upload_camera(self.record.focal, self.record.principal_point, size, self.info.name)
+        self._canvas = None if self.jpegs is not None else _display_canvas(size)
+
+    def frame(self, index: int) -> Any:
+        from .playback import SequenceFrame
+
+        return SequenceFrame((self.sample(index),))
+
+    def sample(self, index: int) -> Sample:
+        """Frame ``index`` as a sample: the frame's people ordered by track id (the first is the draggable one when
+        the frame is shown), their detected 2D as the sample's 2D. A frame with nobody in it raises."""
+        i = int(index)
+        if not 0 <= i < self.num_frames:
+            raise PoseLifterError(f"{self.label}: no frame {i} (0 .. {self.num_frames - 1})")
+        fr = self.frames[i]
+        people = sorted(fr.people, key=lambda p: p.track_id)
+        kp = np.asarray(people[0].keypoints_2d, np.float64)
+        if self.jpegs is not None:
+            img = cv2.imdecode(np.frombuffer(self.jpegs[i], np.uint8), cv2.IMREAD_COLOR)
+            image = self._canvas_for_bad() if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+        else:
+            image = self._canvas
+        return Sample(key=f"{self.key}/{i}", label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
+                      pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
+                      upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]))
+
+    def _canvas_for_bad(self) -> np.ndarray:
+        return _display_canvas(self.record.image_size or (1000, 1000))
+
+    def index_of(self, key: str) -> int | None:
+        """The frame index of a sample key of this sequence, else None."""
+        head, _, tail = key.rpartition("/")
+        return int(tail) if head == self.key and tail.isdigit() and int(tail) < self.num_frames else None
+
+    def trajectories(self, lifter: Any, focal: tuple[float, float]) -> list[dict[int, np.ndarray]]:
+        """Every track's smoothed root trajectory, ``[{frame index: root (3,) mm}, ...]`` (one dict per track id),
+        for ``lifter`` at ``focal``: the record's own when both are the upload's, else every frame's people
+        lifted again in one batch and tracked and smoothed as the upload was (cached for the last pair)."""
+        rec = self.record
+        f = (float(focal[0]), float(focal[1]))
+        key = (getattr(lifter, "name", id(lifter)), f)
+        with self._lock:
+            if self._traj is not None and self._traj[0] == key:
+                return self._traj[1]
+        if key == (rec.model, tuple(rec.focal)):
+            frames = self.frames
+        else:
+            counts = [len(fr.people) for fr in self.frames]
+            kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
+            if not kp:
+                return []
+            src = "clean" if rec.source == "clean" else "detected"
+            res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src)
+            root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
+            lifted, k = [], 0
+            for fr, c in zip(self.frames, counts):
+                lifted.append((fr.index, fr.time_s, np.stack([p.keypoints_2d for p in fr.people]) if c else
+                               np.zeros((0, 17, 2)), root[k:k + c], rel[k:k + c], None))
+                k += c
+            frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
+        tracks: dict[int, dict[int, np.ndarray]] = {}
+        for i, fr in enumerate(frames):
+            for p in fr.people:
+                tracks.setdefault(p.track_id, {})[i] = np.asarray(p.root, np.float64)
+        out = [tracks[t] for t in sorted(tracks)]
+        with self._lock:
+            self._traj = (key, out)
+        return out
+
+
+def _display_canvas(size: tuple[int, int]) -> np.ndarray:
+    W, H = size
+    s = min(1.0, VIDEO_DISPLAY_MAX_SIDE / float(max(W, H)))
+    return canvas(max(1, round(W * s)), max(1, round(H * s)))
+
+
+def _display_jpegs(path: Path, indices: list[int], *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) -> list[bytes]:
+    """The video's frames ``indices`` (file frame numbers, increasing), downscaled and JPEG-encoded."""
+    want = {i: k for k, i in enumerate(indices)}
+    out: list[bytes | None] = [None] * len(indices)
+    cap = cv2.VideoCapture(str(path))
+    try:
+        i = -1
+        last = indices[-1] if indices else -1
+        while i < last:
+            ok, bgr = cap.read()
+            i += 1
+            if not ok or bgr is None:
+                if i > last:
+                    break
+                continue
+            if i in want:
+                h, w = bgr.shape[:2]
+                s = min(1.0, max_side / float(max(h, w)))
+                if s < 1.0:
+                    bgr = cv2.resize(bgr, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA)
+                ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, 80])
+                out[want[i]] = buf.tobytes() if ok else None
+    finally:
+        cap.release()
+    blank = None
+    for k, b in enumerate(out):
+        if b is None:  # (a frame that decoded for the lifter but not now: a grey frame keeps the timing)
+            if blank is None:
+                ok, buf = cv2.imencode(".jpg", np.full((8, 8, 3), 200, np.uint8))
+                blank = buf.tobytes()
+            out[k] = blank
+    return [b for b in out if b is not None]
+
+
+def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
+                   max_bytes: int, detect_lock: Any, max_seconds: float = VIDEO_MAX_SECONDS,
+                   progress: Callable[[int, int | None], None] | None = None) -> VideoSequence:
+    """Lift an uploaded video (``estimator()`` gives the 2D detector) or keypoint sequence JSON into a
+    :class:`VideoSequence` (module docstring). Raises :class:`lifter.PoseLifterError` with a message for the user:
+    too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ..."""
+    nm = safe_name(name)
+    content = bytes(content or b"")
+    check_upload(nm, content, max_bytes=max_bytes)
+    is_video = is_video_upload(nm)
+    suffix = Path(nm).suffix.lower() if is_video else ".json"
+    with tempfile.TemporaryDirectory(prefix="poselifter-upload-") as d:
+        path = Path(d) / f"upload{suffix}"
+        path.write_bytes(content)
+        try:
+            if is_video:
+                if estimator is None:
+                    raise UploadError(f"{nm}: no 2D detector for videos")
+                est = estimator()
+                with detect_lock:
+                    rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
+                                     max_seconds=max_seconds, progress=progress)
+                if not any(fr.people for fr in rec.frames):
+                    raise UploadError(f"{nm}: no person found in any of the {len(rec.frames)} frames")
+                jpegs = _display_jpegs(path, [fr.index for fr in rec.frames if fr.people])
+            else:
+                rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
+                jpegs = None
+                if rec.image_size is None:
+                    raise UploadError(f"{nm}: the keypoint sequence has no \"image_size\": [W, H]; add it (the app "
+                                      "draws the frames on a canvas of that size)")
+        except PoseLifterError as exc:
+            msg = str(exc).replace(str(path), nm)
+            raise UploadError(msg) from None
+    tracks = rec.tracks()
+    notes = list(rec.warnings)
+    empty = sum(1 for fr in rec.frames if not fr.people)
+    if empty:
+        notes.append(f"{empty} frame(s) with nobody in them are left out of playback")
+    detail = next((w for w in notes if "px" in w and "field of view" in w), rec.focal_source)
+    info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,
+                      focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
+                      source=rec.source, detector=rec.detector, warnings=tuple(notes))
+    label = f"{nm} ({len(rec.frames)} frames at {rec.fps:g} fps, {len(tracks)} track{'s' if len(tracks) != 1 else ''})"
+    if not math.isfinite(rec.fps) or rec.fps <= 0:
+        raise UploadError(f"{nm}: no usable frame rate")
+    return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs)
+
+
+def video_message(seq: VideoSequence) -> str:
+    """What the readout says after a video / sequence upload."""
+    rec = seq.record
+    per = f", {1e3 * rec.seconds_per_frame:.0f} ms per frame" if rec.seconds_per_frame else ""
+    notes = [n for n in seq.info.warnings if n != seq.info.focal_detail]
+    return (f"{seq.label}: everyone lifted, tracked and smoothed{per}; press play (Sample tab) to play it with the "
+            f"root trajectories. Focal: {seq.info.focal_detail}." + "".join(f" Note: {n}." for n in notes))
+
+
+__all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json", "is_video_upload",
+           "video_message", "video_sequence"]

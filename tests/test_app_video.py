@@ -1,0 +1,153 @@
+"""The app plays uploaded videos and keypoint sequences (issue 14): every person of every frame lifted, tracked and
+smoothed (lifter.video), the frames played like a Human3.6M sequence with each track's root trajectory."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+pytest.importorskip("viser")
+
+from conftest import require_shipped_models  # noqa: E402
+from poselifter_app import video as vid  # noqa: E402
+from poselifter_app.testing import local_server, wait_for  # noqa: E402
+from poselifter_app.viewer import PoseLifterApp  # noqa: E402
+
+from lifter import project  # noqa: E402
+from lifter.detect import Detection, bbox_of  # noqa: E402
+
+W, H, F = 640, 480, 600.0
+
+
+
+class ScriptedEstimator:
+    """Returns, for the n-th frame it sees, the n-th entry of ``script`` (people as (17, 2) px at full size)."""
+
+    name = "scripted"
+    keypoint_format = "h36m17"
+
+    def __init__(self, script: list[list[np.ndarray]]) -> None:
+        self.script, self.n = script, 0
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        people = self.script[self.n] if self.n < len(self.script) else []
+        self.n += 1
+        s = image.shape[1] / W
+        return [Detection(keypoints=k * s, scores=np.ones(17), bbox_xywh=bbox_of(k * s), keypoint_format="h36m17")
+                for k in people]
+
+
+def _script(n: int, *, nobody: tuple[int, ...] = ()) -> list[list[np.ndarray]]:
+    """Two people 4 m and 6 m away walking sideways in opposite directions; nobody in frames ``nobody``."""
+    from lifter import demo_sample
+
+    pose = demo_sample("standing").pose_3d
+    rel = pose - pose[0]
+    out = []
+    for i in range(n):
+        if i in nobody:
+            out.append([])
+            continue
+        a = rel + [-900.0 + 40 * i, 0.0, 4000.0]
+        b = rel + [1200.0 - 40 * i, 0.0, 6000.0]
+        out.append([project(p, focal=F, principal_point=(W / 2, H / 2)) for p in (a, b)])
+    return out
+
+
+def _clip(path: Path, n: int, fps: float = 25.0) -> bytes:
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (W, H))
+    assert vw.isOpened()
+    for i in range(n):
+        vw.write(np.full((H, W, 3), 40 + 7 * i % 200, np.uint8))
+    vw.release()
+    return path.read_bytes()
+
+
+@pytest.fixture()
+def server():
+    require_shipped_models()
+    s = local_server()
+    yield s
+    s.stop()
+
+
+def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path: Path) -> None:
+    n = 14
+    est = ScriptedEstimator(_script(n, nobody=(6,)))
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    assert v.load_upload("walk.avi", _clip(tmp_path / "walk.avi", n)) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert isinstance(seq, vid.VideoSequence) and seq.num_frames == n - 1 and seq.fps == pytest.approx(25.0)
+    assert "13 frames" not in seq.label and "14 frames" in seq.label and "2 tracks" in seq.label
+    assert any("nobody" in w for w in seq.info.warnings)
+    st = v.state
+    assert st.sample.key == f"{seq.key}/0" and st.sample.num_people == 2 and st.person == 0
+    assert v.gui.sample.source.value == "upload" and not v.gui.play.frame.disabled and v.gui.play.frame.max == n - 2
+    # every person is lifted into the same camera space: the near one ~4 m, the far one ~6 m
+    assert 3000 < v.frame.root[2] < 5000 and 5000 < v.frame.others[0].root[2] < 7500
+    assert "**People** 2" in v.gui.readout.readout.content and "video, scripted" in v.gui.readout.readout.content
+    assert "press play" in v.messages[-1]
+    # each track's root trajectory, smoothed: two paths of 12 segments (the empty frame is left out)
+    trail = v.scene.camera.trail
+    assert trail.visible and np.asarray(trail.points).shape == (2 * (n - 2), 2, 3)
+    tracks = seq.trajectories(app.pool.get(st.model), st.focal)
+    assert len(tracks) == 2 and all(len(t) == n - 1 for t in tracks)
+    x = np.array([tracks[0][i][0] for i in range(n - 1)])
+    assert np.all(np.diff(x) > 0)  # track 1 walks to the right the whole time (a stable track id)
+    # scrubbing: the frame slider shows that frame, focal length kept
+    v.gui.lift.focal.value = 800.0
+    assert wait_for(lambda: abs(v.state.focal_px - 800.0) < 1e-6)
+    v.gui.play.frame.value = 5
+    assert wait_for(lambda: v.state.sample.key == f"{seq.key}/5")
+    assert v.state.focal_px == pytest.approx(800.0) and v.state.sample.image.shape[1] <= vid.VIDEO_DISPLAY_MAX_SIDE
+    # the trajectories follow the focal length in use (recomputed, not the upload's)
+    moved = seq.trajectories(app.pool.get(v.state.model), v.state.focal)
+    assert moved is not tracks and moved[0][0][2] > tracks[0][0][2]
+    # play: frames advance; pause stops
+    assert v.toggle_play() is True
+    assert wait_for(lambda: v.state.sample.key != f"{seq.key}/5", timeout=10)
+    v.stop_playback()
+    assert not v.playing
+    # another source and back: the same frame again
+    shown = v.state.sample.key
+    v.gui.sample.source.value = "demo sample"
+    assert wait_for(lambda: v.state.sample.key.startswith("demo/"))
+    v.gui.sample.source.value = "upload"
+    assert wait_for(lambda: v.state.sample.key == shown)
+
+
+def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
+    est = ScriptedEstimator(_script(4))
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    key = v.state.sample.key
+    assert v.load_upload("broken.mp4", b"\x00\x01 not a video" * 50) is False
+    assert "cannot open as a video" in v.messages[-1] and "broken.mp4" in v.messages[-1]
+    assert "poselifter-upload" not in v.messages[-1]  # (the temporary path is not shown)
+    assert v.load_upload("empty.mp4", b"") is False and "empty file" in v.messages[-1]
+    est.script = [[] for _ in range(4)]
+    est.n = 0
+    assert v.load_upload("room.avi", _clip(tmp_path / "room.avi", 4)) is False
+    assert "no person found in any of the 4 frames" in v.messages[-1]
+    assert v.state.sample.key == key and v.sequence() is None
+
+
+def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(10)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert isinstance(seq, vid.VideoSequence) and seq.num_frames == 10 and seq.jpegs is None
+    assert v.state.sample.num_people == 2 and v.state.focal_px == pytest.approx(F)
+    assert 3000 < v.frame.root[2] < 5000
+    no_size = dict(doc)
+    del no_size["image_size"]
+    assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is False
+    assert "image_size" in v.messages[-1]
