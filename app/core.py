@@ -340,6 +340,8 @@ def input_name(state: SessionState) -> str:
     up = state.sample.upload
     if up is not None:
         where = {"image": f" ({up.detector} on the photo)", "video": f" ({up.detector} on the video frame)"}
+        if getattr(up, "source", "detected") == "clean":
+            return "uploaded exact 2D (keypoint file, \"source\": \"clean\")"
         return "uploaded detection" + where.get(up.kind, " (keypoint file)")
     return "ground truth" if state.input_kind == "gt" else "Stacked-Hourglass detection"
 

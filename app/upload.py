@@ -180,9 +180,10 @@ def _display(rgb: np.ndarray, max_side: int = DISPLAY_MAX_SIDE) -> np.ndarray:
     return cv2.resize(rgb, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA)
 
 
-def _display_canvas(size: tuple[int, int]) -> np.ndarray:
+def display_canvas(size: tuple[int, int], max_side: int = DISPLAY_MAX_SIDE) -> np.ndarray:
+    """A plain canvas for an image of ``size = (W, H)`` px, downscaled to ``max_side`` (uploads without a photo)."""
     W, H = size
-    s = min(1.0, DISPLAY_MAX_SIDE / float(max(W, H)))
+    s = min(1.0, max_side / float(max(W, H)))
     return canvas(max(1, round(W * s)), max(1, round(H * s)))
 
 
@@ -300,7 +301,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         else (size[0] / 2.0, size[1] / 2.0)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
                       source=kf.source, num_people=1 + len(others), warnings=tuple(notes))
-    image = photo.display if use_photo else _display_canvas(size)  # type: ignore[union-attr]
+    image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
                   image=image, has_gt_2d=False, upload=info, others_2d=others)

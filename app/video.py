@@ -29,9 +29,8 @@ import numpy as np
 from lifter import PoseLifterError
 from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence, lift_video, track_lifted
 
-from .drawing import canvas
 from .samples import Sample
-from .upload import MAX_PEOPLE, UploadError, UploadInfo, check_upload, safe_name, upload_camera
+from .upload import MAX_PEOPLE, UploadError, UploadInfo, check_upload, display_canvas, safe_name, upload_camera
 
 VIDEO_MAX_SECONDS: Final[float] = 20.0
 """Uploaded videos and keypoint sequences are lifted up to this duration (the rest is dropped, with a note)."""
@@ -79,7 +78,7 @@ class VideoSequence:
         self.num_frames = len(self.frames)
         size = self.record.image_size or (1000, 1000)
         self.camera = upload_camera(self.record.focal, self.record.principal_point, size, self.info.name)
-        self._canvas = None if self.jpegs is not None else _display_canvas(size)
+        self._canvas = None if self.jpegs is not None else display_canvas(size, VIDEO_DISPLAY_MAX_SIDE)
 
     def frame(self, index: int) -> Any:
         from .playback import SequenceFrame
@@ -105,7 +104,7 @@ class VideoSequence:
                       upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]))
 
     def _canvas_for_bad(self) -> np.ndarray:
-        return _display_canvas(self.record.image_size or (1000, 1000))
+        return display_canvas(self.record.image_size or (1000, 1000), VIDEO_DISPLAY_MAX_SIDE)
 
     def index_of(self, key: str) -> int | None:
         """The frame index of a sample key of this sequence, else None."""
@@ -146,12 +145,6 @@ class VideoSequence:
         with self._lock:
             self._traj = (key, out)
         return out
-
-
-def _display_canvas(size: tuple[int, int]) -> np.ndarray:
-    W, H = size
-    s = min(1.0, VIDEO_DISPLAY_MAX_SIDE / float(max(W, H)))
-    return canvas(max(1, round(W * s)), max(1, round(H * s)))
 
 
 def _display_jpegs(path: Path, indices: list[int], *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) -> list[bytes]:

@@ -291,3 +291,47 @@ def test_drag_playback_upload_download() -> None:
         np.testing.assert_allclose(d["keypoints_2d"], s.keypoints_2d, atol=0.01)
         np.testing.assert_allclose(d["absolute"][0], d["root"], atol=0.02)
         assert d["focal"] == [round(v, 2) for v in s.camera.focal]
+
+
+def test_several_people_in_an_uploaded_sequence() -> None:
+    """Issue 14 in a real browser: a keypoint sequence with two people uploaded through the file input plays with
+    both skeletons, the readout lists both, the person picker hands the drag to person 2, and each track's root
+    trajectory is drawn. (A keypoint sequence, so no detector is needed; videos take the same path after
+    detection, tests/test_app_video.py.)"""
+    from poselifter_app.video import VideoSequence
+
+    with _app_and_browser() as (app, browser):
+        page, view = _open_tab(app, browser)
+        motion = app.motion
+        cam = motion.camera
+        frames = []
+        for i in range(0, 100, 2):
+            kp = motion.frame(i).people[0].keypoints_2d
+            other = (kp - kp.mean(0)) * 0.7 + kp.mean(0) + np.array([260.0, -30.0])
+            frames.append({"people": [{"keypoints": kp.tolist()}, {"keypoints": other.tolist()}]})
+        doc = {"fps": 12.5, "format": "h36m17", "image_size": [cam.width, cam.height], "focal": list(cam.focal),
+               "principal_point": list(cam.principal_point), "source": "clean", "frames": frames}
+        page.get_by_role("tab", name="File").click()
+        page.locator(f"#file_upload_{view.gui.files.upload._impl.uuid}").set_input_files(
+            files=[{"name": "two_walkers.json", "mimeType": "application/json", "buffer": json.dumps(doc).encode()}])
+        assert _wait(lambda: isinstance(view.sequence(), VideoSequence), 60), f"not received: {view.messages[-3:]}"
+        assert view.state.sample.num_people == 2 and len(view.frame.others) == 1
+        assert "**2D input** uploaded exact 2D" in view.gui.readout.readout.content  # the file says "clean"
+        assert _wait(lambda: page.get_by_text("person 2: root").count() > 0, 30)  # the readout, in the page
+        view.gui.joints.person.value = "person 2"
+        assert _wait(lambda: view.state.person == 1, 30)
+        page.get_by_role("tab", name="Sample").click()
+        page.get_by_role("button", name="play").click()
+        assert _wait(lambda: view.playing, 30)
+        time.sleep(3.0)
+        assert view.state.sample.key != f"{view.sequence().key}/0"
+        trail = view.scene.camera.trail
+        assert trail.visible and np.asarray(trail.points).shape[0] == 2 * (len(frames) - 1)
+        page.get_by_role("button", name="pause").click()
+        assert _wait(lambda: not view.playing, 30)
+        if WRITE:
+            _close_notifications(page)
+            view.overview()
+            _settle([view])
+            time.sleep(2.0)
+            page.screenshot(path=str(DOCS / "app_people.png"))
