@@ -221,8 +221,9 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                      f"keypoint JSON (one pose, several people or 'frames') as `poselifter lift` reads it; at most "
                      f"{max_upload_mib} MiB"),
             download_json=gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
-                                         hint="the current lift with the fields `poselifter lift` writes"),
+                                         hint="the current lift with the fields `poselifter lift` writes (everyone "
+                                              "in the image; for an uploaded video the whole sequence)"),
             download_glb=gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
-                                        hint="the lifted skeleton as a mesh (metres, y-up)"),
+                                        hint="the lifted skeletons as meshes (metres, y-up; a video: animated)"),
         )
     return Gui(readout=readout, sample=sample, play=play, lift=lift, noise=noise, joints=joints, files=files)

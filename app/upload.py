@@ -380,10 +380,13 @@ def json_bytes(record: Any) -> bytes:
 
 
 def glb_bytes(record: Any) -> bytes:
-    """The lifted skeleton (``record.absolute``) as a binary glTF (metres, y-up; :mod:`lifter.export`)."""
+    """The lifted skeleton(s) as a binary glTF (metres, y-up; :mod:`lifter.export`): everyone in ``record.people``
+    in one scene, else ``record.absolute``."""
     from lifter.export import skeleton_scene
 
-    return bytes(skeleton_scene(record.absolute).export(file_type="glb"))
+    people = getattr(record, "people", ())
+    pose = np.stack([p.absolute for p in people]) if len(people) > 1 else record.absolute
+    return bytes(skeleton_scene(pose).export(file_type="glb"))
 
 
 __all__ = ["CAMERA_HEIGHT_MM", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",

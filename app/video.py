@@ -230,6 +230,27 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs)
 
 
+def sequence_json_bytes(seq: VideoSequence) -> bytes:
+    """The whole lifted sequence as ``poselifter lift clip.mp4`` writes ``DIR/clip.json`` (fps, frames, people with
+    ``track_id``; the upload's model and focal length, smoothed)."""
+    return json.dumps(seq.record.to_json(), indent=1).encode("utf-8")
+
+
+def sequence_glb_bytes(seq: VideoSequence) -> bytes:
+    """The whole lifted sequence as the animated binary glTF of ``poselifter lift clip.mp4 --glb`` (every track;
+    metres, y-up)."""
+    from lifter.export import write_glb_animation
+
+    tracks = seq.record.tracks()
+    if not tracks:
+        raise UploadError(f"{seq.info.name}: nobody in any frame; nothing to export")
+    with tempfile.TemporaryDirectory(prefix="poselifter-download-") as d:
+        path = Path(d) / "sequence.glb"
+        write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
+                             for tid, seen in tracks.items()}, path, fps=seq.fps)
+        return path.read_bytes()
+
+
 def video_message(seq: VideoSequence) -> str:
     """What the readout says after a video / sequence upload."""
     rec = seq.record
@@ -240,4 +261,4 @@ def video_message(seq: VideoSequence) -> str:
 
 
 __all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json", "is_video_upload",
-           "video_message", "video_sequence"]
+           "sequence_glb_bytes", "sequence_json_bytes", "video_message", "video_sequence"]

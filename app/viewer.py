@@ -940,9 +940,17 @@ class SessionView:
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current
-        clean 2D, dragged joints included, lifted at the current focal length) or ``"glb"``."""
+        clean 2D of everyone, dragged joints included, lifted at the current focal length) or ``"glb"``. For an
+        uploaded video or keypoint sequence: the whole sequence as ``poselifter lift clip.mp4`` writes it (JSON with
+        ``frames``; GLB animated), tracked and smoothed at the upload's focal length."""
         if fmt not in ("json", "glb"):
             raise PoseLifterError(f"unknown download format {fmt!r}; expected 'json' or 'glb'")
+        seq = self.sequence()
+        if isinstance(seq, VideoSequence):  # the whole video, as `poselifter lift clip.mp4 [--glb]` writes it
+            stem = up.download_stem(self.state.sample)
+            if fmt == "json":
+                return f"{stem}.json", vid.sequence_json_bytes(seq)
+            return f"{stem}.glb", vid.sequence_glb_bytes(seq)
         with self.lock:
             st = self.state
             dragged = dict(st.others_dragged)

@@ -496,7 +496,7 @@ def test_late_drag_events_after_a_sample_change_are_ignored(view: SessionView, a
     assert j in view.state.dragged
 
 
-def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLifterApp) -> None:
+def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLifterApp, tmp_path: Path) -> None:
     """Issue 14, app: every person of an uploaded photo is lifted into one camera space, shown (2D, 3D, label,
     readout) and draggable through the person picker; each person's drags are kept, and the download has them all."""
     s = app.demo.get("standing")
@@ -560,6 +560,13 @@ def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLi
         np.testing.assert_allclose(rec["keypoints_2d"], s.keypoints_2d, atol=0.01)
         np.testing.assert_allclose(rec["people"][1]["keypoints_2d"][13], moved, atol=0.01)
         assert any("(person 2): l_wrist" in w for w in rec["warnings"])
+        from lifter.export import read_glb_joints
+
+        gname, glb = v.download_payload("glb")
+        path = tmp_path / gname
+        path.write_bytes(glb)
+        for k in range(3):  # everyone in one scene
+            np.testing.assert_allclose(read_glb_joints(path, person=k), rec["people"][k]["absolute"], atol=1.0)
         # a one-person photo: the picker goes back to one entry, disabled; nothing of the others is left
         est.people = [s.keypoints_2d]
         assert v.load_upload("one.jpg", _jpeg(s.image)) is True

@@ -113,6 +113,19 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     assert wait_for(lambda: v.state.sample.key != f"{seq.key}/5", timeout=10)
     v.stop_playback()
     assert not v.playing
+    # downloads: the whole sequence as `poselifter lift clip.mp4 [--glb]` writes it
+    name, data = v.download_payload("json")
+    rec = json.loads(data)
+    assert name == "walk_lifted.json" and rec["fps"] == pytest.approx(25.0) and len(rec["frames"]) == n
+    assert sorted(t["track_id"] for t in rec["tracks"]) == sorted({p["track_id"] for f in rec["frames"] for p in
+                                                                   f["people"]}) and len(rec["tracks"]) == 2
+    name, glb = v.download_payload("glb")
+    from lifter.export import read_glb_animation
+
+    path = tmp_path / name
+    path.write_bytes(glb)
+    times, anim = read_glb_animation(path)
+    assert len(anim) == 2 and len(times) == n
     # another source and back: the same frame again
     shown = v.state.sample.key
     v.gui.sample.source.value = "demo sample"
