@@ -220,7 +220,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     empty = sum(1 for fr in rec.frames if not fr.people)
     if empty:
         notes.append(f"{empty} frame(s) with nobody in them are left out of playback")
-    detail = next((w for w in notes if "px" in w and "field of view" in w), rec.focal_source)
+    detail = next((w for w in notes if "px" in w and "field of view" in w),
+                  {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
                       source=rec.source, detector=rec.detector, warnings=tuple(notes))
