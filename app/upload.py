@@ -22,6 +22,7 @@ Every problem raises :class:`lifter.PoseLifterError` (subclasses: :class:`Upload
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
@@ -46,9 +47,9 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, PersonResult, parse_keypoint_json
+from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert
-from lifter.pipeline import lift_image
+from lifter.pipeline import lift_image, lift_people
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .drawing import canvas
@@ -339,7 +340,11 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
         people, people_dragged = [keypoints], {0: frozenset(dragged)}
     kp_all = np.stack([_check_2d(q, sample.label if i == 0 else f"{sample.label}, person {i + 1}")
                        for i, q in enumerate(people)])
-    res = lifter.lift(kp_all, focal=focal, principal_point=pp, source=source)
+    lifted = lift_people(lifter, kp_all, np.asarray(focal, np.float64), np.asarray(pp, np.float64), flip_test=None,
+                         source=source)
+    scores = None if info is None else info.scores
+    if scores is not None:  # (the detector's confidences are the largest person's)
+        lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
     warnings = list(info.warnings) if info is not None else []
     for k, joints in sorted((people_dragged or {}).items()):
         if joints:
@@ -350,11 +355,6 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
         warnings.append(f"focal length set with the app's slider to {math.sqrt(focal[0] * focal[1]):.1f} px")
     else:
         src = info.focal_source if info is not None else "calibrated-camera"
-    scores = None if info is None else info.scores
-    lifted = tuple(PersonResult(keypoints_2d=kp_all[i], absolute=np.asarray(res.absolute[i]),
-                                relative=np.asarray(res.relative[i]), root=np.asarray(res.root[i]),
-                                canonical_depth=float(res.canonical_depth[i]), scores=scores if i == 0 else None)
-                   for i in range(len(kp_all)))
     top = lifted[0]
     return LiftRecord(input=info.name if info is not None else sample.label,
                       kind=info.kind if info is not None else "sample",
@@ -362,7 +362,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       root=top.root, canonical_depth=top.canonical_depth, people=lifted,
                       focal=(float(focal[0]), float(focal[1])), focal_source=src, principal_point=pp,
                       image_size=(int(cam.width), int(cam.height)), model=str(getattr(lifter, "name", "custom")),
-                      scores=None if info is None else info.scores,
+                      scores=top.scores,
                       source_format=H36M17 if info is None else info.source_format,
                       num_people=None if info is None else info.num_people,
                       detector=None if info is None else info.detector, warnings=tuple(warnings))

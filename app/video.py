@@ -15,7 +15,6 @@ the model and focal length in use. Units: px, mm, seconds; camera frame OpenCV.
 from __future__ import annotations
 
 import json
-import math
 import tempfile
 import threading
 from collections.abc import Callable
@@ -126,15 +125,13 @@ class VideoSequence:
         else:
             counts = [len(fr.people) for fr in self.frames]
             kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
-            if not kp:
-                return []
             src = "clean" if rec.source == "clean" else "detected"
             res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             lifted, k = [], 0
-            for fr, c in zip(self.frames, counts):
-                lifted.append((fr.index, fr.time_s, np.stack([p.keypoints_2d for p in fr.people]) if c else
-                               np.zeros((0, 17, 2)), root[k:k + c], rel[k:k + c], None))
+            for fr, c in zip(self.frames, counts):  # (every frame kept has someone in it)
+                lifted.append((fr.index, fr.time_s, np.stack([p.keypoints_2d for p in fr.people]), root[k:k + c],
+                               rel[k:k + c], None))
                 k += c
             frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
         tracks: dict[int, dict[int, np.ndarray]] = {}
@@ -147,38 +144,16 @@ class VideoSequence:
         return out
 
 
-def _display_jpegs(path: Path, indices: list[int], *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) -> list[bytes]:
-    """The video's frames ``indices`` (file frame numbers, increasing), downscaled and JPEG-encoded."""
-    want = {i: k for k, i in enumerate(indices)}
-    out: list[bytes | None] = [None] * len(indices)
-    cap = cv2.VideoCapture(str(path))
-    try:
-        i = -1
-        last = indices[-1] if indices else -1
-        while i < last:
-            ok, bgr = cap.read()
-            i += 1
-            if not ok or bgr is None:
-                if i > last:
-                    break
-                continue
-            if i in want:
-                h, w = bgr.shape[:2]
-                s = min(1.0, max_side / float(max(h, w)))
-                if s < 1.0:
-                    bgr = cv2.resize(bgr, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA)
-                ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, 80])
-                out[want[i]] = buf.tobytes() if ok else None
-    finally:
-        cap.release()
-    blank = None
-    for k, b in enumerate(out):
-        if b is None:  # (a frame that decoded for the lifter but not now: a grey frame keeps the timing)
-            if blank is None:
-                ok, buf = cv2.imencode(".jpg", np.full((8, 8, 3), 200, np.uint8))
-                blank = buf.tobytes()
-            out[k] = blank
-    return [b for b in out if b is not None]
+def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) -> bytes:
+    """A frame (OpenCV BGR) downscaled to ``max_side`` and JPEG-encoded, for display."""
+    h, w = bgr.shape[:2]
+    s = min(1.0, max_side / float(max(h, w)))
+    if s < 1.0:
+        bgr = cv2.resize(bgr, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA)
+    ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, 80])
+    if not ok:
+        raise UploadError("a video frame could not be encoded for display")
+    return buf.tobytes()
 
 
 def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
@@ -200,12 +175,14 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                 if estimator is None:
                     raise UploadError(f"{nm}: no 2D detector for videos")
                 est = estimator()
+                shown: dict[int, bytes] = {}  # display copies, made while the video is decoded for lifting
                 with detect_lock:
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
-                                     max_seconds=max_seconds, progress=progress)
+                                     max_seconds=max_seconds, progress=progress,
+                                     on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 if not any(fr.people for fr in rec.frames):
                     raise UploadError(f"{nm}: no person found in any of the {len(rec.frames)} frames")
-                jpegs = _display_jpegs(path, [fr.index for fr in rec.frames if fr.people])
+                jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
                 jpegs = None
@@ -226,8 +203,6 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
                       source=rec.source, detector=rec.detector, warnings=tuple(notes))
     label = f"{nm} ({len(rec.frames)} frames at {rec.fps:g} fps, {len(tracks)} track{'s' if len(tracks) != 1 else ''})"
-    if not math.isfinite(rec.fps) or rec.fps <= 0:
-        raise UploadError(f"{nm}: no usable frame rate")
     return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs)
 
 

@@ -55,9 +55,10 @@ def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, f
     return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
 
 
-def _people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
-            scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
-    """Lift ``(n, 17, 2)`` people in one batch; one :class:`PersonResult` each, in the same order."""
+def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
+                scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
+    """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
+    :class:`PersonResult` each (mm, camera frame), in the same order."""
     res = _lift(lifter, kp17, f, pp, flip_test=flip_test, source=source)
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
@@ -82,7 +83,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
-    lifted = _people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
+    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
     top = lifted[0]
     return LiftRecord(input=str(path), kind="keypoints", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
@@ -107,8 +108,8 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
-    lifted = _people(lifter, np.stack([d.keypoints_2d for d in dets]), f, pp, flip_test=flip_test, source="detected",
-                     scores=np.stack([d.scores for d in dets]))
+    lifted = lift_people(lifter, np.stack([d.keypoints_2d for d in dets]), f, pp, flip_test=flip_test,
+                         source="detected", scores=np.stack([d.scores for d in dets]))
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
     if len(dets) > 1:

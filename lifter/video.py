@@ -200,9 +200,12 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                max_seconds: float = DEFAULT_MAX_SECONDS, max_side: int = DEFAULT_MAX_SIDE_PX,
                flip_test: bool | None = None, search_every_s: float = DEFAULT_SEARCH_EVERY_S,
                blas_threads: int | None = 1,
-               progress: Callable[[int, int | None], None] | None = None) -> SequenceRecord:
+               progress: Callable[[int, int | None], None] | None = None,
+               on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
     """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
-    is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None).
+    is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None);
+    ``on_frame(index, bgr)`` with each lifted frame's decoded image (full resolution, OpenCV BGR), e.g. to keep
+    display copies without decoding the video twice.
     Raises :class:`VideoError` for a file that cannot be opened or has no decodable frame.
 
     Detection: the whole frame is searched (the estimator's ``detect``) every ``search_every_s`` seconds, and
@@ -217,7 +220,8 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     with limit_blas_threads(blas_threads):
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
-                           max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress)
+                           max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
+                           on_frame=on_frame)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -245,7 +249,8 @@ class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
 def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None,
                 principal_point: Any | None, fov_deg: float, smoothing: float, max_people: int,
                 max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
-                progress: Callable[[int, int | None], None] | None) -> SequenceRecord:
+                progress: Callable[[int, int | None], None] | None,
+                on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
     import cv2
 
     from .pipeline import resolve_camera
@@ -350,6 +355,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             recent = {tid: v for tid, v in recent.items() if index - v[0] <= search_every}
             t_total += time.perf_counter() - t0
             n_done += 1
+            if on_frame is not None:  # (outside the timed pipeline)
+                on_frame(index, bgr)
             if progress is not None:
                 progress(n_done, total)
     finally:

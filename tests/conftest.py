@@ -67,6 +67,27 @@ def tiny_lifter(width: int = 64, *, seed: int = 0, name: str = "small", **config
     return Lifter(net, PoseCodec(net.config, target_mean=mean, target_std=std), name=name)
 
 
+class ScriptedEstimator:
+    """A 2D estimator for video tests: for the n-th frame it sees it returns the n-th entry of ``script`` (a list of
+    people, ``(17, 2)`` px each, H36M order). ``full_width``: the script is in px of a frame this wide, and is
+    scaled to the (possibly downscaled) image the estimator is given; None: used as is."""
+
+    name = "scripted"
+    keypoint_format = "h36m17"
+
+    def __init__(self, script: list[list[np.ndarray]], *, full_width: int | None = None) -> None:
+        self.script, self.n, self.full_width = script, 0, full_width
+
+    def detect(self, image: np.ndarray) -> list:
+        from lifter.detect import Detection, bbox_of
+
+        people = self.script[self.n] if self.n < len(self.script) else []
+        self.n += 1
+        s = 1.0 if self.full_width is None else image.shape[1] / self.full_width
+        return [Detection(keypoints=k * s, scores=np.ones(17), bbox_xywh=bbox_of(k * s), keypoint_format="h36m17")
+                for k in people]
+
+
 def require_shipped_models() -> list[str]:
     """The shipped model names, or skip the test when assets/models.json is missing."""
     from lifter import PoseLifterError, available_models

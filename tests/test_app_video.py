@@ -12,33 +12,15 @@ import pytest
 
 pytest.importorskip("viser")
 
-from conftest import require_shipped_models  # noqa: E402
+from conftest import ScriptedEstimator, require_shipped_models  # noqa: E402
 from poselifter_app import video as vid  # noqa: E402
 from poselifter_app.testing import local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp  # noqa: E402
 
 from lifter import project  # noqa: E402
-from lifter.detect import Detection, bbox_of  # noqa: E402
 
 W, H, F = 640, 480, 600.0
 
-
-
-class ScriptedEstimator:
-    """Returns, for the n-th frame it sees, the n-th entry of ``script`` (people as (17, 2) px at full size)."""
-
-    name = "scripted"
-    keypoint_format = "h36m17"
-
-    def __init__(self, script: list[list[np.ndarray]]) -> None:
-        self.script, self.n = script, 0
-
-    def detect(self, image: np.ndarray) -> list[Detection]:
-        people = self.script[self.n] if self.n < len(self.script) else []
-        self.n += 1
-        s = image.shape[1] / W
-        return [Detection(keypoints=k * s, scores=np.ones(17), bbox_xywh=bbox_of(k * s), keypoint_format="h36m17")
-                for k in people]
 
 
 def _script(n: int, *, nobody: tuple[int, ...] = ()) -> list[list[np.ndarray]]:
@@ -77,7 +59,7 @@ def server():
 
 def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path: Path) -> None:
     n = 14
-    est = ScriptedEstimator(_script(n, nobody=(6,)))
+    est = ScriptedEstimator(_script(n, nobody=(6,)), full_width=W)
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
     v = app.headless_view()
     assert v.load_upload("walk.avi", _clip(tmp_path / "walk.avi", n)) is True, v.messages[-3:]
@@ -135,7 +117,7 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
 
 
 def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
-    est = ScriptedEstimator(_script(4))
+    est = ScriptedEstimator(_script(4), full_width=W)
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
     v = app.headless_view()
     key = v.state.sample.key

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import random_pose_cam, tiny_lifter
+from conftest import ScriptedEstimator, random_pose_cam, tiny_lifter
 
 from lifter import PoseLifterError
 from lifter.camera import project
@@ -33,22 +33,6 @@ def _person(rng: np.random.Generator, x0: float) -> np.ndarray:
     kp = project(random_pose_cam(rng, 1)[0], focal=F, principal_point=(W / 2, H / 2))
     kp = (kp - kp.mean(0)) * (90.0 / np.ptp(kp[:, 1])) + [x0, H / 2]
     return kp
-
-
-class ScriptedEstimator:
-    """Returns, for the n-th frame it is given, the n-th entry of ``script`` (a list of (17, 2) px poses)."""
-
-    name = "scripted"
-    keypoint_format = "h36m17"
-
-    def __init__(self, script: list[list[np.ndarray]]) -> None:
-        self.script, self.n = script, 0
-
-    def detect(self, image: np.ndarray) -> list[Detection]:
-        people = self.script[self.n] if self.n < len(self.script) else []
-        self.n += 1
-        return [Detection(keypoints=k, scores=np.ones(17), bbox_xywh=bbox_of(k), keypoint_format="h36m17")
-                for k in people]
 
 
 def _script(n: int, *, nobody: tuple[int, ...] = ()) -> list[list[np.ndarray]]:
