@@ -33,10 +33,21 @@ import torch  # noqa: E402
 import lifter.api as api  # noqa: E402
 from lifter import Lifter  # noqa: E402
 from lifter.camera import project  # noqa: E402
+from lifter.model import MirrorCoupledLinear  # noqa: E402
 
 
 def flops_per_pose(net: torch.nn.Module) -> int:
-    return int(sum(2 * m.in_features * m.out_features for m in net.modules() if isinstance(m, torch.nn.Linear)))
+    """FLOPs of one pose through the network (2 x multiply-adds). A mirror-equivariant net (``symmetry="mirror"``)
+    runs its stem and head on two streams and each coupled layer as two W x W products (U on the streams' sum,
+    V on their difference)."""
+    streams = 2 if getattr(getattr(net, "config", None), "symmetry", "none") == "mirror" else 1
+    total = 0
+    for m in net.modules():
+        if isinstance(m, torch.nn.Linear):
+            total += streams * 2 * m.in_features * m.out_features
+        elif isinstance(m, MirrorCoupledLinear):
+            total += 2 * 2 * m.weight_sum.numel()
+    return int(total)
 
 
 def matmul_gflops(width: int, batch: int = 4096, repeats: int = 20) -> float:
@@ -77,7 +88,8 @@ def main() -> None:
     pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500
     kp = project(pose, focal=1145.0, principal_point=(512.0, 515.0))
 
-    rows = 2 if lifter.flip_test else 1  # network rows per pose: the mirror-image pass of the flip test
+    # network rows per pose: the mirror-image pass of the flip test (a mirror-equivariant net never needs it)
+    rows = 2 if lifter.flip_test and lifter.config.symmetry != "mirror" else 1
     fpp = rows * flops_per_pose(lifter.net)
     gflops = matmul_gflops(lifter.config.width)
     limit = gflops * 1e9 / fpp

@@ -122,13 +122,15 @@ class Lifter:
         """The network for ``source="clean"`` when this model has a separate one (:meth:`lift` routes by source);
         None when one network (conditioned on the source, or not) serves both."""
         self.net = net.eval()
+        net.set_target_statistics(codec.target_mean, codec.target_std)  # a mirror network's output mirror
         self.codec = codec
         self.name = name
         self.meta = meta or {}
         self.train_config = train_config
         self.flip_test = bool(flip_test)
         """Default of :meth:`lift`'s ``flip_test``: the shipped default averages every pose with its mirror image,
-        so mirror equivariance holds exactly (checkpoints: ``meta["inference"]["flip_test"]``)."""
+        so mirror equivariance holds exactly (checkpoints: ``meta["inference"]["flip_test"]``). A network with
+        ``symmetry="mirror"`` is mirror-equivariant by construction and never needs it (it is then ignored)."""
 
     @property
     def config(self) -> ModelConfig:
@@ -206,13 +208,15 @@ class Lifter:
         source: ``"detected"`` (default): 2D from a detector; ``"clean"``: exact 2D (ground truth,
             hand-placed or dragged joints). The lifter uses what it was trained for on each.
         flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
-            None: the model's default (:attr:`flip_test`; on for the shipped default, at the cost of one more
-            network row per pose, which for a single pose costs almost nothing).
+            None: the model's default (:attr:`flip_test`). Ignored by networks that are mirror-equivariant by
+            construction (``symmetry="mirror"``, the shipped default): for them it would give the same result.
         """
-        flip_test = self.flip_test if flip_test is None else bool(flip_test)
         if source == "clean" and self.clean is not None:
             return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
                                    source=source, flip_test=flip_test)
+        flip_test = self.flip_test if flip_test is None else bool(flip_test)
+        if self.config.symmetry == "mirror":
+            flip_test = False
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)

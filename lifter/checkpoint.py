@@ -167,7 +167,12 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     except (KeyError, TypeError, ValueError) as exc:
         raise CheckpointError(f"{where}: bad codec statistics: {exc}") from None
     net = PoseLifterNet(config)
+    derived = {k: v.clone() for k, v in net.state_dict().items() if k in ("in_perm", "in_sign")}
     net.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in state.items()}, strict=True)
+    for k, v in derived.items():  # the mirror maps follow from the config and the codec, never from the file
+        if not torch.equal(net.state_dict()[k], v):
+            raise CheckpointError(f"{where}: tensor {k!r} is not the feature mirror of its model config")
+    net.set_target_statistics(codec.target_mean, codec.target_std)
     for k, t in net.state_dict().items():
         if t.is_floating_point() and not torch.isfinite(t).all():
             raise CheckpointError(f"{where}: tensor {k!r} contains NaN/inf")

@@ -140,8 +140,9 @@ class PoseCodec:
         """
         xp = array_namespace(keypoints)
         k, alpha_in, alpha = self.input_space(keypoints, principal_point, focal)
-        feats = pose_features(k, mode=self.config.mode, scale_definition=self.config.scale_definition)
-        _, sigma = location_and_scale(k, scale_definition=self.config.scale_definition)
+        u, sigma = location_and_scale(k, scale_definition=self.config.scale_definition)
+        feats = pose_features(k, mode=self.config.mode, scale_definition=self.config.scale_definition,
+                              location_scale=(u, sigma))
         if self.config.conditioning == "source":
             flag = self.source_flag(source, like=sigma)
             feats = xp.concat([feats, flag[..., None]], axis=-1)

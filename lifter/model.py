@@ -12,6 +12,7 @@ root (:meth:`lifter.codec.PoseCodec.decode`).
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import asdict, dataclass, fields
 from typing import Any, Final, Literal, get_args
@@ -19,14 +20,16 @@ from typing import Any, Final, Literal, get_args
 import numpy as np
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from ._checks import PoseLifterError
-from .normalization import NORM_MODES, SCALE_DEFINITIONS, NormMode, ScaleDefinition, num_features
-from .skeleton import NUM_JOINTS
+from .normalization import NORM_MODES, SCALE_DEFINITIONS, NormMode, ScaleDefinition, feature_mirror, num_features
+from .skeleton import NUM_JOINTS, mirror
 
 InputSpace = Literal["pixel", "camera"]
 DepthTarget = Literal["canonical", "absolute", "size"]
 Conditioning = Literal["none", "source"]
+Symmetry = Literal["none", "mirror"]
 NUM_OUTPUTS: Final[int] = 3 * (NUM_JOINTS - 1) + 1
 MAX_WIDTH: Final[int] = 8192
 MAX_BLOCKS: Final[int] = 16
@@ -49,6 +52,11 @@ class ModelConfig:
     conditioning: ``"source"`` appends one input feature, 1 for exact 2D (``source="clean"``) and 0 for
         detector output (``"detected"``).
     mode, scale_definition: the normalization layer's features and 2D scale (:mod:`lifter.normalization`).
+    symmetry: ``"mirror"``: the network is mirror-equivariant by construction (:class:`MirrorCoupledLinear`):
+        two weight-shared streams read the features and the features of the mirror image, are coupled in
+        every hidden layer, and the head averages the two streams' outputs with the mirror mapped back. One
+        pass then gives what flip-test averaging gives with two, and ``width`` is the width of each stream.
+        ``"none"``: the paper's MLP.
     """
 
     width: int = 1024
@@ -59,6 +67,7 @@ class ModelConfig:
     input_space: InputSpace = "camera"
     depth_target: DepthTarget = "canonical"
     conditioning: Conditioning = "source"
+    symmetry: Symmetry = "none"
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("width", 1, MAX_WIDTH), ("num_blocks", 1, MAX_BLOCKS)):
@@ -70,7 +79,7 @@ class ModelConfig:
             raise PoseLifterError(f"model config: dropout must be a number in [0, 1), got {d!r}")
         for name, allowed in (("mode", NORM_MODES), ("scale_definition", SCALE_DEFINITIONS),
                               ("input_space", get_args(InputSpace)), ("depth_target", get_args(DepthTarget)),
-                              ("conditioning", get_args(Conditioning))):
+                              ("conditioning", get_args(Conditioning)), ("symmetry", get_args(Symmetry))):
             if getattr(self, name) not in allowed:
                 raise PoseLifterError(f"model config: {name} is {getattr(self, name)!r}; expected one of "
                                       f"{list(allowed)}")
@@ -99,22 +108,73 @@ class ModelConfig:
         return cls(**d)
 
 
-class ResidualBlock(nn.Module):
-    def __init__(self, width: int, dropout: float) -> None:
+class MirrorCoupledLinear(nn.Module):
+    """The hidden layer of a mirror-equivariant network (``symmetry="mirror"``).
+
+    Input ``(2B, W)``: the rows of stream 0 (the features) then those of stream 1 (the mirrored features).
+    With ``s = h0 + h1`` and ``d = h0 - h1``, the output is ``y0 = U s + V d + b`` and ``y1 = U s - V d + b``:
+    swapping the streams swaps the outputs, so the layer commutes with the mirror for any ``U`` and ``V``
+    (``W x W`` each). It is ``[[U + V, U - V], [U - V, U + V]]`` on the stacked streams, computed as two
+    ``W x W`` products instead of one ``2W x 2W``: half the weights and multiply-adds of a width-2W layer.
+    Initialized so that each output's variance matches PyTorch's default ``nn.Linear(2W, W)``.
+    """
+
+    def __init__(self, width: int) -> None:
         super().__init__()
+        self.weight_sum = nn.Parameter(torch.empty(width, width))
+        self.weight_diff = nn.Parameter(torch.empty(width, width))
+        self.bias = nn.Parameter(torch.empty(width))
+        bound = 0.5 / math.sqrt(width)  # U + V then has the variance of a U(-1/sqrt(2W), 1/sqrt(2W)) weight
+        for t in (self.weight_sum, self.weight_diff):
+            nn.init.uniform_(t, -bound, bound)
+        nn.init.uniform_(self.bias, -bound, bound)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if x.shape[0] % 2:
+            raise ValueError(f"MirrorCoupledLinear: expected the two streams stacked, got {x.shape[0]} rows")
+        h0, h1 = x.chunk(2)
+        us = F.linear(h0 + h1, self.weight_sum, self.bias)
+        vd = F.linear(h0 - h1, self.weight_diff)
+        return torch.cat([us + vd, us - vd])
+
+
+class ResidualBlock(nn.Module):
+    def __init__(self, width: int, dropout: float, *, coupled: bool = False) -> None:
+        super().__init__()
+
+        def linear() -> nn.Module:
+            return MirrorCoupledLinear(width) if coupled else nn.Linear(width, width)
+
         self.body = nn.Sequential(
             nn.BatchNorm1d(width),
             nn.Dropout(dropout),
             nn.ReLU(inplace=True),
-            nn.Linear(width, width),
+            linear(),
             nn.BatchNorm1d(width),
             nn.Dropout(dropout),
             nn.ReLU(inplace=True),
-            nn.Linear(width, width),
+            linear(),
         )
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return x + self.body(x)
+
+
+def output_mirror(target_mean: Any = None, target_std: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mirror image in the network's standardized output space: a network output ``z`` ``(..., 49)`` of a
+    mirrored input, mapped back, is ``z[..., perm] * scale + offset``. Raw outputs (``mean + std * z``, mm) are
+    mirrored as :meth:`lifter.codec.PoseCodec.mirror_output` does (the pose by :func:`lifter.skeleton.mirror`,
+    the depth kept). Returns ``perm`` int64 and ``scale``, ``offset`` float32, all ``(49,)``; an involution."""
+    mean = np.zeros(NUM_OUTPUTS) if target_mean is None else np.asarray(target_mean, np.float64)
+    std = np.ones(NUM_OUTPUTS) if target_std is None else np.asarray(target_std, np.float64)
+    probe = np.zeros((NUM_JOINTS, 3))
+    probe[1:] = np.arange(1, NUM_OUTPUTS, dtype=np.float64).reshape(NUM_JOINTS - 1, 3)
+    flat = mirror(probe)[1:].reshape(-1)
+    perm = np.append(np.abs(flat).astype(np.int64) - 1, NUM_OUTPUTS - 1)
+    sign = np.append(np.sign(flat), 1.0)
+    scale = sign * std[perm] / std
+    offset = (sign * mean[perm] - mean) / std
+    return perm, scale.astype(np.float32), offset.astype(np.float32)
 
 
 class PoseLifterNet(nn.Module):
@@ -124,25 +184,67 @@ class PoseLifterNet(nn.Module):
     initialized N(0, 1e-3) with zero bias, so that at step 0 the de-standardized output is the
     training-target mean. Under ``torch.autocast`` only the residual blocks run in reduced precision:
     the stem (which reads pixel-precise features) and the head (millimetre outputs) stay float32.
+
+    ``symmetry="mirror"``: the stem and head are shared by two streams, the features and the mirrored
+    features (buffers ``in_perm``, ``in_sign``: :func:`lifter.normalization.feature_mirror`), the hidden layers
+    are :class:`MirrorCoupledLinear`, BatchNorm's statistics are shared by the streams, and the output is the
+    mean of stream 0's and stream 1's mirrored back (buffers ``out_perm``, ``out_scale``, ``out_offset``:
+    :func:`output_mirror` of the codec's target statistics, set by :meth:`set_target_statistics`). In eval
+    mode ``net(mirrored features)`` is then exactly the mirror of ``net(features)``.
     """
+
+    in_perm: torch.Tensor
+    in_sign: torch.Tensor
+    out_perm: torch.Tensor
+    out_scale: torch.Tensor
+    out_offset: torch.Tensor
 
     def __init__(self, config: ModelConfig | None = None) -> None:
         super().__init__()
         config = config or ModelConfig()
         self.config = config
+        mirrored = config.symmetry == "mirror"
         self.stem = nn.Linear(config.num_features, config.width)
-        self.blocks = nn.Sequential(*[ResidualBlock(config.width, config.dropout) for _ in range(config.num_blocks)])
+        self.blocks = nn.Sequential(*[ResidualBlock(config.width, config.dropout, coupled=mirrored)
+                                      for _ in range(config.num_blocks)])
         self.head = nn.Linear(config.width, NUM_OUTPUTS)
         nn.init.normal_(self.head.weight, std=1e-3)
         nn.init.zeros_(self.head.bias)
+        if mirrored:
+            perm, sign = feature_mirror(config.mode, num_extra=config.num_features - num_features(config.mode))
+            self.register_buffer("in_perm", torch.from_numpy(perm))
+            self.register_buffer("in_sign", torch.from_numpy(sign))
+            self.register_buffer("out_perm", torch.zeros(NUM_OUTPUTS, dtype=torch.int64))
+            self.register_buffer("out_scale", torch.zeros(NUM_OUTPUTS))
+            self.register_buffer("out_offset", torch.zeros(NUM_OUTPUTS))
+            self.set_target_statistics(None, None)
+
+    def set_target_statistics(self, target_mean: Any, target_std: Any) -> None:
+        """Set the output mirror of a ``symmetry="mirror"`` network from the codec's target statistics
+        ``(49,)`` mm (None: 0 and 1). No-op for other networks, whose outputs do not depend on them."""
+        if self.config.symmetry != "mirror":
+            return
+        perm, scale, offset = output_mirror(target_mean, target_std)
+        with torch.no_grad():
+            self.out_perm.copy_(torch.from_numpy(perm))
+            self.out_scale.copy_(torch.from_numpy(scale))
+            self.out_offset.copy_(torch.from_numpy(offset))
 
     def forward(self, features: torch.Tensor) -> torch.Tensor:
         dev = features.device.type
+        mirrored = self.config.symmetry == "mirror"
         with torch.autocast(dev, enabled=False):
-            h = self.stem(features.float())
+            x = features.float()
+            if mirrored:
+                x = torch.cat([x, x[:, self.in_perm] * self.in_sign])
+            h = self.stem(x)
         h = self.blocks(h)
         with torch.autocast(dev, enabled=False):
-            return self.head(h.float())
+            out = self.head(h.float())
+            if mirrored:
+                g0, g1 = out.chunk(2)
+                out = 0.5 * (g0 + g1[:, self.out_perm] * self.out_scale + self.out_offset)
+            return out
 
 
 # ------------------------------------------------------------------------------------------------
@@ -152,16 +254,21 @@ class PoseLifterNet(nn.Module):
 
 def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]] | None:
     """The tensors :func:`forward_numpy` reads, in a fixed order: stem weight and bias; per block the first
-    BatchNorm's weight, bias, running mean and variance, the first Linear's weight and bias, the same for the
-    second pair; head weight and bias. Looked up through the modules' own dictionaries on every call (so
-    replaced layers or tensors are always the current ones); and the BatchNorm epsilons, in the same order.
-    None if a layer is not a plain float ``nn.Linear`` / ``nn.BatchNorm1d`` / ``nn.ReLU`` (or a block not a
-    plain :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
+    BatchNorm's weight, bias, running mean and variance, the first hidden layer's weight and bias (weight_sum,
+    weight_diff and bias for a :class:`MirrorCoupledLinear`), the same for the second pair; head weight and
+    bias; for ``symmetry="mirror"`` then ``in_perm``, ``in_sign``, ``out_perm``, ``out_scale``, ``out_offset``.
+    Looked up through the modules' own dictionaries on every call (so replaced layers or tensors are always the
+    current ones); and the BatchNorm epsilons, in the same order. None if a layer is not the plain float layer
+    its config builds (``nn.Linear`` / :class:`MirrorCoupledLinear` / ``nn.BatchNorm1d`` / ``nn.ReLU``, or a
+    block not a plain :class:`ResidualBlock`) or a BatchNorm or Dropout is in training mode."""
     mods = net._modules
     stem, blocks, head = mods.get("stem"), mods.get("blocks"), mods.get("head")
     if (type(stem) is not nn.Linear or type(head) is not nn.Linear or type(blocks) is not nn.Sequential
             or type(net).forward is not PoseLifterNet.forward):
         return None  # (a subclass that changes the forward pass runs as the module it is)
+    mirrored = net.config.symmetry == "mirror"
+    hidden, names = (MirrorCoupledLinear, ("weight_sum", "weight_diff", "bias")) if mirrored else \
+        (nn.Linear, ("weight", "bias"))
     out = [stem._parameters["weight"], stem._parameters["bias"]]
     eps = []
     for block in blocks._modules.values():
@@ -171,17 +278,19 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
             return None
         bn1, drop1, act1, lin1, bn2, drop2, act2, lin2 = layers
         if (type(block) is not ResidualBlock or type(bn1) is not nn.BatchNorm1d or type(bn2) is not nn.BatchNorm1d
-                or type(lin1) is not nn.Linear or type(lin2) is not nn.Linear or type(act1) is not nn.ReLU
+                or type(lin1) is not hidden or type(lin2) is not hidden or type(act1) is not nn.ReLU
                 or type(act2) is not nn.ReLU or bn1.training or bn2.training or drop1.training or drop2.training):
             return None
         for bn, lin in ((bn1, lin1), (bn2, lin2)):
             p, b = bn._parameters, bn._buffers
-            out += [p["weight"], p["bias"], b["running_mean"], b["running_var"], lin._parameters["weight"],
-                    lin._parameters["bias"]]
+            out += [p["weight"], p["bias"], b["running_mean"], b["running_var"]]
+            out += [lin._parameters[n] for n in names]
             eps.append(float(bn.eps))
     out += [head._parameters["weight"], head._parameters["bias"]]
     if any(t is None or t.dtype != torch.float32 for t in out):
         return None
+    if mirrored:
+        out += [net._buffers[n] for n in ("in_perm", "in_sign", "out_perm", "out_scale", "out_offset")]
     return out, eps  # type: ignore[return-value]
 
 
@@ -200,8 +309,8 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
     weights through numpy views that share memory with the parameters (no copies), so any change to
     the net, in place or by replacing tensors or layers, is seen on the next call; BatchNorm is applied
     as the per-channel affine map of its running statistics. Returns None when a layer is not a plain
-    float32 ``nn.Linear`` / ``nn.BatchNorm1d`` (e.g. quantized) or a BatchNorm or Dropout is in training
-    mode: use the module then.
+    float32 layer of its config (e.g. quantized) or a BatchNorm or Dropout is in training mode: use the
+    module then.
     """
     found = _numpy_tensors(net)
     if found is None:
@@ -213,6 +322,10 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
         cached = (key, [t.detach().numpy() for t in tensors])
         _NUMPY_VIEWS[net] = cached  # one assignment: concurrent readers see the old or the new pair
     v = cached[1]
+    if net.config.symmetry == "mirror":
+        if len(features) == 1:
+            return _forward_numpy_mirror(v, eps, features)
+        return np.concatenate([_forward_numpy_mirror(v, eps, features[i:i + 1]) for i in range(len(features))])
     if len(features) > 1:
         # Row by row: OpenBLAS runs a (1, W) @ (W, W) product as a matrix-vector product, but a (2, W) one as a
         # general product that first packs the whole weight matrix (about 5x slower than two rows on their own;
@@ -234,3 +347,36 @@ def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndar
         h = h + (y @ w2.T + b2)
         i, k = i + 12, k + 2
     return h @ v[-2].T + v[-1]
+
+
+_SUM_DIFF = np.array([[1.0, 1.0], [1.0, -1.0]], np.float32)
+"""``[[1, 1], [1, -1]]``: rows (h0, h1) -> (h0 + h1, h0 - h1), and (U s, V d) -> (y0, y1)."""
+
+
+def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
+    """A ``symmetry="mirror"`` network on one row of features ``(1, F)``: the two streams are the rows of a
+    ``(2, W)`` array; each coupled layer is two matrix-vector products, ``U`` on the streams' sum and ``V`` on
+    their difference (:class:`MirrorCoupledLinear`)."""
+    in_perm, in_sign, out_perm, out_scale, out_offset = v[-5:]
+    x = np.concatenate([features, features[:, in_perm] * in_sign])
+    h = x @ v[0].T + v[1]
+
+    def coupled(y: np.ndarray, u: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
+        sd = _SUM_DIFF @ y
+        out = np.empty_like(sd)
+        np.matmul(u, sd[0], out=out[0])
+        np.matmul(w, sd[1], out=out[1])
+        out[0] += b
+        return _SUM_DIFF @ out
+
+    i, k = 2, 0
+    while i < len(v) - 7:
+        g1, be1, m1, var1, u1, w1, b1, g2, be2, m2, var2, u2, w2, b2 = v[i:i + 14]
+        s1 = g1 / np.sqrt(var1 + eps[k])
+        s2 = g2 / np.sqrt(var2 + eps[k + 1])
+        y = np.maximum((h - m1) * s1 + be1, 0.0)
+        y = np.maximum((coupled(y, u1, w1, b1) - m2) * s2 + be2, 0.0)
+        h = h + coupled(y, u2, w2, b2)
+        i, k = i + 14, k + 2
+    g = h @ v[-7].T + v[-6]
+    return 0.5 * (g[:1] + g[1:, out_perm] * out_scale + out_offset)

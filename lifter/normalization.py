@@ -24,8 +24,11 @@ from __future__ import annotations
 
 from typing import Any, Final, Literal
 
+import numpy as np
+
 from ._array import ArrayT
 from ._array import namespace as array_namespace
+from .skeleton import NUM_JOINTS, mirror
 
 NormMode = Literal["baseline", "location", "scale", "both"]
 ScaleDefinition = Literal["paper", "repo"]
@@ -68,19 +71,20 @@ def pose_scale(keypoints: ArrayT, *, scale_definition: ScaleDefinition = "paper"
 
 
 def pose_features(centred: ArrayT, *, mode: NormMode = "both", scale_definition: ScaleDefinition = "paper",
-                  eps: float = 1e-6) -> ArrayT:
+                  eps: float = 1e-6, location_scale: tuple[ArrayT, ArrayT] | None = None) -> ArrayT:
     """Features ``(..., num_features(mode))`` from keypoints ``(..., J, 2)`` px relative to the principal point.
 
     ``sigma`` is clamped at ``eps`` px to keep the result finite; the public API rejects degenerate
-    (zero-scale) poses before they get here.
+    (zero-scale) poses before they get here. ``location_scale``: :func:`location_and_scale` of ``centred``
+    when the caller has it already (the codec needs sigma too).
     """
     if centred.ndim < 2 or centred.shape[-1] != 2:  # type: ignore[attr-defined]
         raise ValueError(f"keypoints: expected shape (..., J, 2), got {tuple(centred.shape)}")  # type: ignore[attr-defined]
     if mode not in NORM_MODES:
         raise ValueError(f"unknown normalization mode {mode!r}; expected one of {NORM_MODES}")
     xp = array_namespace(centred)
-    u, sigma = location_and_scale(centred, scale_definition=scale_definition)
-    sigma = xp.clip(sigma, min=eps)
+    u, sigma = location_scale or location_and_scale(centred, scale_definition=scale_definition)
+    sigma = sigma.clip(min=eps)  # (the array's own method: numpy and torch alike, without a wrapper)
     pose = (centred - u[..., None, :]) / sigma[..., None, None]  # type: ignore[index, operator]
     parts = [xp.reshape(pose, (*pose.shape[:-2], pose.shape[-2] * 2))]
     if mode in ("location", "both"):
@@ -88,6 +92,27 @@ def pose_features(centred: ArrayT, *, mode: NormMode = "both", scale_definition:
     if mode in ("scale", "both"):
         parts.append(sigma[..., None] * FEATURE_UNIT)  # type: ignore[index]
     return xp.concat(parts, axis=-1)
+
+
+def feature_mirror(mode: NormMode = "both", *, num_extra: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The mirror image (:func:`lifter.skeleton.mirror` of the 2D about the principal point) in feature space:
+    ``pose_features(mirror(p)) == pose_features(p)[..., perm] * sign``, a signed permutation ``(F,)`` int64 and
+    ``(F,)`` float32 (+-1). Mirroring negates the location's x and keeps the scale (both scale definitions are
+    radial); ``num_extra`` features appended after the layer's (the source flag) are kept."""
+    probe = mirror(np.arange(1, 2 * NUM_JOINTS + 1, dtype=np.float64).reshape(NUM_JOINTS, 2)).reshape(-1)
+    perm, sign = [int(abs(v)) - 1 for v in probe], [1.0 if v > 0 else -1.0 for v in probe]
+    k = 2 * NUM_JOINTS
+    if mode in ("location", "both"):
+        perm += [k, k + 1]
+        sign += [-1.0, 1.0]
+        k += 2
+    if mode in ("scale", "both"):
+        perm.append(k)
+        sign.append(1.0)
+        k += 1
+    perm += list(range(k, k + num_extra))
+    sign += [1.0] * num_extra
+    return np.asarray(perm, np.int64), np.asarray(sign, np.float32)
 
 
 def normalize_keypoints(keypoints: ArrayT, principal_point: Any, *, mode: NormMode = "both",

@@ -329,6 +329,7 @@ def train(
         mean, std = target_statistics(codec, T)
         codec = PoseCodec(cfg.model, target_mean=mean, target_std=std)
         net = PoseLifterNet(cfg.model)
+        net.set_target_statistics(mean, std)
     net.to(ctx.device).train()
     model: torch.nn.Module = net
     if ctx.active:

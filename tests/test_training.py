@@ -190,11 +190,13 @@ def test_weight_average_is_an_exponential_moving_average():
         WeightAverage(net, decay=1.0)
 
 
-@pytest.mark.parametrize("precision", ["fp32", "bf16"])
-def test_tiny_training_learns(precision):
-    """A small network on synthetic poses beats the mean pose, in float32 and with bf16 blocks."""
+@pytest.mark.parametrize("precision,symmetry", [("fp32", "none"), ("bf16", "none"), ("bf16", "mirror")])
+def test_tiny_training_learns(precision, symmetry):
+    """A small network on synthetic poses beats the mean pose, in float32 and with bf16 blocks, and so does the
+    mirror-equivariant network, which stays exactly equivariant after training (its output mirror follows the
+    trained codec's statistics)."""
     train_s, val_s = synthetic_samples(3000, seed=1), synthetic_samples(300, seed=2)
-    cfg = TrainConfig(model=ModelConfig(width=128, dropout=0.0),
+    cfg = TrainConfig(model=ModelConfig(width=128, dropout=0.0, symmetry=symmetry),
                       optim=OptimConfig(batch_size=128, lr=2e-3, precision=precision),
                       schedule=ScheduleConfig(epochs=8, eval_every=40))
     res = train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False, log=lambda s: None,
@@ -209,6 +211,11 @@ def test_tiny_training_learns(precision):
     baseline = float(mpjpe(np.broadcast_to(mean_rel, val_s.pose_3d.shape), val_s.relative).mean())
     assert row.mpjpe < 0.8 * baseline, (row.mpjpe, baseline)
     assert res.curve[-1]["val_mpjpe_clean"] == pytest.approx(row.mpjpe, rel=1e-3)
+    if symmetry == "mirror":
+        kp, pp, f = val_s.keypoints_2d[:5], val_s.principal_point[:5], val_s.focal[:5]
+        a = lifter.lift(kp, focal=f, principal_point=pp, source="clean")
+        b = lifter.lift(res.codec.mirror_input(kp, pp), focal=f, principal_point=pp, source="clean")
+        np.testing.assert_allclose(b.relative, mirror(a.relative), atol=5e-3)
 
 
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():

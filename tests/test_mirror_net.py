@@ -1,0 +1,181 @@
+"""The mirror-equivariant network (``ModelConfig(symmetry="mirror")``).
+
+Pinned here: the feature and output mirror maps agree with the codec's one mirror convention; the network is
+exactly mirror-equivariant in eval mode for any weights (one pass, no flip-test); with its cross-stream
+coupling switched off it *is* the flip-test average of a plain network; the numpy single-pose path and the
+half-precision checkpoint give the module's outputs; the coupled layer's gradients are right.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from conftest import random_pose_cam
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterNet
+from lifter.api import NUMPY_MAX_BATCH
+from lifter.camera import project
+from lifter.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from lifter.model import MirrorCoupledLinear, forward_numpy, output_mirror
+from lifter.normalization import feature_mirror, pose_features
+from lifter.skeleton import mirror
+
+PP = (500.0, 490.0)
+F = 1100.0
+
+
+def _randomize(net: PoseLifterNet, seed: int = 0) -> PoseLifterNet:
+    """Non-trivial BatchNorm statistics and a head that is not near zero, so every part of the net matters."""
+    g = torch.Generator().manual_seed(seed)
+    with torch.no_grad():
+        for m in net.modules():
+            if isinstance(m, torch.nn.BatchNorm1d):
+                m.weight.uniform_(0.5, 1.5, generator=g)
+                m.bias.normal_(0.0, 0.3, generator=g)
+                m.running_mean.normal_(0.0, 0.5, generator=g)
+                m.running_var.uniform_(0.3, 2.0, generator=g)
+        net.head.weight.normal_(0.0, 0.05, generator=g)
+        net.head.bias.normal_(0.0, 0.05, generator=g)
+    return net.eval()
+
+
+def _codec(config: ModelConfig) -> PoseCodec:
+    """Target statistics that are *not* mirror-symmetric: the output mirror must still be exact."""
+    rng = np.random.default_rng(3)
+    mean = rng.normal(0.0, 200.0, 49)
+    mean[-1] = 400.0
+    return PoseCodec(config, target_mean=mean, target_std=rng.uniform(30.0, 300.0, 49))
+
+
+def _mirror_lifter(seed: int = 0, **config) -> Lifter:
+    torch.manual_seed(seed)
+    cfg = ModelConfig(width=48, symmetry="mirror", **config)
+    return Lifter(_randomize(PoseLifterNet(cfg), seed), _codec(cfg), name="mirror")
+
+
+def _poses(n: int, seed: int = 1) -> np.ndarray:
+    return project(random_pose_cam(np.random.default_rng(seed), n), focal=F, principal_point=PP)
+
+
+@pytest.mark.parametrize("mode", ["both", "baseline", "location", "scale"])
+@pytest.mark.parametrize("scale_definition", ["paper", "repo"])
+def test_feature_mirror_is_the_codec_mirror(mode, scale_definition):
+    kp = _poses(8).astype(np.float64)
+    centred = kp - np.asarray(PP)
+    perm, sign = feature_mirror(mode)
+    np.testing.assert_allclose(pose_features(mirror(centred), mode=mode, scale_definition=scale_definition),
+                               pose_features(centred, mode=mode, scale_definition=scale_definition)[..., perm] * sign,
+                               atol=1e-12)
+    cfg = ModelConfig(mode=mode, scale_definition=scale_definition, conditioning="source")
+    codec = PoseCodec(cfg)
+    perm, sign = feature_mirror(mode, num_extra=1)
+    for source in ("clean", "detected"):
+        f, c = np.full((8, 2), F), np.broadcast_to(np.asarray(PP), (8, 2))
+        a = codec.encode(codec.mirror_input(kp, c), principal_point=c, focal=f, source=source).features
+        b = codec.encode(kp, principal_point=c, focal=f, source=source).features
+        np.testing.assert_allclose(a, b[..., perm] * sign, atol=1e-12)
+
+
+def test_output_mirror_is_the_codec_mirror_and_an_involution():
+    codec = _codec(ModelConfig())
+    z = np.random.default_rng(0).normal(size=(5, 49))
+    perm, scale, offset = output_mirror(codec.target_mean, codec.target_std)
+    via_map = codec.destandardize(z[:, perm] * scale.astype(np.float64) + offset)
+    np.testing.assert_allclose(via_map, codec.mirror_output(codec.destandardize(z)), rtol=1e-5, atol=1e-3)
+    twice = (z[:, perm] * scale + offset)[:, perm] * scale + offset
+    np.testing.assert_allclose(twice, z, atol=1e-4)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.sampled_from([1, 3, NUMPY_MAX_BATCH + 5]),
+       source=st.sampled_from(["clean", "detected"]))
+def test_mirror_net_is_equivariant_in_one_pass(seed, n, source):
+    """Any weights: lifting the mirror image gives the mirrored result (numpy path for small batches, the torch
+    module for large ones), and flip-test would change nothing."""
+    lifter = _mirror_lifter(seed % 7, conditioning="source")
+    kp = _poses(n, seed)
+    res = lifter.lift(kp, focal=F, principal_point=PP, source=source)
+    mir = lifter.lift(lifter.codec.mirror_input(kp, PP), focal=F, principal_point=PP, source=source)
+    np.testing.assert_allclose(mir.relative, mirror(res.relative), atol=2e-3)
+    np.testing.assert_allclose(mir.root[..., 1:], res.root[..., 1:], rtol=1e-5, atol=1e-2)
+    # the root's x mirrors about the principal point's ray: same depth, x' - ... = -(x ...) in camera space
+    np.testing.assert_allclose(mir.root[..., 0], -res.root[..., 0], rtol=1e-5, atol=1e-2)
+    assert np.abs(res.relative).max() > 1.0  # the output depends on the net
+
+
+def test_uncoupled_mirror_net_is_the_flip_test_average():
+    """With U = V (no coupling between the streams) the network is two copies of a plain MLP whose hidden weights
+    are U + V, one on the pose and one on its mirror image, averaged: exactly flip-test averaging."""
+    torch.manual_seed(0)
+    plain_cfg = ModelConfig(width=40, conditioning="none")
+    plain = _randomize(PoseLifterNet(plain_cfg), 1)
+    sym = PoseLifterNet(ModelConfig(width=40, conditioning="none", symmetry="mirror"))
+    state = sym.state_dict()
+    for k, v in plain.state_dict().items():
+        if k.endswith((".3.weight", ".7.weight")):
+            state[k.replace(".weight", ".weight_sum")] = v / 2
+            state[k.replace(".weight", ".weight_diff")] = v / 2
+        else:
+            state[k] = v
+    sym.load_state_dict(state)
+    codec = _codec(plain_cfg)
+    kp = _poses(6)
+    a = Lifter(plain, codec).lift(kp, focal=F, principal_point=PP, flip_test=True)
+    b = Lifter(sym.eval(), PoseCodec(sym.config, target_mean=codec.target_mean, target_std=codec.target_std)).lift(
+        kp, focal=F, principal_point=PP)
+    np.testing.assert_allclose(b.relative, a.relative, atol=2e-3)
+    np.testing.assert_allclose(b.root, a.root, rtol=1e-5, atol=1e-2)
+
+
+def test_mirror_numpy_path_matches_module():
+    lifter = _mirror_lifter(2)
+    x = lifter.codec.encode(_poses(4).astype(np.float32), principal_point=np.full((4, 2), PP, np.float32),
+                            focal=np.full((4, 2), F, np.float32)).features
+    with torch.inference_mode():
+        ref = lifter.net(torch.from_numpy(x)).numpy()
+    got = forward_numpy(lifter.net, x)
+    assert got is not None and np.abs(ref).std() > 0.05
+    np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-5)
+    with torch.no_grad():  # the numpy path reads the live weights
+        lifter.net.blocks[0].body[3].weight_diff.mul_(2.0)
+        ref2 = lifter.net(torch.from_numpy(x)).numpy()
+    np.testing.assert_allclose(forward_numpy(lifter.net, x), ref2, rtol=1e-5, atol=1e-5)
+    assert np.abs(ref2 - ref).max() > 1e-3
+
+
+def test_coupled_layer_gradcheck_and_stream_swap():
+    layer = MirrorCoupledLinear(5).double()
+    x = torch.randn(6, 5, dtype=torch.float64, requires_grad=True)
+    assert torch.autograd.gradcheck(layer, (x,))
+    y = layer(x)
+    swapped = layer(torch.cat([x[3:], x[:3]]))
+    torch.testing.assert_close(swapped, torch.cat([y[3:], y[:3]]))
+    with pytest.raises(ValueError, match="two streams"):
+        layer(torch.randn(3, 5, dtype=torch.float64))
+
+
+def test_mirror_checkpoint_round_trip_half(tmp_path):
+    lifter = _mirror_lifter(4)
+    path = save_checkpoint(tmp_path / "m.pt", lifter.net, lifter.codec, half=True)
+    back = Lifter.load(path)
+    assert back.config.symmetry == "mirror"
+    kp = _poses(5)
+    a = lifter.lift(kp, focal=F, principal_point=PP)
+    b = back.lift(kp, focal=F, principal_point=PP)
+    np.testing.assert_allclose(b.relative, a.relative, rtol=0.02, atol=1.0)  # float16 weights
+    # the output mirror is rebuilt from the float64 codec statistics, so the loaded net stays exactly equivariant
+    mir = back.lift(back.codec.mirror_input(kp, PP), focal=F, principal_point=PP)
+    np.testing.assert_allclose(mir.relative, mirror(b.relative), atol=2e-3)
+
+
+def test_mirror_checkpoint_with_a_foreign_feature_map_is_refused(tmp_path):
+    lifter = _mirror_lifter(5)
+    path = save_checkpoint(tmp_path / "m.pt", lifter.net, lifter.codec)
+    payload = torch.load(path, weights_only=True)
+    payload["state_dict"]["in_perm"] = torch.flip(payload["state_dict"]["in_perm"], [0])
+    torch.save(payload, path)
+    with pytest.raises(CheckpointError, match="in_perm"):
+        load_checkpoint(path)
