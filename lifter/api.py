@@ -27,7 +27,7 @@ from ._checks import PoseLifterError, as_pair, as_points
 from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
 from .checkpoint import Checkpoint, load_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
-from .model import ModelConfig, PoseLifterNet, forward_numpy
+from .model import MirrorCoupledLinear, ModelConfig, PoseLifterNet, QuantizedCoupledLinear, forward_numpy
 from .normalization import pose_scale
 from .skeleton import NUM_JOINTS
 
@@ -109,7 +109,9 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
 
 
 class Lifter:
-    """A trained network and its codec, numpy in / numpy out (module docstring)."""
+    """A trained network and its codec, numpy in / numpy out (module docstring). The network given is put in
+    eval mode, and a mirror network's output mirror (:meth:`~lifter.model.PoseLifterNet.set_target_statistics`)
+    is set from ``codec``: share a network between Lifters only with the same codec."""
 
     def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
                  meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None,
@@ -122,7 +124,8 @@ class Lifter:
         """The network for ``source="clean"`` when this model has a separate one (:meth:`lift` routes by source);
         None when one network (conditioned on the source, or not) serves both."""
         self.net = net.eval()
-        net.set_target_statistics(codec.target_mean, codec.target_std)  # a mirror network's output mirror
+        # A mirror network's output mirror follows the codec's statistics: set here, on the network given.
+        net.set_target_statistics(codec.target_mean, codec.target_std)
         self.codec = codec
         self.name = name
         self.meta = meta or {}
@@ -178,10 +181,16 @@ class Lifter:
 
     def quantized(self) -> Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the
-        block weight memory. It always runs the torch module. The stem and head stay float32."""
+        block weight memory. It always runs the torch module. The stem and head stay float32. A mirror network's
+        coupled layers become :class:`~lifter.model.QuantizedCoupledLinear` (both products int8)."""
         net = copy.deepcopy(self.net)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            for block in net.blocks:
+                body = block.body  # type: ignore[union-attr]
+                for i, layer in enumerate(body):
+                    if isinstance(layer, MirrorCoupledLinear):
+                        body[i] = QuantizedCoupledLinear(layer)
             net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
         return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
                       flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized())

@@ -130,12 +130,36 @@ class MirrorCoupledLinear(nn.Module):
         nn.init.uniform_(self.bias, -bound, bound)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        if x.shape[0] % 2:
-            raise ValueError(f"MirrorCoupledLinear: expected the two streams stacked, got {x.shape[0]} rows")
-        h0, h1 = x.chunk(2)
-        us = F.linear(h0 + h1, self.weight_sum, self.bias)
-        vd = F.linear(h0 - h1, self.weight_diff)
-        return torch.cat([us + vd, us - vd])
+        return couple_streams(x, lambda s: F.linear(s, self.weight_sum, self.bias),
+                              lambda d: F.linear(d, self.weight_diff))
+
+
+def couple_streams(x: torch.Tensor, on_sum: Any, on_diff: Any) -> torch.Tensor:
+    """The coupling of :class:`MirrorCoupledLinear` with the two products given as callables: rows ``[h0; h1]``
+    -> ``[on_sum(h0 + h1) + on_diff(h0 - h1); on_sum(h0 + h1) - on_diff(h0 - h1)]``."""
+    if x.shape[0] % 2:
+        raise ValueError(f"MirrorCoupledLinear: expected the two streams stacked, got {x.shape[0]} rows")
+    h0, h1 = x.chunk(2)
+    us, vd = on_sum(h0 + h1), on_diff(h0 - h1)
+    return torch.cat([us + vd, us - vd])
+
+
+class QuantizedCoupledLinear(nn.Module):
+    """A :class:`MirrorCoupledLinear` whose two products use int8 weights (PyTorch dynamic quantization), for
+    :meth:`lifter.Lifter.quantized`."""
+
+    def __init__(self, layer: MirrorCoupledLinear) -> None:
+        super().__init__()
+        w = layer.weight_sum.shape[0]
+        pair = nn.ModuleDict({"sum": nn.Linear(w, w), "diff": nn.Linear(w, w, bias=False)})
+        with torch.no_grad():
+            pair["sum"].weight.copy_(layer.weight_sum)
+            pair["sum"].bias.copy_(layer.bias)
+            pair["diff"].weight.copy_(layer.weight_diff)
+        self.pair = torch.ao.quantization.quantize_dynamic(pair, {nn.Linear}, dtype=torch.qint8)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return couple_streams(x, self.pair["sum"], self.pair["diff"])
 
 
 class ResidualBlock(nn.Module):
@@ -287,10 +311,15 @@ def _numpy_tensors(net: PoseLifterNet) -> tuple[list[torch.Tensor], list[float]]
             out += [lin._parameters[n] for n in names]
             eps.append(float(bn.eps))
     out += [head._parameters["weight"], head._parameters["bias"]]
+    if mirrored:
+        out += [net._buffers[n] for n in ("in_sign", "out_scale", "out_offset")]
     if any(t is None or t.dtype != torch.float32 for t in out):
         return None
     if mirrored:
-        out += [net._buffers[n] for n in ("in_perm", "in_sign", "out_perm", "out_scale", "out_offset")]
+        perms = [net._buffers[n] for n in ("in_perm", "out_perm")]
+        if any(t is None or t.dtype != torch.int64 for t in perms):
+            return None
+        out = out[:-3] + [perms[0], out[-3], perms[1], out[-2], out[-1]]
     return out, eps  # type: ignore[return-value]
 
 
@@ -323,6 +352,8 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
         _NUMPY_VIEWS[net] = cached  # one assignment: concurrent readers see the old or the new pair
     v = cached[1]
     if net.config.symmetry == "mirror":
+        if len(features) == 0:
+            return np.zeros((0, NUM_OUTPUTS), np.float32)
         if len(features) == 1:
             return _forward_numpy_mirror(v, eps, features)
         return np.concatenate([_forward_numpy_mirror(v, eps, features[i:i + 1]) for i in range(len(features))])

@@ -324,6 +324,7 @@ def train(
 
     if init is not None:
         net, codec = copy.deepcopy(init[0]), init[1]
+        net.set_target_statistics(codec.target_mean, codec.target_std)
     else:
         codec = PoseCodec(cfg.model)
         mean, std = target_statistics(codec, T)

@@ -157,18 +157,68 @@ def test_coupled_layer_gradcheck_and_stream_swap():
         layer(torch.randn(3, 5, dtype=torch.float64))
 
 
+def _equivariance_gap(net: PoseLifterNet, codec: PoseCodec) -> float:
+    """Largest mm difference between the module's output on mirrored features, mapped back by the codec, and its
+    output on the features (no Lifter involved)."""
+    kp = _poses(6).astype(np.float32)
+    c, f = np.full((6, 2), PP, np.float32), np.full((6, 2), F, np.float32)
+    x = codec.encode(kp, principal_point=c, focal=f).features
+    xm = codec.encode(codec.mirror_input(kp, c), principal_point=c, focal=f).features
+    with torch.inference_mode():
+        a = codec.destandardize(net(torch.from_numpy(x)).double().numpy())
+        b = codec.destandardize(net(torch.from_numpy(xm)).double().numpy())
+    return float(np.abs(codec.mirror_output(b) - a).max())
+
+
 def test_mirror_checkpoint_round_trip_half(tmp_path):
     lifter = _mirror_lifter(4)
     path = save_checkpoint(tmp_path / "m.pt", lifter.net, lifter.codec, half=True)
+    ck = load_checkpoint(path)
+    # the output mirror is rebuilt from the float64 codec statistics (not the float16 copies in the file), so the
+    # loaded network is exactly equivariant on its own, before any Lifter touches it
+    assert _equivariance_gap(ck.net, ck.codec) < 1e-2
+    with torch.no_grad():
+        ck.net.out_offset.add_(0.1)  # (the check above can fail)
+    assert _equivariance_gap(ck.net, ck.codec) > 1.0
     back = Lifter.load(path)
     assert back.config.symmetry == "mirror"
     kp = _poses(5)
     a = lifter.lift(kp, focal=F, principal_point=PP)
     b = back.lift(kp, focal=F, principal_point=PP)
     np.testing.assert_allclose(b.relative, a.relative, rtol=0.02, atol=1.0)  # float16 weights
-    # the output mirror is rebuilt from the float64 codec statistics, so the loaded net stays exactly equivariant
-    mir = back.lift(back.codec.mirror_input(kp, PP), focal=F, principal_point=PP)
-    np.testing.assert_allclose(mir.relative, mirror(b.relative), atol=2e-3)
+
+
+def test_mirror_lift_is_one_pass(monkeypatch):
+    """flip_test=True changes nothing for a mirror network: one network row per pose."""
+    lifter = _mirror_lifter(6)
+    rows: list[int] = []
+    real = Lifter._network
+    monkeypatch.setattr(Lifter, "_network", lambda self, x: rows.append(len(x)) or real(self, x))
+    kp = _poses(3)
+    a = lifter.lift(kp, focal=F, principal_point=PP, flip_test=True)
+    b = lifter.lift(kp[0], focal=F, principal_point=PP)
+    assert rows == [3, 1]
+    np.testing.assert_allclose(b.relative, a.relative[0], atol=2e-3)
+
+
+def test_mirror_quantized_is_int8_and_equivariant():
+    lifter = _mirror_lifter(7)
+    q = lifter.quantized()
+    kinds = {type(m).__name__ for m in q.net.modules()}
+    assert "QuantizedCoupledLinear" in kinds and "MirrorCoupledLinear" not in kinds
+    x = lifter.codec.encode(_poses(1).astype(np.float32), principal_point=np.full((1, 2), PP, np.float32),
+                            focal=np.full((1, 2), F, np.float32)).features
+    assert forward_numpy(q.net, x) is None  # int8 layers run as the torch module
+    kp = _poses(4)
+    a, b = lifter.lift(kp, focal=F, principal_point=PP), q.lift(kp, focal=F, principal_point=PP)
+    assert 0 < np.abs(b.relative - a.relative).max() < 0.05 * np.abs(a.relative).max()
+    mir = q.lift(q.codec.mirror_input(kp, PP), focal=F, principal_point=PP)
+    np.testing.assert_allclose(mir.relative, mirror(b.relative), atol=2e-2)
+
+
+def test_mirror_numpy_path_empty_batch():
+    lifter = _mirror_lifter(8)
+    assert forward_numpy(lifter.net, np.zeros((0, lifter.config.num_features), np.float32)).shape == (0, 49)
 
 
 def test_mirror_checkpoint_with_a_foreign_feature_map_is_refused(tmp_path):

@@ -22,7 +22,7 @@ from lifter.config import AugmentConfig, DataConfig, OptimConfig, ScheduleConfig
 from lifter.data import PoseSamples
 from lifter.evaluate import evaluate_lifter
 from lifter.loss import poselifter_loss
-from lifter.model import ModelConfig
+from lifter.model import ModelConfig, PoseLifterNet, output_mirror
 from lifter.skeleton import mirror
 from lifter.train import (
     Dist,
@@ -203,6 +203,10 @@ def test_tiny_training_learns(precision, symmetry):
                 ctx=Dist())
     losses = [c["train_loss"] for c in res.curve]
     assert losses[-1] < 0.7 * losses[0], losses
+    if symmetry == "mirror":  # the trained net's output mirror is its codec's, before any Lifter sets it
+        perm, scale, offset = output_mirror(res.codec.target_mean, res.codec.target_std)
+        torch.testing.assert_close(res.net.out_offset, torch.from_numpy(offset))
+        torch.testing.assert_close(res.net.out_scale, torch.from_numpy(scale))
     lifter = Lifter(res.net, res.codec, name="tiny")
     row = evaluate_lifter(lifter, val_s, progress=False, source="clean")[0]
     mean_rel = np.concatenate([np.zeros((1, 3)), res.codec.target_mean[:48].reshape(16, 3)])
@@ -237,6 +241,18 @@ def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
                   init=(base.net, base.codec), **quiet).net
     avg = train(one, train_samples=train_s, init=(base.net, base.codec), **quiet).net
     torch.testing.assert_close(avg.stem.weight, 0.5 * (base.net.stem.weight + plain.stem.weight))
+
+
+def test_fine_tuning_a_mirror_net_sets_its_output_mirror_from_the_codec():
+    train_s, val_s = synthetic_samples(200, seed=5), synthetic_samples(20, seed=6)
+    cfg = replace(tiny_config(symmetry="mirror"), optim=OptimConfig(batch_size=200, lr=1e-9), augment=AugmentConfig(flip_prob=0.0))
+    codec = PoseCodec(cfg.model, target_mean=np.linspace(-50, 50, 49), target_std=np.linspace(20, 90, 49))
+    net = PoseLifterNet(cfg.model)  # its output mirror is that of mean 0 / std 1, not the codec's
+    res = train(cfg, train_samples=train_s, init=(net, codec), val_sets=validation_sets(val_s, None), progress=False,
+                log=lambda s: None, ctx=Dist())
+    _, scale, offset = output_mirror(codec.target_mean, codec.target_std)
+    torch.testing.assert_close(res.net.out_offset, torch.from_numpy(offset))
+    torch.testing.assert_close(res.net.out_scale, torch.from_numpy(scale))
 
 
 def test_real_detections_are_required_and_aligned():
