@@ -187,7 +187,7 @@ class Lifter:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             for block in net.blocks:
-                body = block.body  # type: ignore[union-attr]
+                body: torch.nn.Sequential = block.body  # type: ignore[assignment]
                 for i, layer in enumerate(body):
                     if isinstance(layer, MirrorCoupledLinear):
                         body[i] = QuantizedCoupledLinear(layer)

@@ -151,11 +151,12 @@ class QuantizedCoupledLinear(nn.Module):
     def __init__(self, layer: MirrorCoupledLinear) -> None:
         super().__init__()
         w = layer.weight_sum.shape[0]
-        pair = nn.ModuleDict({"sum": nn.Linear(w, w), "diff": nn.Linear(w, w, bias=False)})
+        on_sum, on_diff = nn.Linear(w, w), nn.Linear(w, w, bias=False)
         with torch.no_grad():
-            pair["sum"].weight.copy_(layer.weight_sum)
-            pair["sum"].bias.copy_(layer.bias)
-            pair["diff"].weight.copy_(layer.weight_diff)
+            on_sum.weight.copy_(layer.weight_sum)
+            on_sum.bias.copy_(layer.bias)
+            on_diff.weight.copy_(layer.weight_diff)
+        pair = nn.ModuleDict({"sum": on_sum, "diff": on_diff})
         self.pair = torch.ao.quantization.quantize_dynamic(pair, {nn.Linear}, dtype=torch.qint8)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
