@@ -3,8 +3,8 @@
 The FLOP limit is measured in the same run: the machine's float32 matmul rate (GFLOP/s, a
 ``(B, W) @ (W, W)`` product at the model's width) divided by the FLOPs of one pose through the
 network (2 x multiply-adds of every Linear layer), times two when the model averages each pose with its
-mirror image by default (``Lifter.flip_test``: two network rows per pose). Reported ratios are within one
-run, so they hold
+mirror image by default (``Lifter.flip_test``: two network rows per pose), summed over an ensemble's
+networks. Reported ratios are within one run, so they hold
 on a shared, noisy machine; absolute times are indicative only.
 
     python benchmarks/bench_lift.py [--model default] [--threads 2] [--json out.json]
@@ -88,14 +88,23 @@ def main() -> None:
     pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500
     kp = project(pose, focal=1145.0, principal_point=(512.0, 515.0))
 
-    # network rows per pose: the mirror-image pass of the flip test (a mirror-equivariant net never needs it)
-    rows = 2 if lifter.flip_test and lifter.config.symmetry != "mirror" else 1
-    fpp = rows * flops_per_pose(lifter.net)
-    gflops = matmul_gflops(lifter.config.width)
-    limit = gflops * 1e9 / fpp
-    print(f"model {lifter.name}: width {lifter.config.width}, {rows} network row(s) per pose "
-          f"(flip test {'on' if lifter.flip_test else 'off'}), {fpp / 1e6:.2f} MFLOP/pose; "
-          f"matmul {gflops:.1f} GFLOP/s with {args.threads} threads -> FLOP limit {limit:,.0f} poses/s")
+    # Every network of the model (an ensemble averages several), each with its network rows per pose: the
+    # mirror-image pass of the flip test (a mirror-equivariant net never needs it). The FLOP limit is the time the
+    # machine's matmul rate at each network's width needs for its FLOPs, summed.
+    parts = []
+    for m in (lifter, *lifter.ensemble):
+        rows_m = 2 if m.flip_test and m.config.symmetry != "mirror" else 1
+        parts.append((m, rows_m, rows_m * flops_per_pose(m.net), matmul_gflops(m.config.width)))
+    rows = sum(p[1] for p in parts)
+    fpp = sum(p[2] for p in parts)
+    seconds_per_pose = sum(p[2] / (p[3] * 1e9) for p in parts)
+    limit = 1.0 / seconds_per_pose
+    gflops = fpp / seconds_per_pose / 1e9
+    for m, rows_m, f_m, g_m in parts:
+        print(f"network {m.name}: width {m.config.width}, symmetry {m.config.symmetry}, {rows_m} row(s) per pose "
+              f"(flip test {'on' if m.flip_test else 'off'}), {f_m / 1e6:.2f} MFLOP/pose; matmul {g_m:.1f} GFLOP/s")
+    print(f"model {lifter.name}: {len(parts)} network(s), {fpp / 1e6:.2f} MFLOP/pose; with {args.threads} threads "
+          f"-> FLOP limit {limit:,.0f} poses/s")
 
     single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3

@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import os
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final, Literal
@@ -115,11 +116,17 @@ class Lifter:
 
     def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
                  meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None,
-                 flip_test: bool = False, clean: Lifter | None = None) -> None:
+                 flip_test: bool = False, clean: Lifter | None = None, ensemble: Sequence[Lifter] = ()) -> None:
         if net.config != codec.config:
             raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
-        if clean is not None and clean.clean is not None:
-            raise PoseLifterError("the clean-2D lifter of a Lifter cannot have one of its own")
+        if clean is not None and (clean.clean is not None or clean.ensemble):
+            raise PoseLifterError("the clean-2D lifter of a Lifter cannot have a clean lifter or an ensemble of its own")
+        if any(m.clean is not None or m.ensemble for m in ensemble):
+            raise PoseLifterError("ensemble members cannot have a clean lifter or an ensemble of their own")
+        self.ensemble: tuple[Lifter, ...] = tuple(ensemble)
+        """More networks for the same (detected) 2D: :meth:`lift` averages the relative pose and the root depth of
+        this network and of these, each with its own flip-test default (the root stays on the 2D root's ray). Empty
+        for a single network."""
         self.clean = clean
         """The network for ``source="clean"`` when this model has a separate one (:meth:`lift` routes by source);
         None when one network (conditioned on the source, or not) serves both."""
@@ -142,14 +149,16 @@ class Lifter:
     # -- construction --------------------------------------------------------------------------------
     @classmethod
     def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None,
-              clean: Checkpoint | None = None) -> Lifter:
+              clean: Checkpoint | None = None, ensemble: Sequence[Checkpoint] = ()) -> Lifter:
         inference = ck.meta.get("inference")
         if flip_test is None:
             flip_test = bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
         clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)", meta=clean.meta,
                                                        train_config=clean.train_config, flip_test=flip_test)
+        members = [cls(m.net, m.codec, name=f"{name} (member {i + 2})", meta=m.meta, train_config=m.train_config,
+                       flip_test=flip_test) for i, m in enumerate(ensemble)]
         lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip_test,
-                     clean=clean_lifter)
+                     clean=clean_lifter, ensemble=members)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
@@ -174,7 +183,13 @@ class Lifter:
         if clean_file := entry.get("clean_file"):
             clean = load_checkpoint(assets.read_bytes(clean_file), expected_sha256=entry.get("clean_sha256"),
                                     name=f"shipped model {entry['name']!r} ({clean_file})")
-        return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean)
+        files, sums = entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])
+        if len(sums) != len(files):
+            raise PoseLifterError(f"shipped model {entry['name']!r}: ensemble_files and ensemble_sha256 differ in length "
+                                  "(reinstall poselifter)")
+        members = [load_checkpoint(assets.read_bytes(f), expected_sha256=h, name=f"shipped model {entry['name']!r} ({f})")
+                   for f, h in zip(files, sums)]
+        return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean, ensemble=members)
 
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
@@ -193,7 +208,8 @@ class Lifter:
                         body[i] = QuantizedCoupledLinear(layer)
             net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
         return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
-                      flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized())
+                      flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized(),
+                      ensemble=[m.quantized() for m in self.ensemble])
 
     # -- lifting -------------------------------------------------------------------------------------
     def lift(
@@ -223,9 +239,8 @@ class Lifter:
         if source == "clean" and self.clean is not None:
             return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
                                    source=source, flip_test=flip_test)
-        flip_test = self.flip_test if flip_test is None else bool(flip_test)
-        if self.config.symmetry == "mirror":
-            flip_test = False
+        flip_arg = None if flip_test is None else bool(flip_test)
+        flip_test = self.flip_test if flip_arg is None else flip_arg
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
@@ -270,9 +285,12 @@ class Lifter:
         rel = np.empty((n, NUM_JOINTS, 3))
         root = np.empty((n, 3))
         canonical = np.empty(n)
+        members = [(self, flip_test)] + [(m, flip_arg if flip_arg is not None else m.flip_test) for m in self.ensemble]
         for s in range(0, n, CHUNK_SIZE):
             sl = slice(s, min(n, s + CHUNK_SIZE))
-            rel[sl], root[sl], canonical[sl] = self._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, flip_test)
+            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, flip and m.config.symmetry != "mirror")
+                    for m, flip in members]
+            rel[sl], root[sl], canonical[sl] = (sum(o[i] for o in outs) / len(outs) for i in range(3))
         if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(root))):
             raise PoseLifterError(f"model {self.name!r} produced non-finite outputs (corrupt weights?)")
         rel = rel.reshape(lead + (NUM_JOINTS, 3))

@@ -81,6 +81,10 @@ class ModelEntry(TypedDict, total=False):
     clean_sha256: str
     flip_test: bool
     """The model's default for :meth:`lifter.Lifter.lift`'s ``flip_test``."""
+    ensemble_files: list[str]
+    """More networks for detected 2D (optional), averaged with ``file`` (:attr:`lifter.Lifter.ensemble`), with their
+    ``ensemble_sha256``."""
+    ensemble_sha256: list[str]
     description: str
     train_command: str
     train_minutes: float

@@ -3,8 +3,10 @@
     python scripts/ship_model.py runs/default.pt --name default_v2 --default --description "..."
     python scripts/ship_model.py runs/detected.pt --clean runs/clean.pt --flip-test --name pair --default
 
-``--clean`` ships a second checkpoint that serves ``source="clean"`` (registry ``clean_file`` / ``clean_sha256``;
-the first then serves detected 2D); ``--flip-test`` makes flip averaging the model's default (registry
+``--ensemble A.pt [B.pt ...]`` ships more networks for detected 2D whose lifts are averaged with the first
+(registry ``ensemble_files`` / ``ensemble_sha256``; :attr:`lifter.Lifter.ensemble`). ``--clean`` ships a second
+checkpoint that serves ``source="clean"`` (registry ``clean_file`` / ``clean_sha256``; the first then serves
+detected 2D); ``--flip-test`` makes flip averaging the model's default (registry
 ``flip_test``), and the metrics are then measured with it.
 
 Metrics recorded (Protocol 1, S9 + S11, 4 cameras; S9 'Discussion 1' is missing from the data), each as
@@ -67,6 +69,8 @@ def main() -> None:
     ap.add_argument("--default", action="store_true", help="make it the default model")
     ap.add_argument("--clean", type=Path, default=None, help="a second checkpoint that serves source='clean'")
     ap.add_argument("--flip-test", action="store_true", help="flip averaging on by default for this model")
+    ap.add_argument("--ensemble", type=Path, nargs="*", default=[],
+                    help="more checkpoints for detected 2D, averaged with the first (registry ensemble_files)")
     ap.add_argument("--skip-full", action="store_true", help="do not evaluate every 5th frame")
     ap.add_argument("--h36m", type=Path, default=None)
     args = ap.parse_args()
@@ -87,11 +91,25 @@ def main() -> None:
             src = args.clean.with_suffix(ext)
             if src.is_file():
                 shutil.copyfile(src, dst_clean.with_suffix(ext))
+    dst_members = []
+    for i, member in enumerate(args.ensemble):
+        dst_m = root / "weights" / f"{args.name}_member{i + 2}.pt"
+        shutil.copyfile(member, dst_m)
+        for ext in (".curve.json", ".curve.png"):
+            src = member.with_suffix(ext)
+            if src.is_file():
+                shutil.copyfile(src, dst_m.with_suffix(ext))
+        dst_members.append(dst_m)
     lifter = Lifter.from_checkpoint(dst, name=args.name, clean=dst_clean)
+    if dst_members:
+        lifter.ensemble = tuple(Lifter.from_checkpoint(m, name=f"{args.name} (member {i + 2})")
+                                for i, m in enumerate(dst_members))
     if args.flip_test:
         lifter.flip_test = True
         if lifter.clean is not None:
             lifter.clean.flip_test = True
+        for m in lifter.ensemble:
+            m.flip_test = True
     keys = [k for k in EVALUATIONS if not (args.skip_full and EVALUATIONS[k][2] == 5)]
     metrics = measure(lifter, H36M(args.h36m), keys=keys)
     reg_path = root / "models.json"
@@ -111,6 +129,11 @@ def main() -> None:
                   "clean_samples_seen": lifter.clean.meta.get("samples_seen")}
     if args.flip_test:
         entry["flip_test"] = True
+    if dst_members:
+        entry |= {"ensemble_files": [f"weights/{m.name}" for m in dst_members],
+                  "ensemble_sha256": [sha256_file(m) for m in dst_members],
+                  "ensemble_train_commands": [m.meta.get("command", "") for m in lifter.ensemble],
+                  "ensemble_train_minutes": [round(float(m.meta.get("minutes", 0.0)), 1) for m in lifter.ensemble]}
     reg["models"][args.name] = entry | {"metrics": metrics}
     if args.default:
         reg["default"] = args.name

