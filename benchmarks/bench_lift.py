@@ -80,9 +80,14 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--single-calls", type=int, default=2000)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
+                    help="override the model's flip-test default (every network of an ensemble)")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     lifter = Lifter.load(args.model)
+    if args.flip_test is not None:
+        for m in (lifter, *lifter.ensemble):
+            m.flip_test = args.flip_test
     rng = np.random.default_rng(0)
     pose = np.cumsum(rng.normal(0, 150, (8192, 17, 3)), axis=1)
     pose[..., 2] = np.abs(pose[..., 2]) * 0.2 + 4500
@@ -102,7 +107,8 @@ def main() -> None:
     gflops = fpp / seconds_per_pose / 1e9
     for m, rows_m, f_m, g_m in parts:
         print(f"network {m.name}: width {m.config.width}, symmetry {m.config.symmetry}, {rows_m} row(s) per pose "
-              f"(flip test {'on' if m.flip_test else 'off'}), {f_m / 1e6:.2f} MFLOP/pose; matmul {g_m:.1f} GFLOP/s")
+              f"(flip test {'n/a: equivariant' if m.config.symmetry == 'mirror' else 'on' if m.flip_test else 'off'}), "
+              f"{f_m / 1e6:.2f} MFLOP/pose; matmul {g_m:.1f} GFLOP/s")
     print(f"model {lifter.name}: {len(parts)} network(s), {fpp / 1e6:.2f} MFLOP/pose; with {args.threads} threads "
           f"-> FLOP limit {limit:,.0f} poses/s")
 

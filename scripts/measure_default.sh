@@ -17,6 +17,8 @@ ev universal_sh_s5 "$MODEL" sh_mix --inputs sh --stride 5 --analytic-root
 ev focal_sweep_universal "$MODEL" --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 python benchmarks/bench_invariance.py --models "$MODEL",sh_mix --json "$OUT/${P}bench_invariance.json" \
   | tee "$OUT/${P}bench_invariance.txt"
+python benchmarks/bench_invariance.py --models "$MODEL" --source detected \
+  --json "$OUT/${P}bench_invariance_detected.json" | tee "$OUT/${P}bench_invariance_detected.txt"
 # the 84 demo photos through BlazePose, true focal
 python scripts/eval_cascade.py --model "$MODEL" --compare sh_mix blazepose gt | tee "$OUT/${P}cascade_universal.txt"
 # speed: one pose, batched throughput against the FLOP limit (1 and 2 threads)

@@ -78,3 +78,22 @@ def test_ensemble_quantized_and_nesting_refused():
         Lifter(a.net, a.codec, ensemble=[ens])
     with pytest.raises(PoseLifterError, match="ensemble"):
         Lifter(a.net, a.codec, clean=ens)
+
+
+def test_shipped_ensemble_members_are_checksummed(monkeypatch):
+    """The default's second network is loaded with its registry sha256: a wrong one is refused."""
+    from lifter import resources
+    from lifter.checkpoint import CheckpointError
+
+    entry = resources.model_entry("default")
+    assert entry.get("ensemble_files"), "the shipped default averages several networks"
+    lifter = Lifter.from_pretrained()
+    assert len(lifter.ensemble) == len(entry["ensemble_files"])
+    assert lifter.ensemble[0].config.symmetry == "mirror"
+    bad = {**entry, "ensemble_sha256": ["0" * 64] * len(entry["ensemble_files"])}
+    monkeypatch.setattr(resources, "model_entry", lambda name: bad)
+    with pytest.raises(CheckpointError, match="sha256|checksum"):
+        Lifter.from_pretrained()
+    monkeypatch.setattr(resources, "model_entry", lambda name: {**entry, "ensemble_sha256": []})
+    with pytest.raises(PoseLifterError, match="differ in length"):
+        Lifter.from_pretrained()
