@@ -171,9 +171,11 @@ def test_training_mode_is_refused(kp, part):
 
 def test_shipped_default_single_pose_matches_module(kp):
     lifter = Lifter.from_pretrained("default")
-    _assert_lift_matches_module(lifter, kp[:16])
-    _assert_lift_matches_module(lifter, kp[3])
-    # the default's flip-test averaging: one pose (two rows, numpy row by row) equals the same pose in a batch
+    for part in (lifter, *lifter.ensemble):  # every network of the default, on its own
+        alone = Lifter(part.net, part.codec, name=part.name)
+        _assert_lift_matches_module(alone, kp[:16])
+        _assert_lift_matches_module(alone, kp[3])
+    # the default's flip-test averaging and its ensemble: one pose (numpy rows) equals the same pose in a batch
     one = lifter.lift(kp[3], focal=1145.0, principal_point=PP, flip_test=True)
     batch = lifter.lift(kp[3:6], focal=1145.0, principal_point=PP, flip_test=True)
     np.testing.assert_allclose(one.absolute, batch.absolute[0], rtol=1e-5, atol=1e-2)
