@@ -127,10 +127,10 @@ def main() -> None:
             api.NUMPY_MAX_BATCH = default_max
 
     u50, n50 = lift_with(0, kp[0]), lift_with(1 << 30, kp[0])
-    print(f"single pose, network rows all through the torch module: median {u50:.3f} ms; all through numpy: "
+    print(f"single pose, network rows all through torch (forward_folded): median {u50:.3f} ms; all through numpy: "
           f"{n50:.3f} ms (the default sends up to NUMPY_MAX_BATCH = {default_max} row(s) to numpy)")
     two_torch, two_numpy = lift_with(0, kp[:2]), lift_with(1 << 30, kp[:2])
-    print(f"two poses: torch module {two_torch:.3f} ms, numpy {two_numpy:.3f} ms")
+    print(f"two poses: torch {two_torch:.3f} ms, numpy {two_numpy:.3f} ms")
     q = lifter.quantized()
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3

@@ -102,7 +102,10 @@ def child(args: argparse.Namespace) -> dict[str, object]:
     diffs = {k: float(np.abs(chunked[k] - getattr(one, k)).max()) for k in keys}
     return {
         "model": model.name, "flip_test": model.flip_test, "poses": args.poses, "chunk_size": chunk,
-        "network_rows_per_pose": 2 if model.flip_test else 1, "threads": args.threads, "seed": args.seed,
+        "networks": [{"symmetry": m.config.symmetry, "width": m.config.width,
+                      "rows_per_pose": 2 if (m.flip_test and m.config.symmetry != "mirror") else 1}
+                     for m in (model, *model.ensemble)],
+        "threads": args.threads, "seed": args.seed,
         "rss_after_model_load_mb": baseline, "rss_after_inputs_mb": after_inputs,
         "input_mb": input_mb, "result_arrays_mb": result_mb,
         "peak_rss_mb": peak, "lift_seconds": seconds, "poses_per_s": args.poses / seconds,

@@ -28,15 +28,24 @@ from ._checks import PoseLifterError, as_pair, as_points
 from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
 from .checkpoint import Checkpoint, load_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
-from .model import MirrorCoupledLinear, ModelConfig, PoseLifterNet, QuantizedCoupledLinear, forward_numpy
+from .model import (
+    MirrorCoupledLinear,
+    ModelConfig,
+    PoseLifterNet,
+    QuantizedCoupledLinear,
+    forward_folded,
+    forward_numpy,
+)
 from .normalization import pose_scale
 from .skeleton import NUM_JOINTS
 
 NUMPY_MAX_BATCH: Final[int] = 2
-"""Batches up to this many network rows run in numpy (:func:`~lifter.model.forward_numpy`, one matrix-vector
-chain per row), larger ones through the torch module. Two rows are one pose with flip-test averaging; a
-matrix-vector product in numpy's BLAS has less overhead than torch's kernels, and from a few rows on the torch
-module's matrix products win (``benchmarks/bench_lift.py`` times both)."""
+"""Batches up to this many network rows run in numpy (:func:`~lifter.model.forward_numpy`, matrix-vector
+products, each block of a weight matrix used for every row while it is in cache), larger ones through torch
+(:func:`~lifter.model.forward_folded`, in cache-sized slices; the module itself when a layer is not the plain
+float32 one). Two rows are one pose with flip-test averaging; a matrix-vector product in numpy's BLAS has less
+overhead than torch's kernels, and from a few rows on torch's matrix products win (``benchmarks/bench_lift.py``
+times both)."""
 CHUNK_SIZE: Final[int] = 32768
 """Poses per network pass in :meth:`Lifter.lift`: larger batches are lifted in chunks of this size, so
 memory stays bounded (the result is the same as one pass)."""
@@ -234,7 +243,8 @@ class Lifter:
             hand-placed or dragged joints). The lifter uses what it was trained for on each.
         flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
             None: the model's default (:attr:`flip_test`). Ignored by networks that are mirror-equivariant by
-            construction (``symmetry="mirror"``, the shipped default): for them it would give the same result.
+            construction (``symmetry="mirror"``, like the default's second detected network): for them it would
+            give the same result.
         """
         if source == "clean" and self.clean is not None:
             return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
@@ -331,7 +341,9 @@ class Lifter:
             raise PoseLifterError(f"model {self.name!r} is in training mode (dropout, batch statistics): call "
                                   "lifter.net.eval()")
         with torch.inference_mode():
-            return net(torch.from_numpy(features)).numpy()
+            x = torch.from_numpy(features)
+            folded = forward_folded(net, x)
+            return (folded if folded is not None else net(x)).numpy()
 
     def __repr__(self) -> str:
         c = self.config

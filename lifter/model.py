@@ -358,16 +358,34 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
         if len(features) == 1:
             return _forward_numpy_mirror(v, eps, features)
         return np.concatenate([_forward_numpy_mirror(v, eps, features[i:i + 1]) for i in range(len(features))])
-    if len(features) > 1:
-        # Row by row: OpenBLAS runs a (1, W) @ (W, W) product as a matrix-vector product, but a (2, W) one as a
-        # general product that first packs the whole weight matrix (about 5x slower than two rows on their own;
-        # benchmarks/bench_lift.py). Flip-test averaging sends two rows for one pose.
-        return np.concatenate([_forward_numpy_rows(v, eps, features[i:i + 1]) for i in range(len(features))])
     return _forward_numpy_rows(v, eps, features)
 
 
+_BLOCK_BYTES: Final[int] = 1 << 20
+"""Row blocks of a hidden weight matrix in :func:`_matvec_rows`: small enough to stay in a core's L2 cache
+while every input row is multiplied with them."""
+
+
+def _matvec_rows(w: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``x @ w.T`` for a few rows ``x`` ``(R, in)`` and a weight ``w`` ``(out, in)``, as matrix-vector
+    products. OpenBLAS runs a ``(1, W) @ (W, W)`` product as a matrix-vector product, but a ``(2, W)`` one as
+    a general product that first packs the whole weight matrix (slower than two rows on their own). Two rows
+    one after the other read the weights twice from memory; here each block of ``w``'s rows is read once and
+    multiplied with every row of ``x`` while it is in cache (flip-test averaging sends two rows for one pose;
+    ``benchmarks/bench_lift.py`` times it)."""
+    if len(x) == 1:
+        return x @ w.T
+    out = np.empty((len(x), w.shape[0]), np.result_type(x, w))
+    step = max(1, _BLOCK_BYTES // max(1, w.shape[1] * w.itemsize))
+    for s in range(0, w.shape[0], step):
+        block = w[s:s + step]
+        for r in range(len(x)):
+            np.matmul(block, x[r], out=out[r, s:s + step])
+    return out
+
+
 def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
-    """The chain of :func:`forward_numpy` on ``features`` ``(B, F)`` with the weight views ``v``."""
+    """The chain of :func:`forward_numpy` on ``features`` ``(B, F)`` (a few rows) with the weight views ``v``."""
     h = features @ v[0].T + v[1]
     i, k = 2, 0
     while i < len(v) - 2:
@@ -375,10 +393,92 @@ def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndar
         s1 = g1 / np.sqrt(var1 + eps[k])
         s2 = g2 / np.sqrt(var2 + eps[k + 1])
         y = np.maximum((h - m1) * s1 + be1, 0.0)
-        y = np.maximum((y @ w1.T + b1 - m2) * s2 + be2, 0.0)
-        h = h + (y @ w2.T + b2)
+        y = np.maximum((_matvec_rows(w1, y) + b1 - m2) * s2 + be2, 0.0)
+        h = h + (_matvec_rows(w2, y) + b2)
         i, k = i + 12, k + 2
     return h @ v[-2].T + v[-1]
+
+
+# ------------------------------------------------------------------------------------------------
+# Batches through torch, in cache-sized slices
+# ------------------------------------------------------------------------------------------------
+
+FOLDED_ROWS: Final[int] = 512
+""":func:`forward_folded` runs a batch in slices of this many activation rows (a mirror network's two
+streams count as two: 256 poses): the activations of a slice stay in cache between the layers, and the
+memory a batch needs does not grow with it (``benchmarks/bench_lift.py``, ``benchmarks/bench_memory.py``)."""
+
+def _fold(net: PoseLifterNet) -> list[Any] | None:
+    """The tensors :func:`forward_folded` uses: ``[stem (W, b), blocks, head (W, b), mirror maps]``, each
+    block ``(s1, c1, first layer, s2, c2, second layer)`` with each BatchNorm as the per-channel affine map
+    ``h * s + c`` of its running statistics, and the first hidden layer's bias moved into ``c2``. Only these
+    vectors are computed (on every call, so nothing can go stale); the weights are the live parameters. None
+    when :func:`_numpy_tensors` is (quantized layers, training mode, a subclass)."""
+    found = _numpy_tensors(net)
+    if found is None:
+        return None
+    t, eps = found
+    mirrored = net.config.symmetry == "mirror"
+    k = 3 if mirrored else 2
+    tail = 7 if mirrored else 2
+    with torch.no_grad():
+        blocks = []
+        i, e = 2, 0
+        while i < len(t) - tail:
+            g1, be1, m1, var1 = t[i:i + 4]
+            lin1 = t[i + 4:i + 4 + k]
+            g2, be2, m2, var2 = t[i + 4 + k:i + 8 + k]
+            lin2 = tuple(t[i + 8 + k:i + 8 + 2 * k])
+            s1 = g1 / torch.sqrt(var1 + eps[e])
+            s2 = g2 / torch.sqrt(var2 + eps[e + 1])
+            blocks.append((s1, be1 - m1 * s1, tuple(lin1[:-1]), s2, be2 + (lin1[-1] - m2) * s2, lin2))
+            i, e = i + 8 + 2 * k, e + 2
+        return [tuple(t[:2]), blocks, tuple(t[i:i + 2]), tuple(t[i + 2:])]
+
+
+def _coupled_folded(y: torch.Tensor, u: torch.Tensor, v: torch.Tensor, b: torch.Tensor | None = None
+                    ) -> torch.Tensor:
+    """:func:`couple_streams` of :class:`MirrorCoupledLinear` for rows ``[h0; h1]``, written into one array."""
+    n = y.shape[0] // 2
+    h0, h1 = y[:n], y[n:]
+    us = torch.mm(h0 + h1, u.t()) if b is None else torch.addmm(b, h0 + h1, u.t())
+    vd = torch.mm(h0 - h1, v.t())
+    out = torch.empty_like(y)
+    torch.add(us, vd, out=out[:n])
+    torch.sub(us, vd, out=out[n:])
+    return out
+
+
+def forward_folded(net: PoseLifterNet, features: torch.Tensor) -> torch.Tensor | None:
+    """:meth:`PoseLifterNet.forward` in eval mode for a batch: features ``(B, F)`` float32 -> standardized
+    outputs ``(B, 49)``. Runs in slices of :data:`FOLDED_ROWS` rows, each BatchNorm applied as one
+    multiply-add (with the hidden layer's bias before it), and no Dropout or concatenation passes over the
+    activations. The same function as the module up to float32 rounding (``tests/test_numpy_path.py``).
+    Returns None when the network is not the plain float32 network of its config (quantized, in training
+    mode): run the module then. Call it under ``torch.inference_mode()``."""
+    folded = _fold(net)
+    if folded is None or features.dtype != torch.float32 or features.ndim != 2:
+        return None
+    (w0, b0), blocks, (wh, bh), maps = folded  # maps: in_perm, in_sign, out_perm, out_scale, out_offset
+    out = torch.empty((features.shape[0], NUM_OUTPUTS), dtype=torch.float32)
+    step = FOLDED_ROWS // 2 if maps else FOLDED_ROWS
+    for s in range(0, features.shape[0], step):
+        x = features[s:s + step]
+        n = len(x)
+        if maps:
+            x = torch.cat([x, x[:, maps[0]] * maps[1]])  # the features and the mirrored features
+        h = torch.addmm(b0, x, w0.t())
+        for s1, c1, lin1, s2, c2, lin2 in blocks:
+            y = torch.addcmul(c1, h, s1).relu_()
+            y = _coupled_folded(y, *lin1) if maps else torch.mm(y, lin1[0].t())
+            y = torch.addcmul(c2, y, s2).relu_()
+            h = (h + _coupled_folded(y, *lin2)) if maps else torch.addmm(lin2[1], y, lin2[0].t()).add_(h)
+        g = torch.addmm(bh, h, wh.t())
+        if maps:
+            g0, g1 = g.chunk(2)
+            g = 0.5 * (g0 + g1[:, maps[2]] * maps[3] + maps[4])  # the second stream's output mirrored back
+        out[s:s + n] = g
+    return out
 
 
 _SUM_DIFF = np.array([[1.0, 1.0], [1.0, -1.0]], np.float32)

@@ -1,7 +1,9 @@
-"""The single-pose fast path: ``Lifter.lift`` runs one pose through numpy on the live weights.
+"""The fast paths: ``Lifter.lift`` runs one pose through numpy and batches through torch in cache-sized
+slices, both on the live weights.
 
-``lifter.model.forward_numpy`` must give the torch module's outputs, see every change to the
-weights (no cache to go stale) and step aside for layers it cannot run (quantized, training mode).
+``lifter.model.forward_numpy`` and ``lifter.model.forward_folded`` must give the torch module's outputs,
+see every change to the weights (no cache to go stale) and step aside for layers they cannot run
+(quantized, training mode).
 """
 
 from __future__ import annotations
@@ -11,9 +13,10 @@ import pytest
 import torch
 from conftest import random_pose_cam
 
+import lifter.model as lifter_model
 from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet
 from lifter.camera import project
-from lifter.model import forward_numpy
+from lifter.model import forward_folded, forward_numpy
 
 PP = (512.0, 515.0)
 
@@ -117,6 +120,67 @@ def test_single_pose_sees_every_weight_change(kp, change):
     after = lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative
     assert np.abs(after - before).max() > 1.0
     _assert_lift_matches_module(lifter, kp[0])
+    _assert_lift_matches_module(lifter, kp[:5])  # a batch: forward_folded
+
+
+@pytest.mark.parametrize("change", ["data", "buffer", "eps"])
+def test_batch_sees_every_weight_change(kp, change):
+    """Changes that bypass the tensors' version counters (``.data``, a plain attribute) reach batches too."""
+    lifter = _lifter(_net(seed=0))
+    net = lifter.net
+    before = lifter.lift(kp[:5], focal=1145.0, principal_point=PP).relative
+    with torch.no_grad():
+        if change == "data":
+            net.blocks[0].body[3].weight.data.mul_(1.5)
+        elif change == "buffer":
+            net.blocks[0].body[4].running_var.data.mul_(3.0)
+        elif change == "eps":
+            net.blocks[1].body[4].eps = 0.5
+    after = lifter.lift(kp[:5], focal=1145.0, principal_point=PP).relative
+    assert np.abs(after - before).max() > 1.0
+    _assert_lift_matches_module(lifter, kp[:5])
+
+
+@pytest.mark.parametrize("config", [{"mode": "both"}, {"mode": "baseline"}, {"symmetry": "mirror"},
+                                    {"symmetry": "mirror", "num_blocks": 1}])
+@pytest.mark.parametrize("rows", [1, 7, 8, 9, 20])
+def test_folded_forward_matches_module(kp, monkeypatch, config, rows):
+    """Across slice boundaries (slices of 8 rows here; 4 poses for a mirror network's two streams)."""
+    monkeypatch.setattr(lifter_model, "FOLDED_ROWS", 8)
+    net = _net(**config)
+    if config.get("symmetry") == "mirror":
+        lifter = _lifter(net)  # sets the output mirror from the codec's statistics
+        net = lifter.net
+    x = _features(net, np.concatenate([kp, kp])[:rows])
+    with torch.inference_mode():
+        ref = net(torch.from_numpy(x)).numpy()
+        got = forward_folded(net, torch.from_numpy(x))
+    assert got is not None and got.shape == ref.shape == (rows, 49)
+    assert np.abs(ref).std() > 0.1
+    np.testing.assert_allclose(got.numpy(), ref, rtol=1e-5, atol=1e-5)
+
+
+def test_folded_forward_steps_aside(kp):
+    net = _net()
+    x = torch.from_numpy(_features(net, kp[:4]))
+    assert forward_folded(net, x.double()) is None  # not float32
+    net.blocks[1].train()
+    assert forward_folded(net, x) is None  # batch statistics
+    net.eval()
+    torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8, inplace=True)
+    assert forward_folded(net, x) is None
+
+
+@pytest.mark.parametrize("block_bytes", [256, 1000, 1 << 20])
+def test_row_blocked_products_equal_row_by_row(kp, monkeypatch, block_bytes):
+    """Two rows (a pose and its mirror image) through row blocks of the weights give each row's own result."""
+    monkeypatch.setattr(lifter_model, "_BLOCK_BYTES", block_bytes)
+    net = _net()
+    x = _features(net, kp[:2])
+    both = forward_numpy(net, x)
+    rows = np.concatenate([forward_numpy(net, x[i:i + 1]) for i in range(2)])
+    assert both is not None and both.shape == (2, 49)
+    np.testing.assert_allclose(both, rows, rtol=1e-6, atol=1e-6)
 
 
 def test_net_built_under_inference_mode(kp):
