@@ -65,7 +65,7 @@ import numpy as np
 
 from ._checks import PoseLifterError
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
-from .keypoints import convert, get_format
+from .keypoints import convert, get_format, mirror_permutation
 
 IMAGE_SUFFIXES: Final[frozenset[str]] = frozenset(
     {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff", ".gif", ".ppm", ".pgm"})
@@ -97,6 +97,18 @@ part or a merge of them, not another person."""
 SAME_PERSON: Final[float] = 0.1
 """Two detections are the same person when their median landmark distance is below this share of the larger
 box diagonal, or when each one's pelvis lies in the other's box."""
+FLIP_SAME_IOU: Final[float] = 0.5
+"""``flip_test``: a detection in the mirror image (flipped back) is the same person as one in the image when
+their boxes overlap by at least this intersection over union."""
+FLIP_AGREE: Final[float] = 0.1
+"""``flip_test``: a person's detections in the image and in its mirror image are averaged when their median
+landmark distance is below this share of the box diagonal and no left/right pair of landmarks is crossed
+(:data:`FLIP_CROSSED`); otherwise (e.g. a limb lost, or left and right confused in one of them) the one with the
+higher mean visibility is kept."""
+FLIP_CROSSED: Final[float] = 0.02
+"""``flip_test``: a left/right landmark pair is crossed between two detections when pairing left with right
+brings them closer, by more than this share of the box diagonal, than pairing left with left and right with
+right (averaging them would fold the limbs onto each other)."""
 
 _EXIF_IFD: Final[int] = 0x8769
 _TAG_FOCAL_LENGTH: Final[int] = 37386
@@ -658,6 +670,26 @@ def _in_box(box: np.ndarray, p: np.ndarray) -> bool:
     return bool(x <= p[0] <= x + w and y <= p[1] <= y + h)
 
 
+def _crossed(a: Detection, b: Detection, diag: float) -> bool:
+    """Whether a left/right landmark pair of ``a`` and ``b`` is crossed (:data:`FLIP_CROSSED`)."""
+    perm = mirror_permutation(a.keypoint_format)
+    j = np.flatnonzero(perm > np.arange(len(perm)))  # each left/right pair once
+    k = perm[j]
+    ka, kb = a.keypoints, b.keypoints
+    straight = np.linalg.norm(ka[j] - kb[j], axis=-1) + np.linalg.norm(ka[k] - kb[k], axis=-1)
+    crossed = np.linalg.norm(ka[j] - kb[k], axis=-1) + np.linalg.norm(ka[k] - kb[j], axis=-1)
+    return bool(np.any(crossed < straight - FLIP_CROSSED * diag))
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two ``(x, y, w, h)`` boxes."""
+    iw = max(0.0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    ih = max(0.0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    inter = iw * ih
+    union = float(a[2] * a[3] + b[2] * b[3]) - inter
+    return inter / union if union > 0 else 0.0
+
+
 def _cells(box: np.ndarray, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
     """A box ``(x, y, w, h)`` px as cell ranges of a 1/4-resolution coverage grid of ``shape``."""
     x, y, w, h = (float(v) / 4.0 for v in box)
@@ -682,6 +714,12 @@ class BlazePoseEstimator:
     ``num_poses=max_people``. In every mode a further "person" needs a mean landmark visibility of at least
     :data:`MIN_EXTRA_VISIBILITY` and half of its landmarks inside the image. The README compares the modes on
     two-person photos; :meth:`detect_near` searches only around given boxes (video tracking).
+    flip_test (default True): :meth:`detect` also searches the mirror image and combines each person found with
+    their mirror-image detection (flipped back, left and right swapped; the same person: boxes overlapping by
+    :data:`FLIP_SAME_IOU`): averaged where the two agree (:data:`FLIP_AGREE`), else the one with the higher mean
+    visibility; a person not found in the mirror image is kept as found. It costs a second search and lowers the
+    2D error on the Human3.6M demo photos (README, "Photos"); :meth:`detect_near` (video tracking between full
+    searches) stays one pass. With it, :meth:`detect` on a mirrored image gives the mirrored detections.
     task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 
@@ -689,7 +727,7 @@ class BlazePoseEstimator:
     keypoint_format = "blazepose33"
 
     def __init__(self, *, min_detection_confidence: float = 0.5, max_people: int = 3, multi: str = "windows",
-                 task_path: str | os.PathLike[str] | None = None,
+                 flip_test: bool = True, task_path: str | os.PathLike[str] | None = None,
                  log: Callable[[str], None] | None = None) -> None:
         mp = _import_mediapipe()
         if max_people < 1:
@@ -698,6 +736,7 @@ class BlazePoseEstimator:
             raise PoseLifterError(f"multi must be 'windows', 'mask' or 'tasks', got {multi!r}")
         self.max_people = int(max_people)
         self.multi = multi
+        self.flip_test = bool(flip_test)
         self._mp = mp
         path = Path(task_path) if task_path is not None else ensure_pose_task(log=log)
         from mediapipe.tasks.python import BaseOptions, vision  # pyright: ignore[reportMissingImports]
@@ -792,6 +831,40 @@ class BlazePoseEstimator:
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
         if img.ndim != 3 or img.shape[-1] != 3:
             raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
+        found = self._search(img)
+        if not self.flip_test or not found:
+            return found
+        W, H = img.shape[1], img.shape[0]
+        mirrored = [self._flipped_back(d, W, H) for d in self._search(np.ascontiguousarray(img[:, ::-1]))]
+        out = []
+        for d in found:
+            same = [i for i, e in enumerate(mirrored) if _iou(d.bbox_xywh, e.bbox_xywh) >= FLIP_SAME_IOU]
+            if not same:
+                out.append(d)
+                continue
+            diag = max(math.hypot(*d.bbox_xywh[2:]), 1.0)
+            dist = [float(np.median(np.linalg.norm(d.keypoints - mirrored[i].keypoints, axis=-1))) for i in same]
+            e = mirrored.pop(same[int(np.argmin(dist))])  # each mirror-image detection serves one person
+            if min(dist) < FLIP_AGREE * diag and not _crossed(d, e, diag):
+                k = 0.5 * (d.keypoints + e.keypoints)
+                out.append(Detection(keypoints=k, scores=0.5 * (d.scores + e.scores),
+                                     bbox_xywh=bbox_of(np.clip(k, 0.0, [W, H])), keypoint_format=d.keypoint_format))
+            else:
+                out.append(d if float(d.scores.mean()) >= float(e.scores.mean()) else e)
+        return sorted(out, key=lambda d: d.area, reverse=True)
+
+    @staticmethod
+    def _flipped_back(d: Detection, W: int, H: int) -> Detection:
+        """A detection in the mirror image ``img[:, ::-1]`` -> the same landmarks in the image: ``x -> W - x``
+        (MediaPipe's continuous pixel frame) and left and right swapped."""
+        perm = mirror_permutation(d.keypoint_format)
+        k = d.keypoints[perm].copy()
+        k[:, 0] = W - k[:, 0]
+        return Detection(keypoints=k, scores=d.scores[perm], bbox_xywh=bbox_of(np.clip(k, 0.0, [W, H])),
+                         keypoint_format=d.keypoint_format)
+
+    def _search(self, img: np.ndarray) -> list[Detection]:
+        """One search of ``img`` for everyone (``multi``, class docstring), largest first."""
         H, W = img.shape[:2]
         found: list[Detection] = []
         grown: list[np.ndarray] = []

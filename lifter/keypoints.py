@@ -195,6 +195,29 @@ def get_format(name: str) -> KeypointFormat:
         raise PoseLifterError(f"unknown keypoint format {name!r}; known formats: {sorted(_REGISTRY)}") from None
 
 
+def mirror_permutation(name: str) -> np.ndarray:
+    """``(J,)`` indices that swap a format's left and right joints: ``mirrored[..., j, :] = kp[..., perm[j], :]``
+    after the image flip ``x -> W - x``. Derived from the joint names (``l_`` / ``r_`` prefixes, ``_l`` / ``_r``
+    suffixes, the subject's sides); joints without a side map to themselves. For ``"h36m17"`` it equals
+    :data:`lifter.skeleton.FLIP_PERMUTATION`."""
+    names = get_format(name).joint_names
+    index = {n: i for i, n in enumerate(names)}
+
+    def other(n: str) -> str:
+        for a, b in (("l_", "r_"), ("r_", "l_")):
+            if n.startswith(a):
+                return b + n[2:]
+        for a, b in (("_l", "_r"), ("_r", "_l")):
+            if n.endswith(a):
+                return n[:-2] + b
+        return n
+
+    missing = [n for n in names if other(n) not in index]
+    if missing:
+        raise PoseLifterError(f"keypoint format {name!r}: no mirror counterpart for {missing}")
+    return np.array([index[other(n)] for n in names], np.intp)
+
+
 def keypoint_formats() -> tuple[str, ...]:
     """Names of the registered formats (including any added after import)."""
     return tuple(sorted(_REGISTRY))

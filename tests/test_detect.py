@@ -27,8 +27,9 @@ from lifter.keypoints import (
     convert,
     get_format,
     keypoint_formats,
+    mirror_permutation,
 )
-from lifter.skeleton import JOINT_NAMES
+from lifter.skeleton import FLIP_PERMUTATION, JOINT_NAMES
 
 ROOT = Path(__file__).resolve().parents[1]
 FORMATS = {"blazepose33": BLAZEPOSE33_JOINT_NAMES, "coco17": COCO17_JOINT_NAMES, "openpose25": OPENPOSE25_JOINT_NAMES}
@@ -298,3 +299,113 @@ def test_blazepose_detect_near_finds_only_the_person_in_the_box(blazepose):
         assert len(near) == 1
         assert np.median(np.linalg.norm(near[0].keypoints - d.keypoints, axis=-1)) < 10
     assert blazepose.detect_near(pair, [np.array([0.0, 0.0, 40.0, 40.0])]) == []
+
+
+# ------------------------------------------------------------------ flip test (mirror image search)
+
+
+@pytest.mark.parametrize("fmt", sorted(keypoint_formats()))
+def test_mirror_permutation_swaps_sides(fmt):
+    names = get_format(fmt).joint_names
+    perm = mirror_permutation(fmt)
+    assert sorted(perm) == list(range(len(names)))
+    np.testing.assert_array_equal(perm[perm], np.arange(len(names)))  # an involution
+    for i, n in enumerate(names):
+        m = names[perm[i]]
+        if n.startswith(("l_", "r_")):
+            assert m[2:] == n[2:] and m[:2] != n[:2]
+        elif n.endswith(("_l", "_r")):
+            assert m[:-2] == n[:-2] and m[-2:] != n[-2:]
+        else:
+            assert m == n
+    if fmt == "h36m17":
+        np.testing.assert_array_equal(perm, FLIP_PERMUTATION)  # the one flip convention of lifter.skeleton
+
+
+def _det(k: np.ndarray, vis: float):
+    from lifter.detect import Detection, bbox_of
+
+    return Detection(keypoints=k, scores=np.full(33, vis), bbox_xywh=bbox_of(k), keypoint_format="blazepose33")
+
+
+def _scripted_blazepose(rng, plain: list, mirror: list):
+    """A BlazePoseEstimator whose one search returns ``plain`` for the image and ``mirror`` (detections in the
+    mirror image's pixels) for ``img[:, ::-1]`` (told apart by a marker pixel); no mediapipe needed."""
+    from lifter.detect import BlazePoseEstimator
+
+    est = object.__new__(BlazePoseEstimator)
+    est.flip_test = True
+    est._search = lambda img: list(mirror if img[0, -1, 0] == 255 else plain)  # type: ignore[method-assign]
+    img = np.zeros((400, 600, 3), np.uint8)
+    img[0, 0] = 255
+    return est, img
+
+
+def _person(rng, x0: float) -> np.ndarray:
+    return np.column_stack([rng.uniform(x0, x0 + 120, 33), rng.uniform(50, 350, 33)])
+
+
+def test_flip_test_combines_each_person_with_their_mirror_detection(rng):
+    from lifter.detect import BlazePoseEstimator
+
+    W = 600
+    swap = mirror_permutation("blazepose33")
+
+    def in_mirror(k: np.ndarray) -> np.ndarray:  # where the same landmarks are in img[:, ::-1]
+        m = k[swap].copy()
+        m[:, 0] = W - m[:, 0]
+        return m
+
+    a, b, c = _person(rng, 20), _person(rng, 250), _person(rng, 450)
+    a_m = a + rng.normal(0, 2.0, a.shape)  # agrees with a: averaged
+    b_m = b.copy()
+    b_m[:, 1] = b[::-1, 1]  # same place, landmarks scrambled: disagrees, higher visibility wins
+    est, img = _scripted_blazepose(rng, [_det(a, 0.9), _det(b, 0.6), _det(c, 0.8)],
+                                   [_det(in_mirror(b_m), 0.7), _det(in_mirror(a_m), 0.5)])
+    out = BlazePoseEstimator.detect(est, img)
+    assert len(out) == 3  # c has no mirror detection: kept as it is
+    by_x = sorted(out, key=lambda d: d.keypoints[:, 0].mean())
+    np.testing.assert_allclose(by_x[0].keypoints, 0.5 * (a + a_m), atol=1e-9)
+    np.testing.assert_allclose(by_x[0].scores, 0.7, atol=1e-12)
+    np.testing.assert_allclose(by_x[1].keypoints, b_m, atol=1e-9)  # the mirror pass, visibility 0.7 > 0.6
+    np.testing.assert_allclose(by_x[2].keypoints, c, atol=1e-12)
+    assert [d.area for d in out] == sorted((d.area for d in out), reverse=True)
+    est.flip_test = False
+    assert [d.keypoints.tolist() for d in BlazePoseEstimator.detect(est, img)] == [a.tolist(), b.tolist(), c.tolist()]
+
+
+def test_flip_test_never_borrows_another_person(rng):
+    """A person missed in the mirror image is not replaced by someone else found there."""
+    from lifter.detect import BlazePoseEstimator
+
+    a, far = _person(rng, 20), _person(rng, 450)
+    far_in_mirror = far.copy()
+    far_in_mirror[:, 0] = 600 - far[:, 0]
+    est, img = _scripted_blazepose(rng, [_det(a, 0.5)], [_det(far_in_mirror[mirror_permutation("blazepose33")], 1.0)])
+    (out,) = BlazePoseEstimator.detect(est, img)
+    np.testing.assert_array_equal(out.keypoints, a)
+
+
+def test_blazepose_flip_test_is_mirror_equivariant():
+    """With the flip test, detecting the mirror image gives the mirrored detection (both passes are the same
+    two searches); one pass alone does not."""
+    _bundle_or_skip()
+    from PIL import Image
+
+    from lifter.detect import BlazePoseEstimator
+
+    img = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
+    W = img.shape[1]
+    swap = mirror_permutation("blazepose33")
+    gaps = {}
+    for flip in (True, False):
+        with BlazePoseEstimator(max_people=1, flip_test=flip) as est:
+            (d,) = est.detect(img)
+            (m,) = est.detect(np.ascontiguousarray(img[:, ::-1]))
+        back = m.keypoints[swap].copy()
+        back[:, 0] = W - back[:, 0]
+        gaps[flip] = float(np.abs(back - d.keypoints).max())
+        if flip:
+            np.testing.assert_allclose(m.scores[swap], d.scores, atol=1e-6)
+    assert gaps[True] < 1e-3, gaps
+    assert gaps[False] > 0.05, gaps  # BlazePose alone is not mirror-equivariant: the test above is not vacuous
