@@ -25,9 +25,11 @@ true camera intrinsics (focal, principal point; no lens undistortion):
   sets (OpenPose's Neck / MidHip = BlazePose's mid-shoulders / mid-hips): the rules' error given
   BlazePose-quality joints, not a COCO or OpenPose network's;
 * the Gaussian + uniform mixture error model (:func:`lifter.noise.fit_error_model`) fitted to
-  BlazePose's converted errors over the detected demo frames, written to
-  ``assets/error_model/blazepose_demo.json``, and compared with the shipped SH fit
-  (``assets/error_model/sh_mixture.json``) and with a fit of SH's errors on the same frames.
+  BlazePose's converted errors over the detected demo frames (and without the held-out camera's frames),
+  compared with the shipped SH fit (``assets/error_model/sh_mixture.json``) and with a fit of SH's errors on
+  the same frames. The fits are written only when asked (``--error-model-out``, ``--error-model-train-out``):
+  the shipped ``assets/error_model/blazepose_demo*.json`` are what the default was trained with, and a re-run
+  (e.g. with a changed detector) must not replace them unnoticed.
 
 Writes the JSON and prints markdown tables for the README. Nothing from H36M (images, poses,
 detections) is written: only measured numbers and fitted parameters.
@@ -262,12 +264,13 @@ def main() -> int:
     ap.add_argument(
         "--full",
         action="store_true",
-        help="the full report (JSON, timing, keypoint rules, error "
-        "models written to assets/error_model); default: quick table",
+        help="the full report (JSON, timing, keypoint rules, error-model fits); default: quick table",
     )
     ap.add_argument("--redetect", action="store_true", help="run BlazePose again instead of using the cache")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "cascade" / "eval_cascade.json")
-    ap.add_argument("--error-model-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo.json")
+    ap.add_argument("--error-model-out", type=Path, default=None,
+                    help="write the BlazePose error-model fit here (the shipped one: "
+                    "assets/error_model/blazepose_demo.json); default: fitted and reported, not written")
     ap.add_argument(
         "--holdout-camera",
         default="55011271",
@@ -275,7 +278,9 @@ def main() -> int:
         "lifters are compared on those held-out frames",
     )
     ap.add_argument(
-        "--error-model-train-out", type=Path, default=Path(ASSETS_DIR) / "error_model" / "blazepose_demo_train.json"
+        "--error-model-train-out", type=Path, default=None,
+        help="write the fit without the held-out camera here (the shipped one, which the default's detected "
+        "networks were trained with: assets/error_model/blazepose_demo_train.json); default: not written",
     )
     ap.add_argument(
         "--compare",
@@ -438,8 +443,9 @@ def main() -> int:
         progress=False,
         meta=meta,
     )
-    args.error_model_out.parent.mkdir(parents=True, exist_ok=True)
-    bp_model.save(args.error_model_out)
+    if args.error_model_out is not None:
+        args.error_model_out.parent.mkdir(parents=True, exist_ok=True)
+        bp_model.save(args.error_model_out)
     meta_train = dict(
         meta,
         data=f"the 84 H36M demo frames without camera {args.holdout_camera} "
@@ -453,7 +459,9 @@ def main() -> int:
         progress=False,
         meta=meta_train,
     )
-    bp_train.save(args.error_model_train_out)
+    if args.error_model_train_out is not None:
+        args.error_model_train_out.parent.mkdir(parents=True, exist_ok=True)
+        bp_train.save(args.error_model_train_out)
     sh_demo = fit_error_model(sh17[ok], g, progress=False)
     e_bp, _, _ = normalized_errors(det17, g, reference_scale=sh_model.reference_scale)
     e_sh, _, _ = normalized_errors(sh17[ok], g, reference_scale=sh_model.reference_scale)
@@ -510,11 +518,13 @@ def main() -> int:
         "timing": timing,
         "converter": conv,
         "error_model": noise,
-        "error_model_file": str(args.error_model_out),
+        "error_model_file": None if args.error_model_out is None else str(args.error_model_out),
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=1))
-    print(f"wrote {args.out}, {args.error_model_out} and {args.error_model_train_out}")
+    written = [str(x) for x in (args.out, args.error_model_out, args.error_model_train_out) if x is not None]
+    print("wrote " + ", ".join(written) + ("" if len(written) == 3 else
+          " (error-model fits not written: --error-model-out / --error-model-train-out)"))
     print(markdown(report))
     return 0
 
