@@ -330,6 +330,22 @@ in-place changes are seen without a rebuild, and the key (tensor identities and 
 catches replaced tensors or storage."""
 
 
+def _layout(t: list[Any], eps: list[float], mirrored: bool) -> tuple[tuple, list[tuple], tuple, tuple]:
+    """The flat list of :func:`_numpy_tensors` (torch tensors or their numpy views) in its structure:
+    ``(stem (W, b), blocks, head (W, b), mirror maps)``; each block ``(bn1, first layer, bn2, second layer)``
+    with a BatchNorm as ``(gamma, beta, running mean, running var, eps)`` and a layer as ``(W, b)`` or, for a
+    mirror network, ``(U, V, b)``; the maps ``(in_perm, in_sign, out_perm, out_scale, out_offset)`` or ``()``.
+    The one reader of that order."""
+    k = 3 if mirrored else 2
+    blocks = []
+    i = 2
+    for e in range(0, len(eps), 2):
+        blocks.append(((*t[i:i + 4], eps[e]), tuple(t[i + 4:i + 4 + k]), (*t[i + 4 + k:i + 8 + k], eps[e + 1]),
+                       tuple(t[i + 8 + k:i + 8 + 2 * k])))
+        i += 8 + 2 * k
+    return tuple(t[:2]), blocks, tuple(t[i:i + 2]), tuple(t[i + 2:])
+
+
 def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None:
     """:meth:`PoseLifterNet.forward` in eval mode, in numpy: features ``(B, F)`` float32 -> standardized
     outputs ``(B, 49)``.
@@ -361,6 +377,13 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
     return _forward_numpy_rows(v, eps, features)
 
 
+def _bn_affine_np(bn: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """A BatchNorm ``(gamma, beta, mean, var, eps)`` of :func:`_layout` as ``h * s + c`` (numpy)."""
+    g, beta, mean, var, eps = bn
+    s = g / np.sqrt(var + eps)
+    return s, beta - mean * s
+
+
 _BLOCK_BYTES: Final[int] = 1 << 20
 """Row blocks of a hidden weight matrix in :func:`_matvec_rows`: small enough to stay in a core's L2 cache
 while every input row is multiplied with them."""
@@ -386,17 +409,15 @@ def _matvec_rows(w: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
     """The chain of :func:`forward_numpy` on ``features`` ``(B, F)`` (a few rows) with the weight views ``v``."""
-    h = features @ v[0].T + v[1]
-    i, k = 2, 0
-    while i < len(v) - 2:
-        g1, be1, m1, var1, w1, b1, g2, be2, m2, var2, w2, b2 = v[i:i + 12]
-        s1 = g1 / np.sqrt(var1 + eps[k])
-        s2 = g2 / np.sqrt(var2 + eps[k + 1])
-        y = np.maximum((h - m1) * s1 + be1, 0.0)
-        y = np.maximum((_matvec_rows(w1, y) + b1 - m2) * s2 + be2, 0.0)
+    (w0, b0), blocks, (wh, bh), _ = _layout(v, eps, False)
+    h = features @ w0.T + b0
+    for bn1, (w1, b1), bn2, (w2, b2) in blocks:
+        s1, c1 = _bn_affine_np(bn1)
+        s2, c2 = _bn_affine_np(bn2)
+        y = np.maximum(h * s1 + c1, 0.0)
+        y = np.maximum((_matvec_rows(w1, y) + b1) * s2 + c2, 0.0)
         h = h + (_matvec_rows(w2, y) + b2)
-        i, k = i + 12, k + 2
-    return h @ v[-2].T + v[-1]
+    return h @ wh.T + bh
 
 
 # ------------------------------------------------------------------------------------------------
@@ -417,23 +438,14 @@ def _fold(net: PoseLifterNet) -> list[Any] | None:
     found = _numpy_tensors(net)
     if found is None:
         return None
-    t, eps = found
-    mirrored = net.config.symmetry == "mirror"
-    k = 3 if mirrored else 2
-    tail = 7 if mirrored else 2
+    stem, layers, head, maps = _layout(*found, mirrored=net.config.symmetry == "mirror")
     with torch.no_grad():
         blocks = []
-        i, e = 2, 0
-        while i < len(t) - tail:
-            g1, be1, m1, var1 = t[i:i + 4]
-            lin1 = t[i + 4:i + 4 + k]
-            g2, be2, m2, var2 = t[i + 4 + k:i + 8 + k]
-            lin2 = tuple(t[i + 8 + k:i + 8 + 2 * k])
-            s1 = g1 / torch.sqrt(var1 + eps[e])
-            s2 = g2 / torch.sqrt(var2 + eps[e + 1])
+        for (g1, be1, m1, var1, eps1), lin1, (g2, be2, m2, var2, eps2), lin2 in layers:
+            s1 = g1 / torch.sqrt(var1 + eps1)
+            s2 = g2 / torch.sqrt(var2 + eps2)
             blocks.append((s1, be1 - m1 * s1, tuple(lin1[:-1]), s2, be2 + (lin1[-1] - m2) * s2, lin2))
-            i, e = i + 8 + 2 * k, e + 2
-        return [tuple(t[:2]), blocks, tuple(t[i:i + 2]), tuple(t[i + 2:])]
+        return [stem, blocks, head, maps]
 
 
 def _coupled_folded(y: torch.Tensor, u: torch.Tensor, v: torch.Tensor, b: torch.Tensor | None = None
@@ -489,9 +501,9 @@ def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.nd
     """A ``symmetry="mirror"`` network on one row of features ``(1, F)``: the two streams are the rows of a
     ``(2, W)`` array; each coupled layer is two matrix-vector products, ``U`` on the streams' sum and ``V`` on
     their difference (:class:`MirrorCoupledLinear`)."""
-    in_perm, in_sign, out_perm, out_scale, out_offset = v[-5:]
+    (w0, b0), blocks, (wh, bh), (in_perm, in_sign, out_perm, out_scale, out_offset) = _layout(v, eps, True)
     x = np.concatenate([features, features[:, in_perm] * in_sign])
-    h = x @ v[0].T + v[1]
+    h = x @ w0.T + b0
 
     def coupled(y: np.ndarray, u: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
         sd = _SUM_DIFF @ y
@@ -501,14 +513,11 @@ def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.nd
         out[0] += b
         return _SUM_DIFF @ out
 
-    i, k = 2, 0
-    while i < len(v) - 7:
-        g1, be1, m1, var1, u1, w1, b1, g2, be2, m2, var2, u2, w2, b2 = v[i:i + 14]
-        s1 = g1 / np.sqrt(var1 + eps[k])
-        s2 = g2 / np.sqrt(var2 + eps[k + 1])
-        y = np.maximum((h - m1) * s1 + be1, 0.0)
-        y = np.maximum((coupled(y, u1, w1, b1) - m2) * s2 + be2, 0.0)
-        h = h + coupled(y, u2, w2, b2)
-        i, k = i + 14, k + 2
-    g = h @ v[-7].T + v[-6]
+    for bn1, lin1, bn2, lin2 in blocks:
+        s1, c1 = _bn_affine_np(bn1)
+        s2, c2 = _bn_affine_np(bn2)
+        y = np.maximum(h * s1 + c1, 0.0)
+        y = np.maximum(coupled(y, *lin1) * s2 + c2, 0.0)
+        h = h + coupled(y, *lin2)
+    g = h @ wh.T + bh
     return 0.5 * (g[:1] + g[1:, out_perm] * out_scale + out_offset)
