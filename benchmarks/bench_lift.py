@@ -98,7 +98,7 @@ def main() -> None:
     # machine's matmul rate at each network's width needs for its FLOPs, summed.
     parts = []
     for m in (lifter, *lifter.ensemble):
-        rows_m = 2 if m.flip_test and m.config.symmetry != "mirror" else 1
+        rows_m = m.network_rows()
         parts.append((m, rows_m, rows_m * flops_per_pose(m.net), matmul_gflops(m.config.width)))
     rows = sum(p[1] for p in parts)
     fpp = sum(p[2] for p in parts)

@@ -103,7 +103,7 @@ def child(args: argparse.Namespace) -> dict[str, object]:
     return {
         "model": model.name, "flip_test": model.flip_test, "poses": args.poses, "chunk_size": chunk,
         "networks": [{"symmetry": m.config.symmetry, "width": m.config.width,
-                      "rows_per_pose": 2 if (m.flip_test and m.config.symmetry != "mirror") else 1}
+                      "rows_per_pose": m.network_rows()}
                      for m in (model, *model.ensemble)],
         "threads": args.threads, "seed": args.seed,
         "rss_after_model_load_mb": baseline, "rss_after_inputs_mb": after_inputs,

@@ -151,6 +151,13 @@ class Lifter:
         so mirror equivariance holds exactly (checkpoints: ``meta["inference"]["flip_test"]``). A network with
         ``symmetry="mirror"`` is mirror-equivariant by construction and never needs it (it is then ignored)."""
 
+    def network_rows(self, flip_test: bool | None = None) -> int:
+        """Network rows per pose that :meth:`lift` runs through this network: 2 with the flip test's mirror-image
+        pass (``flip_test``, default :attr:`flip_test`), 1 without it or for a network that is mirror-equivariant
+        by construction (``symmetry="mirror"``), which never needs it."""
+        flip = self.flip_test if flip_test is None else bool(flip_test)
+        return 2 if flip and self.config.symmetry != "mirror" else 1
+
     @property
     def config(self) -> ModelConfig:
         return self.net.config
@@ -249,8 +256,6 @@ class Lifter:
         if source == "clean" and self.clean is not None:
             return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
                                    source=source, flip_test=flip_test)
-        flip_arg = None if flip_test is None else bool(flip_test)
-        flip_test = self.flip_test if flip_arg is None else flip_arg
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
@@ -295,11 +300,11 @@ class Lifter:
         rel = np.empty((n, NUM_JOINTS, 3))
         root = np.empty((n, 3))
         canonical = np.empty(n)
-        members = [(self, flip_test)] + [(m, flip_arg if flip_arg is not None else m.flip_test) for m in self.ensemble]
         for s in range(0, n, CHUNK_SIZE):
             sl = slice(s, min(n, s + CHUNK_SIZE))
-            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, flip and m.config.symmetry != "mirror")
-                    for m, flip in members]
+            # every network with its own flip-test default unless the call gives one
+            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, m.network_rows(flip_test) == 2)
+                    for m in (self, *self.ensemble)]
             rel[sl], root[sl], canonical[sl] = (sum(o[i] for o in outs) / len(outs) for i in range(3))
         if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(root))):
             raise PoseLifterError(f"model {self.name!r} produced non-finite outputs (corrupt weights?)")
