@@ -269,7 +269,8 @@ class Lifter:
         pp = _broadcast(as_pair(principal_point, name="principal_point"), lead, name="principal_point")
         focal_source: FocalSource = "given"
         if focal is None:
-            if self.config.input_space == "pixel" and self.config.depth_target == "absolute":
+            if any(m.config.input_space == "pixel" and m.config.depth_target == "absolute"
+                   for m in (self, *self.ensemble)):
                 raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
             if wh is not None:
                 if wh.ndim != 1:

@@ -719,7 +719,8 @@ class BlazePoseEstimator:
     :data:`FLIP_SAME_IOU`): averaged where the two agree (:data:`FLIP_AGREE`), else the one with the higher mean
     visibility; a person not found in the mirror image is kept as found. It costs a second search and lowers the
     2D error on the Human3.6M demo photos (README, "Photos"); :meth:`detect_near` (video tracking between full
-    searches) stays one pass. With it, :meth:`detect` on a mirrored image gives the mirrored detections.
+    searches) stays one pass. For a person both searches find, :meth:`detect` on the mirrored image gives the
+    mirrored landmarks (a person only the mirror-image search finds is not added: not for them).
     task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 

@@ -468,8 +468,10 @@ def forward_folded(net: PoseLifterNet, features: torch.Tensor) -> torch.Tensor |
     activations. The same function as the module up to float32 rounding (``tests/test_numpy_path.py``).
     Returns None when the network is not the plain float32 network of its config (quantized, in training
     mode): run the module then. Call it under ``torch.inference_mode()``."""
+    if features.dtype != torch.float32 or features.ndim != 2:
+        return None
     folded = _fold(net)
-    if folded is None or features.dtype != torch.float32 or features.ndim != 2:
+    if folded is None:
         return None
     (w0, b0), blocks, (wh, bh), maps = folded  # maps: in_perm, in_sign, out_perm, out_scale, out_offset
     out = torch.empty((features.shape[0], NUM_OUTPUTS), dtype=torch.float32)

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The mirror-equivariant default (ModelConfig symmetry="mirror", width 512 per stream): a pair of
 # reference-camera lifters trained side by side on a 2-core CPU (one torch thread each, bf16 autocast, EMA),
-# one for exact 2D and one for detector 2D. Then:
-#   python scripts/ship_model.py runs/eq/detected.pt --clean runs/eq/clean.pt --name universal --default
+# one for exact 2D and one for detector 2D. The shipped default uses only the detector-2D network, as the second
+# member beside the width-1024 one (registry `universal`: ensemble_files); to ship them as a pair of their own
+# under a new name (never over the default):
+#   python scripts/ship_model.py runs/eq/detected.pt --clean runs/eq/clean.pt --name mirror_pair
 set -euo pipefail
 MINUTES=${MINUTES:-62}
 mkdir -p runs/eq
