@@ -283,7 +283,8 @@ def test_drag_playback_upload_download() -> None:
             files=[{"name": "walking_kp.json", "mimeType": "application/json", "buffer": json.dumps(doc).encode()}])
         assert _wait(lambda: view.state.sample.key.startswith("upload/"), 60), f"upload not received: {view.messages[-3:]}"
         np.testing.assert_allclose(view.state.keypoints, s.keypoints_2d, atol=1e-6)
-        assert not view.scene.camera.floor.visible  # no floor for an upload's guessed camera height
+        # no floor for an upload's guessed camera height (drawn just after the state is set: wait)
+        assert _wait(lambda: not view.scene.camera.floor.visible, 30)
         with page.expect_download(timeout=60000) as dl:
             page.get_by_role("button", name="download result (JSON)").click()
         d = json.loads(Path(dl.value.path()).read_text())
@@ -315,8 +316,10 @@ def test_several_people_in_an_uploaded_sequence() -> None:
         page.locator(f"#file_upload_{view.gui.files.upload._impl.uuid}").set_input_files(
             files=[{"name": "two_walkers.json", "mimeType": "application/json", "buffer": json.dumps(doc).encode()}])
         assert _wait(lambda: isinstance(view.sequence(), VideoSequence), 60), f"not received: {view.messages[-3:]}"
-        assert view.state.sample.num_people == 2 and len(view.frame.others) == 1
-        assert "**2D input** uploaded exact 2D" in view.gui.readout.readout.content  # the file says "clean"
+        # the state changes before the frame and readout are drawn (another thread): wait for both
+        assert _wait(lambda: view.state.sample.num_people == 2 and len(view.frame.others) == 1, 30)
+        assert _wait(lambda: "**2D input** uploaded exact 2D" in view.gui.readout.readout.content, 30), \
+            view.gui.readout.readout.content  # the file says "clean"
         assert _wait(lambda: page.get_by_text("person 2: root").count() > 0, 30)  # the readout, in the page
         view.gui.joints.person.value = "person 2"
         assert _wait(lambda: view.state.person == 1, 30)
