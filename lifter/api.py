@@ -303,8 +303,11 @@ class Lifter:
         canonical = np.empty(n)
         for s in range(0, n, CHUNK_SIZE):
             sl = slice(s, min(n, s + CHUNK_SIZE))
-            # every network with its own flip-test default unless the call gives one
-            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, m.network_rows(flip_test) == 2)
+            # every network with its own flip-test default unless the call gives one; networks whose codecs
+            # encode alike share the encodings (``encoded``)
+            encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] = {}
+            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, m.network_rows(flip_test) == 2,
+                                 encoded=encoded)
                     for m in (self, *self.ensemble)]
             rel[sl], root[sl], canonical[sl] = (sum(o[i] for o in outs) / len(outs) for i in range(3))
         if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(root))):
@@ -316,16 +319,27 @@ class Lifter:
                           keypoints_2d=kp, principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
                           metric_depth=focal_source == "given", source=source)
 
-    def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source,
-                   flip_test: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(N, 17, 2)``, ``(N, 2)``, ``(N, 2)`` px -> relative ``(N, 17, 3)``, root ``(N, 3)`` mm, canonical ``(N,)``."""
+    def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source, flip_test: bool, *,
+                   encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(N, 17, 2)``, ``(N, 2)``, ``(N, 2)`` px -> relative ``(N, 17, 3)``, root ``(N, 3)`` mm, canonical ``(N,)``.
+        encoded: encodings of these inputs by :attr:`PoseCodec.feature_key` (and its mirror image), shared by the
+        networks of one call; filled here."""
         codec = self.codec
+        encoded = {} if encoded is None else encoded
         kp32, pp32, f32 = kp.astype(np.float32), pp.astype(np.float32), f.astype(np.float32)
-        enc = codec.encode(kp32, principal_point=pp32, focal=f32, source=source)
+
+        def encode(mirrored: bool) -> Encoded[np.ndarray]:
+            key = (*codec.feature_key, mirrored)
+            if key not in encoded:
+                k = codec.mirror_input(kp32, pp32) if mirrored else kp32
+                encoded[key] = codec.encode(k, principal_point=pp32, focal=f32, source=source)
+            return encoded[key]
+
+        enc = encode(False)
         feats = enc.features
         if flip_test:
-            enc_m = codec.encode(codec.mirror_input(kp32, pp32), principal_point=pp32, focal=f32, source=source)
-            feats = np.concatenate([feats, enc_m.features])
+            feats = np.concatenate([feats, encode(True).features])
         out = self._network(np.ascontiguousarray(feats, np.float32))
         raw = codec.destandardize(out.astype(np.float64))
         if flip_test:

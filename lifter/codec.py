@@ -118,6 +118,13 @@ class PoseCodec:
         return cls(config, target_mean=np.asarray(state["target_mean"]), target_std=np.asarray(state["target_std"]))
 
     # -- inputs ---------------------------------------------------------------------------------------
+    @property
+    def feature_key(self) -> tuple[Any, ...]:
+        """Everything :meth:`encode` depends on besides its arguments: two codecs with equal keys give equal
+        encodings of the same input (an ensemble encodes once for its networks that share one)."""
+        c = self.config
+        return (c.input_space, c.mode, c.scale_definition, c.conditioning, self.reference_focal)
+
     def input_space(self, keypoints: A, principal_point: Any, focal: Any) -> tuple[A, A, A]:
         """Keypoints ``(..., 17, 2)`` in the input space, relative to its principal point; the input camera's
         focal ``alpha_in`` ``(...)`` and the real ``alpha`` ``(...)`` px."""

@@ -91,6 +91,7 @@ a little differently, so treat its errors as indicative. The 84 frames are 5 sub
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -200,7 +201,12 @@ def mirror_permutation(name: str) -> np.ndarray:
     after the image flip ``x -> W - x``. Derived from the joint names (``l_`` / ``r_`` prefixes, ``_l`` / ``_r``
     suffixes, the subject's sides); joints without a side map to themselves. For ``"h36m17"`` it equals
     :data:`lifter.skeleton.FLIP_PERMUTATION`."""
-    names = get_format(name).joint_names
+    return _mirror_permutation(name, tuple(get_format(name).joint_names))
+
+
+@functools.lru_cache(maxsize=64)
+def _mirror_permutation(name: str, names: tuple[str, ...]) -> np.ndarray:
+    """:func:`mirror_permutation` of a format's joint names, computed once per format (read-only)."""
     index = {n: i for i, n in enumerate(names)}
 
     def other(n: str) -> str:
@@ -215,7 +221,9 @@ def mirror_permutation(name: str) -> np.ndarray:
     missing = [n for n in names if other(n) not in index]
     if missing:
         raise PoseLifterError(f"keypoint format {name!r}: no mirror counterpart for {missing}")
-    return np.array([index[other(n)] for n in names], np.intp)
+    perm = np.array([index[other(n)] for n in names], np.intp)
+    perm.setflags(write=False)
+    return perm
 
 
 def keypoint_formats() -> tuple[str, ...]:

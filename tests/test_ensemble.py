@@ -54,6 +54,29 @@ def test_ensemble_is_the_mean_of_its_members():
                                atol=1e-6)
 
 
+def test_members_share_encodings_only_when_their_codecs_encode_alike(monkeypatch):
+    """Networks whose codecs have the same :attr:`PoseCodec.feature_key` are fed one encoding (and one of the
+    mirror image); a member with other features gets its own, and the lift is still the mean of the members."""
+    a, b, c = _member(4), _member(5, symmetry="mirror"), _member(6, scale_definition="repo")
+    assert a.codec.feature_key == b.codec.feature_key != c.codec.feature_key
+    ens = Lifter(a.net, a.codec, name="ens", flip_test=True, ensemble=[b, c])
+    kp = _poses(3)
+    calls: list[tuple] = []
+    real = PoseCodec.encode
+
+    def counting(self, keypoints, **kw):
+        calls.append(self.feature_key)
+        return real(self, keypoints, **kw)
+
+    monkeypatch.setattr(PoseCodec, "encode", counting)
+    re = ens.lift(kp, focal=F, principal_point=PP)
+    # a: plain + mirror image; b reuses a's plain one; c (flip test on) its own two
+    assert calls == [a.codec.feature_key] * 2 + [c.codec.feature_key] * 2
+    members = [x.lift(kp, focal=F, principal_point=PP) for x in (a, b, c)]
+    np.testing.assert_allclose(re.root, sum(r.root for r in members) / 3, atol=1e-6)
+    np.testing.assert_allclose(re.relative, sum(r.relative for r in members) / 3, atol=1e-6)
+
+
 def test_ensemble_keeps_the_symmetries_of_its_members():
     a, b = _member(2), _member(3, symmetry="mirror")
     ens = Lifter(a.net, a.codec, flip_test=True, ensemble=[b])
