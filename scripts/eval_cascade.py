@@ -177,6 +177,8 @@ def pose_metrics(pred_abs: np.ndarray, gt_abs: np.ndarray) -> dict[str, Any]:
         "mrpe": round(float(mrpe.mean()), 1),
         "mrpe_median": round(float(np.median(mrpe)), 1),
         "mrpe_xyz": np.round(np.abs(pred_abs[:, 0] - gt_abs[:, 0]).mean(0), 1).tolist(),
+        # mean signed root-depth error (+: placed too far): a bias the absolute errors above do not show
+        "root_z_bias": round(float((pred_abs[:, 0, 2] - gt_abs[:, 0, 2]).mean()), 1),
         "per_joint_mpjpe": {n: round(float(v), 1) for n, v in zip(JOINT_NAMES, je.mean(0))},
     }
 
@@ -237,7 +239,9 @@ def quick_table(
     L = [
         f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm",
         "",
-        "| lifter | BlazePose 2D: MPJPE / PA / MRPE | SH 2D (same frames) | GT 2D (same frames, clean) |",
+        "MPJPE / PA-MPJPE / MRPE (mean signed root-depth error, + = too far)",
+        "",
+        "| lifter | BlazePose 2D: MPJPE / PA / MRPE (Z bias) | SH 2D (same frames) | GT 2D (same frames, clean) |",
         "|---|---|---|---|",
     ]
     for ref in refs:
@@ -250,7 +254,7 @@ def quick_table(
         )
         for kp, src in inputs:
             m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src).absolute, gt3d[ok])
-            cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f}")
+            cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['root_z_bias']:+.0f})")
         L.append(f"| {ref if ref.endswith('.pt') else lf.name} | " + " | ".join(cells) + " |")
     return "\n".join(L)
 
@@ -534,14 +538,14 @@ def markdown(r: dict[str, Any]) -> str:
         f"Cascade on the {r['frames']} H36M demo frames (BlazePose found a person in {r['frames_with_detection']}; "
         f"lifter `{r['lifter']['name']}`; camera intrinsics of each frame unless stated):",
         "",
-        "| 2D input | frames | MPJPE | PA-MPJPE | MRPE | MRPE x / y / z |",
-        "|---|---|---|---|---|---|",
+        "| 2D input | frames | MPJPE | PA-MPJPE | MRPE | MRPE x / y / z | Z bias (+: too far) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for name, m in r["lifting"].items():
         L.append(
             f"| {name} | {m['n']} | {m['mpjpe']:.1f} | {m['pa_mpjpe']:.1f} | {m['mrpe']:.1f} | "
             + " / ".join(f"{v:.0f}" for v in m["mrpe_xyz"])
-            + " |"
+            + f" | {m['root_z_bias']:+.0f} |"
         )
     L += [
         "",
