@@ -166,24 +166,34 @@ class Lifter:
     @classmethod
     def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None,
               clean: Checkpoint | None = None, ensemble: Sequence[Checkpoint] = ()) -> Lifter:
-        inference = ck.meta.get("inference")
-        if flip_test is None:
-            flip_test = bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
+        """flip_test: the model's default for every network (the registry's ``flip_test``); None: each network's
+        own checkpoint default (``meta["inference"]["flip_test"]``, else off)."""
+
+        def flip(c: Checkpoint) -> bool:
+            if flip_test is not None:
+                return bool(flip_test)
+            inference = c.meta.get("inference")
+            return bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
+
         clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)", meta=clean.meta,
-                                                       train_config=clean.train_config, flip_test=flip_test)
+                                                       train_config=clean.train_config, flip_test=flip(clean))
         members = [cls(m.net, m.codec, name=f"{name} (member {i + 2})", meta=m.meta, train_config=m.train_config,
-                       flip_test=flip_test) for i, m in enumerate(ensemble)]
-        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip_test,
+                       flip_test=flip(m)) for i, m in enumerate(ensemble)]
+        lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip(ck),
                      clean=clean_lifter, ensemble=members)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
     def from_checkpoint(cls, path: str | os.PathLike[str], *, name: str | None = None, quantize: bool = False,
-                        clean: str | os.PathLike[str] | None = None) -> Lifter:
+                        clean: str | os.PathLike[str] | None = None,
+                        ensemble: Sequence[str | os.PathLike[str]] = ()) -> Lifter:
         """Load your own checkpoint file (``weights_only=True``; :mod:`lifter.checkpoint`). ``clean``: a second
-        checkpoint used for ``source="clean"`` (the first then serves detected 2D)."""
+        checkpoint used for ``source="clean"`` (the first then serves detected 2D). ``ensemble``: more checkpoints
+        for detected 2D, averaged with the first (:attr:`ensemble`). Each network keeps its checkpoint's
+        flip-test default."""
         return cls._from(load_checkpoint(path), name or Path(path).stem, quantize,
-                         clean=None if clean is None else load_checkpoint(clean))
+                         clean=None if clean is None else load_checkpoint(clean),
+                         ensemble=[load_checkpoint(m) for m in ensemble])
 
     @classmethod
     def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> Lifter:
@@ -369,4 +379,5 @@ class Lifter:
         c = self.config
         return (f"Lifter(name={self.name!r}, input_space={c.input_space!r}, depth_target={c.depth_target!r}, "
                 f"conditioning={c.conditioning!r}, width={c.width}, flip_test={self.flip_test}"
-                + (", separate clean-2D network" if self.clean is not None else "") + ")")
+                + (", separate clean-2D network" if self.clean is not None else "")
+                + (f", ensemble of {1 + len(self.ensemble)} networks" if self.ensemble else "") + ")")

@@ -102,9 +102,9 @@ FLIP_SAME_IOU: Final[float] = 0.5
 their boxes overlap by at least this intersection over union."""
 FLIP_AGREE: Final[float] = 0.1
 """``flip_test``: a person's detections in the image and in its mirror image are averaged when their median
-landmark distance is below this share of the box diagonal and no left/right pair of landmarks is crossed
-(:data:`FLIP_CROSSED`); otherwise (e.g. a limb lost, or left and right confused in one of them) the one with the
-higher mean visibility is kept."""
+landmark distance is below this share of the larger of their two box diagonals and no left/right pair of
+landmarks is crossed (:data:`FLIP_CROSSED`); otherwise (e.g. a limb lost, or left and right confused in one of
+them) the one with the higher mean visibility is kept (both averaged on an exact tie)."""
 FLIP_CROSSED: Final[float] = 0.02
 """``flip_test``: a left/right landmark pair is crossed between two detections when pairing left with right
 brings them closer, by more than this share of the box diagonal, than pairing left with left and right with
@@ -716,8 +716,9 @@ class BlazePoseEstimator:
     two-person photos; :meth:`detect_near` searches only around given boxes (video tracking).
     flip_test (default True): :meth:`detect` also searches the mirror image and combines each person found with
     their mirror-image detection (flipped back, left and right swapped; the same person: boxes overlapping by
-    :data:`FLIP_SAME_IOU`): averaged where the two agree (:data:`FLIP_AGREE`), else the one with the higher mean
-    visibility; a person not found in the mirror image is kept as found. It costs a second search and lowers the
+    :data:`FLIP_SAME_IOU`; pairs are formed closest first, each detection in one pair): averaged where the two
+    agree (:data:`FLIP_AGREE`), else the one with the higher mean visibility; a person not found in the mirror
+    image is kept as found. Every rule is symmetric in the two searches. It costs a second search and lowers the
     2D error on the Human3.6M demo photos (README, "Photos"); :meth:`detect_near` (video tracking between full
     searches) stays one pass. For a person both searches find, :meth:`detect` on the mirrored image gives the
     mirrored landmarks (a person only the mirror-image search finds is not added: not for them).
@@ -837,21 +838,29 @@ class BlazePoseEstimator:
             return found
         W, H = img.shape[1], img.shape[0]
         mirrored = [self._flipped_back(d, W, H) for d in self._search(np.ascontiguousarray(img[:, ::-1]))]
+        # pairs by median landmark distance, closest first, each detection in one pair: every rule below is
+        # symmetric in the two searches, so the mirrored image pairs and combines the same people
+        dist = {(i, j): float(np.median(np.linalg.norm(d.keypoints - e.keypoints, axis=-1)))
+                for i, d in enumerate(found) for j, e in enumerate(mirrored)
+                if _iou(d.bbox_xywh, e.bbox_xywh) >= FLIP_SAME_IOU}
+        partner: dict[int, int] = {}
+        for i, j in sorted(dist, key=dist.__getitem__):
+            if i not in partner and j not in partner.values():
+                partner[i] = j
         out = []
-        for d in found:
-            same = [i for i, e in enumerate(mirrored) if _iou(d.bbox_xywh, e.bbox_xywh) >= FLIP_SAME_IOU]
-            if not same:
-                out.append(d)
+        for i, d in enumerate(found):
+            if i not in partner:
+                out.append(d)  # not found in the mirror image: kept as found
                 continue
-            diag = max(math.hypot(*d.bbox_xywh[2:]), 1.0)
-            dist = [float(np.median(np.linalg.norm(d.keypoints - mirrored[i].keypoints, axis=-1))) for i in same]
-            e = mirrored.pop(same[int(np.argmin(dist))])  # each mirror-image detection serves one person
-            if min(dist) < FLIP_AGREE * diag and not _crossed(d, e, diag):
+            e = mirrored[partner[i]]
+            diag = max(math.hypot(*d.bbox_xywh[2:]), math.hypot(*e.bbox_xywh[2:]), 1.0)
+            vd, ve = float(d.scores.mean()), float(e.scores.mean())
+            if (dist[i, partner[i]] < FLIP_AGREE * diag and not _crossed(d, e, diag)) or vd == ve:
                 k = 0.5 * (d.keypoints + e.keypoints)
                 out.append(Detection(keypoints=k, scores=0.5 * (d.scores + e.scores),
                                      bbox_xywh=bbox_of(np.clip(k, 0.0, [W, H])), keypoint_format=d.keypoint_format))
             else:
-                out.append(d if float(d.scores.mean()) >= float(e.scores.mean()) else e)
+                out.append(d if vd > ve else e)
         return sorted(out, key=lambda d: d.area, reverse=True)
 
     @staticmethod

@@ -116,7 +116,9 @@ class MirrorCoupledLinear(nn.Module):
     swapping the streams swaps the outputs, so the layer commutes with the mirror for any ``U`` and ``V``
     (``W x W`` each). It is ``[[U + V, U - V], [U - V, U + V]]`` on the stacked streams, computed as two
     ``W x W`` products instead of one ``2W x 2W``: half the weights and multiply-adds of a width-2W layer.
-    Initialized so that each output's variance matches PyTorch's default ``nn.Linear(2W, W)``.
+    Initialized so that the weights ``U + V`` and ``U - V`` have the variance of PyTorch's default
+    ``nn.Linear(2W, W)`` weights; the bias is drawn from the same ``U(-0.5 / sqrt(W), 0.5 / sqrt(W))`` as ``U``
+    and ``V`` (half the variance of that layer's bias).
     """
 
     def __init__(self, width: int) -> None:
@@ -246,14 +248,18 @@ class PoseLifterNet(nn.Module):
 
     def set_target_statistics(self, target_mean: Any, target_std: Any) -> None:
         """Set the output mirror of a ``symmetry="mirror"`` network from the codec's target statistics
-        ``(49,)`` mm (None: 0 and 1). No-op for other networks, whose outputs do not depend on them."""
+        ``(49,)`` mm (None: 0 and 1). No-op for other networks, whose outputs do not depend on them, and when the
+        buffers hold these values already. Changed buffers are replaced, not written in place (so a network
+        made under ``torch.inference_mode()`` can be given new statistics outside it)."""
         if self.config.symmetry != "mirror":
             return
-        perm, scale, offset = output_mirror(target_mean, target_std)
-        with torch.no_grad():
-            self.out_perm.copy_(torch.from_numpy(perm))
-            self.out_scale.copy_(torch.from_numpy(scale))
-            self.out_offset.copy_(torch.from_numpy(offset))
+        for name, value in zip(("out_perm", "out_scale", "out_offset"), output_mirror(target_mean, target_std)):
+            old = getattr(self, name)
+            if old.is_meta:
+                continue  # a network being built for a checkpoint: loading it gives the values
+            new = torch.from_numpy(value).to(device=old.device, dtype=old.dtype)
+            if not torch.equal(old, new):
+                setattr(self, name, new)
 
     def forward(self, features: torch.Tensor) -> torch.Tensor:
         dev = features.device.type
@@ -427,7 +433,8 @@ def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndar
 FOLDED_ROWS: Final[int] = 512
 """:func:`forward_folded` runs a batch in slices of this many activation rows (a mirror network's two
 streams count as two: 256 poses): the activations of a slice stay in cache between the layers, and the
-memory a batch needs does not grow with it (``benchmarks/bench_lift.py``, ``benchmarks/bench_memory.py``)."""
+hidden activations take the same memory for any batch (the features and outputs still grow with it;
+:meth:`lifter.Lifter.lift` bounds those by its chunks; ``benchmarks/bench_lift.py``, ``benchmarks/bench_memory.py``)."""
 
 def _fold(net: PoseLifterNet) -> list[Any] | None:
     """The tensors :func:`forward_folded` uses: ``[stem (W, b), blocks, head (W, b), mirror maps]``, each

@@ -52,10 +52,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import lifter.detect as detect_module  # noqa: E402
+import lifter.keypoints as keypoints_module  # noqa: E402
 from lifter.api import Lifter  # noqa: E402
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
-from lifter.detect import BlazePoseEstimator, ensure_pose_task, get_estimator, load_image  # noqa: E402
+from lifter.detect import ensure_pose_task, get_estimator, load_image  # noqa: E402
 from lifter.keypoints import BLAZEPOSE33_JOINT_NAMES, COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES, convert  # noqa: E402
 from lifter.metrics import joint_errors, mpjpe, pa_mpjpe, root_errors  # noqa: E402
 from lifter.noise import ErrorModel, fit_error_model, mixture_loglik, normalized_errors  # noqa: E402
@@ -190,8 +192,9 @@ def detect_demo(
     ``scores (N, 33)``, ``people (N,)`` found, per-image ``t_load`` / ``t_det`` seconds. Cached in
     ``cache_dir`` (git-ignored runs/cache) under the model bundle's sha256 and the image list."""
     task = ensure_pose_task(log=print)
-    # the cache key: model bundle, images, search settings and the code that selects people
-    setting = f"|{max_people}|{inspect.getsource(BlazePoseEstimator)}"
+    # the cache key: model bundle, images, search settings and the code that finds and selects people (the whole
+    # detector module, with its thresholds and helpers, and the keypoint formats' mirror maps)
+    setting = f"|{max_people}|{inspect.getsource(detect_module)}|{inspect.getsource(keypoints_module)}"
     key = hashlib.sha256(task.read_bytes() + "\n".join(map(str, images)).encode() + setting.encode())
     cache = cache_dir / f"blazepose_demo_{key.hexdigest()[:16]}.npz"
     if cache.is_file() and not redetect:

@@ -76,34 +76,21 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(2)
     root = Path(str(assets_root()))
-    dst = root / "weights" / f"{args.name}.pt"
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(args.checkpoint, dst)
-    for ext in (".curve.json", ".curve.png"):
-        src = args.checkpoint.with_suffix(ext)
-        if src.is_file():
-            shutil.copyfile(src, dst.with_suffix(ext))
-    dst_clean = None
-    if args.clean is not None:
-        dst_clean = root / "weights" / f"{args.name}_clean.pt"
-        shutil.copyfile(args.clean, dst_clean)
+    weights = root / "weights"
+    weights.mkdir(parents=True, exist_ok=True)
+
+    def ship(src: Path, dst: Path) -> Path:
+        """Copy a checkpoint and its learning curve (``.curve.json`` / ``.curve.png`` beside it, if any)."""
+        shutil.copyfile(src, dst)
         for ext in (".curve.json", ".curve.png"):
-            src = args.clean.with_suffix(ext)
-            if src.is_file():
-                shutil.copyfile(src, dst_clean.with_suffix(ext))
-    dst_members = []
-    for i, member in enumerate(args.ensemble):
-        dst_m = root / "weights" / f"{args.name}_member{i + 2}.pt"
-        shutil.copyfile(member, dst_m)
-        for ext in (".curve.json", ".curve.png"):
-            src = member.with_suffix(ext)
-            if src.is_file():
-                shutil.copyfile(src, dst_m.with_suffix(ext))
-        dst_members.append(dst_m)
-    lifter = Lifter.from_checkpoint(dst, name=args.name, clean=dst_clean)
-    if dst_members:
-        lifter.ensemble = tuple(Lifter.from_checkpoint(m, name=f"{args.name} (member {i + 2})")
-                                for i, m in enumerate(dst_members))
+            if src.with_suffix(ext).is_file():
+                shutil.copyfile(src.with_suffix(ext), dst.with_suffix(ext))
+        return dst
+
+    dst = ship(args.checkpoint, weights / f"{args.name}.pt")
+    dst_clean = None if args.clean is None else ship(args.clean, weights / f"{args.name}_clean.pt")
+    dst_members = [ship(m, weights / f"{args.name}_member{i + 2}.pt") for i, m in enumerate(args.ensemble)]
+    lifter = Lifter.from_checkpoint(dst, name=args.name, clean=dst_clean, ensemble=dst_members)
     if args.flip_test:
         lifter.flip_test = True
         if lifter.clean is not None:

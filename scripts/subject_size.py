@@ -33,6 +33,8 @@ def main() -> int:
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument("--stride", type=int, default=200)
     args = ap.parse_args()
+    if args.stride < 1:
+        ap.error(f"--stride must be a positive number of frames, got {args.stride}")
     data = H36M(args.h36m or default_h36m_dir())
     sizes = {s: subject_size(data, s, stride=args.stride) for s in TRAIN_SUBJECTS + TEST_SUBJECTS}
     ref = float(np.mean([sizes[s][0] for s in TRAIN_SUBJECTS]))

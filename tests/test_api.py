@@ -445,3 +445,17 @@ def test_a_separate_clean_network_serves_source_clean(tmp_path, keypoints):
     assert q.clean is not None and "int8" in q.clean.name and "separate clean-2D network" in repr(loaded)
     with pytest.raises(PoseLifterError, match="cannot have a clean lifter"):
         Lifter(det.net, det.codec, clean=pair)
+
+
+def test_checkpoint_ensemble_members_keep_their_own_flip_test_default(tmp_path, keypoints):
+    """``from_checkpoint(..., ensemble=[...])`` loads more networks for detected 2D, averaged with the first;
+    each network takes its flip-test default from its own checkpoint (``meta["inference"]``)."""
+    a, b = tiny_lifter(32, seed=3, name="a"), tiny_lifter(32, seed=4, name="b")
+    pa = save_checkpoint(tmp_path / "a.pt", a.net, a.codec)
+    pb = save_checkpoint(tmp_path / "b.pt", b.net, b.codec, meta={"inference": {"flip_test": True}})
+    loaded = Lifter.from_checkpoint(pa, ensemble=[pb])
+    assert not loaded.flip_test and [m.flip_test for m in loaded.ensemble] == [True]
+    kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
+    want = 0.5 * (a.lift(keypoints, **kw).absolute + b.lift(keypoints, flip_test=True, **kw).absolute)
+    np.testing.assert_allclose(loaded.lift(keypoints, **kw).absolute, want, atol=1e-3)
+    assert "ensemble" in repr(loaded)

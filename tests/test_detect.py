@@ -386,6 +386,46 @@ def test_flip_test_never_borrows_another_person(rng):
     np.testing.assert_array_equal(out.keypoints, a)
 
 
+def test_flip_test_rules_are_symmetric_in_the_two_searches():
+    """For people both searches find, detecting the mirrored image gives the mirrored people: the agreement
+    threshold, the pairing and the visibility choice treat the image's and the mirror image's detections alike.
+    Many cases lie near the threshold: each mirror-image detection is stretched, so that its median distance to
+    the image's detection can lie between 10 % of one box diagonal and 10 % of the other's."""
+    from lifter.detect import FLIP_AGREE, FLIP_SAME_IOU, BlazePoseEstimator, _iou
+
+    W = 600
+    swap = mirror_permutation("blazepose33")
+
+    def in_mirror(k: np.ndarray) -> np.ndarray:
+        m = k[swap].copy()
+        m[:, 0] = W - m[:, 0]
+        return m
+
+    near = 0
+    for seed in range(60):
+        r = np.random.default_rng(seed)
+        plain, mirror = [], []
+        for x0 in r.permutation([20.0, 220.0, 440.0])[: r.integers(1, 4)]:
+            a = np.column_stack([r.uniform(x0, x0 + 120, 33), r.uniform(100, 300, 33)])
+            b = a.copy()
+            b[:, 1] = 200 + (a[:, 1] - 200) * r.uniform(1.2, 1.6)  # taller: a larger box (inside the image)
+            b[:, 0] += r.uniform(-10, 10)
+            da, db = _det(a, r.choice([0.5, 0.9])), _det(b, r.choice([0.5, 0.9]))
+            assert _iou(da.bbox_xywh, db.bbox_xywh) >= FLIP_SAME_IOU  # the same person for the flip test
+            dist = float(np.median(np.linalg.norm(a - b, axis=-1)))
+            diags = sorted(float(np.hypot(*d.bbox_xywh[2:])) for d in (da, db))
+            near += FLIP_AGREE * diags[0] <= dist < FLIP_AGREE * diags[1]
+            plain.append(da)
+            mirror.append(_det(in_mirror(b), float(db.scores[0])))
+        est, img = _scripted_blazepose(r, plain, mirror)
+        out = BlazePoseEstimator.detect(est, img)
+        out_m = BlazePoseEstimator.detect(est, np.ascontiguousarray(img[:, ::-1]))
+        got = sorted(d.keypoints.round(6).tolist() for d in out)
+        want = sorted(in_mirror(d.keypoints).round(6).tolist() for d in out_m)
+        assert got == want, seed
+    assert near >= 5, near  # the threshold's asymmetric band was exercised
+
+
 def test_blazepose_flip_test_is_mirror_equivariant():
     """With the flip test, detecting the mirror image gives the mirrored detection (both passes are the same
     two searches); one pass alone does not."""

@@ -183,11 +183,18 @@ def test_row_blocked_products_equal_row_by_row(kp, monkeypatch, block_bytes):
     np.testing.assert_allclose(both, rows, rtol=1e-6, atol=1e-6)
 
 
-def test_net_built_under_inference_mode(kp):
+@pytest.mark.parametrize("symmetry", ["none", "mirror"])
+def test_net_built_under_inference_mode(kp, symmetry):
+    """A network made and loaded under ``torch.inference_mode()`` (inference tensors) can be wrapped outside it;
+    a mirror network's output mirror is then set from the codec's statistics (buffers replaced, not written)."""
     with torch.inference_mode():
-        net = PoseLifterNet(ModelConfig(width=64))
-        net.load_state_dict(_net().state_dict())
+        net = PoseLifterNet(ModelConfig(width=64, symmetry=symmetry))
+        net.load_state_dict(_net(symmetry=symmetry).state_dict())
     lifter = _lifter(net, name="inference")
+    if symmetry == "mirror":
+        assert lifter.codec.target_std.std() > 0 and torch.equal(
+            net.out_scale, torch.from_numpy(lifter_model.output_mirror(lifter.codec.target_mean,
+                                                                       lifter.codec.target_std)[1]).float())
     _assert_lift_matches_module(lifter, kp[0])
     _assert_lift_matches_module(lifter, kp[:4])
 
