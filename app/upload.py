@@ -40,6 +40,7 @@ from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
+    INSTALL_DETECT,
     ExifCamera,
     LoadedImage,
     MissingDependencyError,
@@ -69,7 +70,6 @@ MAX_FOCAL_PX: Final[float] = 1e6
 """Focal lengths (px) outside this range in a keypoint file are refused."""
 MAX_PEOPLE: Final[int] = 6
 """People looked for in an uploaded photo / kept from a keypoint file (the largest first)."""
-INSTALL_HINT: Final[str] = 'pip install -e ".[detect]"'
 DEFAULT_DETECTOR: Final[str] = "blazepose"
 
 
@@ -310,7 +310,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
 
 def missing_detector_message(name: str, exc: Exception) -> str:
     return (f"{safe_name(name)}: cannot find 2D joints in a photo: the MediaPipe detector is not installed "
-            f"(install it with: {INSTALL_HINT}; mediapipe==0.10.21 needs numpy<2, so use a separate environment). "
+            f"(install it with: {INSTALL_DETECT}). "
             "Uploading a keypoint JSON file still works (e.g. {\"keypoints\": [[x, y], ...], \"format\": \"coco17\", "
             "\"image_size\": [W, H]}); one uploaded now is drawn on this photo when its image_size matches. "
             f"[{type(exc).__name__}]")

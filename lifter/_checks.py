@@ -38,6 +38,8 @@ def _real_array(x: Any, *, name: str, what: str) -> np.ndarray:
         raise PoseLifterError(f"{name}: complex numbers are not pixel coordinates; pass real values")
     if raw.dtype == bool:
         raise PoseLifterError(f"{name}: booleans are not pixel coordinates; pass numbers")
+    if raw.dtype.kind in "USO" and any(isinstance(v, (str, bytes)) for v in np.ravel(raw)[:1000]):
+        raise PoseLifterError(f"{name}: strings are not numbers; pass numbers (e.g. float(value))")
     try:
         return np.asarray(raw, dtype=np.float64)
     except (TypeError, ValueError, RuntimeError) as exc:
@@ -64,15 +66,18 @@ def check_finite(arr: np.ndarray, *, name: str) -> None:
         raise PoseLifterError(f"{name}: contains {bad} NaN/inf value(s); all values must be finite")
 
 
-def as_pair(x: Any, *, name: str, positive: bool = False) -> np.ndarray:
-    """Return a scalar or a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``."""
-    arr = _real_array(x, name=name, what="a number or pair")
-    if arr.ndim == 0:
+def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) -> np.ndarray:
+    """Return a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``. scalar: a scalar (or a
+    last axis of 1) means the same value twice (a focal length ``fx = fy``); otherwise it is refused (a principal
+    point or image size needs both coordinates)."""
+    arr = _real_array(x, name=name, what="a number or pair" if scalar else "a pair")
+    if scalar and arr.ndim == 0:
         arr = np.stack([arr, arr])
-    elif arr.shape[-1] == 1:
+    elif scalar and arr.shape[-1] == 1:
         arr = np.concatenate([arr, arr], axis=-1)
-    if arr.shape[-1] != 2:
-        raise PoseLifterError(f"{name}: expected a scalar or shape (..., 2), got {tuple(arr.shape)}")
+    if arr.ndim == 0 or arr.shape[-1] != 2:
+        expected = "a scalar or shape (..., 2)" if scalar else "a pair (x, y) or shape (..., 2)"
+        raise PoseLifterError(f"{name}: expected {expected}, got {arr.tolist() if arr.size <= 4 else tuple(arr.shape)}")
     check_finite(arr, name=name)
     if positive and np.any(arr <= 0):
         raise PoseLifterError(f"{name}: must be > 0, got {arr.tolist() if arr.size <= 8 else 'non-positive values'}")

@@ -55,6 +55,9 @@ MIN_POSE_SCALE_PX: Final[float] = 2.0
 MAX_ABS_PX: Final[float] = 1e6
 """Keypoints, principal point and focal length beyond this magnitude (px) are refused: float32 overflow
 territory, and never image pixels."""
+MIN_FOCAL_PX: Final[float] = 10.0
+"""Smallest focal length :meth:`Lifter.lift` accepts (px). A real camera's is hundreds to thousands of pixels
+(``image width / (2 tan(horizontal FOV / 2))``); a few pixels is a focal length in mm (or normalized) by mistake."""
 
 FocalSource = Literal["given", "default-fov", "reference"]
 
@@ -288,7 +291,7 @@ class Lifter:
                 focal, focal_source = focal_from_fov(wh, fov_deg=DEFAULT_DIAGONAL_FOV_DEG), "default-fov"
             else:
                 focal, focal_source = CANONICAL_FOCAL, "reference"
-        f = _broadcast(as_pair(focal, name="focal", positive=True), lead, name="focal")
+        f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True), lead, name="focal")
         for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
             if arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
                 raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "
@@ -303,6 +306,11 @@ class Lifter:
                 f"2D pose scale {float(scale.min()):.3g} px{_where(scale < MIN_POSE_SCALE_PX)} is too small "
                 f"(< {MIN_POSE_SCALE_PX} px): keypoints must be in image pixels (normalized [0, 1] coordinates? "
                 "multiply by the image size)")
+        if f.size and float(f.min()) < MIN_FOCAL_PX:
+            raise PoseLifterError(
+                f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
+                "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to "
+                "assume a default field of view")
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
         flat_pp = pp.reshape(-1, 2)

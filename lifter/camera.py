@@ -42,14 +42,14 @@ DEFAULT_DIAGONAL_FOV_DEG: float = 65.0
 
 
 
-def _last2(x: ArrayLike, *, name: str, positive: bool = False) -> np.ndarray:
-    """A ``(..., 2)`` pair expanded to broadcast against ``(..., J, 2)``."""
-    return as_pair(x, name=name, positive=positive)[..., None, :]
+def _last2(x: ArrayLike, *, name: str, positive: bool = False, scalar: bool = False) -> np.ndarray:
+    """A ``(..., 2)`` pair (:func:`as_pair`) expanded to broadcast against ``(..., J, 2)``."""
+    return as_pair(x, name=name, positive=positive, scalar=scalar)[..., None, :]
 
 
 def focal_alpha(focal: ArrayLike) -> np.ndarray:
     """``alpha = sqrt(fx * fy)`` for a scalar or ``(..., 2)`` focal length (px). Returns ``(...)``."""
-    f = as_pair(focal, name="focal", positive=True)
+    f = as_pair(focal, name="focal", positive=True, scalar=True)
     return np.sqrt(f[..., 0] * f[..., 1])
 
 
@@ -105,7 +105,8 @@ def project(
         k_ = np.zeros(3) if k is None else np.asarray(k, np.float64)[..., None, :]
         p_ = np.zeros(2) if p is None else np.asarray(p, np.float64)[..., None, :]
         xy = distort(xy, k_, p_)
-    return xy * _last2(focal, name="focal", positive=True) + _last2(principal_point, name="principal_point")
+    f = _last2(focal, name="focal", positive=True, scalar=True)
+    return xy * f + _last2(principal_point, name="principal_point")
 
 
 def _pair(x: ArrayT, like: Any) -> ArrayT:
@@ -147,7 +148,7 @@ def backproject(uv: ArrayLike, depth: ArrayLike, *, focal: ArrayLike, principal_
     Inverse of :func:`project` without distortion: ``X = (u - cx) Z / fx``, ``Y = (v - cy) Z / fy``.
     """
     return backproject_generic(np.asarray(uv, np.float64), np.asarray(depth, np.float64),
-                               as_pair(focal, name="focal", positive=True),
+                               as_pair(focal, name="focal", positive=True, scalar=True),
                                as_pair(principal_point, name="principal_point"))
 
 

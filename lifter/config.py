@@ -287,8 +287,11 @@ def add_config_arguments(parser: argparse.ArgumentParser) -> None:
             groups[section] = parser.add_argument_group(title)
         default = f.default if f.default is not MISSING else f.default_factory()  # type: ignore[misc]
         help_text = f.metadata.get("help") or _model_help(f.name)
+        kw = _parser_type(t, _flag(f.name))
+        if "type" in kw and "choices" not in kw:
+            kw["metavar"] = f.name.upper()  # not the internal dest (cfg__section__name)
         groups[section].add_argument(_flag(f.name), dest=f"cfg__{section or ''}__{f.name}", default=None,
-                                     help=f"{help_text} (default: {default})", **_parser_type(t, _flag(f.name)))
+                                     help=f"{help_text} (default: {default})", **kw)
 
 
 def _model_help(name: str) -> str:

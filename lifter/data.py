@@ -134,7 +134,7 @@ class H36M:
         if not (self.root / "poses3d_world_17j_mm.npz").is_file():
             raise FileNotFoundError(
                 f"Human3.6M data not found at {self.root} (expected poses3d_world_17j_mm.npz there); "
-                "pass the folder explicitly or set POSELIFTER_H36M"
+                "pass the folder (--h36m DIR on the command line, H36M(root) in Python) or set POSELIFTER_H36M"
             )
         with open(self.root / "cameras.json") as f:
             self._cameras_raw = json.load(f)["cameras"]

@@ -15,23 +15,18 @@ A 2D estimator is any object with the :class:`PoseEstimator2D` protocol: a ``nam
 :func:`register_estimator`; :func:`get_estimator` builds one by name. Built in: ``"blazepose"``
 (:class:`BlazePoseEstimator`).
 
-MediaPipe BlazePose is an optional extra (``pip install -e ".[detect]"``, i.e. ``mediapipe==0.10.21``).
-It is imported lazily; without it :class:`BlazePoseEstimator` raises :class:`MissingDependencyError`
-with the install command. The legacy ``mediapipe.solutions.pose`` graph is used with
-``model_complexity=1``: the wheel ships ``pose_detection.tflite`` and ``pose_landmark_full.tflite``
-only, so complexity 0 ("lite") and 2 ("heavy") would try to download weights at run time and fail
-offline.
+MediaPipe BlazePose is an optional extra (:data:`INSTALL_DETECT`; ``mediapipe==0.10.31``, the Tasks API's
+``PoseLandmarker``). It is imported lazily; without it :class:`BlazePoseEstimator` raises
+:class:`MissingDependencyError` with the install command. Its model bundle is built once from the Apache-2.0
+tflite files of the 0.10.21 wheel (full landmark model; :func:`ensure_pose_task`), so nothing is downloaded at
+run time.
 
 Several people
 --------------
-BlazePose's legacy graph returns one person. To notice several, :class:`BlazePoseEstimator` masks the
-person it found (their landmark box, grown by 15 % per side, filled with the image's mean colour) and
-runs again, up to ``max_people`` times; a new detection whose box centre falls inside an earlier
-person's grown box is a remnant of that person and is dropped, and so is a further "person" whose
-mean landmark visibility is below :data:`MIN_EXTRA_VISIBILITY` or with fewer than half of its
-landmarks inside the image (on the demo frames the second pass otherwise hallucinates a half-visible
-person at the image border in 4 of 84 frames). :func:`detect_pose` then takes the largest person
-(area of the landmark box clipped to the image) and says so in its ``warnings``.
+BlazePose's landmark model sees one person per region. :class:`BlazePoseEstimator` searches the whole image and
+overlapping windows by default (``multi="windows"``; also ``"mask"`` and ``"tasks"``; its docstring has the
+rules), and with its flip test (default) also the mirror image. :func:`detect_pose` then takes the largest
+person (area of the landmark box clipped to the image) and says so in its ``warnings``.
 
 Focal length from EXIF
 ----------------------
@@ -100,6 +95,12 @@ box diagonal, or when each one's pelvis lies in the other's box."""
 FLIP_SAME_IOU: Final[float] = 0.5
 """``flip_test``: a detection in the mirror image (flipped back) is the same person as one in the image when
 their boxes overlap by at least this intersection over union."""
+INSTALL_DETECT: Final[str] = 'pip install "poselifter[detect]" (in a source checkout: pip install -e ".[detect]")'
+"""How to install the 2D detector (MediaPipe BlazePose), quoted in every message about it."""
+
+MIN_WINDOW_PX: Final[int] = 32
+"""``multi="windows"``: no window searches when a window would be narrower than this (px)."""
+
 FLIP_AGREE: Final[float] = 0.1
 """``flip_test``: a person's detections in the image and in its mirror image are averaged when their median
 landmark distance is below this share of the larger of their two box diagonals and no left/right pair of
@@ -632,8 +633,7 @@ def _import_mediapipe() -> Any:
         from mediapipe.tasks.python import vision  # pyright: ignore[reportMissingImports]  # noqa: F401
     except ImportError as exc:
         raise MissingDependencyError(
-            "the BlazePose 2D detector needs the optional 'detect' extra: pip install -e \".[detect]\" "
-            f"(mediapipe>=0.10.30) [{exc}]") from None
+            f"the BlazePose 2D detector needs the optional 'detect' extra: {INSTALL_DETECT} [{exc}]") from None
     return mp
 
 
@@ -887,7 +887,7 @@ class BlazePoseEstimator:
             cands = self._run(img)
             if self.max_people > 1:
                 ww = round(WINDOW_FRACTION * max(W, H))
-                if ww < 0.95 * W:
+                if MIN_WINDOW_PX <= ww < 0.95 * W:  # no windows in a thumbnail: nobody fits in them
                     n = math.ceil((W - ww) / (ww / 2)) + 1
                     for x0 in np.linspace(0, W - ww, n).round().astype(int):
                         cands += self._in_crop(img, int(x0), 0, int(x0) + ww, H)

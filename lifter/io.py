@@ -5,7 +5,9 @@ Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17"
 "focal": F or [FX, FY], "principal_point": [CX, CY], "source": "detected" | "clean"}`` (only ``keypoints`` is
 required; rows may have a third value, a confidence, which is ignored; a flat ``[x0, y0, c0, x1, ...]`` list
 works too), a bare list of ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}``
-(format openpose25) or a COCO-style list of people ``[{"keypoints": [...]}, ...]``. Without ``format`` it is
+(format openpose25), a COCO-style list of people ``[{"keypoints": [...]}, ...]`` or a result this module wrote
+(:class:`LiftRecord`: ``people[].keypoints_2d``, H36M order, with its camera; lift it again with another focal
+length or model). Without ``format`` it is
 inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33: blazepose33). ``source`` says what
 the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"`` (exact: ground truth or
 hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
@@ -239,6 +241,9 @@ def _people_of(d: Any, p: Path, fmt: str | None) -> tuple[list[Any], str | None,
             if isinstance(q, dict) and "pose_keypoints_2d" in q:
                 people.append(q["pose_keypoints_2d"])
                 fmt = fmt or "openpose25"
+            elif isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q:  # poselifter's own output
+                people.append(q["keypoints_2d"])
+                fmt = fmt or H36M17
             elif isinstance(q, dict):
                 people.append(q.get("keypoints"))
             else:
@@ -289,6 +294,9 @@ def _people_arrays(people: list[Any], p: Path, fmt: str | None, notes: list[str]
         fmt = FORMAT_BY_COUNT[J]
         if J == 17:
             notes.append("17 joints without 'format': assumed H36M order (use --format coco17 for COCO keypoints)")
+        else:
+            notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' or "
+                         "--format if they are another layout)")
     f = get_format(fmt)
     out = []
     for xy, missing in parsed:

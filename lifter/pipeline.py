@@ -23,12 +23,18 @@ from .io import LiftRecord, PersonResult, parse_keypoint_json
 from .keypoints import convert
 
 
+def _px(v: Any) -> str:
+    return " x ".join(f"{float(x):g}" for x in np.ravel(v)) + " px"
+
+
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
             fov_deg: float, where: str) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
     if user_focal is not None:
         focal, src = user_focal, "user"
+        if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):
+            notes.append(f"the focal length given ({_px(user_focal)}) replaces the file's own ({_px(file_focal)})")
     elif file_focal is not None:
         focal, src = file_focal, "keypoint-file"
     elif image_size is not None:
@@ -40,6 +46,8 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
                               "'image_size' in the file")
     if user_pp is not None:
         pp = user_pp
+        if file_pp is not None and not np.allclose(np.broadcast_to(file_pp, (2,)), user_pp):
+            notes.append(f"the principal point given ({_px(user_pp)}) replaces the file's own ({_px(file_pp)})")
     elif file_pp is not None:
         pp = file_pp
     elif image_size is not None:
@@ -79,7 +87,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         people = people[:max_people]
     kp17 = convert(np.stack(people), src=kf.format)
     f, src, pp, cam_notes = resolve_camera(
-        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
@@ -104,7 +112,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     path = img.path if img.path is not None else "<image>"
     dets = detect_people(img, estimator=estimator, max_people=max_people)
     f, src, pp, notes = resolve_camera(
-        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))

@@ -309,7 +309,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             if size is None:
                 size = (W, H)
                 f, src, pp, notes = resolve_camera(
-                    user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+                    user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
                     user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
                     file_focal=None, file_pp=None, image_size=size, exif=None, sensor_width_mm=None,
                     fov_deg=fov_deg, where=str(p))
@@ -408,7 +408,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     ks = parse_keypoint_sequence(path, default_format=default_format)
     warnings = list(ks.warnings)
     f, src, pp, notes = resolve_camera(
-        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True),
+        user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))

@@ -147,7 +147,7 @@ def test_large_batches_are_chunked_with_the_same_result(camera_lifter, keypoints
     [
         (np.zeros((16, 2)), r"expected shape \(\.\.\., 17, 2\)"),
         (np.zeros((17, 3)), r"expected shape"),
-        ("abc", "could not convert"),
+        ("abc", "strings are not numbers"),
     ],
 )
 def test_bad_keypoint_shapes(small_lifter, bad, match):
@@ -274,7 +274,7 @@ def test_checkpoint_refuses_pickled_code(tmp_path):
 def test_unknown_pretrained_name():
     with pytest.raises(PoseLifterError, match="unknown model") as exc:
         Lifter.from_pretrained("no-such-model")
-    assert "Lifter.load('path/to/model.pt')" in str(exc.value)
+    assert "Lifter.from_pretrained('path/to/model.pt')" in str(exc.value) and "--weights" in str(exc.value)
 
 
 def test_quantized_lifter_matches_float32(small_lifter, keypoints):
@@ -459,3 +459,23 @@ def test_checkpoint_ensemble_members_keep_their_own_flip_test_default(tmp_path, 
     want = 0.5 * (a.lift(keypoints, **kw).absolute + b.lift(keypoints, flip_test=True, **kw).absolute)
     np.testing.assert_allclose(loaded.lift(keypoints, **kw).absolute, want, atol=1e-3)
     assert "ensemble" in repr(loaded)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(focal=1000.0, principal_point=400.0), r"principal_point: expected a pair \(x, y\)"),
+        (dict(focal=1000.0, principal_point=(400.0,)), r"principal_point: expected a pair \(x, y\)"),
+        (dict(focal=None, image_size=800), r"image_size: expected a pair \(x, y\)"),
+        (dict(focal="800", principal_point=(400.0, 300.0)), "focal: strings are not numbers"),
+        (dict(focal=4.2, principal_point=(400.0, 300.0)), "focal: 4.2 px is too small.*not mm"),
+        (dict(focal=(1000.0, 0.5), principal_point=(400.0, 300.0)), "focal: 0.5 px is too small"),
+    ],
+)
+def test_camera_arguments_that_are_not_pixels_or_pairs_are_refused(small_lifter, keypoints, kwargs, match):
+    """A principal point or image size needs both coordinates (a single number is not silently doubled, as it
+    is for a focal length fx = fy); strings are refused; a focal length of a few pixels is a mm value by mistake."""
+    with pytest.raises(PoseLifterError, match=match):
+        small_lifter.lift(keypoints, **kwargs)
+    ok = small_lifter.lift(keypoints, focal=(1000.0,), principal_point=(400.0, 300.0))  # (f,) still means fx = fy
+    np.testing.assert_array_equal(ok.focal, np.full((len(keypoints), 2), 1000.0))

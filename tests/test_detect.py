@@ -182,6 +182,12 @@ def blazepose():
     est.close()
 
 
+@pytest.mark.parametrize("shape", [(1, 1), (2, 2), (1, 500), (40, 30)])
+def test_blazepose_on_tiny_images_finds_nobody(blazepose, shape):
+    """Thumbnails down to one pixel: nobody found (the window search would have windows of 0 px), not a crash."""
+    assert blazepose.detect(np.full((*shape, 3), 128, np.uint8)) == []
+
+
 def test_unclosed_estimator_in_a_cycle_is_collected_without_hanging():
     """An estimator dropped without close(), inside a reference cycle, is finalized by the cyclic collector. That
     used to hang forever (MediaPipe's close() waited on a thread pool that was garbage itself): run the collection

@@ -132,6 +132,50 @@ def test_cli_matches_api(tmp_path, weights, kp17, capsys):
     assert got["focal"] == [900.0, 950.0] and got["focal_source"] == "user"
 
 
+def test_format_taken_from_the_joint_count_is_said(tmp_path, weights, kp17, capsys):
+    """A keypoint file without 'format' is read by its joint count, and the output's warnings say so."""
+    (tmp_path / "k16.json").write_text(json.dumps(kp17[:16].tolist()))
+    code, err = run([str(tmp_path / "k16.json"), "--out", str(tmp_path / "o"), "--focal", "900",
+                     "--principal-point", "600", "300", "--weights", str(weights)], capsys)
+    assert code == 0, err
+    got = json.loads((tmp_path / "o" / "k16.json").read_text())
+    assert got["source_format"] == "sh16"
+    assert any("16 joints without 'format': assumed 'sh16'" in w for w in got["warnings"]), got["warnings"]
+
+
+def test_a_focal_given_over_the_file_s_own_is_said(tmp_path, weights, kp17, capsys):
+    """--focal / --principal-point win over the file's camera fields, and the output's warnings say so."""
+    doc = {"keypoints": kp17.tolist(), "format": "h36m17", "focal": 800, "principal_point": [640, 360]}
+    (tmp_path / "k.json").write_text(json.dumps(doc))
+    code, err = run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--focal", "1600",
+                     "--principal-point", "600", "300", "--weights", str(weights)], capsys)
+    assert code == 0, err
+    got = json.loads((tmp_path / "o" / "k.json").read_text())
+    assert got["focal"] == [1600.0, 1600.0] and got["focal_source"] == "user"
+    assert any("(1600 x 1600 px) replaces the file's own (800 x 800 px)" in w for w in got["warnings"]), got
+    assert any("(600 x 300 px) replaces the file's own (640 x 360 px)" in w for w in got["warnings"]), got
+    # the same values as the file's: nothing to say
+    run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o2"), "--focal", "800", "--weights", str(weights)], capsys)
+    assert not any("replaces" in w for w in json.loads((tmp_path / "o2" / "k.json").read_text())["warnings"])
+
+
+def test_a_result_file_can_be_lifted_again(tmp_path, weights, kp17, capsys):
+    """poselifter lift's own output is a keypoint file: everyone's 2D (H36M order), its camera and source."""
+    doc = {"people": [{"keypoints": kp17.tolist()}, {"keypoints": (kp17 * 0.5 + 100).tolist()}], "format": "h36m17",
+           "focal": [900, 950], "principal_point": [600, 300], "source": "clean"}
+    (tmp_path / "k.json").write_text(json.dumps(doc))
+    assert run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)[0] == 0
+    first = json.loads((tmp_path / "o" / "k.json").read_text())
+    code, err = run([str(tmp_path / "o" / "k.json"), "--out", str(tmp_path / "o2"), "--weights", str(weights)],
+                    capsys)
+    assert code == 0, err
+    again = json.loads((tmp_path / "o2" / "k.json").read_text())
+    assert again["num_people"] == 2 and again["source"] == "clean" and again["focal"] == [900.0, 950.0]
+    # the same lift (the written 2D is rounded to 0.01 px)
+    np.testing.assert_allclose(again["absolute"], first["absolute"], atol=0.2)
+    np.testing.assert_allclose(again["people"][1]["absolute"], first["people"][1]["absolute"], atol=0.2)
+
+
 def _jpeg_bytes(size=(64, 48)) -> bytes:
     buf = io.BytesIO()
     Image.new("RGB", size, (120, 130, 140)).save(buf, format="JPEG")

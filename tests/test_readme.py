@@ -36,5 +36,5 @@ def test_documented_checkpoint_loading_errors(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(CheckpointError, match="weights file not found: my.pt"):
         Lifter.from_pretrained("my.pt")
-    with pytest.raises(PoseLifterError, match="unknown model 'mine'.*pass its path"):
+    with pytest.raises(PoseLifterError, match=r"unknown model 'mine'.*pass its .pt path"):
         Lifter.from_pretrained("mine")

@@ -10,12 +10,14 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from .. import __version__
 from .._checks import PoseLifterError
 from . import evaluate, fit_noise, lift, train
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="poselifter", description="PoseLifter: absolute 3D pose from 2D keypoints")
+    parser.add_argument("--version", action="version", version=f"poselifter {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for module in (train, evaluate, fit_noise, lift):
         module.add_parser(sub)

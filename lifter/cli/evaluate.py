@@ -19,6 +19,7 @@ from ..data import H36M
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..metrics import AUC_THRESHOLDS_MM
+from ._help import HelpFormatter
 
 
 def _positive_int(text: str) -> int:
@@ -63,7 +64,7 @@ def _pp_shift(text: str) -> tuple[float, float]:
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("evaluate", help="evaluate lifters on Human3.6M and print the results table",
-                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                       formatter_class=HelpFormatter)
     p.add_argument("weights", nargs="*", default=["default"],
                    help="checkpoint paths or shipped model names; LABEL=PATH to name a row")
     p.add_argument("--h36m", type=Path, default=None)

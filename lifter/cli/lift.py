@@ -76,6 +76,7 @@ from ..video import (
     lift_video,
     limit_blas_threads,
 )
+from ._help import HelpFormatter
 
 # ------------------------------------------------------------------------------------------------
 # Batch
@@ -147,7 +148,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Photos and videos (2D detector: MediaPipe BlazePose, the 'detect' extra) or keypoint JSON files "
                     "in, absolute 3D poses of everyone found out. Exit code 0 if at least one input was lifted, 1 if "
                     "all failed.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        formatter_class=HelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="images, videos, folders of them, keypoint .json files (one frame, or 'frames')")
     p.add_argument("--out", type=Path, required=True, help="output folder")
@@ -218,7 +219,7 @@ def run_lift(args: argparse.Namespace) -> int:
     check_lift_options(args)
     if args.format is not None:
         get_format(args.format)
-    focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True)
+    focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True, scalar=True)
     pp = None if args.principal_point is None else np.asarray(args.principal_point, np.float64)
     files, problems, notes = expand_inputs(args.inputs)
     for msg in problems:

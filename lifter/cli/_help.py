@@ -1,0 +1,16 @@
+"""The help formatter of every ``poselifter`` sub-command."""
+
+from __future__ import annotations
+
+import argparse
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows an option's default after its help, unless the help states it already (``default ...``) or there
+    is none to show (None, False: an unset option or a flag)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if "default" in text.lower() or action.default in (None, False) or action.required:
+            return text
+        return super()._get_help_string(action)
