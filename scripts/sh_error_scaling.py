@@ -32,9 +32,9 @@ sys.path.insert(0, str(ROOT))
 
 from lifter import Lifter  # noqa: E402
 from lifter.data import H36M  # noqa: E402
+from lifter.detections import load_sh_detections  # noqa: E402
 from lifter.evaluate import predict  # noqa: E402
 from lifter.metrics import mpjpe, pa_mpjpe, root_errors  # noqa: E402
-from lifter.noise import load_sh_detections  # noqa: E402
 
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
