@@ -118,10 +118,18 @@ class Photo:
 # ------------------------------------------------------------------------------------------------
 
 
+MAX_NAME_CHARS: Final[int] = 60
+"""Uploaded file names are shortened to this many characters in messages and download names (the readout
+does not wrap a long unbroken name)."""
+
+
 def safe_name(name: str) -> str:
-    """The file name part of an uploaded name, for messages and download names."""
+    """The file name part of an uploaded name, for messages and download names: at most
+    :data:`MAX_NAME_CHARS` characters (a longer name keeps its start and its end, suffix included)."""
     base = re.split(r"[\\/]", str(name or "upload"))[-1].strip() or "upload"
-    return base[:120]
+    if len(base) > MAX_NAME_CHARS:
+        base = base[: MAX_NAME_CHARS - 21] + "…" + base[-20:]
+    return base
 
 
 def check_upload(name: str, content: bytes, *, max_bytes: int = MAX_UPLOAD_BYTES) -> None:
@@ -266,6 +274,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 keypoint JSON file") from None
     except json.JSONDecodeError as exc:
         raise UploadError(f"{nm}: not valid JSON ({exc}); expected a keypoint file as `poselifter lift` reads it") from None
+    except RecursionError:
+        raise UploadError(f"{nm}: JSON nested too deeply to be a keypoint file") from None
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
     kp = _check_2d(convert(kf.keypoints, src=kf.format), nm)
     notes = list(kf.warnings)

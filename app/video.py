@@ -46,8 +46,8 @@ def is_sequence_json(content: bytes) -> bool:
     """A keypoint JSON with ``frames`` (a keypoint sequence)."""
     try:
         doc = json.loads(content.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
-        return False
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        return False  # the keypoint-file reader says what is wrong with it
     return isinstance(doc, dict) and "frames" in doc
 
 

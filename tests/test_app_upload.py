@@ -250,12 +250,19 @@ def test_corrupt_and_not_an_image_uploads(view: SessionView, app: PoseLifterApp)
                                  "image_size": [800, 600]}).encode(), "far outside"),
         "focal.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 10.0).tolist(), "image_size": [800, 600],
                                    "focal": 0}).encode(), "focal"),
+        "deep.json": (b"[" * 100000 + b"]" * 100000, "nested too deeply"),
     }
     for name, (content, expect) in cases.items():
         assert view.load_upload(name, content) is False, name
         assert expect in view.messages[-1], (name, view.messages[-1])
         assert view.messages[-1].startswith(name), view.messages[-1]
+        assert "internal error" not in view.messages[-1]
         _assert_unchanged(view, snap)
+    # a long name is shortened in the message (the readout does not wrap it), its start and suffix kept
+    assert view.load_upload("A" * 250 + ".jpg", b"not a photo") is False
+    shown = view.messages[-1].split(":")[0]
+    assert len(shown) <= 60 and shown.startswith("AAAA") and shown.endswith("A.jpg"), shown
+    _assert_unchanged(view, snap)
     import urllib.request
 
     with urllib.request.urlopen(f"http://127.0.0.1:{app.server.get_port()}/", timeout=10) as r:
