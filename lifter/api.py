@@ -230,12 +230,13 @@ class Lifter:
         net = copy.deepcopy(self.net)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            # the plain Linear layers first, then each coupled layer once (it quantizes its own two products)
+            net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
             for block in net.blocks:
                 body: torch.nn.Sequential = block.body  # type: ignore[assignment]
                 for i, layer in enumerate(body):
                     if isinstance(layer, MirrorCoupledLinear):
                         body[i] = QuantizedCoupledLinear(layer)
-            net.blocks = torch.ao.quantization.quantize_dynamic(net.blocks, {torch.nn.Linear}, dtype=torch.qint8)
         return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
                       flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized(),
                       ensemble=[m.quantized() for m in self.ensemble])

@@ -377,9 +377,7 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
     if net.config.symmetry == "mirror":
         if len(features) == 0:
             return np.zeros((0, NUM_OUTPUTS), np.float32)
-        if len(features) == 1:
-            return _forward_numpy_mirror(v, eps, features)
-        return np.concatenate([_forward_numpy_mirror(v, eps, features[i:i + 1]) for i in range(len(features))])
+        return _forward_numpy_mirror(v, eps, features)
     return _forward_numpy_rows(v, eps, features)
 
 
@@ -502,25 +500,21 @@ def forward_folded(net: PoseLifterNet, features: torch.Tensor) -> torch.Tensor |
     return out
 
 
-_SUM_DIFF = np.array([[1.0, 1.0], [1.0, -1.0]], np.float32)
-"""``[[1, 1], [1, -1]]``: rows (h0, h1) -> (h0 + h1, h0 - h1), and (U s, V d) -> (y0, y1)."""
-
-
 def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
-    """A ``symmetry="mirror"`` network on one row of features ``(1, F)``: the two streams are the rows of a
-    ``(2, W)`` array; each coupled layer is two matrix-vector products, ``U`` on the streams' sum and ``V`` on
-    their difference (:class:`MirrorCoupledLinear`)."""
+    """A ``symmetry="mirror"`` network on a few rows of features ``(R, F)``: the two streams are the rows of a
+    ``(2R, W)`` array (stream 0's rows, then stream 1's); each coupled layer is ``U`` on the streams' sum and
+    ``V`` on their difference (:class:`MirrorCoupledLinear`), each weight read once for all ``R`` rows
+    (:func:`_matvec_rows`)."""
     (w0, b0), blocks, (wh, bh), (in_perm, in_sign, out_perm, out_scale, out_offset) = _layout(v, eps, True)
+    r = len(features)
     x = np.concatenate([features, features[:, in_perm] * in_sign])
     h = x @ w0.T + b0
 
     def coupled(y: np.ndarray, u: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
-        sd = _SUM_DIFF @ y
-        out = np.empty_like(sd)
-        np.matmul(u, sd[0], out=out[0])
-        np.matmul(w, sd[1], out=out[1])
-        out[0] += b
-        return _SUM_DIFF @ out
+        y0, y1 = y[:r], y[r:]
+        us = _matvec_rows(u, y0 + y1) + b
+        vd = _matvec_rows(w, y0 - y1)
+        return np.concatenate([us + vd, us - vd])
 
     for bn1, lin1, bn2, lin2 in blocks:
         s1, c1 = _bn_affine_np(bn1)
@@ -529,4 +523,4 @@ def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.nd
         y = np.maximum(coupled(y, *lin1) * s2 + c2, 0.0)
         h = h + coupled(y, *lin2)
     g = h @ wh.T + bh
-    return 0.5 * (g[:1] + g[1:, out_perm] * out_scale + out_offset)
+    return 0.5 * (g[:r] + g[r:, out_perm] * out_scale + out_offset)

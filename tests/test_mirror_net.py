@@ -130,10 +130,12 @@ def test_uncoupled_mirror_net_is_the_flip_test_average():
     np.testing.assert_allclose(b.root, a.root, rtol=1e-5, atol=1e-2)
 
 
-def test_mirror_numpy_path_matches_module():
+@pytest.mark.parametrize("rows", [1, 2, 4])
+def test_mirror_numpy_path_matches_module(rows):
+    """A few rows run as one chain (each weight read once for all rows), equal to the module."""
     lifter = _mirror_lifter(2)
-    x = lifter.codec.encode(_poses(4).astype(np.float32), principal_point=np.full((4, 2), PP, np.float32),
-                            focal=np.full((4, 2), F, np.float32)).features
+    x = lifter.codec.encode(_poses(rows).astype(np.float32), principal_point=np.full((rows, 2), PP, np.float32),
+                            focal=np.full((rows, 2), F, np.float32)).features
     with torch.inference_mode():
         ref = lifter.net(torch.from_numpy(x)).numpy()
     got = forward_numpy(lifter.net, x)
@@ -206,6 +208,10 @@ def test_mirror_quantized_is_int8_and_equivariant():
     q = lifter.quantized()
     kinds = {type(m).__name__ for m in q.net.modules()}
     assert "QuantizedCoupledLinear" in kinds and "MirrorCoupledLinear" not in kinds
+    # each coupled layer's two products int8 once; the stem and head stay float32
+    int8 = [m for m in q.net.modules() if isinstance(m, torch.ao.nn.quantized.dynamic.Linear)]
+    assert len(int8) == 2 * 2 * len(q.net.blocks)
+    assert sum(isinstance(m, torch.nn.Linear) for m in q.net.modules()) == 2
     x = lifter.codec.encode(_poses(1).astype(np.float32), principal_point=np.full((1, 2), PP, np.float32),
                             focal=np.full((1, 2), F, np.float32)).features
     assert forward_numpy(q.net, x) is None  # int8 layers run as the torch module
