@@ -25,6 +25,7 @@ from typing import Protocol
 import numpy as np
 
 from lifter import Camera
+from lifter.skeleton import FLIP_PERMUTATION
 
 from .samples import DemoCatalog, H36MCatalog, Sample
 
@@ -72,10 +73,6 @@ def _smoothstep(t: float) -> float:
     return t * t * (3.0 - 2.0 * t)
 
 
-_MIRROR = (0, 4, 5, 6, 1, 2, 3, 7, 8, 9, 10, 14, 15, 16, 11, 12, 13)
-"""Joint order of the left-right mirrored pose (H36M-17)."""
-
-
 class DemoMotion:
     """A walk made from the demo samples (no Human3.6M needed): the ``walking`` pose, ``standing``, the mirrored
     ``walking`` pose (the other leg forward), ``standing`` again, blended in turn (``frames_per_pose`` frames
@@ -105,7 +102,7 @@ class DemoMotion:
 
         walk, z_walk = aligned(names[0])
         stand, z_stand = aligned(names[-1])
-        mirrored = walk[list(_MIRROR)] * np.array([1.0, -1.0, 1.0])
+        mirrored = walk[list(FLIP_PERMUTATION)] * np.array([1.0, -1.0, 1.0])  # left <-> right, y = 0 plane
         self._poses = [(walk, z_walk), (stand, z_stand), (mirrored, z_walk), (stand, z_stand)]
         assert base.pose_3d is not None
         self._centre = self.camera.camera_to_world(base.pose_3d[:1])[0]

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 
 from . import resources as assets
 from ._checks import PoseLifterError, as_pair, as_points
-from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_from_fov
+from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov
 from .checkpoint import Checkpoint, load_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
 from .model import (
@@ -226,7 +226,10 @@ class Lifter:
     def quantized(self) -> Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the
         block weight memory. It always runs the torch module. The stem and head stay float32. A mirror network's
-        coupled layers become :class:`~lifter.model.QuantizedCoupledLinear` (both products int8)."""
+        coupled layers become :class:`~lifter.model.QuantizedCoupledLinear` (both products int8). Dynamic
+        quantization scales the activations by the range of the whole batch: a pose's int8 result changes by a few
+        mm with the other poses lifted in the same call (and the flip test's mirror symmetry holds to ~mm only);
+        the float32 lifter has neither effect."""
         net = copy.deepcopy(self.net)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -335,7 +338,7 @@ class Lifter:
         root = root.reshape(lead + (3,))
         absolute = rel + root[..., None, :]
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
-                          keypoints_2d=kp, principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
+                          keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
                           metric_depth=focal_source == "given", source=source)
 
     def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source, flip_test: bool, *,
@@ -363,7 +366,7 @@ class Lifter:
         raw = codec.destandardize(out.astype(np.float64))
         if flip_test:
             raw = 0.5 * (raw[: len(kp)] + codec.mirror_output(raw[len(kp):]))
-        alpha = np.sqrt(f[:, 0] * f[:, 1])  # float64 from here on: the features alone were float32
+        alpha = focal_alpha(f)  # float64 from here on: the features alone were float32
         alpha_in = alpha if codec.config.input_space == "pixel" else np.full_like(alpha, codec.reference_focal)
         enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha)
         dec = codec.decode(raw, enc64, root_2d=kp[:, 0], principal_point=pp, focal=f)
@@ -372,6 +375,10 @@ class Lifter:
     def _network(self, features: np.ndarray) -> np.ndarray:
         """Standardized network outputs ``(N, 49)`` for features ``(N, F)`` float32."""
         net = self.net
+        device = next(net.parameters()).device
+        if device.type != "cpu":
+            raise PoseLifterError(f"model {self.name!r} is on {device}; Lifter.lift runs the network on the CPU "
+                                  "(numpy in, numpy out): move it back with lifter.net.cpu()")
         if len(features) <= NUMPY_MAX_BATCH:
             out = forward_numpy(net, features)
             if out is not None:

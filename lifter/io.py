@@ -432,7 +432,11 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
         raise PoseLifterError(f"{path}: exists as a symbolic link; refusing to write through it (remove it, or "
                               "choose another output folder)")
     raw = data.encode("utf-8") if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        hint = " (the folder does not exist: create it first)" if not path.parent.is_dir() else ""
+        raise PoseLifterError(f"{path}: could not write ({exc.strerror or exc}){hint}") from None
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(raw)

@@ -58,7 +58,10 @@ class Tracker:
 
     def update(self, frame: int, keypoints: list[np.ndarray] | np.ndarray) -> list[int]:
         """Track ids for the people ``keypoints`` (each ``(J, 2)`` px) of frame number ``frame`` (increasing),
-        in the same order. Also ends the tracks unseen for more than ``max_missed`` frames."""
+        in the same order. First ends the tracks unseen for more than ``max_missed`` frames before this one, so a
+        person who comes back after a longer gap gets a new id even if no frame in between was passed here."""
+        for tid in [t for t, tr in self.tracks.items() if frame - tr.last_frame > self.max_missed]:
+            self.ended.append(self.tracks.pop(tid))
         boxes = [box_centre_diag(k) for k in keypoints]
         live = list(self.tracks.values())
         ids: list[int] = [0] * len(boxes)
@@ -86,8 +89,6 @@ class Tracker:
                 self._next += 1
                 self.tracks[tr.track_id] = tr
                 ids[i] = tr.track_id
-        for tid in [t for t, tr in self.tracks.items() if frame - tr.last_frame > self.max_missed]:
-            self.ended.append(self.tracks.pop(tid))
         return ids
 
     def all_tracks(self) -> list[Track]:

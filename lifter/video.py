@@ -190,8 +190,8 @@ def _check_common(smoothing: float, max_people: int, max_seconds: float) -> None
     PoseSmoother(smoothing)
     if max_people < 1:
         raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
-    if not (max_seconds > 0):
-        raise PoseLifterError(f"max_seconds must be > 0, got {max_seconds}")
+    if not (math.isfinite(max_seconds) and max_seconds > 0):
+        raise PoseLifterError(f"max_seconds must be a finite number of seconds > 0, got {max_seconds}")
 
 
 def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,

@@ -52,6 +52,26 @@ def test_shapes_batched(small_lifter, keypoints):
     assert single.root.shape == (3,)
 
 
+def test_result_owns_its_inputs(small_lifter, keypoints):
+    """The result keeps copies: changing the caller's arrays afterwards does not change it."""
+    kp = keypoints.copy()
+    pp, f = np.array([512.0, 515.0]), np.array([1145.0, 1144.0])
+    res = small_lifter.lift(kp, focal=f, principal_point=pp)
+    kp += 100.0
+    pp += 1.0
+    f += 1.0
+    np.testing.assert_array_equal(res.keypoints_2d, keypoints)
+    np.testing.assert_array_equal(res.principal_point[0], [512.0, 515.0])
+    np.testing.assert_array_equal(res.focal[0], [1145.0, 1144.0])
+
+
+def test_network_off_the_cpu_is_refused_with_the_fix(keypoints):
+    lifter = tiny_lifter()
+    lifter.net.to("meta")  # stands in for a GPU here: any device that is not the CPU
+    with pytest.raises(PoseLifterError, match=r"is on meta.*lifter\.net\.cpu\(\)"):
+        lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+
+
 def test_root_lies_on_the_ray_of_the_2d_root(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     reproj = project(res.root[:, None, :], focal=1145.0, principal_point=(512.0, 515.0))[:, 0]

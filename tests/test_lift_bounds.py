@@ -64,3 +64,11 @@ def test_written_files_follow_the_umask(tmp_path):
     os.umask(mask)
     p = write_atomic(tmp_path / "x.json", "{}")
     assert (p.stat().st_mode & 0o777) == (0o666 & ~mask)
+
+
+def test_atomic_write_into_a_missing_folder_names_the_problem(tmp_path):
+    from lifter.io import write_json_atomic
+
+    with pytest.raises(PoseLifterError, match="folder does not exist"):
+        write_json_atomic(tmp_path / "no_such_dir" / "x.json", {})
+    assert not (tmp_path / "no_such_dir").exists()

@@ -16,7 +16,7 @@ from lifter.cli import main
 from lifter.detect import Detection, bbox_of, register_estimator
 from lifter.smoothing import OneEuroFilter, PoseSmoother, smooth_sequence
 from lifter.tracking import Tracker
-from lifter.video import VideoError, lift_keypoint_sequence, lift_video
+from lifter.video import VideoError, lift_keypoint_sequence, lift_video, track_lifted
 
 cv2 = pytest.importorskip("cv2")
 
@@ -107,6 +107,29 @@ def test_tracker_keeps_ids_through_a_gap_and_ends_tracks():
     assert tr.update(40, []) == [] and not tr.tracks
     assert tr.update(41, [script[29][0]]) == [3]
     assert [t.track_id for t in tr.all_tracks()] == [1, 2, 3]
+
+
+@pytest.mark.parametrize("gap", [5, 6, 60])
+def test_tracker_ends_a_stale_track_without_empty_frames_between(gap):
+    """The video and sequence paths do not pass frames with nobody to the tracker: a track unseen for more than
+    max_missed frames must end at the next update, before matching, so a person back after that gets a new id."""
+    kp = _script(1)[0][0]
+    tr = Tracker(max_missed=5)
+    assert tr.update(0, [kp]) == [1]
+    assert tr.update(gap, [kp]) == ([1] if gap <= 5 else [2])
+
+
+def test_track_lifted_person_back_after_the_timeout_gets_a_new_id():
+    kp = _script(1)[0][0][None]
+    root, rel = np.array([[0.0, 0.0, 4000.0]]), np.zeros((1, 17, 3))
+    empty = (np.zeros((0, 17, 2)), np.zeros((0, 3)), np.zeros((0, 17, 3)), None)
+    fps = 25.0
+    frames = [(0, 0.0, kp, root, rel, None), *[(i, i / fps, *empty) for i in range(1, 100)],
+              (100, 100 / fps, kp, root + [0.0, 0.0, 1000.0], rel, None)]
+    out = track_lifted(frames, fps=fps, focal=np.array([1000.0, 1000.0]))
+    first, back = out[0].people[0], out[100].people[0]
+    assert (first.track_id, back.track_id) == (1, 2)
+    np.testing.assert_allclose(back.root, [0.0, 0.0, 5000.0])  # a new smoother: no memory of the old root
 
 
 # ------------------------------------------------------------------------------------------------ video
@@ -361,3 +384,9 @@ def test_cli_photo_crowd_bound_and_everyone_in_one_scene(tmp_path, lifter, capsy
     for k, q in enumerate(d["people"]):
         np.testing.assert_allclose(read_glb_joints(out / "crowd.glb", person=k), q["absolute"], atol=0.1)
     np.testing.assert_allclose(read_bvh(out / "crowd_person2.bvh"), d["people"][1]["absolute"], atol=0.1)
+
+
+@pytest.mark.parametrize("max_seconds", [float("inf"), float("nan"), 0.0])
+def test_library_refuses_a_duration_bound_that_is_not_a_finite_positive_number(tmp_path, lifter, max_seconds):
+    with pytest.raises(PoseLifterError, match="max_seconds must be a finite number"):
+        lift_keypoint_sequence(tmp_path / "never_read.json", lifter=lifter, max_seconds=max_seconds)
