@@ -180,8 +180,6 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
                                      max_seconds=max_seconds, progress=progress,
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
-                if not any(fr.people for fr in rec.frames):
-                    raise UploadError(f"{nm}: no person found in any of the {len(rec.frames)} frames")
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import io
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,6 +98,17 @@ def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:
             "codec": codec, "state_dict": state, "train_config": None}
 
 
+def _load_failure(exc: Exception) -> str:
+    """A short reason why ``torch.load(weights_only=True)`` refused some bytes, without torch's advice to load them
+    with ``weights_only=False`` (which can run code from the file: never for a file of unknown origin)."""
+    text = str(exc)
+    m = re.search(r"WeightsUnpickler error:\s*(.*?)(?:\.\s|\n|$)", text)
+    if m:
+        return f"it holds objects that are not plain tensors or values, refused: {m.group(1).strip()}"
+    first = text.strip().split("\n")[0].split(". ")[0].strip()
+    return f"{type(exc).__name__}: {first}" if first else f"{type(exc).__name__} (empty or truncated file?)"
+
+
 def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: str | None = None,
                     name: str | None = None) -> Checkpoint:
     """Load a checkpoint from a path or its bytes (module docstring for the checks).
@@ -126,7 +138,9 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     try:
         payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
-        raise CheckpointError(f"weights file {where} is corrupt or not a torch checkpoint: {exc}") from None
+        why = "it is a text file, JSON?" if data.lstrip()[:1] in (b"{", b"[") else _load_failure(exc)
+        raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
+                              "give a .pt file written by poselifter train or a shipped model name") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"{where} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
     version = payload.get("version")

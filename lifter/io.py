@@ -48,12 +48,21 @@ class PersonResult:
     root: np.ndarray
     canonical_depth: float
     scores: np.ndarray | None = None
+    input_index: int | None = None
+    """Keypoint files: the person's position in the file's list of people (0-based; the output is largest first)."""
+    person_id: str | int | None = None
+    """Keypoint files: the person's own ``person_id`` (or ``id``, ``track_id``) field, when it has one."""
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
-        return {"keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
-                "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
-                "scores": None if self.scores is None else r(self.scores, 3)}
+        out = {"keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
+               "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
+               "scores": None if self.scores is None else r(self.scores, 3)}
+        if self.input_index is not None:
+            out["input_index"] = self.input_index
+        if self.person_id is not None:
+            out["person_id"] = self.person_id
+        return out
 
 
 @dataclass(frozen=True)
@@ -121,6 +130,10 @@ class KeypointFile:
     source: str = "detected"
     people: tuple[np.ndarray, ...] = ()
     """Everyone in the file, ``(J, 2)`` px each, largest (box area) first; ``keypoints`` is ``people[0]``."""
+    people_index: tuple[int, ...] = ()
+    """For each of ``people``: its position in the file's list of people (0-based)."""
+    people_ids: tuple[str | int | None, ...] = ()
+    """For each of ``people``: its ``person_id`` (or ``id``, ``track_id``) field, None where it has none."""
 
 
 MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
@@ -219,24 +232,45 @@ def _load_json(p: Path) -> Any:
         raise PoseLifterError(f"{p}: {size / 1e6:.0f} MB is more than the {MAX_KEYPOINT_FILE_BYTES / 1e6:.0f} MB a "
                               "keypoint file may have")
     try:
-        return json.loads(p.read_text(encoding="utf-8-sig"))
+        text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise PoseLifterError(f"{p}: cannot read ({exc})") from None
+    if not text.strip():
+        raise PoseLifterError(f"{p}: the file is empty; a keypoint file is JSON with the 2D joints (formats: README, "
+                              "'Photos in, absolute 3D out')")
+    try:
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise PoseLifterError(f"{p}: not valid JSON ({exc})") from None
     except RecursionError:
         raise PoseLifterError(f"{p}: JSON nested too deeply to be a keypoint file") from None
 
 
-def _people_of(d: Any, p: Path, fmt: str | None) -> tuple[list[Any], str | None, dict[str, Any]]:
-    """The raw keypoint lists of the people in one decoded frame object, the format it implies and its
-    camera fields (module docstring layouts)."""
+PERSON_ID_KEYS: Final[tuple[str, ...]] = ("person_id", "id", "track_id")
+"""A person object's own identifier, copied to the output (the first of these keys it has, a string or integer)."""
+
+
+def _person_id(q: Any) -> str | int | None:
+    if isinstance(q, dict):
+        for k in PERSON_ID_KEYS:
+            v = q.get(k)
+            if isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool)):
+                return v
+    return None
+
+
+def _people_of(d: Any, p: Path, fmt: str | None
+               ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any]]:
+    """The people in one decoded frame object as ``(position in the file's list, raw keypoint list, person id)``
+    (people without keypoints left out), the format it implies and its camera fields (module docstring layouts)."""
     meta: dict[str, Any] = {}
+    ids: list[str | int | None] = []
     if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
         if not isinstance(d["people"], list):
             raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} or "
                                   f"{{\"keypoints\": [...]}} objects, got {_short(d['people'])}")
         people = []
+        ids = [_person_id(q) for q in d["people"]]
         for q in d["people"]:
             if isinstance(q, dict) and "pose_keypoints_2d" in q:
                 people.append(q["pose_keypoints_2d"])
@@ -253,9 +287,11 @@ def _people_of(d: Any, p: Path, fmt: str | None) -> tuple[list[Any], str | None,
             fmt = meta["format"]
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
         people = [q.get("keypoints") for q in d]
+        ids = [_person_id(q) for q in d]
         fmt = fmt or "coco17"
     elif isinstance(d, dict) and "keypoints" in d:
         people = [d["keypoints"]]
+        ids = [_person_id(d)]
         meta = d
         fmt = d.get("format") or fmt
     elif isinstance(d, list):
@@ -266,31 +302,40 @@ def _people_of(d: Any, p: Path, fmt: str | None) -> tuple[list[Any], str | None,
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
                               f"{_short(fmt)}")
-    return [q for q in people if q is not None and q != []], fmt, meta
+    ids = ids or [None] * len(people)
+    return [(i, q, pid) for i, (q, pid) in enumerate(zip(people, ids)) if q is not None and q != []], fmt, meta
 
 
-def _people_arrays(people: list[Any], p: Path, fmt: str | None, notes: list[str]) -> tuple[list[np.ndarray], str]:
-    """Each person as ``(J, 2)`` px, largest (box area) first, checked against the format."""
+def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str]
+                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]]]:
+    """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
+    and for each, its ``(position in the file, person id)``."""
     parsed = []
-    for q in people:
+    for _, q, _ in people:
         xy, conf = _rows(q, str(p))
         missing = ~np.all(np.isfinite(xy), axis=1)
         if conf is not None:
             missing |= conf <= 0  # OpenPose / COCO mark undetected joints with confidence 0
         parsed.append((xy, missing))
     if not parsed:
-        return [], fmt or H36M17
+        return [], fmt or H36M17, []
 
-    def area(item: tuple[np.ndarray, np.ndarray]) -> float:
-        xy, miss = item
+    def area(k: int) -> float:
+        xy, miss = parsed[k]
         ok = xy[~miss]
-        return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
+        with np.errstate(over="ignore"):  # absurd coordinates are refused later, with a message naming them
+            return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
 
-    parsed.sort(key=area, reverse=True)
+    order = sorted(range(len(parsed)), key=area, reverse=True)  # stable: equal areas keep the file's order
+    parsed = [parsed[k] for k in order]
+    identity = [(people[k][0], people[k][2]) for k in order]
     J = len(parsed[0][0])
     if fmt is None:
         if J not in FORMAT_BY_COUNT:
-            raise PoseLifterError(f"{p}: {J} joints; give 'format' (one of {list(keypoint_formats())})")
+            counts = ", ".join(f"{get_format(n).num_joints} ({n})" for n in keypoint_formats())
+            raise PoseLifterError(f"{p}: {J} joints per person, which no known keypoint format has; the formats and "
+                                  f"their joint counts: {counts}. Give the joints of one of these formats (and "
+                                  "'format' where the count is shared)")
         fmt = FORMAT_BY_COUNT[J]
         if J == 17:
             notes.append("17 joints without 'format': assumed H36M order (use --format coco17 for COCO keypoints)")
@@ -311,7 +356,7 @@ def _people_arrays(people: list[Any], p: Path, fmt: str | None, notes: list[str]
                                       f"{fmt} -> h36m17 rules use must be given")
             xy = np.where(missing[:, None], 0.0, xy)
         out.append(xy)
-    return out, fmt
+    return out, fmt, identity
 
 
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
@@ -337,12 +382,14 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     people, fmt, meta = _people_of(d, p, default_format)
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
-    arrays, fmt = _people_arrays(people, p, fmt, notes)
+    arrays, fmt, identity = _people_arrays(people, p, fmt, notes)
     if len(arrays) > 1:
-        notes.append(f"{len(arrays)} people in the file; each is lifted (largest first)")
+        notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
+                     "position in the file" + (", 'person_id' their own id)" if any(i for _, i in identity) else ")"))
     image_size, focal, pp, source = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
-                        warnings=tuple(notes), source=source, people=tuple(arrays))
+                        warnings=tuple(notes), source=source, people=tuple(arrays),
+                        people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity))
 
 
 MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
@@ -403,7 +450,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             frames.append([])
             continue
         people, f_fmt, _ = _people_of(fr, where, fmt)
-        arrays, f_fmt = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [])
+        arrays, f_fmt, _ = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [])
         if fmt is None:
             fmt = f_fmt
         elif f_fmt != fmt:

@@ -11,6 +11,7 @@ Units: px and mm; camera frame OpenCV.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -92,6 +93,9 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
+    if kf.people_index:  # who is who in the file (the output is largest first)
+        lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
+                       for q, k, i in zip(lifted, kf.people_index, kf.people_ids))
     top = lifted[0]
     return LiftRecord(input=str(path), kind="keypoints", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,

@@ -20,6 +20,7 @@ Units: px and mm, seconds; camera frame OpenCV (+x right, +y down, +z forward).
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -36,6 +37,11 @@ from .keypoints import convert
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
 from .tracking import Tracker
+
+# FFmpeg's own log lines ("[mov,mp4 @ 0x..] moov atom not found", ...) went to stderr ahead of this module's message
+# about the same problem. OpenCV reads the level once, when FFmpeg is first used: set here, at import, unless the
+# user chose one.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
 VIDEO_SUFFIXES: Final[frozenset[str]] = frozenset(
     {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp", ".ts"})
@@ -261,6 +267,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         raise VideoError(f"{p}: no such file")
     if p.stat().st_size == 0:
         raise VideoError(f"{p}: empty file (zero-length video)")
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # (as at import: in case it was removed since)
     cap = cv2.VideoCapture(str(p))
     try:
         if not cap.isOpened():
@@ -367,6 +374,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if declared > 0 and index + 1 < min(declared, limit):
         warnings.append(f"decoding stopped after frame {index} of the {declared} the file declares; the rest "
                         "could not be read")
+    if frames and len(nobody) == len(frames):
+        raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
+                              f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else ""))
     if nobody:
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:

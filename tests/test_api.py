@@ -287,8 +287,19 @@ def test_checkpoint_refuses_pickled_code(tmp_path):
 
     evil = tmp_path / "evil.pt"
     torch.save({"format": "poselifter-checkpoint", "version": 2, "payload": Evil()}, evil)
-    with pytest.raises(CheckpointError, match="corrupt or not a torch checkpoint"):
+    with pytest.raises(CheckpointError, match="not plain tensors or values, refused") as exc:
         load_checkpoint(evil)
+    assert "weights_only" not in str(exc.value)  # never torch's advice to load it unsafely
+
+
+@pytest.mark.parametrize("data, why", [(b'{"people": []}', "a text file, JSON"), (b"", "empty or truncated"),
+                                       (b"PK\x03\x04" + b"x" * 64, "zip archive")])
+def test_non_checkpoint_files_are_named_as_such(tmp_path, data, why):
+    path = tmp_path / "not_weights.pt"
+    path.write_bytes(data)
+    with pytest.raises(CheckpointError, match="not a poselifter checkpoint") as exc:
+        Lifter.from_pretrained(path)
+    assert why in str(exc.value) and "weights_only" not in str(exc.value) and "file an issue" not in str(exc.value)
 
 
 def test_unknown_pretrained_name():

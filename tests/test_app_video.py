@@ -128,7 +128,7 @@ def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
     est.script = [[] for _ in range(4)]
     est.n = 0
     assert v.load_upload("room.avi", _clip(tmp_path / "room.avi", 4)) is False
-    assert "no person found in any of the 4 frames" in v.messages[-1]
+    assert "room.avi: no person found by the scripted 2D detector in any of the 4 frames" in v.messages[-1]
     assert v.state.sample.key == key and v.sequence() is None
 
 

@@ -156,6 +156,7 @@ def test_lift_out_is_an_existing_file(tmp_path, weights, kp_file, capsys):
         (["--sensor-width", "0"], "--sensor-width must be the sensor's long side in mm, in (0, 1000), got 0"),
         (["--max-side", "0"], "--max-side must be >= 1, got 0"),
         (["--max-people", "0"], "--max-people must be >= 1, got 0"),
+        (["--detector", "foo"], "--detector 'foo': unknown 2D estimator; available: ["),
     ],
 )
 def test_lift_rejects_bad_global_options_up_front(tmp_path, weights, kp_file, argv, expected, capsys):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -81,19 +82,22 @@ def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     assert "lifted 2 of 2" in err
     assert sorted(p.name for p in out.iterdir()) == ["a.bvh", "a.glb", "a.json", "b.bvh", "b.glb", "b.json"]
     # OpenPose's output has no image size: it needs --focal (and --principal-point)
-    (tmp_path / "c.json").write_text(json.dumps({"people": [{"pose_keypoints_2d": small.ravel().tolist()},
-                                                            {"pose_keypoints_2d": op.ravel().tolist()}]}))
+    (tmp_path / "c.json").write_text(json.dumps({"people": [{"pose_keypoints_2d": small.ravel().tolist(),
+                                                             "person_id": "kid"},
+                                                            {"pose_keypoints_2d": op.ravel().tolist(), "id": 7}]}))
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360",
                      "--weights", str(weights)], capsys)
     assert code == 1 and "no focal length and no image size" in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
                      "--weights", str(weights)], capsys)
-    assert code == 0 and "2 people in the file; each is lifted (largest first)" in err
+    assert code == 0 and "2 people in the file; each is lifted (largest first; 'input_index'" in err
     c = json.loads((out / "c.json").read_text())
     assert c["num_people"] == 2 and len(c["people"]) == 2
     assert c["people"][0]["absolute"] == c["absolute"] and c["people"][0]["keypoints_2d"] == c["keypoints_2d"]
     spans = [np.ptp(np.array(q["keypoints_2d"]), axis=0).prod() for q in c["people"]]
     assert spans[0] > spans[1]  # largest first
+    # who is who: each person's position in the file and their own id field are kept
+    assert [(q["input_index"], q["person_id"]) for q in c["people"]] == [(1, 7), (0, "kid")]
     # both lifted in one camera space: each root projects back onto its own 2D pelvis
     for q in c["people"]:
         np.testing.assert_allclose(project(np.array(q["root"])[None], focal=1000.0, principal_point=(640, 360))[0],
@@ -229,6 +233,21 @@ def test_parse_formats(tmp_path):
     p.write_text(json.dumps({"keypoints": [[0, 0]] * 17, "format": "nope"}))
     with pytest.raises(PoseLifterError, match="unknown keypoint format"):
         parse_keypoint_json(p)
+    for empty in ("", "  \n"):
+        p.write_text(empty)
+        with pytest.raises(PoseLifterError, match="the file is empty"):
+            parse_keypoint_json(p)
+    # absurd coordinates: no numpy overflow warning on the way to the message that names them
+    p.write_text(json.dumps({"people": [{"keypoints": [[1e300 * (i % 3 + 1), -1e300] for i in range(17)]},
+                                       {"keypoints": [[1e300, 1e300 * (i % 2 + 1)] for i in range(17)]}]}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parse_keypoint_json(p)
+    # a joint count no format has: the message lists the counts, not only the names
+    p.write_text(json.dumps({"keypoints": [[10.0 * i, 5.0 * i] for i in range(15)]}))
+    with pytest.raises(PoseLifterError, match=r"15 joints per person, which no known keypoint format has") as exc:
+        parse_keypoint_json(p)
+    assert "17 (h36m17)" in str(exc.value) and "16 (sh16)" in str(exc.value)
 
 
 # ------------------------------------------------------------------------------------------------

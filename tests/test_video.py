@@ -259,6 +259,22 @@ def test_keypoint_sequence_errors(tmp_path, lifter, body, match):
 # ------------------------------------------------------------------------------------------------ CLI
 
 
+def test_video_with_nobody_in_any_frame_is_an_error(tmp_path, lifter, capsys):
+    """Like a photo or a keypoint sequence with nobody: an error, and the CLI counts the input as failed."""
+    clip = _write_clip(tmp_path / "empty.avi", 6)
+    with pytest.raises(PoseLifterError, match=r"no person found by the scripted 2D detector in any of the 6 frames"):
+        lift_video(clip, lifter=lifter, estimator=ScriptedEstimator([[]] * 6), focal=F)
+    from lifter.checkpoint import save_checkpoint
+
+    weights = save_checkpoint(tmp_path / "tiny.pt", lifter.net, lifter.codec, meta={"name": "tiny"})
+    register_estimator("_scripted_nobody", lambda **kw: ScriptedEstimator([[]] * 6), overwrite=True)
+    code = main(["lift", "--no-progress", str(clip), "--out", str(tmp_path / "out"), "--detector", "_scripted_nobody",
+                 "--weights", str(weights), "--focal", str(F)])
+    err = capsys.readouterr().err
+    assert code == 1 and "lifted 0 of 1" in err and "no person found" in err, err
+    assert not (tmp_path / "out" / "empty.json").exists()
+
+
 def test_cli_video_and_sequence(tmp_path, lifter, capsys):
     from lifter.checkpoint import save_checkpoint
 
@@ -390,3 +406,23 @@ def test_cli_photo_crowd_bound_and_everyone_in_one_scene(tmp_path, lifter, capsy
 def test_library_refuses_a_duration_bound_that_is_not_a_finite_positive_number(tmp_path, lifter, max_seconds):
     with pytest.raises(PoseLifterError, match="max_seconds must be a finite number"):
         lift_keypoint_sequence(tmp_path / "never_read.json", lifter=lifter, max_seconds=max_seconds)
+
+
+def test_cli_damaged_video_error_without_ffmpeg_log_lines(tmp_path, lifter):
+    """A truncated mp4: our one error line, not FFmpeg's '[mov,mp4,... @ 0x..] moov atom not found' before it (fd 2
+    of a fresh process: FFmpeg writes there directly and reads its log level once)."""
+    import os
+    import subprocess
+    import sys
+
+    from lifter.checkpoint import save_checkpoint
+
+    weights = save_checkpoint(tmp_path / "tiny.pt", lifter.net, lifter.codec, meta={"name": "tiny"})
+    bad = tmp_path / "truncated.mp4"
+    bad.write_bytes(b"\x00\x00\x00\x18ftypmp42" + bytes(range(256)) * 20)
+    run = subprocess.run([sys.executable, "-m", "lifter", "lift", str(bad), "--out", str(tmp_path / "out"),
+                          "--weights", str(weights), "--focal", "1000", "--no-progress"],
+                         capture_output=True, text=True, timeout=120,
+                         env={k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"})
+    assert run.returncode == 1 and "truncated.mp4: cannot open as a video" in run.stderr, run.stderr
+    assert "moov atom" not in run.stderr and "@ 0x" not in run.stderr, run.stderr

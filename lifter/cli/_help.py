@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -14,3 +15,10 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         if "default" in text.lower() or action.default in (None, False) or action.required:
             return text
         return super()._get_help_string(action)
+
+
+def plain_text(doc: str | None) -> str:
+    """A module docstring as help text: reStructuredText roles and literals (``:class:`a.B```, ````x````) shown
+    as their plain names."""
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", doc or "")
+    return re.sub(r"``([^`]+)``", r"\1", text)

@@ -67,8 +67,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                        formatter_class=HelpFormatter)
     p.add_argument("weights", nargs="*", default=["default"],
                    help="checkpoint paths or shipped model names; LABEL=PATH to name a row")
-    p.add_argument("--h36m", type=Path, default=None)
-    p.add_argument("--protocol", type=int, default=1, choices=(1, 2))
+    p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
+    p.add_argument("--protocol", type=int, default=1, choices=(1, 2),
+                   help="test subjects: 1 = S9 and S11 (trained on S1, 5, 6, 7, 8), "
+                   "2 = S11 (trained on S1, 5, 6, 7, 8, 9)")
     p.add_argument("--stride", type=_positive_int, default=5, help="test frame stride at 50 fps")
     p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
                    help="2D inputs: ground-truth (distorted) projection, or the real Stacked-Hourglass detections")
@@ -83,14 +85,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "shipped default)")
     p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
-    p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None)
+    p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None,
+                   help="only the first this many frames of each sequence (after --stride; default all)")
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
     p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
     p.add_argument("--quantize", action="store_true",
                    help="also evaluate each model with int8 block weights (Lifter.quantized)")
     p.add_argument("--source", default=None, choices=("clean", "detected"),
                    help="what the lifter is told the 2D is (default: clean for --inputs gt, detected for --inputs sh)")
-    p.add_argument("--threads", type=_positive_int, default=2)
+    p.add_argument("--threads", type=_positive_int, default=2, help="torch threads")
     p.set_defaults(func=run)
     return p
 

@@ -33,8 +33,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2), help="fit on this protocol's training subjects")
     p.add_argument("--out", type=Path, default=None,
-                   help=f"JSON to write (default <assets>/error_model/sh_mixture.json, i.e. {DEFAULT_JSON})")
-    p.add_argument("--plots", type=Path, default=DEFAULT_PLOT_DIR, help="folder for the PNG figures")
+                   help=f"JSON to write (default {DEFAULT_JSON}, relative to the current folder: run from a checkout's "
+                   "root, that replaces the shipped fit, which is how it is reproduced; elsewhere, give --out)")
+    p.add_argument("--plots", type=Path, default=DEFAULT_PLOT_DIR,
+                   help=f"folder for the PNG figures (default {DEFAULT_PLOT_DIR}, relative to the current folder)")
     p.add_argument("--tol", type=float, default=1e-7, help="EM stops when the mean log-lik gains less (nats/sample)")
     p.add_argument("--max-iter", type=int, default=1000, help="EM iteration cap")
     p.add_argument("--weights", default="default",

@@ -9,7 +9,8 @@ INPUT: image files, videos (anything OpenCV reads: .mp4, .mov, .avi, ...), folde
 ``.json`` files, not recursive) or keypoint JSON files (one frame, or a sequence with ``frames``).
 
 Several people: everyone found (at most ``--max-people``, the largest) is lifted into one camera space;
-``people`` lists them, largest first, and the top-level fields describe the largest. ``--glb`` puts
+``people`` lists them, largest first (from a keypoint file with each person's ``input_index`` in it and
+``person_id`` when given), and the top-level fields describe the largest. ``--glb`` puts
 everyone in one scene; ``--bvh`` writes ``<name>.bvh`` for the largest and ``<name>_person<k>.bvh`` for the others.
 
 Videos and keypoint sequences (:mod:`lifter.video`): ``DIR/<name>.json`` has ``fps``, ``tracks`` and
@@ -153,7 +154,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="images, videos, folders of them, keypoint .json files (one frame, or 'frames')")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--focal", type=float, nargs="+", metavar="F", default=None,
-                   help="focal length FX [FY] in px for every input (default: per input, EXIF or --fov)")
+                   help="focal length FX [FY] in px (one or two values) for every input (default, per input: a "
+                   "keypoint file's focal; a photo's EXIF; else the --fov field of view of the image size, which a "
+                   "keypoint file then has to give as image_size)")
     p.add_argument("--principal-point", type=float, nargs=2, metavar=("CX", "CY"), default=None,
                    help="principal point in px (default: the image centre)")
     p.add_argument("--fov", type=float, default=DEFAULT_DIAGONAL_FOV_DEG,
@@ -167,7 +170,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--weights", default="default",
                    help="lifter: 'default' (one model for every input: images are lifted as detector output, keypoint "
                         "files as their 'source' field says), another shipped name or a checkpoint .pt")
-    p.add_argument("--detector", default="blazepose", help="2D estimator for images")
+    p.add_argument("--detector", default="blazepose",
+                   help="2D estimator for images and videos: 'blazepose' (MediaPipe, the 'detect' extra), or one "
+                   "registered with lifter.detect.register_estimator")
     p.add_argument("--max-people", type=int, default=DEFAULT_MAX_PEOPLE,
                    help="people lifted per image or frame at most (the largest; a crowd bound)")
     p.add_argument("--smoothing", type=float, default=1.0,
@@ -209,6 +214,11 @@ def check_lift_options(args: argparse.Namespace) -> None:
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
+    from ..detect import available_estimators
+
+    if args.detector not in available_estimators():
+        raise PoseLifterError(f"--detector {args.detector!r}: unknown 2D estimator; available: "
+                              f"{list(available_estimators())}")
 
 
 def run_lift(args: argparse.Namespace) -> int:

@@ -25,11 +25,12 @@ from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..train import init_distributed, save_training_outputs, train, validation_sets
+from ._help import plain_text
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train a lifter on Human3.6M (also under torchrun)",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=plain_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
     p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
     p.add_argument("--print-config", action="store_true", help="print the resolved config as JSON and exit")
