@@ -455,11 +455,13 @@ def test_dangling_symlinks_and_other_files_are_named(tmp_path, weights, kp17, ca
     _kp_json(d / "a.json", kp17)
     (d / "gone.json").symlink_to(tmp_path / "nowhere.json")
     (d / "notes.txt").write_text("x")
+    (d / "more_photos").mkdir()
     (tmp_path / "b.png").symlink_to(tmp_path / "nowhere.png")
     code, err = run([str(d), str(tmp_path / "b.png"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0
     assert "gone.json: dangling symbolic link" in err and "b.png: dangling symbolic link" in err
     assert "note:" in err and "notes.txt" in err and "lifted 1 of 3" in err
+    assert "skipped 1 subfolder(s) (folders are not searched recursively; give them as inputs too): more_photos/" in err
 
 
 def test_a_full_disk_leaves_no_partial_files(tmp_path, weights, kp17, capsys, monkeypatch):
@@ -483,3 +485,21 @@ def test_16_bit_greyscale_png_decodes_with_its_contrast(tmp_path):
     img = load_image(tmp_path / "g16.png")
     assert img.rgb.dtype == np.uint8 and img.rgb.min() == 0 and img.rgb.max() == 255
     assert 100 < img.rgb.mean() < 155  # a ramp, not all white
+
+
+def test_output_folder_that_is_also_the_input_folder_is_not_lifted_again(tmp_path, weights, kp17, capsys):
+    d = tmp_path / "work"
+    d.mkdir()
+    _kp_json(d / "pose.json", kp17)
+    code, err = run([str(d), "--out", str(d), "--weights", str(weights)], capsys)
+    assert code == 0 and "lifted 1 of 1" in err, err
+    first = sorted(p.name for p in d.iterdir())
+    assert len(first) == 2  # the input and its result (named so that it does not overwrite the input)
+    # again: the same files, no result of a result
+    code, err = run([str(d), "--out", str(d), "--weights", str(weights)], capsys)
+    assert code == 0 and "lifted 1 of 1" in err and "1 earlier result file(s) are not lifted again" in err, err
+    assert sorted(p.name for p in d.iterdir()) == first
+    # named as an input, a result is lifted (poselifter reads its own output)
+    result = next(p for p in d.iterdir() if p.name != "pose.json")
+    code, err = run([str(result), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0, err

@@ -6,7 +6,8 @@ Registered in :mod:`lifter.cli` by :func:`add_parser`. Usage::
                     [--max-people 3] [--smoothing 1] [--max-seconds 600]
 
 INPUT: image files, videos (anything OpenCV reads: .mp4, .mov, .avi, ...), folders (their images, videos and
-``.json`` files, not recursive) or keypoint JSON files (one frame, or a sequence with ``frames``).
+``.json`` files, not recursive; in the output folder itself, earlier results are left out) or keypoint JSON files
+(one frame, or a sequence with ``frames``).
 
 Several people: everyone found (at most ``--max-people``, the largest) is lifted into one camera space;
 ``people`` lists them, largest first (from a keypoint file with each person's ``input_index`` in it and
@@ -84,10 +85,23 @@ from ._help import HelpFormatter
 # ------------------------------------------------------------------------------------------------
 
 
-def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list[str]]:
+def _is_result_file(path: Path) -> bool:
+    """Whether a .json file is a ``poselifter lift`` result (its ``model`` and ``units`` fields)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(4096)
+    except OSError:
+        return False
+    return head.lstrip().startswith(b"{") and b'"model"' in head and b'"units"' in head
+
+
+def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple[list[Path], list[str], list[str]]:
     """Files to process (folders expanded to their images, videos and .json files, sorted, not recursive) and a
     message for every input that is skipped: missing files, dangling symbolic links, folders without inputs,
-    and entries of a folder that are neither files nor of a known kind (named, so nothing is skipped silently).
+    and entries of a folder that are neither files nor of a known kind, subfolders included (named, so nothing is
+    skipped silently).
+    A folder that is also the output folder ``out`` contributes no earlier results (``poselifter lift`` JSON), so a
+    second run does not lift the first run's output; a result file named as an input itself is lifted.
     Returns ``(files, problems, notes)``: problems count as failed inputs, notes (other files in a folder) do not."""
     files: list[Path] = []
     problems: list[str] = []
@@ -97,7 +111,8 @@ def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list
         if p.is_symlink() and not p.exists():
             problems.append(f"{p}: dangling symbolic link (its target {os.readlink(p)!r} does not exist); skipped")
         elif p.is_dir():
-            found, skipped = [], []
+            found, skipped, subdirs, results = [], [], [], []
+            is_out = out is not None and out.exists() and p.resolve() == out.resolve()
             for q in sorted(p.iterdir()):
                 sfx = q.suffix.lower()
                 known = sfx in IMAGE_SUFFIXES or sfx in VIDEO_SUFFIXES or sfx == ".json"
@@ -106,9 +121,20 @@ def expand_inputs(inputs: list[str | Path]) -> tuple[list[Path], list[str], list
                         problems.append(f"{q}: dangling symbolic link (its target {os.readlink(q)!r} does not exist); "
                                         "skipped")
                 elif q.is_file() and known:
-                    found.append(q)
+                    if is_out and sfx == ".json" and _is_result_file(q):
+                        results.append(q.name)
+                    else:
+                        found.append(q)
                 elif q.is_file() and not q.name.startswith("."):
                     skipped.append(q.name)
+                elif q.is_dir() and not q.name.startswith("."):
+                    subdirs.append(q.name + "/")
+            if results:
+                notes.append(f"{p}: is also the output folder; its {len(results)} earlier result file(s) are not "
+                             "lifted again (name one as an input to lift it)")
+            if subdirs:
+                notes.append(f"{p}: skipped {len(subdirs)} subfolder(s) (folders are not searched recursively; give "
+                             "them as inputs too): " + ", ".join(subdirs[:5]) + (" ..." if len(subdirs) > 5 else ""))
             if skipped:
                 notes.append(f"{p}: skipped {len(skipped)} file(s) that are not images, videos or .json: "
                                 + ", ".join(skipped[:5]) + (" ..." if len(skipped) > 5 else ""))
@@ -231,7 +257,7 @@ def run_lift(args: argparse.Namespace) -> int:
         get_format(args.format)
     focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True, scalar=True)
     pp = None if args.principal_point is None else np.asarray(args.principal_point, np.float64)
-    files, problems, notes = expand_inputs(args.inputs)
+    files, problems, notes = expand_inputs(args.inputs, out=args.out)
     for msg in problems:
         print(f"error: {msg}", file=sys.stderr)
     for msg in notes:
