@@ -420,8 +420,15 @@ def test_cli_damaged_video_error_without_ffmpeg_log_lines(tmp_path, lifter):
     weights = save_checkpoint(tmp_path / "tiny.pt", lifter.net, lifter.codec, meta={"name": "tiny"})
     bad = tmp_path / "truncated.mp4"
     bad.write_bytes(b"\x00\x00\x00\x18ftypmp42" + bytes(range(256)) * 20)
-    run = subprocess.run([sys.executable, "-m", "lifter", "lift", str(bad), "--out", str(tmp_path / "out"),
-                          "--weights", str(weights), "--focal", "1000", "--no-progress"],
+    argv = ["lift", str(bad), "--out", str(tmp_path / "out"), "--weights", str(weights), "--focal", "1000",
+            "--no-progress", "--detector", "_nobody"]
+    code = ("import sys\n"
+            "from lifter.detect import register_estimator\n"
+            "class Nobody:\n    name = 'nobody'\n    def detect(self, image):\n        return []\n"
+            "register_estimator('_nobody', lambda **kw: Nobody())\n"  # no mediapipe needed (CI's first phase)
+            "from lifter.cli import main\n"
+            f"sys.exit(main({argv!r}))\n")
+    run = subprocess.run([sys.executable, "-c", code],
                          capture_output=True, text=True, timeout=120,
                          env={k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"})
     assert run.returncode == 1 and "truncated.mp4: cannot open as a video" in run.stderr, run.stderr
