@@ -384,8 +384,9 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         raise PoseLifterError(f"{p}: no person in the keypoint file")
     arrays, fmt, identity = _people_arrays(people, p, fmt, notes)
     if len(arrays) > 1:
+        has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
-                     "position in the file" + (", 'person_id' their own id)" if any(i for _, i in identity) else ")"))
+                     "position in the file" + (", 'person_id' their own id)" if has_ids else ")"))
     image_size, focal, pp, source = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, people=tuple(arrays),
