@@ -59,6 +59,36 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
+MAX_PLAUSIBLE_VIEW_DEG: float = 90.0
+"""A 2D pose whose box diagonal spans more than this angle of view at the focal length used gets a note (a focal
+length given in mm instead of px is the usual cause; a phone's main camera sees about 75 deg across its diagonal,
+so a whole person rarely spans more than 90 deg)."""
+
+
+def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None) -> list[str]:
+    """Notes on keypoint-file 2D that the lifter takes but that look wrong: poses ``(n, 17, 2)`` px spanning more
+    than :data:`MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px, or lying mostly outside the ``image_size``."""
+    notes: list[str] = []
+    k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
+    if not len(k):
+        return notes
+    diag = np.hypot(*(k.max(1) - k.min(1)).T)
+    view = np.degrees(2 * np.arctan(diag / (2 * float(np.sqrt(focal[0] * focal[1])))))
+    if float(view.max()) > MAX_PLAUSIBLE_VIEW_DEG:
+        notes.append(f"at the focal length used ({_px(focal)}) a 2D pose spans {float(view.max()):.0f} deg of view "
+                     f"(a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg): is the focal length "
+                     "in pixels? (f_px = f_mm * image width px / sensor width mm; or leave it out to assume a field of "
+                     "view)")
+    if image_size is not None:
+        W, H = image_size
+        outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
+        share = outside.mean(1)
+        if float(share.max()) > 0.5:
+            notes.append(f"{int((share > 0.5).sum())} of {len(k)} 2D pose(s) lie mostly outside the {W} x {H} px "
+                         "image: are the keypoints in this image's pixels?")
+    return notes
+
+
 def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None,
           source: str) -> Any:
     return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
@@ -92,6 +122,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
+    cam_notes += plausibility_notes(kp17, f, kf.image_size)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)

@@ -412,7 +412,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
-    from .pipeline import resolve_camera
+    from .pipeline import plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
@@ -441,6 +441,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kp_all = [convert(k, src=ks.format) for fr in frames for k in fr]
     if not kp_all:
         raise PoseLifterError(f"{path}: no person in any frame")
+    warnings.extend(plausibility_notes(np.stack(kp_all), f, ks.image_size))
     res = lifter.lift(np.stack(kp_all), focal=f, principal_point=pp, flip_test=flip_test, source=ks.source)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     kp17 = np.stack(kp_all)

@@ -503,3 +503,16 @@ def test_output_folder_that_is_also_the_input_folder_is_not_lifted_again(tmp_pat
     result = next(p for p in d.iterdir() if p.name != "pose.json")
     code, err = run([str(result), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0, err
+
+
+def test_implausible_keypoint_files_get_a_note(tmp_path, weights, kp17, capsys):
+    """Lifted as given, but said: a focal length that looks like mm, keypoints mostly outside the stated image."""
+    mm = _kp_json(tmp_path / "mm.json", kp17, focal=35.0)
+    code, err = run([str(mm), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "deg of view (a whole person rarely spans more than 90 deg): is the focal length" in err
+    far = _kp_json(tmp_path / "far.json", kp17 - 5000.0)
+    code, err = run([str(far), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "1 of 1 2D pose(s) lie mostly outside the 1280 x 720 px image" in err, err
+    fine = _kp_json(tmp_path / "fine.json", kp17, focal=1000.0)
+    code, err = run([str(fine), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "deg of view" not in err and "outside" not in err, err

@@ -433,3 +433,10 @@ def test_cli_damaged_video_error_without_ffmpeg_log_lines(tmp_path, lifter):
                          env={k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"})
     assert run.returncode == 1 and "truncated.mp4: cannot open as a video" in run.stderr, run.stderr
     assert "moov atom" not in run.stderr and "@ 0x" not in run.stderr, run.stderr
+
+
+def test_keypoint_sequence_with_a_focal_in_mm_gets_the_note(tmp_path, lifter):
+    rec = lift_keypoint_sequence(_sequence_json(tmp_path / "s.json", focal=28.0), lifter=lifter)
+    assert any("is the focal length in pixels?" in w for w in rec.warnings), rec.warnings
+    ok = lift_keypoint_sequence(_sequence_json(tmp_path / "s2.json"), lifter=lifter)
+    assert not any("deg of view" in w for w in ok.warnings), ok.warnings
