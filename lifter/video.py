@@ -56,6 +56,13 @@ DEFAULT_MAX_PEOPLE: Final[int] = 3
 DEFAULT_SEARCH_EVERY_S: Final[float] = 0.5
 """Videos: the whole frame is searched for (new) people at least this often, in seconds."""
 
+MIN_TRACK_FRAMES: Final[int] = 2
+"""Videos of at least :data:`MIN_FRAMES_FOR_TRACK_FILTER` frames: a track the detector saw in fewer frames than this
+is left out (a person flashing up in one frame is almost always a false detection), with a warning naming the
+frames."""
+
+MIN_FRAMES_FOR_TRACK_FILTER: Final[int] = 10
+
 
 class VideoError(PoseLifterError):
     """A video file cannot be opened or decoded, or has no frames."""
@@ -374,6 +381,19 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if declared > 0 and index + 1 < min(declared, limit):
         warnings.append(f"decoding stopped after frame {index} of the {declared} the file declares; the rest "
                         "could not be read")
+    if len(frames) >= MIN_FRAMES_FOR_TRACK_FILTER:
+        seen: dict[int, list[int]] = {}
+        for fr in frames:
+            for q in fr.people:
+                seen.setdefault(q.track_id, []).append(fr.index)
+        flashes = {tid for tid, at in seen.items() if len(at) < MIN_TRACK_FRAMES}
+        if flashes:
+            where = sorted(i for tid in flashes for i in seen[tid])
+            for fr in frames:
+                fr.people = [q for q in fr.people if q.track_id not in flashes]
+            nobody = [fr.index for fr in frames if not fr.people]
+            warnings.append(f"{len(flashes)} detection(s) seen in fewer than {MIN_TRACK_FRAMES} frames left out as "
+                            f"likely false detections (frames {_frames_summary(where)})")
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
                               f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else ""))

@@ -440,3 +440,21 @@ def test_keypoint_sequence_with_a_focal_in_mm_gets_the_note(tmp_path, lifter):
     assert any("is the focal length in pixels?" in w for w in rec.warnings), rec.warnings
     ok = lift_keypoint_sequence(_sequence_json(tmp_path / "s2.json"), lifter=lifter)
     assert not any("deg of view" in w for w in ok.warnings), ok.warnings
+
+
+def test_video_person_seen_in_one_frame_only_is_left_out(tmp_path, lifter):
+    """A detection flashing up in a single frame of a longer video (a false detection on a wall) is dropped, said in
+    a warning; the two real people keep their tracks."""
+    script = _script(14)
+    ghost = _person(np.random.default_rng(5), 160.0) * 0.5 + [80.0, 60.0]
+    script[6] = [*script[6], ghost]
+    est = ScriptedEstimator(script)
+    rec = lift_video(_write_clip(tmp_path / "wall.avi", 14), lifter=lifter, estimator=est, focal=F)
+    assert [t for t in rec.tracks()] == [1, 2]
+    assert all(len(fr.people) == 2 for fr in rec.frames)
+    assert any("1 detection(s) seen in fewer than 2 frames left out as likely false detections (frames 6)" in w
+               for w in rec.warnings), rec.warnings
+    # a short clip keeps everything: too few frames to tell a flash from a person
+    est2 = ScriptedEstimator([*script[:6], script[6]])
+    short = lift_video(_write_clip(tmp_path / "short.avi", 7), lifter=lifter, estimator=est2, focal=F)
+    assert len(short.frames[6].people) == 3
