@@ -70,6 +70,11 @@ from .viser_hooks import limit_uploads, report_rejected_values
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
 
+TYPING_SETTLE_S: float = 1.0
+"""A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
+its range is clamped (and the box rewritten) only when the tab has sent nothing newer for this long, so a value
+being typed is not mangled half-way. Until then the tab keeps lifting with the value in use."""
+
 
 class LatestWins:
     """Runs ``work`` when asked, never twice at once; a request made while it runs makes it run once more
@@ -167,6 +172,8 @@ class SessionView:
         self._reset_request = False
         self._redraw_request = False
         self._flags = threading.Lock()
+        self._typed_at: dict[str, float] = {}
+        """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
         self._last_plane: np.ndarray | None = None
         self._base_key: tuple | None = None
         self._image_key: tuple | None = None
@@ -265,6 +272,8 @@ class SessionView:
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
+        for name, handle in (("focal_px", g.lift.focal), ("noise_level", g.noise.level)):  # before the sync callback
+            handle.on_update(functools.partial(self._note_typed, name))
         for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame, *g.value_handles()]:
             h.on_update(sync)
         g.lift.gt.on_update(self._on(self._request_redraw))
@@ -281,6 +290,16 @@ class SessionView:
         g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name, g.files.upload.value.content)))
         g.files.download_json.on_click(self._on(self.download, "json"))
         g.files.download_glb.on_click(self._on(self.download, "glb"))
+
+    def _note_typed(self, name: str, event: Any) -> None:
+        if getattr(event, "client", None) is not None:  # from a browser tab, not a value set here
+            self._typed_at[name] = time.time()
+
+    def _settle_later(self, delay: float) -> None:
+        """A sync pass after ``delay`` s: a clamped value still in its box is applied then (:data:`TYPING_SETTLE_S`)."""
+        timer = threading.Timer(delay, lambda: self._do(self._runner.request))
+        timer.daemon = True
+        timer.start()
 
     def _request_redraw(self) -> None:
         with self._flags:
@@ -322,6 +341,12 @@ class SessionView:
         old = self.state
         values = self._control_values()
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
+        now = time.time()
+        typing = [r for r in rejected if not r.refused and now - self._typed_at.get(r.control, -math.inf) < TYPING_SETTLE_S]
+        if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
+            st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
+            rejected = [r for r in rejected if r not in typing]
+            self._settle_later(max(TYPING_SETTLE_S - (now - self._typed_at[r.control]) for r in typing) + 0.05)
         with self._flags:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False
@@ -454,8 +479,11 @@ class SessionView:
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         same_camera = sample.camera is old.sample.camera or (
             sample.camera.name == old.sample.camera.name and sample.key.split("/")[0] == old.sample.key.split("/")[0])
-        if same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video"):
+        kept = same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video")
+        if kept:
             st = st.evolve(focal_px=old.focal_px)
+        # a focal length the user chose, replaced by the new camera's: said, not silent
+        chosen = abs(old.focal_px - old.sample.camera.alpha) > 0.5 and abs(st.focal_px - old.focal_px) > 0.5
         self._sample_gen += 1
         self._apply(st, new_sample=True)
         if sample.key.startswith("h36m/"):
@@ -465,6 +493,9 @@ class SessionView:
         self._show_sample_controls(st)
         if note:
             self.show_message(note)
+        if not kept and chosen:
+            self.show_message(f"focal length set to this camera's {st.focal_px:.0f} px (it was {old.focal_px:.0f} px: "
+                              "another camera)")
         cam = sample.camera
         view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)

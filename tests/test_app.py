@@ -612,6 +612,54 @@ def _focal_in_readout(view: SessionView) -> int:
     return int(m.group(1))
 
 
+def test_a_chosen_focal_replaced_by_another_camera_is_said(view: SessionView, app: PoseLifterApp) -> None:
+    names = list(app.demo.names)
+    view.select_demo(names[0])
+    other = next(n for n in names[1:] if abs(app.demo.get(n).camera.alpha - view.state.sample.camera.alpha) > 1)
+    view.gui.lift.focal.value = 2000.0
+    assert view.state.focal_px == 2000.0
+    view.select_demo(other)
+    cam = app.demo.get(other).camera.alpha
+    assert view.state.focal_px == pytest.approx(cam)
+    assert f"focal length set to this camera's {cam:.0f} px (it was 2000 px" in view.messages[-1], view.messages
+    n = len(view.messages)
+    view.select_demo(names[0])  # the camera's own focal was in use: nothing to say
+    assert not any("focal length set" in m for m in view.messages[n:]), view.messages[n:]
+
+
+def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> None:
+    """The number box sends every keystroke: "2", "20", "200", "2000" must end at 2000 px, not be clamped to 100 at
+    "2" and rewritten under the user's fingers; a value left out of range is clamped once the typing has settled
+    (viewer.TYPING_SETTLE_S), with the message."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    before = set(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(set(app.views) - before) == 1)
+        v = app.views[next(iter(set(app.views) - before))]
+        n_msgs = len(v.messages)
+        for typed in ("2", "20", "200", "2000"):
+            _send_value(tab, v.gui.lift.focal, float(typed))
+            time.sleep(0.1)
+        assert wait_for(lambda: v.state.focal_px == 2000.0 and _focal_in_readout(v) == 2000, timeout=10)
+        time.sleep(TYPING_SETTLE_S + 0.3)  # past the settle time: nothing was clamped on the way
+        assert v.state.focal_px == 2000.0 and v.gui.lift.focal.value == 2000.0
+        assert not any("clamped" in m for m in v.messages[n_msgs:]), v.messages[n_msgs:]
+        _send_value(tab, v.gui.lift.focal, 7000.0)  # left out of range: clamped after the settle time, said once
+        time.sleep(0.2)
+        assert v.state.focal_px == 2000.0 and v.gui.lift.focal.value == 7000.0  # not yet
+        assert wait_for(lambda: v.state.focal_px == 6000.0 and v.gui.lift.focal.value == 6000.0
+                        and any("7000 px is outside" in m for m in v.messages[n_msgs:]), timeout=10), v.messages
+        time.sleep(TYPING_SETTLE_S)
+        assert sum("7000 px is outside" in m for m in v.messages[n_msgs:]) == 1, v.messages  # said once
+    finally:
+        tab.conn.close()
+        assert wait_for(lambda: set(app.views) == before)  # (the next test counts the views)
+
+
 def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
     """Bursts of values with no spacing, to two tabs at once: the state, the scene and the readout end on the last
     value of every control, in each tab (viser runs the callbacks on a thread pool, in any order)."""
