@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import gc
 import logging
+import re
 import socket
 import sys
 import threading
@@ -56,7 +57,7 @@ def check_bind(host: str, port: int) -> str | None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="poselifter-app", description=__doc__,
+    p = argparse.ArgumentParser(prog="poselifter-app", description=re.sub(r"``([^`]+)``", r"\1", __doc__ or ""),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
     p.add_argument("--port", type=_port, default=8080, help="port 0-65535 (0 = any free port; a busy port: the next free one)")
