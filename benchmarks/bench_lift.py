@@ -127,6 +127,25 @@ def main() -> None:
         finally:
             api.NUMPY_MAX_BATCH = default_max
 
+    # Everything but the networks' arithmetic (input checks, codec, decode, ensemble averaging): each network call
+    # replays its output for this pose instead of computing it
+    real_network = api.Lifter._network
+    replay: dict[tuple[int, int], np.ndarray] = {}
+
+    def replayed(self: Lifter, x: np.ndarray) -> np.ndarray:
+        key = (id(self), len(x))
+        if key not in replay:
+            replay[key] = real_network(self, x)
+        return replay[key].copy()
+
+    api.Lifter._network = replayed  # type: ignore[method-assign]
+    try:
+        rest50 = float(np.median(time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)),
+                                            args.single_calls))) * 1e3
+    finally:
+        api.Lifter._network = real_network  # type: ignore[method-assign]
+    print(f"single pose, all but the networks' arithmetic (their outputs replayed): median {rest50:.3f} ms; the "
+          f"networks: {p50 - rest50:.3f} ms")
     u50, n50 = lift_with(0, kp[0]), lift_with(1 << 30, kp[0])
     print(f"single pose, network rows all through torch (forward_folded): median {u50:.3f} ms; all through numpy: "
           f"{n50:.3f} ms (the default sends up to NUMPY_MAX_BATCH = {default_max} row(s) to numpy)")
@@ -140,6 +159,7 @@ def main() -> None:
     results = {"model": lifter.name, "flip_test": lifter.flip_test, "rows_per_pose": rows,
                "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
                "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95,
+               "single_without_network_arithmetic_median_ms": rest50,
                "single_torch_module_median_ms": u50, "single_numpy_median_ms": n50,
                "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
