@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair
-from .camera import DEFAULT_DIAGONAL_FOV_DEG
+from .camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
 from .io import LiftRecord, PersonResult, parse_keypoint_json
 from .keypoints import convert
@@ -73,7 +73,7 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     if not len(k):
         return notes
     diag = np.hypot(*(k.max(1) - k.min(1)).T)
-    view = np.degrees(2 * np.arctan(diag / (2 * float(np.sqrt(focal[0] * focal[1])))))
+    view = np.degrees(2 * np.arctan(diag / (2 * float(focal_alpha(focal)))))
     if float(view.max()) > MAX_PLAUSIBLE_VIEW_DEG:
         notes.append(f"at the focal length used ({_px(focal)}) a 2D pose spans {float(view.max()):.0f} deg of view "
                      f"(a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg): is the focal length "

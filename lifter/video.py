@@ -170,11 +170,7 @@ class SequenceRecord:
 
     def tracks(self) -> dict[int, list[tuple[int, PersonState]]]:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
-        out: dict[int, list[tuple[int, PersonState]]] = {}
-        for fr in self.frames:
-            for p in fr.people:
-                out.setdefault(p.track_id, []).append((fr.index, p))
-        return out
+        return _tracks(self.frames)
 
     def to_json(self) -> dict[str, Any]:
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen)}
@@ -193,6 +189,15 @@ class SequenceRecord:
             "tracks": tracks, "bad_frames": self.bad_frames, "warnings": self.warnings,
             "frames": [f.to_json() for f in self.frames],
         }
+
+
+def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]]]:
+    """``track_id -> [(frame index, person), ...]`` of ``frames``, in frame order."""
+    out: dict[int, list[tuple[int, PersonState]]] = {}
+    for fr in frames:
+        for q in fr.people:
+            out.setdefault(q.track_id, []).append((fr.index, q))
+    return out
 
 
 def _frames_summary(idx: list[int], n: int = 8) -> str:
@@ -274,7 +279,6 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         raise VideoError(f"{p}: no such file")
     if p.stat().st_size == 0:
         raise VideoError(f"{p}: empty file (zero-length video)")
-    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # (as at import: in case it was removed since)
     cap = cv2.VideoCapture(str(p))
     try:
         if not cap.isOpened():
@@ -382,13 +386,10 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.append(f"decoding stopped after frame {index} of the {declared} the file declares; the rest "
                         "could not be read")
     if len(frames) >= MIN_FRAMES_FOR_TRACK_FILTER:
-        seen: dict[int, list[int]] = {}
-        for fr in frames:
-            for q in fr.people:
-                seen.setdefault(q.track_id, []).append(fr.index)
+        seen = _tracks(frames)
         flashes = {tid for tid, at in seen.items() if len(at) < MIN_TRACK_FRAMES}
         if flashes:
-            where = sorted(i for tid in flashes for i in seen[tid])
+            where = sorted(i for tid in flashes for i, _ in seen[tid])
             for fr in frames:
                 fr.people = [q for q in fr.people if q.track_id not in flashes]
             nobody = [fr.index for fr in frames if not fr.people]
@@ -461,10 +462,10 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kp_all = [convert(k, src=ks.format) for fr in frames for k in fr]
     if not kp_all:
         raise PoseLifterError(f"{path}: no person in any frame")
-    warnings.extend(plausibility_notes(np.stack(kp_all), f, ks.image_size))
-    res = lifter.lift(np.stack(kp_all), focal=f, principal_point=pp, flip_test=flip_test, source=ks.source)
-    root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     kp17 = np.stack(kp_all)
+    warnings.extend(plausibility_notes(kp17, f, ks.image_size))
+    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source)
+    root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
