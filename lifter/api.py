@@ -79,10 +79,15 @@ class LiftResult:
     keypoints_2d: ``(..., 17, 2)`` px, the input. principal_point, focal: ``(..., 2)`` px used.
     focal_source: ``"given"``; ``"default-fov"`` (no focal: the default diagonal field of view of
         ``image_size``); ``"reference"`` (no focal and no image size: a 1000-px camera).
-    metric_depth: True when the focal length was given. Otherwise Z (and so the root and the absolute pose)
-        is right only up to the unknown focal length, ``Z_true = Z * f_true / f_used`` (paper Eq. 5-6);
-        the canonical depth, the relative pose and the root's direction are known regardless.
+    metric_depth: True when the focal length was given. Otherwise the result is for the assumed focal length
+        ``focal`` (see ``focal_source``), and how the true one would change it depends on ``input_space``.
     source: ``"detected"`` or ``"clean"``, as passed.
+    input_space: what the network read. ``"pixel"`` (the paper's models): the 2D in pixels, so the relative pose
+        and the canonical depth do not depend on the focal length, and with an unknown focal Z is known up to it,
+        ``Z_true = Z * f_true / f_used`` (paper Eq. 5-6), exactly. ``"camera"`` (the default model): the 2D
+        through the focal length (reference camera), so a different focal length changes the pose and the
+        canonical depth as well; ``Z * f_true / f_used`` is then only a rough correction (scripts/wrong_focal.py:
+        within 8 % for exact 2D and 29 % for detected 2D when the focal used is x0.5-x2 the true one).
     """
 
     absolute: np.ndarray
@@ -95,6 +100,7 @@ class LiftResult:
     focal_source: FocalSource
     metric_depth: bool
     source: Source
+    input_space: Literal["pixel", "camera"] = "pixel"
 
     @property
     def note(self) -> str:
@@ -102,8 +108,13 @@ class LiftResult:
             return "absolute pose in mm, camera frame"
         used = ("the default field of view of the image" if self.focal_source == "default-fov"
                 else "a 1000-px reference camera")
-        return (f"no focal length given: depth placed for {used}; the pose, the canonical depth (Z/f) and the root's "
-                "direction are known, Z itself only up to the unknown focal length (Z_true = Z * f_true / f_used)")
+        if self.input_space == "pixel":
+            return (f"no focal length given: depth placed for {used}; the pose, the canonical depth (Z/f) and the "
+                    "root's direction are known, Z itself only up to the unknown focal length "
+                    "(Z_true = Z * f_true / f_used)")
+        return (f"no focal length given: lifted as seen through {used}; this model reads the 2D through the focal "
+                "length, so the pose and the depth both rest on that assumption (Z * f_true / f_used only roughly "
+                "corrects Z); give the focal length for a metric result")
 
 
 def _where(bad: np.ndarray) -> str:
@@ -339,7 +350,9 @@ class Lifter:
         absolute = rel + root[..., None, :]
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
-                          metric_depth=focal_source == "given", source=source)
+                          metric_depth=focal_source == "given", source=source,
+                          input_space="camera" if any(m.config.input_space == "camera" for m in (self, *self.ensemble))
+                          else "pixel")
 
     def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source, flip_test: bool, *,
                    encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None

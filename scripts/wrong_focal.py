@@ -3,6 +3,10 @@ given departs from the true one. Not the focal sweep of ``poselifter evaluate --
 re-projected with each focal, so the 2D changes with it); here the image stays and only the focal told changes,
 as with the app's focal slider.
 
+A second table: how well paper Eq. 5-6 recovers the metric depth afterwards. With a wrong focal f_used, the root
+depth rescaled by the true focal, ``Z * f_true / f_used``, against the Z lifted with the true focal (median ratio;
+exactly 1 for the paper's pixel-space models, whose input does not depend on the focal length).
+
 Protocol 1 test frames (S9, S11, every ``--stride``-th frame, 4 cameras), ground-truth 2D as ``source="clean"``,
 true principal point; the focal given is the camera's times each factor. PA-MPJPE (mm) against the true pose.
 
@@ -13,6 +17,8 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+
+import numpy as np
 
 from lifter import Lifter
 from lifter.data import H36M, default_h36m_dir
@@ -34,13 +40,28 @@ def main() -> int:
           "PA-MPJPE mm with the focal length given = true focal x factor")
     print("| model | " + " | ".join(f"x{f:g}" for f in factors) + " |")
     print("|---|" + "---|" * len(factors))
+    ratios: dict[str, list[str]] = {}
     for name in args.models.split(","):
         lifter = Lifter.load(name)
         row = []
+        for source in ("clean", "detected"):
+            ratios[f"{lifter.name}, source={source!r}"] = []
+        z_true = {source: lifter.lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point,
+                                      source=source).root[:, 2] for source in ("clean", "detected")}
         for k in factors:
-            res = lifter.lift(s.keypoints_2d, focal=s.focal * k, principal_point=s.principal_point, source="clean")
-            row.append(float(pa_mpjpe(res.absolute, s.pose_3d).mean()))
+            for source in ("clean", "detected"):
+                res = lifter.lift(s.keypoints_2d, focal=s.focal * k, principal_point=s.principal_point, source=source)
+                if source == "clean":
+                    row.append(float(pa_mpjpe(res.absolute, s.pose_3d).mean()))
+                ratios[f"{lifter.name}, source={source!r}"].append(
+                    f"{float(np.median(res.root[:, 2] / k / z_true[source])):.3f}")
         print(f"| {lifter.name} | " + " | ".join(f"{v:.1f}" for v in row) + " |")
+    print()
+    print("Z * f_true / f_used over the Z lifted with the true focal (median; 1 = Eq. 5-6 exact)")
+    print("| model | " + " | ".join(f"x{f:g}" for f in factors) + " |")
+    print("|---|" + "---|" * len(factors))
+    for label, row_r in ratios.items():
+        print(f"| {label} | " + " | ".join(row_r) + " |")
     return 0
 
 
