@@ -1,12 +1,12 @@
 """Inference speed of ``Lifter.lift``: single-pose latency and batched throughput against the FLOP limit.
 
-The FLOP limit is measured in the same run, around each batch size's timing (just before and just after it; the
-faster rate counts): the machine's float32 matmul rate (GFLOP/s, a
-``(B, W) @ (W, W)`` product at the model's width) divided by the FLOPs of one pose through the
-network (2 x multiply-adds of every Linear layer), times two when the model averages each pose with its
-mirror image by default (``Lifter.flip_test``: two network rows per pose), summed over an ensemble's
-networks. Reported ratios are within one run, so they hold
-on a shared, noisy machine; absolute times are indicative only.
+The FLOP limit is the machine's float32 matmul rate (GFLOP/s, a ``(4096, W) @ (W, W)`` product at the model's
+width) divided by the FLOPs of one pose through the network (2 x multiply-adds of every Linear layer), times two
+when the model averages each pose with its mirror image by default (``Lifter.flip_test``: two network rows per
+pose), summed over an ensemble's networks. For each batch size the limit and the model are timed alternately in
+``--rounds`` rounds, each the best of a few repeats, and the fraction of the limit is taken per round; the median
+over rounds is reported with its quartiles. Reported ratios are within one run, so they hold on a shared, noisy
+machine; absolute times are indicative only.
 
     python benchmarks/bench_lift.py [--model default] [--threads 2] [--json out.json]
 """
@@ -64,6 +64,13 @@ def matmul_gflops(width: int, batch: int = 4096, repeats: int = 20) -> float:
     return 2 * batch * width * width / best / 1e9
 
 
+def time_calls_cold(fn) -> float:
+    """One call's wall time (s), no warm-up of its own."""
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
 def time_calls(fn, n: int) -> np.ndarray:
     for _ in range(min(20, n)):
         fn()
@@ -81,6 +88,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--single-calls", type=int, default=2000)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--rounds", type=int, default=9, help="alternating rounds (matmul, model) per batch size")
     ap.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
                     help="override the model's flip-test default (every network of an ensemble)")
     args = ap.parse_args()
@@ -164,26 +172,41 @@ def main() -> None:
                "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
-    # Each batch size against the FLOP limit measured around it: the matmul rate just before and just after its
-    # timing, the faster of the two (a shared machine's rate drifts; the faster one gives the lower, safer ratio).
+    # Each batch size against the FLOP limit measured in the same rounds: a shared machine's matmul rate drifts by
+    # +-10 % within minutes, so the two are timed alternately, round after round (the matmul rate at every width,
+    # then the model at this batch size), each as its best of a few repeats, and the ratio is taken per round. The
+    # reported fraction is the median over rounds, with its quartiles.
     widths = sorted({m.config.width for m, *_ in parts})
 
     def limit_with(rates: dict[int, float]) -> float:
         return 1.0 / sum(f_m / (rates[m.config.width] * 1e9) for m, _, f_m, _ in parts)
 
-    print(f"{'batch':>6} {'poses/s':>12} {'FLOP limit':>11} {'of FLOP limit':>14}  (matmul GFLOP/s around it)")
+    print(f"batched: {args.rounds} rounds per batch size, each the matmul rate (best of 5) then the model (best of a "
+          "few calls); median over rounds [quartiles]")
+    print(f"{'batch':>6} {'poses/s':>12} {'FLOP limit':>11} {'of FLOP limit':>14}  [quartiles]  (matmul GFLOP/s)")
     for b in (1, 16, 256, 2048, 8192):
-        before = {w: matmul_gflops(w) for w in widths}
-        reps = max(3, int(20000 / b))
-        t = time_calls(lambda b=b: lifter.lift(kp[:b], focal=1145.0, principal_point=(512.0, 515.0)), reps)
-        after = {w: matmul_gflops(w) for w in widths}
-        rates = {w: max(before[w], after[w]) for w in widths}
-        rate, lim = b / np.median(t), limit_with(rates)
+        kb = kp[:b]
+
+        def call(kb=kb) -> None:
+            lifter.lift(kb, focal=1145.0, principal_point=(512.0, 515.0))
+
+        calls = max(3, int(400 / b))
+        call()
+        rounds = []
+        for _ in range(args.rounds):
+            rates = {w: matmul_gflops(w, repeats=5) for w in widths}
+            t = min(time_calls_cold(call) for _ in range(calls))
+            rounds.append({"poses_per_s": b / t, "flop_limit_poses_per_s": limit_with(rates),
+                           "matmul_gflops": rates})
+        frac = np.array([r["poses_per_s"] / r["flop_limit_poses_per_s"] for r in rounds])
+        q1, med, q3 = np.percentile(frac, [25, 50, 75])
+        rate = float(np.median([r["poses_per_s"] for r in rounds]))
+        lim = float(np.median([r["flop_limit_poses_per_s"] for r in rounds]))
         results["batched"].append({"batch": b, "poses_per_s": rate, "flop_limit_poses_per_s": lim,
-                                   "fraction_of_limit": rate / lim,
-                                   "matmul_gflops_before": before, "matmul_gflops_after": after})
-        around = ", ".join(f"W{w}: {before[w]:.0f} / {after[w]:.0f}" for w in widths)
-        print(f"{b:>6} {rate:>12,.0f} {lim:>11,.0f} {100 * rate / lim:>13.1f}%  ({around})")
+                                   "fraction_of_limit": float(med), "fraction_quartiles": [float(q1), float(q3)],
+                                   "rounds": rounds})
+        gf = ", ".join(f"W{w}: {np.median([r['matmul_gflops'][w] for r in rounds]):.0f}" for w in widths)
+        print(f"{b:>6} {rate:>12,.0f} {lim:>11,.0f} {100 * med:>13.1f}%  [{100 * q1:.1f}, {100 * q3:.1f}]  ({gf})")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=1)
