@@ -11,7 +11,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from ._checks import CheckpointError, PoseLifterError
+from ._checks import CheckpointError, PoseLifterError, PoseLifterWarning
 from .analytic import analytic_root
 from .camera import (
     CANONICAL_FOCAL,
@@ -71,7 +71,8 @@ def __dir__() -> list[str]:
 __all__ = [
     "CANONICAL_FOCAL", "DEFAULT_DIAGONAL_FOV_DEG", "EDGES", "FLIP_PERMUTATION", "JOINT_NAMES", "KEYPOINT_FORMATS",
     "NUM_JOINTS", "PARENTS", "SOURCES", "Camera", "CheckpointError", "Decoded", "Encoded", "ErrorModel", "LiftResult",
-    "DemoSample", "Lifter", "ModelConfig", "PoseCodec", "PoseLifterError", "PoseLifterNet", "analytic_root", "auc",
+    "DemoSample", "Lifter", "ModelConfig", "PoseCodec", "PoseLifterError", "PoseLifterNet", "PoseLifterWarning",
+    "analytic_root", "auc",
     "available_models", "backproject", "canonical_depth_from_depth", "convert", "demo_sample", "demo_sample_names",
     "depth_from_canonical_depth",
     "flip_keypoints_2d", "flip_pose_3d", "focal_alpha", "focal_from_fov", "location_and_scale", "mirror", "mpjpe",

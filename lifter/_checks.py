@@ -16,6 +16,11 @@ class CheckpointError(PoseLifterError):
     """Raised when a weights file is missing, corrupt or of an unknown format."""
 
 
+class PoseLifterWarning(UserWarning):
+    """Input the lifter takes but that looks wrong (a focal length in mm, a missing joint placed at (0, 0)); the
+    message names the problem. Turn into errors with ``warnings.simplefilter("error", PoseLifterWarning)``."""
+
+
 def _untorch(x: Any) -> Any:
     """A torch tensor (any device, with or without ``requires_grad``, any float dtype) as a CPU tensor numpy
     can read; anything else unchanged. torch is only consulted when the caller already imported it."""
@@ -56,7 +61,23 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         if dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 3:
             hint = f"; if the third column is a detector confidence, pass {name}[..., :2]"
         raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}{hint}")
-    check_finite(arr, name=name)
+    if not np.all(np.isfinite(arr)):
+        bad_joint = ~np.isfinite(arr).all(-1)
+        joints = np.flatnonzero(bad_joint.reshape(-1, arr.shape[-2]).any(0))
+        if arr.shape[-2] == 17:
+            from .skeleton import JOINT_NAMES
+
+            which = [JOINT_NAMES[j] for j in joints]
+        else:
+            which = [int(j) for j in joints]
+        where = ""
+        if arr.ndim > 2:
+            first = np.argwhere(bad_joint.any(-1))
+            where = f" (pose at index {tuple(int(i) for i in first[0])}, {len(first)} such pose(s))"
+        raise PoseLifterError(
+            f"{name}: joint(s) {which} contain NaN/inf{where}; every joint needs a finite position. A joint the "
+            "detector missed has to be filled in (from a neighbouring frame, or its left/right partner) or the pose "
+            "left out")
     return arr
 
 
@@ -82,3 +103,49 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
     if positive and np.any(arr <= 0):
         raise PoseLifterError(f"{name}: must be > 0, got {arr.tolist() if arr.size <= 8 else 'non-positive values'}")
     return arr
+
+
+def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None) -> list[str]:
+    """What looks wrong in 2D keypoints ``(..., 17, 2)`` px that the lifter takes anyway (finite, checked shape):
+    a pose spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at ``focal`` (scalar or
+    ``(..., 2)`` px; None: not checked), usually a focal length in mm; a joint at exactly (0, 0) far from the rest
+    of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
+    pose. :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
+    from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
+    from .skeleton import JOINT_NAMES
+
+    notes: list[str] = []
+    k = np.asarray(keypoints, np.float64)
+    if k.size == 0:
+        return notes
+    lead = k.shape[:-2]
+
+    def where(mask: np.ndarray) -> str:
+        if mask.size <= 1:
+            return ""
+        return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
+
+    if focal is not None:
+        view = pose_view_deg(k, focal)
+        wide = view > MAX_PLAUSIBLE_VIEW_DEG
+        if np.any(wide):
+            alpha = np.broadcast_to(focal_alpha(focal), lead)[wide] if lead else focal_alpha(focal)
+            notes.append(f"at the focal length given ({float(np.min(alpha)):.4g} px) a 2D pose spans "
+                         f"{float(np.max(view)):.0f} deg of view (a whole person rarely spans more than "
+                         f"{MAX_PLAUSIBLE_VIEW_DEG:.0f} deg){where(wide)}: is the focal length in pixels? (f_px = f_mm * image "
+                         "width px / sensor width mm; or leave it out to assume a field of view)")
+    zero = (k == 0.0).all(-1)  # (..., J)
+    if np.any(zero):
+        n_other = np.maximum((~zero).sum(-1, keepdims=True), 1)
+        others = np.where(zero[..., None], 0.0, k)
+        centre = others.sum(-2) / n_other
+        radius = np.sqrt((np.where(zero[..., None], 0.0, (k - centre[..., None, :]) ** 2)).sum((-2, -1))
+                         / n_other[..., 0])
+        far = zero.any(-1) & (np.hypot(*np.moveaxis(centre, -1, 0)) > 3.0 * radius) & (zero.sum(-1) < k.shape[-2])
+        if np.any(far):
+            joints = np.flatnonzero((zero & far[..., None]).reshape(-1, k.shape[-2]).any(0))
+            names = [JOINT_NAMES[j] if k.shape[-2] == len(JOINT_NAMES) else int(j) for j in joints]
+            notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where(far)}: a "
+                         "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
+                         "(from a neighbouring frame, or its left/right partner) or leave the pose out")
+    return notes

@@ -24,7 +24,7 @@ import torch
 from numpy.typing import ArrayLike
 
 from . import resources as assets
-from ._checks import PoseLifterError, as_pair, as_points
+from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings
 from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov
 from .checkpoint import Checkpoint, load_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
@@ -281,9 +281,13 @@ class Lifter:
             construction (``symmetry="mirror"``, like the default's second detected network): for them it would
             give the same result.
         """
-        if source == "clean" and self.clean is not None:
-            return self.clean.lift(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
-                                   source=source, flip_test=flip_test)
+        target = self.clean if source == "clean" and self.clean is not None else self
+        return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
+                                    source=source, flip_test=flip_test)
+
+    def _lift_checked(self, keypoints: ArrayLike, *, focal: ArrayLike | None, principal_point: ArrayLike | None,
+                      image_size: ArrayLike | None, source: Source, flip_test: bool | None) -> LiftResult:
+        """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
@@ -326,6 +330,8 @@ class Lifter:
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
                 "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to "
                 "assume a default field of view")
+        for message in input_warnings(kp, f if focal_source == "given" else None):
+            warnings.warn(PoseLifterWarning(message), stacklevel=3)
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
         flat_pp = pp.reshape(-1, 2)

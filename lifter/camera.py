@@ -53,6 +53,20 @@ def focal_alpha(focal: ArrayLike) -> np.ndarray:
     return np.sqrt(f[..., 0] * f[..., 1])
 
 
+MAX_PLAUSIBLE_VIEW_DEG: float = 90.0
+"""A 2D pose whose box diagonal spans more than this angle of view at the focal length given is flagged (a focal
+length in mm instead of px is the usual cause; a phone's main camera sees about 75 deg across its whole diagonal,
+so a whole person rarely spans more than 90 deg)."""
+
+
+def pose_view_deg(keypoints: ArrayLike, focal: ArrayLike) -> np.ndarray:
+    """The angle of view (deg) that each 2D pose's box diagonal spans: keypoints ``(..., J, 2)`` px, focal a scalar
+    or ``(..., 2)`` px. ``2 atan(diagonal / (2 alpha))``, alpha = sqrt(fx fy); returns ``(...)``."""
+    k = np.asarray(keypoints, np.float64)
+    diag = np.hypot(*np.moveaxis(k.max(-2) - k.min(-2), -1, 0))
+    return np.degrees(2 * np.arctan(diag / (2 * focal_alpha(focal))))
+
+
 def world_to_camera(points_world: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:
     """``X_cam = R @ X_world + t`` for points ``(..., J, 3)`` in mm; ``R`` is (3, 3), ``t`` is (3,)."""
     return np.einsum("ij,...j->...i", np.asarray(R, np.float64), np.asarray(points_world, np.float64)) + np.asarray(

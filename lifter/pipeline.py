@@ -12,13 +12,14 @@ Units: px and mm; camera frame OpenCV.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._checks import PoseLifterError, as_pair
-from .camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha
+from ._checks import PoseLifterError, PoseLifterWarning, as_pair, input_warnings
+from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
 from .io import LiftRecord, PersonResult, parse_keypoint_json
 from .keypoints import convert
@@ -59,26 +60,16 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
-MAX_PLAUSIBLE_VIEW_DEG: float = 90.0
-"""A 2D pose whose box diagonal spans more than this angle of view at the focal length used gets a note (a focal
-length given in mm instead of px is the usual cause; a phone's main camera sees about 75 deg across its diagonal,
-so a whole person rarely spans more than 90 deg)."""
-
-
 def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None) -> list[str]:
-    """Notes on keypoint-file 2D that the lifter takes but that look wrong: poses ``(n, 17, 2)`` px spanning more
-    than :data:`MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px, or lying mostly outside the ``image_size``."""
+    """Notes on 2D that the lifter takes but that look wrong, for the records (files, photos, videos): poses
+    ``(n, 17, 2)`` px spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px or
+    with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of), or
+    lying mostly outside the ``image_size`` (None: not checked)."""
     notes: list[str] = []
     k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
     if not len(k):
         return notes
-    diag = np.hypot(*(k.max(1) - k.min(1)).T)
-    view = np.degrees(2 * np.arctan(diag / (2 * float(focal_alpha(focal)))))
-    if float(view.max()) > MAX_PLAUSIBLE_VIEW_DEG:
-        notes.append(f"at the focal length used ({_px(focal)}) a 2D pose spans {float(view.max()):.0f} deg of view "
-                     f"(a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg): is the focal length "
-                     "in pixels? (f_px = f_mm * image width px / sensor width mm; or leave it out to assume a field of "
-                     "view)")
+    notes += input_warnings(k, focal)
     if image_size is not None:
         W, H = image_size
         outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
@@ -89,16 +80,20 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     return notes
 
 
-def _lift(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None,
+def lift_quietly(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None,
           source: str) -> Any:
-    return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
+    """``lifter.lift`` without its :class:`PoseLifterWarning` s: the records carry them as notes
+    (:func:`plausibility_notes`)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PoseLifterWarning)
+        return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
 
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
     :class:`PersonResult` each (mm, camera frame), in the same order."""
-    res = _lift(lifter, kp17, f, pp, flip_test=flip_test, source=source)
+    res = lift_quietly(lifter, kp17, f, pp, flip_test=flip_test, source=source)
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],
@@ -151,8 +146,10 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
-    lifted = lift_people(lifter, np.stack([d.keypoints_2d for d in dets]), f, pp, flip_test=flip_test,
-                         source="detected", scores=np.stack([d.scores for d in dets]))
+    kp_people = np.stack([d.keypoints_2d for d in dets])
+    notes += plausibility_notes(kp_people, f, None)
+    lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
+                         scores=np.stack([d.scores for d in dets]))
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
     if len(dets) > 1:

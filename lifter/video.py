@@ -271,7 +271,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
     import cv2
 
-    from .pipeline import resolve_camera
+    from .pipeline import lift_quietly, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     p = Path(path)
@@ -362,7 +362,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 states: list[PersonState] = []
             else:
                 kp = np.stack([q.keypoints_2d for q in people])
-                res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected")
+                res = lift_quietly(lifter, kp, cam[0], cam[2], flip_test=flip_test, source="detected")
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -406,6 +406,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam
+    seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
+    if seen_2d:
+        warnings.extend(plausibility_notes(np.stack(seen_2d), f, None))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -433,7 +436,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
-    from .pipeline import plausibility_notes, resolve_camera
+    from .pipeline import lift_quietly, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
@@ -464,7 +467,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         raise PoseLifterError(f"{path}: no person in any frame")
     kp17 = np.stack(kp_all)
     warnings.extend(plausibility_notes(kp17, f, ks.image_size))
-    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source)
+    res = lift_quietly(lifter, kp17, f, pp, flip_test=flip_test, source=ks.source)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0
     for i, c in enumerate(counts):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +10,7 @@ import pytest
 import torch
 from conftest import random_pose_cam, tiny_lifter
 
-from lifter import Lifter, LiftResult, PoseLifterError
+from lifter import Lifter, LiftResult, PoseLifterError, PoseLifterWarning
 from lifter._checks import CheckpointError
 from lifter.camera import project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
@@ -186,8 +187,34 @@ def test_bad_keypoint_shapes(small_lifter, bad, match):
 def test_non_finite_keypoints(small_lifter, keypoints, value):
     kp = keypoints.copy()
     kp[2, 5, 1] = value
-    with pytest.raises(PoseLifterError, match="NaN/inf"):
+    with pytest.raises(PoseLifterError, match=r"joint\(s\) \['l_knee'\] contain NaN/inf \(pose at index \(2,\), 1 "
+                       r"such pose\(s\)\); .* filled in"):
         small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
+
+
+def test_focal_in_mm_warns(camera_lifter, keypoints):
+    """Taken, but said: at 35 'px' a person spans far more than 90 deg of view (a focal length in mm)."""
+    with pytest.warns(PoseLifterWarning, match=r"at the focal length given \(35 px\) a 2D pose spans \d+ deg of view "
+                      r"\(a whole person rarely spans more than 90 deg\) \(pose at index \(0,\), 6 such pose\(s\)\): is "
+                      r"the focal length in pixels"):
+        camera_lifter.lift(keypoints, focal=35.0, principal_point=(512.0, 515.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        camera_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
+        camera_lifter.lift(keypoints, principal_point=(512.0, 515.0))  # unknown focal: nothing to check
+
+
+def test_joint_at_origin_warns_only_far_from_its_pose(camera_lifter, keypoints):
+    """A joint at exactly (0, 0) far from the rest (a detector's 'missing' placeholder) is named; a pose that
+    really surrounds the origin (keypoints centred on the pelvis) is not flagged."""
+    kp = keypoints.copy()
+    kp[1, 13] = 0.0
+    with pytest.warns(PoseLifterWarning, match=r"\['l_wrist'\] at exactly \(0, 0\) px.*\(pose at index \(1,\), 1 such"):
+        camera_lifter.lift(kp, focal=1145.0, principal_point=(512.0, 515.0))
+    centred = keypoints - keypoints[:, :1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        camera_lifter.lift(centred, focal=1145.0, principal_point=(0.0, 0.0))
 
 
 def test_degenerate_pose(small_lifter):

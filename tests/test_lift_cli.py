@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from conftest import random_pose_cam, tiny_lifter
 
-from lifter import Lifter, PoseLifterError
+from lifter import Lifter, PoseLifterError, PoseLifterWarning
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, project
 from lifter.camera import focal_from_fov as default_focal
 from lifter.checkpoint import save_checkpoint
@@ -508,7 +508,10 @@ def test_output_folder_that_is_also_the_input_folder_is_not_lifted_again(tmp_pat
 def test_implausible_keypoint_files_get_a_note(tmp_path, weights, kp17, capsys):
     """Lifted as given, but said: a focal length that looks like mm, keypoints mostly outside the stated image."""
     mm = _kp_json(tmp_path / "mm.json", kp17, focal=35.0)
-    code, err = run([str(mm), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    with warnings.catch_warnings(record=True) as caught:  # said once, as a note, not also as a Python warning
+        warnings.simplefilter("always")
+        code, err = run([str(mm), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert not [w for w in caught if issubclass(w.category, PoseLifterWarning)]
     assert code == 0 and "deg of view (a whole person rarely spans more than 90 deg): is the focal length" in err
     far = _kp_json(tmp_path / "far.json", kp17 - 5000.0)
     code, err = run([str(far), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
