@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
@@ -126,14 +127,19 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None) -> list[str]
         return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
 
     if focal is not None:
-        view = pose_view_deg(k, focal)
-        wide = view > MAX_PLAUSIBLE_VIEW_DEG
-        if np.any(wide):
-            alpha = np.broadcast_to(focal_alpha(focal), lead)[wide] if lead else focal_alpha(focal)
-            notes.append(f"at the focal length given ({float(np.min(alpha)):.4g} px) a 2D pose spans "
+        # (the box diagonal against 2 alpha tan(view / 2) first: the angles only when something is wide)
+        ext = k.max(-2) - k.min(-2)
+        f = np.asarray(focal, np.float64)
+        alpha = np.sqrt(f[..., 0] * f[..., 1]) if f.ndim else f
+        limit = 2.0 * alpha * math.tan(math.radians(MAX_PLAUSIBLE_VIEW_DEG) / 2.0)
+        if np.any(ext[..., 0] ** 2 + ext[..., 1] ** 2 > limit**2):
+            view = pose_view_deg(k, focal)
+            wide = view > MAX_PLAUSIBLE_VIEW_DEG
+            alpha_wide = np.broadcast_to(focal_alpha(focal), lead)[wide] if lead else focal_alpha(focal)
+            notes.append(f"at the focal length given ({float(np.min(alpha_wide)):.4g} px) a 2D pose spans "
                          f"{float(np.max(view)):.0f} deg of view (a whole person rarely spans more than "
-                         f"{MAX_PLAUSIBLE_VIEW_DEG:.0f} deg){where(wide)}: is the focal length in pixels? (f_px = f_mm * image "
-                         "width px / sensor width mm; or leave it out to assume a field of view)")
+                         f"{MAX_PLAUSIBLE_VIEW_DEG:.0f} deg){where(wide)}: is the focal length in pixels? (f_px = "
+                         "f_mm * image width px / sensor width mm; or leave it out to assume a field of view)")
     zero = (k == 0.0).all(-1)  # (..., J)
     if np.any(zero):
         n_other = np.maximum((~zero).sum(-1, keepdims=True), 1)
