@@ -15,7 +15,7 @@ import copy
 import os
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Final, Literal
 
@@ -67,7 +67,7 @@ def available_models() -> list[str]:
     return assets.model_names()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LiftResult:
     """Lifted poses for inputs of leading shape ``(...)``. All 3D in mm, camera frame (OpenCV).
 
@@ -101,6 +101,16 @@ class LiftResult:
     metric_depth: bool
     source: Source
     input_space: Literal["pixel", "camera"] = "pixel"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The result as plain Python (lists of floats, strings, bools), ready for ``json.dump``; ``note`` included.
+        Compare results with ``np.allclose`` on the arrays (``==`` between results is identity)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+        out["note"] = self.note
+        return out
 
     @property
     def note(self) -> str:
@@ -290,6 +300,8 @@ class Lifter:
         """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
+        if flip_test is not None and not isinstance(flip_test, (bool, np.bool_)):
+            raise PoseLifterError(f"flip_test must be True, False or None (the model's default), got {flip_test!r}")
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
         lead = kp.shape[:-2]
         wh = None if image_size is None else as_pair(image_size, name="image_size", positive=True)

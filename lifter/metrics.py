@@ -17,12 +17,22 @@ from typing import Literal
 
 import numpy as np
 
+from ._checks import PoseLifterError
+
 
 def _check_pair(pred: np.ndarray, gt: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
     pred = np.asarray(pred, np.float64)
     gt = np.asarray(gt, np.float64)
-    if pred.shape != gt.shape or pred.shape[-1] != 3:
-        raise ValueError(f"{name}: pred and gt must have the same shape (..., J, 3); got {pred.shape} and {gt.shape}")
+    if pred.shape != gt.shape:
+        raise PoseLifterError(f"{name}: pred and gt must have the same shape (..., J, 3); got {pred.shape} and "
+                              f"{gt.shape}")
+    if pred.ndim < 2 or pred.shape[-1] != 3:
+        raise PoseLifterError(f"{name}: expected 3D poses (..., J, 3) in mm, got shape {pred.shape}" + (
+            " (2D keypoints? the metrics compare 3D poses)" if pred.shape[-1:] == (2,) else ""))
+    for arr, which in ((pred, "pred"), (gt, "gt")):
+        if not np.all(np.isfinite(arr)):
+            raise PoseLifterError(f"{name}: {which} contains {int(arr.size - np.isfinite(arr).sum())} NaN/inf "
+                                  "value(s); the metrics need finite poses")
     return pred, gt
 
 
@@ -34,6 +44,7 @@ def joint_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
 
 def mpjpe(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """Per-pose MPJPE ``(...)`` mm after aligning the roots (joint 0)."""
+    pred, gt = _check_pair(pred, gt, "mpjpe")
     return joint_errors(pred, gt).mean(axis=-1)
 
 
@@ -59,12 +70,13 @@ def procrustes_align(
         R = U @ Vt
         scale = np.sqrt((Y**2).sum((-1, -2)) / np.maximum((X**2).sum((-1, -2)), 1e-12))
     else:
-        raise ValueError(f"unknown Procrustes variant {variant!r}")
+        raise PoseLifterError(f"unknown Procrustes variant {variant!r}; use 'standard' or 'repo'")
     return scale[..., None, None] * np.einsum("...ik,...jk->...ji", R, X) + mu_g
 
 
 def pa_mpjpe(pred: np.ndarray, gt: np.ndarray, *, variant: Literal["standard", "repo"] = "standard") -> np.ndarray:
     """Per-pose PA-MPJPE ``(...)`` mm."""
+    pred, gt = _check_pair(pred, gt, "pa_mpjpe")
     aligned = procrustes_align(pred, gt, variant=variant)
     return np.linalg.norm(aligned - np.asarray(gt, np.float64), axis=-1).mean(axis=-1)
 
@@ -74,7 +86,7 @@ def root_errors(pred_root: np.ndarray, gt_root: np.ndarray) -> tuple[np.ndarray,
     pred_root = np.asarray(pred_root, np.float64)
     gt_root = np.asarray(gt_root, np.float64)
     if pred_root.shape != gt_root.shape or pred_root.shape[-1] != 3:
-        raise ValueError(f"root_errors: expected matching (..., 3) shapes, got {pred_root.shape}, {gt_root.shape}")
+        raise PoseLifterError(f"root_errors: expected matching (..., 3) shapes, got {pred_root.shape}, {gt_root.shape}")
     d = pred_root - gt_root
     return np.linalg.norm(d, axis=-1), np.abs(d)
 
@@ -105,5 +117,7 @@ def pck_curve(pred: np.ndarray, gt: np.ndarray, thresholds: np.ndarray = AUC_THR
 
 
 def auc(pred: np.ndarray, gt: np.ndarray) -> float:
-    """Area under the PCK curve over 0:5:150 mm, as a fraction (x 100 for %)."""
+    """Area under the PCK curve over 0:5:150 mm, as a fraction (x 100 for %): the mean of :func:`pck` at the 31
+    thresholds, 0 included, as in the MPI-INF-3DHP evaluation. PCK counts errors strictly below a threshold, so the
+    0 mm threshold counts nothing and a perfect prediction scores 30 / 31 = 0.968."""
     return float(pck_curve(pred, gt).mean())

@@ -138,6 +138,13 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     """Detect everyone in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift them all into one
     camera space, largest first (at most ``max_people``); the top-level fields are the largest person's
     (module docstring)."""
+    if isinstance(image, np.ndarray):
+        raise PoseLifterError(
+            f"lift_image: got a numpy array {image.shape}; pass a file path, or wrap an RGB array with "
+            "lifter.detect.image_from_array(rgb) (from OpenCV's BGR: cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB))")
+    if not isinstance(image, (str, Path, LoadedImage)):
+        raise PoseLifterError(f"lift_image: expected a file path or a lifter.detect.LoadedImage, got "
+                              f"{type(image).__name__}")
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
     path = img.path if img.path is not None else "<image>"
     dets = detect_people(img, estimator=estimator, max_people=max_people)

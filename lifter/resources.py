@@ -17,7 +17,7 @@ from __future__ import annotations
 import io
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from importlib.abc import Traversable
@@ -162,7 +162,7 @@ class DemoSample:
     image_size: tuple[int, int]
     R: np.ndarray
     t: np.ndarray
-    image: bytes
+    image: bytes = field(repr=False)
 
 
 @lru_cache(maxsize=1)

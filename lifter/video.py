@@ -118,8 +118,26 @@ class SequenceTracker:
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
              focal: np.ndarray, scores: np.ndarray | None = None) -> list[PersonState]:
         """The people of frame number ``frame`` at ``t`` s: ``keypoints_2d (n, 17, 2)``, ``root (n, 3)``,
-        ``relative (n, 17, 3)``, the frame's ``focal (2,)`` px; ``scores (n, 17)`` or None."""
-        ids = self.tracker.update(frame, list(keypoints_2d))
+        ``relative (n, 17, 3)``, the frame's ``focal`` px (scalar or ``(2,)``); ``scores (n, 17)`` or None.
+        A single person's arrays without the leading ``n`` axis are refused with the shapes expected."""
+        kp = np.asarray(keypoints_2d, np.float64)
+        n = kp.shape[0] if kp.ndim == 3 else -1
+        shapes = {"keypoints_2d": (kp.shape, (n, 17, 2)), "root": (np.shape(root), (n, 3)),
+                  "relative": (np.shape(relative), (n, 17, 3))}
+        if scores is not None:
+            shapes["scores"] = (np.shape(scores), (n, 17))
+        wrong = [f"{k} {got}" for k, (got, want) in shapes.items() if got != want]
+        if n < 0 or wrong:
+            raise PoseLifterError(
+                "SequenceTracker.step: expected keypoints_2d (n, 17, 2), root (n, 3), relative (n, 17, 3)"
+                f"{', scores (n, 17)' if scores is not None else ''} for the n people of the frame (one person: "
+                f"n = 1, e.g. root[None]); got {', '.join(wrong) if wrong else f'keypoints_2d {kp.shape}'}")
+        f = as_pair(focal, name="focal", positive=True, scalar=True).reshape(-1, 2)
+        if not np.all(f == f[0]):  # (a LiftResult's per-pose focal (n, 2) of one frame is fine)
+            raise PoseLifterError(f"SequenceTracker.step: focal: one focal length for the frame (scalar or (2,) px), "
+                                  f"got {len(f)} different ones")
+        focal = f[0]
+        ids = self.tracker.update(frame, list(kp))
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks:
                 del self._smoothers[tid]  # ended tracks

@@ -544,3 +544,22 @@ def test_camera_arguments_that_are_not_pixels_or_pairs_are_refused(small_lifter,
         small_lifter.lift(keypoints, **kwargs)
     ok = small_lifter.lift(keypoints, focal=(1000.0,), principal_point=(400.0, 300.0))  # (f,) still means fx = fy
     np.testing.assert_array_equal(ok.focal, np.full((len(keypoints), 2), 1000.0))
+
+
+def test_result_to_dict_is_json_and_flip_test_must_be_a_bool(small_lifter, keypoints):
+    import json
+
+    res = small_lifter.lift(keypoints[:2], focal=1145.0, principal_point=(512.0, 515.0))
+    d = json.loads(json.dumps(res.to_dict()))
+    np.testing.assert_allclose(d["absolute"], res.absolute)
+    assert d["focal_source"] == "given" and d["note"] == res.note and d["source"] == "detected"
+    assert res == res and res != small_lifter.lift(keypoints[:2], focal=1145.0, principal_point=(512.0, 515.0))
+    with pytest.raises(PoseLifterError, match="flip_test must be True, False or None"):
+        small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0), flip_test="yes")  # type: ignore[arg-type]
+
+
+def test_demo_sample_repr_leaves_out_the_photo():
+    from lifter import demo_sample, demo_sample_names
+
+    s = demo_sample(demo_sample_names()[0])
+    assert len(s.image) > 10_000 and len(repr(s)) < 5_000 and "image=" not in repr(s)

@@ -519,3 +519,13 @@ def test_implausible_keypoint_files_get_a_note(tmp_path, weights, kp17, capsys):
     fine = _kp_json(tmp_path / "fine.json", kp17, focal=1000.0)
     code, err = run([str(fine), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0 and "deg of view" not in err and "outside" not in err, err
+
+
+def test_lift_image_refuses_an_array_with_the_way_to_pass_one(weights):
+    from lifter.pipeline import lift_image
+
+    lifter = Lifter.from_checkpoint(weights)
+    with pytest.raises(PoseLifterError, match=r"numpy array \(20, 30, 3\).*image_from_array\(rgb\).*COLOR_BGR2RGB"):
+        lift_image(np.zeros((20, 30, 3), np.uint8), lifter=lifter, estimator=None)  # type: ignore[arg-type]
+    with pytest.raises(PoseLifterError, match="expected a file path or a lifter.detect.LoadedImage, got int"):
+        lift_image(3, lifter=lifter, estimator=None)  # type: ignore[arg-type]

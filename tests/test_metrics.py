@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from conftest import random_pose_cam
 
+from lifter import PoseLifterError
 from lifter.analytic import analytic_root
 from lifter.camera import project
 from lifter.metrics import auc, mpjpe, pa_mpjpe, pck, pck_curve, procrustes_align, root_errors
@@ -92,3 +93,22 @@ def test_analytic_root_recovers_root_under_weak_perspective(method):
     root = analytic_root(kp, rel, focal=1150.0, principal_point=(500.0, 500.0), method=method)
     err, _ = root_errors(root, pose[:, 0])
     assert np.all(err < 0.01 * pose[:, 0, 2])
+
+
+def test_metric_input_errors_name_the_problem():
+    a = np.random.default_rng(0).normal(size=(5, 17, 3))
+    with pytest.raises(PoseLifterError, match=r"expected 3D poses \(\.\.\., J, 3\) in mm, got shape \(5, 17, 2\) "
+                       r"\(2D keypoints\?"):
+        mpjpe(a[..., :2], a[..., :2])
+    with pytest.raises(PoseLifterError, match="same shape"):
+        mpjpe(a, a[:4])
+    b = a.copy()
+    b[1, 3, 0] = np.nan
+    with pytest.raises(PoseLifterError, match=r"pa_mpjpe: pred contains 1 NaN/inf value\(s\)"):
+        pa_mpjpe(b, a)
+
+
+def test_auc_of_a_perfect_prediction_is_30_of_31():
+    """The 0 mm threshold is one of the 31 and counts nothing (strict <), as in the 3DHP evaluation."""
+    a = np.random.default_rng(1).normal(size=(3, 17, 3)) * 100
+    assert auc(a, a) == pytest.approx(30 / 31)

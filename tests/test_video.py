@@ -458,3 +458,25 @@ def test_video_person_seen_in_one_frame_only_is_left_out(tmp_path, lifter):
     est2 = ScriptedEstimator([*script[:6], script[6]])
     short = lift_video(_write_clip(tmp_path / "short.avi", 7), lifter=lifter, estimator=est2, focal=F)
     assert len(short.frames[6].people) == 3
+
+
+def test_sequence_tracker_step_checks_its_shapes():
+    """A LiftResult's arrays go in as they come (focal (n, 2) of one frame); one person without the n axis, or a
+    focal per person that differs, is refused with the shapes expected."""
+    from lifter.video import SequenceTracker
+
+    rng = np.random.default_rng(0)
+    kp = rng.normal(500, 50, (2, 17, 2))
+    root = np.array([[0.0, 0.0, 4000.0], [500.0, 0.0, 5000.0]])
+    rel = rng.normal(0, 100, (2, 17, 3))
+    trk = SequenceTracker(fps=25.0)
+    out = trk.step(0, 0.0, kp, root, rel, np.full((2, 2), 1145.0))
+    assert [p.track_id for p in out] == [1, 2] and out[0].canonical_depth == pytest.approx(4000 * 1000 / 1145)
+    assert len(trk.step(1, 0.04, kp, root, rel, 1145.0)) == 2
+    with pytest.raises(PoseLifterError, match=r"expected keypoints_2d \(n, 17, 2\), root \(n, 3\), "
+                       r"relative \(n, 17, 3\) for the n people .*got keypoints_2d \(17, 2\)"):
+        trk.step(2, 0.08, kp[0], root[0], rel[0], 1145.0)
+    with pytest.raises(PoseLifterError, match=r"got root \(3,\), relative \(17, 3\)"):
+        trk.step(2, 0.08, kp[:1], root[0], rel[0], 1145.0)
+    with pytest.raises(PoseLifterError, match="2 different ones"):
+        trk.step(2, 0.08, kp, root, rel, np.array([[1145.0, 1145.0], [1000.0, 1000.0]]))
