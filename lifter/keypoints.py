@@ -92,6 +92,7 @@ a little differently, so treat its errors as indicative. The 84 frames are 5 sub
 from __future__ import annotations
 
 import functools
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -99,7 +100,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError
+from ._checks import PoseLifterError, PoseLifterWarning
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 H36M17: Final[str] = "h36m17"
@@ -425,6 +426,13 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
         joints = sorted({f_src.joint_names[int(i[-1])] for i in bad[:50]})
         raise PoseLifterError(f"keypoints: {len(bad)} joint(s) with NaN/inf coordinates (e.g. {joints}) in format "
                               f"{src!r}; every joint must be detected")
+    if arr.shape[-1] == 3 and arr.size:
+        third, xy = arr[..., 2], arr[..., :2]
+        if float(third.min()) >= 0.0 and float(third.max()) <= 2.0 and float(np.ptp(xy)) > 20.0:
+            warnings.warn(PoseLifterWarning(
+                f"keypoints: the third column is all within [0, 2] while the first two span {float(np.ptp(xy)):.0f} "
+                "units: detector confidences or COCO visibility flags, not a z in mm? They are converted as a "
+                "coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
-from lifter import PoseLifterError
+from lifter import PoseLifterError, PoseLifterWarning
 from lifter.keypoints import (
     KEYPOINT_FORMATS,
     SH16_HEAD_WEIGHT,
@@ -135,3 +137,15 @@ def test_sh16_rule_errors_on_real_detections(h36m):
     raw, _ = load_sh_detections(s, data=h36m, dst="sh16")
     direct_spine = np.median(np.linalg.norm(raw[:, SH["spine"]] - s.keypoints_2d[:, H["spine"]], axis=-1))
     assert direct_spine > 2 * med[H["spine"]]
+
+
+def test_a_confidence_column_is_flagged_not_silently_converted_as_z():
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(100, 600, (17, 2))
+    with pytest.warns(PoseLifterWarning, match=r"third column is all within \[0, 2\].*keypoints\[\.\.\., :2\]"):
+        out = convert(np.c_[xy, np.full(17, 2.0)], src="coco17")
+    assert out.shape == (17, 3)
+    with warnings.catch_warnings():  # a real 3D pose in mm, and 2D, say nothing
+        warnings.simplefilter("error", PoseLifterWarning)
+        convert(rng.normal(0, 300, (17, 3)) + [0, 0, 4000], src="coco17")
+        convert(xy, src="coco17")
