@@ -10,13 +10,14 @@ from __future__ import annotations
 import argparse
 import gc
 import logging
-import re
 import socket
 import sys
 import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
+
+from lifter._text import plain_text
 
 from .samples import default_h36m_root
 
@@ -57,7 +58,7 @@ def check_bind(host: str, port: int) -> str | None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="poselifter-app", description=re.sub(r"``([^`]+)``", r"\1", __doc__ or ""),
+    p = argparse.ArgumentParser(prog="poselifter-app", description=plain_text(__doc__),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
     p.add_argument("--port", type=_port, default=8080, help="port 0-65535 (0 = any free port; a busy port: the next free one)")

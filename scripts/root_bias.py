@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from lifter import Lifter  # noqa: E402
+from lifter.cli._help import add_h36m_arguments  # noqa: E402
 from lifter.data import CAMERA_IDS, H36M, default_h36m_dir  # noqa: E402
 from lifter.detections import load_sh_detections  # noqa: E402
 from lifter.keypoints import convert  # noqa: E402
@@ -73,11 +74,8 @@ def sh_scale_lines(data: H36M, stride: int) -> tuple[list[str], float]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
-    ap.add_argument("--h36m", type=Path, default=None)
-    ap.add_argument("--stride", type=int, default=50)
+    add_h36m_arguments(ap, stride=50)
     args = ap.parse_args()
-    if args.stride < 1:
-        ap.error(f"--stride must be a positive number of frames, got {args.stride}")
     import torch
 
     torch.set_num_threads(2)

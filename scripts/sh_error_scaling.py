@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from lifter import Lifter  # noqa: E402
+from lifter.cli._help import add_h36m_arguments  # noqa: E402
 from lifter.data import H36M  # noqa: E402
 from lifter.detections import load_sh_detections  # noqa: E402
 from lifter.evaluate import predict  # noqa: E402
@@ -41,8 +42,7 @@ ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--h36m", default=None)
-    ap.add_argument("--stride", type=int, default=50)
+    add_h36m_arguments(ap, stride=50)
     ap.add_argument("--models", default="sh_mix,mixture,gt")
     ap.add_argument("--out", default=str(ROOT / "docs/results/sh_error_scaling"))
     ap.add_argument("--threads", type=int, default=2)

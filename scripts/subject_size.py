@@ -11,10 +11,10 @@ every ``--stride``-th frame of all of a subject's sequences (every subject perfo
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
 
+from lifter.cli._help import add_h36m_arguments
 from lifter.data import H36M, default_h36m_dir
 
 TRAIN_SUBJECTS = (1, 5, 6, 7, 8)
@@ -30,11 +30,8 @@ def subject_size(data: H36M, subject: int, *, stride: int) -> tuple[float, int]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
-    ap.add_argument("--h36m", type=Path, default=None)
-    ap.add_argument("--stride", type=int, default=200)
+    add_h36m_arguments(ap, stride=200)
     args = ap.parse_args()
-    if args.stride < 1:
-        ap.error(f"--stride must be a positive number of frames, got {args.stride}")
     data = H36M(args.h36m or default_h36m_dir())
     sizes = {s: subject_size(data, s, stride=args.stride) for s in TRAIN_SUBJECTS + TEST_SUBJECTS}
     ref = float(np.mean([sizes[s][0] for s in TRAIN_SUBJECTS]))

@@ -16,24 +16,21 @@ true principal point; the focal given is the camera's times each factor. PA-MPJP
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
 
 from lifter import Lifter
+from lifter.cli._help import add_h36m_arguments
 from lifter.data import H36M, default_h36m_dir
 from lifter.metrics import pa_mpjpe
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
-    ap.add_argument("--h36m", type=Path, default=None)
-    ap.add_argument("--stride", type=int, default=250)
+    add_h36m_arguments(ap, stride=250)
     ap.add_argument("--models", default="default,gt")
     ap.add_argument("--factors", default="0.1,0.25,0.5,1,2,4,6")
     args = ap.parse_args()
-    if args.stride < 1:
-        ap.error(f"--stride must be a positive number of frames, got {args.stride}")
     factors = [float(x) for x in args.factors.split(",")]
     s = H36M(args.h36m or default_h36m_dir()).load_protocol(1, "test", stride=args.stride)
     print(f"{len(s)} test samples (every {args.stride}th frame, 4 cameras); ground-truth 2D, source='clean'; "

@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import re
+from pathlib import Path
+
+from .._text import plain_text
+
+__all__ = ["HelpFormatter", "add_h36m_arguments", "plain_text", "positive_int"]
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -17,8 +21,21 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
-def plain_text(doc: str | None) -> str:
-    """A module docstring as help text: reStructuredText roles and literals (``:class:`a.B```, ````x````) shown
-    as their plain names."""
-    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", doc or "")
-    return re.sub(r"``([^`]+)``", r"\1", text)
+def positive_int(text: str) -> int:
+    """argparse ``type=``: an integer >= 1 (the option name is added by argparse)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def add_h36m_arguments(parser: argparse.ArgumentParser, *, stride: int) -> None:
+    """``--h36m DIR`` (None: :func:`lifter.data.default_h36m_dir`) and ``--stride N`` (test frames at 50 fps, >= 1),
+    as every H36M script takes them."""
+    parser.add_argument("--h36m", type=Path, default=None,
+                        help="Human3.6M data folder (default: ../shared/data/h36m or $POSELIFTER_H36M)")
+    parser.add_argument("--stride", type=positive_int, default=stride, help=f"test frame stride at 50 fps "
+                        f"(default {stride})")

@@ -19,18 +19,7 @@ from ..data import H36M
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..metrics import AUC_THRESHOLDS_MM
-from ._help import HelpFormatter
-
-
-def _positive_int(text: str) -> int:
-    """argparse ``type=``: an integer >= 1 (the option name is added by argparse)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+from ._help import HelpFormatter, positive_int
 
 
 def _finite_floats(text: str) -> list[float]:
@@ -71,7 +60,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2),
                    help="test subjects: 1 = S9 and S11 (trained on S1, 5, 6, 7, 8), "
                    "2 = S11 (trained on S1, 5, 6, 7, 8, 9)")
-    p.add_argument("--stride", type=_positive_int, default=5, help="test frame stride at 50 fps")
+    p.add_argument("--stride", type=positive_int, default=5, help="test frame stride at 50 fps")
     p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
                    help="2D inputs: ground-truth (distorted) projection, or the real Stacked-Hourglass detections")
     p.add_argument("--focal-scales", type=_focal_scales, default=None,
@@ -85,7 +74,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "shipped default)")
     p.add_argument("--analytic-root", action="store_true", help="add the weak-perspective root row for each model")
     p.add_argument("--per-action", action="store_true", help="also print per-action MPJPE")
-    p.add_argument("--max-frames-per-sequence", type=_positive_int, default=None,
+    p.add_argument("--max-frames-per-sequence", type=positive_int, default=None,
                    help="only the first this many frames of each sequence (after --stride; default all)")
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
     p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
@@ -93,7 +82,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="also evaluate each model with int8 block weights (Lifter.quantized)")
     p.add_argument("--source", default=None, choices=("clean", "detected"),
                    help="what the lifter is told the 2D is (default: clean for --inputs gt, detected for --inputs sh)")
-    p.add_argument("--threads", type=_positive_int, default=2, help="torch threads")
+    p.add_argument("--threads", type=positive_int, default=2, help="torch threads")
     p.set_defaults(func=run)
     return p
 
