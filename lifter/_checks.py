@@ -75,10 +75,10 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         if arr.ndim > 2:
             first = np.argwhere(bad_joint.any(-1))
             where = f" (pose at index {tuple(int(i) for i in first[0])}, {len(first)} such pose(s))"
+        fix = (" A joint the detector missed has to be filled in (from a neighbouring frame, or its left/right "
+               "partner) or the pose left out" if dim == 2 else "")
         raise PoseLifterError(
-            f"{name}: joint(s) {which} contain NaN/inf{where}; every joint needs a finite position. A joint the "
-            "detector missed has to be filled in (from a neighbouring frame, or its left/right partner) or the pose "
-            "left out")
+            f"{name}: joint(s) {which} contain NaN/inf{where}; every joint needs a finite position.{fix}")
     return arr
 
 
@@ -106,12 +106,13 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
     return arr
 
 
-def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None) -> list[str]:
+def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_given: bool = True) -> list[str]:
     """What looks wrong in 2D keypoints ``(..., 17, 2)`` px that the lifter takes anyway (finite, checked shape):
     a pose spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at ``focal`` (scalar or
     ``(..., 2)`` px; None: not checked), usually a focal length in mm; a joint at exactly (0, 0) far from the rest
     of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
-    pose. :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
+    pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice.
+    :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
     from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
     from .skeleton import JOINT_NAMES
 
@@ -135,11 +136,17 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None) -> list[str]
         if np.any(ext[..., 0] ** 2 + ext[..., 1] ** 2 > limit**2):
             view = pose_view_deg(k, focal)
             wide = view > MAX_PLAUSIBLE_VIEW_DEG
-            alpha_wide = np.broadcast_to(focal_alpha(focal), lead)[wide] if lead else focal_alpha(focal)
-            notes.append(f"at the focal length given ({float(np.min(alpha_wide)):.4g} px) a 2D pose spans "
-                         f"{float(np.max(view)):.0f} deg of view (a whole person rarely spans more than "
-                         f"{MAX_PLAUSIBLE_VIEW_DEG:.0f} deg){where(wide)}: is the focal length in pixels? (f_px = "
-                         "f_mm * image width px / sensor width mm; or leave it out to assume a field of view)")
+            if np.any(wide):  # (quoted: the widest pose and its own focal length)
+                widest = np.unravel_index(int(np.argmax(view)), view.shape) if lead else ()
+                alpha_w = float(np.broadcast_to(focal_alpha(focal), lead)[widest]) if lead else float(
+                    focal_alpha(focal))
+                notes.append(f"at the focal length used ({alpha_w:.4g} px) a 2D pose spans {float(np.max(view)):.0f} "
+                             f"deg of view (a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg, "
+                             f"even through an ultra-wide lens){where(wide)}: " + (
+                                 "is the focal length in pixels? (f_px = f_mm * image width px / sensor width mm; or "
+                                 "leave it out to assume a field of view)" if focal_given else
+                                 "the focal length was assumed, not given: are the keypoints in this image's pixels? "
+                                 "(or give the true focal length in pixels)"))
     zero = (k == 0.0).all(-1)  # (..., J)
     if np.any(zero):
         n_other = np.maximum((~zero).sum(-1, keepdims=True), 1)

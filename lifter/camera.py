@@ -53,15 +53,17 @@ def focal_alpha(focal: ArrayLike) -> np.ndarray:
     return np.sqrt(f[..., 0] * f[..., 1])
 
 
-MAX_PLAUSIBLE_VIEW_DEG: float = 90.0
-"""A 2D pose whose box diagonal spans more than this angle of view at the focal length given is flagged (a focal
-length in mm instead of px is the usual cause; a phone's main camera sees about 75 deg across its whole diagonal,
-so a whole person rarely spans more than 90 deg)."""
+MAX_PLAUSIBLE_VIEW_DEG: float = 120.0
+"""A 2D pose whose box diagonal spans more than this angle of view at the focal length used is flagged. A focal
+length in mm instead of px is the usual cause, and gives 140-175 deg for a person of a few hundred px; a phone's
+main camera sees about 75 deg across its whole diagonal and an ultra-wide one about 120 deg, so even a person
+filling an ultra-wide portrait frame (about 105 deg) stays below."""
 
 
 def pose_view_deg(keypoints: ArrayLike, focal: ArrayLike) -> np.ndarray:
     """The angle of view (deg) that each 2D pose's box diagonal spans: keypoints ``(..., J, 2)`` px, focal a scalar
-    or ``(..., 2)`` px. ``2 atan(diagonal / (2 alpha))``, alpha = sqrt(fx fy); returns ``(...)``."""
+    or ``(..., 2)`` px. ``2 atan(diagonal / (2 alpha))``, alpha = sqrt(fx fy), as if the box were centred on the
+    principal point (an off-axis box subtends a little less); returns ``(...)``."""
     k = np.asarray(keypoints, np.float64)
     diag = np.hypot(*np.moveaxis(k.max(-2) - k.min(-2), -1, 0))
     return np.degrees(2 * np.arctan(diag / (2 * focal_alpha(focal))))

@@ -428,11 +428,13 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
                               f"{src!r}; every joint must be detected")
     if arr.shape[-1] == 3 and arr.size:
         third, xy = arr[..., 2], arr[..., :2]
-        if float(third.min()) >= 0.0 and float(third.max()) <= 2.0 and float(np.ptp(xy)) > 20.0:
+        ext = xy.max(-2) - xy.min(-2)  # (..., 2) each pose's box
+        span = float(np.hypot(ext[..., 0], ext[..., 1]).max())
+        if float(third.min()) >= 0.0 and float(third.max()) <= 2.0 and span > 20.0:
             warnings.warn(PoseLifterWarning(
-                f"keypoints: the third column is all within [0, 2] while the first two span {float(np.ptp(xy)):.0f} "
-                "units: detector confidences or COCO visibility flags, not a z in mm? They are converted as a "
-                "coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
+                f"keypoints: the third column is all within [0, 2] while the first two span up to {span:.0f} units "
+                "(box diagonal): detector confidences or COCO visibility flags, not a z in mm? They are converted "
+                "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)

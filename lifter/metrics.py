@@ -39,13 +39,17 @@ def _check_pair(pred: np.ndarray, gt: np.ndarray, name: str) -> tuple[np.ndarray
 def joint_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """Per-joint Euclidean errors ``(..., J)`` of root-relative poses (both re-centred at joint 0)."""
     pred, gt = _check_pair(pred, gt, "joint_errors")
+    return _joint_errors(pred, gt)
+
+
+def _joint_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return np.linalg.norm((pred - pred[..., :1, :]) - (gt - gt[..., :1, :]), axis=-1)
 
 
 def mpjpe(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """Per-pose MPJPE ``(...)`` mm after aligning the roots (joint 0)."""
     pred, gt = _check_pair(pred, gt, "mpjpe")
-    return joint_errors(pred, gt).mean(axis=-1)
+    return _joint_errors(pred, gt).mean(axis=-1)
 
 
 def procrustes_align(
@@ -53,6 +57,10 @@ def procrustes_align(
 ) -> np.ndarray:
     """``pred`` ``(..., J, 3)`` aligned to ``gt`` by the best similarity transform."""
     pred, gt = _check_pair(pred, gt, "procrustes_align")
+    return _procrustes_align(pred, gt, variant=variant)
+
+
+def _procrustes_align(pred: np.ndarray, gt: np.ndarray, *, variant: str) -> np.ndarray:
     mu_p = pred.mean(axis=-2, keepdims=True)
     mu_g = gt.mean(axis=-2, keepdims=True)
     X = pred - mu_p
@@ -77,8 +85,8 @@ def procrustes_align(
 def pa_mpjpe(pred: np.ndarray, gt: np.ndarray, *, variant: Literal["standard", "repo"] = "standard") -> np.ndarray:
     """Per-pose PA-MPJPE ``(...)`` mm."""
     pred, gt = _check_pair(pred, gt, "pa_mpjpe")
-    aligned = procrustes_align(pred, gt, variant=variant)
-    return np.linalg.norm(aligned - np.asarray(gt, np.float64), axis=-1).mean(axis=-1)
+    aligned = _procrustes_align(pred, gt, variant=variant)
+    return np.linalg.norm(aligned - gt, axis=-1).mean(axis=-1)
 
 
 def root_errors(pred_root: np.ndarray, gt_root: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

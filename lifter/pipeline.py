@@ -12,6 +12,7 @@ Units: px and mm; camera frame OpenCV.
 from __future__ import annotations
 
 import dataclasses
+import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -60,7 +61,12 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
-def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None) -> list[str]:
+FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
+"""The ``focal_source`` values of a focal length that was given (the others are assumed: EXIF, field of view)."""
+
+
+def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None, *,
+                       focal_source: str = "user") -> list[str]:
     """Notes on 2D that the lifter takes but that look wrong, for the records (files, photos, videos): poses
     ``(n, 17, 2)`` px spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px or
     with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of), or
@@ -69,7 +75,7 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
     if not len(k):
         return notes
-    notes += input_warnings(k, focal)
+    notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES)
     if image_size is not None:
         W, H = image_size
         outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
@@ -117,7 +123,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
-    cam_notes += plausibility_notes(kp17, f, kf.image_size)
+    cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
@@ -142,7 +148,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         raise PoseLifterError(
             f"lift_image: got a numpy array {image.shape}; pass a file path, or wrap an RGB array with "
             "lifter.detect.image_from_array(rgb) (from OpenCV's BGR: cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB))")
-    if not isinstance(image, (str, Path, LoadedImage)):
+    if not isinstance(image, (str, os.PathLike, LoadedImage)):
         raise PoseLifterError(f"lift_image: expected a file path or a lifter.detect.LoadedImage, got "
                               f"{type(image).__name__}")
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
@@ -154,7 +160,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
     kp_people = np.stack([d.keypoints_2d for d in dets])
-    notes += plausibility_notes(kp_people, f, None)
+    notes += plausibility_notes(kp_people, f, None, focal_source=src)
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
                          scores=np.stack([d.scores for d in dets]))
     top, det = lifted[0], dets[0]

@@ -117,10 +117,18 @@ class SequenceTracker:
 
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
              focal: np.ndarray, scores: np.ndarray | None = None) -> list[PersonState]:
-        """The people of frame number ``frame`` at ``t`` s: ``keypoints_2d (n, 17, 2)``, ``root (n, 3)``,
-        ``relative (n, 17, 3)``, the frame's ``focal`` px (scalar or ``(2,)``); ``scores (n, 17)`` or None.
-        A single person's arrays without the leading ``n`` axis are refused with the shapes expected."""
+        """The people of frame number ``frame`` at ``t`` s: ``keypoints_2d (n, 17, 2)`` px, ``root (n, 3)`` and
+        ``relative (n, 17, 3)`` mm (camera frame, OpenCV), the frame's ``focal`` px (scalar or ``(2,)``; a
+        LiftResult's per-pose ``(n, 2)`` of one frame too); ``scores (n, 17)`` or None. ``n = 0`` (empty arrays
+        or lists) is a frame with nobody. A single person's arrays without the leading ``n`` axis are refused with
+        the shapes expected."""
         kp = np.asarray(keypoints_2d, np.float64)
+        if kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0:
+            self.tracker.update(frame, [])
+            for tid in list(self._smoothers):
+                if tid not in self.tracker.tracks:
+                    del self._smoothers[tid]
+            return []
         n = kp.shape[0] if kp.ndim == 3 else -1
         shapes = {"keypoints_2d": (kp.shape, (n, 17, 2)), "root": (np.shape(root), (n, 3)),
                   "relative": (np.shape(relative), (n, 17, 3))}
@@ -426,7 +434,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     f, src, pp = cam
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
-        warnings.extend(plausibility_notes(np.stack(seen_2d), f, None))
+        warnings.extend(plausibility_notes(np.stack(seen_2d), f, None, focal_source=src))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -484,7 +492,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if not kp_all:
         raise PoseLifterError(f"{path}: no person in any frame")
     kp17 = np.stack(kp_all)
-    warnings.extend(plausibility_notes(kp17, f, ks.image_size))
+    warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
     res = lift_quietly(lifter, kp17, f, pp, flip_test=flip_test, source=ks.source)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0

@@ -16,10 +16,11 @@ true principal point; the focal given is the camera's times each factor. PA-MPJP
 from __future__ import annotations
 
 import argparse
+import warnings
 
 import numpy as np
 
-from lifter import Lifter
+from lifter import Lifter, PoseLifterWarning
 from lifter.cli._help import add_h36m_arguments
 from lifter.data import H36M, default_h36m_dir
 from lifter.metrics import pa_mpjpe
@@ -31,6 +32,7 @@ def main() -> int:
     ap.add_argument("--models", default="default,gt")
     ap.add_argument("--factors", default="0.1,0.25,0.5,1,2,4,6")
     args = ap.parse_args()
+    warnings.simplefilter("ignore", PoseLifterWarning)  # (the focal lengths are wrong on purpose)
     factors = [float(x) for x in args.factors.split(",")]
     s = H36M(args.h36m or default_h36m_dir()).load_protocol(1, "test", stride=args.stride)
     print(f"{len(s)} test samples (every {args.stride}th frame, 4 cameras); ground-truth 2D, source='clean'; "

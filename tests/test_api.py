@@ -12,7 +12,7 @@ from conftest import random_pose_cam, tiny_lifter
 
 from lifter import Lifter, LiftResult, PoseLifterError, PoseLifterWarning
 from lifter._checks import CheckpointError
-from lifter.camera import project
+from lifter.camera import focal_from_fov, project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
 
 
@@ -192,16 +192,33 @@ def test_non_finite_keypoints(small_lifter, keypoints, value):
         small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
 
 
+def test_non_finite_3d_input_is_named_without_detector_advice():
+    from lifter import analytic_root
+
+    rel = np.random.default_rng(0).normal(0, 100, (17, 3))
+    rel[4, 2] = np.nan
+    with pytest.raises(PoseLifterError, match=r"\['l_hip'\] contain NaN/inf; every joint needs a finite position\.$"):
+        analytic_root(np.random.default_rng(1).normal(500, 50, (17, 2)), rel, focal=1000.0, principal_point=(500, 500))
+
+
 def test_focal_in_mm_warns(camera_lifter, keypoints):
-    """Taken, but said: at 35 'px' a person spans far more than 90 deg of view (a focal length in mm)."""
-    with pytest.warns(PoseLifterWarning, match=r"at the focal length given \(35 px\) a 2D pose spans \d+ deg of view "
-                      r"\(a whole person rarely spans more than 90 deg\) \(pose at index \(0,\), 6 such pose\(s\)\): is "
-                      r"the focal length in pixels"):
+    """Taken, but said: at 35 'px' a person spans far more than 120 deg of view (a focal length in mm); a person
+    filling a phone's ultra-wide portrait frame (120 deg diagonal) is not flagged."""
+    with pytest.warns(PoseLifterWarning, match=r"at the focal length used \(35 px\) a 2D pose spans \d+ deg of view "
+                      r"\(a whole person rarely spans more than 120 deg, even through an ultra-wide lens\) \(pose at "
+                      r"index \(0,\), 6 such pose\(s\)\): is the focal length in pixels"):
         camera_lifter.lift(keypoints, focal=35.0, principal_point=(512.0, 515.0))
     with warnings.catch_warnings():
         warnings.simplefilter("error", PoseLifterWarning)
         camera_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
         camera_lifter.lift(keypoints, principal_point=(512.0, 515.0))  # unknown focal: nothing to check
+        f_wide = focal_from_fov((3000, 4000), fov_deg=120.0)
+        from lifter import demo_sample
+
+        standing = demo_sample("walking").keypoints_2d
+        tall = standing - standing.mean(-2, keepdims=True)
+        tall = tall / np.ptp(tall[..., 1]) * 0.9 * 4000 + [1500.0, 2000.0]  # 90 % of the frame's height
+        camera_lifter.lift(tall, focal=f_wide, principal_point=(1500.0, 2000.0))
 
 
 def test_joint_at_origin_warns_only_far_from_its_pose(camera_lifter, keypoints):

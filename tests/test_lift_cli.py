@@ -512,7 +512,8 @@ def test_implausible_keypoint_files_get_a_note(tmp_path, weights, kp17, capsys):
         warnings.simplefilter("always")
         code, err = run([str(mm), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert not [w for w in caught if issubclass(w.category, PoseLifterWarning)]
-    assert code == 0 and "deg of view (a whole person rarely spans more than 90 deg): is the focal length" in err
+    assert code == 0 and ("deg of view (a whole person rarely spans more than 120 deg, even through an ultra-wide "
+                          "lens): is the focal length in pixels") in err
     far = _kp_json(tmp_path / "far.json", kp17 - 5000.0)
     code, err = run([str(far), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0 and "1 of 1 2D pose(s) lie mostly outside the 1280 x 720 px image" in err, err
@@ -529,3 +530,7 @@ def test_lift_image_refuses_an_array_with_the_way_to_pass_one(weights):
         lift_image(np.zeros((20, 30, 3), np.uint8), lifter=lifter, estimator=None)  # type: ignore[arg-type]
     with pytest.raises(PoseLifterError, match="expected a file path or a lifter.detect.LoadedImage, got int"):
         lift_image(3, lifter=lifter, estimator=None)  # type: ignore[arg-type]
+    from pathlib import PurePosixPath
+
+    with pytest.raises(PoseLifterError, match="missing.jpg"):  # any path object is a path: to the file check
+        lift_image(PurePosixPath("/nonexistent/missing.jpg"), lifter=lifter, estimator=None)  # type: ignore[arg-type]

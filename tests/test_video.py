@@ -478,5 +478,9 @@ def test_sequence_tracker_step_checks_its_shapes():
         trk.step(2, 0.08, kp[0], root[0], rel[0], 1145.0)
     with pytest.raises(PoseLifterError, match=r"got root \(3,\), relative \(17, 3\)"):
         trk.step(2, 0.08, kp[:1], root[0], rel[0], 1145.0)
+    # a frame with nobody: empty arrays (a LiftResult of an empty batch, focal (0, 2)) or lists
+    assert trk.step(2, 0.08, np.zeros((0, 17, 2)), np.zeros((0, 3)), np.zeros((0, 17, 3)), np.zeros((0, 2))) == []
+    assert trk.step(3, 0.12, [], [], [], 1145.0) == []
+    assert [p.track_id for p in trk.step(4, 0.16, kp, root, rel, 1145.0)] == [1, 2]  # (back within the timeout)
     with pytest.raises(PoseLifterError, match="2 different ones"):
         trk.step(2, 0.08, kp, root, rel, np.array([[1145.0, 1145.0], [1000.0, 1000.0]]))

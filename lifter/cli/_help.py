@@ -33,9 +33,9 @@ def positive_int(text: str) -> int:
 
 
 def add_h36m_arguments(parser: argparse.ArgumentParser, *, stride: int) -> None:
-    """``--h36m DIR`` (None: :func:`lifter.data.default_h36m_dir`) and ``--stride N`` (test frames at 50 fps, >= 1),
-    as every H36M script takes them."""
+    """``--h36m DIR`` (None: :func:`lifter.data.default_h36m_dir`) and ``--stride N`` (every N-th frame at 50 fps,
+    >= 1), as the analysis scripts under ``scripts/`` take them."""
     parser.add_argument("--h36m", type=Path, default=None,
                         help="Human3.6M data folder (default: ../shared/data/h36m or $POSELIFTER_H36M)")
-    parser.add_argument("--stride", type=positive_int, default=stride, help=f"test frame stride at 50 fps "
+    parser.add_argument("--stride", type=positive_int, default=stride, help=f"frame stride at 50 fps "
                         f"(default {stride})")
