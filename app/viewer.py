@@ -448,6 +448,7 @@ class SessionView:
                                last_upload=self._last_upload.key if self._last_upload is not None else None,
                                sources=self.app.sources, h36m=self.app.h36m, motion_frames=self.app.motion.num_frames,
                                upload_frames=video.num_frames if video is not None else None)
+        self._note_frame_past_end(key, video)
         if key == shown:
             return None
         if self._last_upload is not None and key == self._last_upload.key:
@@ -455,6 +456,24 @@ class SessionView:
         if video is not None and (i := video.index_of(key)) is not None:
             return video.sample(i)
         return self.app.sample(key)
+
+    def _note_frame_past_end(self, key: str, video: Any) -> None:
+        """Say so when the frame asked for (typed in the slider's box) is past the sequence's end and the last frame
+        is shown instead (:func:`poselifter_app.session.requested_key` clamps it)."""
+        try:
+            wanted = int(self.gui.play.frame.value)
+        except (TypeError, ValueError):
+            return
+        if key.startswith("h36m/") and self.app.h36m is not None:
+            _, subj, seq, _, f = key.split("/")
+            last = self.app.h36m.num_frames(int(subj[1:]), seq) - 1
+        elif key.startswith("video/") and video is not None and video.index_of(key) is not None:
+            f, last = key.rsplit("/", 1)[1], video.num_frames - 1
+        else:
+            return
+        if int(f) == last and wanted > last:
+            self.show_message(f"frame {wanted} is past the end of this sequence (frames 0–{last}); showing frame {last}")
+            self._put(self.gui.play.frame, last)  # (said once: the slider shows the frame in use)
 
     def sequence(self) -> SequenceSource | None:
         """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""

@@ -1091,3 +1091,17 @@ def test_person_selection_is_a_pure_transition(app: PoseLifterApp) -> None:
     assert out.person == 0 and [(r.control, r.value) for r in rej] == [("person", 0)]
     with pytest.raises(PoseLifterError, match="out of range"):
         SessionState(sample=demo, model=app.default_model, person=1)
+
+
+def test_a_frame_past_the_sequence_end_is_said(h36m_app: PoseLifterApp) -> None:
+    """A frame number typed past the end shows the last frame, with a message, once; the slider shows it."""
+    v = h36m_app.headless_view()
+    assert v.select_h36m(subject=9, sequence="Walking 1", camera="54138969", frame=10) is True
+    last = h36m_app.h36m.num_frames(9, "Walking 1") - 1
+    n = len(v.messages)
+    v.gui.play.frame.value = last + 500
+    assert v.state.sample.key.endswith(f"/{last}") and v.gui.play.frame.value == last
+    assert len(v.messages) == n + 1 and f"frame {last + 500} is past the end" in v.messages[-1]
+    v.gui.play.frame.value = last - 1  # within the sequence: nothing said
+    v.gui.play.frame.value = last
+    assert len(v.messages) == n + 1
