@@ -272,7 +272,8 @@ class SessionView:
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
-        for name, handle in (("focal_px", g.lift.focal), ("noise_level", g.noise.level)):  # before the sync callback
+        for name, handle in (("focal_px", g.lift.focal), ("noise_level", g.noise.level),
+                             ("frame", g.play.frame)):  # before the sync callback
             handle.on_update(functools.partial(self._note_typed, name))
         for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame, *g.value_handles()]:
             h.on_update(sync)
@@ -472,6 +473,10 @@ class SessionView:
         else:
             return
         if int(f) == last and wanted > last:
+            since = time.time() - self._typed_at.get("frame", -math.inf)
+            if since < TYPING_SETTLE_S:  # still typing ("9999" on the way to "99999"): said once it settles
+                self._settle_later(TYPING_SETTLE_S - since + 0.05)
+                return
             self.show_message(f"frame {wanted} is past the end of this sequence (frames 0–{last}); showing frame {last}")
             self._put(self.gui.play.frame, last)  # (said once: the slider shows the frame in use)
 

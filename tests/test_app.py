@@ -1105,3 +1105,29 @@ def test_a_frame_past_the_sequence_end_is_said(h36m_app: PoseLifterApp) -> None:
     v.gui.play.frame.value = last - 1  # within the sequence: nothing said
     v.gui.play.frame.value = last
     assert len(v.messages) == n + 1
+
+
+def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLifterApp) -> None:
+    """The slider's box sends every keystroke: "9999" on the way to "99999" is past the end too, but the message
+    comes once, for the value left in the box."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    before = set(h36m_app.views)
+    tab = FakeTab(h36m_app.server)
+    try:
+        assert wait_for(lambda: len(set(h36m_app.views) - before) == 1)
+        v = h36m_app.views[next(iter(set(h36m_app.views) - before))]
+        assert v.state.sample.key.startswith("h36m/")
+        n_msgs = len(v.messages)
+        for typed in (9999, 99999):
+            _send_value(tab, v.gui.play.frame, typed)
+            time.sleep(0.1)
+        assert wait_for(lambda: any("past the end" in m for m in v.messages[n_msgs:]), timeout=10), v.messages
+        time.sleep(TYPING_SETTLE_S + 0.3)
+        said = [m for m in v.messages[n_msgs:] if "past the end" in m]
+        assert len(said) == 1 and said[0].startswith("frame 99999 is past the end"), said
+    finally:
+        tab.conn.close()
+        assert wait_for(lambda: set(h36m_app.views) == before)
