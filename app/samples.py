@@ -37,6 +37,8 @@ class Sample:
     others_2d: the other people in the same image, ``(17, 2)`` px each, largest first (a photo or a keypoint
         file with several people; video frames). They are lifted into the same camera space; the app's person
         picker makes any of them the draggable one.
+    person_tags: the input's own name for each person, this one first (``"id 7"``, ``"track 3"``; ``""`` when it
+        has none), shown in the person picker; empty when there are none.
     """
 
     key: str
@@ -49,11 +51,16 @@ class Sample:
     has_gt_2d: bool = True
     upload: Any = None
     others_2d: tuple[np.ndarray, ...] = ()
+    person_tags: tuple[str, ...] = ()
 
     @property
     def num_people(self) -> int:
         """People in the image: this one and :attr:`others_2d`."""
         return 1 + len(self.others_2d)
+
+    def person_tag(self, k: int) -> str:
+        """:attr:`person_tags` ``[k]``, or ``""``."""
+        return self.person_tags[k] if 0 <= k < len(self.person_tags) else ""
 
 
 def _read_rgb(path: Path) -> np.ndarray | None:

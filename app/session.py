@@ -9,6 +9,7 @@ whatever order the callbacks run in.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -144,18 +145,23 @@ def reset_joints(state: SessionState) -> SessionState:
     return state.evolve(keypoints=state.base_keypoints().copy(), dragged=set())
 
 
-def person_label(k: int) -> str:
-    """The person picker's label of person index ``k`` (0 = largest): ``"person 1"``, ..."""
-    return f"person {int(k) + 1}"
+def person_label(k: int, tag: str = "") -> str:
+    """The person picker's label of person index ``k`` (0 = largest): ``"person 1"``, ..., with the input's own
+    name for them when it has one (``tag``: ``"id 7"`` from a keypoint file, ``"track 3"`` in a video):
+    ``"person 2 (id 7)"``."""
+    return f"person {int(k) + 1}" + (f" ({tag})" if tag else "")
+
+
+_PERSON_LABEL = re.compile(r"person (\d+)(?: \([^()]{0,60}\))?")
 
 
 def person_index(value: object) -> int:
-    """A person index from an index or a picker label ``"person k"``."""
+    """A person index from an index or a picker label ``"person k"`` (with or without its tag)."""
     if isinstance(value, str):
-        head, _, num = value.strip().partition(" ")
-        if head != "person" or not num.isdigit() or int(num) < 1:
+        m = _PERSON_LABEL.fullmatch(value.strip())
+        if m is None or int(m.group(1)) < 1:
             raise PoseLifterError(f"unknown person {value[:40]!r}; expected 'person 1', 'person 2', ...")
-        return int(num) - 1
+        return int(m.group(1)) - 1
     return _integer(value, "person")
 
 

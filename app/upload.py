@@ -281,6 +281,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         notes.append(f"{len(people) + 1} people in the file; the {MAX_PEOPLE} largest are shown")
         people = people[:MAX_PEOPLE - 1]
     others = tuple(_check_2d(convert(p, src=kf.format), f"{nm}, person {i + 2}") for i, p in enumerate(people))
+    tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
     size = kf.image_size
@@ -312,7 +313,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
-                  image=image, has_gt_2d=False, upload=info, others_2d=others)
+                  image=image, has_gt_2d=False, upload=info, others_2d=others,
+                  person_tags=tags if any(tags) else ())
 
 
 def missing_detector_message(name: str, exc: Exception) -> str:

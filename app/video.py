@@ -101,7 +101,8 @@ class VideoSequence:
             image = self._canvas
         return Sample(key=f"{self.key}/{i}", label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
                       pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
-                      upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]))
+                      upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]),
+                      person_tags=tuple(f"track {p.track_id}" for p in people))
 
     def _canvas_for_bad(self) -> np.ndarray:
         return display_canvas(self.record.image_size or (1000, 1000), VIDEO_DISPLAY_MAX_SIDE)

@@ -397,7 +397,7 @@ class SessionView:
         if name == "focal_px":
             value = float(round(value))
         if name == "person":
-            value = ss.person_label(int(value))
+            value = ss.person_label(int(value), self.state.sample.person_tag(int(value)))
         self._put(handle, value)
 
     def _show_controls(self, st: SessionState) -> None:
@@ -535,7 +535,7 @@ class SessionView:
         if list(g.input.options) != opts:
             g.input.options = opts
         self._put(g.input, st.input_kind)
-        people = [ss.person_label(k) for k in range(sample.num_people)]
+        people = [ss.person_label(k, sample.person_tag(k)) for k in range(sample.num_people)]
         pick = self.gui.joints.person
         if list(pick.options) != people:
             pick.options = people

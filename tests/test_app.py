@@ -1085,6 +1085,9 @@ def test_person_selection_is_a_pure_transition(app: PoseLifterApp) -> None:
         with pytest.raises(PoseLifterError, match=msg):
             ss.with_person(back, ss.person_index(bad))
     assert ss.person_index("person 2") == 1 and ss.person_label(1) == "person 2"
+    assert ss.person_label(1, "id 7") == "person 2 (id 7)" and ss.person_index("person 2 (id 7)") == 1
+    with pytest.raises(PoseLifterError, match="unknown person"):
+        ss.person_index("person 2 (id 7) extra")
     vals = ss.ControlValues(model=st.model, input_kind="detected", focal_px=st.focal_px, noise_level=0.0, seed=0,
                             cloud_samples=st.cloud_samples, analytic=False, person="person 7")
     out, rej = ss.apply_controls(back, vals, known_model=app.pool.get)

@@ -598,6 +598,16 @@ def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     assert sample.num_people == 2 and sample.upload.num_people == 2
     np.testing.assert_allclose(sample.keypoints_2d, convert(coco, src="coco17"))
     np.testing.assert_allclose(sample.others_2d[0], convert(small, src="coco17"))
+    assert sample.person_tags == ()  # no ids in the file: the picker says "person 1", "person 2"
+    # the file's own ids go with each person (largest first) into the person picker's labels
+    doc["people"] = [{"keypoints": small.tolist(), "person_id": "kid"}, {"keypoints": coco.tolist(), "id": 7}]
+    tagged = up.keypoint_sample("ids.json", json.dumps(doc).encode(), key="upload/t/ids.json")
+    assert tagged.person_tags == ("id 7", "id kid")
+    v = app.headless_view()
+    assert v.load_upload("ids.json", json.dumps(doc).encode()) is True
+    assert list(v.gui.joints.person.options) == ["person 1 (id 7)", "person 2 (id kid)"]
+    v.gui.joints.person.value = "person 2 (id kid)"
+    assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id kid)"
     doc["people"] = [{"keypoints": (coco * (1 - 0.05 * k) + 10 * k).tolist()} for k in range(up.MAX_PEOPLE + 2)]
     crowd = up.keypoint_sample("crowd.json", json.dumps(doc).encode(), key="upload/t/crowd.json")
     assert crowd.num_people == up.MAX_PEOPLE

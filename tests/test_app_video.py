@@ -69,6 +69,7 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     assert any("nobody" in w for w in seq.info.warnings)
     st = v.state
     assert st.sample.key == f"{seq.key}/0" and st.sample.num_people == 2 and st.person == 0
+    assert list(v.gui.joints.person.options) == ["person 1 (track 1)", "person 2 (track 2)"]  # the tracks' ids
     assert v.gui.sample.source.value == "upload" and not v.gui.play.frame.disabled and v.gui.play.frame.max == n - 2
     # every person is lifted into the same camera space: the near one ~4 m, the far one ~6 m
     assert 3000 < v.frame.root[2] < 5000 and 5000 < v.frame.others[0].root[2] < 7500
