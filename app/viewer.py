@@ -172,6 +172,8 @@ class SessionView:
         self._reset_request = False
         self._redraw_request = False
         self._flags = threading.Lock()
+        self._frame_note: tuple[int, int] | None = None
+        """(frame asked for, last frame) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
         self._last_plane: np.ndarray | None = None
@@ -460,7 +462,9 @@ class SessionView:
 
     def _note_frame_past_end(self, key: str, video: Any) -> None:
         """Say so when the frame asked for (typed in the slider's box) is past the sequence's end and the last frame
-        is shown instead (:func:`poselifter_app.session.requested_key` clamps it)."""
+        is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While the box is being typed in
+        ("9999" on the way to "99999") the value is remembered and said once the typing settles
+        (:data:`TYPING_SETTLE_S`), even if the slider has been set to the last frame meanwhile."""
         try:
             wanted = int(self.gui.play.frame.value)
         except (TypeError, ValueError):
@@ -471,14 +475,22 @@ class SessionView:
         elif key.startswith("video/") and video is not None and video.index_of(key) is not None:
             f, last = key.rsplit("/", 1)[1], video.num_frames - 1
         else:
+            self._frame_note = None
             return
         if int(f) == last and wanted > last:
-            since = time.time() - self._typed_at.get("frame", -math.inf)
-            if since < TYPING_SETTLE_S:  # still typing ("9999" on the way to "99999"): said once it settles
-                self._settle_later(TYPING_SETTLE_S - since + 0.05)
-                return
-            self.show_message(f"frame {wanted} is past the end of this sequence (frames 0–{last}); showing frame {last}")
-            self._put(self.gui.play.frame, last)  # (said once: the slider shows the frame in use)
+            self._frame_note = (wanted, last)
+        elif int(f) != last or wanted != last or (self._frame_note is not None and self._frame_note[1] != last):
+            self._frame_note = None  # another frame asked for since (the slider at the last frame keeps the note)
+        if self._frame_note is None:
+            return
+        since = time.time() - self._typed_at.get("frame", -math.inf)
+        if since < TYPING_SETTLE_S:
+            self._settle_later(TYPING_SETTLE_S - since + 0.05)
+            return
+        wanted, last = self._frame_note
+        self._frame_note = None
+        self.show_message(f"frame {wanted} is past the end of this sequence (frames 0–{last}); showing frame {last}")
+        self._put(self.gui.play.frame, last)  # (said once: the slider shows the frame in use)
 
     def sequence(self) -> SequenceSource | None:
         """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""

@@ -1131,6 +1131,18 @@ def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLi
         time.sleep(TYPING_SETTLE_S + 0.3)
         said = [m for m in v.messages[n_msgs:] if "past the end" in m]
         assert len(said) == 1 and said[0].startswith("frame 99999 is past the end"), said
+        # the slider set back to the last frame while the typing settles (a pass in between): still said, once
+        last = int(v.state.sample.key.rsplit("/", 1)[1])
+        _send_value(tab, v.gui.play.frame, last - 3)
+        assert wait_for(lambda: v.state.sample.key.endswith(f"/{last - 3}"), timeout=10)
+        time.sleep(TYPING_SETTLE_S + 0.3)
+        n_msgs = len(v.messages)
+        _send_value(tab, v.gui.play.frame, 5000)
+        assert wait_for(lambda: v.state.sample.key.endswith(f"/{last}"), timeout=10)
+        v.gui.play.frame.value = last
+        time.sleep(TYPING_SETTLE_S + 0.5)
+        said = [m for m in v.messages[n_msgs:] if "past the end" in m]
+        assert len(said) == 1 and said[0].startswith("frame 5000 is past the end"), said
     finally:
         tab.conn.close()
         assert wait_for(lambda: set(h36m_app.views) == before)
