@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import math
 import threading
-import warnings
 from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
 import numpy as np
 
-from lifter import Lifter, PoseLifterError, PoseLifterWarning, analytic_root, available_models
+from lifter import Lifter, PoseLifterError, analytic_root, available_models
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 
@@ -290,9 +289,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     ids = [k for k in range(state.sample.num_people) if k != state.person]
     if ids:  # everyone else, in the same batch: same focal length, same camera space
         batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
-    with warnings.catch_warnings():  # (a slider's extreme focal length is the user's choice, shown in the readout)
-        warnings.simplefilter("ignore", PoseLifterWarning)
-        res = lifter.lift(batch, focal=f, principal_point=pp, source=lift_source(state))
+    # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
+    res = lifter.lift(batch, focal=f, principal_point=pp, source=lift_source(state), warn=False)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))
     res_abs, res_rel = res.absolute[:n_main], res.relative[:n_main]

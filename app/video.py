@@ -26,7 +26,6 @@ import cv2
 import numpy as np
 
 from lifter import PoseLifterError
-from lifter.pipeline import lift_quietly
 from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence, lift_video, track_lifted
 
 from .samples import Sample
@@ -128,7 +127,7 @@ class VideoSequence:
             counts = [len(fr.people) for fr in self.frames]
             kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
             src = "clean" if rec.source == "clean" else "detected"
-            res = lift_quietly(lifter, np.stack(kp), np.asarray(f), np.asarray(rec.principal_point), flip_test=None, source=src)
+            res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             lifted, k = [], 0
             for fr, c in zip(self.frames, counts):  # (every frame kept has someone in it)

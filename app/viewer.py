@@ -479,8 +479,8 @@ class SessionView:
             return
         if int(f) == last and wanted > last:
             self._frame_note = (wanted, last)
-        elif int(f) != last or wanted != last or (self._frame_note is not None and self._frame_note[1] != last):
-            self._frame_note = None  # another frame asked for since (the slider at the last frame keeps the note)
+        elif not (int(f) == wanted == last and self._frame_note is not None and self._frame_note[1] == last):
+            self._frame_note = None  # another frame asked for since (the slider set to the last frame keeps it)
         if self._frame_note is None:
             return
         since = time.time() - self._typed_at.get("frame", -math.inf)

@@ -22,6 +22,15 @@ class PoseLifterWarning(UserWarning):
     message names the problem. Turn into errors with ``warnings.simplefilter("error", PoseLifterWarning)``."""
 
 
+def where_in_batch(mask: Any) -> str:
+    """`` (pose at index (i, j), n such pose(s))`` for the first True entry of a mask over a batch's leading shape;
+    empty for a single pose (a 0-d mask)."""
+    mask = np.asarray(mask)
+    if mask.ndim == 0:
+        return ""
+    return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
+
+
 def _untorch(x: Any) -> Any:
     """A torch tensor (any device, with or without ``requires_grad``, any float dtype) as a CPU tensor numpy
     can read; anything else unchanged. torch is only consulted when the caller already imported it."""
@@ -71,10 +80,7 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
             which = [JOINT_NAMES[j] for j in joints]
         else:
             which = [int(j) for j in joints]
-        where = ""
-        if arr.ndim > 2:
-            first = np.argwhere(bad_joint.any(-1))
-            where = f" (pose at index {tuple(int(i) for i in first[0])}, {len(first)} such pose(s))"
+        where = where_in_batch(bad_joint.any(-1))
         fix = (" A joint the detector missed has to be filled in (from a neighbouring frame, or its left/right "
                "partner) or the pose left out" if dim == 2 else "")
         raise PoseLifterError(
@@ -113,7 +119,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
     pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice.
     :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
-    from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
+    from .camera import MAX_PLAUSIBLE_VIEW_DEG, pose_view_deg
     from .skeleton import JOINT_NAMES
 
     notes: list[str] = []
@@ -122,10 +128,8 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
         return notes
     lead = k.shape[:-2]
 
-    def where(mask: np.ndarray) -> str:
-        if mask.size <= 1:
-            return ""
-        return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
+    def where(mask: np.ndarray) -> str:  # (a batch of one, like a file's single pose, needs no index either)
+        return "" if mask.size <= 1 else where_in_batch(mask)
 
     if focal is not None:
         # (the box diagonal against 2 alpha tan(view / 2) first: the angles only when something is wide)
@@ -138,8 +142,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
             wide = view > MAX_PLAUSIBLE_VIEW_DEG
             if np.any(wide):  # (quoted: the widest pose and its own focal length)
                 widest = np.unravel_index(int(np.argmax(view)), view.shape) if lead else ()
-                alpha_w = float(np.broadcast_to(focal_alpha(focal), lead)[widest]) if lead else float(
-                    focal_alpha(focal))
+                alpha_w = float(np.broadcast_to(alpha, lead)[widest])
                 notes.append(f"at the focal length used ({alpha_w:.4g} px) a 2D pose spans {float(np.max(view)):.0f} "
                              f"deg of view (a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg, "
                              f"even through an ultra-wide lens){where(wide)}: " + (

@@ -24,7 +24,7 @@ import torch
 from numpy.typing import ArrayLike
 
 from . import resources as assets
-from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings
+from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings, where_in_batch
 from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov
 from .checkpoint import Checkpoint, load_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
@@ -126,13 +126,6 @@ class LiftResult:
         return (f"no focal length given: lifted as seen through {used}; this model reads the 2D through the focal "
                 "length, so the pose and the depth both rest on that assumption (Z * f_true / f_used only roughly "
                 "corrects Z); give the focal length for a metric result")
-
-
-def _where(bad: np.ndarray) -> str:
-    """`` (pose at index (i, j))`` for the first True entry of a batched mask; empty for a single pose."""
-    if bad.ndim == 0:
-        return ""
-    return f" (pose at index {tuple(int(i) for i in np.argwhere(bad)[0])}, {int(bad.sum())} such pose(s))"
 
 
 def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
@@ -276,6 +269,7 @@ class Lifter:
         image_size: ArrayLike | None = None,
         source: Source = "detected",
         flip_test: bool | None = None,
+        warn: bool = True,
     ) -> LiftResult:
         """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order, :data:`lifter.JOINT_NAMES`) to absolute 3D.
 
@@ -291,13 +285,16 @@ class Lifter:
             None: the model's default (:attr:`flip_test`). Ignored by networks that are mirror-equivariant by
             construction (``symmetry="mirror"``, like the default's second detected network): for them it would
             give the same result.
+        warn: warn (:class:`lifter.PoseLifterWarning`) of input that is taken but looks wrong
+            (:func:`lifter._checks.input_warnings`); False for callers that report it themselves (the records'
+            notes, the app's readout). A keyword rather than ``warnings.catch_warnings``, which is not thread-safe.
         """
         target = self.clean if source == "clean" and self.clean is not None else self
         return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
-                                    source=source, flip_test=flip_test)
+                                    source=source, flip_test=flip_test, warn=warn)
 
     def _lift_checked(self, keypoints: ArrayLike, *, focal: ArrayLike | None, principal_point: ArrayLike | None,
-                      image_size: ArrayLike | None, source: Source, flip_test: bool | None) -> LiftResult:
+                      image_size: ArrayLike | None, source: Source, flip_test: bool | None, warn: bool) -> LiftResult:
         """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
@@ -331,11 +328,11 @@ class Lifter:
         scale = pose_scale(kp)
         if np.any(scale < DEGENERATE_SCALE_PX):
             raise PoseLifterError(
-                f"degenerate pose{_where(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point (2D scale "
+                f"degenerate pose{where_in_batch(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point (2D scale "
                 f"{float(scale.min()):.2g} px); the normalization needs a pose with non-zero extent")
         if np.any(scale < MIN_POSE_SCALE_PX):
             raise PoseLifterError(
-                f"2D pose scale {float(scale.min()):.3g} px{_where(scale < MIN_POSE_SCALE_PX)} is too small "
+                f"2D pose scale {float(scale.min()):.3g} px{where_in_batch(scale < MIN_POSE_SCALE_PX)} is too small "
                 f"(< {MIN_POSE_SCALE_PX} px): keypoints must be in image pixels (normalized [0, 1] coordinates? "
                 "multiply by the image size)")
         if f.size and float(f.min()) < MIN_FOCAL_PX:
@@ -343,8 +340,9 @@ class Lifter:
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
                 "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to "
                 "assume a default field of view")
-        for message in input_warnings(kp, f if focal_source == "given" else None):
-            warnings.warn(PoseLifterWarning(message), stacklevel=3)
+        if warn:
+            for message in input_warnings(kp, f if focal_source == "given" else None):
+                warnings.warn(PoseLifterWarning(message), stacklevel=3)
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
         flat_pp = pp.reshape(-1, 2)

@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._checks import PoseLifterError, PoseLifterWarning, as_pair, input_warnings
+from ._checks import PoseLifterError, as_pair, input_warnings
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
 from .io import LiftRecord, PersonResult, parse_keypoint_json
@@ -86,20 +85,12 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     return notes
 
 
-def lift_quietly(lifter: Any, kp17: np.ndarray, focal: np.ndarray, pp: np.ndarray, *, flip_test: bool | None,
-          source: str) -> Any:
-    """``lifter.lift`` without its :class:`PoseLifterWarning` s: the records carry them as notes
-    (:func:`plausibility_notes`)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PoseLifterWarning)
-        return lifter.lift(kp17, focal=focal, principal_point=pp, flip_test=flip_test, source=source)
-
-
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
-    :class:`PersonResult` each (mm, camera frame), in the same order."""
-    res = lift_quietly(lifter, kp17, f, pp, flip_test=flip_test, source=source)
+    :class:`PersonResult` each (mm, camera frame), in the same order. No Python warnings: the records carry
+    them as notes (:func:`plausibility_notes`)."""
+    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False)
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],

@@ -123,29 +123,25 @@ class SequenceTracker:
         or lists) is a frame with nobody. A single person's arrays without the leading ``n`` axis are refused with
         the shapes expected."""
         kp = np.asarray(keypoints_2d, np.float64)
-        if kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0:
-            self.tracker.update(frame, [])
-            for tid in list(self._smoothers):
-                if tid not in self.tracker.tracks:
-                    del self._smoothers[tid]
-            return []
-        n = kp.shape[0] if kp.ndim == 3 else -1
-        shapes = {"keypoints_2d": (kp.shape, (n, 17, 2)), "root": (np.shape(root), (n, 3)),
-                  "relative": (np.shape(relative), (n, 17, 3))}
-        if scores is not None:
-            shapes["scores"] = (np.shape(scores), (n, 17))
-        wrong = [f"{k} {got}" for k, (got, want) in shapes.items() if got != want]
-        if n < 0 or wrong:
-            raise PoseLifterError(
-                "SequenceTracker.step: expected keypoints_2d (n, 17, 2), root (n, 3), relative (n, 17, 3)"
-                f"{', scores (n, 17)' if scores is not None else ''} for the n people of the frame (one person: "
-                f"n = 1, e.g. root[None]); got {', '.join(wrong) if wrong else f'keypoints_2d {kp.shape}'}")
-        f = as_pair(focal, name="focal", positive=True, scalar=True).reshape(-1, 2)
-        if not np.all(f == f[0]):  # (a LiftResult's per-pose focal (n, 2) of one frame is fine)
-            raise PoseLifterError(f"SequenceTracker.step: focal: one focal length for the frame (scalar or (2,) px), "
-                                  f"got {len(f)} different ones")
-        focal = f[0]
-        ids = self.tracker.update(frame, list(kp))
+        nobody = kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0
+        if not nobody:
+            n = kp.shape[0] if kp.ndim == 3 else -1
+            shapes = {"keypoints_2d": (kp.shape, (n, 17, 2)), "root": (np.shape(root), (n, 3)),
+                      "relative": (np.shape(relative), (n, 17, 3))}
+            if scores is not None:
+                shapes["scores"] = (np.shape(scores), (n, 17))
+            wrong = [f"{k} {got}" for k, (got, want) in shapes.items() if got != want]
+            if n < 0 or wrong:
+                raise PoseLifterError(
+                    "SequenceTracker.step: expected keypoints_2d (n, 17, 2), root (n, 3), relative (n, 17, 3)"
+                    f"{', scores (n, 17)' if scores is not None else ''} for the n people of the frame (one person: "
+                    f"n = 1, e.g. root[None]); got {', '.join(wrong) if wrong else f'keypoints_2d {kp.shape}'}")
+            f = as_pair(focal, name="focal", positive=True, scalar=True).reshape(-1, 2)
+            if not np.all(f == f[0]):  # (a LiftResult's per-pose focal (n, 2) of one frame is fine)
+                raise PoseLifterError(f"SequenceTracker.step: focal: one focal length for the frame (scalar or (2,) "
+                                      f"px), got {len(f)} different ones")
+            focal = f[0]
+        ids = self.tracker.update(frame, [] if nobody else list(kp))
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks:
                 del self._smoothers[tid]  # ended tracks
@@ -297,7 +293,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
     import cv2
 
-    from .pipeline import lift_quietly, plausibility_notes, resolve_camera
+    from .pipeline import plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     p = Path(path)
@@ -388,7 +384,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 states: list[PersonState] = []
             else:
                 kp = np.stack([q.keypoints_2d for q in people])
-                res = lift_quietly(lifter, kp, cam[0], cam[2], flip_test=flip_test, source="detected")
+                res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
+                                  warn=False)  # (the record's notes say it, once)
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -462,7 +459,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
-    from .pipeline import lift_quietly, plausibility_notes, resolve_camera
+    from .pipeline import plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
@@ -493,7 +490,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         raise PoseLifterError(f"{path}: no person in any frame")
     kp17 = np.stack(kp_all)
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
-    res = lift_quietly(lifter, kp17, f, pp, flip_test=flip_test, source=ks.source)
+    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0
     for i, c in enumerate(counts):

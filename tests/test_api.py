@@ -212,6 +212,7 @@ def test_focal_in_mm_warns(camera_lifter, keypoints):
         warnings.simplefilter("error", PoseLifterWarning)
         camera_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
         camera_lifter.lift(keypoints, principal_point=(512.0, 515.0))  # unknown focal: nothing to check
+        camera_lifter.lift(keypoints, focal=35.0, principal_point=(512.0, 515.0), warn=False)  # the caller reports it
         f_wide = focal_from_fov((3000, 4000), fov_deg=120.0)
         from lifter import demo_sample
 
