@@ -180,6 +180,12 @@ class Lifter:
     def config(self) -> ModelConfig:
         return self.net.config
 
+    @property
+    def input_space(self) -> Literal["pixel", "camera"]:
+        """What this lifter's networks read (:attr:`LiftResult.input_space`): ``"camera"`` when any of them reads
+        the 2D through the focal length (the default), else ``"pixel"`` (the paper's models)."""
+        return "camera" if any(m.config.input_space == "camera" for m in (self, *self.ensemble)) else "pixel"
+
     # -- construction --------------------------------------------------------------------------------
     @classmethod
     def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None,
@@ -347,6 +353,7 @@ class Lifter:
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
         flat_pp = pp.reshape(-1, 2)
         flat_f = f.reshape(-1, 2)
+        flat_alpha = focal_alpha(flat_f)  # float64; checked once here, shared by every network and chunk
         n = len(flat_kp)
         rel = np.empty((n, NUM_JOINTS, 3))
         root = np.empty((n, 3))
@@ -356,8 +363,8 @@ class Lifter:
             # every network with its own flip-test default unless the call gives one; networks whose codecs
             # encode alike share the encodings (``encoded``)
             encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] = {}
-            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], source, m.network_rows(flip_test) == 2,
-                                 encoded=encoded)
+            outs = [m._lift_flat(flat_kp[sl], flat_pp[sl], flat_f[sl], flat_alpha[sl], source,
+                                 m.network_rows(flip_test) == 2, encoded=encoded)
                     for m in (self, *self.ensemble)]
             rel[sl], root[sl], canonical[sl] = (sum(o[i] for o in outs) / len(outs) for i in range(3))
         if not (np.all(np.isfinite(rel)) and np.all(np.isfinite(root))):
@@ -367,14 +374,13 @@ class Lifter:
         absolute = rel + root[..., None, :]
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
-                          metric_depth=focal_source == "given", source=source,
-                          input_space="camera" if any(m.config.input_space == "camera" for m in (self, *self.ensemble))
-                          else "pixel")
+                          metric_depth=focal_source == "given", source=source, input_space=self.input_space)
 
-    def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, source: Source, flip_test: bool, *,
-                   encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None
+    def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, alpha: np.ndarray, source: Source,
+                   flip_test: bool, *, encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(N, 17, 2)``, ``(N, 2)``, ``(N, 2)`` px -> relative ``(N, 17, 3)``, root ``(N, 3)`` mm, canonical ``(N,)``.
+        """``(N, 17, 2)``, ``(N, 2)``, ``(N, 2)`` px and ``alpha = focal_alpha(f)`` ``(N,)`` px -> relative
+        ``(N, 17, 3)``, root ``(N, 3)`` mm, canonical ``(N,)``.
         encoded: encodings of these inputs by :attr:`PoseCodec.feature_key` (and its mirror image), shared by the
         networks of one call; filled here."""
         codec = self.codec
@@ -396,7 +402,7 @@ class Lifter:
         raw = codec.destandardize(out.astype(np.float64))
         if flip_test:
             raw = 0.5 * (raw[: len(kp)] + codec.mirror_output(raw[len(kp):]))
-        alpha = focal_alpha(f)  # float64 from here on: the features alone were float32
+        # float64 from here on: the features alone were float32
         alpha_in = alpha if codec.config.input_space == "pixel" else np.full_like(alpha, codec.reference_focal)
         enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha)
         dec = codec.decode(raw, enc64, root_2d=kp[:, 0], principal_point=pp, focal=f)

@@ -98,7 +98,7 @@ def test_camera_model_sees_rays(camera_lifter, keypoints):
     a = camera_lifter.lift(keypoints, focal=1145.0, principal_point=c)
     b = camera_lifter.lift(keypoints, focal=2290.0, principal_point=c)
     assert not np.allclose(a.relative, b.relative, atol=1e-3)
-    assert a.input_space == "camera"
+    assert a.input_space == "camera" == camera_lifter.input_space
     unknown = camera_lifter.lift(keypoints, principal_point=c)
     assert unknown.input_space == "camera" and "rest on that assumption" in unknown.note and "up to" not in unknown.note
     k = 3.7
@@ -113,7 +113,7 @@ def test_unknown_focal(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, principal_point=(512.0, 515.0))
     assert not res.metric_depth and res.focal_source == "reference"
     # the note says how far the unknown focal matters: exactly a rescaling of Z for a pixel-space model only
-    assert res.input_space == small_lifter.config.input_space
+    assert res.input_space == small_lifter.config.input_space == small_lifter.input_space
     assert ("up to the unknown focal" in res.note) == (res.input_space == "pixel")
     assert ("rest on that assumption" in res.note) == (res.input_space == "camera")
     np.testing.assert_allclose(res.focal, 1000.0)

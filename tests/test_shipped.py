@@ -116,7 +116,9 @@ def test_default_knows_the_root_only_up_to_z_over_f_without_a_focal():
     kp = project(_DEMO.pose_3d, focal=_F, principal_point=_C)
     res = lifter.lift(kp, principal_point=_C)
     assert not res.metric_depth and res.focal_source == "reference"
-    assert res.input_space == "camera" and "rest on that assumption" in res.note
+    assert res.input_space == "camera" == lifter.input_space and "rest on that assumption" in res.note
+    assert lifter.clean is not None
+    assert lifter.lift(kp, principal_point=_C, source="clean").input_space == lifter.clean.input_space == "camera"
     f = res.focal[..., 0]
     assert res.root[2] / f == pytest.approx(res.canonical_depth / CANONICAL_FOCAL, rel=1e-6)
     np.testing.assert_allclose(project(res.root[None], focal=f, principal_point=_C)[0], kp[0], atol=1e-3)
