@@ -69,6 +69,17 @@ IMAGE_SUFFIXES: Final[frozenset[str]] = frozenset(
 DEFAULT_MAX_SIDE_PX: Final[int] = 2048
 """Images with a longer side are downscaled (area filter) before detection; keypoints are mapped back."""
 
+MIN_MAX_SIDE_PX: Final[int] = 256
+"""The smallest ``max_side`` taken: BlazePose itself reads 224-256 px crops, so a smaller image only loses detail
+(at 10 px it invents a person off the image)."""
+
+
+def check_max_side(max_side: int, *, name: str = "max_side") -> None:
+    """:class:`PoseLifterError` unless ``max_side`` is an int of at least :data:`MIN_MAX_SIDE_PX` px."""
+    if isinstance(max_side, bool) or not isinstance(max_side, (int, np.integer)) or max_side < MIN_MAX_SIDE_PX:
+        raise PoseLifterError(f"{name} must be a whole number of px >= {MIN_MAX_SIDE_PX} (the longer image side "
+                              f"detection runs at; the detector reads {MIN_MAX_SIDE_PX}-px crops), got {max_side!r}")
+
 MAX_IMAGE_PIXELS: Final[int] = 400_000_000
 """Larger images (e.g. decompression bombs) are refused without decoding them."""
 
@@ -281,6 +292,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     truncated or corrupt one, or one with more than ``max_pixels`` pixels."""
     from PIL import Image, ImageOps, UnidentifiedImageError
 
+    check_max_side(max_side)
     p = Path(path)
     if not p.is_file():
         raise ImageError(f"{p}: no such file")
@@ -336,6 +348,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
 def image_from_array(rgb: Any, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> LoadedImage:
     """Wrap an ``(H, W, 3)`` uint8 RGB array (e.g. an upload already decoded) as a :class:`LoadedImage`,
     downscaled like :func:`load_image`. Grey ``(H, W)`` and RGBA ``(H, W, 4)`` arrays are converted."""
+    check_max_side(max_side)
     a = np.asarray(rgb)
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
@@ -1045,7 +1058,8 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 
 __all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
-           "ExifCamera", "FocalGuess", "ImageError", "LoadedImage", "MissingDependencyError", "NoPersonError",
+           "MIN_MAX_SIDE_PX", "check_max_side", "ExifCamera", "FocalGuess", "ImageError", "LoadedImage",
+           "MissingDependencyError", "NoPersonError",
            "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",
            "ensure_pose_task", "people_h36m", "focal_from_exif",
            "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

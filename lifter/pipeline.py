@@ -85,6 +85,22 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     return notes
 
 
+def detector_doubt_notes(visibility: list[float]) -> list[str]:
+    """A note naming each detected person (largest first) whose mean landmark visibility (the detector's own
+    confidence, 0-1) is below :data:`lifter.detect.MIN_EXTRA_VISIBILITY`: on real photos the detector gives
+    0.79-0.97 (the 84 Human3.6M demo photos), while a person it half-invents (a tiny, blurred or cut-off
+    image) gets about 0.4, with joints off the body or off the image."""
+    from .detect import MIN_EXTRA_VISIBILITY
+
+    low = [(i, v) for i, v in enumerate(visibility) if v < MIN_EXTRA_VISIBILITY]
+    if not low:
+        return []
+    who = ", ".join(f"person {i + 1} ({v:.2f})" if len(visibility) > 1 else f"{v:.2f}" for i, v in low)
+    return [f"the detector is unsure of {'the person found' if len(visibility) == 1 else 'some people'}: mean "
+            f"landmark visibility {who}, below {MIN_EXTRA_VISIBILITY:g} (real photos give 0.8-1): the 2D, and so the "
+            "3D, may be wrong; is the person large and sharp enough in the image?"]
+
+
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
@@ -151,7 +167,8 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
     kp_people = np.stack([d.keypoints_2d for d in dets])
-    notes += plausibility_notes(kp_people, f, None, focal_source=src)
+    notes += plausibility_notes(kp_people, f, img.size, focal_source=src)
+    notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
                          scores=np.stack([d.scores for d in dets]))
     top, det = lifted[0], dets[0]

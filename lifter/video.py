@@ -431,7 +431,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     f, src, pp = cam
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
-        warnings.extend(plausibility_notes(np.stack(seen_2d), f, None, focal_source=src))
+        warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),

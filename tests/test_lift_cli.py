@@ -328,14 +328,15 @@ class _StubEstimator:
     name = "stub"
     keypoint_format = "h36m17"
 
-    def __init__(self, people: list[np.ndarray]) -> None:
+    def __init__(self, people: list[np.ndarray], visibility: float = 1.0) -> None:
         self.people = people
+        self.visibility = visibility
         self.seen: tuple[int, ...] | None = None
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         self.seen = image.shape
-        return [Detection(keypoints=k, scores=np.ones(17), bbox_xywh=bbox_of(k), keypoint_format="h36m17")
-                for k in self.people]
+        return [Detection(keypoints=k, scores=np.full(17, self.visibility), bbox_xywh=bbox_of(k),
+                          keypoint_format="h36m17") for k in self.people]
 
 
 def test_detect_pose_picks_largest_and_maps_back(tmp_path, kp17):
@@ -367,6 +368,27 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert got["image_size"] == [1280, 720] and got["principal_point"] == [640.0, 360.0]
     assert got["focal_source"] == "default-fov" and got["detector"] == "stub" and got["num_people"] == 1
     assert "downscaled" in err and "65 deg" in err
+
+
+def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, weights, kp17):
+    """A tiny or blurred photo makes BlazePose invent a person with low landmark visibility and joints off the
+    image (seen on a 40 x 40 px photo: visibility 0.37, joints up to 78 px on a 40-px image); the record says so
+    instead of lifting it without a word. A plain detection gets neither note."""
+    from lifter.detect import load_image
+    from lifter.pipeline import lift_image
+
+    p = tmp_path / "tiny.png"
+    Image.new("RGB", (300, 300), (50, 60, 70)).save(p)
+    off = 0.2 * (kp17 - kp17[0]) + np.array([330.0, 150.0])  # mostly right of the 300-px image
+    lifter = Lifter.from_checkpoint(weights)
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([off], visibility=0.37), focal=400.0)
+    assert any("lie mostly outside the 300 x 300 px image" in w for w in rec.warnings), rec.warnings
+    assert any("detector is unsure of the person found: mean landmark visibility 0.37" in w for w in rec.warnings)
+    inside = 0.2 * (kp17 - kp17[0]) + 150.0
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([inside], visibility=0.8), focal=400.0)
+    assert not any("outside" in w or "unsure" in w for w in rec.warnings), rec.warnings
+    with pytest.raises(PoseLifterError, match=r"max_side must be a whole number of px >= 256"):
+        load_image(p, max_side=10)
 
 
 def test_images_are_lifted_as_detections_and_keypoint_files_say_what_they_are(tmp_path, weights, kp17, capsys):

@@ -65,7 +65,14 @@ import numpy as np
 
 from .._checks import PoseLifterError, as_pair
 from ..camera import DEFAULT_DIAGONAL_FOV_DEG
-from ..detect import DEFAULT_MAX_SIDE_PX, IMAGE_SUFFIXES, MissingDependencyError, load_image
+from ..detect import (
+    DEFAULT_MAX_SIDE_PX,
+    IMAGE_SUFFIXES,
+    MIN_MAX_SIDE_PX,
+    MissingDependencyError,
+    check_max_side,
+    load_image,
+)
 from ..io import LiftRecord, _camera_field, is_keypoint_sequence, write_json_atomic
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
@@ -206,7 +213,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "(0 = off, 2 = twice as smooth)")
     p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
                    help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
-    p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX, help="downscale larger images for detection")
+    p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX,
+                   help=f"downscale larger images for detection (px, at least {MIN_MAX_SIDE_PX})")
     p.add_argument("--format", default=None, help="keypoint format of JSON files that name none "
                                                   f"(one of {', '.join(keypoint_formats())})")
     p.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
@@ -231,9 +239,9 @@ def check_lift_options(args: argparse.Namespace) -> None:
     if args.sensor_width is not None and not (math.isfinite(args.sensor_width) and 0 < args.sensor_width < 1000):
         raise PoseLifterError(f"--sensor-width must be the sensor's long side in mm, in (0, 1000), "
                               f"got {args.sensor_width:g}")
-    for opt, value in (("--max-side", args.max_side), ("--max-people", args.max_people)):
-        if value < 1:
-            raise PoseLifterError(f"{opt} must be >= 1, got {value}")
+    if args.max_people < 1:
+        raise PoseLifterError(f"--max-people must be >= 1, got {args.max_people}")
+    check_max_side(args.max_side, name="--max-side")
     if not (math.isfinite(args.smoothing) and args.smoothing >= 0):
         raise PoseLifterError(f"--smoothing must be a strength >= 0 (0 = off, 1 = default), got {args.smoothing:g}")
     if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
