@@ -3,16 +3,18 @@ result record (:class:`LiftRecord`) that ``poselifter lift`` and the app's downl
 
 Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
 "focal": F or [FX, FY], "principal_point": [CX, CY], "source": "detected" | "clean"}`` (only ``keypoints`` is
-required; rows may have a third value, a confidence, which is ignored; a flat ``[x0, y0, c0, x1, ...]`` list
-works too), a bare list of ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}``
-(format openpose25), a COCO-style list of people ``[{"keypoints": [...]}, ...]`` or a result this module wrote
-(:class:`LiftRecord`: ``people[].keypoints_2d``, H36M order, with its camera; lift it again with another focal
-length or model). Without ``format`` it is
+required; rows may have a third value, a confidence, where 0 marks a missing joint, as does a ``null``
+coordinate; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of ``[x, y]`` rows, OpenPose's
+output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}`` (format openpose25), a COCO-style list of people
+``[{"keypoints": [...]}, ...]`` or a result this module wrote (:class:`LiftRecord`: ``people[].keypoints_2d``,
+H36M order, with its camera; lift it again with another focal length or model). Without ``format`` it is
 inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33: blazepose33). ``source`` says what
 the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"`` (exact: ground truth or
 hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
 (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
-magnitude; anything else fails with a message naming the field.
+magnitude; anything else fails with a message naming the field. A person missing a joint that the format's
+rules to H36M need is left out with a note naming them (a frame of a sequence then has one person fewer); a
+file where nobody is left fails.
 
 Units: px for 2D, mm for 3D; camera frame OpenCV (+x right, +y down, +z forward).
 """
@@ -306,10 +308,23 @@ def _people_of(d: Any, p: Path, fmt: str | None
     return [(i, q, pid) for i, (q, pid) in enumerate(zip(people, ids)) if q is not None and q != []], fmt, meta
 
 
+def _needs(fmt: str) -> str:
+    """What a person must give, for the messages on missing joints."""
+    return ("the lifter needs all 17 joints" if fmt == H36M17
+            else f"the lifter needs every joint that the {fmt} -> h36m17 rules use")
+
+
+def _who(k: int, pid: str | int | None, n: int) -> str:
+    """A person of a file with ``n`` people, for messages: their position (1-based) and id."""
+    return ("the person" if n == 1 and pid is None
+            else f"person {k + 1} of {n}" + ("" if pid is None else f" (id {pid!r})"))
+
+
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str]
-                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]]]:
+                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
-    and for each, its ``(position in the file, person id)``."""
+    for each, its ``(position in the file, person id)``; and the people left out because a joint the lifter needs
+    is missing (confidence 0, or null / non-finite coordinates): ``(who, [joint names])`` each."""
     parsed = []
     for _, q, _ in people:
         xy, conf = _rows(q, str(p))
@@ -318,7 +333,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             missing |= conf <= 0  # OpenPose / COCO mark undetected joints with confidence 0
         parsed.append((xy, missing))
     if not parsed:
-        return [], fmt or H36M17, []
+        return [], fmt or H36M17, [], []
 
     def area(k: int) -> float:
         xy, miss = parsed[k]
@@ -343,20 +358,27 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' or "
                          "--format if they are another layout)")
     f = get_format(fmt)
-    out = []
-    for xy, missing in parsed:
+    used = sorted({k for rule in f.to_h36m for k, _ in rule})  # only the joints a rule uses are needed
+    out, kept, dropped = [], [], []
+    for (xy, missing), (pos, pid) in zip(parsed, identity):
         if len(xy) != f.num_joints:
             raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}")
         if missing.any():
-            # only the joints a rule uses are needed
-            used = sorted({k for rule in f.to_h36m for k, _ in rule})
             bad = [f.joint_names[k] for k in used if missing[k]]
             if bad:
-                raise PoseLifterError(f"{p}: joint(s) {bad} missing (confidence 0 or not finite); every joint the "
-                                      f"{fmt} -> h36m17 rules use must be given")
+                dropped.append((_who(pos, pid, len(people)), bad))
+                continue
             xy = np.where(missing[:, None], 0.0, xy)
         out.append(xy)
-    return out, fmt, identity
+        kept.append((pos, pid))
+    return out, fmt, kept, dropped
+
+
+def _missing_message(p: Path, fmt: str, dropped: list[tuple[str, list[str]]]) -> str:
+    who = "; ".join(f"{w}: {bad}" for w, bad in dropped[:5]) + ("; ..." if len(dropped) > 5 else "")
+    return (f"joint(s) missing (confidence 0, or null / non-finite coordinates) for {who}; {_needs(fmt)}. "
+            "Give those joints (e.g. placed by hand, or interpolated from neighbouring frames) or leave the person "
+            "out of the file")
 
 
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
@@ -382,7 +404,11 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     people, fmt, meta = _people_of(d, p, default_format)
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
-    arrays, fmt, identity = _people_arrays(people, p, fmt, notes)
+    arrays, fmt, identity, dropped = _people_arrays(people, p, fmt, notes)
+    if dropped and not arrays:
+        raise PoseLifterError(f"{p}: {_missing_message(p, fmt, dropped)}")
+    if dropped:
+        notes.append(f"{len(dropped)} of {len(people)} people left out: {_missing_message(p, fmt, dropped)}")
     if len(arrays) > 1:
         has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
@@ -410,6 +436,9 @@ class KeypointSequence:
     principal_point: np.ndarray | None = None
     warnings: tuple[str, ...] = ()
     source: str = "detected"
+    people_ids: list[list[str | int | None]] | None = None
+    """Per frame, for each of its people: their ``person_id`` (or ``id``, ``track_id``) field, None where they
+    have none; None when no frame has one."""
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -445,21 +474,39 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
     notes: list[str] = []
     frames: list[list[np.ndarray]] = []
+    ids: list[list[str | int | None]] = []
+    dropped: list[tuple[int, tuple[str, list[str]]]] = []  # (frame, (who, joints))
     for i, fr in enumerate(raw):
         where = Path(f"{p} frame {i}")
         if fr == [] or fr is None or (isinstance(fr, dict) and fr.get("people") == []):
             frames.append([])
+            ids.append([])
             continue
         people, f_fmt, _ = _people_of(fr, where, fmt)
-        arrays, f_fmt, _ = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [])
+        arrays, f_fmt, identity, gone = _people_arrays(people, where, f_fmt,
+                                                       notes if fmt is None and not frames else [])
         if fmt is None:
             fmt = f_fmt
         elif f_fmt != fmt:
             raise PoseLifterError(f"{where}: format {f_fmt!r} differs from the sequence's {fmt!r}")
         frames.append(arrays)
+        ids.append([pid for _, pid in identity])
+        dropped += [(i, g) for g in gone]
+    fmt = fmt or H36M17
+    if dropped:
+        at = sorted({i for i, _ in dropped})
+        joints = sorted({j for _, (_, bad) in dropped for j in bad})
+        msg = (f"{len(dropped)} person(s) left out of {len(at)} frame(s) ({', '.join(map(str, at[:10]))}"
+               f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0, or null / non-finite "
+               f"coordinates); {_needs(fmt)}")
+        if not any(frames):
+            raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
+                                  "neighbouring frames)")
+        notes.append(msg)
     image_size, focal, pp, source = _camera_meta(d, p)
-    return KeypointSequence(frames=frames, format=fmt or H36M17, fps=float(fps), image_size=image_size, focal=focal,
-                            principal_point=pp, warnings=tuple(notes), source=source)
+    return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
+                            principal_point=pp, warnings=tuple(notes), source=source,
+                            people_ids=ids if any(i is not None for fr in ids for i in fr) else None)
 
 
 def _read_umask() -> int:

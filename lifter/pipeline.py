@@ -33,6 +33,15 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
             fov_deg: float, where: str) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
+    if image_size is None:  # everything missing in one message, not one run per missing field
+        have = {"focal": user_focal is not None or file_focal is not None,
+                "principal_point": user_pp is not None or file_pp is not None}
+        need = [(opt, f) for opt, f in (("--focal", "focal"), ("--principal-point", "principal_point")) if not have[f]]
+        if need:
+            what = " and no ".join("focal length" if f == "focal" else "principal point" for _, f in need)
+            raise PoseLifterError(
+                f"{where}: no {what} and no image size: pass {' and '.join(o for o, _ in need)}, or put "
+                f"'image_size' (or {' and '.join(repr(f) for _, f in need)}) in the file")
     if user_focal is not None:
         focal, src = user_focal, "user"
         if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):

@@ -82,6 +82,9 @@ class PersonState:
     relative_raw: np.ndarray
     canonical_depth: float
     scores: np.ndarray | None = None
+    person_id: str | int | None = None
+    """Keypoint sequences: the person's own ``person_id`` (or ``id``, ``track_id``) field in that frame, when it
+    has one (``track_id`` is the tracker's)."""
 
     @property
     def absolute(self) -> np.ndarray:
@@ -96,7 +99,8 @@ class PersonState:
         return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, 2), "absolute": r(self.absolute),
                 "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 1),
                 "root_unsmoothed": r(self.root_raw),
-                "scores": None if self.scores is None else r(self.scores, 3)}
+                "scores": None if self.scores is None else r(self.scores, 3)} | (
+                {} if self.person_id is None else {"person_id": self.person_id})
 
 
 class SequenceTracker:
@@ -481,6 +485,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
                         f"the {max_people} largest were lifted (--max-people)")
     frames = [fr[:max_people] for fr in frames]
+    ids = None if ks.people_ids is None else [fr[:max_people] for fr in ks.people_ids[:len(frames)]]
     counts = [len(fr) for fr in frames]
     nobody = [i for i, c in enumerate(counts) if c == 0]
     if nobody:
@@ -497,6 +502,9 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         k += c
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
+    for fr, frame_ids in zip(out, ids or []):  # (the tracker keeps each frame's order: largest first)
+        for st, pid in zip(fr.people, frame_ids):
+            st.person_id = pid
     return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,

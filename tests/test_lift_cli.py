@@ -88,6 +88,9 @@ def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360",
                      "--weights", str(weights)], capsys)
     assert code == 1 and "no focal length and no image size" in err
+    code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 1 and ("no focal length and no principal point and no image size: pass --focal and --principal-"
+                          "point, or put 'image_size' (or 'focal' and 'principal_point') in the file") in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
                      "--weights", str(weights)], capsys)
     assert code == 0 and "2 people in the file; each is lifted (largest first; 'input_index'" in err
@@ -202,7 +205,8 @@ def test_bad_inputs_do_not_stop_the_batch(tmp_path, weights, kp17, capsys):
     assert code == 0, err
     assert (out / "good.json").is_file() and len(list(out.iterdir())) == 1
     for frag in ("broken.json: not valid JSON", "wrongcount.json: 12 joints", "nan.json: joint(s)",
-                 "nosize.json: no focal length and no image size", "text.jpg: not an image", "empty.png: empty file",
+                 "nosize.json: no focal length and no principal point and no image size", "text.jpg: not an image",
+                 "empty.png: empty file",
                  "truncated.jpg: unreadable or truncated", "missing.png: no such file", "lifted 1 of 9"):
         assert frag in err, (frag, err)
 
@@ -368,6 +372,61 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert got["image_size"] == [1280, 720] and got["principal_point"] == [640.0, 360.0]
     assert got["focal_source"] == "default-fov" and got["detector"] == "stub" and got["num_people"] == 1
     assert "downscaled" in err and "65 deg" in err
+
+
+def _openpose_person(kp17: np.ndarray, *, missing: tuple[str, ...] = (), **extra: object) -> dict:
+    op = np.zeros((25, 3))
+    for i, n in enumerate(OPENPOSE25_JOINT_NAMES):
+        op[i, :2] = kp17[JOINT_NAMES.index(n)] if n in JOINT_NAMES else kp17[0] + [i, -i]
+        op[i, 2] = 0.0 if n in missing else 0.9
+    return {"pose_keypoints_2d": op.ravel().tolist(), **extra}
+
+
+def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weights, kp17, capsys):
+    """OpenPose / COCO mark undetected joints with confidence 0. A person missing a joint the rules need is left out
+    with a note naming them (position, id, joints); the rest of the file is lifted. Only a file where nobody is
+    left fails, with the fix. Before, one missing wrist failed the whole file (user trial)."""
+    cam = {"image_size": [1280, 720], "focal": 1000.0}
+    two = tmp_path / "two.json"
+    two.write_text(json.dumps({"people": [_openpose_person(kp17, missing=("l_wrist",), id="A"),
+                                          _openpose_person(0.5 * kp17 + 100, id="B")], **cam}))
+    one = tmp_path / "one.json"
+    one.write_text(json.dumps({"people": [_openpose_person(kp17, missing=("l_wrist",))], **cam}))
+    h36 = kp17.tolist()
+    h36[5] = [None, None]
+    h = tmp_path / "h.json"
+    h.write_text(json.dumps({"keypoints": h36, "format": "h36m17", **cam}))
+    out = tmp_path / "out"
+    code, err = run([str(two), str(one), str(h), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 0 and "lifted 1 of 3" in err, err
+    assert "1 of 2 people left out: joint(s) missing (confidence 0, or null / non-finite coordinates) for person 1 " \
+           "of 2 (id 'A'): ['l_wrist']; the lifter needs every joint that the openpose25 -> h36m17 rules use" in err
+    got = json.loads((out / "two.json").read_text())
+    assert got["num_people"] == 1 and got["people"][0]["person_id"] == "B" and got["people"][0]["input_index"] == 1
+    assert f"{one}: joint(s) missing (confidence 0, or null / non-finite coordinates) for the person: ['l_wrist']" \
+           in err and "Give those joints" in err and not (out / "one.json").exists()
+    assert "the lifter needs all 17 joints" in err and "h36m17 -> h36m17" not in err
+
+
+def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tmp_path, weights, kp17, capsys):
+    """A 20-frame OpenPose sequence with one frame missing a wrist: that frame has nobody (noted), the other 19 are
+    lifted; each person keeps their own id (person_id) beside the tracker's track_id."""
+    frames = [{"people": [_openpose_person(kp17 + [3.0 * i, 0.0], missing=("l_wrist",) if i == 13 else (), id="A")]}
+              for i in range(20)]
+    seq = tmp_path / "seq.json"
+    seq.write_text(json.dumps({"fps": 25, "image_size": [1280, 720], "focal": 1000.0, "frames": frames}))
+    code, err = run([str(seq), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    assert "1 person(s) left out of 1 frame(s) (13) for missing joints ['l_wrist']" in err
+    d = json.loads((tmp_path / "o" / "seq.json").read_text())
+    assert d["frames"][13]["people"] == []
+    people = [q for i, f in enumerate(d["frames"]) if i != 13 for q in f["people"]]
+    assert len(people) == 19 and {q["person_id"] for q in people} == {"A"}
+    for fr in frames:
+        fr["people"][0] = _openpose_person(kp17, missing=("r_knee",))
+    seq.write_text(json.dumps({"fps": 25, "image_size": [1280, 720], "focal": 1000.0, "frames": frames}))
+    code, err = run([str(seq), "--out", str(tmp_path / "o2"), "--weights", str(weights)], capsys)
+    assert code == 1 and "20 person(s) left out of 20 frame(s)" in err and "nobody is left to lift" in err
 
 
 def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, weights, kp17):
