@@ -150,18 +150,28 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                                  "leave it out to assume a field of view)" if focal_given else
                                  "the focal length was assumed, not given: are the keypoints in this image's pixels? "
                                  "(or give the true focal length in pixels)"))
-    zero = (k == 0.0).all(-1)  # (..., J)
-    if np.any(zero):
-        n_other = np.maximum((~zero).sum(-1, keepdims=True), 1)
-        others = np.where(zero[..., None], 0.0, k)
-        centre = others.sum(-2) / n_other
-        radius = np.sqrt((np.where(zero[..., None], 0.0, (k - centre[..., None, :]) ** 2)).sum((-2, -1))
-                         / n_other[..., 0])
-        far = zero.any(-1) & (np.hypot(*np.moveaxis(centre, -1, 0)) > 3.0 * radius) & (zero.sum(-1) < k.shape[-2])
-        if np.any(far):
-            joints = np.flatnonzero((zero & far[..., None]).reshape(-1, k.shape[-2]).any(0))
-            names = [JOINT_NAMES[j] if k.shape[-2] == len(JOINT_NAMES) else int(j) for j in joints]
-            notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where(far)}: a "
-                         "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
-                         "(from a neighbouring frame, or its left/right partner) or leave the pose out")
+    placeholder = zero_placeholders(k)
+    far = np.asarray(placeholder.any(-1))
+    if np.any(far):
+        joints = np.flatnonzero(placeholder.reshape(-1, k.shape[-2]).any(0))
+        names = [JOINT_NAMES[j] if k.shape[-2] == len(JOINT_NAMES) else int(j) for j in joints]
+        notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where(far)}: a "
+                     "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
+                     "(from a neighbouring frame, or its left/right partner) or leave the pose out")
     return notes
+
+
+def zero_placeholders(keypoints: np.ndarray) -> np.ndarray:
+    """Which joints ``(..., J)`` of 2D keypoints ``(..., J, 2)`` px lie at exactly (0, 0) far from the rest of their
+    pose (the pose's other joints' centre is more than 3 times their RMS radius from the origin): a detector's usual
+    placeholder for a missing joint."""
+    k = np.asarray(keypoints, np.float64)
+    zero = (k == 0.0).all(-1)  # (..., J)
+    if not np.any(zero):
+        return zero
+    n_other = np.maximum((~zero).sum(-1, keepdims=True), 1)
+    centre = np.where(zero[..., None], 0.0, k).sum(-2) / n_other
+    radius = np.sqrt((np.where(zero[..., None], 0.0, (k - centre[..., None, :]) ** 2)).sum((-2, -1))
+                     / n_other[..., 0])
+    far = (np.hypot(*np.moveaxis(centre, -1, 0)) > 3.0 * radius) & (zero.sum(-1) < k.shape[-2])
+    return zero & far[..., None]

@@ -100,7 +100,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, PoseLifterWarning
+from ._checks import PoseLifterError, PoseLifterWarning, where_in_batch, zero_placeholders
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 H36M17: Final[str] = "h36m17"
@@ -437,6 +437,18 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
                 "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
+    if arr.shape[-1] == 2 and src != H36M17:  # (h36m17 poses: Lifter.lift names them itself)
+        used = np.zeros(f_src.num_joints, bool)  # (a placeholder for a joint no rule reads does no harm)
+        used[[k for rule in f_src.to_h36m for k, _ in rule]] = True
+        placeholder = zero_placeholders(arr) & used
+        far = placeholder.any(-1)
+        if np.any(far):
+            names = [f_src.joint_names[j] for j in np.flatnonzero(placeholder.reshape(-1, f_src.num_joints).any(0))]
+            warnings.warn(PoseLifterWarning(
+                f"keypoints: joint(s) {names} of format {src!r} at exactly (0, 0) px, far from the rest of the pose"
+                f"{where_in_batch(far) if far.size > 1 else ''}: a detector's placeholder for a missing joint? The "
+                f"conversion mixes it into the H36M joints made from it, where the lifter can no longer see it; fill "
+                "it in (from a neighbouring frame, or its left/right partner) or leave the pose out"), stacklevel=2)
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)
     if dst == H36M17:
         return h36m

@@ -106,6 +106,29 @@ def test_bad_inputs():
         convert([["a", "b"]] * 16, src="sh16")
 
 
+def test_convert_names_a_zero_placeholder_it_would_hide():
+    """A COCO r_hip at (0, 0) (the usual 'missing' mark) is mixed into the H36M pelvis and hip, where the lifter's own
+    (0, 0) check cannot see it (user trial: the root moved from 5.2 to 2.2 m without a word); convert names it. A
+    placeholder on a joint no rule reads (an OpenPose toe), or a pose around the origin, is not flagged."""
+    from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
+
+    rng = np.random.default_rng(3)
+    coco = rng.uniform(300, 500, (2, 17, 2))
+    coco[1, COCO17_JOINT_NAMES.index("r_hip")] = 0.0
+    with pytest.warns(PoseLifterWarning, match=r"joint\(s\) \['r_hip'\] of format 'coco17' at exactly \(0, 0\) px.*"
+                      r"pose at index \(1,\)"):
+        out = convert(coco, src="coco17")
+    assert (out != 0).all()  # (what the lifter alone would not have noticed)
+    op = rng.uniform(300, 500, (25, 2))
+    op[OPENPOSE25_JOINT_NAMES.index("l_big_toe")] = 0.0
+    centred = rng.uniform(-50, 50, (17, 2))
+    centred[3] = 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        convert(op, src="openpose25")
+        convert(centred, src="coco17")
+
+
 def test_register_format():
     names = tuple(f"j{i}" for i in range(17))
     rules = tuple(((16 - j, 1.0),) for j in range(17))
