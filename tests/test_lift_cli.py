@@ -429,6 +429,34 @@ def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tm
     assert code == 1 and "20 person(s) left out of 20 frame(s)" in err and "nobody is left to lift" in err
 
 
+class _InterruptedEstimator(_StubEstimator):
+    """Ctrl-C during the second detection."""
+
+    calls = 0
+
+    def detect(self, image: np.ndarray) -> list[Detection]:
+        type(self).calls += 1
+        if type(self).calls == 2:
+            raise KeyboardInterrupt
+        return super().detect(image)
+
+
+def test_ctrl_c_ends_the_batch_with_one_line_and_keeps_what_was_written(tmp_path, weights, kp17, capsys):
+    """Ctrl-C: one line saying how far it got (exit 130), the finished outputs kept, no traceback; and without
+    --no-progress, no progress bar is written to a stderr that is not a terminal (a log file)."""
+    _InterruptedEstimator.calls = 0
+    register_estimator("_interrupted", lambda **kw: _InterruptedEstimator([kp17]), overwrite=True)
+    for n in ("a", "b", "c"):
+        Image.new("RGB", (1280, 720), (50, 60, 70)).save(tmp_path / f"{n}.png")
+    code = main(["lift", *(str(tmp_path / f"{n}.png") for n in "abc"), "--out", str(tmp_path / "o"), "--detector",
+                 "_interrupted", "--focal", "1000", "--weights", str(weights)])
+    err = capsys.readouterr().err
+    assert code == 130 and "poselifter lift: interrupted after 1 of 3 input(s) lifted" in err, err
+    assert "Traceback" not in err and "\r" not in err and "it/s" not in err
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["a.json"]
+    json.loads((tmp_path / "o" / "a.json").read_text())
+
+
 def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, weights, kp17):
     """A tiny or blurred photo makes BlazePose invent a person with low landmark visibility and joints off the
     image (seen on a 40 x 40 px photo: visibility 0.37, joints up to 78 px on a 40-px image); the record says so

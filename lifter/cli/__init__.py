@@ -32,3 +32,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (PoseLifterError, FileNotFoundError) as exc:
         print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # (Ctrl-C: one line, not a traceback through the libraries' threads)
+        print(f"poselifter {args.command}: interrupted", file=sys.stderr)
+        return 130

@@ -283,8 +283,9 @@ def run_lift(args: argparse.Namespace) -> int:
     estimator: Any = None
     estimator_error: str | None = None
     ok, failed = 0, len(problems)
-    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=args.no_progress, file=sys.stderr,
-               position=0)
+    # (disable=None: no bar when stderr is not a terminal, e.g. a log file or a pipe)
+    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=True if args.no_progress else None,
+               file=sys.stderr, position=0)
 
     def say(msg: str) -> None:  # a message on its own line, never glued onto a progress bar
         tqdm.write(msg, file=sys.stderr)
@@ -304,69 +305,79 @@ def run_lift(args: argparse.Namespace) -> int:
             raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
         return estimator
 
+    interrupted = False
     with limit_blas_threads(1):  # see lifter.video.lift_video: faster beside MediaPipe's threads
         seq_kw = {"smoothing": args.smoothing, "max_people": args.max_people, "max_seconds": args.max_seconds,
                   "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp}
-        for path, name in bar:
-            try:
-                sfx = path.suffix.lower()
-                seq: SequenceRecord | None = None
-                rec: LiftRecord | None = None
-                if sfx == ".json" and is_keypoint_sequence(path):
-                    seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
-                                                 **seq_kw)
-                elif sfx == ".json":
-                    rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
-                                             default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
-                                             max_people=args.max_people)
-                elif sfx in VIDEO_SUFFIXES:
-                    est = get_estimator_once(path)
-                    with tqdm(desc=f"  {path.name}", unit="frame", disable=args.no_progress, file=sys.stderr,
-                              position=1, leave=False) as fbar:
-                        def progress(done: int, total: int | None, fbar: Any = fbar) -> None:
-                            if total is not None and fbar.total != total:
-                                fbar.total = total
-                            fbar.update(done - fbar.n)
+        try:
+            for path, name in bar:
+                try:
+                    sfx = path.suffix.lower()
+                    seq: SequenceRecord | None = None
+                    rec: LiftRecord | None = None
+                    if sfx == ".json" and is_keypoint_sequence(path):
+                        seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
+                                                     **seq_kw)
+                    elif sfx == ".json":
+                        rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
+                                                 default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
+                                                 max_people=args.max_people)
+                    elif sfx in VIDEO_SUFFIXES:
+                        est = get_estimator_once(path)
+                        with tqdm(desc=f"  {path.name}", unit="frame", disable=True if args.no_progress else None,
+                                  file=sys.stderr,
+                                  position=1, leave=False) as fbar:
+                            def progress(done: int, total: int | None, fbar: Any = fbar) -> None:
+                                if total is not None and fbar.total != total:
+                                    fbar.total = total
+                                fbar.update(done - fbar.n)
 
-                        seq = lift_video(path, lifter=lifter_for["image"], estimator=est, max_side=args.max_side,
-                                         progress=progress, **seq_kw)
-                else:
-                    img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
-                    rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path), focal=focal,
-                                     principal_point=pp, sensor_width_mm=args.sensor_width, fov_deg=args.fov,
-                                     max_side=args.max_side, flip_test=args.flip_test, max_people=args.max_people)
-                if seq is not None:
-                    write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
-                    for b in seq.bad_frames[:20]:
-                        say(f"{path}: frame {b['index']}: {b['error']}")
-                    for msg in seq.warnings:
-                        say(f"{path}: note: {msg}")
-                elif rec is not None:
-                    write_json_atomic(args.out / f"{name}.json", rec.to_json())
-                    poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
-                    if args.glb:
-                        from ..export import write_glb
+                            seq = lift_video(path, lifter=lifter_for["image"], estimator=est, max_side=args.max_side,
+                                             progress=progress, **seq_kw)
+                    else:
+                        img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
+                        rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path),
+                                         focal=focal, principal_point=pp, sensor_width_mm=args.sensor_width,
+                                         fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
+                                         max_people=args.max_people)
+                    if seq is not None:
+                        write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
+                        for b in seq.bad_frames[:20]:
+                            say(f"{path}: frame {b['index']}: {b['error']}")
+                        for msg in seq.warnings:
+                            say(f"{path}: note: {msg}")
+                    elif rec is not None:
+                        write_json_atomic(args.out / f"{name}.json", rec.to_json())
+                        poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
+                        if args.glb:
+                            from ..export import write_glb
 
-                        write_glb(poses, args.out / f"{name}.glb")
-                    if args.bvh:
-                        from ..export import write_bvh
+                            write_glb(poses, args.out / f"{name}.glb")
+                        if args.bvh:
+                            from ..export import write_bvh
 
-                        for k, pose in enumerate(poses):
-                            write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
-                    for msg in rec.warnings:
-                        say(f"{path}: note: {msg}")
-                ok += 1
-            except PoseLifterError as exc:
-                msg = str(exc)
-                say(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}")
-                failed += 1
-            except Exception as exc:  # noqa: BLE001 -- one bad input must not stop the batch
-                say(f"error: {path}: unexpected {type(exc).__name__}: {exc}")
-                failed += 1
+                            for k, pose in enumerate(poses):
+                                write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
+                        for msg in rec.warnings:
+                            say(f"{path}: note: {msg}")
+                    ok += 1
+                except PoseLifterError as exc:
+                    msg = str(exc)
+                    say(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}")
+                    failed += 1
+                except Exception as exc:  # noqa: BLE001 -- one bad input must not stop the batch
+                    say(f"error: {path}: unexpected {type(exc).__name__}: {exc}")
+                    failed += 1
+        except KeyboardInterrupt:
+            interrupted = True
     if estimator is not None and hasattr(estimator, "close"):
         estimator.close()
     bar.close()
     total = ok + failed
+    if interrupted:
+        print(f"poselifter lift: interrupted after {ok} of {len(files)} input(s) lifted into {args.out} (the files "
+              "written are complete: each is written whole or not at all)", file=sys.stderr)
+        return 130
     print(f"lifted {ok} of {total} input(s) into {args.out}"
           + (f"; {failed} failed (see the messages above)" if failed else ""), file=sys.stderr)
     return 0 if ok else 1
