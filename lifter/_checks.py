@@ -24,9 +24,9 @@ class PoseLifterWarning(UserWarning):
 
 def where_in_batch(mask: Any) -> str:
     """`` (pose at index (i, j), n such pose(s))`` for the first True entry of a mask over a batch's leading shape;
-    empty for a single pose (a 0-d mask)."""
+    empty for a single pose (a 0-d mask, or a batch of one like a file's single pose)."""
     mask = np.asarray(mask)
-    if mask.ndim == 0:
+    if mask.size <= 1:
         return ""
     return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
 
@@ -128,9 +128,6 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
         return notes
     lead = k.shape[:-2]
 
-    def where(mask: np.ndarray) -> str:  # (a batch of one, like a file's single pose, needs no index either)
-        return "" if mask.size <= 1 else where_in_batch(mask)
-
     if focal is not None:
         # (the box diagonal against 2 alpha tan(view / 2) first: the angles only when something is wide)
         ext = k.max(-2) - k.min(-2)
@@ -145,7 +142,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                 alpha_w = float(np.broadcast_to(alpha, lead)[widest])
                 notes.append(f"at the focal length used ({alpha_w:.4g} px) a 2D pose spans {float(np.max(view)):.0f} "
                              f"deg of view (a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg, "
-                             f"even through an ultra-wide lens){where(wide)}: " + (
+                             f"even through an ultra-wide lens){where_in_batch(wide)}: " + (
                                  "is the focal length in pixels? (f_px = f_mm * image width px / sensor width mm; or "
                                  "leave it out to assume a field of view)" if focal_given else
                                  "the focal length was assumed, not given: are the keypoints in this image's pixels? "
@@ -155,7 +152,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     if np.any(far):
         joints = np.flatnonzero(placeholder.reshape(-1, k.shape[-2]).any(0))
         names = [JOINT_NAMES[j] if k.shape[-2] == len(JOINT_NAMES) else int(j) for j in joints]
-        notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where(far)}: a "
+        notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where_in_batch(far)}: a "
                      "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
                      "(from a neighbouring frame, or its left/right partner) or leave the pose out")
     return notes

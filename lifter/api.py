@@ -132,6 +132,9 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
     try:
         return np.broadcast_to(x, lead + (2,))
     except ValueError:
+        if not lead:
+            raise PoseLifterError(f"{name}: shape {tuple(x.shape)} for a single pose (keypoints (17, 2)); give one "
+                                  f"(2,) {name}, e.g. {name}[0]") from None
         raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
                               f"shape {lead} (expected (2,) or {lead + (2,)})") from None
 

@@ -446,7 +446,7 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
             names = [f_src.joint_names[j] for j in np.flatnonzero(placeholder.reshape(-1, f_src.num_joints).any(0))]
             warnings.warn(PoseLifterWarning(
                 f"keypoints: joint(s) {names} of format {src!r} at exactly (0, 0) px, far from the rest of the pose"
-                f"{where_in_batch(far) if far.size > 1 else ''}: a detector's placeholder for a missing joint? The "
+                f"{where_in_batch(far)}: a detector's placeholder for a missing joint? The "
                 f"conversion mixes it into the H36M joints made from it, where the lifter can no longer see it; fill "
                 "it in (from a neighbouring frame, or its left/right partner) or leave the pose out"), stacklevel=2)
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)

@@ -261,6 +261,9 @@ def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
         small_lifter.lift(keypoints, focal=np.full((4, 2), 1000.0), principal_point=(512.0, 515.0))
     with pytest.raises(PoseLifterError, match="principal_point: shape"):
         small_lifter.lift(keypoints, focal=1000.0, principal_point=np.zeros((5, 2)))
+    with pytest.raises(PoseLifterError, match=r"focal: shape \(1, 2\) for a single pose \(keypoints \(17, 2\)\); "
+                       r"give one \(2,\) focal, e\.g\. focal\[0\]"):
+        small_lifter.lift(keypoints[3], focal=per_pose[3:4], principal_point=(512.0, 515.0))
 
 
 def test_absolute_depth_model_path():
