@@ -223,10 +223,23 @@ def test_exit_code_when_all_fail(tmp_path, weights, capsys):
 
 
 def test_output_names(tmp_path):
-    files = [tmp_path / "a.png", tmp_path / "sub" / "a.png", tmp_path / "a.json", tmp_path / "b.json"]
-    assert output_names(files, tmp_path / "out") == ["a", "a_png", "a_json", "b"]
+    """Two inputs named alike get names that tell them apart (the folder, else the suffix), each said in a note;
+    an input's own JSON is never overwritten."""
+    files = [tmp_path / "a.png", tmp_path / "sub" / "a.png", tmp_path / "a.json", tmp_path / "b.json",
+             tmp_path / "sub" / "b.json"]
+    names, notes = output_names(files, tmp_path / "out")
+    assert names == ["a", "sub_a", "a_json", "b", "sub_b"]
+    assert notes[0] == f"{tmp_path / 'sub' / 'a.png'}: its results are named sub_a.* ({tmp_path / 'a.png'} is also " \
+                       "named a)" and len(notes) == 3
+    from lifter.cli.lift import expand_inputs
+
+    (tmp_path / "b.json").write_text("{}")
+    got, problems, notes = expand_inputs([tmp_path / "b.json", tmp_path / "." / "b.json", tmp_path])
+    assert got == [tmp_path / "b.json"] and not problems
+    assert any(n.startswith("2 input(s) given more than once, lifted once") for n in notes), notes
     # never overwrite an input keypoint file
-    assert output_names([tmp_path / "b.json"], tmp_path) == ["b_json"]
+    assert output_names([tmp_path / "b.json"], tmp_path) == (["b_json"], [
+        f"{tmp_path / 'b.json'}: its results are named b_json.* (b.json in {tmp_path} is an input)"])
 
 
 def test_parse_formats(tmp_path):

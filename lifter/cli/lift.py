@@ -152,27 +152,44 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
             files.append(p)
         else:
             problems.append(f"{p}: no such file or folder")
-    return files, problems, notes
-
-
-def output_names(files: list[Path], out_dir: Path) -> list[str]:
-    """A unique output stem per input: the file stem; on a clash ``<stem>_<suffix>``, then a number.
-    A name whose JSON would overwrite one of the inputs also gets ``_lifted``."""
-    used: set[str] = set()
-    inputs = {f.resolve() for f in files}
-    names = []
+    unique: dict[Path, Path] = {}
+    twice = []
     for f in files:
-        cands = [f.stem, f"{f.stem}_{f.suffix.lstrip('.').lower()}"] + [f"{f.stem}_{i}" for i in range(2, 10_000)]
+        if f.resolve() in unique:
+            twice.append(str(f))
+        else:
+            unique[f.resolve()] = f
+    if twice:
+        notes.append(f"{len(twice)} input(s) given more than once, lifted once: " + ", ".join(twice[:5])
+                     + (" ..." if len(twice) > 5 else ""))
+    return list(unique.values()), problems, notes
+
+
+def output_names(files: list[Path], out_dir: Path) -> tuple[list[str], list[str]]:
+    """A unique output stem per input, and a note for each input whose outputs are not named by its own stem.
+    The stem; on a clash with an earlier input, ``<folder>_<stem>`` when the two sit in different folders, else
+    ``<stem>_<suffix>``, then a number. A name whose JSON would overwrite one of the inputs is not used."""
+    claimed: dict[str, Path] = {}
+    inputs = {f.resolve() for f in files}
+    names, notes = [], []
+    for f in files:
+        first = claimed.get(f.stem)
+        cands = [f.stem]
+        if first is not None and first.parent.name != f.parent.name and f.parent.name:
+            cands.append(f"{f.parent.name}_{f.stem}")
+        cands += [f"{f.stem}_{f.suffix.lstrip('.').lower()}"] + [f"{f.stem}_{i}" for i in range(2, 10_000)]
         for c in cands:
-            if c not in used and (out_dir / f"{c}.json").resolve() not in inputs:
+            if c not in claimed and (out_dir / f"{c}.json").resolve() not in inputs:
                 break
         else:  # pragma: no cover
             raise PoseLifterError(f"cannot name the output of {f}")
-        if (out_dir / f"{c}.json").resolve() in inputs:  # pragma: no cover
-            c = f"{c}_lifted"
-        used.add(c)
+        claimed[c] = f
         names.append(c)
-    return names
+        if c != f.stem:
+            why = (f"{first} is also named {f.stem}" if first is not None
+                   else f"{f.stem}.json in {out_dir} is an input")
+            notes.append(f"{f}: its results are named {c}.* ({why})")
+    return names, notes
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -279,7 +296,9 @@ def run_lift(args: argparse.Namespace) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise PoseLifterError(f"--out {args.out}: cannot create the output folder ({exc.strerror or exc})") from None
-    names = output_names(files, args.out)
+    names, name_notes = output_names(files, args.out)
+    for msg in name_notes:
+        print(f"note: {msg}", file=sys.stderr)
     estimator: Any = None
     estimator_error: str | None = None
     ok, failed = 0, len(problems)
