@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from . import resources as assets
 from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings, where_in_batch
 from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov
-from .checkpoint import Checkpoint, load_checkpoint
+from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
 from .model import (
     MirrorCoupledLinear,
@@ -246,6 +246,20 @@ class Lifter:
 
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
+
+    def save(self, path: str | os.PathLike[str], *, half: bool = False) -> Path:
+        """Write this lifter's own network (:attr:`net`, with its codec, training config and flip-test default) as a
+        checkpoint that :meth:`from_checkpoint` loads back to the same lifts (``half=True``: float16 weights). One
+        network: a model with a separate clean-2D network or an ensemble (like the shipped default) saves its
+        first detected network only; save :attr:`clean` or an :attr:`ensemble` member on its own."""
+        if any(isinstance(m, QuantizedCoupledLinear) or type(m).__module__.startswith("torch.ao.nn.quantized")
+               for m in self.net.modules()):
+            raise PoseLifterError(f"model {self.name!r} has int8 weights, which a checkpoint does not hold: save the "
+                                  "float32 lifter, and load it with from_checkpoint(path, quantize=True)")
+        inference = self.meta.get("inference")
+        meta = {**self.meta, "inference": {**(inference if isinstance(inference, dict) else {}),
+                                           "flip_test": self.flip_test}}
+        return save_checkpoint(path, self.net, self.codec, train_config=self.train_config, meta=meta, half=half)
 
     def quantized(self) -> Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the

@@ -11,7 +11,7 @@ from conftest import requires_h36m
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lifter import CheckpointError, Lifter, available_models, demo_sample
+from lifter import CheckpointError, Lifter, PoseLifterError, available_models, demo_sample
 from lifter.camera import CANONICAL_FOCAL, project
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
@@ -122,3 +122,19 @@ def test_default_knows_the_root_only_up_to_z_over_f_without_a_focal():
     f = res.focal[..., 0]
     assert res.root[2] / f == pytest.approx(res.canonical_depth / CANONICAL_FOCAL, rel=1e-6)
     np.testing.assert_allclose(project(res.root[None], focal=f, principal_point=_C)[0], kp[0], atol=1e-3)
+
+
+def test_a_saved_network_loads_back_to_the_same_lift(tmp_path):
+    """Lifter.save keeps the network's flip-test default (user trial: save_checkpoint(net, codec) reloaded with the
+    flip test off, root z 3268 instead of 3291 mm); an int8 lifter is refused with what to do instead."""
+    lifter = _default()
+    kp = project(_DEMO.pose_3d, focal=_F, principal_point=_C)
+    assert lifter.flip_test and lifter.network_rows() == 2  # its width-1024 detected network: flip test on
+    mine = Lifter.from_checkpoint(lifter.save(tmp_path / "my.pt"))
+    assert mine.flip_test and not mine.ensemble and mine.clean is None
+    alone = Lifter(lifter.net, lifter.codec, flip_test=True)
+    got = mine.lift(kp, focal=_F, principal_point=_C).absolute
+    np.testing.assert_array_equal(got, alone.lift(kp, focal=_F, principal_point=_C).absolute)
+    assert np.abs(got - mine.lift(kp, focal=_F, principal_point=_C, flip_test=False).absolute).max() > 1.0
+    with pytest.raises(PoseLifterError, match="int8 weights.*quantize=True"):
+        lifter.quantized().save(tmp_path / "q.pt")
