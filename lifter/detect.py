@@ -716,8 +716,9 @@ class BlazePoseEstimator:
 
     min_detection_confidence: the person detector's threshold. max_people: how many people to look for.
     multi: how several people are found (BlazePose's landmark model sees one person per region of interest).
-    ``"windows"`` (default): the whole image and 3 overlapping windows (each :data:`WINDOW_FRACTION` of the longer
-    side wide, full height) are searched, one person each; a person found in a window must lie inside it
+    ``"windows"`` (default): the whole image and overlapping windows (each :data:`WINDOW_FRACTION` of the longer
+    side wide but at most ``window_aspect`` times the image height, full height, half overlapping: 3 in a photo up
+    to 2:1, more in a wider one) are searched, one person each; a person found in a window must lie inside it
     (:data:`WINDOW_MIN_INSIDE`), the candidates are kept by mean visibility, and a candidate is dropped when it is
     the same person as one kept (:data:`SAME_PERSON`) or its box is mostly covered by kept people's boxes
     (:data:`MAX_COVERED`: a body part, or two people merged). ``"mask"``: one person per pass; the person found
@@ -743,10 +744,15 @@ class BlazePoseEstimator:
 
     def __init__(self, *, min_detection_confidence: float = 0.5, max_people: int = 3, multi: str = "windows",
                  flip_test: bool = True, task_path: str | os.PathLike[str] | None = None,
-                 log: Callable[[str], None] | None = None) -> None:
+                 log: Callable[[str], None] | None = None, window_aspect: float | None = 1.0) -> None:
         mp = _import_mediapipe()
         if max_people < 1:
             raise PoseLifterError(f"max_people must be >= 1, got {max_people}")
+        if window_aspect is not None and not (math.isfinite(window_aspect) and window_aspect > 0):
+            raise PoseLifterError(f"window_aspect must be a width / height ratio > 0, or None, got {window_aspect!r}")
+        self.window_aspect = window_aspect
+        """``multi="windows"``: a window is at most this many times the image height wide; None: always
+        :data:`WINDOW_FRACTION` of the longer side (3 windows in any landscape photo, the earlier rule)."""
         if multi not in ("windows", "mask", "tasks"):
             raise PoseLifterError(f"multi must be 'windows', 'mask' or 'tasks', got {multi!r}")
         self.max_people = int(max_people)
@@ -899,7 +905,11 @@ class BlazePoseEstimator:
         if self.multi == "windows":
             cands = self._run(img)
             if self.max_people > 1:
+                # at most window_aspect x the height: a wide group photo gets more windows, each about one
+                # standing person wide (benchmarks/bench_people_row.py)
                 ww = round(WINDOW_FRACTION * max(W, H))
+                if self.window_aspect is not None:
+                    ww = min(ww, max(round(self.window_aspect * H), MIN_WINDOW_PX))
                 if MIN_WINDOW_PX <= ww < 0.95 * W:  # no windows in a thumbnail: nobody fits in them
                     n = math.ceil((W - ww) / (ww / 2)) + 1
                     for x0 in np.linspace(0, W - ww, n).round().astype(int):

@@ -297,13 +297,16 @@ def test_blazepose_detect_near_finds_only_the_person_in_the_box(blazepose):
 
     a = np.asarray(Image.open(ROOT / "assets" / "demo" / "standing.jpg").convert("RGB"))
     b = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
-    pair = np.concatenate([a, b], axis=1)
-    both = blazepose.detect(pair)
+    pair = np.concatenate([a, b], axis=1)  # 1600 x 600 px: wider than 2:1, so 5 windows
+    both = sorted(blazepose.detect(pair), key=lambda d: float(d.keypoints[:, 0].mean()))
     assert len(both) == 2
-    for d in both:
-        near = blazepose.detect_near(pair, [d.bbox_xywh])
+    alone = [blazepose.detect(a)[0].keypoints, blazepose.detect(b)[0].keypoints + [a.shape[1], 0]]
+    for d, own in zip(both, alone):
+        # each as found in their own photo (3 windows two people wide put the walker 61 px off)
+        assert np.median(np.linalg.norm(d.keypoints - own, axis=-1)) < 10
+        near = blazepose.detect_near(pair, [d.bbox_xywh])  # (one pass, no flip test: a little further)
         assert len(near) == 1
-        assert np.median(np.linalg.norm(near[0].keypoints - d.keypoints, axis=-1)) < 10
+        assert np.median(np.linalg.norm(near[0].keypoints - d.keypoints, axis=-1)) < 20
     assert blazepose.detect_near(pair, [np.array([0.0, 0.0, 40.0, 40.0])]) == []
 
 
@@ -345,6 +348,35 @@ def _scripted_blazepose(rng, plain: list, mirror: list):
     img = np.zeros((400, 600, 3), np.uint8)
     img[0, 0] = 255
     return est, img
+
+
+@pytest.mark.parametrize("aspect, size, windows", [
+    (1.0, (1826, 695), [(0, 695), (283, 978), (566, 1261), (848, 1543), (1131, 1826)]),  # wider than 2:1: 5
+    (None, (1826, 695), [(0, 913), (456, 1369), (913, 1826)]),  # the earlier rule: 3, two people wide each
+    (1.0, (1000, 1000), [(0, 500), (250, 750), (500, 1000)]),  # up to 2:1 both rules agree (the demo photos)
+    (1.0, (1600, 900), [(0, 800), (400, 1200), (800, 1600)]),
+])
+def test_window_search_windows_are_about_one_standing_person_wide(aspect, size, windows):
+    """The window search: the whole image, then full-height windows, half overlapping, half the longer side wide
+    but at most window_aspect x the height, so a panorama gets more of them (bench_people_row.py: 5 people in a
+    row, 1580 x 600 px, found 18 % -> 70 %); no mediapipe needed."""
+    from lifter.detect import BlazePoseEstimator
+
+    est = object.__new__(BlazePoseEstimator)
+    est.multi, est.max_people, est.window_aspect = "windows", 4, aspect
+    seen: list[tuple[int, int]] = []
+    W, H = size
+    img = np.zeros((H, W, 3), np.uint8)
+    img[0, :, 0], img[0, :, 1] = np.arange(W) % 256, np.arange(W) // 256  # a crop's first pixel names its x0
+
+    def run(a: np.ndarray) -> list:
+        x0 = int(a[0, 0, 0]) + 256 * int(a[0, 0, 1])
+        seen.append((x0, x0 + a.shape[1]))
+        return []
+
+    est._run = run  # type: ignore[method-assign]
+    est._search(img)
+    assert seen == [(0, W), *windows]
 
 
 def _person(rng, x0: float) -> np.ndarray:
