@@ -14,19 +14,23 @@ from typing import Any, Literal
 import numpy as np
 
 from lifter import Lifter, PoseLifterError, analytic_root, available_models
+from lifter.api import MIN_FOCAL_PX
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 
 from .noise import ErrorModelLike
 from .samples import Sample
 
-FOCAL_MIN_PX: float = 100.0
+FOCAL_MIN_PX: float = MIN_FOCAL_PX
 FOCAL_MAX_PX: float = 6000.0
-"""Range of the focal-length slider (px, the geometric mean ``alpha = sqrt(fx fy)``)."""
+"""Range of the focal-length slider (px, the geometric mean ``alpha = sqrt(fx fy)``): from the library's own lower
+bound (10 px: a 40-px photo's default field of view gives 44 px, lifted as is), to 6000 px."""
 NOISE_MAX: float = 3.0
 """Noise level: 0 = clean, 1 = as fitted, up to 3 (exaggerated)."""
 CLOUD_SAMPLES: int = 64
 """Default number of noisy 2D draws lifted for the uncertainty cloud."""
+MAX_CLOUD_SAMPLES: int = 256
+"""The cloud-samples slider's end, and the most its box takes."""
 DEFAULT_SEED: int = 0
 JOINT_MARGIN: float = 0.25
 """A dragged or typed 2D joint must lie in the image grown by this fraction of its size on every side;

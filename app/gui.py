@@ -17,7 +17,7 @@ import viser
 
 from lifter.skeleton import JOINT_NAMES
 
-from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, NOISE_MAX
+from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, NOISE_MAX
 from .video import VIDEO_MAX_SECONDS
 
 SOURCE_LABELS: dict[str, str] = {"demo": "demo sample", "motion": "demo motion", "h36m": "Human3.6M",
@@ -147,8 +147,9 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         lift = LiftGui(
             model=gui.add_dropdown("model", models or ["(none)"], initial_value=model or (models or ["(none)"])[0],
                                    hint="shipped weights (assets/models.json)"),
-            focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
-                                 marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
+            # (step 0.1: a typed decimal point is kept; with step 1 the box drops it, so 1144.5 became 11445)
+            focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 0.1, 1000.0,
+                                 marks=((FOCAL_MIN_PX, f"{FOCAL_MIN_PX:g}"), (FOCAL_MAX_PX, "6k")),
                                  hint="alpha = sqrt(fx fy); the root slides along its ray, further away as f grows"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
             auto_frame=gui.add_checkbox("keep skeleton in view", True,
@@ -162,7 +163,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         noise = NoiseGui(
             level=gui.add_slider("noise level", 0.0, NOISE_MAX, 0.05, 0.0, marks=((0.0, "0"), (1.0, "1"), (3.0, "3")),
                                  hint="mixture 2D noise: 0 clean · 1 as fitted · 3 exaggerated"),
-            cloud=gui.add_slider("cloud samples", 0, 256, 1, CLOUD_SAMPLES, marks=((0, "0"), (256, "256")),
+            cloud=gui.add_slider("cloud samples", 0, MAX_CLOUD_SAMPLES, 1, CLOUD_SAMPLES,
+                                 marks=((0, "0"), (MAX_CLOUD_SAMPLES, f"{MAX_CLOUD_SAMPLES}")),
                                  hint="noisy 2D draws lifted for the per-joint uncertainty clouds"),
             seed=gui.add_number("seed", DEFAULT_SEED, step=1, min=0),
             resample=gui.add_button("resample noise", hint="seed + 1"),
@@ -208,7 +210,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                 hint="photos with several people: whose joints are draggable (1 = largest); everyone is lifted "
                      "into the same camera space")),
             joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
-            uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0, hint="type a position to move the joint"),
+            uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=0.1,
+                               hint="type a position to move the joint (applied when the typing pauses)"),
             reset=gui.add_button("reset dragged joints"),
         )
     with tabs.add_tab("File", viser.Icon.FILE):

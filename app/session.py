@@ -19,11 +19,10 @@ import numpy as np
 from lifter import PoseLifterError
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
-from .core import NOISE_MAX, SessionState, check_joint, clamp_focal, clamp_noise, focal_max
+from .core import MAX_CLOUD_SAMPLES, NOISE_MAX, SessionState, check_joint, clamp_focal, clamp_noise, focal_max
 from .samples import Sample
 
 INPUT_KINDS: tuple[str, ...] = ("gt", "detected")
-MAX_CLOUD_SAMPLES: int = 1024
 
 
 def input_options(sample: Sample) -> list[str]:
@@ -43,8 +42,9 @@ def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple
     opts = input_options(sample)
     kind = input_pref if input_pref in opts else opts[0]
     if input_pref == "detected" and kind != "detected" and state.sample.has_gt_2d:
-        note = (f"no 2D detection for {sample.label}; using ground-truth 2D (the detection is used again where "
-                "there is one)")
+        note = (f"no 2D detection for {sample.label}; using ground-truth 2D where a frame has none (the "
+                "detection is used again where there is one; the training subjects' detections cover every 5th "
+                "frame; said once per sequence)")
     new = SessionState(sample=sample, model=state.model, input_kind=kind, noise_level=state.noise_level,
                        seed=state.seed, cloud_samples=state.cloud_samples, analytic=state.analytic)
     return new, note

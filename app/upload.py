@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
+from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -50,7 +51,7 @@ from lifter.detect import (
 )
 from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert
-from lifter.pipeline import lift_image, lift_people
+from lifter.pipeline import lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .drawing import canvas
@@ -65,9 +66,10 @@ MAX_CANVAS_SIDE: Final[int] = 100_000
 CAMERA_HEIGHT_MM: Final[float] = 1600.0
 """Uploaded photos have no extrinsics: the camera is placed 1.6 m above the floor, looking horizontally
 along the world's +y axis (world z up), so the 3D view has the usual floor grid."""
-MIN_FOCAL_PX: Final[float] = 1.0
+MIN_FOCAL_PX: Final[float] = LIFT_MIN_FOCAL_PX
 MAX_FOCAL_PX: Final[float] = 1e6
-"""Focal lengths (px) outside this range in a keypoint file are refused."""
+"""Focal lengths (px) outside this range in a keypoint file are refused (the lower end is the library's and the
+focal slider's)."""
 MAX_PEOPLE: Final[int] = 6
 """People looked for in an uploaded photo / kept from a keypoint file (the largest first)."""
 DEFAULT_DETECTOR: Final[str] = "blazepose"
@@ -296,8 +298,14 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                           "add it, or upload the photo first")
     if min(size) <= 0 or max(size) > MAX_CANVAS_SIDE:
         raise UploadError(f"{nm}: image_size {list(size)} px is not plausible")
-    for i, q in enumerate((kp, *others)):
-        _check_2d(q, nm if i == 0 else f"{nm}, person {i + 1}", size)
+    try:
+        for i, q in enumerate((kp, *others)):
+            _check_2d(q, nm if i == 0 else f"{nm}, person {i + 1}", size)
+    except UploadError as exc:
+        if use_photo and kf.image_size is None:  # (say where the size came from: an earlier upload)
+            raise UploadError(f"{exc} (the file gives no \"image_size\", so the size of the photo {photo.name} "  # type: ignore[union-attr]
+                              "uploaded before was used; add the file's own \"image_size\": [W, H])") from None
+        raise
     if use_photo:
         notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
     if kf.focal is not None:
@@ -308,6 +316,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         notes.append(g.detail)
     pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
         else (size[0] / 2.0, size[1] / 2.0)
+    # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
+    notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
                       source=kf.source, num_people=1 + len(others), warnings=tuple(notes))
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]

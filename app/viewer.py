@@ -176,6 +176,11 @@ class SessionView:
         """(frame asked for, last frame) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
+        self._typed_uv: tuple[float, int, np.ndarray] | None = None
+        """The joint position being typed into the (u, v) boxes: (time of its last keystroke, joint, value); applied
+        once the typing settles (:meth:`_on_uv_event`)."""
+        self._fallback_said: set[str] = set()
+        """Sequences whose missing-detection note was said (once per sequence, not once per frame in playback)."""
         self._last_plane: np.ndarray | None = None
         self._base_key: tuple | None = None
         self._image_key: tuple | None = None
@@ -284,7 +289,7 @@ class SessionView:
         g.lift.focal_reset.on_click(self._on(self.reset_focal))
         g.noise.resample.on_click(self._on(self.resample))
         g.joints.joint.on_update(self._on(self._on_joint_selected))
-        g.joints.uv.on_update(self._on(self._on_joint_uv))
+        g.joints.uv.on_update(self._on_uv_event)
         g.joints.reset.on_click(self._on(self.reset_joints))
         g.joints.head_on.on_click(self._on(self.head_on_view))
         g.lift.overview.on_click(self._on(self.overview))
@@ -527,7 +532,9 @@ class SessionView:
         if sample.key.startswith("video/"):
             self._last_upload = sample  # (coming back to the upload returns to this frame)
         self._show_sample_controls(st)
-        if note:
+        seq_key = sample.key.rsplit("/", 1)[0]  # (h36m/S1/Walking 1/c3: said once per sequence, not per frame)
+        if note and seq_key not in self._fallback_said:
+            self._fallback_said.add(seq_key)
             self.show_message(note)
         if not kept and chosen:
             self.show_message(f"focal length set to this camera's {st.focal_px:.0f} px (it was {old.focal_px:.0f} px: "
@@ -594,7 +601,9 @@ class SessionView:
         st = self.state
         s = st.sample
         uv = (float(round(kp[self.selected, 0], 1)), float(round(kp[self.selected, 1], 1)))
-        if tuple(float(v) for v in self.gui.joints.uv.value) != uv:
+        with self._flags:
+            typing = self._typed_uv is not None  # (a position being typed is left in its box until applied)
+        if not typing and tuple(float(v) for v in self.gui.joints.uv.value) != uv:
             self.gui.joints.uv.value = uv
         poses = {"gt": s.keypoints_2d if (self.gui.lift.gt.value and s.has_gt_2d) else None,
                  "detected": s.detected_2d, "noisy": noisy if st.noise_level > 0 else None, "current": kp}
@@ -848,13 +857,42 @@ class SessionView:
                 self.selected = j
                 self._draw_2d(self.state.keypoints, self.frame.noisy_2d if self.frame is not None else None)
 
+    def _on_uv_event(self, event: Any) -> None:
+        """The (u, v) boxes. A browser sends every keystroke ("9", "99", "999", "9999"): applying each would move the
+        joint to half-typed positions and leave it at the last one in range when the whole value is refused. So a
+        typed position is applied once the typing settles (:data:`TYPING_SETTLE_S`); a value set here (not from a
+        tab) at once."""
+        if getattr(event, "client", None) is None:
+            self._do(self._on_joint_uv)
+            return
+        now = time.time()
+        with self._flags:
+            self._typed_uv = (now, self.selected, np.asarray(self.gui.joints.uv.value, np.float64).copy())
+
+        def settle() -> None:
+            with self._flags:
+                typed, self._typed_uv = self._typed_uv, (None if self._typed_uv is not None
+                                                         and self._typed_uv[0] == now else self._typed_uv)
+            if typed is not None and typed[0] == now:  # no keystroke since
+                self._do(self._apply_typed_uv, typed[1], typed[2])
+
+        timer = threading.Timer(TYPING_SETTLE_S, settle)
+        timer.daemon = True
+        timer.start()
+
+    def _apply_typed_uv(self, joint: int, uv: np.ndarray) -> None:
+        with self.lock:
+            if np.allclose(uv, np.round(self.state.keypoints[joint], 1), atol=0.05):
+                return
+        self._queue_drag(joint, uv)  # (the pass says a refusal; move_joint would raise it again: a second toast)
+
     def _on_joint_uv(self) -> None:
         uv = np.asarray(self.gui.joints.uv.value, np.float64)
         with self.lock:
             cur = np.round(self.state.keypoints[self.selected], 1)
             if np.allclose(uv, cur, atol=0.05):
                 return  # our own echo of the joint's position
-            self.move_joint(self.selected, uv)
+            self._queue_drag(self.selected, uv)  # (not move_joint: it would raise the pass's refusal again)
 
     def drag_to_pixel(self, event: Any) -> np.ndarray:
         """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)

@@ -14,6 +14,7 @@ from lifter import project
 viser = pytest.importorskip("viser")
 
 from conftest import require_shipped_models  # noqa: E402
+from poselifter_app.core import FOCAL_MIN_PX  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
 from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
@@ -187,8 +188,10 @@ def test_joint_nudge_via_gui(view: SessionView) -> None:
     assert view.state.keypoints[16][0] == pytest.approx(uv[0] + 25.0)
     # typed far outside the image: refused (not clamped and lifted), the box and the sphere show the joint again
     kp, fr = view.state.keypoints.copy(), view.frame
+    n = view._message_count
     view.gui.joints.uv.value = (5000.0, 5000.0)
     assert "far outside" in view.messages[-1] and view.frame is fr
+    assert view._message_count == n + 1  # said once (it used to be said again by the callback's error handler)
     np.testing.assert_array_equal(view.state.keypoints, kp)
     np.testing.assert_allclose(view.gui.joints.uv.value, kp[16], atol=0.05)
     np.testing.assert_allclose(view.scene.pose.joints2d[16].position, image_plane(view.state, kp[16]), atol=1e-6)
@@ -241,7 +244,7 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     view.gui.lift.focal.value = float("nan")
     assert "not a finite" in view.messages[-1]
     view.gui.lift.focal.value = -5.0
-    assert view.state.focal_px == 100.0
+    assert view.state.focal_px == FOCAL_MIN_PX == 10.0
     view.gui.noise.level.value = 99.0
     assert view.state.noise_level == 3.0 and "clamped" in view.messages[-1]
     view.gui.noise.level.value = 0.0
@@ -524,6 +527,10 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v.gui.play.frame.value = 10  # a detection again: the user's choice is back
     assert v.state.input_kind == "detected" and v.gui.sample.input.value == "detected"
     np.testing.assert_allclose(v.state.keypoints, v.state.sample.detected_2d)
+    for f in (11, 12, 15, 16):  # said once per sequence, not once per frame (playback flooded the tab with toasts)
+        v.gui.play.frame.value = f
+    assert v.state.input_kind == "gt" and sum("no 2D detection" in m for m in v.messages) == 1, v.messages
+    v.gui.play.frame.value = 10
     # an upload forces "detected" without changing the preference; choosing gt does
     assert _json_upload(v, h36m_app.demo.get("standing")) is True and v.state.input_kind == "detected"
     v.gui.sample.source.value = "Human3.6M"
@@ -658,6 +665,44 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
     finally:
         tab.conn.close()
         assert wait_for(lambda: set(app.views) == before)  # (the next test counts the views)
+
+
+def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLifterApp) -> None:
+    """The (u, v) boxes send every keystroke: "9", "99", ..., "99999" must not leave the joint at 999 (the last value
+    in range) when 99999 is refused, nor say the refusal twice; "300.5" ends at 300.5 px (user trial)."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    from lifter.skeleton import JOINT_NAMES
+
+    before = set(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(set(app.views) - before) == 1)
+        v = app.views[next(iter(set(app.views) - before))]
+        v.gui.joints.joint.value = "r_wrist"
+        j = JOINT_NAMES.index("r_wrist")
+        kp0 = v.state.keypoints.copy()
+        u0, v0 = (float(x) for x in v.gui.joints.uv.value)
+        n = v._message_count
+        for typed in ("9", "99", "999", "9999", "99999"):
+            _send_value(tab, v.gui.joints.uv, (float(typed), v0))
+            time.sleep(0.1)
+        np.testing.assert_array_equal(v.state.keypoints, kp0)  # nothing applied while typing
+        assert wait_for(lambda: v._message_count > n, timeout=10)
+        time.sleep(TYPING_SETTLE_S)
+        assert v._message_count == n + 1 and "far outside" in v.messages[-1], v.messages[-3:]
+        np.testing.assert_array_equal(v.state.keypoints, kp0)  # the pose from before the typing
+        assert wait_for(lambda: np.allclose(v.gui.joints.uv.value, (u0, v0), atol=0.05), timeout=5)
+        for typed in ("3", "30", "300", "300.", "300.5"):
+            _send_value(tab, v.gui.joints.uv, (u0, float(typed)))
+            time.sleep(0.05)
+        assert wait_for(lambda: v.state.keypoints[j, 1] == 300.5, timeout=10), v.state.keypoints[j]
+        assert v.state.keypoints[j, 0] == pytest.approx(u0, abs=0.05)
+    finally:
+        tab.conn.close()
+        assert wait_for(lambda: set(app.views) == before)
 
 
 def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:

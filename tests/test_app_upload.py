@@ -315,6 +315,17 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
                                                             "format": "h36m17"}).encode()) is True
         assert v.state.sample.image.shape[:2] == (600, 800) and "drawn on the photo walking.jpg" in v.messages[-1]
         assert float(v.state.sample.image.std()) > 20  # the photo, not a blank canvas
+        # keypoints that do not fit the borrowed size: the refusal says where the size came from (user trial)
+        far = (s.keypoints_2d * 3).tolist()
+        assert v.load_upload("far.json", json.dumps({"keypoints": far, "format": "h36m17"}).encode()) is False
+        assert "the size of the photo walking.jpg uploaded before was used; add the file's own \"image_size\"" \
+            in v.messages[-1], v.messages[-1]
+        # a focal length in mm by mistake: lifted as given (not clamped to the slider) and said, as by the CLI
+        n = v._message_count
+        assert v.load_upload("mm.json", json.dumps({"keypoints": s.keypoints_2d.tolist(), "format": "h36m17",
+                                                    "image_size": [800, 600], "focal": 35}).encode()) is True
+        assert v.state.focal_px == 35.0 and v.frame.alpha == pytest.approx(35.0)
+        assert any("deg of view" in m and "is the focal length in pixels?" in m for m in v.messages[-(v._message_count - n):])
     finally:
         server.stop()
     if not mediapipe_available():  # this environment: the real default detector says the same
