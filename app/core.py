@@ -21,10 +21,10 @@ from lifter.skeleton import NUM_JOINTS
 from .noise import ErrorModelLike
 from .samples import Sample
 
-FOCAL_MIN_PX: float = MIN_FOCAL_PX
+FOCAL_MIN_PX: float = 100.0
 FOCAL_MAX_PX: float = 6000.0
-"""Range of the focal-length slider (px, the geometric mean ``alpha = sqrt(fx fy)``): from the library's own lower
-bound (10 px: a 40-px photo's default field of view gives 44 px, lifted as is), to 6000 px."""
+"""Range of the focal-length slider (px, the geometric mean ``alpha = sqrt(fx fy)``); a sample whose camera lies
+outside it widens it (:func:`focal_min`, :func:`focal_max`)."""
 NOISE_MAX: float = 3.0
 """Noise level: 0 = clean, 1 = as fitted, up to 3 (exaggerated)."""
 CLOUD_SAMPLES: int = 64
@@ -152,15 +152,23 @@ def focal_max(sample: Sample) -> float:
     return max(FOCAL_MAX_PX, 100.0 * math.ceil(2.5 * sample.camera.alpha / 100.0))
 
 
-def clamp_focal(value: float, *, hi: float = FOCAL_MAX_PX) -> tuple[float, str | None]:
-    """Clamp a focal length (px) to the slider range ``[FOCAL_MIN_PX, hi]``; returns the value and a
-    message if it was changed."""
+def focal_min(sample: Sample) -> float:
+    """Lower end of the focal slider for ``sample``: :data:`FOCAL_MIN_PX`, or half the camera's focal rounded down
+    to 1 px when that is smaller (a 40-px photo's default field of view gives 44 px; a keypoint file may give a
+    focal in mm by mistake, which is then lifted as given and noted), never below the library's 10 px. (Not simply
+    10 px for everyone: a focal typed key by key would be lifted at "11" on its way to "1145".)"""
+    return max(MIN_FOCAL_PX, min(FOCAL_MIN_PX, float(math.floor(0.5 * sample.camera.alpha))))
+
+
+def clamp_focal(value: float, *, lo: float = FOCAL_MIN_PX, hi: float = FOCAL_MAX_PX) -> tuple[float, str | None]:
+    """Clamp a focal length (px) to the slider range ``[lo, hi]``; returns the value and a message if it was
+    changed."""
     v = float(value)
     if not math.isfinite(v):
-        return FOCAL_MIN_PX, f"focal length {value!r} is not a finite number; using {FOCAL_MIN_PX:g} px"
-    if v < FOCAL_MIN_PX or v > hi:
-        c = min(max(v, FOCAL_MIN_PX), hi)
-        return c, f"focal length {v:g} px is outside [{FOCAL_MIN_PX:g}, {hi:g}]; clamped to {c:g} px"
+        return lo, f"focal length {value!r} is not a finite number; using {lo:g} px"
+    if v < lo or v > hi:
+        c = min(max(v, lo), hi)
+        return c, f"focal length {v:g} px is outside [{lo:g}, {hi:g}]; clamped to {c:g} px"
     return v, None
 
 

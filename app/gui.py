@@ -149,7 +149,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                    hint="shipped weights (assets/models.json)"),
             # (step 0.1: a typed decimal point is kept; with step 1 the box drops it, so 1144.5 became 11445)
             focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 0.1, 1000.0,
-                                 marks=((FOCAL_MIN_PX, f"{FOCAL_MIN_PX:g}"), (FOCAL_MAX_PX, "6k")),
+                                 marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
                                  hint="alpha = sqrt(fx fy); the root slides along its ray, further away as f grows"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
             auto_frame=gui.add_checkbox("keep skeleton in view", True,

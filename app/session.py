@@ -19,7 +19,16 @@ import numpy as np
 from lifter import PoseLifterError
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
-from .core import MAX_CLOUD_SAMPLES, NOISE_MAX, SessionState, check_joint, clamp_focal, clamp_noise, focal_max
+from .core import (
+    MAX_CLOUD_SAMPLES,
+    NOISE_MAX,
+    SessionState,
+    check_joint,
+    clamp_focal,
+    clamp_noise,
+    focal_max,
+    focal_min,
+)
 from .samples import Sample
 
 INPUT_KINDS: tuple[str, ...] = ("gt", "detected")
@@ -77,7 +86,7 @@ def with_focal(state: SessionState, value: float) -> tuple[SessionState, str | N
         raise PoseLifterError(f"focal length must be a number of px, got {value!r}") from None
     if not np.isfinite(v):
         raise PoseLifterError(f"focal length {value!r} is not a finite number; kept {state.focal_px:.0f} px")
-    v, note = clamp_focal(v, hi=focal_max(state.sample))
+    v, note = clamp_focal(v, lo=focal_min(state.sample), hi=focal_max(state.sample))
     if v == state.focal_px or (note is None and v == round(state.focal_px)):  # (the slider shows whole px)
         return state, None
     return state.evolve(focal_px=v), note

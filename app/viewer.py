@@ -40,7 +40,7 @@ from . import framing
 from . import session as ss
 from . import upload as up
 from . import video as vid
-from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, readout_markdown, spread_details
+from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, focal_min, readout_markdown, spread_details
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
 from .noise import ErrorModelLike, default_error_model, model_name
@@ -560,7 +560,9 @@ class SessionView:
             pick.options = people
         pick.disabled = len(people) == 1
         self._set_control("person", st.person)
-        hi = focal_max(sample)
+        lo, hi = focal_min(sample), focal_max(sample)
+        if self.gui.lift.focal.min != lo:
+            self.gui.lift.focal.min = lo
         if self.gui.lift.focal.max != hi:
             self.gui.lift.focal.max = hi
         self._set_control("focal_px", st.focal_px)

@@ -244,7 +244,7 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     view.gui.lift.focal.value = float("nan")
     assert "not a finite" in view.messages[-1]
     view.gui.lift.focal.value = -5.0
-    assert view.state.focal_px == FOCAL_MIN_PX == 10.0
+    assert view.state.focal_px == FOCAL_MIN_PX == 100.0
     view.gui.noise.level.value = 99.0
     assert view.state.noise_level == 3.0 and "clamped" in view.messages[-1]
     view.gui.noise.level.value = 0.0
