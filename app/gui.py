@@ -147,8 +147,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         lift = LiftGui(
             model=gui.add_dropdown("model", models or ["(none)"], initial_value=model or (models or ["(none)"])[0],
                                    hint="shipped weights (assets/models.json)"),
-            # (step 0.1: a typed decimal point is kept; with step 1 the box drops it, so 1144.5 became 11445)
-            focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 0.1, 1000.0,
+            focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
                                  marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
                                  hint="alpha = sqrt(fx fy); the root slides along its ray, further away as f grows"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
@@ -210,7 +209,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                 hint="photos with several people: whose joints are draggable (1 = largest); everyone is lifted "
                      "into the same camera space")),
             joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
-            uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=0.1,
+            uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0,
                                hint="type a position to move the joint (applied when the typing pauses)"),
             reset=gui.add_button("reset dragged joints"),
         )
@@ -229,4 +228,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             download_glb=gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
                                         hint="the lifted skeletons as meshes (metres, y-up; a video: animated)"),
         )
+    # One decimal in the focal and joint boxes: with the precision viser derives from step 1 (0 digits) the box drops
+    # a typed decimal point, so "1144.5" arrived as 11445 px. The step stays 1 px (arrow keys, slider).
+    lift.focal.precision = 1
+    joints.uv.precision = 1
     return Gui(readout=readout, sample=sample, play=play, lift=lift, noise=noise, joints=joints, files=files)

@@ -181,6 +181,16 @@ def test_joint_drag_callback_relifts(view: SessionView) -> None:
     np.testing.assert_allclose(view.frame.lifted, before, atol=1e-9)
 
 
+def test_focal_and_joint_boxes_take_a_decimal_and_step_by_1_px(view: SessionView) -> None:
+    """viser's boxes keep as many typed decimals as their precision, which it derives from the step: with step 1 the
+    box dropped the point and "1144.5" arrived as 11445 px (browser trial). One decimal, steps of 1 px (arrow keys);
+    tests/browser/test_browser.py presses the slider's keys in Chromium."""
+    for handle in (view.gui.lift.focal, view.gui.joints.uv):
+        assert handle.precision == 1 and handle.step == 1.0
+    view.gui.lift.focal.value = 1144.5
+    assert view.state.focal_px == 1144.5 and view.frame.alpha == pytest.approx(1144.5)
+
+
 def test_joint_nudge_via_gui(view: SessionView) -> None:
     view.gui.joints.joint.value = "r_wrist"
     uv = view.gui.joints.uv.value
