@@ -50,7 +50,7 @@ from lifter.detect import (
     load_image,
 )
 from lifter.io import LiftRecord, parse_keypoint_json
-from lifter.keypoints import H36M17, convert
+from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
@@ -276,13 +276,15 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 keypoint JSON file") from None
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
-    kp = _check_2d(convert(kf.keypoints, src=kf.format), nm)
+    kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)
     notes = list(kf.warnings)
     people = list(kf.people[1:])
     if len(people) + 1 > MAX_PEOPLE:
         notes.append(f"{len(people) + 1} people in the file; the {MAX_PEOPLE} largest are shown")
         people = people[:MAX_PEOPLE - 1]
-    others = tuple(_check_2d(convert(p, src=kf.format), f"{nm}, person {i + 2}") for i, p in enumerate(people))
+    others = tuple(_check_2d(convert(p, src=kf.format, warn=False), f"{nm}, person {i + 2}")
+                   for i, p in enumerate(people))
+    notes += placeholder_notes(np.stack([kf.keypoints, *people]), src=kf.format)
     tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)

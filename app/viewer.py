@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import itertools
 import logging
 import math
 import threading
@@ -176,9 +177,10 @@ class SessionView:
         """(frame asked for, last frame) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
-        self._typed_uv: tuple[float, int, np.ndarray] | None = None
-        """The joint position being typed into the (u, v) boxes: (time of its last keystroke, joint, value); applied
-        once the typing settles (:meth:`_on_uv_event`)."""
+        self._typed_uv: tuple[int, int, int, int, np.ndarray] | None = None
+        """The joint position being typed into the (u, v) boxes: (keystroke number, joint, sample generation, person,
+        value px); applied once the typing settles (:meth:`_on_uv_event`)."""
+        self._typed_seq = itertools.count()
         self._fallback_said: set[str] = set()
         """Sequences whose missing-detection note was said (once per sequence, not once per frame in playback)."""
         self._last_plane: np.ndarray | None = None
@@ -349,6 +351,8 @@ class SessionView:
         old = self.state
         values = self._control_values()
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
+        if st.person != old.person:
+            self._drop_typed_uv()
         now = time.time()
         typing = [r for r in rejected if not r.refused and now - self._typed_at.get(r.control, -math.inf) < TYPING_SETTLE_S]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
@@ -526,6 +530,7 @@ class SessionView:
         # a focal length the user chose, replaced by the new camera's: said, not silent
         chosen = abs(old.focal_px - old.sample.camera.alpha) > 0.5 and abs(st.focal_px - old.focal_px) > 0.5
         self._sample_gen += 1
+        self._drop_typed_uv()
         self._apply(st, new_sample=True)
         if sample.key.startswith("h36m/"):
             self._last_h36m = sample.key
@@ -857,36 +862,48 @@ class SessionView:
         with self.lock:
             if j != self.selected:
                 self.selected = j
+                self._drop_typed_uv()
                 self._draw_2d(self.state.keypoints, self.frame.noisy_2d if self.frame is not None else None)
 
     def _on_uv_event(self, event: Any) -> None:
         """The (u, v) boxes. A browser sends every keystroke ("9", "99", "999", "9999"): applying each would move the
         joint to half-typed positions and leave it at the last one in range when the whole value is refused. So a
-        typed position is applied once the typing settles (:data:`TYPING_SETTLE_S`); a value set here (not from a
-        tab) at once."""
+        typed position is applied once the typing settles (:data:`TYPING_SETTLE_S`), to the joint, person and sample
+        it was typed for (dropped if any of them changed meanwhile: :meth:`_drop_typed_uv`); a value set here (not
+        from a tab) at once."""
         if getattr(event, "client", None) is None:
             self._do(self._on_joint_uv)
-            return
-        now = time.time()
+        else:
+            self._do(self._note_typed_uv)
+
+    def _note_typed_uv(self) -> None:
+        uv = np.asarray(self.gui.joints.uv.value, np.float64).reshape(2)
         with self._flags:
-            self._typed_uv = (now, self.selected, np.asarray(self.gui.joints.uv.value, np.float64).copy())
-
-        def settle() -> None:
-            with self._flags:
-                typed, self._typed_uv = self._typed_uv, (None if self._typed_uv is not None
-                                                         and self._typed_uv[0] == now else self._typed_uv)
-            if typed is not None and typed[0] == now:  # no keystroke since
-                self._do(self._apply_typed_uv, typed[1], typed[2])
-
-        timer = threading.Timer(TYPING_SETTLE_S, settle)
+            seq = next(self._typed_seq)
+            self._typed_uv = (seq, self.selected, self._sample_gen, self.state.person, uv.copy())
+        timer = threading.Timer(TYPING_SETTLE_S, lambda: self._do(self._settle_typed_uv, seq))
         timer.daemon = True
         timer.start()
 
-    def _apply_typed_uv(self, joint: int, uv: np.ndarray) -> None:
+    def _settle_typed_uv(self, seq: int) -> None:
+        """Apply the typed position if keystroke ``seq`` was the last one and it is still for what is shown."""
+        with self._flags:
+            typed = self._typed_uv
+            if typed is None or typed[0] != seq:
+                return  # a newer keystroke (its own timer applies it), or dropped
+            self._typed_uv = None
+        _, joint, gen, person, uv = typed
         with self.lock:
+            if (gen, person, joint) != (self._sample_gen, self.state.person, self.selected):
+                return
             if np.allclose(uv, np.round(self.state.keypoints[joint], 1), atol=0.05):
                 return
         self._queue_drag(joint, uv)  # (the pass says a refusal; move_joint would raise it again: a second toast)
+
+    def _drop_typed_uv(self) -> None:
+        """Forget a position being typed: another sample, person or joint is shown (the box then shows that)."""
+        with self._flags:
+            self._typed_uv = None
 
     def _on_joint_uv(self) -> None:
         uv = np.asarray(self.gui.joints.uv.value, np.float64)

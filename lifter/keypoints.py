@@ -403,14 +403,38 @@ KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
 
-def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
+def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
+    """A note when 2D keypoints ``(..., J, 2)`` px of format ``src`` have a joint at exactly (0, 0) far from the rest
+    of its pose (a detector's placeholder for a missing joint) that the rules to H36M read: mixed into a computed
+    joint, it would no longer be visible as such to :meth:`lifter.Lifter.lift`'s own check. h36m17 poses and joints
+    no rule reads are not flagged. Empty list: nothing to say."""
+    f = get_format(src)
+    arr = np.asarray(keypoints, np.float64)
+    if src == H36M17 or arr.ndim < 2 or arr.shape[-1] != 2 or arr.shape[-2] != f.num_joints or not arr.size:
+        return []
+    used = np.zeros(f.num_joints, bool)
+    used[[k for rule in f.to_h36m for k, _ in rule]] = True
+    placeholder = zero_placeholders(arr) & used
+    far = np.asarray(placeholder.any(-1))
+    if not np.any(far):
+        return []
+    names = [f.joint_names[j] for j in np.flatnonzero(placeholder.reshape(-1, f.num_joints).any(0))]
+    return [f"joint(s) {names} of format {src!r} at exactly (0, 0) px, far from the rest of the pose"
+            f"{where_in_batch(far)}: a detector's placeholder for a missing joint? The conversion to H36M mixes it "
+            "into the joints made from it, where the lifter can no longer see it; mark it missing (confidence 0 or "
+            "null in a keypoint file), fill it in, or leave the pose out"]
+
+
+def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = True) -> np.ndarray:
     """Convert keypoints ``(..., J_src, D)`` (D = 2 px or 3 mm) from format ``src`` to ``dst``.
 
     Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules; ``h36m17 ->
     dst`` applies the format's ``from_h36m`` (H36M joints, or the inverses of interpolated rules, so
     ``src -> h36m17 -> src`` is the identity); other pairs go through h36m17. Raises
     :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension, and NaN/inf input
-    (mark missing joints before converting; the lifter needs all 17).
+    (mark missing joints before converting; the lifter needs all 17). ``warn``: warn
+    (:class:`lifter.PoseLifterWarning`) of a (0, 0) placeholder the rules would hide (:func:`placeholder_notes`);
+    False for callers that report it themselves (the records' notes, the app).
     """
     f_src, f_dst = get_format(src), get_format(dst)
     try:
@@ -437,18 +461,9 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17) -> np.ndarray:
                 "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
-    if arr.shape[-1] == 2 and src != H36M17:  # (h36m17 poses: Lifter.lift names them itself)
-        used = np.zeros(f_src.num_joints, bool)  # (a placeholder for a joint no rule reads does no harm)
-        used[[k for rule in f_src.to_h36m for k, _ in rule]] = True
-        placeholder = zero_placeholders(arr) & used
-        far = placeholder.any(-1)
-        if np.any(far):
-            names = [f_src.joint_names[j] for j in np.flatnonzero(placeholder.reshape(-1, f_src.num_joints).any(0))]
-            warnings.warn(PoseLifterWarning(
-                f"keypoints: joint(s) {names} of format {src!r} at exactly (0, 0) px, far from the rest of the pose"
-                f"{where_in_batch(far)}: a detector's placeholder for a missing joint? The "
-                f"conversion mixes it into the H36M joints made from it, where the lifter can no longer see it; fill "
-                "it in (from a neighbouring frame, or its left/right partner) or leave the pose out"), stacklevel=2)
+    if warn:
+        for message in placeholder_notes(arr, src=src):
+            warnings.warn(PoseLifterWarning(message), stacklevel=2)
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)
     if dst == H36M17:
         return h36m
@@ -467,4 +482,5 @@ def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 __all__: Sequence[str] = ("BLAZEPOSE33_JOINT_NAMES", "COCO17_JOINT_NAMES", "KEYPOINT_FORMATS", "KeypointFormat",
                           "OPENPOSE25_JOINT_NAMES", "SH16_JOINT_NAMES", "body_rules", "convert", "fit_line_weight",
+                          "placeholder_notes",
                           "get_format", "keypoint_formats", "register_format")

@@ -22,7 +22,7 @@ from ._checks import PoseLifterError, as_pair, input_warnings
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
 from .io import LiftRecord, PersonResult, parse_keypoint_json
-from .keypoints import convert
+from .keypoints import convert, placeholder_notes
 
 
 def _px(v: Any) -> str:
@@ -133,7 +133,9 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     if max_people is not None and len(people) > max_people:
         notes.append(f"{len(people)} people in the file; the {max_people} largest are lifted (max_people)")
         people = people[:max_people]
-    kp17 = convert(np.stack(people), src=kf.format)
+    raw = np.stack(people)
+    kp17 = convert(raw, src=kf.format, warn=False)
+    notes += placeholder_notes(raw, src=kf.format)  # (in the record, not a Python warning)
     f, src, pp, cam_notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),

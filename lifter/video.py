@@ -33,7 +33,7 @@ from ._checks import PoseLifterError, as_pair
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, image_from_array, people_h36m
 from .io import parse_keypoint_sequence
-from .keypoints import convert
+from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
 from .tracking import Tracker
@@ -490,7 +490,9 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     nobody = [i for i, c in enumerate(counts) if c == 0]
     if nobody:
         warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
-    kp_all = [convert(k, src=ks.format) for fr in frames for k in fr]
+    kp_all = [convert(k, src=ks.format, warn=False) for fr in frames for k in fr]
+    if kp_all:
+        warnings.extend(placeholder_notes(np.stack([k for fr in frames for k in fr]), src=ks.format))
     if not kp_all:
         raise PoseLifterError(f"{path}: no person in any frame")
     kp17 = np.stack(kp_all)

@@ -710,6 +710,23 @@ def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLift
             time.sleep(0.05)
         assert wait_for(lambda: v.state.keypoints[j, 1] == 300.5, timeout=10), v.state.keypoints[j]
         assert v.state.keypoints[j, 0] == pytest.approx(u0, abs=0.05)
+        # typed, then another joint chosen (or another sample shown) before the typing settled: dropped, not applied
+        # to the new joint or sample, and the box shows the joint now selected
+        kp1 = v.state.keypoints.copy()
+        _send_value(tab, v.gui.joints.uv, (u0 + 40.0, 300.5))
+        time.sleep(0.1)
+        v.gui.joints.joint.value = "l_wrist"
+        time.sleep(TYPING_SETTLE_S + 0.5)
+        np.testing.assert_array_equal(v.state.keypoints, kp1)
+        np.testing.assert_allclose(v.gui.joints.uv.value, kp1[JOINT_NAMES.index("l_wrist")], atol=0.05)
+        names = list(app.demo.names)
+        other = next(n for n in names if f"demo/{n}" != v.state.sample.key)
+        _send_value(tab, v.gui.joints.uv, (300.0, 300.0))
+        time.sleep(0.1)
+        v.select_demo(other)
+        time.sleep(TYPING_SETTLE_S + 0.5)
+        np.testing.assert_array_equal(v.state.keypoints, app.demo.get(other).keypoints_2d)
+        assert not v.state.dragged
     finally:
         tab.conn.close()
         assert wait_for(lambda: set(app.views) == before)

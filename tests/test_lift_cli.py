@@ -421,6 +421,25 @@ def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weigh
     assert "the lifter needs all 17 joints" in err and "h36m17 -> h36m17" not in err
 
 
+def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weights, kp17, capsys):
+    """A COCO r_hip at (0, 0) without confidences (the user trial's silent 5.2 -> 2.2 m root): each file's record
+    and the CLI name it, as a note per file, not a Python warning said once per process."""
+    coco = np.column_stack([np.linspace(500, 700, 17), np.linspace(200, 600, 17)])
+    coco[COCO17_JOINT_NAMES.index("r_hip")] = 0.0
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17",
+                                                            "image_size": [1280, 720], "focal": 1000.0}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        code, err = run([str(tmp_path / "a.json"), str(tmp_path / "b.json"), "--out", str(tmp_path / "o"),
+                         "--weights", str(weights)], capsys)
+    assert code == 0, err
+    for name in ("a", "b"):
+        rec = json.loads((tmp_path / "o" / f"{name}.json").read_text())
+        assert any("joint(s) ['r_hip'] of format 'coco17' at exactly (0, 0) px" in w for w in rec["warnings"])
+        assert f"{name}.json: note: joint(s) ['r_hip'] of format 'coco17'" in err
+
+
 def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tmp_path, weights, kp17, capsys):
     """A 20-frame OpenPose sequence with one frame missing a wrist: that frame has nobody (noted), the other 19 are
     lifted; each person keeps their own id (person_id) beside the tracker's track_id."""
