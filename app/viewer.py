@@ -406,7 +406,7 @@ class SessionView:
                   "noise_level": g.noise.level, "seed": g.noise.seed, "cloud_samples": g.noise.cloud,
                   "analytic": g.lift.analytic, "person": g.joints.person}[name]
         if name == "focal_px":
-            value = float(round(value))
+            value = float(round(value, 1))  # (the box's precision)
         if name == "person":
             value = ss.person_label(int(value), self.state.sample.person_tag(int(value)))
         self._put(handle, value)
@@ -537,7 +537,8 @@ class SessionView:
         if sample.key.startswith("video/"):
             self._last_upload = sample  # (coming back to the upload returns to this frame)
         self._show_sample_controls(st)
-        seq_key = sample.key.rsplit("/", 1)[0]  # (h36m/S1/Walking 1/c3: said once per sequence, not per frame)
+        # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
+        seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
         if note and seq_key not in self._fallback_said:
             self._fallback_said.add(seq_key)
             self.show_message(note)

@@ -54,7 +54,8 @@ def row_photo(ann: Any, demo: Path, frames: list[int], scales: list[float], *, m
         x0, x1 = int(max(0, lo - margin * (hi - lo))), int(min(W, hi + margin * (hi - lo)))
         strip = Image.fromarray(np.ascontiguousarray(rgb[:, x0:x1]))
         if s != 1.0:
-            strip = strip.resize((max(1, round(strip.width * s)), max(1, round(strip.height * s))), Image.LANCZOS)
+            size = (max(1, round(strip.width * s)), max(1, round(strip.height * s)))
+            strip = strip.resize(size, Image.Resampling.LANCZOS)
         strips.append(np.asarray(strip))
         pelvis.append((kp[0] - [x0, 0]) * s)
     gap = 16
@@ -91,9 +92,8 @@ def main() -> int:
         return 1
     ann = np.load(demo / "annotations.npz", allow_pickle=True)
     rng = np.random.default_rng(args.seed)
-    rules = RULES
     estimators = {name: BlazePoseEstimator(max_people=max(args.people) + 1, window_aspect=a)
-                  for name, a in rules.items()}
+                  for name, a in RULES.items()}
     results: list[dict[str, Any]] = []
     print(f"{'people':>6}  {'variant':<11}  {'search':<34} {'recall':>7}  {'all found':>9}  {'nobody':>6}  "
           f"{'ms/photo':>8}  size (median)")

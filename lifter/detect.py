@@ -92,6 +92,9 @@ BOX_GROW: Final[float] = 0.15
 
 MIN_EXTRA_VISIBILITY: Final[float] = 0.5
 """A second, third, ... person must have at least this mean landmark visibility to count."""
+DOUBTFUL_SCORE: Final[float] = 0.5
+"""A person lifted from a photo whose mean landmark score is below this gets a note that the detector is unsure
+(:func:`lifter.pipeline.detector_doubt_notes`)."""
 
 WINDOW_FRACTION: Final[float] = 0.5
 """``multi="windows"``: the search windows are this fraction of the image's longer side wide (full height)."""
@@ -910,6 +913,8 @@ class BlazePoseEstimator:
                 ww = round(WINDOW_FRACTION * max(W, H))
                 if self.window_aspect is not None:
                     ww = min(ww, max(round(self.window_aspect * H), MIN_WINDOW_PX))
+                    # at most 2 max_people + 1 windows (a 2048 x 40 strip would get ~100): wider ones if need be
+                    ww = max(ww, math.ceil(2 * W / (2 * self.max_people + 2)))
                 if MIN_WINDOW_PX <= ww < 0.95 * W:  # no windows in a thumbnail: nobody fits in them
                     n = math.ceil((W - ww) / (ww / 2)) + 1
                     for x0 in np.linspace(0, W - ww, n).round().astype(int):
@@ -1068,8 +1073,8 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 
 __all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
-           "MIN_MAX_SIDE_PX", "check_max_side", "ExifCamera", "FocalGuess", "ImageError", "LoadedImage",
-           "MissingDependencyError", "NoPersonError",
+           "MIN_MAX_SIDE_PX", "DOUBTFUL_SCORE", "check_max_side", "ExifCamera", "FocalGuess", "ImageError",
+           "LoadedImage", "MissingDependencyError", "NoPersonError",
            "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",
            "ensure_pose_task", "people_h36m", "focal_from_exif",
            "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

@@ -315,9 +315,9 @@ def _needs(fmt: str) -> str:
 
 
 def _who(k: int, pid: str | int | None, n: int) -> str:
-    """A person of a file with ``n`` people, for messages: their position (1-based) and id."""
+    """A person of a file with ``n`` people, for messages: their position in the file's list (1-based) and id."""
     return ("the person" if n == 1 and pid is None
-            else f"person {k + 1} of {n}" + ("" if pid is None else f" (id {pid!r})"))
+            else f"the person at position {k + 1} in the file" + ("" if pid is None else f" (id {pid!r})"))
 
 
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str]
@@ -374,11 +374,11 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
     return out, fmt, kept, dropped
 
 
-def _missing_message(p: Path, fmt: str, dropped: list[tuple[str, list[str]]]) -> str:
+def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
     who = "; ".join(f"{w}: {bad}" for w, bad in dropped[:5]) + ("; ..." if len(dropped) > 5 else "")
-    return (f"joint(s) missing (confidence 0, or null / non-finite coordinates) for {who}; {_needs(fmt)}. "
-            "Give those joints (e.g. placed by hand, or interpolated from neighbouring frames) or leave the person "
-            "out of the file")
+    return (f"joint(s) missing (confidence 0, or null / non-finite coordinates) for {who}; {_needs(fmt)}"
+            + (". Give those joints (e.g. placed by hand, or interpolated from neighbouring frames)" if nobody_left
+               else ""))
 
 
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
@@ -406,9 +406,10 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         raise PoseLifterError(f"{p}: no person in the keypoint file")
     arrays, fmt, identity, dropped = _people_arrays(people, p, fmt, notes)
     if dropped and not arrays:
-        raise PoseLifterError(f"{p}: {_missing_message(p, fmt, dropped)}")
+        raise PoseLifterError(f"{p}: {_missing_message(fmt, dropped, nobody_left=True)}")
     if dropped:
-        notes.append(f"{len(dropped)} of {len(people)} people left out: {_missing_message(p, fmt, dropped)}")
+        notes.append(f"{len(dropped)} of {len(people)} people left out: "
+                     f"{_missing_message(fmt, dropped, nobody_left=False)}")
     if len(arrays) > 1:
         has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "

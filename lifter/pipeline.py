@@ -52,9 +52,8 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
         notes.append(g.detail)
-    else:
-        raise PoseLifterError(f"{where}: no focal length and no image size: pass --focal, or put 'focal' or "
-                              "'image_size' in the file")
+    else:  # pragma: no cover -- checked above, with every missing field named
+        raise AssertionError("no focal length and no image size")
     if user_pp is not None:
         pp = user_pp
         if file_pp is not None and not np.allclose(np.broadcast_to(file_pp, (2,)), user_pp):
@@ -63,9 +62,8 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         pp = file_pp
     elif image_size is not None:
         pp = np.asarray(image_size, np.float64) / 2.0
-    else:
-        raise PoseLifterError(f"{where}: no principal point and no image size: pass --principal-point, or put "
-                              "'principal_point' or 'image_size' in the file")
+    else:  # pragma: no cover -- checked above
+        raise AssertionError("no principal point and no image size")
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
@@ -74,11 +72,12 @@ FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
 
 
 def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None, *,
-                       focal_source: str = "user") -> list[str]:
+                       focal_source: str = "user", detected: bool = False) -> list[str]:
     """Notes on 2D that the lifter takes but that look wrong, for the records (files, photos, videos): poses
     ``(n, 17, 2)`` px spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px or
     with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of), or
-    lying mostly outside the ``image_size`` (None: not checked)."""
+    lying mostly outside the ``image_size`` (None: not checked). detected: the 2D is this package's detector's
+    (photos, videos), not the user's keypoints, which changes the advice."""
     notes: list[str] = []
     k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
     if not len(k):
@@ -89,25 +88,27 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
         outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
         share = outside.mean(1)
         if float(share.max()) > 0.5:
-            notes.append(f"{int((share > 0.5).sum())} of {len(k)} 2D pose(s) lie mostly outside the {W} x {H} px "
-                         "image: are the keypoints in this image's pixels?")
+            n = f"{int((share > 0.5).sum())} of {len(k)} 2D pose(s)"
+            notes.append(f"the detector placed most joints of {n} outside the {W} x {H} px image (a person cut off "
+                         "by the frame, or half-invented): their 3D is uncertain" if detected else
+                         f"{n} lie mostly outside the {W} x {H} px image: are the keypoints in this image's pixels?")
     return notes
 
 
 def detector_doubt_notes(visibility: list[float]) -> list[str]:
-    """A note naming each detected person (largest first) whose mean landmark visibility (the detector's own
-    confidence, 0-1) is below :data:`lifter.detect.MIN_EXTRA_VISIBILITY`: on real photos the detector gives
-    0.79-0.97 (the 84 Human3.6M demo photos), while a person it half-invents (a tiny, blurred or cut-off
-    image) gets about 0.4, with joints off the body or off the image."""
-    from .detect import MIN_EXTRA_VISIBILITY
+    """A note naming each detected person (largest first) whose mean landmark score (the detector's own confidence,
+    0-1) is below :data:`lifter.detect.DOUBTFUL_SCORE`: BlazePose gives 0.79-0.97 on the 84 Human3.6M demo photos,
+    and about 0.4 to a person it half-invents (a tiny, blurred or cut-off image), with joints off the body or off
+    the image."""
+    from .detect import DOUBTFUL_SCORE
 
-    low = [(i, v) for i, v in enumerate(visibility) if v < MIN_EXTRA_VISIBILITY]
+    low = [(i, v) for i, v in enumerate(visibility) if v < DOUBTFUL_SCORE]
     if not low:
         return []
     who = ", ".join(f"person {i + 1} ({v:.2f})" if len(visibility) > 1 else f"{v:.2f}" for i, v in low)
     return [f"the detector is unsure of {'the person found' if len(visibility) == 1 else 'some people'}: mean "
-            f"landmark visibility {who}, below {MIN_EXTRA_VISIBILITY:g} (real photos give 0.8-1): the 2D, and so the "
-            "3D, may be wrong; is the person large and sharp enough in the image?"]
+            f"landmark score {who}, below {DOUBTFUL_SCORE:g} (BlazePose gives 0.8-1 to people it sees well): the "
+            "2D, and so the 3D, may be wrong; is the person large and sharp enough in the image?"]
 
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
@@ -178,7 +179,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
     kp_people = np.stack([d.keypoints_2d for d in dets])
-    notes += plausibility_notes(kp_people, f, img.size, focal_source=src)
+    notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
                          scores=np.stack([d.scores for d in dets]))

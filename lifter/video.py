@@ -31,7 +31,7 @@ import numpy as np
 
 from ._checks import PoseLifterError, as_pair
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
-from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, image_from_array, people_h36m
+from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, check_max_side, image_from_array, people_h36m
 from .io import parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
@@ -261,6 +261,7 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     the ``detect`` extra; None = unchanged). One lift is a few small matrix products, and BLAS threads that
     spin beside MediaPipe's own threads cost more than they give (see the README's timings).
     """
+    check_max_side(max_side)  # (up front: not as the same error for every frame)
     with limit_blas_threads(blas_threads):
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
@@ -435,7 +436,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     f, src, pp = cam
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
-        warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src))
+        warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),

@@ -189,6 +189,10 @@ def test_focal_and_joint_boxes_take_a_decimal_and_step_by_1_px(view: SessionView
         assert handle.precision == 1 and handle.step == 1.0
     view.gui.lift.focal.value = 1144.5
     assert view.state.focal_px == 1144.5 and view.frame.alpha == pytest.approx(1144.5)
+    view.gui.lift.focal.value = 1144.0  # (not swallowed as "the same whole px")
+    assert view.state.focal_px == 1144.0
+    view.gui.lift.focal.value = 1144.6
+    assert view.state.focal_px == 1144.6 and view.gui.lift.focal.value == 1144.6
 
 
 def test_joint_nudge_via_gui(view: SessionView) -> None:

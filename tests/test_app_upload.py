@@ -326,7 +326,9 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
                                                     "image_size": [800, 600], "focal": 35}).encode()) is True
         assert v.state.focal_px == 35.0 and v.frame.alpha == pytest.approx(35.0)
         assert v.gui.lift.focal.min == 17.0  # the slider reaches down to half this camera's focal (not below 10 px)
-        assert any("deg of view" in m and "is the focal length in pixels?" in m for m in v.messages[-(v._message_count - n):])
+        new = v._message_count - n
+        assert new > 0 and any("deg of view" in m and "is the focal length in pixels?" in m
+                               for m in v.messages[len(v.messages) - new:])
     finally:
         server.stop()
     if not mediapipe_available():  # this environment: the real default detector says the same

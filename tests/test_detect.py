@@ -377,6 +377,14 @@ def test_window_search_windows_are_about_one_standing_person_wide(aspect, size, 
     est._run = run  # type: ignore[method-assign]
     est._search(img)
     assert seen == [(0, W), *windows]
+    # a long thin strip: no more than 2 max_people + 1 windows, still covering it (about 100 without the cap)
+    seen.clear()
+    W, H = 2048, 40
+    img = np.zeros((H, W, 3), np.uint8)
+    img[0, :, 0], img[0, :, 1] = np.arange(W) % 256, np.arange(W) // 256
+    est._search(img)
+    assert len(seen) - 1 == (9 if aspect else 3) and seen[1][0] == 0 and seen[-1][1] == W
+    assert all(b[0] <= a[1] for a, b in zip(seen[1:], seen[2:]))  # (overlapping: nothing between two windows)
 
 
 def _person(rng, x0: float) -> np.ndarray:

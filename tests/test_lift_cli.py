@@ -412,8 +412,9 @@ def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weigh
     out = tmp_path / "out"
     code, err = run([str(two), str(one), str(h), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and "lifted 1 of 3" in err, err
-    assert "1 of 2 people left out: joint(s) missing (confidence 0, or null / non-finite coordinates) for person 1 " \
-           "of 2 (id 'A'): ['l_wrist']; the lifter needs every joint that the openpose25 -> h36m17 rules use" in err
+    assert "1 of 2 people left out: joint(s) missing (confidence 0, or null / non-finite coordinates) for the person " \
+           "at position 1 in the file (id 'A'): ['l_wrist']; the lifter needs every joint that the openpose25 -> " \
+           "h36m17 rules use" in err
     got = json.loads((out / "two.json").read_text())
     assert got["num_people"] == 1 and got["people"][0]["person_id"] == "B" and got["people"][0]["input_index"] == 1
     assert f"{one}: joint(s) missing (confidence 0, or null / non-finite coordinates) for the person: ['l_wrist']" \
@@ -473,11 +474,13 @@ class _InterruptedEstimator(_StubEstimator):
         return super().detect(image)
 
 
-def test_ctrl_c_ends_the_batch_with_one_line_and_keeps_what_was_written(tmp_path, weights, kp17, capsys):
+def test_ctrl_c_ends_the_batch_with_one_line_and_keeps_what_was_written(tmp_path, weights, kp17, capsys, monkeypatch):
     """Ctrl-C: one line saying how far it got (exit 130), the finished outputs kept, no traceback; and without
     --no-progress, no progress bar is written to a stderr that is not a terminal (a log file)."""
     _InterruptedEstimator.calls = 0
-    register_estimator("_interrupted", lambda **kw: _InterruptedEstimator([kp17]), overwrite=True)
+    import lifter.detect as detect
+
+    monkeypatch.setitem(detect._ESTIMATORS, "_interrupted", lambda **kw: _InterruptedEstimator([kp17]))
     for n in ("a", "b", "c"):
         Image.new("RGB", (1280, 720), (50, 60, 70)).save(tmp_path / f"{n}.png")
     code = main(["lift", *(str(tmp_path / f"{n}.png") for n in "abc"), "--out", str(tmp_path / "o"), "--detector",
@@ -501,8 +504,9 @@ def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, wei
     off = 0.2 * (kp17 - kp17[0]) + np.array([330.0, 150.0])  # mostly right of the 300-px image
     lifter = Lifter.from_checkpoint(weights)
     rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([off], visibility=0.37), focal=400.0)
-    assert any("lie mostly outside the 300 x 300 px image" in w for w in rec.warnings), rec.warnings
-    assert any("detector is unsure of the person found: mean landmark visibility 0.37" in w for w in rec.warnings)
+    assert any("the detector placed most joints of 1 of 1 2D pose(s) outside the 300 x 300 px image" in w
+               for w in rec.warnings), rec.warnings
+    assert any("detector is unsure of the person found: mean landmark score 0.37" in w for w in rec.warnings)
     inside = 0.2 * (kp17 - kp17[0]) + 150.0
     rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([inside], visibility=0.8), focal=400.0)
     assert not any("outside" in w or "unsure" in w for w in rec.warnings), rec.warnings

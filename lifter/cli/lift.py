@@ -21,9 +21,9 @@ strength ``--smoothing`` (0 = off). ``--bvh`` writes one BVH animation per track
 ``--glb`` an animated scene (:func:`lifter.export.write_glb_animation`). A progress bar counts frames; a bad
 frame (undecodable, or of another size than the first) is reported and skipped; a video longer than
 ``--max-seconds`` is lifted up to that duration.
-For every input it writes ``DIR/<name>.json`` (``<name>`` = the file name without its suffix; a
-clash gets ``_<suffix>`` or a number appended) with ``keypoints_2d`` (17 x 2 px, H36M order),
-``absolute`` (17 x 3 mm, camera frame: OpenCV, +x right, +y down, +z forward), ``relative``,
+For every input it writes ``DIR/<name>.json`` (``<name>`` = the file name without its suffix; two inputs
+named alike get ``<folder>_<name>``, else ``<name>_<suffix>`` or a number, with a note) with ``keypoints_2d``
+(17 x 2 px, H36M order), ``absolute`` (17 x 3 mm, camera frame: OpenCV, +x right, +y down, +z forward), ``relative``,
 ``root`` (3, mm), ``canonical_depth`` (mm at a 1000-px focal), ``focal`` (fx, fy px), ``focal_source``,
 ``principal_point`` (px), ``image_size``, ``warnings`` and, for images, the detector's per-joint
 ``scores`` and the number of people found; with ``--glb`` / ``--bvh`` also ``DIR/<name>.glb`` /
