@@ -644,7 +644,13 @@ class SessionView:
         ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
                                            cloud=fr.cloud)
         if self.gui.lift.auto_frame.value and not self._close_up:
-            self._keep_in_view()
+            since = time.time() - self._typed_at.get("focal_px", -math.inf)
+            if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,
+                timer = threading.Timer(TYPING_SETTLE_S - since + 0.05, lambda: self._do(self._auto_frame))
+                timer.daemon = True  # not to each half-typed value (the view was left far out after "114")
+                timer.start()
+            else:
+                self._keep_in_view()
 
     def _update_trail(self, fr: Frame) -> None:
         st = self.state

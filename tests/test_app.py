@@ -681,6 +681,35 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
         assert wait_for(lambda: set(app.views) == before)  # (the next test counts the views)
 
 
+def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> None:
+    """Typing "1144.5" lifts at "114" on the way (in range), where the frustum is ten times wider: reframing to it
+    left the view far out once the value was complete (seen in Chromium). The keep-in-view check waits until the
+    typing settles, then runs once for the value typed."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    before = set(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(set(app.views) - before) == 1)
+        v = app.views[next(iter(set(app.views) - before))]
+        checks: list[tuple[float, float]] = []  # (time, focal in use) of each keep-in-view check
+        real = v._keep_in_view
+        v._keep_in_view = lambda: (checks.append((time.time(), v.state.focal_px)), real())  # type: ignore[method-assign]
+        for typed in ("1", "11", "114", "1144", "1144.5"):
+            _send_value(tab, v.gui.lift.focal, float(typed))
+            time.sleep(0.06)
+        last_key = time.time()
+        assert wait_for(lambda: v.state.focal_px == 1144.5, timeout=10)
+        assert wait_for(lambda: len(checks) >= 1, timeout=TYPING_SETTLE_S + 5)
+        time.sleep(0.3)
+        assert all(f == 1144.5 and t >= last_key + TYPING_SETTLE_S - 0.2 for t, f in checks), (checks, last_key)
+    finally:
+        tab.conn.close()
+        assert wait_for(lambda: set(app.views) == before)
+
+
 def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLifterApp) -> None:
     """The (u, v) boxes send every keystroke: "9", "99", ..., "99999" must not leave the joint at 999 (the last value
     in range) when 99999 is refused, nor say the refusal twice; "300.5" ends at 300.5 px (user trial)."""
