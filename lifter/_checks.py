@@ -105,7 +105,10 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
         arr = np.concatenate([arr, arr], axis=-1)
     if arr.ndim == 0 or arr.shape[-1] != 2:
         expected = "a scalar or shape (..., 2)" if scalar else "a pair (x, y) or shape (..., 2)"
-        raise PoseLifterError(f"{name}: expected {expected}, got {arr.tolist() if arr.size <= 4 else tuple(arr.shape)}")
+        hint = (f" (one value per pose: give shape {tuple(arr.shape) + (1,)}, e.g. {name}[:, None]; a bare (2,) "
+                "always means (fx, fy))" if scalar and arr.ndim >= 1 and arr.shape[-1] > 2 else "")
+        raise PoseLifterError(f"{name}: expected {expected}, got "
+                              f"{arr.tolist() if arr.size <= 4 else tuple(arr.shape)}{hint}")
     check_finite(arr, name=name)
     if positive and np.any(arr <= 0):
         raise PoseLifterError(f"{name}: must be > 0, got {arr.tolist() if arr.size <= 8 else 'non-positive values'}")

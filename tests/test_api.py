@@ -264,6 +264,11 @@ def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
     with pytest.raises(PoseLifterError, match=r"focal: shape \(1, 2\) for a single pose \(keypoints \(17, 2\)\); "
                        r"give one \(2,\) focal, e\.g\. focal\[0\]"):
         small_lifter.lift(keypoints[3], focal=per_pose[3:4], principal_point=(512.0, 515.0))
+    # one scalar focal per pose as (N,): refused (a (2,) would be ambiguous), with the shape that works
+    with pytest.raises(PoseLifterError, match=r"one value per pose: give shape \(6, 1\), e\.g\. focal\[:, None\]"):
+        small_lifter.lift(keypoints, focal=per_pose[:, 1], principal_point=(512.0, 515.0))
+    res = small_lifter.lift(keypoints, focal=per_pose[:, 1][:, None], principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(res.focal, per_pose[:, [1, 1]])
 
 
 def test_absolute_depth_model_path():
