@@ -72,14 +72,8 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
             hint = f"; if the third column is a detector confidence, pass {name}[..., :2]"
         raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}{hint}")
     if not np.all(np.isfinite(arr)):
-        bad_joint = ~np.isfinite(arr).all(-1)
-        joints = np.flatnonzero(bad_joint.reshape(-1, arr.shape[-2]).any(0))
-        if arr.shape[-2] == 17:
-            from .skeleton import JOINT_NAMES
-
-            which = [JOINT_NAMES[j] for j in joints]
-        else:
-            which = [int(j) for j in joints]
+        bad_joint = np.asarray(~np.isfinite(arr).all(-1))
+        which = _joint_labels(bad_joint)
         where = where_in_batch(bad_joint.any(-1))
         fix = (" A joint the detector missed has to be filled in (from a neighbouring frame, or its left/right "
                "partner) or the pose left out" if dim == 2 else "")
@@ -122,8 +116,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
     pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice.
     :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
-    from .camera import MAX_PLAUSIBLE_VIEW_DEG, pose_view_deg
-    from .skeleton import JOINT_NAMES
+    from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
 
     notes: list[str] = []
     k = np.asarray(keypoints, np.float64)
@@ -134,8 +127,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     if focal is not None:
         # (the box diagonal against 2 alpha tan(view / 2) first: the angles only when something is wide)
         ext = k.max(-2) - k.min(-2)
-        f = np.asarray(focal, np.float64)
-        alpha = np.sqrt(f[..., 0] * f[..., 1]) if f.ndim else f
+        alpha = focal_alpha(focal)
         limit = 2.0 * alpha * math.tan(math.radians(MAX_PLAUSIBLE_VIEW_DEG) / 2.0)
         if np.any(ext[..., 0] ** 2 + ext[..., 1] ** 2 > limit**2):
             view = pose_view_deg(k, focal)
@@ -153,12 +145,19 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     placeholder = zero_placeholders(k)
     far = np.asarray(placeholder.any(-1))
     if np.any(far):
-        joints = np.flatnonzero(placeholder.reshape(-1, k.shape[-2]).any(0))
-        names = [JOINT_NAMES[j] if k.shape[-2] == len(JOINT_NAMES) else int(j) for j in joints]
-        notes.append(f"joint(s) {names} at exactly (0, 0) px, far from the rest of the pose{where_in_batch(far)}: a "
+        notes.append(f"joint(s) {_joint_labels(placeholder)} at exactly (0, 0) px, far from the rest of the pose"
+                     f"{where_in_batch(far)}: a "
                      "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
                      "(from a neighbouring frame, or its left/right partner) or leave the pose out")
     return notes
+
+
+def _joint_labels(mask: np.ndarray) -> list[str] | list[int]:
+    """The joints flagged anywhere in a mask ``(..., J)``: H36M names for 17 joints, else indices."""
+    from .skeleton import JOINT_NAMES
+
+    joints = np.flatnonzero(mask.reshape(-1, mask.shape[-1]).any(0))
+    return [JOINT_NAMES[j] for j in joints] if mask.shape[-1] == len(JOINT_NAMES) else [int(j) for j in joints]
 
 
 def zero_placeholders(keypoints: np.ndarray) -> np.ndarray:

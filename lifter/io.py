@@ -358,13 +358,12 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' or "
                          "--format if they are another layout)")
     f = get_format(fmt)
-    used = sorted({k for rule in f.to_h36m for k, _ in rule})  # only the joints a rule uses are needed
     out, kept, dropped = [], [], []
     for (xy, missing), (pos, pid) in zip(parsed, identity):
         if len(xy) != f.num_joints:
             raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}")
         if missing.any():
-            bad = [f.joint_names[k] for k in used if missing[k]]
+            bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
             if bad:
                 dropped.append((_who(pos, pid, len(people)), bad))
                 continue

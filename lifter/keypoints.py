@@ -153,6 +153,11 @@ class KeypointFormat:
         return len(self.joint_names)
 
     @property
+    def rule_joints(self) -> tuple[int, ...]:
+        """This format's joints that the rules to H36M read (sorted indices): the ones a person must give."""
+        return tuple(sorted({k for rule in self.to_h36m for k, _ in rule}))
+
+    @property
     def matrix(self) -> np.ndarray:
         """``(17, J)`` weights: ``h36m = matrix @ src`` (per coordinate)."""
         M = np.zeros((NUM_JOINTS, self.num_joints))
@@ -413,7 +418,7 @@ def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
     if src == H36M17 or arr.ndim < 2 or arr.shape[-1] != 2 or arr.shape[-2] != f.num_joints or not arr.size:
         return []
     used = np.zeros(f.num_joints, bool)
-    used[[k for rule in f.to_h36m for k, _ in rule]] = True
+    used[list(f.rule_joints)] = True
     placeholder = zero_placeholders(arr) & used
     far = np.asarray(placeholder.any(-1))
     if not np.any(far):

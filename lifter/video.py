@@ -491,12 +491,11 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     nobody = [i for i, c in enumerate(counts) if c == 0]
     if nobody:
         warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
-    kp_all = [convert(k, src=ks.format, warn=False) for fr in frames for k in fr]
-    if kp_all:
-        warnings.extend(placeholder_notes(np.stack([k for fr in frames for k in fr]), src=ks.format))
-    if not kp_all:
+    if not sum(counts):
         raise PoseLifterError(f"{path}: no person in any frame")
-    kp17 = np.stack(kp_all)
+    raw = np.stack([k for fr in frames for k in fr])  # every person of every frame, one batch
+    kp17 = convert(raw, src=ks.format, warn=False)
+    warnings.extend(placeholder_notes(raw, src=ks.format))
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
