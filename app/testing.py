@@ -7,8 +7,10 @@ A :class:`FakeTab` is a bare websocket client that speaks enough of viser's prot
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 from uuid import uuid4
@@ -80,3 +82,18 @@ def wait_for(predicate: Any, *, timeout: float = 20.0, interval: float = 0.05) -
             return True
         time.sleep(interval)
     return bool(predicate())
+
+
+@contextlib.contextmanager
+def open_tab(app: Any, *, timeout: float = 20.0) -> Iterator[tuple[FakeTab, Any]]:
+    """A new :class:`FakeTab` on ``app`` (a :class:`poselifter_app.viewer.PoseLifterApp`) and the session view the
+    app built for it. On leaving, the tab disconnects and its view must be gone within ``timeout`` s (the next test
+    counts the views)."""
+    before = set(app.views)
+    tab = FakeTab(app.server)
+    try:
+        assert wait_for(lambda: len(set(app.views) - before) == 1, timeout=timeout), "the fake tab got no session"
+        yield tab, app.views[next(iter(set(app.views) - before))]
+    finally:
+        tab.close()
+    assert wait_for(lambda: set(app.views) == before, timeout=timeout), "the fake tab's session did not end"

@@ -305,11 +305,19 @@ class SessionView:
         if getattr(event, "client", None) is not None:  # from a browser tab, not a value set here
             self._typed_at[name] = time.time()
 
-    def _settle_later(self, delay: float) -> None:
-        """A sync pass after ``delay`` s: a clamped value still in its box is applied then (:data:`TYPING_SETTLE_S`)."""
-        timer = threading.Timer(delay, lambda: self._do(self._runner.request))
+    def _later(self, delay: float, func: Callable[..., Any], *args: Any) -> None:
+        """Run ``func(*args)`` through :meth:`_do` after ``delay`` s, on a daemon timer thread."""
+        timer = threading.Timer(delay, self._do, args=(func, *args))
         timer.daemon = True
         timer.start()
+
+    def _settle_later(self, delay: float) -> None:
+        """A sync pass after ``delay`` s: a clamped value still in its box is applied then (:data:`TYPING_SETTLE_S`)."""
+        self._later(delay, self._runner.request)
+
+    def _since_typed(self, name: str) -> float:
+        """Seconds since the tab last sent a value for control ``name`` (inf: never)."""
+        return time.time() - self._typed_at.get(name, -math.inf)
 
     def _request_redraw(self) -> None:
         with self._flags:
@@ -353,12 +361,11 @@ class SessionView:
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
         if st.person != old.person:
             self._drop_typed_uv()
-        now = time.time()
-        typing = [r for r in rejected if not r.refused and now - self._typed_at.get(r.control, -math.inf) < TYPING_SETTLE_S]
+        typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < TYPING_SETTLE_S]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
             rejected = [r for r in rejected if r not in typing]
-            self._settle_later(max(TYPING_SETTLE_S - (now - self._typed_at[r.control]) for r in typing) + 0.05)
+            self._settle_later(max(TYPING_SETTLE_S - self._since_typed(r.control) for r in typing) + 0.05)
         with self._flags:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False
@@ -492,7 +499,7 @@ class SessionView:
             self._frame_note = None  # another frame asked for since (the slider set to the last frame keeps it)
         if self._frame_note is None:
             return
-        since = time.time() - self._typed_at.get("frame", -math.inf)
+        since = self._since_typed("frame")
         if since < TYPING_SETTLE_S:
             self._settle_later(TYPING_SETTLE_S - since + 0.05)
             return
@@ -644,11 +651,9 @@ class SessionView:
         ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
                                            cloud=fr.cloud)
         if self.gui.lift.auto_frame.value and not self._close_up:
-            since = time.time() - self._typed_at.get("focal_px", -math.inf)
+            since = self._since_typed("focal_px")
             if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,
-                timer = threading.Timer(TYPING_SETTLE_S - since + 0.05, lambda: self._do(self._auto_frame))
-                timer.daemon = True  # not to each half-typed value (the view was left far out after "114")
-                timer.start()
+                self._later(TYPING_SETTLE_S - since + 0.05, self._auto_frame)  # not to each half-typed value
             else:
                 self._keep_in_view()
 
@@ -888,9 +893,7 @@ class SessionView:
         with self._flags:
             seq = next(self._typed_seq)
             self._typed_uv = (seq, self.selected, self._sample_gen, self.state.person, uv.copy())
-        timer = threading.Timer(TYPING_SETTLE_S, lambda: self._do(self._settle_typed_uv, seq))
-        timer.daemon = True
-        timer.start()
+        self._later(TYPING_SETTLE_S, self._settle_typed_uv, seq)
 
     def _settle_typed_uv(self, seq: int) -> None:
         """Apply the typed position if keystroke ``seq`` was the last one and it is still for what is shown."""
@@ -901,11 +904,14 @@ class SessionView:
             self._typed_uv = None
         _, joint, gen, person, uv = typed
         with self.lock:
-            if (gen, person, joint) != (self._sample_gen, self.state.person, self.selected):
-                return
-            if np.allclose(uv, np.round(self.state.keypoints[joint], 1), atol=0.05):
-                return
-        self._queue_drag(joint, uv)  # (the pass says a refusal; move_joint would raise it again: a second toast)
+            if (gen, person, joint) == (self._sample_gen, self.state.person, self.selected):
+                self._move_if_changed(joint, uv)
+
+    def _move_if_changed(self, joint: int, uv: np.ndarray) -> None:
+        """Move ``joint`` to the (u, v) box's ``uv`` px unless it is there (the box's own echo, to 0.1 px). Not
+        :meth:`move_joint`: the pass says a refusal, and move_joint would raise it again (a second toast)."""
+        if not np.allclose(uv, np.round(self.state.keypoints[joint], 1), atol=0.05):
+            self._queue_drag(joint, uv)
 
     def _drop_typed_uv(self) -> None:
         """Forget a position being typed: another sample, person or joint is shown (the box then shows that)."""
@@ -913,12 +919,8 @@ class SessionView:
             self._typed_uv = None
 
     def _on_joint_uv(self) -> None:
-        uv = np.asarray(self.gui.joints.uv.value, np.float64)
         with self.lock:
-            cur = np.round(self.state.keypoints[self.selected], 1)
-            if np.allclose(uv, cur, atol=0.05):
-                return  # our own echo of the joint's position
-            self._queue_drag(self.selected, uv)  # (not move_joint: it would raise the pass's refusal again)
+            self._move_if_changed(self.selected, np.asarray(self.gui.joints.uv.value, np.float64))
 
     def drag_to_pixel(self, event: Any) -> np.ndarray:
         """Pixel under the pointer of a drag event: the viewer's ray through ``event.end_position`` (world, m)

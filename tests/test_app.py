@@ -18,7 +18,7 @@ from poselifter_app.core import FOCAL_MIN_PX  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
 from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
-from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
+from poselifter_app.testing import FakeTab, local_server, open_tab, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
 from poselifter_app.viser_hooks import drag_callback  # noqa: E402
 
@@ -656,11 +656,7 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
 
     from poselifter_app.viewer import TYPING_SETTLE_S
 
-    before = set(app.views)
-    tab = FakeTab(app.server)
-    try:
-        assert wait_for(lambda: len(set(app.views) - before) == 1)
-        v = app.views[next(iter(set(app.views) - before))]
+    with open_tab(app) as (tab, v):  # (on leaving: the tab's session ended)
         n_msgs = len(v.messages)
         for typed in ("2", "20", "200", "2000"):
             _send_value(tab, v.gui.lift.focal, float(typed))
@@ -676,9 +672,6 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
                         and any("7000 px is outside" in m for m in v.messages[n_msgs:]), timeout=10), v.messages
         time.sleep(TYPING_SETTLE_S)
         assert sum("7000 px is outside" in m for m in v.messages[n_msgs:]) == 1, v.messages  # said once
-    finally:
-        tab.conn.close()
-        assert wait_for(lambda: set(app.views) == before)  # (the next test counts the views)
 
 
 def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> None:
@@ -689,11 +682,7 @@ def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> N
 
     from poselifter_app.viewer import TYPING_SETTLE_S
 
-    before = set(app.views)
-    tab = FakeTab(app.server)
-    try:
-        assert wait_for(lambda: len(set(app.views) - before) == 1)
-        v = app.views[next(iter(set(app.views) - before))]
+    with open_tab(app) as (tab, v):  # (on leaving: the tab's session ended)
         checks: list[tuple[float, float]] = []  # (time, focal in use) of each keep-in-view check
         real = v._keep_in_view
         v._keep_in_view = lambda: (checks.append((time.time(), v.state.focal_px)), real())  # type: ignore[method-assign]
@@ -705,9 +694,6 @@ def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> N
         assert wait_for(lambda: len(checks) >= 1, timeout=TYPING_SETTLE_S + 5)
         time.sleep(0.3)
         assert all(f == 1144.5 and t >= last_key + TYPING_SETTLE_S - 0.2 for t, f in checks), (checks, last_key)
-    finally:
-        tab.conn.close()
-        assert wait_for(lambda: set(app.views) == before)
 
 
 def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLifterApp) -> None:
@@ -719,11 +705,7 @@ def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLift
 
     from lifter.skeleton import JOINT_NAMES
 
-    before = set(app.views)
-    tab = FakeTab(app.server)
-    try:
-        assert wait_for(lambda: len(set(app.views) - before) == 1)
-        v = app.views[next(iter(set(app.views) - before))]
+    with open_tab(app) as (tab, v):  # (on leaving: the tab's session ended)
         v.gui.joints.joint.value = "r_wrist"
         j = JOINT_NAMES.index("r_wrist")
         kp0 = v.state.keypoints.copy()
@@ -760,9 +742,6 @@ def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLift
         time.sleep(TYPING_SETTLE_S + 0.5)
         np.testing.assert_array_equal(v.state.keypoints, app.demo.get(other).keypoints_2d)
         assert not v.state.dragged
-    finally:
-        tab.conn.close()
-        assert wait_for(lambda: set(app.views) == before)
 
 
 def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
@@ -1222,11 +1201,7 @@ def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLi
 
     from poselifter_app.viewer import TYPING_SETTLE_S
 
-    before = set(h36m_app.views)
-    tab = FakeTab(h36m_app.server)
-    try:
-        assert wait_for(lambda: len(set(h36m_app.views) - before) == 1)
-        v = h36m_app.views[next(iter(set(h36m_app.views) - before))]
+    with open_tab(h36m_app) as (tab, v):  # (on leaving: the tab's session ended)
         assert v.state.sample.key.startswith("h36m/")
         n_msgs = len(v.messages)
         for typed in (9999, 99999):
@@ -1248,6 +1223,3 @@ def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLi
         time.sleep(TYPING_SETTLE_S + 0.5)
         said = [m for m in v.messages[n_msgs:] if "past the end" in m]
         assert len(said) == 1 and said[0].startswith("frame 5000 is past the end"), said
-    finally:
-        tab.conn.close()
-        assert wait_for(lambda: set(h36m_app.views) == before)
