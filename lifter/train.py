@@ -11,6 +11,10 @@ Recipe: :class:`lifter.config.TrainConfig`. Per step:
 * AdamW with linear warm-up then cosine decay, driven by ``max(step / steps, elapsed / max_minutes)`` so a
   wall-clock limit still ends fully decayed; optional weight EMA and bf16 autocast of the residual blocks.
 
+Device: the training tensors are moved once to the training device (the GPU under CUDA) and every batch is
+drawn there, so a step has no host work; the loss is read back only every :data:`FINITE_CHECK_EVERY` steps
+(a non-finite loss stops training with a :class:`FloatingPointError`).
+
 Distributed: under ``torchrun`` (``WORLD_SIZE > 1``) every process loads the data, builds the same
 network from the same seed and trains a shard of every global batch (``batch_size / world`` samples,
 disjoint slices of one shared permutation) through :class:`torch.nn.parallel.DistributedDataParallel`
@@ -148,8 +152,8 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
     rel, depth = T["rel"][idx], T["depth"][idx]
-    bs = len(idx)
-    u = torch.rand(bs, generator=gen)
+    bs, dev = len(idx), kp.device
+    u = torch.rand(bs, generator=gen, device=dev)
     clean = u < d.clean_prob
     real = (u >= d.clean_prob) & (u < d.clean_prob + d.real_prob)
     if "has_real" in T:
@@ -158,14 +162,14 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     else:
         real = torch.zeros_like(real)
     if cfg.augment.flip_prob > 0:
-        kp, rel = flip_batch(kp, pp, rel, torch.rand(bs, generator=gen) < cfg.augment.flip_prob)
+        kp, rel = flip_batch(kp, pp, rel, torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob)
     if cfg.augment.zoom:
         a = cfg.augment
-        s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen)).clamp(-a.zoom_clip, a.zoom_clip))
+        s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen, device=dev)).clamp(-a.zoom_clip, a.zoom_clip))
         kp, pp, f = kp * s[:, None, None], pp * s[:, None], f * s[:, None]
     synth = ~clean & ~real
     if noise is not None and bool(synth.any()):
-        level = d.noise_level_min + (d.noise_level_max - d.noise_level_min) * torch.rand(bs, generator=gen)
+        level = d.noise_level_min + (d.noise_level_max - d.noise_level_min) * torch.rand(bs, generator=gen, device=dev)
         noisy = noise.sample_torch(kp, level=level, generator=gen, outliers=d.noise_outliers)
         kp = torch.where(synth[:, None, None], noisy, kp)
     return {"kp": kp, "pp": pp, "focal": f, "rel": rel, "depth": depth, "clean": clean}
@@ -281,6 +285,16 @@ def _sync_buffers(net: torch.nn.Module) -> None:
 # ------------------------------------------------------------------------------------------------
 
 
+FINITE_CHECK_EVERY = 50
+"""Steps between checks that the training loss is finite (each check waits for the device)."""
+
+
+def _check_finite(running: torch.Tensor, step: int) -> None:
+    if not bool(torch.isfinite(running)):
+        raise FloatingPointError(f"the training loss became {float(running)} by step {step} "
+                                 "(lower --lr, or check the data)")
+
+
 def train(
     cfg: TrainConfig,
     *,
@@ -302,7 +316,8 @@ def train(
     (default: :func:`init_distributed`)."""
     ctx = ctx or init_distributed()
     torch.manual_seed(cfg.schedule.seed)
-    gen = torch.Generator().manual_seed(cfg.schedule.seed + 1000 * ctx.rank)  # this rank's augmentation draws
+    # this rank's augmentation draws, made where the batches are made: on the training device
+    gen = torch.Generator(device=ctx.device).manual_seed(cfg.schedule.seed + 1000 * ctx.rank)
     perm_gen = torch.Generator().manual_seed(cfg.schedule.seed)  # the shared permutation
     if train_samples is None:
         data = data or H36M()
@@ -332,6 +347,7 @@ def train(
         net = PoseLifterNet(cfg.model)
         net.set_target_statistics(mean, std)
     net.to(ctx.device).train()
+    T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device: no host work per step
     model: torch.nn.Module = net
     if ctx.active:
         model = torch.nn.parallel.DistributedDataParallel(net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
@@ -350,17 +366,17 @@ def train(
         log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}), {steps} steps "
             f"({cfg.schedule.epochs:g} epochs), max {cfg.schedule.max_minutes or 'inf'} min, {cfg.model}")
     curve: list[dict[str, float]] = []
-    perm = torch.randperm(n, generator=perm_gen)
+    perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
     pos = 0
     t0 = time.perf_counter()
-    running: float | None = None
+    running: torch.Tensor | None = None  # on the device: read back only every FINITE_CHECK_EVERY steps
     bar = tqdm(total=steps, disable=not (progress and ctx.main), unit="step", dynamic_ncols=True, mininterval=2.0)
     step = 0
     clock = torch.zeros(1, device=ctx.device)
 
     def record() -> None:
         rec = {"step": step, "samples": step * gbs, "minutes": (time.perf_counter() - t0) / 60.0,
-               "lr": opt.param_groups[0]["lr"], "train_loss": float(running or 0.0)}
+               "lr": opt.param_groups[0]["lr"], "train_loss": 0.0 if running is None else float(running)}
         rec.update(validate(eval_net, codec, val_dev))
         curve.append(rec)
         bar.set_postfix({k.replace("val_", ""): f"{v:.1f}" for k, v in rec.items() if k.startswith("val_")})
@@ -381,14 +397,12 @@ def train(
         for g in opt.param_groups:
             g["lr"] = cfg.optim.lr * lr_factor(prog, cfg)
         if pos + gbs > n:
-            perm = torch.randperm(n, generator=perm_gen)
+            perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
             pos = 0
         idx = perm[pos + ctx.rank * lbs: pos + (ctx.rank + 1) * lbs]
         pos += gbs
-        batch = {k: v.to(ctx.device) for k, v in make_batch(T, idx, cfg, gen, noise=noise).items()}
+        batch = make_batch(T, idx, cfg, gen, noise=noise)
         loss = batch_loss(model, codec, batch, cfg)
-        if not torch.isfinite(loss):
-            raise FloatingPointError(f"loss became {loss.item()} at step {step}")
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
@@ -397,10 +411,14 @@ def train(
         if ema is not None:
             ema.update(net)
         step += 1
-        running = loss.item() if running is None else 0.98 * running + 0.02 * loss.item()
+        running = loss.detach() if running is None else 0.98 * running + 0.02 * loss.detach()
+        if step % FINITE_CHECK_EVERY == 0:
+            _check_finite(running, step)
         if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
             record()
         bar.update(1)
+    if running is not None:
+        _check_finite(running, step)
     if ctx.main and (not curve or curve[-1]["step"] != step):
         record()
     bar.close()

@@ -255,6 +255,20 @@ def test_fine_tuning_a_mirror_net_sets_its_output_mirror_from_the_codec():
     torch.testing.assert_close(res.net.out_scale, torch.from_numpy(scale))
 
 
+@pytest.mark.parametrize("steps", [3, 120])
+def test_a_loss_that_stops_being_finite_ends_training_with_its_step(steps):
+    """The loss is read back from the device only every FINITE_CHECK_EVERY steps and at the end: a short run and
+    a long one both stop with a FloatingPointError naming the step, not with a NaN checkpoint."""
+    from lifter.train import FINITE_CHECK_EVERY
+
+    train_s, val_s = synthetic_samples(64 * steps, seed=7), synthetic_samples(20, seed=8)
+    cfg = replace(tiny_config(), optim=OptimConfig(batch_size=64, lr=1e30))  # diverges in a few steps
+    with pytest.raises(FloatingPointError, match=r"the training loss became (nan|inf) by step \d+"):
+        train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False, log=lambda s: None,
+              ctx=Dist())
+    assert FINITE_CHECK_EVERY < 120
+
+
 def test_real_detections_are_required_and_aligned():
     train_s = synthetic_samples(100)
     cfg = replace(tiny_config(), data=DataConfig(clean_prob=0.5, real_prob=0.5))
