@@ -1,0 +1,63 @@
+"""Learning curves of several training runs in one figure, against samples seen: validation MPJPE and MRPE
+(mm) of each ``.curve.json`` (written by ``poselifter train``) on the detected and the clean validation set.
+
+    python scripts/plot_curves.py LABEL=run.curve.json ... --out curves.png [--title TEXT]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+PANELS = (("val_mpjpe_detected", "MPJPE, SH detections (mm)"), ("val_mrpe_detected", "MRPE, SH detections (mm)"),
+          ("val_mpjpe_clean", "MPJPE, GT 2D (mm)"), ("val_mrpe_clean", "MRPE, GT 2D (mm)"))
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    p.add_argument("runs", nargs="+", help="LABEL=path/to/run.curve.json")
+    p.add_argument("--out", type=Path, required=True, help="PNG to write")
+    p.add_argument("--title", default="")
+    args = p.parse_args()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(PANELS), figsize=(4.2 * len(PANELS), 3.6 + 0.3 * len(args.runs)))
+    for spec in args.runs:
+        label, sep, path = spec.partition("=")
+        if not sep:
+            raise SystemExit(f"{spec!r}: give LABEL=path/to/run.curve.json")
+        curve = json.loads(Path(path).read_text())["curve"]
+        x = [c["samples"] / 1e6 for c in curve]
+        for ax, (key, _) in zip(axes, PANELS):
+            pts = [(xi, c[key]) for xi, c in zip(x, curve) if key in c]
+            if pts:
+                ax.plot(*zip(*pts), label=label, lw=1.4)
+    for ax, (_, name) in zip(axes, PANELS):
+        ax.set_xlabel("samples seen (millions)")
+        ax.set_title(name, fontsize=10)
+        vals = [ln.get_ydata() for ln in ax.get_lines()]
+        if vals:  # the first points (untrained) are off the scale; show the range where the runs differ
+            finals = [v[-1] for v in vals]
+            lo, hi = min(min(v) for v in vals), max(finals)
+            ax.set_ylim(lo - 0.1 * (hi - lo + 1), hi + 0.6 * (hi - lo + 1))
+        ax.grid(alpha=0.3)
+    handles, labels = axes[0].get_legend_handles_labels()
+    rows = (len(labels) + 1) // 2
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=9, frameon=False)
+    if args.title:
+        fig.suptitle(args.title, fontsize=11)
+    fig.tight_layout(rect=(0, 0.07 * rows, 1, 1))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_suffix(".tmp.png")
+    fig.savefig(tmp, dpi=110)
+    tmp.replace(args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
