@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._checks import PoseLifterError
 from .camera import Camera, canonical_depth_from_depth, project, world_to_camera
 
 DEFAULT_H36M_DIR = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "h36m"
@@ -53,6 +54,10 @@ ACTIONS: tuple[str, ...] = (
 
 CAMERA_IDS: tuple[str, ...] = ("54138969", "55011271", "58860488", "60457274")
 MISSING_TEST_SEQUENCES: tuple[str, ...] = ("S9/Discussion 1",)
+
+
+COMPACT_FILE = "compact.json"
+"""In a copy written by ``scripts/compact_h36m.py``: ``{"keep_every": k}``, only frames at multiples of k hold poses."""
 
 
 def default_h36m_dir() -> Path:
@@ -140,6 +145,8 @@ class H36M:
             self._cameras_raw = json.load(f)["cameras"]
         self._poses = np.load(self.root / "poses3d_world_17j_mm.npz")
         self._decoded: dict[str, np.ndarray] = {}  # int16 arrays: an npz member is decompressed on every access
+        compact = self.root / COMPACT_FILE
+        self.keep_every = int(json.loads(compact.read_text())["keep_every"]) if compact.is_file() else 1
         self.sequences: tuple[str, ...] = tuple(sorted(self._poses.files))
 
     def camera(self, subject: int, camera_id: str) -> Camera:
@@ -171,6 +178,12 @@ class H36M:
     def poses_world(self, sequence: str, frames: np.ndarray | int | slice | None = None) -> np.ndarray:
         """``(frames, 17, 3)`` float64 mm, world frame, 50 fps (optionally only the given ``frames``)."""
         raw = self._raw(sequence)
+        if self.keep_every > 1:
+            kept = np.arange(len(raw))[slice(None) if frames is None else frames]
+            if np.any(np.asarray(kept) % self.keep_every):
+                raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {self.keep_every}th "
+                                      f"frame (see {COMPACT_FILE}); use a stride that is a multiple of "
+                                      f"{self.keep_every}, or the full Human3.6M folder")
         return (raw if frames is None else raw[frames]).astype(np.float64)
 
     def sequences_of(self, subjects: Iterable[int]) -> list[str]:

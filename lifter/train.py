@@ -12,8 +12,9 @@ Recipe: :class:`lifter.config.TrainConfig`. Per step:
   wall-clock limit still ends fully decayed; optional weight EMA and bf16 autocast of the residual blocks.
 
 Device: the training tensors are moved once to the training device (the GPU under CUDA) and every batch is
-drawn there, so a step has no host work; the loss is read back only every :data:`FINITE_CHECK_EVERY` steps
-(a non-finite loss stops training with a :class:`FloatingPointError`).
+drawn there, so no batch is built on the host and copied; the loss is read back only every
+:data:`FINITE_CHECK_EVERY` steps (a non-finite loss on any process stops every process with a
+:class:`FloatingPointError`).
 
 Distributed: under ``torchrun`` (``WORLD_SIZE > 1``) every process loads the data, builds the same
 network from the same seed and trains a shard of every global batch (``batch_size / world`` samples,
@@ -168,7 +169,7 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
         s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen, device=dev)).clamp(-a.zoom_clip, a.zoom_clip))
         kp, pp, f = kp * s[:, None, None], pp * s[:, None], f * s[:, None]
     synth = ~clean & ~real
-    if noise is not None and bool(synth.any()):
+    if noise is not None:  # drawn for every batch: asking whether any sample needs it would wait for the device
         level = d.noise_level_min + (d.noise_level_max - d.noise_level_min) * torch.rand(bs, generator=gen, device=dev)
         noisy = noise.sample_torch(kp, level=level, generator=gen, outliers=d.noise_outliers)
         kp = torch.where(synth[:, None, None], noisy, kp)
@@ -289,10 +290,17 @@ FINITE_CHECK_EVERY = 50
 """Steps between checks that the training loss is finite (each check waits for the device)."""
 
 
-def _check_finite(running: torch.Tensor, step: int) -> None:
-    if not bool(torch.isfinite(running)):
-        raise FloatingPointError(f"the training loss became {float(running)} by step {step} "
-                                 "(lower --lr, or check the data)")
+def _check_finite(running: torch.Tensor, step: int, ctx: Dist) -> None:
+    """Raise on every rank when the running loss of any rank is not finite (one rank alone raising would leave the
+    others waiting in their next collective)."""
+    ok = torch.isfinite(running).to(torch.int32).reshape(1)
+    if ctx.active:
+        dist.all_reduce(ok, op=dist.ReduceOp.MIN)
+    if not bool(ok):
+        where = f" on another process (this one's: {float(running):.4g})" if bool(torch.isfinite(running)) \
+            else f" ({float(running)})"
+        raise FloatingPointError(f"the training loss became non-finite by step {step}{where}; "
+                                 "lower --lr, or check the data")
 
 
 def train(
@@ -347,7 +355,7 @@ def train(
         net = PoseLifterNet(cfg.model)
         net.set_target_statistics(mean, std)
     net.to(ctx.device).train()
-    T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device: no host work per step
+    T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device, not copied to it
     model: torch.nn.Module = net
     if ctx.active:
         model = torch.nn.parallel.DistributedDataParallel(net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
@@ -413,12 +421,12 @@ def train(
         step += 1
         running = loss.detach() if running is None else 0.98 * running + 0.02 * loss.detach()
         if step % FINITE_CHECK_EVERY == 0:
-            _check_finite(running, step)
+            _check_finite(running, step, ctx)
         if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
             record()
         bar.update(1)
     if running is not None:
-        _check_finite(running, step)
+        _check_finite(running, step, ctx)
     if ctx.main and (not curve or curve[-1]["step"] != step):
         record()
     bar.close()

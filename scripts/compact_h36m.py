@@ -3,7 +3,7 @@
 Training reads every 5th frame and evaluation every 5th (or a multiple of it), so the 3D poses of the other
 frames are zeroed and the test subjects' detections of the other frames set to NaN; both then compress to
 almost nothing (62 MB -> 27 MB). Frame numbering, shapes and keys are unchanged, so ``H36M(out)`` loads it
-like the original for any stride that is a multiple of 5 (a stride that is not would read zeroed poses).
+like the original for any stride that is a multiple of 5; its ``compact.json`` makes ``H36M`` refuse the rest.
 
 The copy is Human3.6M data: keep it in a git-ignored folder (the default, ``.gpu/h36m``, is ignored) and
 never commit it.
@@ -14,12 +14,13 @@ never commit it.
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 from pathlib import Path
 
 import numpy as np
 
-from lifter.data import default_h36m_dir
+from lifter.data import COMPACT_FILE, default_h36m_dir
 from lifter.detections import SH_DETECTIONS_FILE
 
 KEEP_EVERY = 5
@@ -33,7 +34,7 @@ def main() -> int:
     args = p.parse_args()
     src = args.h36m or default_h36m_dir()
     args.out.mkdir(parents=True, exist_ok=True)
-    shutil.copy(src / "cameras.json", args.out / "cameras.json")
+    shutil.copyfile(src / "cameras.json", args.out / "cameras.json")  # not the source's read-only mode
     poses = np.load(src / "poses3d_world_17j_mm.npz")
     out = {}
     for k in poses.files:
@@ -49,6 +50,8 @@ def main() -> int:
             a[np.arange(len(a)) % KEEP_EVERY != 0] = np.nan
         out[k] = a
     np.savez_compressed(args.out / SH_DETECTIONS_FILE, **out)
+    # H36M(out) reads this and refuses frames that were dropped (they hold zeros, not poses)
+    (args.out / COMPACT_FILE).write_text(json.dumps({"keep_every": KEEP_EVERY}) + "\n")
     total = sum(f.stat().st_size for f in args.out.iterdir())
     print(f"wrote {args.out} ({total / 1e6:.1f} MB; only frames at a multiple of {KEEP_EVERY} kept)")
     return 0

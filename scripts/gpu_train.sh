@@ -19,18 +19,19 @@ if compgen -G ".gpu/whl/*.whl" > /dev/null; then
 fi
 export PYTHONUNBUFFERED=1 PYTHONPATH=$PWD:${PYTHONPATH:-}
 M=${M:-6}; WA=${WA:-4096}; WB=${WB:-1024}; EV=${EV:-1}; TH=${TH:-5}
-D=${H36M:-.gpu/h36m}; R=runs/gpu; mkdir -p $R
+D=${H36M:-.gpu/h36m}; R=runs/gpu
+rm -rf "$R"; mkdir -p "$R" "$OUT"  # a second run on the same machine must not report the first one's files
 (nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv; nproc; python3 -c "import torch, numpy, tqdm; print('torch', torch.__version__, 'cuda', torch.cuda.is_available(), 'numpy', numpy.__version__)") > $R/env.txt 2>&1
 cat $R/env.txt
-(command -v nvidia-smi >/dev/null && nvidia-smi dmon -s um -d 10 > $R/dmon.txt 2>&1) &
-DMON=$!
+DMON=
+if command -v nvidia-smi >/dev/null; then nvidia-smi dmon -s um -d 10 > "$R/dmon.txt" 2>&1 & DMON=$!; fi
 waitall() { for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait $p; done; }
 DET="--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 0 --real-prob 0.5 --noise-level-min 0 --noise-level-max 1.5"
 CLEAN="--depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 1.0"
 tr() { # name port args...
   local name=$1 port=$2; shift 2
-  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port $port -m lifter train --h36m $D --threads $TH --max-minutes $M --out $R/$name.pt "$@" > $R/$name.log 2>&1
-  echo "$name exit $?" >> $R/$name.log
+  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port $port -m lifter train --h36m "$D" --threads $TH --max-minutes $M --out "$R/$name.pt" "$@" > "$R/$name.log" 2>&1
+  echo "$name exit $?" >> "$R/$name.log"
 }
 JOBS=${JOBS:-all}; DROP=${DROP:-0.25}
 tr paper4096 29511 $DET --width $WA --dropout $DROP --eval-every 2000 &
@@ -42,7 +43,8 @@ waitall
 tail -n 3 $R/*.log
 if [ "$EV" = 1 ]; then
   ev() { # label path inputs stride source
-    python3 -m lifter evaluate $1=$2 --h36m $D --inputs $3 --stride $4 --source $5 --flip-test --threads $TH --json $R/$1_$3_s$4.json > $R/$1_$3_s$4.txt 2>&1; echo "exit $?" >> $R/$1_$3_s$4.txt; }
+    local f="$R/$1_$3_s$4"
+    python3 -m lifter evaluate "$1=$2" --h36m "$D" --inputs $3 --stride $4 --source $5 --flip-test --threads $TH --json "$f.json" > "$f.txt" 2>&1; echo "exit $?" >> "$f.txt"; }
   TH=8 ev paper4096 $R/paper4096.pt gt 5 clean & ev paper4096 $R/paper4096.pt sh 50 detected &
   if [ "$JOBS" = all ]; then
   ev detected1024 $R/detected1024.pt gt 5 clean & ev detected1024 $R/detected1024.pt sh 50 detected &
@@ -51,8 +53,8 @@ if [ "$EV" = 1 ]; then
   waitall
   cat $R/*_s*.txt
 fi
-kill $DMON 2>/dev/null
+[ -n "$DMON" ] && kill "$DMON" 2>/dev/null
 ls -la $R
-tar czf $OUT/results.tgz --exclude='*.pt' -C runs gpu
-cp $R/clean1024.pt $R/detected1024.pt $OUT/ 2>/dev/null
-cat $R/*.log > $OUT/logs.txt
+tar czf "$OUT/results.tgz" --exclude='*.pt' -C runs gpu
+cp "$R/clean1024.pt" "$R/detected1024.pt" "$OUT/" 2>/dev/null
+cat "$R"/*.log > "$OUT/logs.txt"

@@ -26,6 +26,29 @@ def test_missing_folder_error(tmp_path):
         H36M(tmp_path)
 
 
+def test_a_compacted_copy_refuses_the_frames_it_dropped(tmp_path):
+    """scripts/compact_h36m.py keeps every 5th frame and zeroes the rest; its compact.json makes H36M refuse a
+    stride or frame that would read a zeroed pose, naming the fix, and serve the kept frames as before."""
+    import json
+
+    from lifter._checks import PoseLifterError
+    from lifter.data import COMPACT_FILE, H36M
+
+    poses = np.zeros((12, 17, 3), np.int16)
+    poses[::5] = np.arange(17 * 3, dtype=np.int16).reshape(17, 3) + 100
+    np.savez_compressed(tmp_path / "poses3d_world_17j_mm.npz", **{"S9/Walking 1": poses})
+    (tmp_path / "cameras.json").write_text(json.dumps({"cameras": {}}))
+    assert H36M(tmp_path).keep_every == 1  # a plain folder: every frame
+    np.testing.assert_array_equal(H36M(tmp_path).poses_world("S9/Walking 1", 1), poses[1])
+    (tmp_path / COMPACT_FILE).write_text(json.dumps({"keep_every": 5}))
+    data = H36M(tmp_path)
+    np.testing.assert_array_equal(data.poses_world("S9/Walking 1", np.arange(0, 12, 5)), poses[::5])
+    np.testing.assert_array_equal(data.poses_world("S9/Walking 1", 10), poses[10])
+    for frames in (np.arange(0, 12, 2), 3, None, slice(0, 12, 4)):
+        with pytest.raises(PoseLifterError, match="keeps only every 5th frame .* a stride that is a multiple of 5"):
+            data.poses_world("S9/Walking 1", frames)
+
+
 @requires_h36m
 def test_projection_with_distortion_matches_dataset_2d(h36m):
     """Our camera-frame 3D + distorted projection reproduces the 2D annotations shipped with the demo frames."""

@@ -263,7 +263,7 @@ def test_a_loss_that_stops_being_finite_ends_training_with_its_step(steps):
 
     train_s, val_s = synthetic_samples(64 * steps, seed=7), synthetic_samples(20, seed=8)
     cfg = replace(tiny_config(), optim=OptimConfig(batch_size=64, lr=1e30))  # diverges in a few steps
-    with pytest.raises(FloatingPointError, match=r"the training loss became (nan|inf) by step \d+"):
+    with pytest.raises(FloatingPointError, match=r"the training loss became non-finite by step \d+ \((nan|inf)\)"):
         train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False, log=lambda s: None,
               ctx=Dist())
     assert FINITE_CHECK_EVERY < 120
@@ -368,6 +368,35 @@ def test_ddp_two_cpu_processes_agree(tmp_path):
     assert r0["state"].keys() == r1["state"].keys()
     for k in r0["state"]:
         torch.testing.assert_close(r0["state"][k], r1["state"][k], rtol=0, atol=0, msg=k)
+
+
+FINITE_SCRIPT = textwrap.dedent('''
+    import sys, torch, torch.distributed as dist
+    from lifter.train import init_distributed, _check_finite
+    ctx = init_distributed()
+    running = torch.tensor(float("nan") if ctx.rank == 1 else 3.0)
+    try:
+        _check_finite(running, 50, ctx)
+        print(f"rank {ctx.rank}: no error")
+    except FloatingPointError as e:
+        print(f"rank {ctx.rank}: {e}")
+    dist.destroy_process_group()
+''')
+
+
+def test_ddp_a_loss_non_finite_on_one_rank_stops_every_rank(tmp_path):
+    """Only rank 1's loss is NaN: both ranks raise (a lone raising rank would leave the other waiting in its next
+    all-reduce), and rank 0 says the loss went non-finite on another process."""
+    script = tmp_path / "finite.py"
+    script.write_text(FINITE_SCRIPT)
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--nproc_per_node", "2", "--master_addr", "127.0.0.1",
+           "--master_port", str(_free_port()), str(script)]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "rank 0: the training loss became non-finite by step 50 on another process (this one's: 3)" in proc.stdout
+    assert "rank 1: the training loss became non-finite by step 50 (nan)" in proc.stdout
+    assert "no error" not in proc.stdout
 
 
 @requires_h36m
