@@ -23,7 +23,6 @@ import hashlib
 import io
 import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +31,7 @@ import torch
 
 from ._checks import CheckpointError, PoseLifterError
 from .codec import PoseCodec
+from .io import write_atomic
 from .model import ModelConfig, PoseLifterNet
 
 FORMAT = "poselifter-checkpoint"
@@ -69,18 +69,14 @@ def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: Pos
     payload = {"format": FORMAT, "version": VERSION, "model_config": net.config.to_dict(),
                "codec": codec.state_dict(), "state_dict": state, "train_config": train_config, "meta": meta or {}}
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(payload, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise PoseLifterError(f"{path}: cannot create its folder ({exc.strerror or exc}); choose another "
+                              "path") from None
+    buf = io.BytesIO()
+    torch.save(payload, buf)
+    return write_atomic(path, buf.getvalue())  # the umask's mode (not mkstemp's 0600), fsync, rename
 
 
 def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:

@@ -548,6 +548,27 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
     return path
 
 
+def check_writable(path: str | Path, *, option: str) -> None:
+    """Raise a :class:`PoseLifterError` naming ``option`` (e.g. ``"--out"``) when a file could not be written at
+    ``path`` (nor files beside it): a folder there, a parent that is a file, a folder that cannot be created or
+    written, a symbolic link. Creates the missing parent folders. For commands that work for minutes first."""
+    path = Path(path)
+    if path.is_symlink():
+        raise PoseLifterError(f"{option} {path} is a symbolic link; give a plain file path")
+    if path.is_dir():
+        raise PoseLifterError(f"{option} {path} is a folder; give a file path in it")
+    blocker = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
+    if blocker is not None:
+        raise PoseLifterError(f"{option} {path}: {blocker} is a file, not a folder; choose another path")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path.parent):
+            pass
+    except OSError as exc:
+        raise PoseLifterError(f"{option} {path}: cannot write to {path.parent} ({exc.strerror or exc}); choose "
+                              "another path") from None
+
+
 def write_json_atomic(path: str | Path, data: Any) -> Path:
     """``data`` as indented JSON through :func:`write_atomic`."""
     return write_atomic(path, json.dumps(data, indent=1))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -15,25 +14,34 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def curve_y_range(series: Sequence[Sequence[float]]) -> tuple[float, float]:
+    """The y range of a validation panel: from 0.9x the lowest value to at most 2.5x it (the untrained first
+    points are cut off), but always above every curve's last point, so no curve leaves the plot."""
+    lo = min(min(v) for v in series)
+    hi = max(max(v) for v in series)
+    last = max(v[-1] for v in series)
+    return lo * 0.9, max(min(hi, lo * 2.5), last) * 1.02
+
+
 def plot_learning_curve(curve: Sequence[dict[str, float]], path: str | Path, *, title: str = "") -> Path:
     """Train loss, and validation MPJPE / MRPE (mm) per validation set (``val_mpjpe_<set>``; older curves:
     ``val_mpjpe``), against training samples seen. Written atomically."""
     path = Path(path)
     x = np.array([c["samples"] for c in curve]) / 1e6
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    axes[0].plot(x, [c["train_loss"] for c in curve])
+    axes[0].plot(x, [c["train_loss"] for c in curve], marker="o" if len(curve) < 5 else None)
     axes[0].set_ylabel("train loss (mm, sum of 48 + depth)")
     for ax, metric in ((axes[1], "mpjpe"), (axes[2], "mrpe")):
         keys = sorted(k for k in curve[0] if k == f"val_{metric}" or k.startswith(f"val_{metric}_")) if curve else []
-        lo, hi = math.inf, 0.0
+        series = []
         for i, key in enumerate(keys):
             vals = [c[key] for c in curve]
             label = key.split("_", 2)[2] if key.count("_") >= 2 else "val"
-            ax.plot(x, vals, color=f"C{i + 1}", label=f"{label} 2D")
-            lo, hi = min(lo, min(vals)), max(hi, max(vals))
+            ax.plot(x, vals, color=f"C{i + 1}", label=f"{label} 2D", marker="o" if len(vals) < 5 else None)
+            series.append(vals)
         ax.set_ylabel(f"val {metric.upper()} (mm)")
         if keys:
-            ax.set_ylim(lo * 0.9, min(hi, lo * 2.5) * 1.02)
+            ax.set_ylim(*curve_y_range(series))
             ax.legend(fontsize=8)
     for ax in axes:
         ax.set_xlabel("samples seen (millions)")

@@ -135,8 +135,8 @@ def model_entry(name: str) -> ModelEntry:
         name = reg["default"]
     if name not in reg["models"]:
         raise PoseLifterError(f"unknown model {name!r}; shipped models: {sorted(reg['models'])} or 'default' "
-                              "(your own checkpoint: pass its .pt path, Lifter.from_pretrained('path/to/model.pt') "
-                              "or --weights path/to/model.pt)")
+                              "(your own checkpoint: pass its .pt path on the command line, or "
+                              "Lifter.from_pretrained('path/to/model.pt'))")
     return {**reg["models"][name], "name": name}
 
 

@@ -369,10 +369,13 @@ def train(
     if gbs < ctx.world:
         raise PoseLifterError(f"batch size {gbs} is smaller than the {ctx.world} processes")
     lbs = gbs // ctx.world
+    asked = "" if lbs * ctx.world == gbs else f"; {gbs} asked, rounded down to a multiple of {ctx.world}"
+    gbs = lbs * ctx.world  # the samples a step really trains on (and counts)
     steps = max(1, int(round(cfg.schedule.epochs * n / gbs)))
+    limit = f"max {cfg.schedule.max_minutes:g} min" if cfg.schedule.max_minutes else "no time limit"
     if ctx.main:
-        log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}), {steps} steps "
-            f"({cfg.schedule.epochs:g} epochs), max {cfg.schedule.max_minutes or 'inf'} min, {cfg.model}")
+        log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}{asked}), {steps} steps "
+            f"({cfg.schedule.epochs:g} epochs), {limit}, {cfg.model}")
     curve: list[dict[str, float]] = []
     perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
     pos = 0

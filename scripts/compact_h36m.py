@@ -30,9 +30,15 @@ TEST_SUBJECTS = ("S9", "S11")
 def main() -> int:
     p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
-    p.add_argument("--out", type=Path, default=Path(".gpu/h36m"), help="where to write the copy (git-ignored)")
+    p.add_argument("--out", type=Path, default=Path(".gpu/h36m"),
+                   help="where to write the copy (default .gpu/h36m, git-ignored)")
     args = p.parse_args()
     src = args.h36m or default_h36m_dir()
+    missing = [f for f in ("cameras.json", "poses3d_world_17j_mm.npz", SH_DETECTIONS_FILE) if not (src / f).is_file()]
+    if missing:
+        p.error(f"no Human3.6M data at {src} ({', '.join(missing)} missing): pass --h36m FOLDER")
+    if args.out.resolve() == src.resolve():
+        p.error(f"--out {args.out} is the Human3.6M folder itself: write the copy elsewhere")
     args.out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(src / "cameras.json", args.out / "cameras.json")  # not the source's read-only mode
     poses = np.load(src / "poses3d_world_17j_mm.npz")

@@ -1,60 +1,96 @@
 #!/usr/bin/env bash
 # Trainings on one GPU through the torchrun path (`torchrun -m lifter train`, NCCL would join more GPUs),
 # then evaluation of each on the machine's CPUs (`poselifter evaluate`, S9+S11, flip test):
-#   paper4096     the paper's width (67.5M parameters) with the default's detected-2D recipe
-#   detected1024  the same recipe at the default's width 1024 (same minutes, same GPU: the width comparison)
-#   clean1024     the default's clean-2D recipe at width 1024
-# All three run at once on the one GPU (JOBS=all) or only paper4096 (JOBS=paper). Settings (environment):
-#   M minutes per training (6), WA / WB widths (4096 / 1024), DROP dropout of paper4096 (0.25; the paper's is
-#   0.5), TH CPU threads per process (5), H36M data folder (.gpu/h36m, from scripts/compact_h36m.py), OUT
-#   folder for the results (results.tgz, the width-1024 checkpoints, logs.txt).
-# Run from the repository root, on a machine where python3 has torch with CUDA; wheels of missing pure-Python
-# dependencies (array-api-compat) can be put in .gpu/whl. What the lent H200 gave: docs/results/gpu_h200/.
+#   paper<WA>     the paper's width (4096: 67.5M parameters) with the default's detected-2D recipe
+#   detected<WB>  the same recipe at the default's width 1024 (same minutes, same GPU: the width comparison)
+#   clean<WB>     the default's clean-2D recipe at width 1024
+# All three run at once on the one GPU (JOBS=all) or only paper<WA> (JOBS=paper). Settings (environment):
+#   M minutes per training (6), WA / WB widths (4096 / 1024), DROP dropout of paper<WA> (0.25; the paper's is
+#   0.5), TH CPU threads per process (5), EV=0 to skip the evaluations, H36M data folder (.gpu/h36m, from
+#   scripts/compact_h36m.py), OUT folder for the results: results.tgz (this run's folder without checkpoints:
+#   logs, .curve.json/.png, evaluation tables), the width-WB checkpoints, logs.txt.
+# Each run gets its own folder runs/gpu/<UTC time>. The script exits 1 when a training or an evaluation failed,
+# after printing its error lines. Run from the repository root, on a machine where python3 has torch with
+# CUDA; wheels of missing pure-Python dependencies (array-api-compat) can be put in .gpu/whl. What the lent
+# H200 gave: docs/results/gpu_h200/.
 #   M=5.5 OUT=/tmp/out bash scripts/gpu_train.sh
 #   M=3.5 JOBS=paper DROP=0.5 TH=12 OUT=/tmp/out bash scripts/gpu_train.sh
 set -u
 OUT=${OUT:?set OUT to the folder for the results}
+M=${M:-6}; WA=${WA:-4096}; WB=${WB:-1024}; EV=${EV:-1}; TH=${TH:-5}; JOBS=${JOBS:-all}; DROP=${DROP:-0.25}
+D=${H36M:-.gpu/h36m}
+if [ ! -f "$D/poses3d_world_17j_mm.npz" ]; then
+  echo "gpu_train.sh: no Human3.6M data at $D: run python scripts/compact_h36m.py, or set H36M=<folder>" >&2
+  exit 2
+fi
 if compgen -G ".gpu/whl/*.whl" > /dev/null; then
-  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .gpu/whl/*.whl && export PYTHONPATH=/tmp/site
+  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .gpu/whl/*.whl \
+    && export PYTHONPATH=/tmp/site
 fi
 export PYTHONUNBUFFERED=1 PYTHONPATH=$PWD:${PYTHONPATH:-}
-M=${M:-6}; WA=${WA:-4096}; WB=${WB:-1024}; EV=${EV:-1}; TH=${TH:-5}
-D=${H36M:-.gpu/h36m}; R=runs/gpu
-rm -rf "$R"; mkdir -p "$R" "$OUT"  # a second run on the same machine must not report the first one's files
-(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv; nproc; python3 -c "import torch, numpy, tqdm; print('torch', torch.__version__, 'cuda', torch.cuda.is_available(), 'numpy', numpy.__version__)") > $R/env.txt 2>&1
-cat $R/env.txt
+STAMP=$(date -u +%Y%m%d-%H%M%S); R=runs/gpu/$STAMP
+mkdir -p "$R" "$OUT"
+{
+  command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv
+  echo "cpus $(nproc)"
+  python3 -c "import torch, numpy; print('torch', torch.__version__, 'cuda', torch.cuda.is_available(), 'numpy', numpy.__version__)"
+} > "$R/env.txt" 2>&1
+cat "$R/env.txt"
 DMON=
-if command -v nvidia-smi >/dev/null; then nvidia-smi dmon -s um -d 10 > "$R/dmon.txt" 2>&1 & DMON=$!; fi
-waitall() { for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait $p; done; }
+if command -v nvidia-smi > /dev/null; then nvidia-smi dmon -s um -d 10 > "$R/dmon.txt" 2>&1 & DMON=$!; fi
+waitall() { for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done; }
+FAILED=()
+failed() { # file: the file's own error lines, not torchrun's wrapper
+  FAILED+=("$1"); echo "FAILED: $1" >&2; grep -m 3 -E "error: |Error: " "$1" >&2; }
 DET="--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 0 --real-prob 0.5 --noise-level-min 0 --noise-level-max 1.5"
 CLEAN="--depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 1.0"
 tr() { # name port args...
   local name=$1 port=$2; shift 2
-  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port $port -m lifter train --h36m "$D" --threads $TH --max-minutes $M --out "$R/$name.pt" "$@" > "$R/$name.log" 2>&1
+  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port "$port" -m lifter train --h36m "$D" \
+    --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "$@" > "$R/$name.log" 2>&1
   echo "$name exit $?" >> "$R/$name.log"
 }
-JOBS=${JOBS:-all}; DROP=${DROP:-0.25}
-tr paper4096 29511 $DET --width $WA --dropout $DROP --eval-every 2000 &
+NAMES=("paper$WA")
+# shellcheck disable=SC2086  # the recipes are word lists
+tr "paper$WA" 29511 $DET --width "$WA" --dropout "$DROP" --eval-every 2000 &
 if [ "$JOBS" = all ]; then
-tr detected1024 29512 $DET --width $WB --eval-every 1000 &
-tr clean1024 29513 $CLEAN --width $WB --eval-every 1000 &
+  NAMES+=("detected$WB" "clean$WB")
+  # shellcheck disable=SC2086
+  tr "detected$WB" 29512 $DET --width "$WB" --eval-every 1000 &
+  # shellcheck disable=SC2086
+  tr "clean$WB" 29513 $CLEAN --width "$WB" --eval-every 1000 &
 fi
 waitall
-tail -n 3 $R/*.log
+for n in "${NAMES[@]}"; do
+  tail -n 3 "$R/$n.log"
+  [ "$(tail -n 1 "$R/$n.log")" = "$n exit 0" ] || failed "$R/$n.log"
+done
 if [ "$EV" = 1 ]; then
-  ev() { # label path inputs stride source
-    local f="$R/$1_$3_s$4"
-    python3 -m lifter evaluate "$1=$2" --h36m "$D" --inputs $3 --stride $4 --source $5 --flip-test --threads $TH --json "$f.json" > "$f.txt" 2>&1; echo "exit $?" >> "$f.txt"; }
-  TH=8 ev paper4096 $R/paper4096.pt gt 5 clean & ev paper4096 $R/paper4096.pt sh 50 detected &
-  if [ "$JOBS" = all ]; then
-  ev detected1024 $R/detected1024.pt gt 5 clean & ev detected1024 $R/detected1024.pt sh 50 detected &
-  ev clean1024 $R/clean1024.pt gt 5 clean &
-  fi
+  ev() { # label inputs stride source
+    local f="$R/$1_$2_s$3"
+    python3 -m lifter evaluate "$1=$R/$1.pt" --h36m "$D" --inputs "$2" --stride "$3" --source "$4" --flip-test \
+      --threads "$TH" --json "$f.json" > "$f.txt" 2>&1
+    echo "exit $?" >> "$f.txt"
+  }
+  for n in "${NAMES[@]}"; do
+    [ -f "$R/$n.pt" ] || continue
+    if [ "$n" = "paper$WA" ]; then TH=8 ev "$n" gt 5 clean & else ev "$n" gt 5 clean & fi
+    [[ $n == clean* ]] || ev "$n" sh 50 detected &
+  done
   waitall
-  cat $R/*_s*.txt
+  for f in "$R"/*_s*.txt; do
+    [ -f "$f" ] || continue
+    grep -v "^lifting (" "$f"
+    [ "$(tail -n 1 "$f")" = "exit 0" ] || failed "$f"
+  done
 fi
-[ -n "$DMON" ] && kill "$DMON" 2>/dev/null
-ls -la $R
-tar czf "$OUT/results.tgz" --exclude='*.pt' -C runs gpu
-cp "$R/clean1024.pt" "$R/detected1024.pt" "$OUT/" 2>/dev/null
+[ -n "$DMON" ] && kill "$DMON" 2> /dev/null
+ls -la "$R"
+tar czf "$OUT/results.tgz" --exclude='*.pt' -C runs/gpu "$STAMP"
+for n in "detected$WB" "clean$WB"; do [ -f "$R/$n.pt" ] && cp "$R/$n.pt" "$OUT/"; done
 cat "$R"/*.log > "$OUT/logs.txt"
+if [ ${#FAILED[@]} -gt 0 ]; then
+  echo "gpu_train.sh: ${#FAILED[@]} step(s) failed: ${FAILED[*]}" >&2
+  exit 1
+fi
+echo "gpu_train.sh: results in $R and $OUT"

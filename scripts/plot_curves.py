@@ -29,13 +29,17 @@ def main() -> int:
     for spec in args.runs:
         label, sep, path = spec.partition("=")
         if not sep:
-            raise SystemExit(f"{spec!r}: give LABEL=path/to/run.curve.json")
-        curve = json.loads(Path(path).read_text())["curve"]
+            p.error(f"{spec!r}: give LABEL=path/to/run.curve.json")
+        try:
+            curve = json.loads(Path(path).read_text())["curve"]
+        except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
+            p.error(f"{path}: not a learning curve ({type(exc).__name__}: {exc}); give the .curve.json that "
+                    "poselifter train writes beside its checkpoint")
         x = [c["samples"] / 1e6 for c in curve]
         for ax, (key, _) in zip(axes, PANELS):
             pts = [(xi, c[key]) for xi, c in zip(x, curve) if key in c]
-            if pts:
-                ax.plot(*zip(*pts), label=label, lw=1.4)
+            if pts:  # (a run with a few points gets markers: one point alone draws no line)
+                ax.plot(*zip(*pts), label=label, lw=1.4, marker="o" if len(pts) < 5 else None)
     for ax, (_, name) in zip(axes, PANELS):
         ax.set_xlabel("samples seen (millions)")
         ax.set_title(name, fontsize=10)

@@ -64,6 +64,15 @@ def test_written_files_follow_the_umask(tmp_path):
     os.umask(mask)
     p = write_atomic(tmp_path / "x.json", "{}")
     assert (p.stat().st_mode & 0o777) == (0o666 & ~mask)
+    # checkpoints too (user trial: a trained .pt was 0600 beside 0644 curve files, unreadable on shared storage)
+    from lifter.checkpoint import save_checkpoint
+    from lifter.codec import PoseCodec
+    from lifter.model import ModelConfig, PoseLifterNet
+
+    cfg = ModelConfig(width=16)
+    ck = save_checkpoint(tmp_path / "sub" / "m.pt", PoseLifterNet(cfg), PoseCodec(cfg))
+    assert (ck.stat().st_mode & 0o777) == (0o666 & ~mask)
+    assert [f.name for f in ck.parent.iterdir()] == ["m.pt"]  # no temporary file left
 
 
 def test_atomic_write_into_a_missing_folder_names_the_problem(tmp_path):

@@ -322,6 +322,48 @@ def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):
     assert "width" in capsys.readouterr().err
     assert main(["train", "--out", str(tmp_path / "x.pt"), "--config", str(tmp_path / "missing.json")]) == 2
     assert "no such file" in capsys.readouterr().err
+    # an --out that cannot be written is refused before the data is even read (user trial: a run trained to the
+    # end, then failed to save), naming the file that stands where a folder must be
+    bad.with_name("t1.pt").write_bytes(b"")
+    nodata = ["--h36m", str(tmp_path / "no_h36m")]
+    assert main(["train", "--out", str(tmp_path / "t1.pt" / "x.pt"), *nodata]) == 2
+    assert f"{tmp_path / 't1.pt'} is a file, not a folder" in capsys.readouterr().err
+    assert main(["train", "--out", str(tmp_path / "new" / "x.pt"), *nodata]) == 2  # writable: on to the data
+    assert "Human3.6M data not found" in capsys.readouterr().err and (tmp_path / "new").is_dir()
+
+
+def test_cli_output_paths_are_checked_before_the_work_and_ctrl_c_says_nothing_was_saved(tmp_path, capsys,
+                                                                                        monkeypatch):
+    """User trial: `evaluate --json <folder>` failed with a traceback after evaluating; Ctrl-C in `train` said
+    only "interrupted"."""
+    import lifter.cli.train as cli_train
+    from lifter.cli import main
+
+    nodata = ["--h36m", str(tmp_path / "no_h36m")]
+    assert main(["evaluate", "--json", str(tmp_path), *nodata]) == 2
+    assert f"--json {tmp_path} is a folder; give a file path in it" in capsys.readouterr().err
+    (tmp_path / "f").write_text("")
+    assert main(["evaluate", "--pck-plot", str(tmp_path / "f" / "p.png"), *nodata]) == 2
+    assert f"{tmp_path / 'f'} is a file, not a folder" in capsys.readouterr().err
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_train, "H36M", interrupt)
+    assert main(["train", "--out", str(tmp_path / "r.pt"), *nodata]) == 130
+    assert capsys.readouterr().err.strip() == ("poselifter train: interrupted (no checkpoint was written: a run saves "
+                                               "at its end)")
+    assert not (tmp_path / "r.pt").exists()
+
+
+def test_learning_curve_range_keeps_every_curves_last_point():
+    """User trial: a detected-2D MRPE ending at 470 mm fell off a panel capped at 2.5x the clean curve's 160."""
+    from lifter.plots import curve_y_range
+
+    lo, hi = curve_y_range([[900.0, 200.0, 160.0], [1500.0, 600.0, 470.0]])
+    assert lo == pytest.approx(144.0) and hi >= 470.0
+    lo, hi = curve_y_range([[900.0, 100.0, 110.0], [800.0, 120.0, 130.0]])  # the untrained start is still cut
+    assert hi == pytest.approx(250.0 * 1.02)
 
 
 # -- DistributedDataParallel -------------------------------------------------------------------------
@@ -405,10 +447,11 @@ def test_ddp_cli_writes_one_checkpoint(tmp_path):
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     cmd = [sys.executable, "-m", "torch.distributed.run", "--nproc_per_node", "2", "--master_addr", "127.0.0.1",
            "--master_port", str(_free_port()), "-m", "lifter", "train", "--out", str(out), "--width", "32",
-           "--epochs", "1", "--batch-size", "64", "--max-frames-per-sequence", "3", "--val-stride", "400",
+           "--epochs", "1", "--batch-size", "65", "--max-frames-per-sequence", "3", "--val-stride", "400",
            "--threads", "1", "--no-progress"]
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert out.is_file() and sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".pt") == ["ddp.pt"]
     lifter = Lifter.from_checkpoint(out)
-    assert lifter.meta["world_size"] == 2 and "2 process(es) x 32" in proc.stdout
+    assert lifter.meta["world_size"] == 2  # a batch of 65 over 2 processes is 64, and the log says so
+    assert "global batch 64 (2 process(es) x 32; 65 asked, rounded down to a multiple of 2)" in proc.stdout

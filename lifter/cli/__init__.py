@@ -33,5 +33,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # (Ctrl-C: one line, not a traceback through the libraries' threads)
-        print(f"poselifter {args.command}: interrupted", file=sys.stderr)
+        lost = " (no checkpoint was written: a run saves at its end)" if args.command == "train" else ""
+        print(f"poselifter {args.command}: interrupted{lost}", file=sys.stderr)
         return 130

@@ -7,7 +7,6 @@ With no model it evaluates the shipped default on GT 2D told ``source="clean"``,
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +17,7 @@ from ..api import Lifter
 from ..data import H36M
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
+from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
 from ._help import HelpFormatter, positive_int
 
@@ -88,8 +88,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def check_evaluate_options(args: argparse.Namespace) -> None:
-    """Reject ``evaluate`` option combinations that would be silently ignored or misleading (before any
-    weights or data are loaded). Raises :class:`PoseLifterError` naming the options."""
+    """Reject ``evaluate`` option combinations that would be silently ignored or misleading, and output paths
+    that could not be written (before any weights or data are loaded). Raises :class:`PoseLifterError` naming
+    the options."""
+    for option, path in (("--json", args.json), ("--pck-plot", args.pck_plot)):
+        if path is not None:
+            check_writable(path, option=option)
     if args.focal_scales is None:
         if tuple(args.pp_shift) != (0.0, 0.0):
             raise PoseLifterError("--pp-shift only applies to the virtual cameras of --focal-scales; "
@@ -135,8 +139,7 @@ def run(args: argparse.Namespace) -> int:
                  for label, lifter in lifters}
         print(format_focal_table(sweep, principal_shift=shift))
         if args.json:
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps({k: [r.to_dict() for r in v] for k, v in sweep.items()}, indent=1))
+            write_json_atomic(args.json, {k: [r.to_dict() for r in v] for k, v in sweep.items()})
         return 0
     rows = []
     for label, lifter in lifters:
@@ -146,8 +149,7 @@ def run(args: argparse.Namespace) -> int:
     if args.per_action:
         print(format_per_action(rows))
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps([r.to_dict() for r in rows], indent=1))
+        write_json_atomic(args.json, [r.to_dict() for r in rows])
     if args.pck_plot:
         from ..plots import plot_pck_curves  # matplotlib only when a figure is asked for (~0.5 s to import)
 

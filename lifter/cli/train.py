@@ -24,6 +24,7 @@ from ..api import Lifter
 from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
+from ..io import check_writable
 from ..train import init_distributed, save_training_outputs, train, validation_sets
 from ._help import plain_text
 
@@ -55,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         raise PoseLifterError(f"--out {args.out} is a folder; give the checkpoint file path (e.g. runs/model.pt)")
     if args.threads is not None and args.threads < 1:
         raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
+    check_writable(args.out, option="--out")  # before training, not after it: a run not saved is lost
 
     ctx = init_distributed()
     if args.threads:
