@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -152,12 +153,15 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     return notes
 
 
-def _joint_labels(mask: np.ndarray) -> list[str] | list[int]:
-    """The joints flagged anywhere in a mask ``(..., J)``: H36M names for 17 joints, else indices."""
+def _joint_labels(mask: np.ndarray, names: Sequence[str] | None = None) -> list[str] | list[int]:
+    """The joints flagged anywhere in a mask ``(..., J)``: by ``names`` (default: H36M's for 17 joints), else
+    indices."""
     from .skeleton import JOINT_NAMES
 
     joints = np.flatnonzero(mask.reshape(-1, mask.shape[-1]).any(0))
-    return [JOINT_NAMES[j] for j in joints] if mask.shape[-1] == len(JOINT_NAMES) else [int(j) for j in joints]
+    if names is None and mask.shape[-1] == len(JOINT_NAMES):
+        names = JOINT_NAMES
+    return [names[int(j)] for j in joints] if names is not None else [int(j) for j in joints]
 
 
 def zero_placeholders(keypoints: np.ndarray) -> np.ndarray:

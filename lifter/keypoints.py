@@ -100,7 +100,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, PoseLifterWarning, where_in_batch, zero_placeholders
+from ._checks import PoseLifterError, PoseLifterWarning, _joint_labels, where_in_batch, zero_placeholders
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 H36M17: Final[str] = "h36m17"
@@ -423,7 +423,7 @@ def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
     far = np.asarray(placeholder.any(-1))
     if not np.any(far):
         return []
-    names = [f.joint_names[j] for j in np.flatnonzero(placeholder.reshape(-1, f.num_joints).any(0))]
+    names = _joint_labels(placeholder, f.joint_names)
     return [f"joint(s) {names} of format {src!r} at exactly (0, 0) px, far from the rest of the pose"
             f"{where_in_batch(far)}: a detector's placeholder for a missing joint? The conversion to H36M mixes it "
             "into the joints made from it, where the lifter can no longer see it; mark it missing (confidence 0 or "

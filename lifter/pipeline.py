@@ -48,22 +48,20 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
             notes.append(f"the focal length given ({_px(user_focal)}) replaces the file's own ({_px(file_focal)})")
     elif file_focal is not None:
         focal, src = file_focal, "keypoint-file"
-    elif image_size is not None:
+    else:
+        assert image_size is not None  # (checked above, with every missing field named)
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
         notes.append(g.detail)
-    else:  # pragma: no cover -- checked above, with every missing field named
-        raise AssertionError("no focal length and no image size")
     if user_pp is not None:
         pp = user_pp
         if file_pp is not None and not np.allclose(np.broadcast_to(file_pp, (2,)), user_pp):
             notes.append(f"the principal point given ({_px(user_pp)}) replaces the file's own ({_px(file_pp)})")
     elif file_pp is not None:
         pp = file_pp
-    elif image_size is not None:
+    else:
+        assert image_size is not None  # (checked above)
         pp = np.asarray(image_size, np.float64) / 2.0
-    else:  # pragma: no cover -- checked above
-        raise AssertionError("no principal point and no image size")
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 

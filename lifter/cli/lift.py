@@ -302,9 +302,8 @@ def run_lift(args: argparse.Namespace) -> int:
     estimator: Any = None
     estimator_error: str | None = None
     ok, failed = 0, len(problems)
-    # (disable=None: no bar when stderr is not a terminal, e.g. a log file or a pipe)
-    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=True if args.no_progress else None,
-               file=sys.stderr, position=0)
+    quiet = True if args.no_progress else None  # (tqdm's None: no bar when stderr is not a terminal, e.g. a pipe)
+    bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=quiet, file=sys.stderr, position=0)
 
     def say(msg: str) -> None:  # a message on its own line, never glued onto a progress bar
         tqdm.write(msg, file=sys.stderr)
@@ -343,9 +342,8 @@ def run_lift(args: argparse.Namespace) -> int:
                                                  max_people=args.max_people)
                     elif sfx in VIDEO_SUFFIXES:
                         est = get_estimator_once(path)
-                        with tqdm(desc=f"  {path.name}", unit="frame", disable=True if args.no_progress else None,
-                                  file=sys.stderr,
-                                  position=1, leave=False) as fbar:
+                        with tqdm(desc=f"  {path.name}", unit="frame", disable=quiet, file=sys.stderr, position=1,
+                                  leave=False) as fbar:
                             def progress(done: int, total: int | None, fbar: Any = fbar) -> None:
                                 if total is not None and fbar.total != total:
                                     fbar.total = total

@@ -52,11 +52,9 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.out is None:
         raise PoseLifterError("--out is required: the checkpoint path to write")
-    if args.out.exists() and args.out.is_dir():
-        raise PoseLifterError(f"--out {args.out} is a folder; give the checkpoint file path (e.g. runs/model.pt)")
+    check_writable(args.out, option="--out")  # before training, not after it: a run not saved is lost
     if args.threads is not None and args.threads < 1:
         raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
-    check_writable(args.out, option="--out")  # before training, not after it: a run not saved is lost
 
     ctx = init_distributed()
     if args.threads:
