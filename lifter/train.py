@@ -47,6 +47,7 @@ from .checkpoint import save_checkpoint
 from .codec import PoseCodec
 from .config import TrainConfig
 from .data import H36M, PoseSamples
+from .detections import match_scale
 from .loss import poselifter_loss
 from .model import PoseLifterNet
 from .noise import ErrorModel
@@ -340,6 +341,11 @@ def train(
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
         cfg = replace(cfg, model=init[0].config)
+    if cfg.data.real_rescale and cfg.data.real_prob > 0 and real_keypoints_2d is not None:
+        real_keypoints_2d, ratio = match_scale(real_keypoints_2d, train_samples.keypoints_2d)
+        if ctx.main:
+            log(f"real detections rescaled by 1/{ratio:.4f} about their 2D mean (their median 2D scale was "
+                f"{100 * (ratio - 1):+.2f} % of the GT 2D's)")
     T = samples_to_tensors(train_samples, real_keypoints_2d if cfg.data.real_prob > 0 else None)
     noise = noise if noise is not None else load_noise(cfg)
     if cfg.data.noise_prob > 0 and noise is None:

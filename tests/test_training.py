@@ -279,6 +279,58 @@ def test_real_detections_are_required_and_aligned():
               progress=False, ctx=Dist())
 
 
+def test_match_scale_removes_a_detectors_size_bias_and_nothing_else():
+    from lifter.detections import match_scale
+    from lifter.normalization import location_and_scale
+
+    rng = np.random.default_rng(3)
+    gt = synthetic_samples(200).keypoints_2d.astype(np.float64)
+    shape_noise = rng.normal(0, 3.0, gt.shape)
+    u = gt.mean(axis=1, keepdims=True)
+    det = u + 0.97 * (gt - u) + shape_noise  # a detector 3 % small, with shape errors
+    det[5] = np.nan  # a frame without a detection
+    out, r = match_scale(det, gt)
+    assert r == pytest.approx(0.97, abs=0.005)
+    ok = np.isfinite(det).all(axis=(1, 2))
+    assert np.isnan(out[5]).all() and np.isfinite(out[ok]).all()
+    (u0, s0), (u1, s1) = location_and_scale(det[ok]), location_and_scale(out[ok])
+    np.testing.assert_allclose(u1, u0, atol=1e-9)  # the 2D location is kept
+    np.testing.assert_allclose(s1, s0 / r, rtol=1e-12)  # every pose scaled by the one factor
+    assert np.median(s1 / location_and_scale(gt[ok])[1]) == pytest.approx(1.0, abs=1e-9)
+    with pytest.raises(ValueError, match="must both be"):
+        match_scale(det[:3], gt)
+    with pytest.raises(ValueError, match="no sample has both"):
+        match_scale(np.full_like(gt, np.nan), gt)
+
+
+def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatch):
+    import lifter.train as T
+
+    train_s = synthetic_samples(128)
+    gt = train_s.keypoints_2d.astype(np.float64)
+    u = gt.mean(axis=1, keepdims=True)
+    real = u + 0.95 * (gt - u)
+    seen: list[np.ndarray] = []
+    real_samples_to_tensors = T.samples_to_tensors
+
+    def spy(samples, real_keypoints_2d=None):
+        seen.append(real_keypoints_2d)
+        return real_samples_to_tensors(samples, real_keypoints_2d)
+
+    monkeypatch.setattr(T, "samples_to_tensors", spy)
+    logs: list[str] = []
+    for rescale in (False, True):
+        cfg = replace(tiny_config(), data=DataConfig(clean_prob=0.5, real_prob=0.5, real_rescale=rescale),
+                      schedule=ScheduleConfig(epochs=1, eval_every=1000, max_minutes=None))
+        train(cfg, train_samples=train_s, real_keypoints_2d=real, val_sets=validation_sets(train_s, None),
+              progress=False, ctx=Dist(), log=logs.append)
+    given = [r for r in seen if r is not None]  # (validation_sets converts its samples without detections)
+    assert len(given) == 2
+    np.testing.assert_allclose(given[0], real)
+    np.testing.assert_allclose(given[1], gt, atol=1e-6)  # a pure 5 % shrink is undone exactly
+    assert any("rescaled by 1/0.9500" in line for line in logs)
+
+
 # -- CLI -------------------------------------------------------------------------------------------
 
 
