@@ -62,8 +62,8 @@ class DataConfig:
     clean_prob: float = _help("share of samples given their exact GT 2D", default=1.0)
     real_prob: float = _help("share given their real SH detection (where the frame has one)", default=0.0)
     real_rescale: bool = _help("rescale the real detections about their 2D mean so that their median 2D scale "
-                               "matches the GT 2D's (SH's 2D poses are ~2.4 %% smaller): the network then learns "
-                               "no one detector's size bias", default=False)
+                               "matches the GT 2D's (SH's 2D poses are ~2.3 %% smaller): the network then does not "
+                               "learn SH's size bias", default=False)
     noise: Literal["mixture", "gaussian"] = _help("synthetic noise: the fitted mixture or its single-Gaussian "
                                                   "baseline", default="mixture")
     error_model: str = _help("error-model fit: a shipped name (sh_mixture) or a JSON path", default="sh_mixture")
@@ -84,6 +84,11 @@ class DataConfig:
                f"{self.real_prob}: lower --clean-prob or --real-prob")
         _check(self.real_prob == 0 or self.train_stride % 5 == 0,
                f"real detections exist every 5th frame: train_stride must be a multiple of 5, got {self.train_stride}")
+        for name in ("real_rescale", "noise_outliers"):
+            _check(isinstance(getattr(self, name), bool), f"{name} must be true or false, got {getattr(self, name)!r}")
+        _check(not self.real_rescale or self.real_prob > 0,
+               "real_rescale rescales the real detections, but real_prob is 0 (none are used): give --real-prob or "
+               "drop --real-rescale")
         _check(self.noise in ("mixture", "gaussian"), f"noise must be 'mixture' or 'gaussian', got {self.noise!r}")
         for name in ("noise_level_min", "noise_level_max"):
             _positive(name, getattr(self, name), allow_zero=True)

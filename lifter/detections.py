@@ -81,7 +81,11 @@ def match_scale(detections: np.ndarray, reference: np.ndarray) -> tuple[np.ndarr
     ok = np.isfinite(det).all(axis=(1, 2)) & np.isfinite(ref).all(axis=(1, 2))
     if not ok.any():
         raise PoseLifterError("match_scale: no sample has both a detection and its reference 2D")
-    ratio = float(np.median(pose_scale(det[ok]) / pose_scale(ref[ok])))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = float(np.median(pose_scale(det[ok]) / pose_scale(ref[ok])))
+    if not (np.isfinite(ratio) and ratio > 0):
+        raise PoseLifterError(f"match_scale: the median scale ratio is {ratio} (reference poses of zero size?); "
+                              "check that the reference is the same samples' 2D in px")
     mean = det.mean(axis=1, keepdims=True)
     return mean + (det - mean) / ratio, ratio
 

@@ -345,7 +345,7 @@ def train(
         real_keypoints_2d, ratio = match_scale(real_keypoints_2d, train_samples.keypoints_2d)
         if ctx.main:
             log(f"real detections rescaled by 1/{ratio:.4f} about their 2D mean (their median 2D scale was "
-                f"{100 * (ratio - 1):+.2f} % of the GT 2D's)")
+                f"{100 * ratio:.2f} % of the GT 2D's)")
     T = samples_to_tensors(train_samples, real_keypoints_2d if cfg.data.real_prob > 0 else None)
     noise = noise if noise is not None else load_noise(cfg)
     if cfg.data.noise_prob > 0 and noise is None:

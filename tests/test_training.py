@@ -301,6 +301,12 @@ def test_match_scale_removes_a_detectors_size_bias_and_nothing_else():
         match_scale(det[:3], gt)
     with pytest.raises(ValueError, match="no sample has both"):
         match_scale(np.full_like(gt, np.nan), gt)
+    with pytest.raises(ValueError, match="zero size"):
+        match_scale(det, np.zeros_like(gt))
+    with pytest.raises(ValueError, match="real_prob is 0"):
+        DataConfig(real_rescale=True)
+    with pytest.raises(ValueError, match="must be true or false"):
+        DataConfig(clean_prob=0.5, real_prob=0.5, real_rescale="false")  # type: ignore[arg-type]  # from JSON
 
 
 def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatch):
@@ -328,7 +334,7 @@ def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatc
     assert len(given) == 2
     np.testing.assert_allclose(given[0], real)
     np.testing.assert_allclose(given[1], gt, atol=1e-6)  # a pure 5 % shrink is undone exactly
-    assert any("rescaled by 1/0.9500" in line for line in logs)
+    assert any("rescaled by 1/0.9500" in line and "95.00 % of" in line for line in logs)
 
 
 # -- CLI -------------------------------------------------------------------------------------------
