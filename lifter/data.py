@@ -183,7 +183,8 @@ class H36M:
             if np.any(np.asarray(kept) % self.keep_every):
                 raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {self.keep_every}th "
                                       f"frame (see {COMPACT_FILE}); use a stride that is a multiple of "
-                                      f"{self.keep_every}, or the full Human3.6M folder")
+                                      f"{self.keep_every} (poselifter train: --train-stride and --val-stride; "
+                                      "poselifter evaluate: --stride), or the full Human3.6M folder")
         return (raw if frames is None else raw[frames]).astype(np.float64)
 
     def sequences_of(self, subjects: Iterable[int]) -> list[str]:
