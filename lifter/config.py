@@ -87,8 +87,8 @@ class DataConfig:
         for name in ("real_rescale", "noise_outliers"):
             _check(isinstance(getattr(self, name), bool), f"{name} must be true or false, got {getattr(self, name)!r}")
         _check(not self.real_rescale or self.real_prob > 0,
-               "real_rescale rescales the real detections, but real_prob is 0 (none are used): give --real-prob or "
-               "drop --real-rescale")
+               "real_rescale rescales the real detections, but real_prob is 0 (none are used): give --real-prob P "
+               "(with --clean-prob at most 1 - P) or --no-real-rescale")
         _check(self.noise in ("mixture", "gaussian"), f"noise must be 'mixture' or 'gaussian', got {self.noise!r}")
         for name in ("noise_level_min", "noise_level_max"):
             _positive(name, getattr(self, name), allow_zero=True)
@@ -223,6 +223,10 @@ def _build(cls: type, d: Any, where: str) -> Any:
         if is_dataclass(t) and isinstance(t, type):
             kw[name] = _build(t, value, f"{where}.{name}")
         else:
+            if bool in _scalar_types(t) and not isinstance(value, bool) and not (value is None and t is not bool):
+                kind = "a string" if isinstance(value, str) else type(value).__name__
+                raise PoseLifterError(f"{where}.{name} must be a JSON boolean (true or false, unquoted), got "
+                                      f"{value!r} ({kind})")
             if isinstance(value, int) and not isinstance(value, bool) and float in _scalar_types(t):
                 value = float(value)  # JSON writes 30.0 as 30
             kw[name] = value

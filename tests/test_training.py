@@ -306,7 +306,11 @@ def test_match_scale_removes_a_detectors_size_bias_and_nothing_else():
     with pytest.raises(ValueError, match="real_prob is 0"):
         DataConfig(real_rescale=True)
     with pytest.raises(ValueError, match="must be true or false"):
-        DataConfig(clean_prob=0.5, real_prob=0.5, real_rescale="false")  # type: ignore[arg-type]  # from JSON
+        DataConfig(clean_prob=0.5, real_prob=0.5, real_rescale="false")  # type: ignore[arg-type]
+    for section, key in (("augment", "zoom"), ("data", "real_rescale"), ("data", "noise_outliers")):
+        with pytest.raises(ValueError, match=f"{section}.{key} must be a JSON boolean .*'false' \\(a string\\)"):
+            TrainConfig.from_dict({section: {key: "false"}})
+    assert TrainConfig.from_dict({"augment": {"zoom": True}}).augment.zoom is True
 
 
 def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatch):
@@ -365,6 +369,21 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert "MPJPE" in text and "analytic" in text and "Discussion 1" in text and "source='clean'" in text
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
+    # a fine-tune records the weights it started from; repeating it from its own result, or from other weights, says so
+    ft = tmp_path / "ft.pt"
+    quick = ["--max-minutes", "0.002", "--max-frames-per-sequence", "4", "--val-stride", "200", "--threads", "1"]
+    assert main(["train", "--out", str(ft), "--init", str(out), *quick, "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert f"fine-tuning from --init {out}" in err and "not repeat" not in err
+    from lifter.checkpoint import sha256_file
+    assert load_checkpoint(ft).meta["init_sha256"] == sha256_file(out)
+    assert main(["train", "--config", str(ft), "--init", str(ft), "--out", str(tmp_path / "b.pt"), *quick]) == 0
+    assert "is the --config checkpoint itself" in capsys.readouterr().err
+    assert main(["train", "--config", str(ft), "--out", str(tmp_path / "c.pt"), *quick]) == 0
+    assert "not repeat" not in capsys.readouterr().err  # the same init weights: a repeat
+    out.write_bytes((tmp_path / "b.pt").read_bytes())  # the init file now holds other weights
+    assert main(["train", "--config", str(ft), "--out", str(tmp_path / "d.pt"), *quick]) == 0
+    assert "is not what" in capsys.readouterr().err
 
 
 def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):

@@ -19,8 +19,10 @@ from pathlib import Path
 import torch
 import torch.distributed as dist
 
+from .. import resources
 from .._checks import PoseLifterError
 from ..api import Lifter
+from ..checkpoint import load_checkpoint, sha256_file
 from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
@@ -66,19 +68,48 @@ def run(args: argparse.Namespace) -> int:
     real = load_sh_detections(samples, data=data)[0] if d.real_prob > 0 else None
     val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence)
     val_det = load_sh_detections(val, data=data)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file() else None
-    init = None
+    init, init_sha = None, None
     if cfg.init is not None:
         lifter = Lifter.load(cfg.init)
         init = (lifter.net, lifter.codec)
-        if ctx.main and lifter.config != cfg.model:
-            print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
+        init_sha = init_sha256(cfg.init)
+        if ctx.main:
+            print(f"fine-tuning from --init {cfg.init} (sha256 {init_sha[:12]}; {lifter.name})", file=sys.stderr)
+            if lifter.config != cfg.model:
+                print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
+            for line in repeat_notes(args.config, cfg.init, init_sha):
+                print(f"note: {line}", file=sys.stderr)
     result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
                    val_sets=validation_sets(val, val_det), init=init, progress=not args.no_progress, ctx=ctx)
     if ctx.main:
         meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
+        if init_sha is not None:
+            meta["init_sha256"] = init_sha
         out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     if ctx.active:
         dist.barrier()
         dist.destroy_process_group()
     return 0
+
+
+def init_sha256(ref: str) -> str:
+    """The sha256 of the weights ``--init`` names: a shipped model's registry entry, else the file's own."""
+    if ref == "default" or ref in resources.model_names():
+        return str(resources.model_entry(ref).get("sha256", ""))
+    return sha256_file(ref)
+
+
+def repeat_notes(config: Path | None, init: str, init_sha: str) -> list[str]:
+    """Why ``--config RUN.pt`` with this ``--init`` would not repeat that run: the init weights are that run's own
+    result, or not the weights it started from (``meta["init_sha256"]``, recorded since this check existed)."""
+    if config is None or config.suffix != ".pt":
+        return []
+    if sha256_file(config) == init_sha:
+        return [f"--init {init} is the --config checkpoint itself: this fine-tunes that run's result again, it does "
+                "not repeat the run (give --init the weights it started from)"]
+    stored = load_checkpoint(config).meta.get("init_sha256")
+    if isinstance(stored, str) and stored != init_sha:
+        return [f"--init {init} (sha256 {init_sha[:12]}) is not what {config} started from ({stored[:12]}): this does "
+                "not repeat that run"]
+    return []
