@@ -1,5 +1,6 @@
-"""How fast this machine streams float32 weights through one-row matrix-vector products, and what that means for
-one pose through the default model (the issue's ``Lifter.lift`` one-pose line).
+"""The weight-read floor of one pose: how fast this machine streams float32 weights through one-row products.
+
+That rate bounds one pose through the default model (the issue's ``Lifter.lift`` one-pose line).
 
 A single pose is a chain of ``(1, W) @ (W, W)`` products: every weight is read once and used for one multiply-add,
 so the time is the weight bytes over the rate at which the core can read them. That rate depends on whether the
@@ -21,12 +22,14 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads its BLA
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from lifter import Lifter  # noqa: E402
-from lifter.io import write_atomic  # noqa: E402
+from lifter._checks import PoseLifterError  # noqa: E402
+from lifter.io import check_writable, write_atomic  # noqa: E402
 
 
 def chain_rate(total_mb: float, *, width: int = 1024, calls: int = 300) -> tuple[float, float]:
@@ -68,9 +71,17 @@ def main() -> int:
         sizes = [float(v) for v in args.sizes_mb.split(",")]
     except ValueError:
         ap.error(f"--sizes-mb: expected comma-separated numbers, got {args.sizes_mb!r}")
-    if not sizes or min(sizes) <= 0:
-        ap.error("--sizes-mb: give positive sizes")
-    lifter = Lifter.from_pretrained(args.model)
+    if not sizes or not all(math.isfinite(v) and 0 < v <= 4096 for v in sizes):
+        ap.error(f"--sizes-mb: give sizes in MB between 0 and 4096, got {args.sizes_mb!r}")
+    if args.json:
+        try:
+            check_writable(args.json, option="--json")
+        except PoseLifterError as exc:
+            ap.error(str(exc))
+    try:
+        lifter = Lifter.from_pretrained(args.model)
+    except (PoseLifterError, OSError) as exc:
+        ap.error(f"--model {args.model}: {exc}")
     model_mb = weight_bytes(lifter) / 1e6
     rows = []
     print("one-row float32 matrix-vector chains, W = 1024, 1 BLAS thread (median of 300 warm passes)")
