@@ -57,8 +57,8 @@ class DataConfig:
     train_stride: int = _help("training frames: every n-th 50-fps frame (real detections need a multiple of 5)",
                               default=5)
     val_stride: int = _help("learning-curve frames of the test subjects: every n-th", default=100)
-    max_frames_per_sequence: int | None = _help("keep only the first frames of each sequence (tiny runs)",
-                                                default=None)
+    max_frames_per_sequence: int | None = _help("keep only the first this many frames of each sequence, counted "
+                                                "after the stride (tiny runs)", default=None)
     clean_prob: float = _help("share of samples given their exact GT 2D", default=1.0)
     real_prob: float = _help("share given their real SH detection (where the frame has one)", default=0.0)
     real_rescale: bool = _help("rescale the real detections about their 2D mean so that their median 2D scale "
@@ -215,7 +215,13 @@ def _build(cls: type, d: Any, where: str) -> Any:
     known = {f.name: f for f in fields(cls)}
     unknown = sorted(set(d) - set(known))
     if unknown:
-        raise PoseLifterError(f"{where}: unknown keys {unknown}; known: {sorted(known)}")
+        hint = ""
+        if cls is TrainConfig:  # a flat config: leaf keys written without their section
+            home = {f.name: sec for sec, c in SECTIONS for f in fields(c)}
+            placed = sorted({f'"{home[k]}"' for k in unknown if k in home})
+            if placed:
+                hint = f" (section keys go inside their section's object: {', '.join(placed)})"
+        raise PoseLifterError(f"{where}: unknown keys {unknown}; known: {sorted(known)}{hint}")
     kw = {}
     hints = typing.get_type_hints(cls)
     for name, value in d.items():

@@ -443,7 +443,8 @@ def train(
     eval_net.eval()
     eval_net.cpu()
     if ctx.main:
-        log(f"done: {step} steps, {step * gbs} samples in {minutes:.1f} min "
+        log(f"done: {step} steps, {step * gbs} samples in "
+            f"{f'{minutes:.1f} min' if minutes >= 1 else f'{60 * minutes:.1f} s'} "
             f"({step * gbs / max(minutes * 60, 1e-9):.0f} samples/s)")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
                        minutes=minutes)

@@ -311,6 +311,9 @@ def test_match_scale_removes_a_detectors_size_bias_and_nothing_else():
         with pytest.raises(ValueError, match=f"{section}.{key} must be a JSON boolean .*'false' \\(a string\\)"):
             TrainConfig.from_dict({section: {key: "false"}})
     assert TrainConfig.from_dict({"augment": {"zoom": True}}).augment.zoom is True
+    with pytest.raises(ValueError, match=r"unknown keys \['real_rescale', 'width'\].*inside their section's object: "
+                                         r'"data", "model"'):
+        TrainConfig.from_dict({"real_rescale": True, "width": 64})
 
 
 def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatch):
