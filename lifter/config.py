@@ -44,6 +44,14 @@ def _positive(name: str, v: float, *, integer: bool = False, allow_zero: bool = 
     _check(ok, f"{name} must be {'an integer' if integer else 'a number'} {'>= 0' if allow_zero else '> 0'}, got {v!r}")
 
 
+def _booleans(section: Any) -> None:
+    """Every ``bool`` field of a config section holds a bool (a Python caller's ``"false"`` would read as true)."""
+    for f in fields(section):
+        if f.type in (bool, "bool"):
+            v = getattr(section, f.name)
+            _check(isinstance(v, bool), f"{f.name} must be true or false, got {v!r}")
+
+
 @dataclass(frozen=True)
 class DataConfig:
     """Which H36M samples, and which 2D each training sample is given.
@@ -84,8 +92,7 @@ class DataConfig:
                f"{self.real_prob}: lower --clean-prob or --real-prob")
         _check(self.real_prob == 0 or self.train_stride % 5 == 0,
                f"real detections exist every 5th frame: train_stride must be a multiple of 5, got {self.train_stride}")
-        for name in ("real_rescale", "noise_outliers"):
-            _check(isinstance(getattr(self, name), bool), f"{name} must be true or false, got {getattr(self, name)!r}")
+        _booleans(self)
         _check(not self.real_rescale or self.real_prob > 0,
                "real_rescale rescales the real detections, but real_prob is 0 (none are used): give --real-prob P "
                "(with --clean-prob at most 1 - P) or --no-real-rescale")
@@ -112,6 +119,7 @@ class AugmentConfig:
     zoom_clip: float = _help("zoom: |log2(scale)| limit (0.5: x0.71..x1.41)", default=0.5)
 
     def __post_init__(self) -> None:
+        _booleans(self)
         _prob("flip_prob", self.flip_prob)
         _positive("zoom_sigma", self.zoom_sigma, allow_zero=True)
         _positive("zoom_clip", self.zoom_clip, allow_zero=True)

@@ -341,7 +341,7 @@ def train(
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
         cfg = replace(cfg, model=init[0].config)
-    if cfg.data.real_rescale and cfg.data.real_prob > 0 and real_keypoints_2d is not None:
+    if cfg.data.real_rescale and real_keypoints_2d is not None:  # (the config refuses it with real_prob 0)
         real_keypoints_2d, ratio = match_scale(real_keypoints_2d, train_samples.keypoints_2d)
         if ctx.main:
             log(f"real detections rescaled by 1/{ratio:.4f} about their 2D mean (their median 2D scale was "
