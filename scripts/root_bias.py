@@ -9,7 +9,12 @@
    photos (detections cached by ``scripts/eval_cascade.py``; the first run needs the ``detect`` extra).
 3. A diagnostic, not a shipped correction: the photos' BlazePose 2D rescaled about its centre so that its scale
    against the ground truth matches SH's on the training frames (the BlazePose ratio measured on the error-fit
-   camera's 42 photos only), then lifted; all 84 photos and the 42 of the held-out camera.
+   camera's 42 photos only), then lifted; all 84 photos and the 42 of the held-out camera. Beside it, the photos'
+   ground-truth 2D told "clean" and "detected": how much of the photos' bias is there without the detector.
+4. Subject size: per subject (training and test), the mean signed root-depth error of each network given the
+   subject's exact 2D (every ``--stride``-th frame, all four cameras), beside the error a lifter that took everyone
+   for the training subjects' mean size would make (``scripts/subject_size.py``). On the test subjects this shows
+   how much of a larger-than-average person's size each network reads from the 2D (the rest it places too near).
 
     python scripts/root_bias.py [--h36m PATH] [--stride 50]
 """
@@ -25,8 +30,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
 
+from subject_size import TEST_SUBJECTS, TRAIN_SUBJECTS, subject_size  # noqa: E402
+
 from lifter import Lifter  # noqa: E402
 from lifter.cli._help import add_h36m_arguments  # noqa: E402
+from lifter.codec import Source  # noqa: E402
 from lifter.data import CAMERA_IDS, H36M, default_h36m_dir  # noqa: E402
 from lifter.detections import load_sh_detections  # noqa: E402
 from lifter.keypoints import convert  # noqa: E402
@@ -70,6 +78,38 @@ def sh_scale_lines(data: H36M, stride: int) -> tuple[list[str], float]:
         if split == "train":
             train_ratio = float(np.median(r))
     return lines, train_ratio
+
+
+def size_lines(lifter: Lifter, data: H36M, stride: int) -> list[str]:
+    """Section 4: per subject, its size against the training subjects' mean and the mean signed root-depth error
+    (% of the true depth) of each network given its exact 2D: the clean network, the detected networks averaged
+    (the default for ``source="detected"``) and each of them alone (its own flip-test default)."""
+    nets: list[tuple[str, Lifter, Source]] = [("clean network", lifter, "clean"),
+                                           ("detected, averaged", lifter, "detected")]
+    if lifter.ensemble:
+        for i, m in enumerate((lifter, *lifter.ensemble)):
+            alone = Lifter(m.net, m.codec, name=f"member {i + 1}", flip_test=m.flip_test)
+            nets.append((f"detected member {i + 1} ({m.net.config.symmetry}, width {m.net.config.width})", alone,
+                         "detected"))
+    sizes = {s: subject_size(data, s, stride=200)[0] for s in TRAIN_SUBJECTS + TEST_SUBJECTS}
+    ref = float(np.mean([sizes[s] for s in TRAIN_SUBJECTS]))
+    cols = TRAIN_SUBJECTS + TEST_SUBJECTS
+    lines = ["| exact 2D through | " + " | ".join(f"S{s} ({'train' if s in TRAIN_SUBJECTS else 'test'})" for s in cols)
+             + " |", "|---|" + "---|" * len(cols),
+             "| size vs the training mean | " + " | ".join(f"{100 * (sizes[s] / ref - 1):+.1f} %" for s in cols) + " |",
+             "| a lifter that took everyone for the mean size | "
+             + " | ".join(f"{100 * (ref / sizes[s] - 1):+.1f} %" for s in cols) + " |"]
+    samples = {s: data.load([s], stride=stride) for s in cols}
+    for name, net, src in nets:
+        row = []
+        for s in cols:
+            p = samples[s]
+            r = net.lift(np.asarray(p.keypoints_2d, np.float64), focal=p.focal, principal_point=p.principal_point,
+                         source=src)
+            z = p.pose_3d[:, 0, 2].astype(np.float64)
+            row.append(f"{100 * float(((r.root[:, 2] - z) / z).mean()):+.1f} %")
+        lines.append(f"| {name} | " + " | ".join(row) + " |")
+    return lines
 
 
 def main() -> int:
@@ -117,6 +157,16 @@ def main() -> int:
             parts.append(f"{name} ({m.sum()}): {mpjpe(r.absolute[m], gt3d[m]).mean():.1f} / {e[m].mean():.1f} "
                          f"({bias:+.0f})")
         print(f"  x{k_s:.4f}: " + "; ".join(parts))
+    exact: list[str] = []
+    sources: tuple[Source, ...] = ("clean", "detected")
+    for src in sources:
+        dz = lifter.lift(gt2d, focal=focal, principal_point=pp, source=src).root[:, 2] - gt3d[:, 0, 2]
+        exact.append(f"told {src}: {float(dz.mean()):+.0f} mm ({100 * float((dz / gt3d[:, 0, 2]).mean()):+.1f} %)")
+    print(f"  the same photos' exact 2D, mean signed root-depth error (all {len(gt2d)}): " + "; ".join(exact))
+    print(f"\n4. mean signed root-depth error given each subject's exact 2D, % of the true depth (+ = too far), "
+          f"every {args.stride}th frame, all cameras; subject size: RMS joint distance from the pelvis "
+          "(scripts/subject_size.py)")
+    print("\n".join(size_lines(lifter, data, args.stride)))
     return 0
 
 
