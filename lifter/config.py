@@ -113,8 +113,8 @@ class AugmentConfig:
     """Geometric augmentation (2D and 3D together, so every sample stays physically consistent)."""
 
     flip_prob: float = _help("horizontal flip probability (x and cx mirrored, L/R swapped, X negated)", default=0.5)
-    zoom: bool = _help("zoom: scale 2D, principal point and focal together (pixel input space only; in the "
-                       "reference camera it is an exact symmetry)", default=False)
+    zoom: bool = _help("zoom: scale 2D, principal point and focal together (pixel input space only; training "
+                       "refuses it in the reference camera, where it is an exact symmetry)", default=False)
     zoom_sigma: float = _help("zoom: std of log2(scale)", default=0.25)
     zoom_clip: float = _help("zoom: |log2(scale)| limit (0.5: x0.71..x1.41)", default=0.5)
 

@@ -341,6 +341,11 @@ def train(
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
         cfg = replace(cfg, model=init[0].config)
+    if cfg.augment.zoom and cfg.model.input_space == "camera":
+        raise PoseLifterError("--zoom scales the 2D, principal point and focal together, which the reference-camera "
+                              "input (input_space 'camera') undoes exactly, so it would change nothing: drop --zoom, "
+                              "or train a pixel-space model (--input-space pixel)"
+                              + (" (this model's config comes from --init)" if init is not None else ""))
     if cfg.data.real_rescale and real_keypoints_2d is not None:  # (the config refuses it with real_prob 0)
         real_keypoints_2d, ratio = match_scale(real_keypoints_2d, train_samples.keypoints_2d)
         if ctx.main:

@@ -16,6 +16,7 @@ import pytest
 import torch
 from conftest import random_pose_cam, requires_h36m
 
+from lifter._checks import PoseLifterError
 from lifter.api import Lifter
 from lifter.codec import PoseCodec
 from lifter.config import AugmentConfig, DataConfig, OptimConfig, ScheduleConfig, TrainConfig
@@ -343,6 +344,23 @@ def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatc
     np.testing.assert_allclose(given[1], gt, atol=1e-6)  # a pure 5 % shrink is undone exactly
     assert any("rescaled by 1/0.9500" in line and "95.00 % of" in line for line in logs)
 
+
+
+def test_zoom_is_refused_where_the_input_space_undoes_it():
+    """Zoom augmentation scales 2D, principal point and focal together: the reference-camera codec maps that back
+    exactly, so a camera-space run with zoom would spend its time on nothing; the error names the fix. Pixel-space
+    runs take it."""
+    train_s = synthetic_samples(64, seed=9)
+    zoomed = replace(tiny_config(), augment=AugmentConfig(zoom=True),
+                     schedule=ScheduleConfig(epochs=1, eval_every=1000, max_minutes=None))
+    assert zoomed.model.input_space == "camera"
+    with pytest.raises(PoseLifterError, match="drop --zoom, or train a pixel-space model"):
+        train(zoomed, train_samples=train_s, val_sets=validation_sets(train_s, None), progress=False, ctx=Dist(),
+              log=lambda _: None)
+    pixel = replace(zoomed, model=replace(zoomed.model, input_space="pixel", depth_target="canonical"))
+    result = train(pixel, train_samples=train_s, val_sets=validation_sets(train_s, None), progress=False, ctx=Dist(),
+                   log=lambda _: None)
+    assert result.net.config.input_space == "pixel" and result.config.augment.zoom
 
 # -- CLI -------------------------------------------------------------------------------------------
 
