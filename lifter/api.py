@@ -247,11 +247,35 @@ class Lifter:
     load = from_pretrained
     """Alias of :meth:`from_pretrained`: a shipped name or a checkpoint path."""
 
+    def networks(self) -> dict[str, Lifter]:
+        """Each network of this model as a lifter of its own (same weights, codec, training config and flip-test
+        default; no clean network, no ensemble): ``"detected"`` (:attr:`net`; ``"detected 1"``, ``"detected 2"``, ...
+        with an :attr:`ensemble`) and ``"clean"`` when the model has a separate clean-2D network. For one network,
+        ``{"detected": self}``-alike. What :meth:`save` writes, one at a time."""
+        detected = (self, *self.ensemble)
+        out: dict[str, Lifter] = {}
+        for i, m in enumerate(detected):
+            key = "detected" if len(detected) == 1 else f"detected {i + 1}"
+            out[key] = Lifter(m.net, m.codec, name=f"{self.name} ({key})", meta=m.meta, train_config=m.train_config,
+                              flip_test=m.flip_test)
+        if self.clean is not None:
+            c = self.clean
+            out["clean"] = Lifter(c.net, c.codec, name=f"{self.name} (clean)", meta=c.meta,
+                                  train_config=c.train_config, flip_test=c.flip_test)
+        return out
+
     def save(self, path: str | os.PathLike[str], *, half: bool = False) -> Path:
-        """Write this lifter's own network (:attr:`net`, with its codec, training config and flip-test default) as a
-        checkpoint that :meth:`from_checkpoint` loads back to the same lifts (``half=True``: float16 weights). One
-        network: a model with a separate clean-2D network or an ensemble (like the shipped default) saves its
-        first detected network only; save :attr:`clean` or an :attr:`ensemble` member on its own."""
+        """Write this lifter's network (:attr:`net`, with its codec, training config and flip-test default) as a
+        checkpoint that :meth:`from_checkpoint` loads back to the same lifts (``half=True``: float16 weights). A
+        checkpoint holds one network: a model with a separate clean-2D network or an ensemble (like the shipped
+        default) is refused, since its reloaded file would lift differently; save one of :meth:`networks`."""
+        if self.clean is not None or self.ensemble:
+            names = list(self.networks())
+            raise PoseLifterError(
+                f"model {self.name!r} has {len(names)} networks ({', '.join(names)}) and a checkpoint holds one, so "
+                "the file would not lift like this model: save one of them, e.g. "
+                f"lifter.networks()[{names[0]!r}].save(path), or refer to this model by its name "
+                f"(Lifter.from_pretrained({self.name!r}))")
         if any(isinstance(m, QuantizedCoupledLinear) or type(m).__module__.startswith("torch.ao.nn.quantized")
                for m in self.net.modules()):
             raise PoseLifterError(f"model {self.name!r} has int8 weights, which a checkpoint does not hold: save the "

@@ -129,12 +129,23 @@ def test_a_saved_network_loads_back_to_the_same_lift(tmp_path):
     flip test off, root z 3268 instead of 3291 mm); an int8 lifter is refused with what to do instead."""
     lifter = _default()
     kp = project(_DEMO.pose_3d, focal=_F, principal_point=_C)
-    assert lifter.flip_test and lifter.network_rows() == 2  # its width-1024 detected network: flip test on
-    mine = Lifter.from_checkpoint(lifter.save(tmp_path / "my.pt"))
+    nets = lifter.networks()
+    assert list(nets) == ["detected 1", "detected 2", "clean"]
+    first = nets["detected 1"]
+    assert first.flip_test and first.network_rows() == 2  # its width-1024 detected network: flip test on
+    mine = Lifter.from_checkpoint(first.save(tmp_path / "my.pt"))
     assert mine.flip_test and not mine.ensemble and mine.clean is None
     alone = Lifter(lifter.net, lifter.codec, flip_test=True)
     got = mine.lift(kp, focal=_F, principal_point=_C).absolute
     np.testing.assert_array_equal(got, alone.lift(kp, focal=_F, principal_point=_C).absolute)
     assert np.abs(got - mine.lift(kp, focal=_F, principal_point=_C, flip_test=False).absolute).max() > 1.0
+    for key, src in (("detected 2", "detected"), ("clean", "clean")):  # every network reloads to its own lifts
+        back = Lifter.from_checkpoint(nets[key].save(tmp_path / f"{key}.pt"))
+        np.testing.assert_array_equal(back.lift(kp, focal=_F, principal_point=_C, source=src).absolute,
+                                      nets[key].lift(kp, focal=_F, principal_point=_C, source=src).absolute)
+    # the whole default would reload as one network, lifting differently: refused, with what to do instead
+    with pytest.raises(PoseLifterError, match=r"has 3 networks \(detected 1, detected 2, clean\).*networks\(\)"):
+        lifter.save(tmp_path / "all.pt")
+    assert not (tmp_path / "all.pt").exists()
     with pytest.raises(PoseLifterError, match="int8 weights.*quantize=True"):
-        lifter.quantized().save(tmp_path / "q.pt")
+        first.quantized().save(tmp_path / "q.pt")
