@@ -76,7 +76,8 @@ def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: Pos
                               "path") from None
     buf = io.BytesIO()
     torch.save(payload, buf)
-    return write_atomic(path, buf.getvalue())  # the umask's mode (not mkstemp's 0600), fsync, rename
+    # the umask's mode (not mkstemp's 0600), fsync, rename; getbuffer(): no third copy of the weights in memory
+    return write_atomic(path, buf.getbuffer())
 
 
 def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:

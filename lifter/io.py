@@ -518,7 +518,7 @@ def _read_umask() -> int:
 _UMASK: Final[int] = _read_umask()
 
 
-def write_atomic(path: str | Path, data: bytes | str) -> Path:
+def write_atomic(path: str | Path, data: bytes | memoryview | str) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder, ``fsync``, then a rename: a full disk
     or a crash never leaves a partial or empty file behind (the temporary file is removed on failure). Refuses to
     write through a symbolic link, so an existing link cannot redirect the write out of its folder."""
