@@ -268,6 +268,9 @@ class Frame:
     metrics: dict[str, float]
     spread: Spread | None = None
     others: tuple[PersonLift, ...] = ()
+    caution: tuple[str, ...] = ()
+    """What looks wrong in the lifted pose (:meth:`lifter.Lifter.output_notes`): a root behind the camera, a
+    pixel-space model given a 2D pose larger or smaller than those it was trained on."""
     """The other people of the image, lifted at the same focal length into the same camera space."""
 
     @property
@@ -325,7 +328,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others)
+                 others=others, caution=tuple(lifter.output_notes(noisy, pp, res.root[0])))
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:
@@ -405,6 +408,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm",
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px",
     ]
+    lines += [f"**Caution** {note}" for note in frame.caution]
     lines.append(input_line(state))
     up = state.sample.upload
     if up is not None:

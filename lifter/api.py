@@ -12,6 +12,7 @@ Example::
 from __future__ import annotations
 
 import copy
+import dataclasses
 import os
 import warnings
 from collections.abc import Sequence
@@ -59,6 +60,11 @@ MIN_FOCAL_PX: Final[float] = 10.0
 """Smallest focal length :meth:`Lifter.lift` accepts (px). A real camera's is hundreds to thousands of pixels
 (``image width / (2 tan(horizontal FOV / 2))``); a few pixels is a focal length in mm (or normalized) by mistake."""
 
+H36M_POSE_PX: Final[tuple[float, float, float]] = (34.7, 208.1, 421.6)
+"""Human3.6M's training 2D poses (Protocol 1, ground truth, every frame): the smallest and largest scale (RMS radius,
+:func:`lifter.normalization.pose_scale`) and the largest distance of their centre from the principal point, px. A
+network that reads pixels knows poses of these sizes (times its zoom augmentation), :attr:`Lifter.trained_pixel_range`."""
+
 FocalSource = Literal["given", "default-fov", "reference"]
 
 
@@ -89,6 +95,9 @@ class LiftResult:
         canonical depth as well; ``Z * f_true / f_used`` is then only a rough correction (scripts/wrong_focal.py,
         exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 8 % through the clean network,
         29 % through the detected ones; single poses further).
+    warnings: what looks wrong in the output (roots behind the camera; a pixel-space model given 2D poses larger
+        or smaller than those it was trained on), as :meth:`Lifter.lift` warned them (``warn=True``) or would have; empty when
+        nothing does.
     """
 
     absolute: np.ndarray
@@ -102,6 +111,7 @@ class LiftResult:
     metric_depth: bool
     source: Source
     input_space: Literal["pixel", "camera"] = "pixel"
+    warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """The result as plain Python (lists of floats, strings, bools), ready for ``json.dump``; ``note`` included.
@@ -109,7 +119,7 @@ class LiftResult:
         out: dict[str, Any] = {}
         for f in fields(self):
             v = getattr(self, f.name)
-            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else list(v) if isinstance(v, tuple) else v
         out["note"] = self.note
         return out
 
@@ -189,6 +199,57 @@ class Lifter:
         the 2D through the focal length (the default), else ``"pixel"`` (the paper's models)."""
         return "camera" if any(m.config.input_space == "camera" for m in (self, *self.ensemble)) else "pixel"
 
+    @property
+    def trained_pixel_range(self) -> tuple[float, float, float] | None:
+        """For a network that reads pixels (``input_space="pixel"``, the paper's models): the 2D poses it was
+        trained on, ``(smallest scale, largest scale, largest centre offset)`` px: Human3.6M's
+        (:data:`H36M_POSE_PX`) widened by its zoom augmentation (its training config; for the shipped ones without
+        one, the registry's ``trained_zoom``). Beyond them its depth is an extrapolation: the shipped pixel models
+        place people behind the camera on images 3-4 x H36M's size (``benchmarks/bench_invariance.py``), and
+        :meth:`lift` warns. The focal length alone does not matter to such a network (it only scales Z). None for
+        a reference-camera network (exact at every image size) and for a pixel checkpoint that does not say."""
+        if self.config.input_space != "pixel":
+            return None
+        zoom = self.meta.get("trained_zoom")
+        if not (isinstance(zoom, (list, tuple)) and len(zoom) == 2):
+            augment = (self.train_config or {}).get("augment")
+            if not isinstance(augment, dict):
+                return None
+            k = 2.0 ** float(augment.get("zoom_clip", 0.0)) if augment.get("zoom") else 1.0
+            zoom = (1.0 / k, k)
+        lo, hi = float(zoom[0]), float(zoom[1])
+        return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)
+
+    def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike) -> list[str]:
+        """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
+        ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
+        and for a pixel-space network 2D poses outside :attr:`trained_pixel_range`. For callers that show one pose
+        of a batch (the app)."""
+        from .normalization import location_and_scale
+
+        root = np.asarray(root, np.float64)
+        notes: list[str] = []
+        span = self.trained_pixel_range
+        if span is not None and root.size:
+            loc, scale = location_and_scale(np.asarray(keypoints, np.float64))
+            offset = np.linalg.norm(loc - np.asarray(principal_point, np.float64), axis=-1)
+            outside = (scale < span[0] * (1 - 1e-6)) | (scale > span[1] * (1 + 1e-6)) | (offset > span[2] * (1 + 1e-6))
+            if np.any(outside):
+                first = np.unravel_index(int(np.argmax(outside)), outside.shape) if outside.ndim else ()
+                notes.append(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
+                             f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
+                             f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
+                             f"{where_in_batch(outside)}: its depth is an extrapolation (it can place people behind "
+                             "the camera): use the default model, which is exact at any image size, or scale the "
+                             "image and its intrinsics down")
+        behind = root[..., 2] <= 0
+        if np.any(behind):
+            notes.append(f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
+                         f"{where_in_batch(behind)}: the 2D is outside what it was trained on; the result is not a "
+                         "valid pose" + ("" if self.config.input_space == "camera" else
+                                         " (a pixel-space model: use the default model)"))
+        return notes
+
     # -- construction --------------------------------------------------------------------------------
     @classmethod
     def _from(cls, ck: Checkpoint, name: str, quantize: bool, flip_test: bool | None = None,
@@ -242,6 +303,8 @@ class Lifter:
                                   "(reinstall poselifter)")
         members = [load_checkpoint(assets.read_bytes(f), expected_sha256=h, name=f"shipped model {entry['name']!r} ({f})")
                    for f, h in zip(files, sums)]
+        if "trained_zoom" in entry:  # (shipped pixel models older than training configs in checkpoints)
+            ck = dataclasses.replace(ck, meta={**ck.meta, "trained_zoom": entry["trained_zoom"]})
         return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean, ensemble=members)
 
     load = from_pretrained
@@ -413,9 +476,14 @@ class Lifter:
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
         root = root.reshape(lead + (3,))
         absolute = rel + root[..., None, :]
+        notes = self.output_notes(kp, pp, root)
+        if warn:
+            for message in notes:
+                warnings.warn(PoseLifterWarning(message), stacklevel=3)
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
-                          metric_depth=focal_source == "given", source=source, input_space=self.input_space)
+                          metric_depth=focal_source == "given", source=source, input_space=self.input_space,
+                          warnings=tuple(notes))
 
     def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, alpha: np.ndarray, source: Source,
                    flip_test: bool, *, encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None

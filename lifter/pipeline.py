@@ -110,11 +110,14 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
 
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
-                scores: np.ndarray | None = None) -> tuple[PersonResult, ...]:
+                scores: np.ndarray | None = None, notes: list[str] | None = None) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
     :class:`PersonResult` each (mm, camera frame), in the same order. No Python warnings: the records carry
-    them as notes (:func:`plausibility_notes`)."""
+    them as notes (:func:`plausibility_notes`; what looks wrong in the output, :attr:`LiftResult.warnings`, is
+    appended to ``notes``)."""
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False)
+    if notes is not None:
+        notes.extend(getattr(res, "warnings", ()))
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],
@@ -141,7 +144,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
-    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source)
+    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
                        for q, k, i in zip(lifted, kf.people_index, kf.people_ids))
@@ -180,7 +183,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
-                         scores=np.stack([d.scores for d in dets]))
+                         scores=np.stack([d.scores for d in dets]), notes=notes)
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
     if len(dets) > 1:

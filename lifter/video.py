@@ -312,6 +312,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
         warnings: list[str] = []
+        output_notes: dict[str, tuple[int, int, str]] = {}  # kind -> (first frame, frames, message)
         if not (math.isfinite(fps) and 0 < fps <= 1000):
             warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
             fps = 30.0
@@ -391,6 +392,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 kp = np.stack([q.keypoints_2d for q in people])
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
+                for note in getattr(res, "warnings", ()):  # what looks wrong in the output: once per kind
+                    first, n, message = output_notes.get(note[:40], (index, 0, note))
+                    output_notes[note[:40]] = (first, n + 1, message)
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -437,6 +441,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
+    warnings.extend(f"frame {first}: {note}" + (f" ({n} frames like it)" if n > 1 else "")
+                    for first, n, note in output_notes.values())
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -498,6 +504,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     warnings.extend(placeholder_notes(raw, src=ks.format))
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
+    warnings.extend(getattr(res, "warnings", ()))
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0
     for i, c in enumerate(counts):

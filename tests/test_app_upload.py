@@ -630,3 +630,20 @@ def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     doc["people"] = [{"keypoints": coco.tolist()}, {"keypoints": (coco + 5000.0).tolist()}]
     with pytest.raises(up.UploadError, match="person 2"):
         up.keypoint_sample("far.json", json.dumps(doc).encode(), key="upload/t/far.json")
+
+
+def test_readout_cautions_when_a_pixel_model_extrapolates(view: SessionView, app: PoseLifterApp) -> None:
+    """A 4x-size view of a demo pose (a 3200 x 2400 px keypoint file, focal scaled with it) lifted by the paper's
+    pixel-space model 'gt' gets a caution in the readout; the default lifts it exactly and stays quiet."""
+    if "gt" not in app.pool.names:
+        pytest.skip("the paper-table model 'gt' is not shipped")
+    s = app.demo.get(app.demo.names[0])
+    kp = (s.keypoints_2d - np.array([400.0, 300.0])) * 4 + np.array([1600.0, 1200.0])
+    doc = {"keypoints": kp.tolist(), "format": "h36m17", "image_size": [3200, 2400], "focal": [4000, 4000],
+           "source": "clean"}
+    assert view.load_upload("big.json", json.dumps(doc).encode()) is True, view.messages[-1]
+    assert "Caution" not in view.gui.readout.readout.content
+    view.gui.lift.model.value = "gt"
+    assert view.state.model == "gt"
+    md = view.gui.readout.readout.content
+    assert "**Caution** model 'gt' reads pixels and was trained on 2D poses" in md, md

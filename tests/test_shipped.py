@@ -3,6 +3,8 @@ assets/models.json (and quoted in the README) on the every-50th-frame slice."""
 
 from __future__ import annotations
 
+import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +13,7 @@ from conftest import requires_h36m
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lifter import CheckpointError, Lifter, PoseLifterError, available_models, demo_sample
+from lifter import CheckpointError, Lifter, PoseLifterError, PoseLifterWarning, available_models, demo_sample
 from lifter.camera import CANONICAL_FOCAL, project
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
@@ -149,3 +151,74 @@ def test_a_saved_network_loads_back_to_the_same_lift(tmp_path):
     assert not (tmp_path / "all.pt").exists()
     with pytest.raises(PoseLifterError, match="int8 weights.*quantize=True"):
         first.quantized().save(tmp_path / "q.pt")
+
+
+def test_pixel_models_warn_outside_the_2d_sizes_they_were_trained_on(tmp_path):
+    """User trial: the paper's pixel-space models put a person behind the camera on an ordinary 4000-px view of an
+    H36M frame (intrinsics scaled with it: the same physical camera), silently, exit code 0. They now say so, in
+    Python warnings and in the result; a focal length alone (the teacher's slider) changes nothing they read and
+    is not warned of; the default (reference-camera input) stays exact and quiet."""
+    from lifter.api import H36M_POSE_PX
+
+    kp = project(_DEMO.pose_3d, focal=_F, principal_point=_C)
+    gt = Lifter.from_pretrained("gt")
+    assert gt.trained_pixel_range == pytest.approx(H36M_POSE_PX)  # no zoom augmentation: H36M's poses only
+    lo, hi, off = H36M_POSE_PX
+    assert Lifter.from_pretrained("sh_mix").trained_pixel_range == pytest.approx((lo / 2, hi * 2, off * 2))  # zoom
+    assert _default().trained_pixel_range is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert gt.lift(kp, focal=_F, principal_point=_C).warnings == ()  # at home: nothing to say
+        assert gt.lift(kp, focal=4 * _F, principal_point=_C).warnings == ()  # Z x4, the network reads the same
+        for k in (0.1, 4.0, 10.0):
+            assert _default().lift(kp * k, focal=_F * k, principal_point=_C * k).warnings == ()
+    with pytest.warns(PoseLifterWarning) as record:
+        res = gt.lift(np.stack([kp, kp * 4]), focal=np.array([[_F, _F], [4 * _F, 4 * _F]]),
+                      principal_point=np.stack([_C, 4 * _C]))
+    assert res.root[1, 2] <= 0 < res.root[0, 2]  # the extrapolation this warns of (else the test proves nothing)
+    said = [str(w.message) for w in record]
+    assert len(said) == 2 == len(res.warnings) and said == list(res.warnings)
+    assert "trained on 2D poses 35-208 px in scale" in said[0] and "(pose at index (1,), 1 such" in said[0]
+    assert "use the default model" in said[0]
+    assert "1 of 2 root(s) behind the camera (Z <= 0) (pose at index (1,)" in said[1]
+    assert res.to_dict()["warnings"] == said
+    # what the records (CLI, files) carry: a keypoint file of the 4x view
+    from lifter.pipeline import lift_keypoint_file
+
+    p = tmp_path / "big.json"
+    p.write_text(json.dumps({"format": "h36m17", "keypoints": (kp * 4).tolist(), "focal": 4 * _F,
+                             "principal_point": (_C * 4).tolist(), "image_size": [4096, 4096]}))
+    assert any("trained on 2D poses" in w for w in lift_keypoint_file(p, lifter=gt).warnings)
+    assert not any("trained on 2D poses" in w for w in lift_keypoint_file(p, lifter=_default()).warnings)
+
+
+def test_trained_pixel_range_comes_from_the_training_config():
+    """A pixel-space checkpoint with its training config: H36M's 2D poses times its zoom range; none without a
+    config (unknown) and none for the reference camera (exact at every image size)."""
+    from lifter.api import H36M_POSE_PX
+    from lifter.codec import PoseCodec
+    from lifter.config import AugmentConfig, TrainConfig
+    from lifter.model import ModelConfig, PoseLifterNet
+
+    cfg = ModelConfig(width=16, num_blocks=1, input_space="pixel", depth_target="canonical")
+    net, codec = PoseLifterNet(cfg), PoseCodec(cfg)
+    zoomed = TrainConfig(model=cfg, augment=AugmentConfig(zoom=True, zoom_clip=0.5)).to_dict()
+    k = 2 ** 0.5
+    lo, hi, off = H36M_POSE_PX
+    assert Lifter(net, codec, train_config=zoomed).trained_pixel_range == pytest.approx((lo / k, hi * k, off * k))
+    plain = TrainConfig(model=cfg).to_dict()
+    assert Lifter(net, codec, train_config=plain).trained_pixel_range == pytest.approx(H36M_POSE_PX)
+    assert Lifter(net, codec).trained_pixel_range is None
+    cam = ModelConfig(width=16, num_blocks=1)
+    assert Lifter(PoseLifterNet(cam), PoseCodec(cam), train_config=plain).trained_pixel_range is None
+
+
+@requires_h36m
+def test_h36m_pose_range_is_that_of_the_training_poses(h36m):
+    from lifter.api import H36M_POSE_PX
+    from lifter.normalization import location_and_scale
+
+    s = h36m.load_protocol(1, "train", stride=1)
+    loc, scale = location_and_scale(s.keypoints_2d.astype(np.float64))
+    offset = np.linalg.norm(loc - s.principal_point, axis=-1)
+    assert (scale.min(), scale.max(), offset.max()) == pytest.approx(H36M_POSE_PX, abs=0.1)
