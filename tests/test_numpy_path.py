@@ -14,7 +14,7 @@ import torch
 from conftest import random_pose_cam
 
 import lifter.model as lifter_model
-from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet
+from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterError, PoseLifterNet, PoseLifterWarning
 from lifter.camera import project
 from lifter.model import forward_folded, forward_numpy
 
@@ -225,8 +225,9 @@ def test_subclass_with_its_own_forward_uses_the_module(kp):
     net = Clamped(ModelConfig(width=64))
     net.load_state_dict(_net().state_dict())
     lifter = _lifter(net.eval(), name="clamped")
-    assert lifter.lift(kp[0], focal=1145.0, principal_point=PP).canonical_depth < 0  # 4400 + 400 * (-30) mm
-    _assert_lift_matches_module(lifter, kp[0])
+    with pytest.warns(PoseLifterWarning, match="behind the camera"):  # (and LiftResult.warnings says it too)
+        assert lifter.lift(kp[0], focal=1145.0, principal_point=PP).canonical_depth < 0  # 4400 + 400 * (-30) mm
+        _assert_lift_matches_module(lifter, kp[0])
 
 
 @pytest.mark.parametrize("part", ["net", "blocks"])
