@@ -3,14 +3,14 @@ result record (:class:`LiftRecord`) that ``poselifter lift`` and the app's downl
 
 Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
 "focal": F or [FX, FY], "principal_point": [CX, CY], "source": "detected" | "clean"}`` (only ``keypoints`` is
-required; rows may have a third value, a confidence, where 0 marks a missing joint, as does a ``null``
-coordinate; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of ``[x, y]`` rows, OpenPose's
-output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}`` (format openpose25), a COCO-style list of people
-``[{"keypoints": [...]}, ...]`` or a result this module wrote (:class:`LiftRecord`: ``people[].keypoints_2d``,
-H36M order, with its camera; lift it again with another focal length or model). Without ``format`` it is
-inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33: blazepose33). ``source`` says what
-the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"`` (exact: ground truth or
-hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
+required; rows may have a third value, a confidence, where 0 marks a missing joint, as does ``null`` for a
+coordinate, a confidence or a whole row; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of
+``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}`` (format openpose25), a
+COCO-style list of people ``[{"keypoints": [...]}, ...]`` or a result this module wrote (:class:`LiftRecord`:
+``people[].keypoints_2d``, H36M order, with its camera; lift it again with another focal length or model).
+Without ``format`` it is inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33:
+blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"``
+(exact: ground truth or hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
 (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
 magnitude; anything else fails with a message naming the field. A person missing a joint that the format's
 rules to H36M need is left out with a note naming them (a frame of a sequence then has one person fewer); a
@@ -148,7 +148,7 @@ def _is_row(v: Any) -> bool:
 
 def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
     """``(J, 2)`` px and optional ``(J,)`` confidences from ``[[x, y(, c)], ...]`` or a flat list of numbers.
-    ``null`` coordinates mean a missing joint (NaN)."""
+    ``null`` coordinates, a ``null`` row and a ``null`` confidence mean a missing joint (NaN)."""
     form = "a list of [x, y] or [x, y, confidence] rows, or a flat list of numbers"
     if not isinstance(raw, list):
         raise PoseLifterError(f"{where}: 'keypoints' must be {form}, got {type(raw).__name__} {_short(raw)}")
@@ -162,10 +162,13 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
         else:
             raise PoseLifterError(f"{where}: a flat keypoint list of {n} numbers is not J x 2 or J x 3 for "
                                   f"J in {sorted(FORMAT_BY_COUNT)}")
-    elif raw and all(_is_row(r) for r in raw):
-        if len({len(r) for r in raw}) != 1:
+    elif raw and all(_is_row(r) or r is None for r in raw) and any(r is not None for r in raw):
+        widths = {len(r) for r in raw if r is not None}
+        if len(widths) != 1:
             raise PoseLifterError(f"{where}: keypoint rows must all have 2 or all have 3 values")
-        a = np.array([[np.nan if v is None else v for v in r] for r in raw], np.float64)
+        width = widths.pop()  # a row that is null as a whole: a missing joint
+        a = np.array([[np.nan if v is None else v for v in (r if r is not None else [None] * width)] for r in raw],
+                     np.float64)
     else:
         bad = next((r for r in raw if not (_is_row(r) or _is_number(r))), None) if raw else None
         raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}")
@@ -324,13 +327,13 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                    ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
     for each, its ``(position in the file, person id)``; and the people left out because a joint the lifter needs
-    is missing (confidence 0, or null / non-finite coordinates): ``(who, [joint names])`` each."""
+    is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each."""
     parsed = []
     for _, q, _ in people:
         xy, conf = _rows(q, str(p))
         missing = ~np.all(np.isfinite(xy), axis=1)
         if conf is not None:
-            missing |= conf <= 0  # OpenPose / COCO mark undetected joints with confidence 0
+            missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
         parsed.append((xy, missing))
     if not parsed:
         return [], fmt or H36M17, [], []
@@ -375,7 +378,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
 
 def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
     who = "; ".join(f"{w}: {bad}" for w, bad in dropped[:5]) + ("; ..." if len(dropped) > 5 else "")
-    return (f"joint(s) missing (confidence 0, or null / non-finite coordinates) for {who}; {_needs(fmt)}"
+    return (f"joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for {who}; {_needs(fmt)}"
             + (". Give those joints (e.g. placed by hand, or interpolated from neighbouring frames)" if nobody_left
                else ""))
 
@@ -497,8 +500,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         at = sorted({i for i, _ in dropped})
         joints = sorted({j for _, (_, bad) in dropped for j in bad})
         msg = (f"{len(dropped)} person(s) left out of {len(at)} frame(s) ({', '.join(map(str, at[:10]))}"
-               f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0, or null / non-finite "
-               f"coordinates); {_needs(fmt)}")
+               f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0 or null, or null / "
+               f"non-finite coordinates); {_needs(fmt)}")
         if not any(frames):
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")

@@ -412,15 +412,41 @@ def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weigh
     out = tmp_path / "out"
     code, err = run([str(two), str(one), str(h), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and "lifted 1 of 3" in err, err
-    assert "1 of 2 people left out: joint(s) missing (confidence 0, or null / non-finite coordinates) for the person " \
-           "at position 1 in the file (id 'A'): ['l_wrist']; the lifter needs every joint that the openpose25 -> " \
-           "h36m17 rules use" in err
+    assert "1 of 2 people left out: joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for " \
+           "the person at position 1 in the file (id 'A'): ['l_wrist']; the lifter needs every joint that the " \
+           "openpose25 -> h36m17 rules use" in err
     got = json.loads((out / "two.json").read_text())
     assert got["num_people"] == 1 and got["people"][0]["person_id"] == "B" and got["people"][0]["input_index"] == 1
-    assert f"{one}: joint(s) missing (confidence 0, or null / non-finite coordinates) for the person: ['l_wrist']" \
-           in err and "Give those joints" in err and not (out / "one.json").exists()
+    assert f"{one}: joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for the person: " \
+           "['l_wrist']" in err and "Give those joints" in err and not (out / "one.json").exists()
     assert "the lifter needs all 17 joints" in err and "h36m17 -> h36m17" not in err
 
+
+
+def test_a_null_confidence_or_a_null_row_marks_a_missing_joint(tmp_path, kp17):
+    """The README: a confidence of 0 marks a missing joint, as does null. User trial: [x, y, null] was lifted with
+    that joint (the same output as confidence 0.9), and a row that is null as a whole failed the file."""
+    from lifter.io import parse_keypoint_json
+
+    cam = {"image_size": [1280, 720], "focal": 1000.0, "format": "h36m17"}
+    rows = [[float(x), float(y), 0.9] for x, y in kp17]
+    missing_msg = r"joint\(s\) missing \(confidence 0 or null, or null / non-finite coordinates\) for the person: " \
+                  r"\['l_wrist'\]"
+    for bad in ([float(kp17[13, 0]), float(kp17[13, 1]), None], [float(kp17[13, 0]), float(kp17[13, 1]), 0], None,
+                [None, None, 0.9]):
+        doc = [list(r) for r in rows]
+        doc[13] = bad  # l_wrist
+        p = tmp_path / "k.json"
+        p.write_text(json.dumps({"keypoints": doc, **cam}))
+        with pytest.raises(PoseLifterError, match=missing_msg):
+            parse_keypoint_json(p)
+    two = [[float(x), float(y)] for x, y in kp17]
+    two[13] = None  # a whole null row among [x, y] rows too
+    p.write_text(json.dumps({"keypoints": two, **cam}))
+    with pytest.raises(PoseLifterError, match=missing_msg):
+        parse_keypoint_json(p)
+    p.write_text(json.dumps({"keypoints": rows, **cam}))  # every confidence > 0: all 17 joints
+    np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
 
 def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weights, kp17, capsys):
     """A COCO r_hip at (0, 0) without confidences (the user trial's silent 5.2 -> 2.2 m root): each file's record
