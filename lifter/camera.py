@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -39,6 +39,10 @@ CANONICAL_FOCAL: float = 1000.0
 DEFAULT_DIAGONAL_FOV_DEG: float = 65.0
 """Diagonal field of view assumed when neither the user nor the image's EXIF data give a focal length:
 ``f = image_diagonal / (2 tan 32.5 deg) = 0.785 * diagonal`` (a 34 mm full-frame equivalent)."""
+MIN_FOV_DEG: Final[float] = 1.0
+MAX_FOV_DEG: Final[float] = 150.0
+"""Diagonal fields of view ``poselifter lift --fov`` takes: a long telephoto (about 2500 mm full-frame equivalent)
+to beyond the widest rectilinear phone lens (about 120 deg); a pinhole camera wider than this is a fisheye."""
 
 
 

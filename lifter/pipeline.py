@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair, input_warnings
+from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
 from .io import LiftRecord, PersonResult, parse_keypoint_json
@@ -52,6 +53,11 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         assert image_size is not None  # (checked above, with every missing field named)
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
+        if g.focal < MIN_FOCAL_PX:  # (else the lifter's message would blame a focal length the user never gave)
+            raise PoseLifterError(
+                f"{where}: the focal length assumed for this {image_size[0]} x {image_size[1]} px image ({g.detail}) "
+                f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length (--focal), or a narrower "
+                "field of view (--fov)")
         notes.append(g.detail)
     if user_pp is not None:
         pp = user_pp

@@ -151,8 +151,10 @@ def test_lift_out_is_an_existing_file(tmp_path, weights, kp_file, capsys):
         (["--focal", "1", "2", "3"], "--focal takes FX or FX FY, got 3 values"),
         (["--principal-point", "nan", "3"], "--principal-point must be [cx, cy] in px, each finite"),
         (["--principal-point", "5e7", "3"], "--principal-point must be [cx, cy] in px"),
-        (["--fov", "0"], "--fov must be a diagonal field of view in (0, 180) degrees, got 0"),
-        (["--fov", "180"], "--fov must be a diagonal field of view in (0, 180) degrees, got 180"),
+        (["--fov", "0"], "--fov must be a diagonal field of view in [1, 150] degrees (a long telephoto to beyond "
+                         "the widest phone lens, ~120), got 0"),
+        (["--fov", "179"], "--fov must be a diagonal field of view in [1, 150] degrees"),  # (user trial: 179 passed,
+        # then failed on a focal length 'in mm' the user never gave)
         (["--sensor-width", "0"], "--sensor-width must be the sensor's long side in mm, in (0, 1000), got 0"),
         (["--max-side", "0"], "--max-side must be a whole number of px >= 256"),
         (["--max-side", "10"], "--max-side must be a whole number of px >= 256"),
@@ -168,6 +170,19 @@ def test_lift_rejects_bad_global_options_up_front(tmp_path, weights, kp_file, ar
     assert len(lines) == 1 and lines[0].startswith(f"poselifter lift: error: {expected}"), err
     assert not out.exists()  # nothing processed
 
+
+
+def test_an_assumed_focal_below_the_limit_names_fov_not_a_focal_in_mm(tmp_path, weights, capsys):
+    """A tiny image at a wide --fov assumes a focal length under 10 px: the message names the assumption and the
+    options, not the lifter's 'focal length in mm' advice for a focal the user never gave."""
+    p = tmp_path / "tiny.json"
+    p.write_text(json.dumps({"keypoints": [[10 + i, 5 + i] for i in range(17)], "image_size": [40, 30]}))
+    code, err = lift([str(p), "--out", str(tmp_path / "out"), "--weights", str(weights), "--fov", "150"], capsys)
+    assert code == 1
+    assert "the focal length assumed for this 40 x 30 px image (no focal length given: assumed a 150 deg diagonal " \
+           "field of view -> 6.7 px) is 6.7 px, below 10 px: give the focal length (--focal), or a narrower field of " \
+           "view (--fov)" in err, err
+    assert "not mm" not in err and "focal=None" not in err
 
 @pytest.mark.parametrize(
     "fields, expected",

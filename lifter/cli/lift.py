@@ -64,7 +64,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import PoseLifterError, as_pair
-from ..camera import DEFAULT_DIAGONAL_FOV_DEG
+from ..camera import DEFAULT_DIAGONAL_FOV_DEG, MAX_FOV_DEG, MIN_FOV_DEG
 from ..detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -251,8 +251,9 @@ def check_lift_options(args: argparse.Namespace) -> None:
         _camera_field(list(args.focal), name="--focal", where=None)
     if args.principal_point is not None:
         _camera_field(list(args.principal_point), name="--principal-point", where=None)
-    if not (math.isfinite(args.fov) and 0 < args.fov < 180):
-        raise PoseLifterError(f"--fov must be a diagonal field of view in (0, 180) degrees, got {args.fov:g}")
+    if not (math.isfinite(args.fov) and MIN_FOV_DEG <= args.fov <= MAX_FOV_DEG):
+        raise PoseLifterError(f"--fov must be a diagonal field of view in [{MIN_FOV_DEG:g}, {MAX_FOV_DEG:g}] degrees "
+                              f"(a long telephoto to beyond the widest phone lens, ~120), got {args.fov:g}")
     if args.sensor_width is not None and not (math.isfinite(args.sensor_width) and 0 < args.sensor_width < 1000):
         raise PoseLifterError(f"--sensor-width must be the sensor's long side in mm, in (0, 1000), "
                               f"got {args.sensor_width:g}")
