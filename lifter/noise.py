@@ -453,7 +453,7 @@ def fit_error_model(detections: np.ndarray, ground_truth: np.ndarray, *, source:
     gamma, iters = np.zeros(J), np.zeros(J, int)
     mu, sigma, gmu, gsig = (np.zeros((J, 2)) for _ in range(4))
     nll_m, nll_g = np.zeros(J), np.zeros(J)
-    for j in tqdm(range(J), desc="EM per joint", unit="joint", disable=not progress):
+    for j in tqdm(range(J), desc="EM per joint", unit="joint", disable=None if progress else True):
         gmu[j], gsig[j], nll_g[j] = fit_gaussian(e[:, j])
         f = fit_mixture(e[:, j], tol=tol, max_iter=max_iter)
         gamma[j], mu[j], sigma[j], nll_m[j], iters[j] = f.gamma, f.mu, f.sigma, f.nll, f.iterations

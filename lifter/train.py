@@ -392,7 +392,7 @@ def train(
     pos = 0
     t0 = time.perf_counter()
     running: torch.Tensor | None = None  # on the device: read back only every FINITE_CHECK_EVERY steps
-    bar = tqdm(total=steps, disable=not (progress and ctx.main), unit="step", dynamic_ncols=True, mininterval=2.0)
+    bar = tqdm(total=steps, disable=None if progress and ctx.main else True, unit="step", dynamic_ncols=True, mininterval=2.0)
     step = 0
     clock = torch.zeros(1, device=ctx.device)
 
@@ -402,7 +402,7 @@ def train(
         rec.update(validate(eval_net, codec, val_dev))
         curve.append(rec)
         bar.set_postfix({k.replace("val_", ""): f"{v:.1f}" for k, v in rec.items() if k.startswith("val_")})
-        if not progress:
+        if bar.disable:  # (--no-progress, or stderr not a terminal: the curve goes to the log instead)
             log(f"step {step}: " + ", ".join(f"{k} {v:.4g}" for k, v in rec.items() if k != "step"))
 
     while True:

@@ -386,8 +386,10 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     again = TrainConfig.from_dict(__import__("json").loads(capsys.readouterr().out))
     assert again == replace(cfg, schedule=replace(cfg.schedule, epochs=3.0))
     assert main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root"]) == 0
-    text = capsys.readouterr().out
+    captured = capsys.readouterr()
+    text = captured.out
     assert "MPJPE" in text and "analytic" in text and "Discussion 1" in text and "source='clean'" in text
+    assert "lifting (" not in captured.err  # stderr is not a terminal here: no progress bar in logs (user trial)
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
     # a fine-tune records the weights it started from; repeating it from its own result, or from other weights, says so
