@@ -25,7 +25,17 @@ import numpy as np
 from ._checks import PoseLifterError
 from .camera import Camera, canonical_depth_from_depth, project, world_to_camera
 
-DEFAULT_H36M_DIR = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "h36m"
+
+def _default_h36m_dir(package_parent: Path) -> Path:
+    """``../shared/data/h36m`` beside the project when ``package_parent`` (the folder holding ``lifter/``) is a
+    source checkout (it has ``pyproject.toml``: an editable install); else, for an installed wheel (site-packages),
+    relative to the working folder."""
+    base = package_parent.parent if (package_parent / "pyproject.toml").is_file() else Path("..")
+    return base / "shared" / "data" / "h36m"
+
+
+DEFAULT_H36M_DIR = _default_h36m_dir(Path(__file__).resolve().parent.parent)
+"""The Human3.6M folder when neither ``--h36m`` nor ``$POSELIFTER_H36M`` names one (:func:`_default_h36m_dir`)."""
 
 PROTOCOLS: dict[int, tuple[tuple[int, ...], tuple[int, ...]]] = {
     1: ((1, 5, 6, 7, 8), (9, 11)),
@@ -61,7 +71,8 @@ COMPACT_FILE = "compact.json"
 
 
 def default_h36m_dir() -> Path:
-    """``$POSELIFTER_H36M`` if set, else ``../shared/data/h36m`` relative to the project root."""
+    """``$POSELIFTER_H36M`` if set, else :data:`DEFAULT_H36M_DIR` (``../shared/data/h36m``: from the project root
+    in a source checkout, from the working folder for an installed wheel)."""
     env = os.environ.get("POSELIFTER_H36M")
     return Path(env) if env else DEFAULT_H36M_DIR
 

@@ -55,7 +55,9 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
     """Lift every sample (its own camera) told ``source``; optionally also the analytic root."""
     rel, root, aroot = [], [], []
     n = len(samples)
-    for s in tqdm(range(0, n, batch_size), disable=None if progress else True, desc=f"lifting ({lifter.name})", unit="batch"):
+    bar = tqdm(range(0, n, batch_size), disable=None if progress else True, desc=f"lifting ({lifter.name})",
+               unit="batch")  # (None: no bar when stderr is not a terminal)
+    for s in bar:
         sl = slice(s, min(n, s + batch_size))
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
                           principal_point=samples.principal_point[sl], flip_test=flip_test, source=source)

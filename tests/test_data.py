@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import H36M_DIR, requires_h36m
@@ -18,6 +20,17 @@ def test_action_names():
     with pytest.raises(ValueError, match="unknown H36M action"):
         action_of("S1/Dancing 1")
 
+
+
+def test_default_folder_for_a_checkout_and_for_a_wheel(tmp_path):
+    """User trial: from an installed wheel the default resolved to site-packages' ../shared/data/h36m. A checkout
+    (pyproject.toml beside lifter/) looks beside the project; an install looks from the working folder."""
+    from lifter.data import _default_h36m_dir
+
+    (tmp_path / "repo").mkdir()
+    (tmp_path / "repo" / "pyproject.toml").write_text("")
+    assert _default_h36m_dir(tmp_path / "repo") == tmp_path / "shared" / "data" / "h36m"
+    assert _default_h36m_dir(tmp_path / "site-packages") == Path("..") / "shared" / "data" / "h36m"
 
 def test_missing_folder_error(tmp_path):
     from lifter.data import H36M
