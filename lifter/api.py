@@ -138,6 +138,9 @@ class LiftResult:
                 "corrects Z); give the focal length for a metric result")
 
 
+_PAIRS: Final[dict[str, str]] = {"focal": "(fx, fy)", "principal_point": "(cx, cy)", "image_size": "(width, height)"}
+
+
 def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
     try:
         return np.broadcast_to(x, lead + (2,))
@@ -145,8 +148,11 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
         if not lead:
             raise PoseLifterError(f"{name}: shape {tuple(x.shape)} for a single pose (keypoints (17, 2)); give one "
                                   f"(2,) {name}, e.g. {name}[0]") from None
+        per_first = "" if len(lead) < 2 else (f", or {lead[:1] + (1,) * (len(lead) - 1) + (2,)} for one per "
+                                                 f"index of the first axis")
         raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
-                              f"shape {lead} (expected (2,) or {lead + (2,)})") from None
+                              f"shape {lead}: its last axis is {_PAIRS.get(name, '(x, y)')}, so give (2,) for every pose, {lead + (2,)} for "
+                              f"each{per_first}") from None
 
 
 class Lifter:
@@ -388,7 +394,7 @@ class Lifter:
             (:data:`lifter.camera.DEFAULT_DIAGONAL_FOV_DEG`) of ``image_size`` is assumed, or a 1000-px
             reference camera without an image size, and the result says so (``metric_depth=False``).
         principal_point: ``(cx, cy)`` or ``(..., 2)`` px; defaults to the image centre of ``image_size``.
-        image_size: ``(width, height)`` px, for the defaults above.
+        image_size: ``(width, height)`` px, or per pose ``(..., 2)``, for the defaults above.
         source: ``"detected"`` (default): 2D from a detector; ``"clean"``: exact 2D (ground truth,
             hand-placed or dragged joints). The lifter uses what it was trained for on each.
         flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
@@ -413,6 +419,8 @@ class Lifter:
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
         lead = kp.shape[:-2]
         wh = None if image_size is None else as_pair(image_size, name="image_size", positive=True)
+        if wh is not None and wh.ndim > 1:  # one per pose: checked here, before the defaults it gives
+            wh = _broadcast(wh, lead, name="image_size")
         if principal_point is None:
             if wh is None:
                 raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the "
@@ -425,9 +433,12 @@ class Lifter:
                    for m in (self, *self.ensemble)):
                 raise PoseLifterError(f"model {self.name!r} predicts absolute depth and needs the focal length")
             if wh is not None:
-                if wh.ndim != 1:
-                    raise PoseLifterError("image_size: give one (width, height) for the default focal length")
-                focal, focal_source = focal_from_fov(wh, fov_deg=DEFAULT_DIAGONAL_FOV_DEG), "default-fov"
+                if wh.ndim == 1:
+                    focal = focal_from_fov(wh, fov_deg=DEFAULT_DIAGONAL_FOV_DEG)
+                else:  # one image size per pose (mixed cameras): each its own default focal length
+                    one = np.asarray(focal_from_fov(wh, fov_deg=DEFAULT_DIAGONAL_FOV_DEG))
+                    focal = np.stack([one, one], axis=-1)
+                focal_source = "default-fov"
             else:
                 focal, focal_source = CANONICAL_FOCAL, "reference"
         f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True), lead, name="focal")

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -195,15 +195,23 @@ def root_from_canonical_depth(
     return backproject(root_2d, z, focal=focal, principal_point=principal_point)
 
 
-def focal_from_fov(image_size: Sequence[float] | np.ndarray, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> float:
+@overload
+def focal_from_fov(image_size: Sequence[float], *, fov_deg: float = ...) -> float: ...
+@overload
+def focal_from_fov(image_size: np.ndarray, *, fov_deg: float = ...) -> float | np.ndarray: ...
+def focal_from_fov(image_size: Sequence[float] | np.ndarray, *, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG
+                   ) -> float | np.ndarray:
     """The focal length (px) that gives a diagonal field of view ``fov_deg`` to an image of
-    ``image_size = (W, H)`` px: ``hypot(W, H) / (2 tan(fov / 2))``. Scales with the image."""
+    ``image_size = (W, H)`` px: ``hypot(W, H) / (2 tan(fov / 2))``. Scales with the image. A float for one
+    ``(W, H)``; ``(...)`` for image sizes ``(..., 2)``."""
     if not (math.isfinite(fov_deg) and 0 < fov_deg < 180):
         raise PoseLifterError(f"field of view must be in (0, 180) degrees, got {fov_deg}")
-    w, h = (float(v) for v in image_size)
-    if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
-        raise PoseLifterError(f"image_size must be two positive numbers (width, height) px, got {tuple(image_size)}")
-    return math.hypot(w, h) / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
+    wh = np.asarray(image_size, np.float64)
+    if wh.ndim == 0 or wh.shape[-1] != 2 or not (np.all(np.isfinite(wh)) and np.all(wh > 0)):
+        shown = tuple(image_size) if wh.ndim == 1 else f"shape {wh.shape}"
+        raise PoseLifterError(f"image_size must be two positive numbers (width, height) px, got {shown}")
+    f = np.hypot(wh[..., 0], wh[..., 1]) / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
+    return float(f) if wh.ndim == 1 else f
 
 
 # --------------------------------------------------------------------------------------------

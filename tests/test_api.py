@@ -10,7 +10,7 @@ import pytest
 import torch
 from conftest import random_pose_cam, tiny_lifter
 
-from lifter import Lifter, LiftResult, PoseLifterError, PoseLifterWarning
+from lifter import Lifter, LiftResult, PoseLifterError, PoseLifterWarning, demo_sample
 from lifter._checks import CheckpointError
 from lifter.camera import focal_from_fov, project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
@@ -591,3 +591,28 @@ def test_demo_sample_repr_leaves_out_the_photo():
 
     s = demo_sample(demo_sample_names()[0])
     assert len(s.image) > 10_000 and len(repr(s)) < 5_000 and "image=" not in repr(s)
+
+
+def test_batched_camera_arguments_per_pose_and_their_messages():
+    """User trial: a (5, 2) focal for (5, 2, 17, 2) keypoints got '(5, 2) does not broadcast against (5, 2)';
+    the message now says what the last axis is and names the per-frame shape. Per-pose image sizes without a focal
+    length each get their own default focal length (they were refused)."""
+    m = Lifter.from_pretrained()
+    kp = np.broadcast_to(demo_sample("walking").keypoints_2d, (5, 2, 17, 2))
+    with pytest.raises(PoseLifterError, match=r"focal: shape \(5, 2\) does not broadcast against the keypoints' "
+                                              r"leading shape \(5, 2\): its last axis is \(fx, fy\), so give \(2,\) "
+                                              r"for every pose, \(5, 2, 2\) for each, or \(5, 1, 2\) for one per"):
+        m.lift(kp, focal=np.full((5, 2), 1145.0), principal_point=(512, 515))
+    np.testing.assert_allclose(m.lift(kp, focal=np.full((5, 1, 2), 1145.0), principal_point=(512, 515)).absolute,
+                               m.lift(kp, focal=1145.0, principal_point=(512, 515)).absolute)
+    size = np.full((5, 2, 2), 1000.0)
+    size[1] = (2000.0, 1500.0)
+    res = m.lift(kp, image_size=size, source="clean")
+    assert res.focal_source == "default-fov" and not res.metric_depth
+    for i in (0, 1):  # each pose as if lifted alone with its own image size
+        alone = m.lift(kp[i, 0], image_size=tuple(size[i, 0]), source="clean")
+        np.testing.assert_allclose(res.focal[i, 0], alone.focal)
+        np.testing.assert_allclose(res.principal_point[i, 0], alone.principal_point)
+        np.testing.assert_allclose(res.absolute[i, 0], alone.absolute, atol=1e-3)
+    with pytest.raises(PoseLifterError, match=r"image_size: shape \(3, 2\) does not broadcast"):
+        m.lift(kp, image_size=np.full((3, 2), 1000.0))
