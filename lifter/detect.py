@@ -114,6 +114,9 @@ INSTALL_DETECT: Final[str] = 'pip install "poselifter[detect]" (in a source chec
 
 MIN_WINDOW_PX: Final[int] = 32
 """``multi="windows"``: no window searches when a window would be narrower than this (px)."""
+MAX_WINDOWS: Final[int] = 24
+"""``multi="windows"``: at most this many windows per search (a 12:1 panorama gets 23 at window_aspect 1); a wider
+image gets wider windows. Bounds the time of a search: each window is one landmarker pass."""
 
 FLIP_AGREE: Final[float] = 0.1
 """``flip_test``: a person's detections in the image and in its mirror image are averaged when their median
@@ -913,8 +916,10 @@ class BlazePoseEstimator:
                 ww = round(WINDOW_FRACTION * max(W, H))
                 if self.window_aspect is not None:
                     ww = min(ww, max(round(self.window_aspect * H), MIN_WINDOW_PX))
-                    # at most 2 max_people + 1 windows (a 2048 x 40 strip would get ~100): wider ones if need be
-                    ww = max(ww, math.ceil(2 * W / (2 * self.max_people + 2)))
+                    # at most MAX_WINDOWS (a 2048 x 40 strip would get ~130): wider ones if need be. Not tied to
+                    # max_people: wider windows lose small people (user trial: one person in a 6:1 panorama was
+                    # found with --max-people 6 and missed with the default 3)
+                    ww = max(ww, math.ceil(2 * W / (MAX_WINDOWS + 1)))
                 if MIN_WINDOW_PX <= ww < 0.95 * W:  # no windows in a thumbnail: nobody fits in them
                     n = math.ceil((W - ww) / (ww / 2)) + 1
                     for x0 in np.linspace(0, W - ww, n).round().astype(int):

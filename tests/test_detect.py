@@ -355,12 +355,15 @@ def _scripted_blazepose(rng, plain: list, mirror: list):
     (None, (1826, 695), [(0, 913), (456, 1369), (913, 1826)]),  # the earlier rule: 3, two people wide each
     (1.0, (1000, 1000), [(0, 500), (250, 750), (500, 1000)]),  # up to 2:1 both rules agree (the demo photos)
     (1.0, (1600, 900), [(0, 800), (400, 1200), (800, 1600)]),
+    # one person in a 6000 x 1002 panorama, downscaled for detection (user trial: with at most 2 max_people + 1
+    # windows they were 410 px wide and the person was missed; found with --max-people 6)
+    (1.0, (2048, 342), [(round(x), round(x) + 342) for x in np.linspace(0, 2048 - 342, 11)]),
 ])
 def test_window_search_windows_are_about_one_standing_person_wide(aspect, size, windows):
     """The window search: the whole image, then full-height windows, half overlapping, half the longer side wide
     but at most window_aspect x the height, so a panorama gets more of them (bench_people_row.py: 5 people in a
     row, 1580 x 600 px, found 18 % -> 70 %); no mediapipe needed."""
-    from lifter.detect import BlazePoseEstimator
+    from lifter.detect import MAX_WINDOWS, BlazePoseEstimator
 
     est = object.__new__(BlazePoseEstimator)
     est.multi, est.max_people, est.window_aspect = "windows", 4, aspect
@@ -377,13 +380,13 @@ def test_window_search_windows_are_about_one_standing_person_wide(aspect, size, 
     est._run = run  # type: ignore[method-assign]
     est._search(img)
     assert seen == [(0, W), *windows]
-    # a long thin strip: no more than 2 max_people + 1 windows, still covering it (about 100 without the cap)
+    # a long thin strip: no more than MAX_WINDOWS, still covering it (about 130 without the cap)
     seen.clear()
     W, H = 2048, 40
     img = np.zeros((H, W, 3), np.uint8)
     img[0, :, 0], img[0, :, 1] = np.arange(W) % 256, np.arange(W) // 256
     est._search(img)
-    assert len(seen) - 1 == (9 if aspect else 3) and seen[1][0] == 0 and seen[-1][1] == W
+    assert len(seen) - 1 == (MAX_WINDOWS if aspect else 3) and seen[1][0] == 0 and seen[-1][1] == W
     assert all(b[0] <= a[1] for a, b in zip(seen[1:], seen[2:]))  # (overlapping: nothing between two windows)
 
 
