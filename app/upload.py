@@ -101,6 +101,11 @@ class UploadInfo:
     """What the 2D is, for the lifter: photos are detector output; keypoint files say so (``"source"``)."""
     detector: str | None = None
     warnings: tuple[str, ...] = ()
+    people_index: tuple[int, ...] = ()
+    """A keypoint file with several people: each shown person's position in the file (largest first), and"""
+    people_ids: tuple[str | int | None, ...] = ()
+    """their own ids (``person_id``, ``id`` or ``track_id``; None where none): the download keeps both, as
+    ``poselifter lift`` writes them."""
 
 
 @dataclass(frozen=True)
@@ -321,7 +326,9 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
     notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
-                      source=kf.source, num_people=1 + len(others), warnings=tuple(notes))
+                      source=kf.source, num_people=1 + len(others), warnings=tuple(notes),
+                      people_index=tuple(kf.people_index[:1 + len(others)]),
+                      people_ids=tuple(kf.people_ids[:1 + len(others)]))
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
@@ -366,6 +373,9 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     scores = None if info is None else info.scores
     if scores is not None:  # (the detector's confidences are the largest person's)
         lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
+    if info is not None and info.people_index and len(info.people_index) == len(lifted):  # who is who in the file
+        lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
+                       for q, k, i in zip(lifted, info.people_index, info.people_ids))
     warnings = list(info.warnings) if info is not None else []
     for k, joints in sorted((people_dragged or {}).items()):
         if joints:

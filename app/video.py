@@ -18,7 +18,7 @@ import json
 import tempfile
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Final
 
@@ -191,6 +191,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
         except PoseLifterError as exc:
             msg = str(exc).replace(str(path), nm)
             raise UploadError(msg) from None
+    # the user's file name, not the server's temporary copy (in the download's "input" and in any note)
+    rec = replace(rec, input=nm, warnings=[w.replace(str(path), nm) for w in rec.warnings])
     tracks = rec.tracks()
     notes = list(rec.warnings)
     empty = sum(1 for fr in rec.frames if not fr.people)

@@ -622,6 +622,10 @@ def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     assert list(v.gui.joints.person.options) == ["person 1 (id 7)", "person 2 (id kid)"]
     v.gui.joints.person.value = "person 2 (id kid)"
     assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id kid)"
+    # the download keeps who is who, as poselifter lift writes it (user trial: the app's dropped both fields)
+    name, payload = v.download_payload("json")
+    people = json.loads(payload)["people"]
+    assert [(q["input_index"], q["person_id"]) for q in people] == [(1, 7), (0, "kid")], name
     doc["people"] = [{"keypoints": (coco * (1 - 0.05 * k) + 10 * k).tolist()} for k in range(up.MAX_PEOPLE + 2)]
     crowd = up.keypoint_sample("crowd.json", json.dumps(doc).encode(), key="upload/t/crowd.json")
     assert crowd.num_people == up.MAX_PEOPLE

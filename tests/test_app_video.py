@@ -143,6 +143,8 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     assert isinstance(seq, vid.VideoSequence) and seq.num_frames == 10 and seq.jpegs is None
     assert v.state.sample.num_people == 2 and v.state.focal_px == pytest.approx(F)
     assert 3000 < v.frame.root[2] < 5000
+    _, payload = v.download_payload("json")  # the user's file name, not the server's temporary copy (user trial)
+    assert json.loads(payload)["input"] == "walk.json"
     no_size = dict(doc)
     del no_size["image_size"]
     assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is False
