@@ -87,8 +87,10 @@ def with_focal(state: SessionState, value: float) -> tuple[SessionState, str | N
     if not np.isfinite(v):
         raise PoseLifterError(f"focal length {value!r} is not a finite number; kept {state.focal_px:.0f} px")
     v, note = clamp_focal(v, lo=focal_min(state.sample), hi=focal_max(state.sample))
-    if v == state.focal_px or (note is None and v == round(state.focal_px, 1)):  # (the box shows 0.1 px)
+    if note is None and (v == state.focal_px or v == round(state.focal_px, 1)):  # (the box shows 0.1 px)
         return state, None
+    if v == state.focal_px:  # clamped to the value in use (e.g. -500 at the minimum): said, and the box put back
+        return state, note
     return state.evolve(focal_px=v), note
 
 

@@ -74,7 +74,12 @@ LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
 its range is clamped (and the box rewritten) only when the tab has sent nothing newer for this long, so a value
-being typed is not mangled half-way. Until then the tab keeps lifting with the value in use."""
+being typed is not mangled half-way. Until then the tab keeps lifting with the value in use, and nothing else (a
+frame of a playing sequence) rewrites the box."""
+TYPING_GROW_S: float = 3.0
+"""As :data:`TYPING_SETTLE_S`, for a positive value below the box's minimum: more digits can still bring it into
+range ("6" on the way to "6000"), so a slow typist gets this long (user trial: after 1 s the box was rewritten to
+the minimum with the cursor in front, and "6", "000" became "000100")."""
 
 
 class LatestWins:
@@ -361,11 +366,11 @@ class SessionView:
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
         if st.person != old.person:
             self._drop_typed_uv()
-        typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < TYPING_SETTLE_S]
+        typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < self._settle_s(r, values)]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
             rejected = [r for r in rejected if r not in typing]
-            self._settle_later(max(TYPING_SETTLE_S - self._since_typed(r.control) for r in typing) + 0.05)
+            self._settle_later(max(self._settle_s(r, values) - self._since_typed(r.control) for r in typing) + 0.05)
         with self._flags:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False
@@ -399,6 +404,18 @@ class SessionView:
             self._draw_2d(old.keypoints)
         for n in notes:
             self.show_message(n, error=True)
+
+    def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
+        """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
+        positive focal length below the minimum, else :data:`TYPING_SETTLE_S`)."""
+        if r.control == "focal_px":
+            try:
+                typed = float(values.focal_px)
+            except (TypeError, ValueError):
+                return TYPING_SETTLE_S
+            if 0 < typed < focal_min(self.state.sample):
+                return TYPING_GROW_S
+        return TYPING_SETTLE_S
 
     def _control_values(self) -> ss.ControlValues:
         g = self.gui
@@ -578,7 +595,8 @@ class SessionView:
             self.gui.lift.focal.min = lo
         if self.gui.lift.focal.max != hi:
             self.gui.lift.focal.max = hi
-        self._set_control("focal_px", st.focal_px)
+        if self._since_typed("focal_px") >= TYPING_GROW_S:  # (each frame of a playing sequence: not over a focal
+            self._set_control("focal_px", st.focal_px)      # being typed; the pass that settles it shows it)
         if src == "demo":
             self._put(g.demo, sample.key.split("/", 1)[1])
         seq = self.sequence()

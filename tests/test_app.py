@@ -1223,3 +1223,46 @@ def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLi
         time.sleep(TYPING_SETTLE_S + 0.5)
         said = [m for m in v.messages[n_msgs:] if "past the end" in m]
         assert len(said) == 1 and said[0].startswith("frame 5000 is past the end"), said
+
+
+def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
+    """User trial (Chromium): typing 3000 into the focal box while a sequence played left the box at 1144.4 and the
+    lift at 300 px (each frame rewrote the box under the keys); a slow typist's "6" was clamped to the minimum after
+    1 s, so "6000" became "000100"; at the minimum, -500 was neither applied nor answered. Now the frames leave a
+    box being typed alone, a value below the minimum waits TYPING_GROW_S for more digits, and a clamp to the value
+    in use is said and put back in the box."""
+    import time
+
+    from poselifter_app.core import focal_min
+    from poselifter_app.viewer import TYPING_GROW_S, TYPING_SETTLE_S
+
+    with open_tab(app) as (tab, v):
+        v.gui.play.play.value = True  # a still demo sample plays the demo motion
+        assert v.playing
+        try:
+            for typed in ("3", "30", "300", "3000"):
+                _send_value(tab, v.gui.lift.focal, float(typed))
+                time.sleep(0.25)  # several frames between keys
+                assert v.gui.lift.focal.value == float(typed)  # the frames did not rewrite what is being typed
+            assert wait_for(lambda: v.state.focal_px == 3000.0 and _focal_in_readout(v) == 3000, timeout=10)
+            time.sleep(TYPING_GROW_S + 0.3)
+            assert v.gui.lift.focal.value == 3000.0 and v.state.focal_px == 3000.0 and v.playing
+        finally:
+            v.gui.play.play.value = True  # pause
+            assert wait_for(lambda: not v.playing, timeout=5)
+        lo = focal_min(v.state.sample)
+        n_msgs = len(v.messages)
+        _send_value(tab, v.gui.lift.focal, 6.0)  # a slow typist: "6", then a pause longer than TYPING_SETTLE_S
+        time.sleep(TYPING_SETTLE_S + 0.4)
+        assert v.gui.lift.focal.value == 6.0 and v.state.focal_px == 3000.0  # not clamped yet
+        for typed in ("60", "600", "6000"):
+            _send_value(tab, v.gui.lift.focal, float(typed))
+            time.sleep(0.2)
+        assert wait_for(lambda: v.state.focal_px == 6000.0 and v.gui.lift.focal.value == 6000.0, timeout=10)
+        assert not any("clamped" in m for m in v.messages[n_msgs:]), v.messages[n_msgs:]
+        _send_value(tab, v.gui.lift.focal, lo)  # at the minimum, then a value below it
+        assert wait_for(lambda: v.state.focal_px == lo, timeout=10)
+        _send_value(tab, v.gui.lift.focal, -500.0)
+        assert wait_for(lambda: v.gui.lift.focal.value == lo and any("-500 px is outside" in m
+                                                                     for m in v.messages[n_msgs:]), timeout=10)
+        assert v.state.focal_px == lo
