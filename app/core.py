@@ -268,10 +268,10 @@ class Frame:
     metrics: dict[str, float]
     spread: Spread | None = None
     others: tuple[PersonLift, ...] = ()
-    caution: tuple[str, ...] = ()
-    """What looks wrong in the lifted pose (:meth:`lifter.Lifter.output_notes`): a root behind the camera, a
-    pixel-space model given a 2D pose larger or smaller than those it was trained on."""
     """The other people of the image, lifted at the same focal length into the same camera space."""
+    caution: tuple[str, ...] = ()
+    """What looks wrong in the lifted pose (:meth:`lifter.Lifter.output_notes` of the network that lifted it): a
+    root behind the camera, a pixel-space model given a 2D pose larger or smaller than those it was trained on."""
 
     @property
     def alpha(self) -> float:
@@ -305,7 +305,9 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     if ids:  # everyone else, in the same batch: same focal length, same camera space
         batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
     # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
-    res = lifter.lift(batch, focal=f, principal_point=pp, source=lift_source(state), warn=False)
+    source = lift_source(state)
+    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False)
+    used = lifter.clean if source == "clean" and lifter.clean is not None else lifter  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))
     res_abs, res_rel = res.absolute[:n_main], res.relative[:n_main]
@@ -328,7 +330,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others, caution=tuple(lifter.output_notes(noisy, pp, res.root[0])))
+                 others=others, caution=tuple(used.output_notes(noisy, pp, res.root[0])))
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:

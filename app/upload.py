@@ -368,15 +368,16 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
         people, people_dragged = [keypoints], {0: frozenset(dragged)}
     kp_all = np.stack([_check_2d(q, sample.label if i == 0 else f"{sample.label}, person {i + 1}")
                        for i, q in enumerate(people)])
+    output_notes: list[str] = []  # (what looks wrong in the output, as poselifter lift's records carry it)
     lifted = lift_people(lifter, kp_all, np.asarray(focal, np.float64), np.asarray(pp, np.float64), flip_test=None,
-                         source=source)
+                         source=source, notes=output_notes)
     scores = None if info is None else info.scores
     if scores is not None:  # (the detector's confidences are the largest person's)
         lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
     if info is not None and info.people_index and len(info.people_index) == len(lifted):  # who is who in the file
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
                        for q, k, i in zip(lifted, info.people_index, info.people_ids))
-    warnings = list(info.warnings) if info is not None else []
+    warnings = (list(info.warnings) if info is not None else []) + output_notes
     for k, joints in sorted((people_dragged or {}).items()):
         if joints:
             who = f" (person {k + 1})" if len(people) > 1 else ""

@@ -551,6 +551,8 @@ class SessionView:
         kept = same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video")
         if kept:
             st = st.evolve(focal_px=old.focal_px)
+        else:  # the new camera's focal replaces one being typed: the box shows it now (and the pass reads it back)
+            self._typed_at.pop("focal_px", None)
         # a focal length the user chose, replaced by the new camera's: said, not silent
         chosen = abs(old.focal_px - old.sample.camera.alpha) > 0.5 and abs(st.focal_px - old.focal_px) > 0.5
         self._sample_gen += 1

@@ -56,8 +56,8 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         if g.focal < MIN_FOCAL_PX:  # (else the lifter's message would blame a focal length the user never gave)
             raise PoseLifterError(
                 f"{where}: the focal length assumed for this {image_size[0]} x {image_size[1]} px image ({g.detail}) "
-                f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length (--focal), or a narrower "
-                "field of view (--fov)")
+                f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length (--focal)"
+                + (", or a narrower field of view (--fov)" if g.source == "default-fov" else ""))
         notes.append(g.detail)
     if user_pp is not None:
         pp = user_pp

@@ -343,8 +343,9 @@ def train(
         cfg = replace(cfg, model=init[0].config)
     if cfg.augment.zoom and cfg.model.input_space == "camera":
         raise PoseLifterError("--zoom scales the 2D, principal point and focal together, which the reference-camera "
-                              "input (input_space 'camera') undoes exactly, so it would change nothing: drop --zoom, "
-                              "or train a pixel-space model (--input-space pixel)"
+                              "input (input_space 'camera') undoes exactly: the network would see the same input "
+                              "(only each sample's depth-loss weight would change): drop --zoom, or train a "
+                              "pixel-space model (--input-space pixel)"
                               + (" (this model's config comes from --init)" if init is not None else ""))
     if cfg.data.real_rescale and real_keypoints_2d is not None:  # (the config refuses it with real_prob 0)
         real_keypoints_2d, ratio = match_scale(real_keypoints_2d, train_samples.keypoints_2d)

@@ -173,6 +173,22 @@ class FrameResult:
         return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
 
 
+
+def _collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
+    """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note (a pixel
+    model outside its trained sizes, roots behind the camera), with its first frame and how many frames had it."""
+    for note in notes:
+        kind = "pixel-range" if "reads pixels" in note else "behind-camera" if "behind the camera" in note else note
+        first, n, message = acc.get(kind, (frame, 0, note))
+        acc[kind] = (first, n + 1, message)
+
+
+def _output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
+    """The record's lines for :func:`_collect_output_notes`: the first frame's note, and how many frames had it."""
+    return [f"frame {first}: {message}" + (f" ({n} frames like it)" if n > 1 else "")
+            for first, n, message in acc.values()]
+
+
 @dataclass
 class SequenceRecord:
     """A lifted video or keypoint sequence; :meth:`to_json` is what ``DIR/<name>.json`` holds."""
@@ -392,9 +408,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 kp = np.stack([q.keypoints_2d for q in people])
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
-                for note in getattr(res, "warnings", ()):  # what looks wrong in the output: once per kind
-                    first, n, message = output_notes.get(note[:40], (index, 0, note))
-                    output_notes[note[:40]] = (first, n + 1, message)
+                _collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -441,8 +455,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
-    warnings.extend(f"frame {first}: {note}" + (f" ({n} frames like it)" if n > 1 else "")
-                    for first, n, note in output_notes.values())
+    warnings.extend(_output_note_lines(output_notes))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -504,12 +517,18 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     warnings.extend(placeholder_notes(raw, src=ks.format))
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
-    warnings.extend(getattr(res, "warnings", ()))
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
+    # what looks wrong in the output, per frame (the batch's own notes would count people of all frames at once)
+    used = getattr(lifter, "clean", None) if ks.source == "clean" else None
+    used = used if used is not None else lifter
+    output_notes: dict[str, tuple[int, int, str]] = {}
     lifted, k = [], 0
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
+        if c and getattr(res, "warnings", ()):
+            _collect_output_notes(output_notes, i, used.output_notes(kp17[k:k + c], pp, root[k:k + c]))
         k += c
+    warnings.extend(_output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
     for fr, frame_ids in zip(out, ids or []):  # (the tracker keeps each frame's order: largest first)
         for st, pid in zip(fr.people, frame_ids):

@@ -1266,3 +1266,21 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
         assert wait_for(lambda: v.gui.lift.focal.value == lo and any("-500 px is outside" in m
                                                                      for m in v.messages[n_msgs:]), timeout=10)
         assert v.state.focal_px == lo
+
+
+def test_a_typed_focal_is_replaced_by_a_new_cameras_at_once(app: PoseLifterApp) -> None:
+    """Review: after the playback fix, a focal typed in a tab and then another camera chosen within the typing
+    window kept the typed value for good (box and lift at 2000 px while the message said the camera's 800)."""
+    import time
+
+    names = list(app.demo.names)
+    with open_tab(app) as (tab, v):
+        v.select_demo(names[0])
+        other = next(n for n in names[1:] if abs(app.demo.get(n).camera.alpha - v.state.sample.camera.alpha) > 1)
+        _send_value(tab, v.gui.lift.focal, 2000.0)
+        assert wait_for(lambda: v.state.focal_px == 2000.0, timeout=10)
+        v.select_demo(other)  # within the typing window
+        cam = app.demo.get(other).camera.alpha
+        assert v.state.focal_px == pytest.approx(cam) and v.gui.lift.focal.value == pytest.approx(cam, abs=0.05)
+        time.sleep(0.5)
+        assert v.state.focal_px == pytest.approx(cam) and _focal_in_readout(v) == round(cam)

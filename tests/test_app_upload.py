@@ -651,3 +651,5 @@ def test_readout_cautions_when_a_pixel_model_extrapolates(view: SessionView, app
     assert view.state.model == "gt"
     md = view.gui.readout.readout.content
     assert "**Caution** model 'gt' reads pixels and was trained on 2D poses" in md, md
+    _, payload = view.download_payload("json")  # the download carries it too, as poselifter lift's record does
+    assert any("reads pixels and was trained on 2D poses" in w for w in json.loads(payload)["warnings"])

@@ -190,6 +190,16 @@ def test_pixel_models_warn_outside_the_2d_sizes_they_were_trained_on(tmp_path):
                              "principal_point": (_C * 4).tolist(), "image_size": [4096, 4096]}))
     assert any("trained on 2D poses" in w for w in lift_keypoint_file(p, lifter=gt).warnings)
     assert not any("trained on 2D poses" in w for w in lift_keypoint_file(p, lifter=_default()).warnings)
+    # a keypoint sequence: once per kind, from the first frame that has it, with how many frames do
+    from lifter.video import lift_keypoint_sequence
+
+    frames = [{"keypoints": (kp + 3 * _C if i < 2 else kp * 4).tolist()} for i in range(5)]  # (x1 about the same pp)
+    q = tmp_path / "seq.json"
+    q.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": 4 * _F, "principal_point": (_C * 4).tolist(),
+                             "image_size": [4096, 4096], "frames": frames}))
+    said = [w for w in lift_keypoint_sequence(q, lifter=gt).warnings if "reads pixels" in w or "behind" in w]
+    assert len(said) == 2 and said[0].startswith("frame 2: model 'gt' reads pixels") and "(3 frames like it)" in said[0]
+    assert said[1].startswith("frame 2: the model placed 1 of 1 root(s) behind the camera"), said
 
 
 def test_trained_pixel_range_comes_from_the_training_config():
