@@ -351,10 +351,11 @@ def missing_detector_message(name: str, exc: Exception) -> str:
 
 def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: tuple[float, float],
                   dragged: set[int] | frozenset[int] = frozenset(), focal_changed: bool = False,
-                  people: list[np.ndarray] | None = None, people_dragged: dict[int, frozenset[int]] | None = None
-                  ) -> Any:
+                  people: list[np.ndarray] | None = None, people_dragged: dict[int, frozenset[int]] | None = None,
+                  source: str | None = None) -> Any:
     """The tab's result as a :class:`lifter.io.LiftRecord`: the current clean 2D (``(17, 2)`` px,
-    dragged joints included, no noise) lifted at ``focal`` and the sample's principal point.
+    dragged joints included, no noise) lifted at ``focal`` and the sample's principal point, told ``source``
+    (None: the upload's own, ``"clean"`` for a sample without one); the record's ``source`` says which.
 
     With several people, ``people`` is everyone's current 2D in the sample's order (largest first) and
     ``people_dragged`` their dragged joints (person index -> joints); they are lifted in one batch into
@@ -363,7 +364,8 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     cam = sample.camera
     pp = (float(cam.principal_point[0]), float(cam.principal_point[1]))
     info: UploadInfo | None = sample.upload
-    source = "clean" if info is None or info.source == "clean" else "detected"
+    if source is None:  # (the tab says: a sample's detections are "detected", its ground truth "clean")
+        source = "clean" if info is None or info.source == "clean" else "detected"
     if people is None:
         people, people_dragged = [keypoints], {0: frozenset(dragged)}
     kp_all = np.stack([_check_2d(q, sample.label if i == 0 else f"{sample.label}, person {i + 1}")
@@ -397,7 +399,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       scores=top.scores,
                       source_format=H36M17 if info is None else info.source_format,
                       num_people=None if info is None else info.num_people,
-                      detector=None if info is None else info.detector, warnings=tuple(warnings))
+                      detector=None if info is None else info.detector, warnings=tuple(warnings), source=source)
 
 
 def download_stem(sample: Sample) -> str:

@@ -41,7 +41,17 @@ from . import framing
 from . import session as ss
 from . import upload as up
 from . import video as vid
-from .core import Frame, LifterPool, SessionState, compute_frame, focal_max, focal_min, readout_markdown, spread_details
+from .core import (
+    Frame,
+    LifterPool,
+    SessionState,
+    compute_frame,
+    focal_max,
+    focal_min,
+    lift_source,
+    readout_markdown,
+    spread_details,
+)
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
 from .noise import ErrorModelLike, default_error_model, model_name
@@ -597,8 +607,10 @@ class SessionView:
             self.gui.lift.focal.min = lo
         if self.gui.lift.focal.max != hi:
             self.gui.lift.focal.max = hi
-        if self._since_typed("focal_px") >= TYPING_GROW_S:  # (each frame of a playing sequence: not over a focal
-            self._set_control("focal_px", st.focal_px)      # being typed; the pass that settles it shows it)
+        # (each frame of a playing sequence: not over a focal being typed, nor before the pass that settles it at
+        # TYPING_GROW_S has clamped it and shown it: a frame first would put the old value back, silently)
+        if self._since_typed("focal_px") >= TYPING_GROW_S + 1.0:
+            self._set_control("focal_px", st.focal_px)
         if src == "demo":
             self._put(g.demo, sample.key.split("/", 1)[1])
         seq = self.sequence()
@@ -1110,7 +1122,8 @@ class SessionView:
             dragged[st.person] = frozenset(st.dragged)
             rec = up.result_record(st.sample, st.keypoints, lifter=self.app.pool.get(st.model), focal=st.focal,
                                    focal_changed=abs(st.focal_px - st.sample.camera.alpha) > 0.5,
-                                   people=st.people_2d(), people_dragged=dragged)
+                                   people=st.people_2d(), people_dragged=dragged,
+                                   source=lift_source(st.evolve(noise_level=0.0)))  # (clean 2D: no noise on it)
             stem = up.download_stem(st.sample)
         if fmt == "json":
             return f"{stem}.json", up.json_bytes(rec)

@@ -1247,14 +1247,23 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
             assert wait_for(lambda: v.state.focal_px == 3000.0 and _focal_in_readout(v) == 3000, timeout=10)
             time.sleep(TYPING_GROW_S + 0.3)
             assert v.gui.lift.focal.value == 3000.0 and v.state.focal_px == 3000.0 and v.playing
+            # below the minimum while playing: clamped and said once it settles, not put back silently by a frame
+            lo_play = focal_min(v.state.sample)
+            n_play = len(v.messages)
+            _send_value(tab, v.gui.lift.focal, lo_play / 2)
+            assert wait_for(lambda: v.state.focal_px == lo_play and v.gui.lift.focal.value == lo_play
+                            and any("is outside" in m for m in v.messages[n_play:]), timeout=TYPING_GROW_S + 5), \
+                (v.state.focal_px, v.gui.lift.focal.value, v.messages[n_play:])
+            assert v.playing
         finally:
             v.gui.play.play.value = True  # pause
             assert wait_for(lambda: not v.playing, timeout=5)
         lo = focal_min(v.state.sample)
         n_msgs = len(v.messages)
+        before = v.state.focal_px
         _send_value(tab, v.gui.lift.focal, 6.0)  # a slow typist: "6", then a pause longer than TYPING_SETTLE_S
         time.sleep(TYPING_SETTLE_S + 0.4)
-        assert v.gui.lift.focal.value == 6.0 and v.state.focal_px == 3000.0  # not clamped yet
+        assert v.gui.lift.focal.value == 6.0 and v.state.focal_px == before  # not clamped yet
         for typed in ("60", "600", "6000"):
             _send_value(tab, v.gui.lift.focal, float(typed))
             time.sleep(0.2)

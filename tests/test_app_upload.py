@@ -440,6 +440,7 @@ def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
         assert d["canonical_depth"] == pytest.approx(float(ref.canonical_depth), abs=0.01)
         assert d["focal_source"] == "app-slider" and any("r_wrist" in w for w in d["warnings"])
         assert d["kind"] == "keypoints" and d["image_size"] == [800, 600] and d["model"] == v.state.model
+        assert d["source"] == "detected"  # (the file says nothing: detector 2D, as poselifter lift reads it)
         v.gui.files.download_glb.value = True
         assert sent[-1][0] == "sitting_kp_lifted.glb"
         path = tmp_path / "skeleton.glb"
@@ -450,6 +451,14 @@ def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
         name, data = v.download_payload("json")
         d = json.loads(data)
         assert name.startswith("demo_") and d["kind"] == "sample" and d["focal_source"] == "calibrated-camera"
+        assert d["source"] == "clean"  # exact 2D, and the record says so (user trial: it said "detected")
+        ref = app.pool.get(v.state.model).lift(v.state.keypoints, focal=v.state.focal,
+                                               principal_point=v.state.sample.camera.principal_point, source="clean")
+        np.testing.assert_allclose(d["root"], ref.root, atol=0.01)
+        clean_doc = {"keypoints": s.keypoints_2d.tolist(), "format": "h36m17", "image_size": [800, 600],
+                     "focal": 1000, "source": "clean"}
+        assert v.load_upload("clean.json", json.dumps(clean_doc).encode()) is True
+        assert json.loads(v.download_payload("json")[1])["source"] == "clean"
         assert v.download("xml") is False and "unknown download format" in v.messages[-1]
     finally:
         tab.close()
