@@ -209,8 +209,8 @@ class Lifter:
     def trained_pixel_range(self) -> tuple[float, float, float] | None:
         """For a network that reads pixels (``input_space="pixel"``, the paper's models): the 2D poses it was
         trained on, ``(smallest scale, largest scale, largest centre offset)`` px: Human3.6M's
-        (:data:`H36M_POSE_PX`) widened by its zoom augmentation (its training config; for the shipped ones without
-        one, the registry's ``trained_zoom``). Beyond them its depth is an extrapolation: the shipped pixel models
+        (:data:`H36M_POSE_PX`) widened by the typical range of its zoom augmentation, ``2 ** ±zoom_sigma`` (its
+        training config; for the shipped ones without one, the registry's ``trained_zoom``). Beyond them its depth is an extrapolation: the shipped pixel models
         place people behind the camera on images 3-4 x H36M's size (``benchmarks/bench_invariance.py``), and
         :meth:`lift` warns. The focal length alone does not matter to such a network (it only scales Z). None for
         a reference-camera network (exact at every image size) and for a pixel checkpoint that does not say."""
@@ -221,7 +221,11 @@ class Lifter:
             augment = (self.train_config or {}).get("augment")
             if not isinstance(augment, dict):
                 return None
-            k = 2.0 ** float(augment.get("zoom_clip", 0.0)) if augment.get("zoom") else 1.0
+            # the zoom's typical range (log2 scale within one standard deviation), not its clip: near the clip a
+            # zoomed pose is rare in training, and the models are already far off there (re-trial: sh_mix -71 %
+            # on a 4x view, inside its clip range)
+            spread = min(float(augment.get("zoom_sigma", 0.0)), float(augment.get("zoom_clip", 0.0)))
+            k = 2.0 ** spread if augment.get("zoom") else 1.0
             zoom = (1.0 / k, k)
         lo, hi = float(zoom[0]), float(zoom[1])
         return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)

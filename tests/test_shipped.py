@@ -164,7 +164,8 @@ def test_pixel_models_warn_outside_the_2d_sizes_they_were_trained_on(tmp_path):
     gt = Lifter.from_pretrained("gt")
     assert gt.trained_pixel_range == pytest.approx(H36M_POSE_PX)  # no zoom augmentation: H36M's poses only
     lo, hi, off = H36M_POSE_PX
-    assert Lifter.from_pretrained("sh_mix").trained_pixel_range == pytest.approx((lo / 2, hi * 2, off * 2))  # zoom
+    k = 2 ** 0.5  # their zoom: log2 scale with sigma 0.5 (clipped at 1): the typical range, not the clip
+    assert Lifter.from_pretrained("sh_mix").trained_pixel_range == pytest.approx((lo / k, hi * k, off * k), rel=1e-4)
     assert _default().trained_pixel_range is None
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -212,8 +213,8 @@ def test_trained_pixel_range_comes_from_the_training_config():
 
     cfg = ModelConfig(width=16, num_blocks=1, input_space="pixel", depth_target="canonical")
     net, codec = PoseLifterNet(cfg), PoseCodec(cfg)
-    zoomed = TrainConfig(model=cfg, augment=AugmentConfig(zoom=True, zoom_clip=0.5)).to_dict()
-    k = 2 ** 0.5
+    zoomed = TrainConfig(model=cfg, augment=AugmentConfig(zoom=True, zoom_sigma=0.5, zoom_clip=1.0)).to_dict()
+    k = 2 ** 0.5  # one standard deviation of log2 zoom, within the clip
     lo, hi, off = H36M_POSE_PX
     assert Lifter(net, codec, train_config=zoomed).trained_pixel_range == pytest.approx((lo / k, hi * k, off * k))
     plain = TrainConfig(model=cfg).to_dict()
