@@ -307,7 +307,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
     source = lift_source(state)
     res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False)
-    used = lifter.clean if source == "clean" and lifter.clean is not None else lifter  # (what lift routed to)
+    used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))
     res_abs, res_rel = res.absolute[:n_main], res.relative[:n_main]

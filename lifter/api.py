@@ -96,8 +96,8 @@ class LiftResult:
         exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 8 % through the clean network,
         29 % through the detected ones; single poses further).
     warnings: what looks wrong in the output (roots behind the camera; a pixel-space model given 2D poses larger
-        or smaller than those it was trained on), as :meth:`Lifter.lift` warned them (``warn=True``) or would have; empty when
-        nothing does.
+        or smaller than those it was trained on), as :meth:`Lifter.lift` warned them (``warn=True``) or would have;
+        empty when nothing does.
     """
 
     absolute: np.ndarray
@@ -151,8 +151,8 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
         per_first = "" if len(lead) < 2 else (f", or {lead[:1] + (1,) * (len(lead) - 1) + (2,)} for one per "
                                                  f"index of the first axis")
         raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
-                              f"shape {lead}: its last axis is {_PAIRS.get(name, '(x, y)')}, so give (2,) for every pose, {lead + (2,)} for "
-                              f"each{per_first}") from None
+                              f"shape {lead}: its last axis is {_PAIRS.get(name, '(x, y)')}, so give (2,) for "
+                              f"every pose, {lead + (2,)} for each{per_first}") from None
 
 
 class Lifter:
@@ -210,9 +210,9 @@ class Lifter:
         """For a network that reads pixels (``input_space="pixel"``, the paper's models): the 2D poses it was
         trained on, ``(smallest scale, largest scale, largest centre offset)`` px: Human3.6M's
         (:data:`H36M_POSE_PX`) widened by the typical range of its zoom augmentation, ``2 ** ±zoom_sigma`` (its
-        training config; for the shipped ones without one, the registry's ``trained_zoom``). Beyond them its depth is an extrapolation: the shipped pixel models
-        place people behind the camera on images 3-4 x H36M's size (``benchmarks/bench_invariance.py``), and
-        :meth:`lift` warns. The focal length alone does not matter to such a network (it only scales Z). None for
+        training config; for the shipped ones without one, the registry's ``trained_zoom``). Beyond them its depth
+        is an extrapolation: the shipped pixel models place people behind the camera on images 3-4 x H36M's size
+        (``benchmarks/bench_invariance.py``), and :meth:`lift` warns. The focal length alone does not matter to such a network (it only scales Z). None for
         a reference-camera network (exact at every image size) and for a pixel checkpoint that does not say."""
         if self.config.input_space != "pixel":
             return None
@@ -229,6 +229,11 @@ class Lifter:
             zoom = (1.0 / k, k)
         lo, hi = float(zoom[0]), float(zoom[1])
         return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)
+
+    def network_for(self, source: Source) -> Lifter:
+        """The lifter :meth:`lift` runs for 2D told ``source``: :attr:`clean` for ``"clean"`` when this model has a
+        separate clean-2D network, else this one (with its :attr:`ensemble`)."""
+        return self.clean if source == "clean" and self.clean is not None else self
 
     def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike) -> list[str]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
@@ -409,7 +414,7 @@ class Lifter:
             (:func:`lifter._checks.input_warnings`); False for callers that report it themselves (the records'
             notes, the app's readout). A keyword rather than ``warnings.catch_warnings``, which is not thread-safe.
         """
-        target = self.clean if source == "clean" and self.clean is not None else self
+        target = self.network_for(source)
         return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
                                     source=source, flip_test=flip_test, warn=warn)
 

@@ -173,7 +173,6 @@ class FrameResult:
         return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
 
 
-
 def _collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
     """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note (a pixel
     model outside its trained sizes, roots behind the camera), with its first frame and how many frames had it."""
@@ -519,14 +518,13 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     # what looks wrong in the output, per frame (the batch's own notes would count people of all frames at once)
-    used = getattr(lifter, "clean", None) if ks.source == "clean" else None
-    used = used if used is not None else lifter
     output_notes: dict[str, tuple[int, int, str]] = {}
     lifted, k = [], 0
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
-            _collect_output_notes(output_notes, i, used.output_notes(kp17[k:k + c], pp, root[k:k + c]))
+            _collect_output_notes(output_notes, i,
+                                  lifter.network_for(ks.source).output_notes(kp17[k:k + c], pp, root[k:k + c]))
         k += c
     warnings.extend(_output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
