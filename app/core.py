@@ -306,7 +306,9 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
     # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
     source = lift_source(state)
-    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False)
+    lens = (*cam.k, *cam.p)  # H36M frames: their camera's; demo renders and uploads: none
+    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False,
+                      distortion=lens if any(lens) else None)
     used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))
@@ -317,7 +319,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     cloud = res_abs[1:] if n_main > 1 else None
     analytic = None
     if state.analytic:
-        root_a = analytic_root(noisy, res_rel[0], focal=f, principal_point=pp)
+        root_a = analytic_root(res.keypoints_2d[0], res_rel[0], focal=f, principal_point=pp)  # (as lifted)
         analytic = root_a[None, :] + res_rel[0]
     metrics: dict[str, float] = {}
     gt = state.sample.pose_3d

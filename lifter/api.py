@@ -26,9 +26,10 @@ from numpy.typing import ArrayLike
 
 from . import resources as assets
 from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings, where_in_batch
-from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov
+from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov, undistort_pixels
 from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
+from .data import LENSES, Lens
 from .model import (
     MirrorCoupledLinear,
     ModelConfig,
@@ -141,6 +142,16 @@ class LiftResult:
 _PAIRS: Final[dict[str, str]] = {"focal": "(fx, fy)", "principal_point": "(cx, cy)", "image_size": "(width, height)"}
 
 
+def _lens_of(train_config: dict[str, Any] | None) -> Lens:
+    """The ``data.lens`` of a checkpoint's training config; ``"h36m"`` when it has none (checkpoints from before
+    the option, the paper's models)."""
+    data = (train_config or {}).get("data")
+    lens = data.get("lens", "h36m") if isinstance(data, dict) else "h36m"
+    if lens not in LENSES:
+        raise PoseLifterError(f"checkpoint training config: data.lens is {lens!r}; expected one of {list(LENSES)}")
+    return lens
+
+
 def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
     try:
         return np.broadcast_to(x, lead + (2,))
@@ -169,6 +180,10 @@ class Lifter:
             raise PoseLifterError("the clean-2D lifter of a Lifter cannot have a clean lifter or an ensemble of its own")
         if any(m.clean is not None or m.ensemble for m in ensemble):
             raise PoseLifterError("ensemble members cannot have a clean lifter or an ensemble of their own")
+        if any(_lens_of(m.train_config) != _lens_of(train_config) for m in ensemble):
+            raise PoseLifterError("ensemble members must have learned the same 2D as the network they join "
+                                  "(train config data.lens): " + ", ".join(
+                                      sorted({_lens_of(m.train_config) for m in ensemble} | {_lens_of(train_config)})))
         self.ensemble: tuple[Lifter, ...] = tuple(ensemble)
         """More networks for the same (detected) 2D: :meth:`lift` averages the relative pose and the root depth of
         this network and of these, each with its own flip-test default (the root stays on the 2D root's ray). Empty
@@ -229,6 +244,14 @@ class Lifter:
             zoom = (1.0 / k, k)
         lo, hi = float(zoom[0]), float(zoom[1])
         return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)
+
+    @property
+    def lens(self) -> Lens:
+        """The 2D this network learned (training config ``data.lens``; :data:`lifter.data.Lens`): ``"pinhole"``,
+        undistorted 2D (the default lifter), or ``"h36m"``, Human3.6M's own 2D with its cameras' lens distortion
+        (the paper's models, and any checkpoint that does not say). :meth:`lift` undistorts 2D for which it is
+        given a ``distortion`` only for a pinhole network."""
+        return _lens_of(self.train_config)
 
     def network_for(self, source: Source) -> Lifter:
         """The lifter :meth:`lift` runs for 2D told ``source``: :attr:`clean` for ``"clean"`` when this model has a
@@ -393,6 +416,7 @@ class Lifter:
         principal_point: ArrayLike | None = None,
         image_size: ArrayLike | None = None,
         source: Source = "detected",
+        distortion: ArrayLike | None = None,
         flip_test: bool | None = None,
         warn: bool = True,
     ) -> LiftResult:
@@ -406,6 +430,13 @@ class Lifter:
         image_size: ``(width, height)`` px, or per pose ``(..., 2)``, for the defaults above.
         source: ``"detected"`` (default): 2D from a detector; ``"clean"``: exact 2D (ground truth,
             hand-placed or dragged joints). The lifter uses what it was trained for on each.
+        distortion: the lens distortion of the camera that saw the 2D, ``(k1, k2, k3, p1, p2)`` or per pose
+            ``(..., 5)``, in Human3.6M's Brown-Conrady form (:func:`lifter.camera.distort`; its radial terms are
+            OpenCV's, its tangential terms are not). None (default): the 2D is already undistorted, or the
+            distortion is not known. The default lifter's networks learned undistorted (pinhole) 2D, so given a
+            distortion it undistorts the keypoints first (:func:`lifter.camera.undistort_pixels`) and lifts those
+            (:attr:`LiftResult.keypoints_2d`); the paper's models learned H36M's distorted 2D
+            (:attr:`lens` ``"h36m"``) and are given the keypoints as they are. Needs the camera's focal length.
         flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
             None: the model's default (:attr:`flip_test`). Ignored by networks that are mirror-equivariant by
             construction (``symmetry="mirror"``, like the default's second detected network): for them it would
@@ -416,10 +447,11 @@ class Lifter:
         """
         target = self.network_for(source)
         return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
-                                    source=source, flip_test=flip_test, warn=warn)
+                                    source=source, distortion=distortion, flip_test=flip_test, warn=warn)
 
     def _lift_checked(self, keypoints: ArrayLike, *, focal: ArrayLike | None, principal_point: ArrayLike | None,
-                      image_size: ArrayLike | None, source: Source, flip_test: bool | None, warn: bool) -> LiftResult:
+                      image_size: ArrayLike | None, source: Source, distortion: ArrayLike | None,
+                      flip_test: bool | None, warn: bool) -> LiftResult:
         """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
@@ -470,6 +502,21 @@ class Lifter:
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
                 "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to "
                 "assume a default field of view")
+        if distortion is not None:
+            if focal_source != "given":
+                raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "
+                                      "(px) too, or leave distortion out")
+            dist = np.asarray(distortion, np.float64)
+            if dist.ndim == 0 or dist.shape[-1] != 5 or not np.all(np.isfinite(dist)):
+                raise PoseLifterError(f"distortion: expected finite (k1, k2, k3, p1, p2) or per pose (..., 5), got "
+                                      f"shape {dist.shape}")
+            try:
+                dist = np.broadcast_to(dist, lead + (5,))
+            except ValueError:
+                raise PoseLifterError(f"distortion: shape {dist.shape} does not match the keypoints' poses "
+                                      f"{lead}: give one (5,) for all, or one row per pose {lead + (5,)}") from None
+            if self.lens == "pinhole":
+                kp = undistort_pixels(kp, focal=f, principal_point=pp, k=dist[..., :3], p=dist[..., 3:])
         if warn:
             for message in input_warnings(kp, f if focal_source == "given" else None):
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)

@@ -21,6 +21,7 @@ from typing import Any, Literal, get_args, get_origin
 
 from ._checks import PoseLifterError
 from .checkpoint import load_checkpoint
+from .data import LENSES, Lens
 from .model import ModelConfig
 
 
@@ -78,6 +79,9 @@ class DataConfig:
     noise_level_min: float = _help("lowest noise level (0 clean, 1 as fitted)", default=1.0)
     noise_level_max: float = _help("highest noise level", default=1.0)
     noise_outliers: bool = _help("sample the mixture's uniform outliers (False: the authors' code)", default=False)
+    lens: Lens = _help("the 2D the network learns: 'h36m' H36M's own, with its cameras' lens distortion (the "
+                       "paper's models), or 'pinhole' the ideal pinhole projection, with the real detections "
+                       "undistorted (what undistorted photos give; the default lifter)", default="h36m")
 
     def __post_init__(self) -> None:
         _check(self.protocol in (1, 2), f"protocol must be 1 or 2, got {self.protocol!r}")
@@ -92,6 +96,7 @@ class DataConfig:
                f"{self.real_prob}: lower --clean-prob or --real-prob")
         _check(self.real_prob == 0 or self.train_stride % 5 == 0,
                f"real detections exist every 5th frame: train_stride must be a multiple of 5, got {self.train_stride}")
+        _check(self.lens in LENSES, f"lens must be one of {list(LENSES)}, got {self.lens!r}")
         _booleans(self)
         _check(not self.real_rescale or self.real_prob > 0,
                "real_rescale rescales the real detections, but real_prob is 0 (none are used): give --real-prob P "

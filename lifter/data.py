@@ -5,7 +5,9 @@ Reads the repackaged H36M folder (default ``../shared/data/h36m``, or ``$POSELIF
 
 * 3D: world mm -> camera frame with each camera's ``R, t`` (``X_cam = R X_world + t``), mm.
 * 2D: the projection **with the camera's lens distortion** (how H36M's own 2D annotations are
-  made), px, in the 1000 x 1000 (or 1000 x 1002) image.
+  made), px, in the 1000 x 1000 (or 1000 x 1002) image; or, with ``lens="pinhole"``, the ideal pinhole
+  projection of the same 3D (what an undistorted photo shows; :meth:`H36M.undistort` maps H36M's 2D and its
+  detections there).
 * Frames are taken at ``stride`` from frame 0 of each 50-fps sequence.
 
 The data are licensed for non-commercial research and are never copied into the project.
@@ -19,11 +21,12 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
+from typing import Literal, get_args
 
 import numpy as np
 
 from ._checks import PoseLifterError
-from .camera import Camera, canonical_depth_from_depth, project, world_to_camera
+from .camera import Camera, canonical_depth_from_depth, undistort_pixels, world_to_camera
 
 
 def _default_h36m_dir(package_parent: Path) -> Path:
@@ -63,6 +66,12 @@ ACTIONS: tuple[str, ...] = (
 """The 15 H36M actions in the column order of the paper's Table 5."""
 
 CAMERA_IDS: tuple[str, ...] = ("54138969", "55011271", "58860488", "60457274")
+
+Lens = Literal["h36m", "pinhole"]
+"""Which 2D a network learned and is given: ``"h36m"`` H36M's own 2D, with its cameras' lens distortion (up to
+about 10 px at the image border; the paper's models); ``"pinhole"`` the ideal pinhole projection, i.e. undistorted
+2D (the default lifter's networks). Users' 2D from undistorted photos is pinhole 2D."""
+LENSES: tuple[str, ...] = get_args(Lens)
 MISSING_TEST_SEQUENCES: tuple[str, ...] = ("S9/Discussion 1",)
 
 
@@ -90,12 +99,16 @@ def action_of(sequence: str) -> str:
 class PoseSamples:
     """A set of N H36M samples (one camera view of one frame each), all as numpy arrays.
 
-    keypoints_2d: ``(N, 17, 2)`` float32 px, distorted projection of the 3D joints (ground truth).
+    keypoints_2d: ``(N, 17, 2)`` float32 px, the projection of the 3D joints (ground truth): with the lens
+        distortion when ``lens`` is ``"h36m"`` (H36M's own 2D), the ideal pinhole projection when ``"pinhole"``.
     pose_3d: ``(N, 17, 3)`` float32 mm, camera frame.
     focal, principal_point: ``(N, 2)`` float32 px. image_size: ``(N, 2)`` int (width, height) px.
     subject: ``(N,)`` int; action: ``(N,)`` int index into :data:`ACTIONS`;
     camera: ``(N,)`` int index into :data:`CAMERA_IDS`; frame: ``(N,)`` int, 0-based row at 50 fps;
     sequence: ``(N,)`` int index into ``sequence_names``.
+    distortion: ``(N, 5)`` float32, each sample's camera's lens distortion ``(k1, k2, k3, p1, p2)``
+        (:func:`lifter.camera.distort`'s form), whatever ``lens``.
+    lens: which 2D ``keypoints_2d`` is (:data:`Lens`).
     """
 
     keypoints_2d: np.ndarray
@@ -109,6 +122,8 @@ class PoseSamples:
     frame: np.ndarray
     sequence: np.ndarray
     sequence_names: tuple[str, ...]
+    distortion: np.ndarray
+    lens: Lens = "h36m"
 
     def __len__(self) -> int:
         return int(self.keypoints_2d.shape[0])
@@ -134,6 +149,22 @@ class PoseSamples:
             if isinstance(v, np.ndarray):
                 kw[k] = v[index]
         return PoseSamples(**kw)
+
+    @property
+    def input_distortion(self) -> np.ndarray | None:
+        """What to pass :meth:`lifter.Lifter.lift` as ``distortion`` with ``keypoints_2d`` (or detections made on
+        H36M's images): the cameras' :attr:`distortion` for H36M's own 2D, None for pinhole 2D."""
+        return self.distortion if self.lens == "h36m" else None
+
+    def undistort(self, keypoints: np.ndarray) -> np.ndarray:
+        """2D ``(N, J, 2)`` px seen through the samples' real cameras (H36M's 2D, detections on H36M's images)
+        mapped to the ideal pinhole with the same intrinsics (:func:`lifter.camera.undistort_pixels`); row i uses
+        sample i's camera. NaN joints stay NaN."""
+        kp = np.asarray(keypoints, np.float64)
+        if kp.ndim != 3 or kp.shape[0] != len(self) or kp.shape[-1] != 2:
+            raise PoseLifterError(f"keypoints: expected shape ({len(self)}, J, 2), got {kp.shape}")
+        d = self.distortion.astype(np.float64)
+        return undistort_pixels(kp, focal=self.focal, principal_point=self.principal_point, k=d[:, :3], p=d[:, 3:])
 
     def with_keypoints(self, keypoints_2d: np.ndarray) -> PoseSamples:
         """A copy whose 2D inputs are replaced (e.g. by detections or noisy 2D)."""
@@ -210,15 +241,20 @@ class H36M:
         cameras: Sequence[str] = CAMERA_IDS,
         actions: Sequence[str] | None = None,
         max_frames_per_sequence: int | None = None,
+        lens: Lens = "h36m",
     ) -> PoseSamples:
         """All samples of the given subjects at a frame stride, for each camera.
 
         ``max_frames_per_sequence`` keeps only the first frames (after striding) of each sequence:
-        small, fixed slices for tests.
+        small, fixed slices for tests. ``lens``: the 2D with H36M's lens distortion or the pinhole projection
+        (:data:`Lens`).
         """
         if stride < 1:
             raise ValueError(f"stride must be >= 1, got {stride}")
-        acc: dict[str, list[np.ndarray]] = {k: [] for k in ("kp", "p3", "f", "c", "wh", "s", "a", "cam", "fr", "seq")}
+        if lens not in LENSES:
+            raise PoseLifterError(f"lens must be one of {list(LENSES)}, got {lens!r}")
+        acc: dict[str, list[np.ndarray]] = {k: [] for k in ("kp", "p3", "f", "c", "wh", "s", "a", "cam", "fr", "seq",
+                                                             "dist")}
         names = self.sequences_of(subjects)
         for seq_idx, seq in enumerate(names):
             subject = int(seq.split("/")[0][1:])
@@ -232,7 +268,7 @@ class H36M:
             for cam_id in cameras:
                 cam = self.camera(subject, cam_id)
                 p3 = world_to_camera(world, cam.R, cam.t)
-                kp = project(p3, focal=cam.focal, principal_point=cam.principal_point, k=cam.k, p=cam.p)
+                kp = cam.project(p3, distortion=lens == "h36m")
                 n = len(frames)
                 acc["kp"].append(kp.astype(np.float32))
                 acc["p3"].append(p3.astype(np.float32))
@@ -244,6 +280,7 @@ class H36M:
                 acc["cam"].append(np.full(n, CAMERA_IDS.index(cam_id), np.int32))
                 acc["fr"].append(frames.astype(np.int32))
                 acc["seq"].append(np.full(n, seq_idx, np.int32))
+                acc["dist"].append(np.tile(np.asarray([*cam.k, *cam.p], np.float32), (n, 1)))
         if not acc["kp"]:
             raise ValueError(f"no H36M samples for subjects={list(subjects)} actions={actions}")
         cat = {k: np.concatenate(v) for k, v in acc.items()}
@@ -259,6 +296,8 @@ class H36M:
             frame=cat["fr"],
             sequence=cat["seq"],
             sequence_names=tuple(names),
+            distortion=cat["dist"],
+            lens=lens,
         )
 
     def load_protocol(self, protocol: int, split: str, *, stride: int, **kw) -> PoseSamples:

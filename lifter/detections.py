@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import PoseLifterError
-from .data import CAMERA_IDS, H36M, PoseSamples
+from .data import CAMERA_IDS, H36M, Lens, PoseSamples
 from .keypoints import convert, get_format
 from .normalization import pose_scale
 
@@ -23,7 +23,7 @@ SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
 
 
 def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: str = "sh16",
-                       dst: str = "h36m17") -> tuple[np.ndarray, np.ndarray]:
+                       dst: str = "h36m17", lens: Lens = "h36m") -> tuple[np.ndarray, np.ndarray]:
     """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
 
     Returns ``(keypoints (N, J_dst, 2) px float64, valid (N,) bool)``: detections converted with
@@ -31,7 +31,9 @@ def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: s
     the file has no detection for the sample (e.g. S11 "Directions" camera 54138969, or a training frame
     that is not a multiple of 5). The row of a frame is inferred per sequence and camera from the row
     count: ``frame // 5`` when the file holds every 5th frame (training subjects), ``frame`` when it
-    holds every frame (S9, S11). ``data`` is the :class:`lifter.data.H36M` the samples came from.
+    holds every frame (S9, S11). ``data`` is the :class:`lifter.data.H36M` the samples came from. ``lens``:
+    ``"h36m"`` the pixels as detected on H36M's images (with its lens distortion), ``"pinhole"`` undistorted
+    (:meth:`lifter.data.PoseSamples.undistort`).
     """
     data = data or H36M()
     path = Path(data.root) / SH_DETECTIONS_FILE
@@ -62,6 +64,10 @@ def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: s
         rows = np.arange(a, b)[ok]
         out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
         valid[rows] = True
+    if lens != "h36m":
+        if lens != "pinhole":
+            raise PoseLifterError(f"lens must be 'h36m' or 'pinhole', got {lens!r}")
+        out = samples.undistort(out)
     return out, valid
 
 

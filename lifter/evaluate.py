@@ -52,19 +52,22 @@ class Predictions:
 
 def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = None, analytic: bool = False,
             batch_size: int = 8192, progress: bool = True, source: Source = "detected") -> Predictions:
-    """Lift every sample (its own camera) told ``source``; optionally also the analytic root."""
+    """Lift every sample (its own camera, with its lens distortion for H36M's own 2D:
+    :attr:`~lifter.data.PoseSamples.input_distortion`) told ``source``; optionally also the analytic root."""
     rel, root, aroot = [], [], []
     n = len(samples)
     bar = tqdm(range(0, n, batch_size), disable=None if progress else True, desc=f"lifting ({lifter.name})",
                unit="batch")  # (None: no bar when stderr is not a terminal)
     for s in bar:
         sl = slice(s, min(n, s + batch_size))
+        dist = samples.input_distortion
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
-                          principal_point=samples.principal_point[sl], flip_test=flip_test, source=source)
+                          principal_point=samples.principal_point[sl], flip_test=flip_test, source=source,
+                          distortion=None if dist is None else dist[sl])
         rel.append(res.relative)
         root.append(res.root)
-        if analytic:
-            aroot.append(analytic_root(samples.keypoints_2d[sl], res.relative, focal=samples.focal[sl],
+        if analytic:  # from the 2D the networks lifted (undistorted for a pinhole lifter)
+            aroot.append(analytic_root(res.keypoints_2d, res.relative, focal=samples.focal[sl],
                                        principal_point=samples.principal_point[sl]))
     return Predictions(np.concatenate(rel), np.concatenate(root), np.concatenate(aroot) if analytic else None)
 
@@ -125,7 +128,7 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
     f = samples.focal.astype(np.float64) * focal_scale
     c = samples.principal_point.astype(np.float64) + np.asarray(principal_shift, np.float64)
     kp = project(samples.pose_3d.astype(np.float64), focal=f, principal_point=c)
-    return replace(samples, keypoints_2d=kp.astype(np.float32), focal=f.astype(np.float32),
+    return replace(samples, keypoints_2d=kp.astype(np.float32), focal=f.astype(np.float32), lens="pinhole",
                    principal_point=c.astype(np.float32),
                    image_size=np.round(samples.image_size * focal_scale).astype(np.int32))
 

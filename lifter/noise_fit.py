@@ -226,7 +226,8 @@ def plot_depth_vs_scale(samples: PoseSamples, path: Path, *, weights: str = "def
         raise SkipFigure(f"no lifter weights ({exc})") from None
     plt = _pyplot()
     kp = samples.keypoints_2d.astype(np.float64)
-    res = lifter.lift(kp, focal=samples.focal, principal_point=samples.principal_point, source="clean")
+    res = lifter.lift(kp, focal=samples.focal, principal_point=samples.principal_point, source="clean",
+                      distortion=samples.input_distortion)
     sigma = pose_scale(kp)
     pred, true = res.canonical_depth / 1000.0, samples.canonical_depth / 1000.0
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))

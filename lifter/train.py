@@ -331,12 +331,16 @@ def train(
     if train_samples is None:
         data = data or H36M()
         train_samples = data.load_protocol(cfg.data.protocol, "train", stride=cfg.data.train_stride,
-                                           max_frames_per_sequence=cfg.data.max_frames_per_sequence)
+                                           max_frames_per_sequence=cfg.data.max_frames_per_sequence,
+                                           lens=cfg.data.lens)
     if val_sets is None:
         data = data or H36M()
         val = data.load_protocol(cfg.data.protocol, "test", stride=cfg.data.val_stride,
-                                 max_frames_per_sequence=cfg.data.max_frames_per_sequence)
+                                 max_frames_per_sequence=cfg.data.max_frames_per_sequence, lens=cfg.data.lens)
         val_sets = validation_sets(val, None)
+    if train_samples.lens != cfg.data.lens:
+        raise PoseLifterError(f"the training samples' 2D is lens={train_samples.lens!r} but the config says data.lens="
+                              f"{cfg.data.lens!r}: load them with H36M.load(..., lens={cfg.data.lens!r})")
     if cfg.data.real_prob > 0 and real_keypoints_2d is None:
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:

@@ -12,7 +12,7 @@ never committed), keyed by the model bundle's sha256, so only the first run need
 ~10 s; ``--redetect`` refreshes the cache.
 
 The full report (``--full [--out docs/cascade/eval_cascade.json]``) also measures, with each frame's
-true camera intrinsics (focal, principal point; no lens undistortion):
+true camera intrinsics (focal, principal point, and lens distortion, which a pinhole lifter undistorts):
 
 * MPJPE, PA-MPJPE, MRPE (mm), per joint, for BlazePose 2D, and for reference the ground-truth 2D
   and the Stacked-Hourglass detections of the same frames; also BlazePose with the focal length
@@ -237,6 +237,7 @@ def quick_table(
     gt3d: np.ndarray,
     focal: np.ndarray,
     pp: np.ndarray,
+    dist: np.ndarray,
 ) -> str:
     """MPJPE / PA-MPJPE / MRPE of each lifter on BlazePose, SH and GT 2D of the detected frames (true camera)."""
     L = [
@@ -256,7 +257,8 @@ def quick_table(
             (gt2d[ok], "clean"),
         )
         for kp, src in inputs:
-            m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src).absolute, gt3d[ok])
+            m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src,
+                                     distortion=dist[ok]).absolute, gt3d[ok])
             cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['root_z_bias']:+.0f})")
         L.append(f"| {ref if ref.endswith('.pt') else lf.name} | " + " | ".join(cells) + " |")
     return "\n".join(L)
@@ -308,6 +310,7 @@ def main() -> int:
     cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
     focal = np.array([c.focal for c in cams])
     pp = np.array([c.principal_point for c in cams])
+    dist = np.array([[*c.k, *c.p] for c in cams])  # the 2D is seen through H36M's lenses: each camera's distortion
     sizes = np.array([(c.width, c.height) for c in cams])
     gt2d = ann["p2d_gt"].astype(np.float64)
     gt3d = ann["p3d_cam"].astype(np.float64)
@@ -328,6 +331,7 @@ def main() -> int:
                 gt3d,
                 focal,
                 pp,
+                dist,
             )
         )
         return 0
@@ -337,7 +341,7 @@ def main() -> int:
     t_lift = np.full(n_all, np.nan)
     for i in np.flatnonzero(ok):
         t3 = time.perf_counter()
-        lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i])
+        lifter.lift(convert(kp33[i], src="blazepose33"), focal=focal[i], principal_point=pp[i], distortion=dist[i])
         t_lift[i] = time.perf_counter() - t3
     timing = {
         "decode_ms": round(1e3 * float(np.median(t_load)), 1),
@@ -354,7 +358,7 @@ def main() -> int:
     # ---------------------------------------------------------------- lifting metrics
     det17 = convert(kp33[ok], src="blazepose33")
     rows: dict[str, Any] = {}
-    res = lifter.lift(det17, focal=focal[ok], principal_point=pp[ok])
+    res = lifter.lift(det17, focal=focal[ok], principal_point=pp[ok], distortion=dist[ok])
     rows["BlazePose 2D, true focal"] = pose_metrics(res.absolute, gt3d[ok])
     f_def = np.array([focal_from_fov(tuple(s)) for s in sizes[ok]])[:, None].repeat(2, 1)
     res_nf = lifter.lift(det17, focal=f_def, principal_point=sizes[ok] / 2.0)
@@ -362,16 +366,17 @@ def main() -> int:
         res_nf.absolute, gt3d[ok]
     )
     rows["SH detections 2D (same frames), true focal"] = pose_metrics(
-        lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok]).absolute, gt3d[ok]
+        lifter.lift(sh17[ok], focal=focal[ok], principal_point=pp[ok], distortion=dist[ok]).absolute, gt3d[ok]
     )
     rows["ground-truth 2D (same frames), true focal"] = pose_metrics(
-        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok], source="clean").absolute, gt3d[ok]
+        lifter.lift(gt2d[ok], focal=focal[ok], principal_point=pp[ok], source="clean",
+                    distortion=dist[ok]).absolute, gt3d[ok]
     )
     rows["ground-truth 2D, all 84 frames"] = pose_metrics(
-        lifter.lift(gt2d, focal=focal, principal_point=pp, source="clean").absolute, gt3d
+        lifter.lift(gt2d, focal=focal, principal_point=pp, source="clean", distortion=dist).absolute, gt3d
     )
     rows["SH detections 2D, all 84 frames"] = pose_metrics(
-        lifter.lift(sh17, focal=focal, principal_point=pp).absolute, gt3d
+        lifter.lift(sh17, focal=focal, principal_point=pp, distortion=dist).absolute, gt3d
     )
     held = ann["camera"][ok] == args.holdout_camera
     if not held.any() or held.all():
@@ -382,7 +387,7 @@ def main() -> int:
     comparison: dict[str, Any] = {}
     for ref in dict.fromkeys([args.weights, *args.compare]):
         lf = lifter if ref == args.weights else Lifter.load(ref)
-        a = lf.lift(det17, focal=focal[ok], principal_point=pp[ok]).absolute
+        a = lf.lift(det17, focal=focal[ok], principal_point=pp[ok], distortion=dist[ok]).absolute
         comparison[ref if ref.endswith(".pt") else lf.name] = {
             "all detected frames": pose_metrics(a, gt3d[ok]),
             f"held-out camera {args.holdout_camera}": pose_metrics(a[held], gt3d[ok][held]),

@@ -40,9 +40,11 @@ def main() -> int:
           f"{np.median(pose_scale(dist) / pose_scale(pin)):.4f}")
     print(f"{'2D':26s} {'source':9s} {'MPJPE':>6s} {'MRPE':>6s}  mean signed root-depth error ({lifter.name!r})")
     sources: tuple[Source, ...] = ("clean", "detected")
-    for name, kp in (("H36M's (lens distortion)", dist), ("pinhole re-projection", pin)):
+    for name, kp, lens in (("H36M's (lens distortion)", dist, None),
+                           ("H36M's, distortion given", dist, s.distortion),
+                           ("pinhole re-projection", pin, None)):
         for src in sources:
-            r = lifter.lift(kp, focal=s.focal, principal_point=s.principal_point, source=src)
+            r = lifter.lift(kp, focal=s.focal, principal_point=s.principal_point, source=src, distortion=lens)
             dz = r.root[:, 2] - gt[:, 0, 2]
             print(f"{name:26s} {src:9s} {mpjpe(r.absolute, gt).mean():6.1f} "
                   f"{np.linalg.norm(r.root - gt[:, 0], axis=-1).mean():6.1f}  {dz.mean():+.0f} mm "

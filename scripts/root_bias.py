@@ -56,7 +56,7 @@ def depth_bias_table(lifter: Lifter, data: H36M, stride: int) -> list[str]:
                              ("GT 2D, detected", s.keypoints_2d, "detected", np.ones(len(s), bool)),
                              ("SH detections, detected", det, "detected", ok)):
         r = lifter.lift(np.asarray(kp[m], np.float64), focal=s.focal[m], principal_point=s.principal_point[m],
-                        source=src)
+                        source=src, distortion=s.distortion[m])
         z = 100 * (r.root[:, 2] - gt[m][:, 0, 2]) / gt[m][:, 0, 2]
         cam, sub = s.camera[m], s.subject[m]
         lines.append(f"| {name} | " + " | ".join(
@@ -105,7 +105,7 @@ def size_lines(lifter: Lifter, data: H36M, stride: int) -> list[str]:
         for s in cols:
             p = samples[s]
             r = net.lift(np.asarray(p.keypoints_2d, np.float64), focal=p.focal, principal_point=p.principal_point,
-                         source=src)
+                         source=src, distortion=p.distortion)
             z = p.pose_3d[:, 0, 2].astype(np.float64)
             row.append(f"{100 * float(((r.root[:, 2] - z) / z).mean()):+.1f} %")
         lines.append(f"| {name} | " + " | ".join(row) + " |")
@@ -135,11 +135,12 @@ def main() -> int:
     cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
     focal = np.array([c.focal for c in cams])
     pp = np.array([c.principal_point for c in cams])
+    lens = np.array([[*c.k, *c.p] for c in cams])  # (the photos' 2D is seen through H36M's lenses)
     gt2d, gt3d = ann["p2d_gt"].astype(np.float64), ann["p3d_cam"].astype(np.float64)
     det = detect_demo(h36m / "demo", ann["image"])
     ok = det["people"] > 0
     kp = convert(det["kp33"][ok], src="blazepose33")
-    gt2d, gt3d, focal, pp, camera = gt2d[ok], gt3d[ok], focal[ok], pp[ok], ann["camera"][ok]
+    gt2d, gt3d, focal, pp, camera, lens = gt2d[ok], gt3d[ok], focal[ok], pp[ok], ann["camera"][ok], lens[ok]
     ratio = pose_scale(kp) / pose_scale(gt2d)
     fit = camera == FIT_CAMERA
     bp_fit = float(np.median(ratio[fit]))
@@ -149,7 +150,7 @@ def main() -> int:
           f"BlazePose's on camera {FIT_CAMERA}), true focal; MPJPE / MRPE mm (mean signed root-depth error)")
     for k_s in (1.0, sh_ratio / bp_fit):
         c = kp.mean(1, keepdims=True)
-        r = lifter.lift(c + (kp - c) * k_s, focal=focal, principal_point=pp)
+        r = lifter.lift(c + (kp - c) * k_s, focal=focal, principal_point=pp, distortion=lens)
         e, _ = root_errors(r.absolute[:, 0], gt3d[:, 0])
         parts = []
         for name, m in (("all", np.ones(len(kp), bool)), ("held-out camera", ~fit)):
@@ -160,7 +161,7 @@ def main() -> int:
     exact: list[str] = []
     sources: tuple[Source, ...] = ("clean", "detected")
     for src in sources:
-        dz = lifter.lift(gt2d, focal=focal, principal_point=pp, source=src).root[:, 2] - gt3d[:, 0, 2]
+        dz = lifter.lift(gt2d, focal=focal, principal_point=pp, source=src, distortion=lens).root[:, 2] - gt3d[:, 0, 2]
         exact.append(f"told {src}: {float(dz.mean()):+.0f} mm ({100 * float((dz / gt3d[:, 0, 2]).mean()):+.1f} %)")
     print(f"  the same photos' exact 2D, mean signed root-depth error (all {len(gt2d)}): " + "; ".join(exact))
     print(f"\n4. mean signed root-depth error given each subject's exact 2D, % of the true depth (+ = too far), "

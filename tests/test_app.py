@@ -1293,3 +1293,24 @@ def test_a_typed_focal_is_replaced_by_a_new_cameras_at_once(app: PoseLifterApp) 
         assert v.state.focal_px == pytest.approx(cam) and v.gui.lift.focal.value == pytest.approx(cam, abs=0.05)
         time.sleep(0.5)
         assert v.state.focal_px == pytest.approx(cam) and _focal_in_readout(v) == round(cam)
+
+
+def test_compute_frame_gives_a_pinhole_lifter_the_cameras_lens(app: PoseLifterApp) -> None:
+    """An H36M frame's 2D carries its camera's lens distortion: the lift undistorts it for a network that learned
+    pinhole 2D (the default), and a sample whose camera has no distortion (demo renders, uploads) is lifted as is."""
+    from dataclasses import replace
+
+    from conftest import tiny_lifter
+    from poselifter_app.core import SessionState, compute_frame
+
+    lf = tiny_lifter()
+    lf.train_config = {"data": {"lens": "pinhole"}}
+    demo = app.demo.get("walking")
+    lens_cam = replace(demo.camera, k=(-0.2083, 0.2554, -0.0026), p=(-0.0011, -0.0026))
+    for sample, kp in ((demo, None), (replace(demo, camera=lens_cam), lens_cam.undistort_pixels)):
+        st = SessionState(sample=sample, model=app.default_model)
+        frame = compute_frame(st, lf, app.error_model)
+        lifted_2d = st.keypoints if kp is None else kp(st.keypoints)
+        want = lf.lift(lifted_2d, focal=st.focal, principal_point=sample.camera.principal_point, source="clean")
+        np.testing.assert_allclose(frame.root, want.root, rtol=1e-9)
+    assert np.abs(lens_cam.undistort_pixels(st.keypoints) - st.keypoints).max() > 0.5  # (the lens matters here)

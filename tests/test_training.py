@@ -50,7 +50,8 @@ def synthetic_samples(n: int, *, seed: int = 0) -> PoseSamples:
     return PoseSamples(keypoints_2d=kp.astype(np.float32), pose_3d=pose.astype(np.float32),
                        focal=np.tile(f, (n, 1)).astype(np.float32), principal_point=np.tile(c, (n, 1)).astype(np.float32),
                        image_size=np.tile([1000, 1000], (n, 1)).astype(np.int32), subject=z + 1, action=z, camera=z,
-                       frame=np.arange(n, dtype=np.int32), sequence=z, sequence_names=("S1/Walking 1",))
+                       frame=np.arange(n, dtype=np.int32), sequence=z, sequence_names=("S1/Walking 1",),
+                       distortion=np.zeros((n, 5), np.float32))
 
 
 def tiny_config(**model: object) -> TrainConfig:

@@ -64,10 +64,12 @@ def run(args: argparse.Namespace) -> int:
     data = H36M(args.h36m)
     d = cfg.data
     samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
-                                 max_frames_per_sequence=d.max_frames_per_sequence)
-    real = load_sh_detections(samples, data=data)[0] if d.real_prob > 0 else None
-    val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence)
-    val_det = load_sh_detections(val, data=data)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file() else None
+                                 max_frames_per_sequence=d.max_frames_per_sequence, lens=d.lens)
+    real = load_sh_detections(samples, data=data, lens=d.lens)[0] if d.real_prob > 0 else None
+    val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence,
+                             lens=d.lens)
+    val_det = (load_sh_detections(val, data=data, lens=d.lens)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file()
+               else None)
     init, init_sha = None, None
     if cfg.init is not None:
         lifter = Lifter.load(cfg.init)

@@ -1,0 +1,137 @@
+"""Lens distortion: undistortion inverts H36M's lens model, and a lifter that learned pinhole 2D is given
+undistorted 2D (``Lifter.lift(distortion=...)``), while one that learned H36M's own 2D is given it as it is."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import random_pose_cam, requires_h36m, tiny_lifter
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lifter import Lifter, PoseLifterError
+from lifter import camera as cam
+from lifter.config import DataConfig
+
+# one H36M camera's coefficients (S9, 54138969), and a stronger made-up lens (barrel, a few % at the border)
+H36M_LENS = ((-0.2083, 0.2554, -0.0026), (-0.0011, -0.0026))
+STRONG_LENS = ((-0.3, 0.1, 0.0), (0.002, -0.001))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), strong=st.booleans())
+def test_undistort_inverts_distort(seed, strong):
+    k, p = STRONG_LENS if strong else H36M_LENS
+    xy = np.random.default_rng(seed).uniform(-0.45, 0.45, (50, 2))  # a 1000-px image at f = 1145 px, and beyond
+    back = cam.undistort(cam.distort(xy, k, p), k, p)
+    np.testing.assert_allclose(back, xy, atol=1e-10)
+
+
+def test_undistort_pixels_gives_the_pinhole_projection(rng):
+    X = random_pose_cam(rng, 20)
+    k, p = H36M_LENS
+    f, c = (1145.0, 1144.0), (512.0, 515.0)
+    distorted = cam.project(X, focal=f, principal_point=c, k=k, p=p)
+    pinhole = cam.project(X, focal=f, principal_point=c)
+    assert np.abs(distorted - pinhole).max() > 1.0  # (the lens moves the joints by whole pixels)
+    np.testing.assert_allclose(cam.undistort_pixels(distorted, focal=f, principal_point=c, k=k, p=p), pinhole,
+                               atol=1e-7)
+
+
+def test_undistort_pixels_per_pose_lenses_and_missing_joints(rng):
+    X = random_pose_cam(rng, 3)
+    lenses = np.array([[*H36M_LENS[0], *H36M_LENS[1]], [0, 0, 0, 0, 0], [*STRONG_LENS[0], *STRONG_LENS[1]]])
+    f, c = np.array([[1145.0, 1145.0], [900.0, 900.0], [1500.0, 1500.0]]), np.array([[512, 515], [400, 300], [0, 0.0]])
+    d = np.stack([cam.project(X[i], focal=f[i], principal_point=c[i], k=lenses[i, :3], p=lenses[i, 3:])
+                  for i in range(3)])
+    d[1, 4] = np.nan  # a missing joint stays missing and does not spoil the others
+    u = cam.undistort_pixels(d, focal=f, principal_point=c, k=lenses[:, :3], p=lenses[:, 3:])
+    pin = cam.project(X, focal=f, principal_point=c)
+    assert np.isnan(u[1, 4]).all()
+    ok = np.isfinite(d).all(-1)
+    np.testing.assert_allclose(u[ok], pin[ok], atol=1e-7)
+
+
+def test_undistort_refuses_a_lens_it_cannot_invert():
+    with pytest.raises(PoseLifterError, match="too strong.*undistort the 2D with the lens model's own inverse"):
+        cam.undistort(np.array([[1.5, 1.5]]), (-0.6, 0.0, 0.0), (0.0, 0.0))
+
+
+def pinhole_lifter(**kw) -> Lifter:
+    lf = tiny_lifter(**kw)
+    lf.train_config = {"data": {"lens": "pinhole"}}
+    return lf
+
+
+def test_lens_property_reads_the_training_config():
+    assert tiny_lifter().lens == "h36m"  # a checkpoint that does not say learned H36M's own 2D
+    assert pinhole_lifter().lens == "pinhole"
+    bad = tiny_lifter()
+    bad.train_config = {"data": {"lens": "fisheye"}}
+    with pytest.raises(PoseLifterError, match="data.lens is 'fisheye'"):
+        _ = bad.lens
+
+
+def test_lift_undistorts_for_a_pinhole_lifter_only(rng):
+    X = random_pose_cam(rng, 8)
+    k, p = H36M_LENS
+    f, c = 1145.0, (512.0, 515.0)
+    distorted = cam.project(X, focal=f, principal_point=c, k=k, p=p)
+    pinhole = cam.project(X, focal=f, principal_point=c)
+    lens = (*k, *p)
+    lf = pinhole_lifter()
+    given_lens = lf.lift(distorted, focal=f, principal_point=c, distortion=lens)
+    np.testing.assert_allclose(given_lens.root, lf.lift(pinhole, focal=f, principal_point=c).root, rtol=1e-5)
+    np.testing.assert_allclose(given_lens.keypoints_2d, pinhole, atol=1e-6)  # (what was lifted)
+    assert not np.allclose(lf.lift(distorted, focal=f, principal_point=c).root, given_lens.root, rtol=1e-4)
+    old = tiny_lifter()  # learned H36M's distorted 2D: given it as it is
+    np.testing.assert_array_equal(old.lift(distorted, focal=f, principal_point=c, distortion=lens).root,
+                                  old.lift(distorted, focal=f, principal_point=c).root)
+    per_pose = np.tile(np.asarray(lens), (8, 1))
+    np.testing.assert_allclose(lf.lift(distorted, focal=f, principal_point=c, distortion=per_pose).root,
+                               given_lens.root, rtol=1e-12)
+
+
+def test_lift_distortion_errors_name_the_fix():
+    kp = cam.project(random_pose_cam(np.random.default_rng(1), 2), focal=1000.0, principal_point=(500, 500))
+    lf = pinhole_lifter()
+    with pytest.raises(PoseLifterError, match="distortion needs the focal length.*pass focal="):
+        lf.lift(kp, image_size=(1000, 1000), distortion=(0.1, 0, 0, 0, 0))
+    with pytest.raises(PoseLifterError, match=r"expected finite \(k1, k2, k3, p1, p2\)"):
+        lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=(0.1, 0.0))
+    with pytest.raises(PoseLifterError, match=r"distortion: shape \(3, 5\) does not match the keypoints' poses"):
+        lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=np.zeros((3, 5)))
+
+
+def test_ensemble_members_must_share_the_lens():
+    a, b = tiny_lifter(seed=1), pinhole_lifter(seed=2)
+    with pytest.raises(PoseLifterError, match="ensemble members must have learned the same 2D"):
+        Lifter(a.net, a.codec, ensemble=[b])
+
+
+def test_data_config_lens_is_validated():
+    assert DataConfig().lens == "h36m"
+    with pytest.raises(PoseLifterError, match="lens must be one of"):
+        DataConfig(lens="fisheye")  # type: ignore[arg-type]
+
+
+@requires_h36m
+def test_h36m_pinhole_samples_and_undistorted_2d(h36m):
+    s = h36m.load([9], stride=1000, cameras=["54138969", "60457274"])
+    q = h36m.load([9], stride=1000, cameras=["54138969", "60457274"], lens="pinhole")
+    assert (s.lens, q.lens) == ("h36m", "pinhole")
+    assert np.abs(s.keypoints_2d - q.keypoints_2d).max() > 5.0  # H36M's lenses move border joints by ~10 px
+    np.testing.assert_allclose(s.undistort(s.keypoints_2d), q.keypoints_2d, atol=1e-3)
+    assert s.input_distortion is s.distortion and q.input_distortion is None
+    cam9 = h36m.camera(9, "60457274")
+    np.testing.assert_array_equal(s.distortion[s.camera == 3][0], np.float32([*cam9.k, *cam9.p]))
+
+
+@requires_h36m
+def test_training_refuses_samples_of_the_other_lens(h36m):
+    from lifter.config import TrainConfig
+    from lifter.train import train
+
+    s = h36m.load([1], stride=500, max_frames_per_sequence=2)
+    with pytest.raises(PoseLifterError, match="lens='h36m' but the config says data.lens='pinhole'"):
+        train(TrainConfig(data=DataConfig(lens="pinhole")), data=h36m, train_samples=s, val_sets={}, progress=False)
