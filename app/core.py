@@ -306,9 +306,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
     # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
     source = lift_source(state)
-    lens = (*cam.k, *cam.p)  # H36M frames: their camera's; demo renders and uploads: none
-    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False,
-                      distortion=lens if any(lens) else None)
+    # (H36M frames: their camera's lens; keypoint files that give one; demo renders and photos: none)
+    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False, distortion=cam.distortion)
     used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))

@@ -27,7 +27,7 @@ import json
 import math
 import re
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -180,12 +180,15 @@ def _with_temp_file(name: str, content: bytes, suffix: str, func: Callable[[Path
 
 
 def upload_camera(focal: tuple[float, float], principal_point: tuple[float, float], size: tuple[int, int],
-                  name: str) -> Camera:
-    """The camera of an uploaded photo / keypoint file (intrinsics as given, extrinsics: :data:`CAMERA_HEIGHT_MM`)."""
+                  name: str, distortion: Sequence[float] | np.ndarray | None = None) -> Camera:
+    """The camera of an uploaded photo / keypoint file (intrinsics as given, lens distortion ``(k1, k2, k3, p1,
+    p2)`` as a keypoint file gives it, else none; extrinsics: :data:`CAMERA_HEIGHT_MM`)."""
+    d = (0.0,) * 5 if distortion is None else tuple(float(v) for v in distortion)
     R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # world z up -> camera y down, z = world y
     C = np.array([0.0, 0.0, CAMERA_HEIGHT_MM])
     return Camera(focal=(float(focal[0]), float(focal[1])), principal_point=(float(principal_point[0]), float(principal_point[1])),
-                  width=int(size[0]), height=int(size[1]), R=R, t=-R @ C, name=f"upload/{name}")
+                  width=int(size[0]), height=int(size[1]), k=d[:3], p=d[3:], R=R, t=-R @ C,  # type: ignore[arg-type]
+                  name=f"upload/{name}")
 
 
 def _display(rgb: np.ndarray, max_side: int = DISPLAY_MAX_SIDE) -> np.ndarray:
@@ -330,7 +333,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                       people_index=tuple(kf.people_index[:1 + len(others)]),
                       people_ids=tuple(kf.people_ids[:1 + len(others)]))
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
-    cam = upload_camera(focal, pp, size, nm)
+    cam = upload_camera(focal, pp, size, nm, kf.distortion)  # (the lift undistorts with it: core.compute_frame)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
                   image=image, has_gt_2d=False, upload=info, others_2d=others,
                   person_tags=tags if any(tags) else ())
@@ -372,7 +375,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                        for i, q in enumerate(people)])
     output_notes: list[str] = []  # (what looks wrong in the output, as poselifter lift's records carry it)
     lifted = lift_people(lifter, kp_all, np.asarray(focal, np.float64), np.asarray(pp, np.float64), flip_test=None,
-                         source=source, notes=output_notes)
+                         source=source, notes=output_notes, distortion=cam.distortion)  # (as the tab lifted it)
     scores = None if info is None else info.scores
     if scores is not None:  # (the detector's confidences are the largest person's)
         lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
@@ -399,7 +402,8 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       scores=top.scores,
                       source_format=H36M17 if info is None else info.source_format,
                       num_people=None if info is None else info.num_people,
-                      detector=None if info is None else info.detector, warnings=tuple(warnings), source=source)
+                      detector=None if info is None else info.detector, warnings=tuple(warnings), source=source,
+                      distortion=cam.distortion)
 
 
 def download_stem(sample: Sample) -> str:

@@ -76,7 +76,8 @@ class VideoSequence:
         self.frames = [fr for fr in self.record.frames if fr.people]
         self.num_frames = len(self.frames)
         size = self.record.image_size or (1000, 1000)
-        self.camera = upload_camera(self.record.focal, self.record.principal_point, size, self.info.name)
+        self.camera = upload_camera(self.record.focal, self.record.principal_point, size, self.info.name,
+                                    self.record.distortion)
         self._canvas = None if self.jpegs is not None else display_canvas(size, VIDEO_DISPLAY_MAX_SIDE)
 
     def frame(self, index: int) -> Any:
@@ -127,7 +128,8 @@ class VideoSequence:
             counts = [len(fr.people) for fr in self.frames]
             kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
             src = "clean" if rec.source == "clean" else "detected"
-            res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False)
+            res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False,
+                              distortion=rec.distortion)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             lifted, k = [], 0
             for fr, c in zip(self.frames, counts):  # (every frame kept has someone in it)

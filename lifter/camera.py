@@ -308,6 +308,13 @@ class Camera:
         return float(np.sqrt(self.focal[0] * self.focal[1]))
 
     @property
+    def distortion(self) -> tuple[float, float, float, float, float] | None:
+        """The lens distortion as :meth:`lifter.Lifter.lift` takes it, ``(k1, k2, k3, p1, p2)``; None for a lens
+        without distortion (an ideal pinhole)."""
+        d = (*self.k, *self.p)
+        return None if not any(d) else (float(d[0]), float(d[1]), float(d[2]), float(d[3]), float(d[4]))
+
+    @property
     def centre(self) -> np.ndarray:
         """The camera centre (the projection centre) in world coordinates ``(3,)`` mm: ``-R^T t``."""
         return camera_to_world(np.zeros(3), self.R, self.t)

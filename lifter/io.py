@@ -2,7 +2,8 @@
 result record (:class:`LiftRecord`) that ``poselifter lift`` and the app's download write as JSON.
 
 Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
-"focal": F or [FX, FY], "principal_point": [CX, CY], "source": "detected" | "clean"}`` (only ``keypoints`` is
+"focal": F or [FX, FY], "principal_point": [CX, CY], "distortion": [K1, K2, K3, P1, P2], "source": "detected" |
+"clean"}`` (only ``keypoints`` is
 required; rows may have a third value, a confidence, where 0 marks a missing joint, as does ``null`` for a
 coordinate, a confidence or a whole row; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of
 ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}`` (format openpose25), a
@@ -12,7 +13,9 @@ Without ``format`` it is inferred from the joint count (17: h36m17; 16: sh16; 25
 blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"``
 (exact: ground truth or hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
 (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
-magnitude; anything else fails with a message naming the field. A person missing a joint that the format's
+magnitude; ``distortion`` five finite numbers below 10 in magnitude, the lens that saw the 2D in Human3.6M's
+Brown-Conrady form (:func:`lifter.camera.distort`; needs ``focal``; without it the 2D is taken as undistorted); anything
+else fails with a message naming the field. A person missing a joint that the format's
 rules to H36M need is left out with a note naming them (a frame of a sequence then has one person fewer); a
 file where nobody is left fails.
 
@@ -97,6 +100,9 @@ class LiftRecord:
     warnings: tuple[str, ...] = field(default=())
     source: str = "detected"
     people: tuple[PersonResult, ...] = ()
+    distortion: tuple[float, ...] | None = None
+    """The lens distortion the 2D was given with ``(k1, k2, k3, p1, p2)`` (a keypoint file's ``distortion``), or
+    None; ``keypoints_2d`` stays as given (distorted)."""
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
@@ -110,6 +116,7 @@ class LiftRecord:
             "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
             "focal": r(self.focal), "focal_source": self.focal_source, "principal_point": r(self.principal_point),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
+            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
             "num_people": self.num_people,
             "scores": None if self.scores is None else r(self.scores, 3), "warnings": list(self.warnings),
@@ -130,6 +137,8 @@ class KeypointFile:
     principal_point: np.ndarray | None = None
     warnings: tuple[str, ...] = ()
     source: str = "detected"
+    distortion: np.ndarray | None = None
+    """``(5,)`` ``(k1, k2, k3, p1, p2)``: the lens that saw the 2D (module docstring), or None (undistorted)."""
     people: tuple[np.ndarray, ...] = ()
     """Everyone in the file, ``(J, 2)`` px each, largest (box area) first; ``keypoints`` is ``people[0]``."""
     people_index: tuple[int, ...] = ()
@@ -383,8 +392,25 @@ def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_l
                else ""))
 
 
+MAX_DISTORTION: Final[float] = 10.0
+"""Lens-distortion coefficients of a keypoint file must be below this in magnitude (real lenses: well below 1)."""
+
+
+def _distortion_field(raw: Any, *, where: str) -> np.ndarray:
+    """A keypoint file's ``distortion``: five finite numbers ``[k1, k2, k3, p1, p2]`` below :data:`MAX_DISTORTION`
+    in magnitude."""
+    form = (f"[k1, k2, k3, p1, p2]: five numbers below {MAX_DISTORTION:g} in magnitude (Human3.6M's Brown-Conrady "
+            "form, lifter.camera.distort)")
+    if not (isinstance(raw, (list, tuple)) and len(raw) == 5 and all(_is_number(v) for v in raw)):
+        raise PoseLifterError(f"{where}: distortion must be {form}, got {_short(raw)}")
+    arr = np.asarray(raw, np.float64)
+    if not (np.all(np.isfinite(arr)) and np.all(np.abs(arr) < MAX_DISTORTION)):
+        raise PoseLifterError(f"{where}: distortion must be {form}, got {arr.tolist()}")
+    return arr
+
+
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
-                                                          np.ndarray | None, str]:
+                                                          np.ndarray | None, str, np.ndarray | None]:
     image_size = _image_size_field(meta.get("image_size"), where=str(p))
     focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
     pp = None if meta.get("principal_point") is None else \
@@ -393,7 +419,11 @@ def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None,
     if source not in ("detected", "clean"):
         raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "
                               f"(exact 2D: ground truth or hand-placed), got {source!r}")
-    return image_size, focal, pp, source
+    dist = None if meta.get("distortion") is None else _distortion_field(meta["distortion"], where=str(p))
+    if dist is not None and focal is None:
+        raise PoseLifterError(f"{p}: 'distortion' needs the camera's 'focal' (px) in the same file: lens coefficients "
+                              "act on coordinates divided by the focal length")
+    return image_size, focal, pp, source, dist
 
 
 def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
@@ -416,9 +446,9 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
                      "position in the file" + (", 'person_id' their own id)" if has_ids else ")"))
-    image_size, focal, pp, source = _camera_meta(meta, p)
+    image_size, focal, pp, source, dist = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
-                        warnings=tuple(notes), source=source, people=tuple(arrays),
+                        warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity))
 
 
@@ -439,6 +469,8 @@ class KeypointSequence:
     principal_point: np.ndarray | None = None
     warnings: tuple[str, ...] = ()
     source: str = "detected"
+    distortion: np.ndarray | None = None
+    """``(5,)``: the lens that saw the 2D (module docstring), or None (undistorted)."""
     people_ids: list[list[str | int | None]] | None = None
     """Per frame, for each of its people: their ``person_id`` (or ``id``, ``track_id``) field, None where they
     have none; None when no frame has one."""
@@ -455,8 +487,8 @@ def is_keypoint_sequence(path: str | Path) -> bool:
 
 def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None) -> KeypointSequence:
     """Read a keypoint sequence: ``{"frames": [FRAME, ...], "fps": 50, "format": ..., "image_size": ...,
-    "focal": ..., "principal_point": ..., "source": ...}`` where each FRAME is any single-frame layout of
-    the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
+    "focal": ..., "principal_point": ..., "distortion": ..., "source": ...}`` where each FRAME is any single-frame
+    layout of the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
     or an empty list / ``{"people": []}`` for a frame with nobody. ``fps`` is required (frames/s, in (0, 1000])."""
     p = Path(path)
     d = _load_json(p)
@@ -506,9 +538,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")
         notes.append(msg)
-    image_size, focal, pp, source = _camera_meta(d, p)
+    image_size, focal, pp, source, dist = _camera_meta(d, p)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
-                            principal_point=pp, warnings=tuple(notes), source=source,
+                            principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None)
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._checks import PoseLifterError, as_pair, input_warnings
 from .api import MIN_FOCAL_PX
@@ -116,12 +117,14 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
 
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
-                scores: np.ndarray | None = None, notes: list[str] | None = None) -> tuple[PersonResult, ...]:
+                scores: np.ndarray | None = None, notes: list[str] | None = None,
+                distortion: ArrayLike | None = None) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
     :class:`PersonResult` each (mm, camera frame), in the same order. No Python warnings: the records carry
     them as notes (:func:`plausibility_notes`; what looks wrong in the output, :attr:`LiftResult.warnings`, is
-    appended to ``notes``)."""
-    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False)
+    appended to ``notes``). ``distortion``: the lens that saw the 2D (:meth:`lifter.Lifter.lift`), or None."""
+    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False,
+                      distortion=distortion)
     if notes is not None:
         notes.extend(getattr(res, "warnings", ()))
     cd = np.asarray(res.canonical_depth).reshape(-1)
@@ -150,7 +153,8 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
-    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes)
+    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes,
+                         distortion=kf.distortion)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
                        for q, k, i in zip(lifted, kf.people_index, kf.people_ids))
@@ -160,7 +164,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=kf.image_size, model=lifter.name, source_format=kf.format,
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
-                      people=lifted)
+                      people=lifted, distortion=None if kf.distortion is None else tuple(kf.distortion.tolist()))
 
 
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,

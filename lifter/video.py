@@ -208,6 +208,8 @@ class SequenceRecord:
     detector: str | None = None
     seconds_per_frame: float | None = None
     source: str = "detected"
+    distortion: tuple[float, ...] | None = None
+    """The lens distortion the 2D was given with (a keypoint sequence's ``distortion``), or None."""
 
     def tracks(self) -> dict[int, list[tuple[int, PersonState]]]:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
@@ -225,6 +227,7 @@ class SequenceRecord:
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
+            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "detector": self.detector, "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
             "seconds_per_frame": None if self.seconds_per_frame is None else round(self.seconds_per_frame, 4),
             "tracks": tracks, "bad_frames": self.bad_frames, "warnings": self.warnings,
@@ -515,7 +518,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
-    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False)
+    res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
+                      distortion=ks.distortion)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     # what looks wrong in the output, per frame (the batch's own notes would count people of all frames at once)
     output_notes: dict[str, tuple[int, int, str]] = {}
@@ -534,7 +538,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
-                          num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source)
+                          num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
+                          distortion=None if ks.distortion is None else tuple(ks.distortion.tolist()))
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "FrameResult", "PersonState", "SequenceRecord",

@@ -17,6 +17,9 @@ Metrics recorded (Protocol 1, S9 + S11, 4 cameras; S9 'Discussion 1' is missing 
 
 The every-50th-frame entries are what ``tests/test_shipped.py`` re-evaluates to check that the shipped weights
 reproduce the README. ``--skip-full`` leaves out the every-5th-frame evaluation (slow on a CPU).
+``--keep-earlier-stages`` (for a fine-tuned re-ship of a model under the same name) keeps the registry entry being
+replaced, without its metrics, as the last item of the new entry's ``earlier_stages`` (its own earlier stages before
+it), so the commands of every training stage stay on record.
 """
 
 from __future__ import annotations
@@ -72,6 +75,8 @@ def main() -> None:
     ap.add_argument("--ensemble", type=Path, nargs="*", default=[],
                     help="more checkpoints for detected 2D, averaged with the first (registry ensemble_files)")
     ap.add_argument("--skip-full", action="store_true", help="do not evaluate every 5th frame")
+    ap.add_argument("--keep-earlier-stages", action="store_true",
+                    help="keep the entry being replaced (without metrics) in the new entry's earlier_stages")
     ap.add_argument("--h36m", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(2)
@@ -114,6 +119,12 @@ def main() -> None:
                   "clean_train_command": lifter.clean.meta.get("command", ""),
                   "clean_train_minutes": round(float(lifter.clean.meta.get("minutes", 0.0)), 1),
                   "clean_samples_seen": lifter.clean.meta.get("samples_seen")}
+    if lifter.meta.get("init_sha256"):  # fine-tuned (--init): the weights it started from
+        entry["train_init_sha256"] = lifter.meta["init_sha256"]
+    if lifter.clean is not None and lifter.clean.meta.get("init_sha256"):
+        entry["clean_train_init_sha256"] = lifter.clean.meta["init_sha256"]
+    if any(m.meta.get("init_sha256") for m in lifter.ensemble):
+        entry["ensemble_train_init_sha256"] = [m.meta.get("init_sha256") for m in lifter.ensemble]
     if args.flip_test:
         entry["flip_test"] = True
     if dst_members:
@@ -121,6 +132,11 @@ def main() -> None:
                   "ensemble_sha256": [sha256_file(m) for m in dst_members],
                   "ensemble_train_commands": [m.meta.get("command", "") for m in lifter.ensemble],
                   "ensemble_train_minutes": [round(float(m.meta.get("minutes", 0.0)), 1) for m in lifter.ensemble]}
+    previous = reg["models"].get(args.name)
+    if args.keep_earlier_stages and previous is not None:
+        earlier = list(previous.get("earlier_stages", []))
+        earlier.append({k: v for k, v in previous.items() if k not in ("metrics", "earlier_stages")})
+        entry["earlier_stages"] = earlier
     reg["models"][args.name] = entry | {"metrics": metrics}
     if args.default:
         reg["default"] = args.name

@@ -662,3 +662,26 @@ def test_readout_cautions_when_a_pixel_model_extrapolates(view: SessionView, app
     assert "**Caution** model 'gt' reads pixels and was trained on 2D poses" in md, md
     _, payload = view.download_payload("json")  # the download carries it too, as poselifter lift's record does
     assert any("reads pixels and was trained on 2D poses" in w for w in json.loads(payload)["warnings"])
+
+
+def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() -> None:
+    """A keypoint file's "distortion" becomes the upload's camera lens: the tab and its download lift the 2D
+    undistorted (for a network that learned pinhole 2D) and the record says which lens."""
+    from conftest import random_pose_cam, tiny_lifter
+
+    from lifter import project
+
+    lens = [-0.2083, 0.2554, -0.0026, -0.0011, -0.0026]
+    X = random_pose_cam(np.random.default_rng(3), 1)[0]
+    kp = project(X, focal=1145.0, principal_point=(512.0, 515.0), k=lens[:3], p=lens[3:])
+    doc = {"keypoints": kp.tolist(), "focal": 1145.0, "principal_point": [512, 515], "image_size": [1000, 1000],
+           "distortion": lens, "source": "clean"}
+    sample = up.keypoint_sample("lens.json", json.dumps(doc).encode(), key="upload/t/lens.json")
+    assert sample.camera.distortion == pytest.approx(tuple(lens))
+    lf = tiny_lifter()
+    lf.train_config = {"data": {"lens": "pinhole"}}
+    rec = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(1145.0, 1145.0))
+    want = lf.lift(project(X, focal=1145.0, principal_point=(512.0, 515.0)), focal=1145.0,
+                   principal_point=(512.0, 515.0), source="clean")
+    np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
+    assert rec.to_json()["distortion"] == pytest.approx(lens)

@@ -135,3 +135,61 @@ def test_training_refuses_samples_of_the_other_lens(h36m):
     s = h36m.load([1], stride=500, max_frames_per_sequence=2)
     with pytest.raises(PoseLifterError, match="lens='h36m' but the config says data.lens='pinhole'"):
         train(TrainConfig(data=DataConfig(lens="pinhole")), data=h36m, train_samples=s, val_sets={}, progress=False)
+
+
+def _write(path, obj):
+    import json
+
+    path.write_text(json.dumps(obj))
+    return path
+
+
+def test_keypoint_file_and_sequence_distortion_is_lifted_undistorted(tmp_path, rng):
+    """A keypoint file's "distortion" reaches the lift: a pinhole lifter gives the same roots as for the
+    undistorted file, the record keeps the 2D as given and says which lens; a sequence likewise."""
+    from lifter.pipeline import lift_keypoint_file
+    from lifter.video import lift_keypoint_sequence
+
+    k, p = H36M_LENS
+    f, c = 1145.0, (512.0, 515.0)
+    X = random_pose_cam(rng, 2)
+    d = cam.project(X, focal=f, principal_point=c, k=k, p=p)
+    u = cam.project(X, focal=f, principal_point=c)
+    lf = pinhole_lifter()
+    meta = {"focal": f, "principal_point": list(c), "image_size": [1000, 1000], "source": "clean"}
+    with_lens = lift_keypoint_file(_write(tmp_path / "d.json", {"keypoints": d[0].tolist(), **meta,
+                                                                 "distortion": [*k, *p]}), lifter=lf)
+    plain = lift_keypoint_file(_write(tmp_path / "u.json", {"keypoints": u[0].tolist(), **meta}), lifter=lf)
+    np.testing.assert_allclose(with_lens.root, plain.root, rtol=1e-6)
+    np.testing.assert_allclose(with_lens.keypoints_2d, d[0], atol=1e-9)  # (the record keeps the 2D as given)
+    assert with_lens.to_json()["distortion"] == pytest.approx([*k, *p]) and "distortion" not in plain.to_json()
+    seq = {"frames": [{"keypoints": q.tolist()} for q in d], "fps": 25, **meta, "distortion": [*k, *p]}
+    rec = lift_keypoint_sequence(_write(tmp_path / "s.json", seq), lifter=lf, smoothing=0.0)
+    ref = lf.lift(u, focal=f, principal_point=c, source="clean")
+    np.testing.assert_allclose([fr.people[0].root for fr in rec.frames], ref.root, rtol=1e-6)
+    assert rec.to_json()["distortion"] == pytest.approx([*k, *p])
+
+
+@pytest.mark.parametrize(("distortion", "focal", "message"), [
+    ([0.1, 0.0, 0.0, 0.0], 1000.0, r"distortion must be \[k1, k2, k3, p1, p2\]: five numbers"),
+    ([0.1, 0.0, 0.0, 0.0, 25.0], 1000.0, r"distortion must be .* got \[0.1, 0.0, 0.0, 0.0, 25.0\]"),
+    ("barrel", 1000.0, "distortion must be"),
+    ([0.1, 0.0, 0.0, 0.0, 0.0], None, "'distortion' needs the camera's 'focal'"),
+])
+def test_keypoint_file_distortion_errors_name_the_field(tmp_path, distortion, focal, message):
+    from lifter.io import parse_keypoint_json
+
+    obj = {"keypoints": (np.arange(34).reshape(17, 2) * 10.0).tolist(), "distortion": distortion}
+    if focal is not None:
+        obj["focal"] = focal
+    with pytest.raises(PoseLifterError, match=message):
+        parse_keypoint_json(_write(tmp_path / "k.json", obj))
+
+
+def test_camera_distortion_property():
+    from lifter.camera import Camera
+
+    assert Camera(focal=(1000.0, 1000.0), principal_point=(500.0, 500.0), width=1000, height=1000).distortion is None
+    c = Camera(focal=(1000.0, 1000.0), principal_point=(500.0, 500.0), width=1000, height=1000, k=H36M_LENS[0],
+               p=H36M_LENS[1])
+    assert c.distortion == (*H36M_LENS[0], *H36M_LENS[1])

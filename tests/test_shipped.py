@@ -233,3 +233,25 @@ def test_h36m_pose_range_is_that_of_the_training_poses(h36m):
     loc, scale = location_and_scale(s.keypoints_2d.astype(np.float64))
     offset = np.linalg.norm(loc - s.principal_point, axis=-1)
     assert (scale.min(), scale.max(), offset.max()) == pytest.approx(H36M_POSE_PX, abs=0.1)
+
+
+def test_the_default_learned_pinhole_2d_and_the_paper_models_h36m_2d():
+    """Every network of the default was trained on undistorted 2D (so users' undistorted 2D is what it knows, and
+    H36M's 2D is lifted with its camera's lens); the paper's models keep H36M's distorted 2D."""
+    assert {n.lens for n in _default().networks().values()} == {"pinhole"}
+    assert {Lifter.from_pretrained(m).lens for m in ("gt", "mixture", "sh_mix", "blazepose")} == {"h36m"}
+
+
+@requires_h36m
+def test_the_default_places_pinhole_2d_and_lens_2d_alike(h36m):
+    """The same poses as H36M's camera sees them through its lens (given the lens) and as an ideal pinhole sees
+    them: the default gives the same roots to float precision, and without the lens the distorted 2D is off."""
+    s = h36m.load([9], stride=2000)
+    pin = h36m.load([9], stride=2000, lens="pinhole")
+    for source in ("clean", "detected"):
+        a = _default().lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source,
+                            distortion=s.distortion)
+        b = _default().lift(pin.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
+        np.testing.assert_allclose(a.root, b.root, rtol=1e-4)
+        c = _default().lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
+        assert np.abs(c.root[:, 2] / a.root[:, 2] - 1).mean() > 1e-3  # (the lens moves depth by ~1 %)

@@ -62,7 +62,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "2 = S11 (trained on S1, 5, 6, 7, 8, 9)")
     p.add_argument("--stride", type=positive_int, default=5, help="test frame stride at 50 fps")
     p.add_argument("--inputs", default="gt", choices=("gt", "sh"),
-                   help="2D inputs: ground-truth (distorted) projection, or the real Stacked-Hourglass detections")
+                   help="2D inputs: H36M's ground-truth 2D, or the real Stacked-Hourglass detections; both as seen "
+                        "through each camera's lens, which is passed to the lifter (Lifter.lift distortion=): a "
+                        "network that learned pinhole 2D undistorts them")
     p.add_argument("--focal-scales", type=_focal_scales, default=None,
                    help="comma-separated focal factors (e.g. 0.5,0.7,1,1.4,2): re-project the test poses through "
                         "virtual pinhole cameras with focal x factor and report MRPE per factor (GT 2D inputs only; "
