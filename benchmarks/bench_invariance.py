@@ -34,10 +34,13 @@ SCALES = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 10.0)
 
 
 def lift_roots(model: Lifter, kp: np.ndarray, focal: np.ndarray | None, pp: np.ndarray, size: np.ndarray,
-               *, source: str) -> np.ndarray:
-    """Roots ``(N, 3)`` mm; with ``focal=None`` the image size (one per group of equal sizes) sets the focal."""
+               *, source: str, distortion: np.ndarray) -> np.ndarray:
+    """Roots ``(N, 3)`` mm; with ``focal=None`` the image size (one per group of equal sizes) sets the focal. With
+    the focal given the cameras' lens is given too (its coefficients act on px / focal, unchanged by scaling); with
+    the focal assumed it cannot be, as for a photo of unknown camera."""
     if focal is not None:
-        res = model.lift(kp, focal=focal, principal_point=pp, source=source)  # type: ignore[arg-type]
+        res = model.lift(kp, focal=focal, principal_point=pp, source=source,  # type: ignore[arg-type]
+                         distortion=distortion)
         return np.asarray(res.root, np.float64)
     root = np.empty(kp.shape[:-2] + (3,))
     for wh in np.unique(size, axis=0):
@@ -74,7 +77,8 @@ def main() -> None:
             ref = None
             per_k = {}
             for k in SCALES:
-                root = lift_roots(model, kp * k, f * k if focal_known else None, c * k, size * k, source=args.source)
+                root = lift_roots(model, kp * k, f * k if focal_known else None, c * k, size * k, source=args.source,
+                                  distortion=s.distortion)
                 if k == 1.0:
                     ref = root
                 per_k[k] = root

@@ -45,6 +45,7 @@ python scripts/sh_error_scaling.py --stride 50 --models sh_mix,mixture,gt --out 
 # "detected"), resolution invariance against a pixel-space model, and the 84 demo photos through BlazePose.
 ev universal_gt2d universal --analytic-root --per-action --stride 5
 ev focal_sweep_universal universal --focal-scales 0.5,0.7,1,1.4,2 --stride 50
+ev focal_sweep_shifted_pp_universal universal --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
 ev universal_sh_s5 universal sh_mix --inputs sh --stride 5 --analytic-root
 python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/bench_invariance.json" \
   | tee "$OUT/bench_invariance.txt"

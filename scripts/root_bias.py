@@ -86,10 +86,9 @@ def size_lines(lifter: Lifter, data: H36M, stride: int) -> list[str]:
     (the default for ``source="detected"``) and each of them alone (its own flip-test default)."""
     nets: list[tuple[str, Lifter, Source]] = [("clean network", lifter, "clean"),
                                            ("detected, averaged", lifter, "detected")]
-    if lifter.ensemble:
-        for i, m in enumerate((lifter, *lifter.ensemble)):
-            alone = Lifter(m.net, m.codec, name=f"member {i + 1}", flip_test=m.flip_test)
-            nets.append((f"detected member {i + 1} ({m.net.config.symmetry}, width {m.net.config.width})", alone,
+    if lifter.ensemble:  # each detected network alone (Lifter.networks: with its own flip test and training config)
+        for i, m in enumerate(lifter.networks()[f"detected {k + 1}"] for k in range(1 + len(lifter.ensemble))):
+            nets.append((f"detected member {i + 1} ({m.net.config.symmetry}, width {m.net.config.width})", m,
                          "detected"))
     sizes = {s: subject_size(data, s, stride=200)[0] for s in TRAIN_SUBJECTS + TEST_SUBJECTS}
     ref = float(np.mean([sizes[s] for s in TRAIN_SUBJECTS]))

@@ -252,6 +252,6 @@ def test_the_default_places_pinhole_2d_and_lens_2d_alike(h36m):
         a = _default().lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source,
                             distortion=s.distortion)
         b = _default().lift(pin.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
-        np.testing.assert_allclose(a.root, b.root, rtol=1e-4)
+        np.testing.assert_allclose(a.root, b.root, rtol=1e-5, atol=0.01)  # mm: float32 2D, undistorted to ~1e-4 px
         c = _default().lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
         assert np.abs(c.root[:, 2] / a.root[:, 2] - 1).mean() > 1e-3  # (the lens moves depth by ~1 %)
