@@ -296,6 +296,9 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
+    elif kf.distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)
+        raise UploadError(f"{nm}: \"distortion\" needs the camera's own focal length: add \"focal\" (px) to the "
+                          "file, or leave \"distortion\" out")
     size = kf.image_size
     use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
     if size is None and use_photo:

@@ -14,7 +14,8 @@ blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's outpu
 (exact: ground truth or hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
 (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
 magnitude; ``distortion`` five finite numbers below 10 in magnitude, the lens that saw the 2D in Human3.6M's
-Brown-Conrady form (:func:`lifter.camera.distort`; needs ``focal``; without it the 2D is taken as undistorted); anything
+Brown-Conrady form (:func:`lifter.camera.distort`; needs the camera's focal length, in the file or given with it;
+without it the 2D is taken as undistorted); anything
 else fails with a message naming the field. A person missing a joint that the format's
 rules to H36M need is left out with a note naming them (a frame of a sequence then has one person fewer); a
 file where nobody is left fails.
@@ -420,9 +421,6 @@ def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None,
         raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "
                               f"(exact 2D: ground truth or hand-placed), got {source!r}")
     dist = None if meta.get("distortion") is None else _distortion_field(meta["distortion"], where=str(p))
-    if dist is not None and focal is None:
-        raise PoseLifterError(f"{p}: 'distortion' needs the camera's 'focal' (px) in the same file: lens coefficients "
-                              "act on coordinates divided by the focal length")
     return image_size, focal, pp, source, dist
 
 

@@ -33,7 +33,8 @@ def _px(v: Any) -> str:
 
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
-            fov_deg: float, where: str) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
+            fov_deg: float, where: str, file_distortion: np.ndarray | None = None
+            ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
     if image_size is None:  # everything missing in one message, not one run per missing field
         have = {"focal": user_focal is not None or file_focal is not None,
@@ -52,6 +53,9 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         focal, src = file_focal, "keypoint-file"
     else:
         assert image_size is not None  # (checked above, with every missing field named)
+        if file_distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)
+            raise PoseLifterError(f"{where}: 'distortion' needs the camera's own focal length: put 'focal' (px) in "
+                                  "the file or pass --focal, or leave 'distortion' out")
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
         if g.focal < MIN_FOCAL_PX:  # (else the lifter's message would blame a focal length the user never gave)
@@ -151,7 +155,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
-        sensor_width_mm=None, fov_deg=fov_deg, where=str(path))
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion)
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes,
                          distortion=kf.distortion)

@@ -685,3 +685,7 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
                    principal_point=(512.0, 515.0), source="clean")
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
     assert rec.to_json()["distortion"] == pytest.approx(lens)
+
+    nofocal = {k: v for k, v in doc.items() if k != "focal"}
+    with pytest.raises(up.UploadError, match='"distortion" needs the camera\'s own focal length: add "focal"'):
+        up.keypoint_sample("nofocal.json", json.dumps(nofocal).encode(), key="upload/t/nofocal.json")

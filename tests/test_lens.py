@@ -174,7 +174,6 @@ def test_keypoint_file_and_sequence_distortion_is_lifted_undistorted(tmp_path, r
     ([0.1, 0.0, 0.0, 0.0], 1000.0, r"distortion must be \[k1, k2, k3, p1, p2\]: five numbers"),
     ([0.1, 0.0, 0.0, 0.0, 25.0], 1000.0, r"distortion must be .* got \[0.1, 0.0, 0.0, 0.0, 25.0\]"),
     ("barrel", 1000.0, "distortion must be"),
-    ([0.1, 0.0, 0.0, 0.0, 0.0], None, "'distortion' needs the camera's 'focal'"),
 ])
 def test_keypoint_file_distortion_errors_name_the_field(tmp_path, distortion, focal, message):
     from lifter.io import parse_keypoint_json
@@ -193,3 +192,22 @@ def test_camera_distortion_property():
     c = Camera(focal=(1000.0, 1000.0), principal_point=(500.0, 500.0), width=1000, height=1000, k=H36M_LENS[0],
                p=H36M_LENS[1])
     assert c.distortion == (*H36M_LENS[0], *H36M_LENS[1])
+
+
+def test_keypoint_file_distortion_needs_a_focal_given_not_assumed(tmp_path, rng):
+    """Lens coefficients act on px / focal: with the focal assumed from the image size the lift is refused, naming
+    both ways to give it; with --focal (the CLI's focal=) the file's lens is used."""
+    from lifter.pipeline import lift_keypoint_file
+
+    k, p = H36M_LENS
+    X = random_pose_cam(rng, 1)[0]
+    d = cam.project(X, focal=1145.0, principal_point=(512.0, 515.0), k=k, p=p)
+    path = _write(tmp_path / "k.json", {"keypoints": d.tolist(), "image_size": [1000, 1000],
+                                        "principal_point": [512, 515], "distortion": [*k, *p]})
+    lf = pinhole_lifter()
+    with pytest.raises(PoseLifterError, match="'distortion' needs the camera's own focal length: put 'focal'.*--focal"):
+        lift_keypoint_file(path, lifter=lf)
+    rec = lift_keypoint_file(path, lifter=lf, focal=1145.0)
+    want = lf.lift(cam.project(X, focal=1145.0, principal_point=(512.0, 515.0)), focal=1145.0,
+                   principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
