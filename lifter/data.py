@@ -107,7 +107,8 @@ class PoseSamples:
     camera: ``(N,)`` int index into :data:`CAMERA_IDS`; frame: ``(N,)`` int, 0-based row at 50 fps;
     sequence: ``(N,)`` int index into ``sequence_names``.
     distortion: ``(N, 5)`` float32, each sample's camera's lens distortion ``(k1, k2, k3, p1, p2)``
-        (:func:`lifter.camera.distort`'s form), whatever ``lens``.
+        (:func:`lifter.camera.distort`'s form), whatever ``lens``; None for ideal pinhole cameras (samples made
+        without a lens model).
     lens: which 2D ``keypoints_2d`` is (:data:`Lens`).
     """
 
@@ -122,7 +123,7 @@ class PoseSamples:
     frame: np.ndarray
     sequence: np.ndarray
     sequence_names: tuple[str, ...]
-    distortion: np.ndarray
+    distortion: np.ndarray | None = None
     lens: Lens = "h36m"
 
     def __len__(self) -> int:
@@ -154,7 +155,7 @@ class PoseSamples:
     def input_distortion(self) -> np.ndarray | None:
         """What to pass :meth:`lifter.Lifter.lift` as ``distortion`` with ``keypoints_2d`` (or detections made on
         H36M's images): the cameras' :attr:`distortion` for H36M's own 2D, None for pinhole 2D."""
-        return self.distortion if self.lens == "h36m" else None
+        return self.distortion if self.lens == "h36m" else None  # (None too for samples without a lens model)
 
     def undistort(self, keypoints: np.ndarray) -> np.ndarray:
         """2D ``(N, J, 2)`` px seen through the samples' real cameras (H36M's 2D, detections on H36M's images)
@@ -163,6 +164,8 @@ class PoseSamples:
         kp = np.asarray(keypoints, np.float64)
         if kp.ndim != 3 or kp.shape[0] != len(self) or kp.shape[-1] != 2:
             raise PoseLifterError(f"keypoints: expected shape ({len(self)}, J, 2), got {kp.shape}")
+        if self.distortion is None:  # (ideal pinhole cameras: nothing to undistort)
+            return kp.copy()
         d = self.distortion.astype(np.float64)
         return undistort_pixels(kp, focal=self.focal, principal_point=self.principal_point, k=d[:, :3], p=d[:, 3:])
 

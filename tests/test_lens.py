@@ -211,3 +211,20 @@ def test_keypoint_file_distortion_needs_a_focal_given_not_assumed(tmp_path, rng)
     want = lf.lift(cam.project(X, focal=1145.0, principal_point=(512.0, 515.0)), focal=1145.0,
                    principal_point=(512.0, 515.0))
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
+
+
+def test_pose_samples_without_a_lens_model_are_pinhole(rng):
+    """Samples built without ``distortion`` (ideal pinhole cameras) need no lens: nothing to pass to lift, and
+    undistorting leaves the 2D as it is."""
+    from lifter.data import PoseSamples
+
+    X = random_pose_cam(rng, 3)
+    kp = cam.project(X, focal=1000.0, principal_point=(500.0, 500.0))
+    z = np.zeros(3, np.int32)
+    s = PoseSamples(keypoints_2d=kp.astype(np.float32), pose_3d=X.astype(np.float32),
+                    focal=np.full((3, 2), 1000, np.float32), principal_point=np.full((3, 2), 500, np.float32),
+                    image_size=np.full((3, 2), 1000, np.int32), subject=z + 1, action=z, camera=z, frame=z,
+                    sequence=z, sequence_names=("S1/Walking 1",))
+    assert s.distortion is None and s.input_distortion is None
+    np.testing.assert_array_equal(s.undistort(s.keypoints_2d), s.keypoints_2d)
+    assert s.subset(np.array([0, 2])).distortion is None
