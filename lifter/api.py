@@ -26,7 +26,14 @@ from numpy.typing import ArrayLike
 
 from . import resources as assets
 from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings, where_in_batch
-from .camera import CANONICAL_FOCAL, DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, focal_from_fov, undistort_pixels
+from .camera import (
+    CANONICAL_FOCAL,
+    DEFAULT_DIAGONAL_FOV_DEG,
+    check_distortion,
+    focal_alpha,
+    focal_from_fov,
+    undistort_pixels,
+)
 from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
 from .data import LENSES, Lens
@@ -83,7 +90,8 @@ class LiftResult:
     relative: ``(..., 17, 3)`` root-relative pose, root row zero.
     canonical_depth: ``(...)`` ``Z * 1000 / alpha`` (mm as seen by a 1000-px camera; alpha = sqrt(fx fy)):
         known whether or not the focal length is.
-    keypoints_2d: ``(..., 17, 2)`` px, the input. principal_point, focal: ``(..., 2)`` px used.
+    keypoints_2d: ``(..., 17, 2)`` px, the 2D that was lifted: the input, undistorted when a ``distortion`` was given to
+    a pinhole lifter. principal_point, focal: ``(..., 2)`` px used.
     focal_source: ``"given"``; ``"default-fov"`` (no focal: the default diagonal field of view of
         ``image_size``); ``"reference"`` (no focal and no image size: a 1000-px camera).
     metric_depth: True when the focal length was given. Otherwise the result is for the assumed focal length
@@ -506,15 +514,7 @@ class Lifter:
             if focal_source != "given":
                 raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "
                                       "(px) too, or leave distortion out")
-            dist = np.asarray(distortion, np.float64)
-            if dist.ndim == 0 or dist.shape[-1] != 5 or not np.all(np.isfinite(dist)):
-                raise PoseLifterError(f"distortion: expected finite (k1, k2, k3, p1, p2) or per pose (..., 5), got "
-                                      f"shape {dist.shape}")
-            try:
-                dist = np.broadcast_to(dist, lead + (5,))
-            except ValueError:
-                raise PoseLifterError(f"distortion: shape {dist.shape} does not match the keypoints' poses "
-                                      f"{lead}: give one (5,) for all, or one row per pose {lead + (5,)}") from None
+            dist = check_distortion(distortion, lead=lead)
             if self.lens == "pinhole":
                 kp = undistort_pixels(kp, focal=f, principal_point=pp, k=dist[..., :3], p=dist[..., 3:])
         if warn:

@@ -36,6 +36,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError
+from .camera import MAX_DISTORTION_COEFFICIENT
 from .keypoints import H36M17, get_format, keypoint_formats
 from .skeleton import JOINT_NAMES
 
@@ -393,19 +394,17 @@ def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_l
                else ""))
 
 
-MAX_DISTORTION: Final[float] = 10.0
-"""Lens-distortion coefficients of a keypoint file must be below this in magnitude (real lenses: well below 1)."""
-
-
 def _distortion_field(raw: Any, *, where: str) -> np.ndarray:
-    """A keypoint file's ``distortion``: five finite numbers ``[k1, k2, k3, p1, p2]`` below :data:`MAX_DISTORTION`
-    in magnitude."""
-    form = (f"[k1, k2, k3, p1, p2]: five numbers below {MAX_DISTORTION:g} in magnitude (Human3.6M's Brown-Conrady "
-            "form, lifter.camera.distort)")
+    """A keypoint file's ``distortion``: five finite numbers ``[k1, k2, k3, p1, p2]`` below
+    :data:`lifter.camera.MAX_DISTORTION_COEFFICIENT` in magnitude."""
+    form = (f"[k1, k2, k3, p1, p2]: five numbers below {MAX_DISTORTION_COEFFICIENT:g} in magnitude (Human3.6M's "
+            "Brown-Conrady form, lifter.camera.distort; OpenCV's distCoeffs are another order and other tangential "
+            "terms: undistort with cv2.undistortPoints instead)")
     if not (isinstance(raw, (list, tuple)) and len(raw) == 5 and all(_is_number(v) for v in raw)):
-        raise PoseLifterError(f"{where}: distortion must be {form}, got {_short(raw)}")
+        count = f" ({len(raw)} values)" if isinstance(raw, (list, tuple)) else ""
+        raise PoseLifterError(f"{where}: distortion must be {form}, got {_short(raw)}{count}")
     arr = np.asarray(raw, np.float64)
-    if not (np.all(np.isfinite(arr)) and np.all(np.abs(arr) < MAX_DISTORTION)):
+    if not (np.all(np.isfinite(arr)) and np.all(np.abs(arr) < MAX_DISTORTION_COEFFICIENT)):
         raise PoseLifterError(f"{where}: distortion must be {form}, got {arr.tolist()}")
     return arr
 

@@ -53,8 +53,40 @@ def test_undistort_pixels_per_pose_lenses_and_missing_joints(rng):
 
 
 def test_undistort_refuses_a_lens_it_cannot_invert():
-    with pytest.raises(PoseLifterError, match="too strong.*undistort the 2D with the lens model's own inverse"):
+    with pytest.raises(PoseLifterError, match="did not converge.*too strong.*undistort the 2D yourself"):
         cam.undistort(np.array([[1.5, 1.5]]), (-0.6, 0.0, 0.0), (0.0, 0.0))
+
+
+def test_undistort_converges_for_a_wide_angle_lens_near_the_border():
+    """A user trial's case: a strong barrel lens (k1 = -0.3) and points near the image border, where a fixed
+    number of steps had stopped short (residual 1.3e-9) and the lift was refused."""
+    k, p = (-0.3, 0.1, 0.0), (0.0, 0.0)
+    xy = np.array([[0.70, 0.38], [0.55, 0.05], [-0.6, -0.4]])  # 1280 x 720 at f = 600 px reaches |x| ~ 1.07
+    back = cam.undistort(cam.distort(xy, k, p), k, p)
+    np.testing.assert_allclose(back, xy, atol=1e-11)
+
+
+def test_undistort_leaves_a_half_missing_joint_missing_and_the_rest_exact():
+    k, p = H36M_LENS
+    xy = np.array([[0.1, 0.2], [np.nan, 0.3], [0.2, -0.1]])
+    d = cam.distort(np.nan_to_num(xy), k, p)
+    d[1, 0] = np.nan
+    out = cam.undistort(d, k, p)
+    assert np.isnan(out[1]).all()
+    np.testing.assert_allclose(out[[0, 2]], xy[[0, 2]], atol=1e-12)
+
+
+@pytest.mark.parametrize(("k", "p", "message"), [
+    ((0.1, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0), r"k must be \(k1, k2, k3\) and p \(p1, p2\)"),
+    ((0.1, 0.0), (0.0, 0.0), r"k must be \(k1, k2, k3\)"),
+    (None, (0.0, 0.0), r"k must be"),
+    ((np.nan, 0.0, 0.0), (0.0, 0.0), "coefficients must be finite"),
+    (np.zeros((17, 3)), (0.0, 0.0), r"does not match the keypoints' poses"),
+])
+def test_undistort_pixels_checks_its_lens(k, p, message):
+    kp = np.arange(34, dtype=float).reshape(17, 2) * 10
+    with pytest.raises(PoseLifterError, match=message):
+        cam.undistort_pixels(kp, focal=1000.0, principal_point=(500, 500), k=k, p=p)
 
 
 def pinhole_lifter(**kw) -> Lifter:
@@ -97,8 +129,15 @@ def test_lift_distortion_errors_name_the_fix():
     lf = pinhole_lifter()
     with pytest.raises(PoseLifterError, match="distortion needs the focal length.*pass focal="):
         lf.lift(kp, image_size=(1000, 1000), distortion=(0.1, 0, 0, 0, 0))
-    with pytest.raises(PoseLifterError, match=r"expected finite \(k1, k2, k3, p1, p2\)"):
+    with pytest.raises(PoseLifterError, match=r"distortion must be \(k1, k2, k3, p1, p2\).*OpenCV.*\(2 value"):
         lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=(0.1, 0.0))
+    for bad in ("abc", ["a", 0, 0, 0, 0], {"k1": 0.1}, [[0.1, 0], [0, 0, 0]]):
+        with pytest.raises(PoseLifterError, match="distortion must be"):
+            lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=bad)
+    with pytest.raises(PoseLifterError, match=r"pose at index \(1,\).*must be finite and below 10.*nan"):
+        lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=[[0.1, 0, 0, 0, 0], [np.nan, 0, 0, 0, 0]])
+    with pytest.raises(PoseLifterError, match="below 10 in magnitude"):
+        lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=[1e6, 0, 0, 0, 0])
     with pytest.raises(PoseLifterError, match=r"distortion: shape \(3, 5\) does not match the keypoints' poses"):
         lf.lift(kp, focal=1000.0, principal_point=(500, 500), distortion=np.zeros((3, 5)))
 
