@@ -275,6 +275,21 @@ def _person_id(q: Any) -> str | int | None:
     return None
 
 
+CAMERA_FIELDS: Final[tuple[str, ...]] = ("focal", "principal_point", "image_size", "distortion", "source")
+"""The fields that describe a file's camera and 2D; read only at a file's (or sequence's) top level."""
+
+
+def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
+    """Camera fields (:data:`CAMERA_FIELDS`) inside a person object of decoded frame ``d`` (or, ``frame_level``,
+    in the frame object itself), which are not read: a note names them so a misplaced lens or focal is not lost
+    silently."""
+    people = d.get("people") if isinstance(d, dict) else d if isinstance(d, list) else None
+    objs = [q for q in people if isinstance(q, dict)] if isinstance(people, list) else []
+    if frame_level and isinstance(d, dict):
+        objs.append(d)
+    return sorted({k for q in objs for k in CAMERA_FIELDS if k in q})
+
+
 def _people_of(d: Any, p: Path, fmt: str | None
                ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any]]:
     """The people in one decoded frame object as ``(position in the file's list, raw keypoint list, person id)``
@@ -443,6 +458,10 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
                      "position in the file" + (", 'person_id' their own id)" if has_ids else ")"))
+    misplaced = _misplaced_camera_fields(d, frame_level=False)
+    if misplaced:
+        notes.append(f"{', '.join(repr(k) for k in misplaced)} inside a person is not read: camera fields go at the "
+                     "file's top level, beside the people")
     image_size, focal, pp, source, dist = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
@@ -508,7 +527,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     dropped: list[tuple[int, tuple[str, list[str]]]] = []  # (frame, (who, joints))
+    misplaced: dict[str, int] = {}  # camera field -> first frame that has it inside a frame or person
     for i, fr in enumerate(raw):
+        for k in _misplaced_camera_fields(fr, frame_level=True):
+            misplaced.setdefault(k, i)
         where = Path(f"{p} frame {i}")
         if fr == [] or fr is None or (isinstance(fr, dict) and fr.get("people") == []):
             frames.append([])
@@ -535,6 +557,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")
         notes.append(msg)
+    if misplaced:
+        notes.append(f"{', '.join(f'{k!r} (first in frame {i})' for k, i in sorted(misplaced.items()))} inside a "
+                     "frame is not read: a sequence's camera fields go at its top level, beside 'frames'")
     image_size, focal, pp, source, dist = _camera_meta(d, p)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,

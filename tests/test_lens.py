@@ -267,3 +267,23 @@ def test_pose_samples_without_a_lens_model_are_pinhole(rng):
     assert s.distortion is None and s.input_distortion is None
     np.testing.assert_array_equal(s.undistort(s.keypoints_2d), s.keypoints_2d)
     assert s.subset(np.array([0, 2])).distortion is None
+
+
+def test_misplaced_camera_fields_get_a_note_not_silence(tmp_path):
+    """A user trial put "distortion" inside a person and inside a sequence's frame: it was not read, and nothing
+    said so. Now a note names the field and where it belongs; at the top level there is no note."""
+    from lifter.io import parse_keypoint_json, parse_keypoint_sequence
+
+    kp = (np.arange(34).reshape(17, 2) * 10.0 + 100).tolist()
+    lens = [*H36M_LENS[0], *H36M_LENS[1]]
+    person = parse_keypoint_json(_write(tmp_path / "p.json", {"people": [{"keypoints": kp, "distortion": lens}],
+                                                               "focal": 1000}))
+    assert person.distortion is None
+    assert any("'distortion' inside a person is not read" in n and "top level" in n for n in person.warnings)
+    top = parse_keypoint_json(_write(tmp_path / "t.json", {"people": [{"keypoints": kp}], "focal": 1000,
+                                                            "distortion": lens}))
+    assert top.distortion is not None and not any("not read" in n for n in top.warnings)
+    seq = parse_keypoint_sequence(_write(tmp_path / "s.json", {
+        "frames": [{"keypoints": kp}, {"keypoints": kp, "focal": 900, "distortion": lens}], "fps": 25}))
+    assert any("'distortion' (first in frame 1), 'focal' (first in frame 1) inside a frame is not read" in n
+               for n in seq.warnings), seq.warnings
