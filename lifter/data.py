@@ -6,8 +6,8 @@ Reads the repackaged H36M folder (default ``../shared/data/h36m``, or ``$POSELIF
 * 3D: world mm -> camera frame with each camera's ``R, t`` (``X_cam = R X_world + t``), mm.
 * 2D: the projection **with the camera's lens distortion** (how H36M's own 2D annotations are
   made), px, in the 1000 x 1000 (or 1000 x 1002) image; or, with ``lens="pinhole"``, the ideal pinhole
-  projection of the same 3D (what an undistorted photo shows; :meth:`H36M.undistort` maps H36M's 2D and its
-  detections there).
+  projection of the same 3D (what an undistorted photo shows; :meth:`PoseSamples.undistort` maps H36M's 2D and
+  its detections there).
 * Frames are taken at ``stride`` from frame 0 of each 50-fps sequence.
 
 The data are licensed for non-commercial research and are never copied into the project.

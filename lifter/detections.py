@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import PoseLifterError
-from .data import CAMERA_IDS, H36M, Lens, PoseSamples
+from .data import CAMERA_IDS, H36M, LENSES, Lens, PoseSamples
 from .keypoints import convert, get_format
 from .normalization import pose_scale
 
@@ -35,6 +35,8 @@ def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: s
     ``"h36m"`` the pixels as detected on H36M's images (with its lens distortion), ``"pinhole"`` undistorted
     (:meth:`lifter.data.PoseSamples.undistort`).
     """
+    if lens not in LENSES:
+        raise PoseLifterError(f"lens must be one of {list(LENSES)}, got {lens!r}")
     data = data or H36M()
     path = Path(data.root) / SH_DETECTIONS_FILE
     if not path.is_file():
@@ -64,9 +66,7 @@ def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: s
         rows = np.arange(a, b)[ok]
         out[rows] = convert(det[fr[ok] // stride], src=fmt, dst=dst)
         valid[rows] = True
-    if lens != "h36m":
-        if lens != "pinhole":
-            raise PoseLifterError(f"lens must be 'h36m' or 'pinhole', got {lens!r}")
+    if lens == "pinhole":
         out = samples.undistort(out)
     return out, valid
 
