@@ -76,7 +76,8 @@ MISSING_TEST_SEQUENCES: tuple[str, ...] = ("S9/Discussion 1",)
 
 
 COMPACT_FILE = "compact.json"
-"""In a copy written by ``scripts/compact_h36m.py``: ``{"keep_every": k}``, only frames at multiples of k hold poses."""
+"""In a copy written by ``scripts/compact_h36m.py``: ``{"keep_every": k}``, only frames at multiples of k hold poses;
+or ``{"keep_every": {"S1": k1, ...}}``, per subject (a subject not named keeps every frame)."""
 
 
 def default_h36m_dir() -> Path:
@@ -191,7 +192,9 @@ class H36M:
         self._poses = np.load(self.root / "poses3d_world_17j_mm.npz")
         self._decoded: dict[str, np.ndarray] = {}  # int16 arrays: an npz member is decompressed on every access
         compact = self.root / COMPACT_FILE
-        self.keep_every = int(json.loads(compact.read_text())["keep_every"]) if compact.is_file() else 1
+        kept = json.loads(compact.read_text())["keep_every"] if compact.is_file() else 1
+        self.keep_every: int | dict[str, int] = (
+            {str(k): int(v) for k, v in kept.items()} if isinstance(kept, dict) else int(kept))
         self.sequences: tuple[str, ...] = tuple(sorted(self._poses.files))
 
     def camera(self, subject: int, camera_id: str) -> Camera:
@@ -223,12 +226,14 @@ class H36M:
     def poses_world(self, sequence: str, frames: np.ndarray | int | slice | None = None) -> np.ndarray:
         """``(frames, 17, 3)`` float64 mm, world frame, 50 fps (optionally only the given ``frames``)."""
         raw = self._raw(sequence)
-        if self.keep_every > 1:
+        subject = sequence.split("/")[0]
+        every = self.keep_every.get(subject, 1) if isinstance(self.keep_every, dict) else self.keep_every
+        if every > 1:
             kept = np.arange(len(raw))[slice(None) if frames is None else frames]
-            if np.any(np.asarray(kept) % self.keep_every):
-                raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {self.keep_every}th "
-                                      f"frame (see {COMPACT_FILE}); use a stride that is a multiple of "
-                                      f"{self.keep_every} (poselifter train: --train-stride and --val-stride; "
+            if np.any(np.asarray(kept) % every):
+                raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {every}th frame of "
+                                      f"{subject} (see {COMPACT_FILE}); use a stride that is a multiple of "
+                                      f"{every} (poselifter train: --train-stride and --val-stride; "
                                       "poselifter evaluate: --stride), or the full Human3.6M folder")
         return (raw if frames is None else raw[frames]).astype(np.float64)
 

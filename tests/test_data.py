@@ -63,6 +63,29 @@ def test_a_compacted_copy_refuses_the_frames_it_dropped(tmp_path):
             data.poses_world("S9/Walking 1", frames)
 
 
+def test_a_compacted_copy_can_keep_each_subject_at_its_own_rate(tmp_path):
+    """compact_h36m.py --train-every 1 --test-every 100 writes per-subject rates: every frame of a training
+    subject is served, a test subject's dropped frames are refused naming that subject, and an unnamed subject
+    keeps every frame."""
+    import json
+
+    from lifter._checks import PoseLifterError
+    from lifter.data import COMPACT_FILE, H36M
+
+    poses = (np.arange(12 * 17 * 3, dtype=np.int16) % 1000).reshape(12, 17, 3)
+    np.savez_compressed(tmp_path / "poses3d_world_17j_mm.npz",
+                        **{"S1/Walking 1": poses, "S9/Walking 1": poses, "S5/Walking 1": poses})
+    (tmp_path / "cameras.json").write_text(json.dumps({"cameras": {}}))
+    (tmp_path / COMPACT_FILE).write_text(json.dumps({"keep_every": {"S1": 1, "S9": 10}}))
+    data = H36M(tmp_path)
+    assert data.keep_every == {"S1": 1, "S9": 10}
+    np.testing.assert_array_equal(data.poses_world("S1/Walking 1"), poses)
+    np.testing.assert_array_equal(data.poses_world("S5/Walking 1", 3), poses[3])
+    np.testing.assert_array_equal(data.poses_world("S9/Walking 1", np.arange(0, 12, 10)), poses[::10])
+    with pytest.raises(PoseLifterError, match="keeps only every 10th frame of S9 .* multiple of 10"):
+        data.poses_world("S9/Walking 1", np.arange(0, 12, 5))
+
+
 @requires_h36m
 def test_projection_with_distortion_matches_dataset_2d(h36m):
     """Our camera-frame 3D + distorted projection reproduces the 2D annotations shipped with the demo frames."""
