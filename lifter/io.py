@@ -25,6 +25,7 @@ Units: px for 2D, mm for 3D; camera frame OpenCV (+x right, +y down, +z forward)
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -279,6 +280,54 @@ CAMERA_FIELDS: Final[tuple[str, ...]] = ("focal", "principal_point", "image_size
 """The fields that describe a file's camera and 2D; read only at a file's (or sequence's) top level."""
 
 
+READ_FIELDS: Final[tuple[str, ...]] = (*CAMERA_FIELDS, "keypoints", "format", "people", "frames", "fps")
+"""Every top-level field a keypoint file or sequence is read by."""
+
+_FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
+    "dist_coeffs": "distortion", "distcoeffs": "distortion", "dist": "distortion", "distortion_coeffs": "distortion",
+    "distortion_coefficients": "distortion", "focal_length": "focal", "f": "focal", "fx": "focal", "fy": "focal",
+    "camera_matrix": "focal and principal_point", "k": "focal and principal_point",
+    "intrinsics": "focal and principal_point", "c": "principal_point", "pp": "principal_point",
+    "cx": "principal_point", "cy": "principal_point", "center": "principal_point", "size": "image_size",
+    "resolution": "image_size", "width": "image_size", "height": "image_size", "image_width": "image_size",
+    "image_height": "image_size", "keypoint_format": "format", "fmt": "format", "framerate": "fps",
+    "frame_rate": "fps"}
+"""Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
+
+_WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
+    "input", "kind", "model", "joint_names", "units", "frame", "keypoints_2d", "absolute", "relative", "root",
+    "canonical_depth", "focal_source", "source_format", "detector", "num_people", "scores", "warnings", "tracks",
+    "num_frames", "num_frames_in_file", "first_frame", "last_frame", "bad_frames", "smoothing", "filter",
+    "strength", "seconds_per_frame", "time_s", "error", "index", "root_unsmoothed", "track_id", "person_id",
+    "input_index"))
+"""Fields of the results this package writes (:meth:`LiftRecord.to_json`, video records), which are read back
+as keypoint files: not noted as unread."""
+
+
+def unread_field_notes(meta: dict[str, Any]) -> list[str]:
+    """Notes for top-level fields of a keypoint file or sequence that look meant for a field it is read by
+    (:data:`READ_FIELDS`) but are not, e.g. OpenCV's ``dist_coeffs`` or a misspelled ``distorsion``: their values
+    would otherwise be dropped silently. Fields that resemble none (an image name, a version) are not noted."""
+    notes = []
+    for key in meta:
+        if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS:
+            continue
+        ours = _FIELD_NAMES_ELSEWHERE.get(key.lower()) or next(
+            iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.8)), None)
+        if ours is None:
+            continue
+        names = " and ".join(f"{n!r}" for n in ours.split(" and "))
+        hint = ""
+        if ours == "distortion" and key.lower() in _FIELD_NAMES_ELSEWHERE:
+            hint = (" It takes Human3.6M's order (k1, k2, k3, p1, p2); OpenCV's coefficients (k1, k2, p1, p2, k3) "
+                    "have other tangential terms: undistort the 2D with cv2.undistortPoints first and leave the "
+                    "lens out")
+        elif ours == "focal and principal_point":
+            hint = " (fx, fy and cx, cy of the camera matrix, px)"
+        notes.append(f"{key!r} is not read: did you mean {names}?{hint}")
+    return notes
+
+
 def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
     """Camera fields (:data:`CAMERA_FIELDS`) inside a person object of decoded frame ``d`` (or, ``frame_level``,
     in the frame object itself), which are not read: a note names them so a misplaced lens or focal is not lost
@@ -462,6 +511,7 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     if misplaced:
         notes.append(f"{', '.join(repr(k) for k in misplaced)} inside a person is not read: camera fields go at the "
                      "file's top level, beside the people")
+    notes += unread_field_notes(meta)
     image_size, focal, pp, source, dist = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
@@ -560,6 +610,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if misplaced:
         notes.append(f"{', '.join(f'{k!r} (first in frame {i})' for k, i in sorted(misplaced.items()))} inside a "
                      "frame is not read: a sequence's camera fields go at its top level, beside 'frames'")
+    notes += unread_field_notes(d)
     image_size, focal, pp, source, dist = _camera_meta(d, p)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,

@@ -287,3 +287,37 @@ def test_misplaced_camera_fields_get_a_note_not_silence(tmp_path):
         "frames": [{"keypoints": kp}, {"keypoints": kp, "focal": 900, "distortion": lens}], "fps": 25}))
     assert any("'distortion' (first in frame 1), 'focal' (first in frame 1) inside a frame is not read" in n
                for n in seq.warnings), seq.warnings
+
+
+def test_other_names_for_read_fields_get_a_note_naming_ours(tmp_path):
+    """A misspelled "distorsion" or OpenCV's "dist_coeffs" at the top level used to be dropped silently (the 2D
+    was then lifted as undistorted). Now a note names the field it was probably meant for (for OpenCV's
+    coefficients, also their other order); unrelated fields and the fields of our own results are not noted,
+    so a result read back as a keypoint file gets no such note."""
+    from lifter.io import LiftRecord, PersonResult, parse_keypoint_json, parse_keypoint_sequence
+
+    kp = (np.arange(34).reshape(17, 2) * 10.0 + 100).tolist()
+    lens = [*H36M_LENS[0], *H36M_LENS[1]]
+    f = parse_keypoint_json(_write(tmp_path / "a.json", {"keypoints": kp, "focal": 1000, "distorsion": lens,
+                                                          "dist_coeffs": lens, "focal_length": 900, "K": [[1]],
+                                                          "image": "a.jpg", "version": 2}))
+    assert f.distortion is None
+    notes = [n for n in f.warnings if "is not read" in n]
+    assert len(notes) == 4, f.warnings
+    assert "'distorsion' is not read: did you mean 'distortion'?" in notes
+    assert any(n.startswith("'dist_coeffs' is not read: did you mean 'distortion'? It takes Human3.6M's order")
+               and "cv2.undistortPoints" in n for n in notes)
+    assert "'focal_length' is not read: did you mean 'focal'?" in notes
+    assert any(n.startswith("'K' is not read: did you mean 'focal' and 'principal_point'?") for n in notes)
+    seq = parse_keypoint_sequence(_write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 25, "Distortion": lens}))
+    assert seq.distortion is None and any("'Distortion' is not read: did you mean 'distortion'?" in n
+                                          for n in seq.warnings), seq.warnings
+    rec = LiftRecord(input="x.json", kind="keypoints", model="universal", keypoints_2d=np.asarray(kp),
+                     absolute=np.zeros((17, 3)), relative=np.zeros((17, 3)), root=np.array([0.0, 0.0, 3000.0]),
+                     canonical_depth=3.0, focal=(1000.0, 1000.0), focal_source="given",
+                     principal_point=(500.0, 500.0), image_size=(1000, 1000), distortion=tuple(lens),
+                     people=(PersonResult(keypoints_2d=np.asarray(kp), absolute=np.zeros((17, 3)),
+                                          relative=np.zeros((17, 3)), root=np.array([0.0, 0.0, 3000.0]),
+                                          canonical_depth=3.0, input_index=0),))
+    back = parse_keypoint_json(_write(tmp_path / "r.json", rec.to_json()))
+    assert back.distortion is not None and not any("not read" in n for n in back.warnings), back.warnings
