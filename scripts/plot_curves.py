@@ -1,7 +1,10 @@
 """Learning curves of several training runs in one figure, against samples seen: validation MPJPE and MRPE
 (mm) of each ``.curve.json`` (written by ``poselifter train``) on the detected and the clean validation set.
 
-    python scripts/plot_curves.py LABEL=run.curve.json ... --out curves.png [--title TEXT]
+    python scripts/plot_curves.py LABEL=run.curve.json ... --out curves.png [--title TEXT] [--inputs clean]
+
+``--inputs clean`` (or ``detected``) draws only that validation set's two panels (a clean-2D network's error on the
+detections says nothing about it).
 """
 
 from __future__ import annotations
@@ -19,13 +22,16 @@ def main() -> int:
     p.add_argument("runs", nargs="+", help="LABEL=path/to/run.curve.json")
     p.add_argument("--out", type=Path, required=True, help="PNG to write")
     p.add_argument("--title", default="")
+    p.add_argument("--inputs", choices=("all", "clean", "detected"), default="all",
+                   help="which validation set's panels to draw (default all)")
     args = p.parse_args()
+    panels = [(k, t) for k, t in PANELS if args.inputs == "all" or k.endswith(args.inputs)]
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(PANELS), figsize=(4.2 * len(PANELS), 3.6 + 0.3 * len(args.runs)))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6 + 0.3 * len(args.runs)))
     for spec in args.runs:
         label, sep, path = spec.partition("=")
         if not sep:
@@ -36,11 +42,11 @@ def main() -> int:
             p.error(f"{path}: not a learning curve ({type(exc).__name__}: {exc}); give the .curve.json that "
                     "poselifter train writes beside its checkpoint")
         x = [c["samples"] / 1e6 for c in curve]
-        for ax, (key, _) in zip(axes, PANELS):
+        for ax, (key, _) in zip(axes, panels):
             pts = [(xi, c[key]) for xi, c in zip(x, curve) if key in c]
             if pts:  # (a run with a few points gets markers: one point alone draws no line)
                 ax.plot(*zip(*pts), label=label, lw=1.4, marker="o" if len(pts) < 5 else None)
-    for ax, (_, name) in zip(axes, PANELS):
+    for ax, (_, name) in zip(axes, panels):
         ax.set_xlabel("samples seen (millions)")
         ax.set_title(name, fontsize=10)
         vals = [ln.get_ydata() for ln in ax.get_lines()]
