@@ -48,7 +48,10 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     if user_focal is not None:
         focal, src = user_focal, "user"
         if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):
-            notes.append(f"the focal length given ({_px(user_focal)}) replaces the file's own ({_px(file_focal)})")
+            notes.append(f"the focal length given ({_px(user_focal)}) replaces the file's own ({_px(file_focal)})"
+                         + ("; the file's 'distortion' is applied with it (lens coefficients act on (x - c) / f, so "
+                            "at another focal they bend the 2D differently: leave --focal out if the lens was "
+                            "calibrated with the file's focal)" if file_distortion is not None else ""))
     elif file_focal is not None:
         focal, src = file_focal, "keypoint-file"
     else:

@@ -250,6 +250,15 @@ def test_keypoint_file_distortion_needs_a_focal_given_not_assumed(tmp_path, rng)
     want = lf.lift(cam.project(X, focal=1145.0, principal_point=(512.0, 515.0)), focal=1145.0,
                    principal_point=(512.0, 515.0))
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
+    assert not any("replaces" in w for w in rec.warnings)
+    # a --focal replacing the file's own focal applies the file's lens with it, and the note says so
+    with_focal = _write(tmp_path / "f.json", {"keypoints": d.tolist(), "focal": 1145.0, "principal_point": [512, 515],
+                                              "distortion": [*k, *p]})
+    rec = lift_keypoint_file(with_focal, lifter=lf, focal=1300.0)
+    assert any("replaces the file's own (1145 x 1145 px); the file's 'distortion' is applied with it" in w
+               and "leave --focal out" in w for w in rec.warnings), rec.warnings
+    plain = _write(tmp_path / "g.json", {"keypoints": d.tolist(), "focal": 1145.0, "principal_point": [512, 515]})
+    assert not any("'distortion'" in w for w in lift_keypoint_file(plain, lifter=lf, focal=1300.0).warnings)
 
 
 def test_pose_samples_without_a_lens_model_are_pinhole(rng):
