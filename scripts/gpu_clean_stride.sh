@@ -10,33 +10,21 @@
 #
 # Data: a copy that keeps every frame of the training subjects and every 100th of S9/S11 (the learning curve):
 #   python scripts/compact_h36m.py --out .gpu/h36m_s1 --train-every 1 --test-every 100
-# Settings (environment): M minutes per training (5.5), TH CPU threads per process (4), H36M (.gpu/h36m_s1),
+# Settings (environment): M minutes per training (5.5), TH CPU threads per process (4), BENCH=0 to skip the
+# benchmarks, H36M (.gpu/h36m_s1),
 # OUT folder for what comes back: clean_s5.pt, clean_s1.pt, clean_s1b.pt, logs.tgz (logs, curves, env, dmon),
 # bench_lift.json, bench_lift.txt. Exits 1 when a training failed, after printing its error lines.
 #   M=5.5 OUT=/tmp/out bash scripts/gpu_clean_stride.sh
 set -u
 OUT=${OUT:?set OUT to the folder for the results}
-M=${M:-5.5}; TH=${TH:-4}; D=${H36M:-.gpu/h36m_s1}
+M=${M:-5.5}; TH=${TH:-4}; BENCH=${BENCH:-1}; D=${H36M:-.gpu/h36m_s1}
 if [ ! -f "$D/poses3d_world_17j_mm.npz" ]; then
   echo "gpu_clean_stride.sh: no Human3.6M data at $D: run python scripts/compact_h36m.py --out $D --train-every 1" \
     "--test-every 100, or set H36M=<folder>" >&2
   exit 2
 fi
-if compgen -G ".gpu/whl/*.whl" > /dev/null; then
-  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .gpu/whl/*.whl \
-    && export PYTHONPATH=/tmp/site
-fi
-export PYTHONUNBUFFERED=1 PYTHONPATH=$PWD:${PYTHONPATH:-}
-STAMP=$(date -u +%Y%m%d-%H%M%S); R=runs/gpu/$STAMP
-mkdir -p "$R" "$OUT"
-{
-  command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv
-  echo "cpus $(nproc)"; grep -m 1 "model name" /proc/cpuinfo
-  python3 -c "import torch, numpy; print('torch', torch.__version__, 'cuda', torch.cuda.is_available(), 'numpy', numpy.__version__)"
-} > "$R/env.txt" 2>&1
-cat "$R/env.txt"
-DMON=
-if command -v nvidia-smi > /dev/null; then nvidia-smi dmon -s um -d 10 > "$R/dmon.txt" 2>&1 & DMON=$!; fi
+# shellcheck source=scripts/gpu_setup.sh
+. scripts/gpu_setup.sh  # wheels, PYTHONPATH, R and OUT, R/env.txt, nvidia-smi dmon (DMON)
 RECIPE=(--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 200
         --clean-prob 1.0 --lens pinhole --width 1024 --eval-every 2000 --no-progress)
 tr() { # name port args...
@@ -59,10 +47,12 @@ for n in "${NAMES[@]}"; do
   fi
 done
 # the default's speed on this machine's CPU (one thread), then its memory bandwidth for a 25 MB working set
-python3 benchmarks/bench_lift.py --threads 1 --single-calls 2000 --rounds 5 --json "$OUT/bench_lift.json" \
-  > "$OUT/bench_lift.txt" 2>&1 || echo "bench_lift failed" >&2
-python3 benchmarks/bench_weight_traffic.py >> "$OUT/bench_lift.txt" 2>&1 || echo "bench_weight_traffic failed" >&2
-cat "$OUT/bench_lift.txt"
+if [ "$BENCH" = 1 ]; then
+  python3 benchmarks/bench_lift.py --threads 1 --single-calls 2000 --rounds 5 --json "$OUT/bench_lift.json" \
+    > "$OUT/bench_lift.txt" 2>&1 || echo "bench_lift failed" >&2
+  python3 benchmarks/bench_weight_traffic.py >> "$OUT/bench_lift.txt" 2>&1 || echo "bench_weight_traffic failed" >&2
+  cat "$OUT/bench_lift.txt"
+fi
 tar czf "$OUT/logs.tgz" --exclude='*.pt' -C runs/gpu "$STAMP"
 if [ ${#FAILED[@]} -gt 0 ]; then
   echo "gpu_clean_stride.sh: ${#FAILED[@]} training(s) failed: ${FAILED[*]}" >&2

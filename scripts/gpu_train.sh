@@ -23,21 +23,8 @@ if [ ! -f "$D/poses3d_world_17j_mm.npz" ]; then
   echo "gpu_train.sh: no Human3.6M data at $D: run python scripts/compact_h36m.py, or set H36M=<folder>" >&2
   exit 2
 fi
-if compgen -G ".gpu/whl/*.whl" > /dev/null; then
-  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .gpu/whl/*.whl \
-    && export PYTHONPATH=/tmp/site
-fi
-export PYTHONUNBUFFERED=1 PYTHONPATH=$PWD:${PYTHONPATH:-}
-STAMP=$(date -u +%Y%m%d-%H%M%S); R=runs/gpu/$STAMP
-mkdir -p "$R" "$OUT"
-{
-  command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv
-  echo "cpus $(nproc)"
-  python3 -c "import torch, numpy; print('torch', torch.__version__, 'cuda', torch.cuda.is_available(), 'numpy', numpy.__version__)"
-} > "$R/env.txt" 2>&1
-cat "$R/env.txt"
-DMON=
-if command -v nvidia-smi > /dev/null; then nvidia-smi dmon -s um -d 10 > "$R/dmon.txt" 2>&1 & DMON=$!; fi
+# shellcheck source=scripts/gpu_setup.sh
+. scripts/gpu_setup.sh  # wheels, PYTHONPATH, R and OUT, R/env.txt, nvidia-smi dmon (DMON)
 waitall() { for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done; }
 FAILED=()
 failed() { # file: the file's own error lines, not torchrun's wrapper
