@@ -279,6 +279,18 @@ class Frame:
         return math.sqrt(self.focal[0] * self.focal[1])
 
 
+def lens_free_2d(keypoints: np.ndarray, *, camera: Any, lifter: Any) -> np.ndarray:
+    """``(..., 17, 2)`` px seen through ``camera`` (a :class:`lifter.Camera`), as ``lifter`` should be given them
+    at any focal length the app's slider sets: undistorted with the camera's own lens **and its own calibrated
+    focal** for a network that learned pinhole 2D (lens coefficients act on ``(x - c) / f`` of the focal they were
+    calibrated with; applying them at a what-if focal would bend the 2D differently, or fail to invert at a short
+    one); as they are for a camera without a lens or a network that learned Human3.6M's distorted 2D
+    (:attr:`lifter.Lifter.lens`). The result is then lifted without a ``distortion``."""
+    if camera.distortion is None or getattr(lifter, "lens", "pinhole") != "pinhole":
+        return np.asarray(keypoints, np.float64)
+    return camera.undistort_pixels(np.asarray(keypoints, np.float64))
+
+
 def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLike) -> Frame:
     """Noise, lift (the shown pose and the cloud in one batch), analytic root and metrics for ``state``.
 
@@ -306,8 +318,10 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         batch = np.concatenate([batch, np.stack([state.others[k] for k in ids])], axis=0)
     # (no Python warnings: a slider's extreme focal length is the user's choice, shown in the readout)
     source = lift_source(state)
-    # (H36M frames: their camera's lens; keypoint files that give one; demo renders and photos: none)
-    res = lifter.lift(batch, focal=f, principal_point=pp, source=source, warn=False, distortion=cam.distortion)
+    # (H36M frames: their camera's lens; keypoint files that give one; demo renders and photos: none), undistorted
+    # with the camera's own focal, whatever focal the slider sets (lens_free_2d)
+    res = lifter.lift(lens_free_2d(batch, camera=cam, lifter=lifter), focal=f, principal_point=pp, source=source,
+                      warn=False)
     used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))

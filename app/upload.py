@@ -54,6 +54,7 @@ from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
+from .core import lens_free_2d
 from .drawing import canvas
 from .samples import Sample
 
@@ -377,8 +378,18 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     kp_all = np.stack([_check_2d(q, sample.label if i == 0 else f"{sample.label}, person {i + 1}")
                        for i, q in enumerate(people)])
     output_notes: list[str] = []  # (what looks wrong in the output, as poselifter lift's records carry it)
-    lifted = lift_people(lifter, kp_all, np.asarray(focal, np.float64), np.asarray(pp, np.float64), flip_test=None,
-                         source=source, notes=output_notes, distortion=cam.distortion)  # (as the tab lifted it)
+    # (as the tab lifted it: undistorted with the camera's own focal, then lifted at the tab's)
+    lifted = lift_people(lifter, lens_free_2d(kp_all, camera=cam, lifter=lifter), np.asarray(focal, np.float64),
+                         np.asarray(pp, np.float64), flip_test=None, source=source, notes=output_notes)
+    # the record's 2D: as given, with its lens, at the camera's own focal (the lens belongs to it); at another
+    # focal, undistorted and without the lens, so that lifting the record again gives this result
+    keep_lens = cam.distortion is not None and not (focal_changed and getattr(lifter, "lens", "pinhole") == "pinhole")
+    if cam.distortion is not None and not keep_lens:
+        output_notes.append(f"2D undistorted with the camera's lens at its own focal length ({cam.alpha:.1f} px), then "
+                            "lifted at the app's focal length: keypoints_2d is that undistorted 2D, and no "
+                            "'distortion' is recorded")
+    else:
+        lifted = tuple(dataclasses.replace(q, keypoints_2d=kp_all[i]) for i, q in enumerate(lifted))
     scores = None if info is None else info.scores
     if scores is not None:  # (the detector's confidences are the largest person's)
         lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
@@ -406,7 +417,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       source_format=H36M17 if info is None else info.source_format,
                       num_people=None if info is None else info.num_people,
                       detector=None if info is None else info.detector, warnings=tuple(warnings), source=source,
-                      distortion=cam.distortion)
+                      distortion=cam.distortion if keep_lens else None)
 
 
 def download_stem(sample: Sample) -> str:

@@ -28,6 +28,7 @@ import numpy as np
 from lifter import PoseLifterError
 from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence, lift_video, track_lifted
 
+from .core import lens_free_2d
 from .samples import Sample
 from .upload import MAX_PEOPLE, UploadError, UploadInfo, check_upload, display_canvas, safe_name, upload_camera
 
@@ -128,8 +129,9 @@ class VideoSequence:
             counts = [len(fr.people) for fr in self.frames]
             kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
             src = "clean" if rec.source == "clean" else "detected"
-            res = lifter.lift(np.stack(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False,
-                              distortion=rec.distortion)
+            # (undistorted with the upload's own focal, lifted at this one)
+            res = lifter.lift(lens_free_2d(np.stack(kp), camera=self.camera, lifter=lifter), focal=f,
+                              principal_point=rec.principal_point, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             lifted, k = [], 0
             for fr, c in zip(self.frames, counts):  # (every frame kept has someone in it)

@@ -1314,3 +1314,13 @@ def test_compute_frame_gives_a_pinhole_lifter_the_cameras_lens(app: PoseLifterAp
         want = lf.lift(lifted_2d, focal=st.focal, principal_point=sample.camera.principal_point, source="clean")
         np.testing.assert_allclose(frame.root, want.root, rtol=1e-9)
     assert np.abs(lens_cam.undistort_pixels(st.keypoints) - st.keypoints).max() > 0.5  # (the lens matters here)
+    # at any focal the slider sets, the lens is undone at the camera's own focal (it belongs to that calibration),
+    # then the pinhole 2D is lifted at the slider's: a user trial's short focal on a lens sample failed to
+    # invert the lens at that focal, and typing "2000" key by key reset the box at the "2"
+    lens_sample = replace(demo, camera=lens_cam)
+    pinhole_2d = lens_cam.undistort_pixels(lens_sample.keypoints_2d)
+    for f in (100.0, 250.0, 2000.0):
+        st = SessionState(sample=lens_sample, model=app.default_model, focal_px=f)
+        frame = compute_frame(st, lf, app.error_model)
+        want = lf.lift(pinhole_2d, focal=f, principal_point=lens_cam.principal_point, source="clean", warn=False)
+        np.testing.assert_allclose(frame.root, want.root, rtol=1e-9)

@@ -685,6 +685,16 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
                    principal_point=(512.0, 515.0), source="clean")
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
     assert rec.to_json()["distortion"] == pytest.approx(lens)
+    np.testing.assert_array_equal(rec.keypoints_2d, kp)  # (the 2D as given, with its lens)
+    # at another focal (the slider): the lens is undone at the file's own focal, and the record holds that pinhole
+    # 2D without a lens, so that lifting the record again gives the same result
+    rec2 = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(2000.0, 2000.0), focal_changed=True)
+    pinhole = project(X, focal=1145.0, principal_point=(512.0, 515.0))
+    want2 = lf.lift(pinhole, focal=2000.0, principal_point=(512.0, 515.0), source="clean")
+    np.testing.assert_allclose(rec2.root, want2.root, rtol=1e-6)
+    np.testing.assert_allclose(rec2.keypoints_2d, pinhole, atol=1e-6)
+    assert "distortion" not in rec2.to_json()
+    assert any("undistorted with the camera's lens at its own focal length (1145.0 px)" in w for w in rec2.warnings)
 
     nofocal = {k: v for k, v in doc.items() if k != "focal"}
     with pytest.raises(up.UploadError, match='"distortion" needs the camera\'s own focal length: add "focal"'):
