@@ -15,6 +15,7 @@ the model and focal length in use. Units: px, mm, seconds; camera frame OpenCV.
 from __future__ import annotations
 
 import json
+import math
 import tempfile
 import threading
 from collections.abc import Callable
@@ -69,7 +70,7 @@ class VideoSequence:
     jpegs: list[bytes] | None
     fps: float = field(init=False)
     num_frames: int = field(init=False)
-    _traj: tuple[tuple, list[dict[int, np.ndarray]]] | None = field(default=None, init=False, repr=False)
+    _relifted: tuple[tuple, SequenceRecord] | None = field(default=None, init=False, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -113,40 +114,64 @@ class VideoSequence:
         head, _, tail = key.rpartition("/")
         return int(tail) if head == self.key and tail.isdigit() and int(tail) < self.num_frames else None
 
-    def trajectories(self, lifter: Any, focal: tuple[float, float]) -> list[dict[int, np.ndarray]]:
-        """Every track's smoothed root trajectory, ``[{frame index: root (3,) mm}, ...]`` (one dict per track id),
-        for ``lifter`` at ``focal``: the record's own when both are the upload's, else every frame's people
-        lifted again in one batch and tracked and smoothed as the upload was (cached for the last pair)."""
+    def record_at(self, lifter: Any, focal: tuple[float, float]) -> SequenceRecord:
+        """The whole sequence as ``poselifter lift`` writes it, for ``lifter`` at ``focal``: the upload's record
+        when both are the upload's, else every frame's people lifted again in one batch and tracked and smoothed as
+        the upload was (cached for the last pair), with a note saying so. A lens is undone at the upload's own
+        focal (:func:`app.core.lens_free_2d`); at another focal the record then holds that undistorted 2D and no
+        lens, so that lifting it again gives the same result."""
         rec = self.record
         f = (float(focal[0]), float(focal[1]))
+        name = str(getattr(lifter, "name", "custom"))
         key = (getattr(lifter, "name", id(lifter)), f)
-        with self._lock:
-            if self._traj is not None and self._traj[0] == key:
-                return self._traj[1]
         if key == (rec.model, tuple(rec.focal)):
-            frames = self.frames
-        else:
-            counts = [len(fr.people) for fr in self.frames]
-            kp = [p.keypoints_2d for fr in self.frames for p in fr.people]
+            return rec
+        with self._lock:
+            if self._relifted is not None and self._relifted[0] == key:
+                return self._relifted[1]
+        seen = [fr for fr in rec.frames if fr.people]
+        kp_given = [np.stack([p.keypoints_2d for p in fr.people]) for fr in seen]
+        kp = [lens_free_2d(k, camera=self.camera, lifter=lifter) for k in kp_given]
+        undistorted = rec.distortion is not None and getattr(lifter, "lens", "pinhole") == "pinhole"
+        lifted_by_index: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        if seen:
             src = "clean" if rec.source == "clean" else "detected"
-            # (undistorted with the upload's own focal, lifted at this one)
-            res = lifter.lift(lens_free_2d(np.stack(kp), camera=self.camera, lifter=lifter), focal=f,
-                              principal_point=rec.principal_point, source=src, warn=False)
+            res = lifter.lift(np.concatenate(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
-            lifted, k = [], 0
-            for fr, c in zip(self.frames, counts):  # (every frame kept has someone in it)
-                lifted.append((fr.index, fr.time_s, np.stack([p.keypoints_2d for p in fr.people]), root[k:k + c],
-                               rel[k:k + c], None))
+            k = 0
+            for fr, q, given in zip(seen, kp, kp_given):
+                c = len(q)
+                lifted_by_index[fr.index] = (q if undistorted else given, root[k:k + c], rel[k:k + c])
                 k += c
-            frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
+        lifted = []
+        for fr in rec.frames:  # (a frame with nobody keeps its place)
+            q, r, rl = lifted_by_index.get(fr.index, (np.zeros((0, 17, 2)), np.zeros((0, 3)), np.zeros((0, 17, 3))))
+            have = [p.scores for p in fr.people if p.scores is not None]
+            scores = np.stack(have) if fr.people and len(have) == len(fr.people) else None
+            lifted.append((fr.index, fr.time_s, q, r, rl, scores))
+        frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
+        note = (f"lifted again in the app: model {name!r} at focal length {math.sqrt(f[0] * f[1]):.1f} px (the upload's: "
+                f"{rec.model!r} at {math.sqrt(rec.focal[0] * rec.focal[1]):.1f} px)")
+        if undistorted:
+            note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
+                     "undistorted 2D, and no 'distortion' is recorded")
+        out = replace(rec, model=name, focal=f, focal_source="app-slider" if f != tuple(rec.focal) else rec.focal_source,
+                      frames=frames, warnings=[*rec.warnings, note],
+                      distortion=None if undistorted else rec.distortion)
+        with self._lock:
+            self._relifted = (key, out)
+        return out
+
+    def trajectories(self, lifter: Any, focal: tuple[float, float]) -> list[dict[int, np.ndarray]]:
+        """Every track's smoothed root trajectory, ``[{frame index: root (3,) mm}, ...]`` (one dict per track id,
+        frames counted as :meth:`sample` counts them: those with someone in them), for ``lifter`` at ``focal``
+        (:meth:`record_at`)."""
+        frames = [fr for fr in self.record_at(lifter, focal).frames if fr.people]
         tracks: dict[int, dict[int, np.ndarray]] = {}
         for i, fr in enumerate(frames):
             for p in fr.people:
                 tracks.setdefault(p.track_id, {})[i] = np.asarray(p.root, np.float64)
-        out = [tracks[t] for t in sorted(tracks)]
-        with self._lock:
-            self._traj = (key, out)
-        return out
+        return [tracks[t] for t in sorted(tracks)]
 
 
 def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) -> bytes:
@@ -211,18 +236,20 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs)
 
 
-def sequence_json_bytes(seq: VideoSequence) -> bytes:
+def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:
     """The whole lifted sequence as ``poselifter lift clip.mp4`` writes ``DIR/clip.json`` (fps, frames, people with
-    ``track_id``; the upload's model and focal length, smoothed)."""
-    return json.dumps(seq.record.to_json(), indent=1).encode("utf-8")
+    ``track_id``; smoothed), for ``lifter`` at ``focal`` (:meth:`VideoSequence.record_at`; None: the upload's)."""
+    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal)
+    return json.dumps(rec.to_json(), indent=1).encode("utf-8")
 
 
-def sequence_glb_bytes(seq: VideoSequence) -> bytes:
+def sequence_glb_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:
     """The whole lifted sequence as the animated binary glTF of ``poselifter lift clip.mp4 --glb`` (every track;
-    metres, y-up)."""
+    metres, y-up), for ``lifter`` at ``focal`` (None: the upload's)."""
     from lifter.export import write_glb_animation
 
-    tracks = seq.record.tracks()
+    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal)
+    tracks = rec.tracks()
     if not tracks:
         raise UploadError(f"{seq.info.name}: nobody in any frame; nothing to export")
     with tempfile.TemporaryDirectory(prefix="poselifter-download-") as d:

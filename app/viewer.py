@@ -1107,15 +1107,19 @@ class SessionView:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current
         clean 2D of everyone, dragged joints included, lifted at the current focal length) or ``"glb"``. For an
         uploaded video or keypoint sequence: the whole sequence as ``poselifter lift clip.mp4`` writes it (JSON with
-        ``frames``; GLB animated), tracked and smoothed at the upload's focal length."""
+        ``frames``; GLB animated), tracked and smoothed, at the tab's model and focal length (lifted again when they
+        are not the upload's)."""
         if fmt not in ("json", "glb"):
             raise PoseLifterError(f"unknown download format {fmt!r}; expected 'json' or 'glb'")
         seq = self.sequence()
         if isinstance(seq, VideoSequence):  # the whole video, as `poselifter lift clip.mp4 [--glb]` writes it
-            stem = up.download_stem(self.state.sample)
+            with self.lock:
+                st = self.state
+                stem, model, focal = up.download_stem(st.sample), st.model, st.focal
+            lifter = self.app.pool.get(model)  # (at the tab's model and focal length, as it shows them)
             if fmt == "json":
-                return f"{stem}.json", vid.sequence_json_bytes(seq)
-            return f"{stem}.glb", vid.sequence_glb_bytes(seq)
+                return f"{stem}.json", vid.sequence_json_bytes(seq, lifter=lifter, focal=focal)
+            return f"{stem}.glb", vid.sequence_glb_bytes(seq, lifter=lifter, focal=focal)
         with self.lock:
             st = self.state
             dragged = dict(st.others_dragged)

@@ -102,6 +102,12 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     assert name == "walk_lifted.json" and rec["fps"] == pytest.approx(25.0) and len(rec["frames"]) == n
     assert sorted(t["track_id"] for t in rec["tracks"]) == sorted({p["track_id"] for f in rec["frames"] for p in
                                                                    f["people"]}) and len(rec["tracks"]) == 2
+    # ... at the focal length the tab shows (800 px, set above), not the upload's: a user trial's download kept
+    # the upload's while the readout showed another
+    assert np.sqrt(np.prod(rec["focal"])) == pytest.approx(800.0, abs=0.01) and rec["focal_source"] == "app-slider"
+    assert any("lifted again in the app" in w and "800.0 px" in w for w in rec["warnings"]), rec["warnings"]
+    first = next(p for p in rec["frames"][0]["people"] if p["track_id"] == 1)
+    np.testing.assert_allclose(first["root"], moved[0][0], atol=0.06)  # (the file rounds to 0.1 mm)
     name, glb = v.download_payload("glb")
     from lifter.export import read_glb_animation
 
