@@ -31,7 +31,16 @@ from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence,
 
 from .core import lens_free_2d
 from .samples import Sample
-from .upload import MAX_PEOPLE, UploadError, UploadInfo, check_upload, display_canvas, safe_name, upload_camera
+from .upload import (
+    MAX_CANVAS_SIDE,
+    MAX_PEOPLE,
+    UploadError,
+    UploadInfo,
+    check_upload,
+    display_canvas,
+    safe_name,
+    upload_camera,
+)
 
 VIDEO_MAX_SECONDS: Final[float] = 20.0
 """Uploaded videos and keypoint sequences are lifted up to this duration (the rest is dropped, with a note)."""
@@ -214,9 +223,15 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             else:
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
                 jpegs = None
-                if rec.image_size is None:
-                    raise UploadError(f"{nm}: the keypoint sequence has no \"image_size\": [W, H]; add it (the app "
-                                      "draws the frames on a canvas of that size)")
+                if rec.image_size is None:  # (lifted with its principal point; the canvas needs a size)
+                    cx, cy = rec.principal_point
+                    size = (max(1, round(2 * float(cx))), max(1, round(2 * float(cy))))
+                    if max(size) > MAX_CANVAS_SIDE:
+                        raise UploadError(f"{nm}: the keypoint sequence has no \"image_size\": [W, H], and twice its "
+                                          f"principal point ({size[0]} x {size[1]} px) is too large a canvas; add it")
+                    rec = replace(rec, image_size=size, warnings=[
+                        *rec.warnings, f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the "
+                        "principal point) for the canvas"])
         except PoseLifterError as exc:
             msg = str(exc).replace(str(path), nm)
             raise UploadError(msg) from None

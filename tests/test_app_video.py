@@ -155,3 +155,10 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     del no_size["image_size"]
     assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is False
     assert "image_size" in v.messages[-1]
+    # with a principal point but no image size (which poselifter lift accepts), the canvas is twice the principal
+    # point, as for a single keypoint file, and a note says so (a user trial's sequence was refused)
+    no_size["principal_point"] = [W / 2 + 10, H / 2 - 20]
+    assert v.load_upload("pp.json", json.dumps(no_size).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None and seq.record.image_size == (W + 20, H - 40)
+    assert any("assumed" in w and "twice the principal point" in w for w in seq.info.warnings), seq.info.warnings
