@@ -148,6 +148,9 @@ class KeypointFile:
     """For each of ``people``: its position in the file's list of people (0-based)."""
     people_ids: tuple[str | int | None, ...] = ()
     """For each of ``people``: its ``person_id`` (or ``id``, ``track_id``) field, None where it has none."""
+    unread: tuple[str, ...] = ()
+    """The notes (also in ``warnings``) on fields that were not read: camera fields inside a person, fields named
+    otherwise than the ones read (:func:`unread_field_notes`). An error about a missing field repeats them."""
 
 
 MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
@@ -291,7 +294,9 @@ _FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
     "cx": "principal_point", "cy": "principal_point", "center": "principal_point", "size": "image_size",
     "resolution": "image_size", "width": "image_size", "height": "image_size", "image_width": "image_size",
     "image_height": "image_size", "keypoint_format": "format", "fmt": "format", "framerate": "fps",
-    "frame_rate": "fps"}
+    "frame_rate": "fps", "lens": "distortion", "intrinsic": "focal and principal_point",
+    "intrinsic_matrix": "focal and principal_point", "camera": "focal and principal_point",
+    "cam": "focal and principal_point", "calibration": "focal and principal_point"}
 """Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
 
 _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
@@ -322,6 +327,9 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
             hint = (" It takes Human3.6M's order (k1, k2, k3, p1, p2); OpenCV's coefficients (k1, k2, p1, p2, k3) "
                     "have other tangential terms: undistort the 2D with cv2.undistortPoints first and leave the "
                     "lens out")
+        elif key.lower() in ("camera", "cam", "calibration") and isinstance(meta[key], dict):
+            hint = (" Camera fields go at the file's top level: 'focal', 'principal_point', 'image_size', "
+                    "'distortion'")
         elif ours == "focal and principal_point":
             hint = " (fx, fy and cx, cy of the camera matrix, px)"
         notes.append(f"{key!r} is not read: did you mean {names}?{hint}")
@@ -507,15 +515,18 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         has_ids = any(i is not None for _, i in identity)
         notes.append(f"{len(arrays)} people in the file; each is lifted (largest first; 'input_index' is a person's "
                      "position in the file" + (", 'person_id' their own id)" if has_ids else ")"))
+    unread: list[str] = []
     misplaced = _misplaced_camera_fields(d, frame_level=False)
     if misplaced:
-        notes.append(f"{', '.join(repr(k) for k in misplaced)} inside a person is not read: camera fields go at the "
-                     "file's top level, beside the people")
-    notes += unread_field_notes(meta)
+        unread.append(f"{', '.join(repr(k) for k in misplaced)} inside a person is not read: camera fields and "
+                      "'source' go at the file's top level, beside the people")
+    unread += unread_field_notes(meta)
+    notes += unread
     image_size, focal, pp, source, dist = _camera_meta(meta, p)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
-                        people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity))
+                        people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),
+                        unread=tuple(unread))
 
 
 MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
@@ -540,6 +551,8 @@ class KeypointSequence:
     people_ids: list[list[str | int | None]] | None = None
     """Per frame, for each of its people: their ``person_id`` (or ``id``, ``track_id``) field, None where they
     have none; None when no frame has one."""
+    unread: tuple[str, ...] = ()
+    """The notes (also in ``warnings``) on fields that were not read (:attr:`KeypointFile.unread`)."""
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -607,14 +620,18 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")
         notes.append(msg)
+    unread: list[str] = []
     if misplaced:
-        notes.append(f"{', '.join(f'{k!r} (first in frame {i})' for k, i in sorted(misplaced.items()))} inside a "
-                     "frame is not read: a sequence's camera fields go at its top level, beside 'frames'")
-    notes += unread_field_notes(d)
+        unread.append(f"{', '.join(f'{k!r} (first in frame {i})' for k, i in sorted(misplaced.items()))} inside a "
+                      "frame is not read: a sequence's camera fields and 'source' go at its top level, beside "
+                      "'frames'")
+    unread += unread_field_notes(d)
+    notes += unread
     image_size, focal, pp, source, dist = _camera_meta(d, p)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
-                            people_ids=ids if any(i is not None for fr in ids for i in fr) else None)
+                            people_ids=ids if any(i is not None for fr in ids for i in fr) else None,
+                            unread=tuple(unread))
 
 
 def _read_umask() -> int:

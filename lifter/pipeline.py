@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,8 +34,27 @@ def _px(v: Any) -> str:
 
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
-            fov_deg: float, where: str, file_distortion: np.ndarray | None = None
+            fov_deg: float, where: str, file_distortion: np.ndarray | None = None, unread: Sequence[str] = ()
             ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
+    """The focal length, its source, the principal point and notes for one input, from what the user gave, the
+    file's camera fields and the image size. A missing field raises a :class:`PoseLifterError` naming the ways
+    to give it, followed by ``unread`` (a keypoint file's notes on fields it has but that are not read, e.g. a
+    ``"focal_length"``: :attr:`lifter.io.KeypointFile.unread`), which likely explain it."""
+    try:
+        return _resolve_camera(user_focal=user_focal, user_pp=user_pp, file_focal=file_focal, file_pp=file_pp,
+                               image_size=image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg,
+                               where=where, file_distortion=file_distortion)
+    except PoseLifterError as exc:
+        if not unread:
+            raise
+        raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(
+            n if n.endswith((".", "?", ")")) else n + "." for n in unread)) from None
+
+
+def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
+                    file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any,
+                    sensor_width_mm: float | None, fov_deg: float, where: str, file_distortion: np.ndarray | None
+                    ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
     if image_size is None:  # everything missing in one message, not one run per missing field
         have = {"focal": user_focal is not None or file_focal is not None,
@@ -158,7 +178,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
-        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion)
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread)
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes,
                          distortion=kf.distortion)

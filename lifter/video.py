@@ -494,7 +494,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
-        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion)
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread)
     warnings.extend(notes)
     frames = ks.frames
     limit = int(math.floor(max_seconds * ks.fps + 1e-9))

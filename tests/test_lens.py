@@ -330,3 +330,28 @@ def test_other_names_for_read_fields_get_a_note_naming_ours(tmp_path):
                                           canonical_depth=3.0, input_index=0),))
     back = parse_keypoint_json(_write(tmp_path / "r.json", rec.to_json()))
     assert back.distortion is not None and not any("not read" in n for n in back.warnings), back.warnings
+
+
+def test_an_error_about_a_missing_field_repeats_the_unread_fields(tmp_path):
+    """A user trial's file said "focal_length" and no image size: the lift failed with "no focal length", and
+    the note that would have explained it was dropped with the record. The error now ends with the file's notes
+    on fields that are not read; a nested "camera" object gets its own hint."""
+    from lifter.pipeline import lift_keypoint_file
+    from lifter.video import lift_keypoint_sequence
+
+    kp = (np.arange(34).reshape(17, 2) * 10.0 + 100).tolist()
+    lf = pinhole_lifter()
+    path = _write(tmp_path / "a.json", {"keypoints": kp, "focal_length": 1145, "principal_point": [512, 515]})
+    with pytest.raises(PoseLifterError, match=r"no focal length and no image size: .*\. Also in the file: "
+                                              r"'focal_length' is not read: did you mean 'focal'\?$"):
+        lift_keypoint_file(path, lifter=lf)
+    path = _write(tmp_path / "c.json", {"keypoints": kp, "camera": {"focal": 1145}, "principal_point": [512, 515]})
+    with pytest.raises(PoseLifterError, match=r"Also in the file: 'camera' is not read: .*Camera fields go at the "
+                                              r"file's top level"):
+        lift_keypoint_file(path, lifter=lf)
+    path = _write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 10, "K": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]})
+    with pytest.raises(PoseLifterError, match=r"Also in the file: 'K' is not read: did you mean 'focal' and "
+                                              r"'principal_point'\?"):
+        lift_keypoint_sequence(path, lifter=lf)
+    ok = _write(tmp_path / "ok.json", {"keypoints": kp, "image_size": [1000, 1000]})
+    assert lift_keypoint_file(ok, lifter=lf).root[2] > 0  # (no unread fields: lifted as before)
