@@ -420,6 +420,12 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       distortion=cam.distortion if keep_lens else None)
 
 
+def sentence(note: str) -> str:
+    """``note`` ending in one full stop (notes that end in "?", "." or ")" get none added)."""
+    note = note.rstrip()
+    return note if note.endswith((".", "?", "!")) else note + "."
+
+
 def download_stem(sample: Sample) -> str:
     """A file-name stem for the result of ``sample``."""
     raw = Path(sample.upload.name).stem if sample.upload is not None else sample.key
@@ -492,4 +498,4 @@ def upload_message(sample: Sample) -> str:
         what += ", all lifted into one camera space (the Drag tab's person picker selects whose joints to drag)"
     notes = [n for n in info.warnings if n != info.focal_detail]
     return (f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
-            + "".join(f" Note: {n}." for n in notes))
+            + "".join(f" Note: {sentence(n)}" for n in notes))

@@ -439,10 +439,11 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                                   "'format' where the count is shared)")
         fmt = FORMAT_BY_COUNT[J]
         if J == 17:
-            notes.append("17 joints without 'format': assumed H36M order (use --format coco17 for COCO keypoints)")
+            notes.append("17 joints without 'format': assumed H36M order (for COCO keypoints give \"format\": "
+                         "\"coco17\" in the file, or --format coco17 on the command line)")
         else:
-            notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' or "
-                         "--format if they are another layout)")
+            notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' in the "
+                         "file, or --format on the command line, if they are another layout)")
     f = get_format(fmt)
     out, kept, dropped = [], [], []
     for (xy, missing), (pos, pid) in zip(parsed, identity):

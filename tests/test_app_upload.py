@@ -699,3 +699,14 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
     nofocal = {k: v for k, v in doc.items() if k != "focal"}
     with pytest.raises(up.UploadError, match='"distortion" needs the camera\'s own focal length: add "focal"'):
         up.keypoint_sample("nofocal.json", json.dumps(nofocal).encode(), key="upload/t/nofocal.json")
+
+
+def test_upload_notes_read_as_sentences_and_name_the_files_field() -> None:
+    """A user trial: the app's note on a 17-joint file without "format" named a CLI flag (--format) the app does
+    not have, and a note ending in "?" got a second full stop ("did you mean 'distortion'?.")."""
+    kp = (np.arange(34).reshape(17, 2) * 10.0 + 100).tolist()
+    doc = {"keypoints": kp, "image_size": [1000, 1000], "distorsion": [0, 0, 0, 0, 0]}
+    sample = up.keypoint_sample("k.json", json.dumps(doc).encode(), key="upload/t/k.json")
+    msg = up.upload_message(sample)
+    assert "give \"format\": \"coco17\" in the file" in msg and "did you mean 'distortion'? " in msg + " "
+    assert "?." not in msg and ".." not in msg
