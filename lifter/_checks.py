@@ -62,6 +62,11 @@ def _real_array(x: Any, *, name: str, what: str) -> np.ndarray:
         raise PoseLifterError(f"{name}: could not convert to {what} ({exc})") from None
 
 
+_OTHER_FORMATS: dict[int, tuple[str, ...]] = {16: ("sh16",), 25: ("openpose25",), 33: ("blazepose33",)}
+"""Joint counts of the other keypoint formats (:mod:`lifter.keypoints`), for the shape error's hint (17 joints
+is also COCO's: the count cannot tell, so it gets none)."""
+
+
 def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
     """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error.
     Torch tensors are accepted (detached and copied to the CPU)."""
@@ -71,6 +76,10 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         hint = ""
         if dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 3:
             hint = f"; if the third column is a detector confidence, pass {name}[..., :2]"
+        elif num_joints == 17 and arr.ndim >= 2 and arr.shape[-1] == dim and arr.shape[-2] in _OTHER_FORMATS:
+            fmts = " or ".join(f'src="{f}"' for f in _OTHER_FORMATS[arr.shape[-2]])
+            hint = (f"; {arr.shape[-2]} joints is another detector's layout: convert it to Human3.6M's 17 with "
+                    f"lifter.convert({name}, {fmts}) first")
         raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}{hint}")
     if not np.all(np.isfinite(arr)):
         bad_joint = np.asarray(~np.isfinite(arr).all(-1))

@@ -102,11 +102,14 @@ class LiftResult:
         ``Z_true = Z * f_true / f_used`` (paper Eq. 5-6), exactly. ``"camera"`` (the default model): the 2D
         through the focal length (reference camera), so a different focal length changes the pose and the
         canonical depth as well; ``Z * f_true / f_used`` is then only a rough correction (scripts/wrong_focal.py,
-        exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 8 % through the clean network,
-        29 % through the detected ones; single poses further).
+        exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 9 % through the clean network,
+        30 % through the detected ones; single poses further).
     warnings: what looks wrong in the output (roots behind the camera; a pixel-space model given 2D poses larger
         or smaller than those it was trained on), as :meth:`Lifter.lift` warned them (``warn=True``) or would have;
         empty when nothing does.
+    input_warnings: what looks wrong in the input but was lifted (a pose spanning more than 120 deg of view at
+        the focal length given, usually a focal in mm rather than px; a joint at exactly (0, 0) far from its pose),
+        as :meth:`Lifter.lift` warned them or would have; kept here so that :meth:`to_dict` carries them.
     """
 
     absolute: np.ndarray
@@ -121,6 +124,7 @@ class LiftResult:
     source: Source
     input_space: Literal["pixel", "camera"] = "pixel"
     warnings: tuple[str, ...] = ()
+    input_warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """The result as plain Python (lists of floats, strings, bools), ready for ``json.dump``; ``note`` included.
@@ -517,8 +521,9 @@ class Lifter:
             dist = check_distortion(distortion, lead=lead)
             if self.lens == "pinhole":
                 kp = undistort_pixels(kp, focal=f, principal_point=pp, k=dist[..., :3], p=dist[..., 3:])
+        in_notes = tuple(input_warnings(kp, f if focal_source == "given" else None))
         if warn:
-            for message in input_warnings(kp, f if focal_source == "given" else None):
+            for message in in_notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
@@ -550,7 +555,7 @@ class Lifter:
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
                           metric_depth=focal_source == "given", source=source, input_space=self.input_space,
-                          warnings=tuple(notes))
+                          warnings=tuple(notes), input_warnings=in_notes)
 
     def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, alpha: np.ndarray, source: Source,
                    flip_test: bool, *, encoded: dict[tuple[Any, ...], Encoded[np.ndarray]] | None = None

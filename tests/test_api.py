@@ -616,3 +616,30 @@ def test_batched_camera_arguments_per_pose_and_their_messages():
         np.testing.assert_allclose(res.absolute[i, 0], alone.absolute, atol=1e-3)
     with pytest.raises(PoseLifterError, match=r"image_size: shape \(3, 2\) does not broadcast"):
         m.lift(kp, image_size=np.full((3, 2), 1000.0))
+
+
+def test_input_warnings_are_kept_in_the_result_and_its_dict():
+    """A user trial: a focal length in mm raised a Python warning, but the result (and so ``to_dict()``, what
+    users save) did not carry it. ``LiftResult.input_warnings`` does, with ``warn=False`` too; plain input has
+    none."""
+    import json
+
+    lf = tiny_lifter()
+    kp = project(random_pose_cam(np.random.default_rng(0), 1)[0], focal=1000.0, principal_point=(500.0, 500.0))
+    with pytest.warns(PoseLifterWarning, match="is the focal length in pixels"):
+        res = lf.lift(kp, focal=50.0, principal_point=(500.0, 500.0))
+    assert any("is the focal length in pixels" in w for w in res.input_warnings)
+    assert json.loads(json.dumps(res.to_dict()))["input_warnings"] == list(res.input_warnings)
+    quiet = lf.lift(kp, focal=50.0, principal_point=(500.0, 500.0), warn=False)
+    assert quiet.input_warnings == res.input_warnings
+    assert lf.lift(kp, focal=1000.0, principal_point=(500.0, 500.0)).input_warnings == ()
+
+
+def test_another_detectors_joint_count_names_the_conversion():
+    """(33, 2) BlazePose landmarks given to lift: the shape error names lifter.convert with the format."""
+    lf = tiny_lifter()
+    with pytest.raises(PoseLifterError, match=r'got \(33, 2\); 33 joints .*lifter\.convert\(keypoints, '
+                                              r'src="blazepose33"\)'):
+        lf.lift(np.full((33, 2), 100.0), focal=1000.0, principal_point=(500.0, 500.0))
+    with pytest.raises(PoseLifterError, match=r'src="openpose25"'):
+        lf.lift(np.full((2, 25, 2), 100.0), focal=1000.0, principal_point=(500.0, 500.0))
