@@ -582,6 +582,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if len(raw) > MAX_SEQUENCE_FRAMES:
         raise PoseLifterError(f"{p}: {len(raw)} frames is more than the {MAX_SEQUENCE_FRAMES} a sequence may have")
     fps: Any = d.get("fps")
+    if "fps" not in d:
+        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate, e.g. \"fps\": 30 "
+                              "(frames/s, in (0, 1000])")
     if not (_is_number(fps) and math.isfinite(fps) and 0 < fps <= 1000):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(fps)}")
     fmt = d.get("format") or default_format

@@ -244,7 +244,8 @@ def test_keypoint_sequence(tmp_path, lifter):
 
 @pytest.mark.parametrize(("body", "match"), [
     ({"frames": [], "fps": 30}, "zero-length sequence"),
-    ({"frames": [[[0, 0]] * 17]}, "'fps' must be the frame rate"),
+    ({"frames": [[[0, 0]] * 17]}, "'fps' is missing: a keypoint sequence needs its frame rate"),
+    ({"frames": [[[0, 0]] * 17], "fps": None}, "'fps' must be the frame rate"),
     ({"frames": 3, "fps": 30}, "'frames' must be a list"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}, {"keypoints": [[1, 1]] * 16}], "fps": 30,
       "format": "h36m17"}, "frame 1: format 'h36m17' has 17 joints, the file has 16"),
