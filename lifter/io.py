@@ -81,8 +81,8 @@ class LiftRecord:
     root: ``(3,)`` mm; canonical_depth: mm (at a 1000-px focal); focal: ``(fx, fy)`` px;
     principal_point: ``(cx, cy)`` px; image_size: ``(W, H)`` px or None; scores: ``(17,)`` or None.
     The top-level pose fields describe the largest person; ``people`` holds everyone lifted, largest first
-    (``people[0]`` is the top-level person). ``num_people``: how many the detector found in an image (None for
-    keypoint files); at most ``max_people`` of them are lifted, so it can exceed ``len(people)``.
+    (``people[0]`` is the top-level person). ``num_people``: how many the detector found in an image (or the
+    keypoint file holds); at most ``max_people`` of them are lifted, so it can exceed ``len(people)``.
     """
 
     input: str
