@@ -103,6 +103,11 @@ WINDOW_MIN_INSIDE: Final[float] = 0.8
 MAX_COVERED: Final[float] = 0.5
 """``multi="windows"``: a candidate whose box is covered more than this by the boxes of people already kept is a
 part or a merge of them, not another person."""
+WEAKER_OVERLAP: Final[tuple[float, float]] = (0.5, 0.2)
+"""``multi="windows"``: a candidate whose box shares more than the first value of the smaller of its and a kept
+person's boxes, and whose mean landmark visibility is lower than that person's by more than the second, is a
+weaker second reading of the same region (a user trial: a distorted, upside-down skeleton at 0.63 over a person
+found at 0.93, ranked first in the output because its box was the largest), not another person."""
 SAME_PERSON: Final[float] = 0.1
 """Two detections are the same person when their median landmark distance is below this share of the larger
 box diagonal, or when each one's pelvis lies in the other's box."""
@@ -818,6 +823,16 @@ class BlazePoseEstimator:
         pa, pb = _pelvis(a), _pelvis(b)
         return _in_box(a.bbox_xywh, pb) and _in_box(b.bbox_xywh, pa)
 
+    @staticmethod
+    def _weaker_overlap(d: Detection, e: Detection) -> bool:
+        """``d`` overlaps ``e``'s box by more than :data:`WEAKER_OVERLAP` [0] of the smaller box and is less visible
+        by more than [1]: a weaker reading of the person ``e`` already is."""
+        (xa, ya, wa, ha), (xb, yb, wb, hb) = d.bbox_xywh, e.bbox_xywh
+        inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
+        share, gap = WEAKER_OVERLAP
+        return (inter > share * max(min(wa * ha, wb * hb), 1e-9)
+                and float(d.scores.mean()) < float(e.scores.mean()) - gap)
+
     def _select(self, cands: list[Detection], W: int, H: int) -> list[Detection]:
         """Candidates from several searches -> distinct people (class docstring), largest first."""
         kept: list[Detection] = []
@@ -828,7 +843,7 @@ class BlazePoseEstimator:
                 inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
                 if float(d.scores.mean()) < MIN_EXTRA_VISIBILITY or inside < 0.5:
                     continue
-                if any(self._same(d, e) for e in kept):
+                if any(self._same(d, e) or self._weaker_overlap(d, e) for e in kept):
                     continue
                 x0, y0, x1, y1 = _cells(d.bbox_xywh, cover.shape)
                 if x1 > x0 and y1 > y0 and float(cover[y0:y1, x0:x1].mean()) > MAX_COVERED:
