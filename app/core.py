@@ -279,14 +279,16 @@ class Frame:
         return math.sqrt(self.focal[0] * self.focal[1])
 
 
-def lens_free_2d(keypoints: np.ndarray, *, camera: Any, lifter: Any) -> np.ndarray:
+def lens_free_2d(keypoints: np.ndarray, *, camera: Any, lifter: Any, source: str = "detected") -> np.ndarray:
     """``(..., 17, 2)`` px seen through ``camera`` (a :class:`lifter.Camera`), as ``lifter`` should be given them
     at any focal length the app's slider sets: undistorted with the camera's own lens **and its own calibrated
     focal** for a network that learned pinhole 2D (lens coefficients act on ``(x - c) / f`` of the focal they were
     calibrated with; applying them at a what-if focal would bend the 2D differently, or fail to invert at a short
     one); as they are for a camera without a lens or a network that learned Human3.6M's distorted 2D
-    (:attr:`lifter.Lifter.lens`). The result is then lifted without a ``distortion``."""
-    if camera.distortion is None or getattr(lifter, "lens", "pinhole") != "pinhole":
+    (:attr:`lifter.Lifter.lens` of the network ``source`` routes to). The result is then lifted without a
+    ``distortion``."""
+    net = lifter.network_for(source) if hasattr(lifter, "network_for") else lifter
+    if camera.distortion is None or getattr(net, "lens", "pinhole") != "pinhole":
         return np.asarray(keypoints, np.float64)
     return camera.undistort_pixels(np.asarray(keypoints, np.float64))
 
@@ -320,8 +322,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     source = lift_source(state)
     # (H36M frames: their camera's lens; keypoint files that give one; demo renders and photos: none), undistorted
     # with the camera's own focal, whatever focal the slider sets (lens_free_2d)
-    res = lifter.lift(lens_free_2d(batch, camera=cam, lifter=lifter), focal=f, principal_point=pp, source=source,
-                      warn=False)
+    res = lifter.lift(lens_free_2d(batch, camera=cam, lifter=lifter, source=source), focal=f, principal_point=pp,
+                      source=source, warn=False)
     used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
                               root=res.root[n_main + i]) for i, k in enumerate(ids))

@@ -379,11 +379,13 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                        for i, q in enumerate(people)])
     output_notes: list[str] = []  # (what looks wrong in the output, as poselifter lift's records carry it)
     # (as the tab lifted it: undistorted with the camera's own focal, then lifted at the tab's)
-    lifted = lift_people(lifter, lens_free_2d(kp_all, camera=cam, lifter=lifter), np.asarray(focal, np.float64),
-                         np.asarray(pp, np.float64), flip_test=None, source=source, notes=output_notes)
+    lifted = lift_people(lifter, lens_free_2d(kp_all, camera=cam, lifter=lifter, source=source),
+                         np.asarray(focal, np.float64), np.asarray(pp, np.float64), flip_test=None, source=source,
+                         notes=output_notes)
     # the record's 2D: as given, with its lens, at the camera's own focal (the lens belongs to it); at another
     # focal, undistorted and without the lens, so that lifting the record again gives this result
-    keep_lens = cam.distortion is not None and not (focal_changed and getattr(lifter, "lens", "pinhole") == "pinhole")
+    net = lifter.network_for(source) if hasattr(lifter, "network_for") else lifter
+    keep_lens = cam.distortion is not None and not (focal_changed and getattr(net, "lens", "pinhole") == "pinhole")
     if cam.distortion is not None and not keep_lens:
         output_notes.append(f"2D undistorted with the camera's lens at its own focal length ({cam.alpha:.1f} px), then "
                             "lifted at the app's focal length: keypoints_2d is that undistorted 2D, and no "
@@ -421,7 +423,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
 
 
 def sentence(note: str) -> str:
-    """``note`` ending in one full stop (notes that end in "?", "." or ")" get none added)."""
+    """``note`` ending in one full stop (notes that end in ".", "?" or "!" get none added)."""
     note = note.rstrip()
     return note if note.endswith((".", "?", "!")) else note + "."
 

@@ -27,7 +27,16 @@ import cv2
 import numpy as np
 
 from lifter import PoseLifterError
-from lifter.video import VIDEO_SUFFIXES, SequenceRecord, lift_keypoint_sequence, lift_video, track_lifted
+from lifter.video import (
+    OUTPUT_NOTE_LINE,
+    VIDEO_SUFFIXES,
+    SequenceRecord,
+    collect_output_notes,
+    lift_keypoint_sequence,
+    lift_video,
+    output_note_lines,
+    track_lifted,
+)
 
 from .core import lens_free_2d
 from .samples import Sample
@@ -43,6 +52,8 @@ from .upload import (
     upload_camera,
 )
 
+FOCAL_SAME_PX: Final[float] = 0.5
+"""A focal length within this of the upload's (alpha, px) is the upload's (the focal box shows 0.1 px)."""
 VIDEO_MAX_SECONDS: Final[float] = 20.0
 """Uploaded videos and keypoint sequences are lifted up to this duration (the rest is dropped, with a note)."""
 VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
@@ -80,7 +91,9 @@ class VideoSequence:
     jpegs: list[bytes] | None
     fps: float = field(init=False)
     num_frames: int = field(init=False)
-    _relifted: tuple[tuple, SequenceRecord] | None = field(default=None, init=False, repr=False)
+    uploaded_with: Any = None
+    """The lifter object the upload was lifted with (None: known by the record's model name only)."""
+    _relifted: tuple[tuple, Any, SequenceRecord] | None = field(default=None, init=False, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -124,34 +137,53 @@ class VideoSequence:
         head, _, tail = key.rpartition("/")
         return int(tail) if head == self.key and tail.isdigit() and int(tail) < self.num_frames else None
 
+    def is_upload_pair(self, lifter: Any, focal: tuple[float, float]) -> bool:
+        """Whether ``lifter`` at ``focal`` is what the upload was lifted with: the same lifter object (its name when
+        the sequence does not know it) and the same focal length within :data:`FOCAL_SAME_PX` (the box shows
+        0.1 px)."""
+        rec = self.record
+        same = (lifter is self.uploaded_with if self.uploaded_with is not None
+                else getattr(lifter, "name", None) == rec.model)
+        return same and abs(math.sqrt(float(focal[0]) * float(focal[1]))
+                            - math.sqrt(rec.focal[0] * rec.focal[1])) <= FOCAL_SAME_PX
+
     def record_at(self, lifter: Any, focal: tuple[float, float]) -> SequenceRecord:
         """The whole sequence as ``poselifter lift`` writes it, for ``lifter`` at ``focal``: the upload's record
-        when both are the upload's, else every frame's people lifted again in one batch and tracked and smoothed as
-        the upload was (cached for the last pair), with a note saying so. A lens is undone at the upload's own
-        focal (:func:`app.core.lens_free_2d`); at another focal the record then holds that undistorted 2D and no
-        lens, so that lifting it again gives the same result."""
+        when both are the upload's (:meth:`is_upload_pair`), else every frame's people lifted again in one batch and
+        tracked and smoothed as the upload was (cached for the last pair), each person keeping their
+        ``person_id``, with the new lift's notes on its output in place of the upload's and a note saying so. A
+        lens is undone at the upload's own focal (:func:`app.core.lens_free_2d`); the record then holds that
+        undistorted 2D and no lens, so that lifting it again gives the same result."""
         rec = self.record
-        f = (float(focal[0]), float(focal[1]))
-        name = str(getattr(lifter, "name", "custom"))
-        key = (getattr(lifter, "name", id(lifter)), f)
-        if key == (rec.model, tuple(rec.focal)):
+        if self.is_upload_pair(lifter, focal):
             return rec
+        f = (float(focal[0]), float(focal[1]))
+        same_focal = abs(math.sqrt(f[0] * f[1]) - math.sqrt(rec.focal[0] * rec.focal[1])) <= FOCAL_SAME_PX
+        if same_focal:  # (another model at the upload's focal length)
+            f = (float(rec.focal[0]), float(rec.focal[1]))
+        name = str(getattr(lifter, "name", "custom"))
+        key = (id(lifter), f)
         with self._lock:
-            if self._relifted is not None and self._relifted[0] == key:
-                return self._relifted[1]
+            if self._relifted is not None and self._relifted[0] == key and self._relifted[1] is lifter:
+                return self._relifted[2]
+        src = "clean" if rec.source == "clean" else "detected"
+        net = lifter.network_for(src) if hasattr(lifter, "network_for") else lifter
         seen = [fr for fr in rec.frames if fr.people]
         kp_given = [np.stack([p.keypoints_2d for p in fr.people]) for fr in seen]
-        kp = [lens_free_2d(k, camera=self.camera, lifter=lifter) for k in kp_given]
-        undistorted = rec.distortion is not None and getattr(lifter, "lens", "pinhole") == "pinhole"
+        kp = [lens_free_2d(k, camera=self.camera, lifter=lifter, source=src) for k in kp_given]
+        undistorted = rec.distortion is not None and getattr(net, "lens", "pinhole") == "pinhole"
         lifted_by_index: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        output_notes: dict[str, tuple[int, int, str]] = {}
         if seen:
-            src = "clean" if rec.source == "clean" else "detected"
-            res = lifter.lift(np.concatenate(kp), focal=f, principal_point=rec.principal_point, source=src, warn=False)
+            pp = np.asarray(rec.principal_point, np.float64)
+            res = lifter.lift(np.concatenate(kp), focal=f, principal_point=pp, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             k = 0
             for fr, q, given in zip(seen, kp, kp_given):
                 c = len(q)
                 lifted_by_index[fr.index] = (q if undistorted else given, root[k:k + c], rel[k:k + c])
+                if getattr(res, "warnings", ()) and hasattr(net, "output_notes"):
+                    collect_output_notes(output_notes, fr.index, net.output_notes(q, pp, root[k:k + c]))
                 k += c
         lifted = []
         for fr in rec.frames:  # (a frame with nobody keeps its place)
@@ -160,16 +192,21 @@ class VideoSequence:
             scores = np.stack(have) if fr.people and len(have) == len(fr.people) else None
             lifted.append((fr.index, fr.time_s, q, r, rl, scores))
         frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
+        for new, old in zip(frames, rec.frames):  # (the tracker keeps each frame's order)
+            for st, was in zip(new.people, old.people):
+                st.person_id = was.person_id
         note = (f"lifted again in the app: model {name!r} at focal length {math.sqrt(f[0] * f[1]):.1f} px (the upload's: "
                 f"{rec.model!r} at {math.sqrt(rec.focal[0] * rec.focal[1]):.1f} px)")
         if undistorted:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")
-        out = replace(rec, model=name, focal=f, focal_source="app-slider" if f != tuple(rec.focal) else rec.focal_source,
-                      frames=frames, warnings=[*rec.warnings, note],
+        kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)]  # (the upload's lift's: replaced)
+        out = replace(rec, model=name, focal=f, focal_source=rec.focal_source if same_focal else "app-slider",
+                      frames=frames,
+                      warnings=[*kept, *output_note_lines(output_notes), note],
                       distortion=None if undistorted else rec.distortion)
         with self._lock:
-            self._relifted = (key, out)
+            self._relifted = (key, lifter, out)
         return out
 
     def trajectories(self, lifter: Any, focal: tuple[float, float]) -> list[dict[int, np.ndarray]]:
@@ -249,7 +286,7 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
                       source=rec.source, detector=rec.detector, warnings=tuple(notes))
     label = f"{nm} ({len(rec.frames)} frames at {rec.fps:g} fps, {len(tracks)} track{'s' if len(tracks) != 1 else ''})"
-    return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs)
+    return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs, uploaded_with=lifter)
 
 
 def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:

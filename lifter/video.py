@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -173,7 +174,7 @@ class FrameResult:
         return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
 
 
-def _collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
+def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
     """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note (a pixel
     model outside its trained sizes, roots behind the camera), with its first frame and how many frames had it."""
     for note in notes:
@@ -182,7 +183,11 @@ def _collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, note
         acc[kind] = (first, n + 1, message)
 
 
-def _output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
+OUTPUT_NOTE_LINE: Final[re.Pattern[str]] = re.compile(r"frame \d+: ")
+"""How a record's line of :func:`output_note_lines` begins (and no other of its notes does)."""
+
+
+def output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
     """The record's lines for :func:`_collect_output_notes`: the first frame's note, and how many frames had it."""
     return [f"frame {first}: {message}" + (f" ({n} frames like it)" if n > 1 else "")
             for first, n, message in acc.values()]
@@ -410,7 +415,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 kp = np.stack([q.keypoints_2d for q in people])
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
-                _collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
+                collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -457,7 +462,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
-    warnings.extend(_output_note_lines(output_notes))
+    warnings.extend(output_note_lines(output_notes))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -527,10 +532,10 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
-            _collect_output_notes(output_notes, i,
+            collect_output_notes(output_notes, i,
                                   lifter.network_for(ks.source).output_notes(kp17[k:k + c], pp, root[k:k + c]))
         k += c
-    warnings.extend(_output_note_lines(output_notes))
+    warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
     for fr, frame_ids in zip(out, ids or []):  # (the tracker keeps each frame's order: largest first)
         for st, pid in zip(fr.people, frame_ids):
@@ -542,6 +547,6 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           distortion=None if ks.distortion is None else tuple(ks.distortion.tolist()))
 
 
-__all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "FrameResult", "PersonState", "SequenceRecord",
-           "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "lift_keypoint_sequence", "lift_video",
-           "limit_blas_threads", "track_lifted"]
+__all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
+           "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
+           "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_lifted"]

@@ -162,3 +162,32 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     seq = v.sequence()
     assert seq is not None and seq.record.image_size == (W + 20, H - 40)
     assert any("assumed" in w and "twice the principal point" in w for w in seq.info.warnings), seq.info.warnings
+
+
+def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(server) -> None:
+    """A review: the download at another focal lost each person's person_id, and kept the upload's notes on its
+    lift's output while dropping the new lift's. Now ids are kept, the output notes are the new lift's, and the
+    upload's own focal within 0.5 px (the box shows 0.1 px) is the upload's record."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist(), "person_id": name} for p, name in zip(people, ("ann", "bob"))]}
+              for people in _script(6)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("ids.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None
+    lf = app.pool.get(v.state.model)
+    assert seq.record_at(lf, (F + 0.3, F + 0.3)) is seq.record  # (the upload's focal, as the box shows it)
+    ids = [[p.person_id for p in fr.people] for fr in seq.record.frames]
+    assert ids[0] == ["ann", "bob"]
+    again = seq.record_at(lf, (2 * F, 2 * F))
+    assert [[p.person_id for p in fr.people] for fr in again.frames] == ids
+    assert again.focal_source == "app-slider" and any("lifted again in the app" in w for w in again.warnings)
+    # a note on the upload's lift's output ("frame N: ..." lines) does not describe another lift: it is dropped
+    from dataclasses import replace
+
+    stale = "frame 0: the model placed 1 of 2 root(s) behind the camera (Z <= 0)"
+    seq.record = replace(seq.record, warnings=[*seq.record.warnings, stale])
+    relifted = seq.record_at(lf, (3 * F, 3 * F))
+    assert stale not in relifted.warnings and stale in seq.record.warnings
+    assert all(w in relifted.warnings for w in seq.record.warnings if w != stale)
