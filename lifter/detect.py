@@ -104,10 +104,12 @@ MAX_COVERED: Final[float] = 0.5
 """``multi="windows"``: a candidate whose box is covered more than this by the boxes of people already kept is a
 part or a merge of them, not another person."""
 WEAKER_OVERLAP: Final[tuple[float, float]] = (0.5, 0.2)
-"""``multi="windows"``: a candidate whose box shares more than the first value of the smaller of its and a kept
-person's boxes, and whose mean landmark visibility is lower than that person's by more than the second, is a
-weaker second reading of the same region (a user trial: a distorted, upside-down skeleton at 0.63 over a person
-found at 0.93, ranked first in the output because its box was the largest), not another person."""
+"""``multi="windows"``: an upside-down candidate (hips above shoulders in the image) over an upright person kept,
+sharing more than the first value of the smaller of their boxes and less visible by more than the second, is a
+garbled second reading of that person (a user trial: a distorted, upside-down skeleton at 0.63 over a person
+found at 0.93, ranked first in the output because its box was the largest), not another person. An upright
+candidate is never dropped by this rule: a partly hidden adult behind a child has the same boxes and
+visibilities."""
 SAME_PERSON: Final[float] = 0.1
 """Two detections are the same person when their median landmark distance is below this share of the larger
 box diagonal, or when each one's pelvis lies in the other's box."""
@@ -685,6 +687,17 @@ def _close_open_landmarkers() -> None:
             pass
 
 
+def _upside_down(d: Detection) -> bool | None:
+    """Whether ``d``'s hips are above its shoulders in the image (None: its format has no hips and shoulders)."""
+    names = get_format(d.keypoint_format).joint_names
+    try:
+        sh = [names.index("l_shoulder"), names.index("r_shoulder")]
+        hp = [names.index("l_hip"), names.index("r_hip")]
+    except ValueError:
+        return None
+    return bool(d.keypoints[hp, 1].mean() < d.keypoints[sh, 1].mean())
+
+
 def _pelvis(d: Detection) -> np.ndarray:
     return convert(d.keypoints, src=d.keypoint_format)[0]
 
@@ -825,8 +838,11 @@ class BlazePoseEstimator:
 
     @staticmethod
     def _weaker_overlap(d: Detection, e: Detection) -> bool:
-        """``d`` overlaps ``e``'s box by more than :data:`WEAKER_OVERLAP` [0] of the smaller box and is less visible
-        by more than [1]: a weaker reading of the person ``e`` already is."""
+        """``d`` is upside down where ``e`` is upright, overlaps ``e``'s box by more than :data:`WEAKER_OVERLAP` [0]
+        of the smaller box and is less visible by more than [1]: a garbled reading of the person ``e`` already
+        is."""
+        if not (_upside_down(d) and _upside_down(e) is False):
+            return False
         (xa, ya, wa, ha), (xb, yb, wb, hb) = d.bbox_xywh, e.bbox_xywh
         inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
         share, gap = WEAKER_OVERLAP

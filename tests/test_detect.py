@@ -500,25 +500,35 @@ def test_blazepose_flip_test_is_mirror_equivariant():
     assert gaps[False] > 0.05, gaps  # BlazePose alone is not mirror-equivariant: the test above is not vacuous
 
 
-def test_window_search_drops_a_weaker_reading_over_someone_found():
+def test_window_search_drops_a_garbled_reading_over_someone_found():
     """A user trial: two demo frames side by side gave three people; the third, mean visibility 0.63, was a
     distorted upside-down skeleton whose box overlapped a person found at 0.93 (IoU 0.28, so no rule caught it),
-    and, being the largest, it came first in the output. A candidate sharing most of the smaller box with a
-    person kept, and less visible by more than WEAKER_OVERLAP[1], is now dropped; two people side by side, or one
-    overlapping another at a similar visibility, are both kept. No mediapipe needed."""
+    and, being the largest, it came first in the output. An upside-down candidate sharing most of the smaller box
+    with an upright person kept, and less visible by more than WEAKER_OVERLAP[1], is now dropped. A review: an
+    upright, partly hidden adult (0.65) behind a child found at 0.92 has the same boxes, and is kept. No
+    mediapipe needed."""
     from lifter.detect import BlazePoseEstimator
 
     est = object.__new__(BlazePoseEstimator)
     est.max_people = 3
     rng = np.random.default_rng(0)
 
-    def body(x0, y0, w, h):
-        return np.column_stack([rng.uniform(x0, x0 + w, 33), rng.uniform(y0, y0 + h, 33)])
+    def body(x0, y0, w, h, *, inverted=False):
+        k = np.column_stack([rng.uniform(x0, x0 + w, 33), rng.uniform(y0, y0 + h, 33)])
+        top, mid = (y0 + 0.55 * h, y0 + 0.25 * h) if inverted else (y0 + 0.25 * h, y0 + 0.55 * h)
+        k[[11, 12], 1], k[[23, 24], 1] = top, mid  # shoulders, hips (blazepose33)
+        k[[0, 32], 1] = y0, y0 + h  # (the box spans the body)
+        return k
 
     person, other = _det(body(1335, 278, 84, 344), 0.93), _det(body(400, 300, 110, 330), 0.93)
-    ghost = _det(body(1271, 151, 131, 382), 0.63)  # the trial's boxes
+    ghost = _det(body(1271, 151, 131, 382, inverted=True), 0.63)  # the trial's boxes
     kept = est._select([person, other, ghost], 2000, 1002)
     assert len(kept) == 2 and all(k is not ghost for k in kept)
-    near = _det(body(1300, 250, 100, 360), 0.85)  # overlapping as much, but about as visible: another person
-    assert not est._weaker_overlap(near, person) and est._weaker_overlap(ghost, person)
-    assert not est._weaker_overlap(_det(body(100, 300, 110, 330), 0.6), person)  # far away: not a reading of it
+    assert est._weaker_overlap(ghost, person)
+    child, adult = _det(body(260, 480, 140, 370), 0.92), _det(body(100, 50, 300, 800), 0.65)
+    assert not est._weaker_overlap(adult, child)
+    assert len(est._select([child, adult], 1000, 1000)) == 2
+    upright_ghost = _det(body(1271, 151, 131, 382), 0.63)  # the same boxes upright: another person
+    assert not est._weaker_overlap(upright_ghost, person)
+    far = _det(body(100, 300, 110, 330, inverted=True), 0.6)  # upside down but elsewhere: not a reading of it
+    assert not est._weaker_overlap(far, person)
