@@ -309,7 +309,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         notes.append(f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the principal point)")
     if size is None:
         raise UploadError(f"{nm}: the keypoint file has no \"image_size\": [W, H] (nor a \"principal_point\"); "
-                          "add it, or upload the photo first")
+                          "add it, or upload the photo first"
+                          + (". Also in the file: " + " ".join(sentence(n) for n in kf.unread) if kf.unread else ""))
     if min(size) <= 0 or max(size) > MAX_CANVAS_SIDE:
         raise UploadError(f"{nm}: image_size {list(size)} px is not plausible")
     try:

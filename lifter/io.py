@@ -289,16 +289,26 @@ READ_FIELDS: Final[tuple[str, ...]] = (*CAMERA_FIELDS, "keypoints", "format", "p
 
 _FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
     "dist_coeffs": "distortion", "distcoeffs": "distortion", "dist": "distortion", "distortion_coeffs": "distortion",
-    "distortion_coefficients": "distortion", "focal_length": "focal", "f": "focal", "fx": "focal", "fy": "focal",
-    "camera_matrix": "focal and principal_point", "k": "focal and principal_point",
-    "intrinsics": "focal and principal_point", "c": "principal_point", "pp": "principal_point",
-    "cx": "principal_point", "cy": "principal_point", "center": "principal_point", "size": "image_size",
-    "resolution": "image_size", "width": "image_size", "height": "image_size", "image_width": "image_size",
-    "image_height": "image_size", "keypoint_format": "format", "fmt": "format", "framerate": "fps",
-    "frame_rate": "fps", "lens": "distortion", "intrinsic": "focal and principal_point",
-    "intrinsic_matrix": "focal and principal_point", "camera": "focal and principal_point",
-    "cam": "focal and principal_point", "calibration": "focal and principal_point"}
+    "distortion_coefficients": "distortion", "lens": "distortion", "focal_length": "focal", "fx": "focal",
+    "fy": "focal", "camera_matrix": "focal and principal_point", "intrinsics": "focal and principal_point",
+    "intrinsic": "focal and principal_point", "intrinsic_matrix": "focal and principal_point",
+    "camera": "focal and principal_point", "cam": "focal and principal_point",
+    "calibration": "focal and principal_point", "pp": "principal_point", "cx": "principal_point",
+    "cy": "principal_point", "resolution": "image_size", "width": "image_size", "height": "image_size",
+    "image_width": "image_size", "image_height": "image_size", "keypoint_format": "format", "fmt": "format",
+    "framerate": "fps", "frame_rate": "fps"}
 """Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
+
+_FIELD_LETTERS: Final[dict[str, str]] = {
+    "f": "focal", "c": "principal_point", "K": "focal and principal_point", "k": "distortion", "p": "distortion",
+    "d": "distortion", "D": "distortion", "w": "image_size", "h": "image_size"}
+"""One-letter names, case-sensitive (OpenCV's ``K`` is the camera matrix; Human3.6M's ``k``, ``p`` the lens)."""
+
+_OTHER_FIELDS: Final[frozenset[str]] = frozenset((
+    "num_keypoints", "keypoints_3d", "image_id", "category_id", "bbox", "area", "iscrowd", "score", "id",
+    "person_id", "track_id", "center", "scale", "version", "image", "file_name", "filename"))
+"""Fields of common keypoint formats (COCO annotations and results, ...) that are not ours and not meant for ours:
+never noted."""
 
 _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
     "input", "kind", "model", "joint_names", "units", "frame", "keypoints_2d", "absolute", "relative", "root",
@@ -316,15 +326,18 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
     would otherwise be dropped silently. Fields that resemble none (an image name, a version) are not noted."""
     notes = []
     for key in meta:
-        if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS:
+        if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS or key in _OTHER_FIELDS:
             continue
-        ours = _FIELD_NAMES_ELSEWHERE.get(key.lower()) or next(
-            iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.8)), None)
-        if ours is None:
-            continue
+        ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(
+            iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None)
+        if ours is None or all(n in meta for n in ours.split(" and ")):
+            continue  # (not like any of ours, or ours is there too: fx beside focal, width beside image_size)
         names = " and ".join(f"{n!r}" for n in ours.split(" and "))
         hint = ""
-        if ours == "distortion" and key.lower() in _FIELD_NAMES_ELSEWHERE:
+        if ours == "distortion" and key in ("k", "p"):
+            hint = (" Human3.6M's cameras name the lens k (k1, k2, k3) and p (p1, p2); give them together as "
+                    "'distortion': [k1, k2, k3, p1, p2]")
+        elif ours == "distortion" and (key.lower() in _FIELD_NAMES_ELSEWHERE or key in _FIELD_LETTERS):
             hint = (" It takes Human3.6M's order (k1, k2, k3, p1, p2); OpenCV's coefficients (k1, k2, p1, p2, k3) "
                     "have other tangential terms: undistort the 2D with cv2.undistortPoints first and leave the "
                     "lens out")

@@ -710,3 +710,13 @@ def test_upload_notes_read_as_sentences_and_name_the_files_field() -> None:
     msg = up.upload_message(sample)
     assert "give \"format\": \"coco17\" in the file" in msg and "did you mean 'distortion'? " in msg + " "
     assert "?." not in msg and ".." not in msg
+
+
+def test_an_upload_refused_for_a_missing_field_repeats_the_unread_ones() -> None:
+    """A review: the app's own "no image_size" refusal dropped the note on a "focal_length" / "pp" field that
+    would have explained it (poselifter lift's error repeats it)."""
+    kp = (np.arange(34).reshape(17, 2) * 10.0 + 100).tolist()
+    doc = {"keypoints": kp, "focal_length": 1145, "pp": [512, 515]}
+    with pytest.raises(up.UploadError, match=r"has no \"image_size\".*upload the photo first\. Also in the file: "
+                                             r"'focal_length' is not read: did you mean 'focal'\? 'pp' is not read"):
+        up.keypoint_sample("k.json", json.dumps(doc).encode(), key="upload/t/k.json")

@@ -312,11 +312,10 @@ def test_other_names_for_read_fields_get_a_note_naming_ours(tmp_path):
                                                           "image": "a.jpg", "version": 2}))
     assert f.distortion is None
     notes = [n for n in f.warnings if "is not read" in n]
-    assert len(notes) == 4, f.warnings
+    assert len(notes) == 3, f.warnings  # (not 'focal_length': the file has 'focal', which is read)
     assert "'distorsion' is not read: did you mean 'distortion'?" in notes
     assert any(n.startswith("'dist_coeffs' is not read: did you mean 'distortion'? It takes Human3.6M's order")
                and "cv2.undistortPoints" in n for n in notes)
-    assert "'focal_length' is not read: did you mean 'focal'?" in notes
     assert any(n.startswith("'K' is not read: did you mean 'focal' and 'principal_point'?") for n in notes)
     seq = parse_keypoint_sequence(_write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 25, "Distortion": lens}))
     assert seq.distortion is None and any("'Distortion' is not read: did you mean 'distortion'?" in n
@@ -355,3 +354,20 @@ def test_an_error_about_a_missing_field_repeats_the_unread_fields(tmp_path):
         lift_keypoint_sequence(path, lifter=lf)
     ok = _write(tmp_path / "ok.json", {"keypoints": kp, "image_size": [1000, 1000]})
     assert lift_keypoint_file(ok, lifter=lf).root[2] > 0  # (no unread fields: lifted as before)
+
+
+def test_unread_field_notes_name_the_right_field_and_spare_other_formats():
+    """A review: Human3.6M's own camera names ("k", "p": the lens) were taken for OpenCV's camera matrix "K" or
+    not noted at all; a COCO annotation's "num_keypoints", a "keypoints_3d" or a bounding-box "center" got false
+    notes; "fx" beside "focal" was noted although the focal was read. One-letter names are now case-sensitive,
+    other formats' fields are left alone, and an alias of a field the file has is not noted."""
+    from lifter.io import unread_field_notes
+
+    got = unread_field_notes({"f": 1145, "c": [512, 515], "k": [0.1, 0, 0], "p": [0, 0], "K": [[1]]})
+    assert [n.split(" is not read")[0] for n in got] == ["'f'", "'c'", "'k'", "'p'", "'K'"]
+    assert "did you mean 'distortion'? Human3.6M's cameras name the lens k" in got[2]
+    assert "did you mean 'focal' and 'principal_point'? (fx, fy and cx, cy of the camera matrix" in got[4]
+    assert unread_field_notes({"num_keypoints": 17, "image_id": 3, "category_id": 1, "bbox": [0, 0, 1, 1],
+                               "keypoints_3d": [], "center": [1, 2], "score": 0.9}) == []
+    assert unread_field_notes({"fx": 1, "focal": 1, "width": 2, "height": 3, "image_size": [2, 3]}) == []
+    assert unread_field_notes({"fx": 1}) == ["'fx' is not read: did you mean 'focal'?"]
