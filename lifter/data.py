@@ -231,7 +231,8 @@ class H36M:
         if every > 1:
             kept = np.arange(len(raw))[slice(None) if frames is None else frames]
             if np.any(np.asarray(kept) % every):
-                raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {every}th frame of "
+                nth = f"{every}{'th' if 10 <= every % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(every % 10, 'th')}"
+                raise PoseLifterError(f"{self.root} is a compacted copy that keeps only every {nth} frame of "
                                       f"{subject} (see {COMPACT_FILE}); use a stride that is a multiple of "
                                       f"{every} (poselifter train: --train-stride and --val-stride; "
                                       "poselifter evaluate: --stride), or the full Human3.6M folder")

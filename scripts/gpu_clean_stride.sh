@@ -27,16 +27,16 @@ fi
 . scripts/gpu_setup.sh  # wheels, PYTHONPATH, R and OUT, R/env.txt, nvidia-smi dmon (DMON)
 RECIPE=(--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 200
         --clean-prob 1.0 --lens pinhole --width 1024 --eval-every 2000 --no-progress)
-tr() { # name port args...
+train_run() { # name port args...
   local name=$1 port=$2; shift 2
   OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port "$port" -m lifter train --h36m "$D" \
     --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "${RECIPE[@]}" "$@" > "$R/$name.log" 2>&1
   echo "$name exit $?" >> "$R/$name.log"
 }
 NAMES=(clean_s5 clean_s1 clean_s1b)
-tr clean_s5 29511 --train-stride 5 --seed 0 &
-tr clean_s1 29512 --train-stride 1 --seed 0 &
-tr clean_s1b 29513 --train-stride 1 --seed 1 &
+train_run clean_s5 29511 --train-stride 5 --seed 0 &
+train_run clean_s1 29512 --train-stride 1 --seed 0 &
+train_run clean_s1b 29513 --train-stride 1 --seed 1 &
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
 FAILED=()

@@ -31,7 +31,7 @@ failed() { # file: the file's own error lines, not torchrun's wrapper
   FAILED+=("$1"); echo "FAILED: $1" >&2; grep -m 3 -E "error: |Error: " "$1" >&2; }
 DET="--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 0 --real-prob 0.5 --noise-level-min 0 --noise-level-max 1.5"
 CLEAN="--depth-target size --conditioning none --ema-decay 0.999 --precision bf16 --epochs 100000 --no-progress --clean-prob 1.0"
-tr() { # name port args...
+train_run() { # name port args...
   local name=$1 port=$2; shift 2
   OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port "$port" -m lifter train --h36m "$D" \
     --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "$@" > "$R/$name.log" 2>&1
@@ -39,13 +39,13 @@ tr() { # name port args...
 }
 NAMES=("paper$WA")
 # shellcheck disable=SC2086  # the recipes are word lists
-tr "paper$WA" 29511 $DET --width "$WA" --dropout "$DROP" --eval-every 2000 &
+train_run "paper$WA" 29511 $DET --width "$WA" --dropout "$DROP" --eval-every 2000 &
 if [ "$JOBS" = all ]; then
   NAMES+=("detected$WB" "clean$WB")
   # shellcheck disable=SC2086
-  tr "detected$WB" 29512 $DET --width "$WB" --eval-every 1000 &
+  train_run "detected$WB" 29512 $DET --width "$WB" --eval-every 1000 &
   # shellcheck disable=SC2086
-  tr "clean$WB" 29513 $CLEAN --width "$WB" --eval-every 1000 &
+  train_run "clean$WB" 29513 $CLEAN --width "$WB" --eval-every 1000 &
 fi
 waitall
 for n in "${NAMES[@]}"; do
