@@ -287,10 +287,16 @@ def lens_free_2d(keypoints: np.ndarray, *, camera: Any, lifter: Any, source: str
     one); as they are for a camera without a lens or a network that learned Human3.6M's distorted 2D
     (:attr:`lifter.Lifter.lens` of the network ``source`` routes to). The result is then lifted without a
     ``distortion``."""
-    net = lifter.network_for(source) if hasattr(lifter, "network_for") else lifter
-    if camera.distortion is None or getattr(net, "lens", "pinhole") != "pinhole":
+    if not undoes_lens(camera=camera, lifter=lifter, source=source):
         return np.asarray(keypoints, np.float64)
     return camera.undistort_pixels(np.asarray(keypoints, np.float64))
+
+
+def undoes_lens(*, camera: Any, lifter: Any, source: str = "detected") -> bool:
+    """Whether :func:`lens_free_2d` undistorts for these: ``camera`` has a lens and the network ``source`` routes to
+    learned pinhole 2D."""
+    net = lifter.network_for(source) if hasattr(lifter, "network_for") else lifter
+    return camera.distortion is not None and getattr(net, "lens", "pinhole") == "pinhole"
 
 
 def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLike) -> Frame:

@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
+from lifter._text import sentence
 from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
 from lifter.detect import (
@@ -54,7 +55,7 @@ from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
-from .core import lens_free_2d
+from .core import lens_free_2d, undoes_lens
 from .drawing import canvas
 from .samples import Sample
 
@@ -385,8 +386,8 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                          notes=output_notes)
     # the record's 2D: as given, with its lens, at the camera's own focal (the lens belongs to it); at another
     # focal, undistorted and without the lens, so that lifting the record again gives this result
-    net = lifter.network_for(source) if hasattr(lifter, "network_for") else lifter
-    keep_lens = cam.distortion is not None and not (focal_changed and getattr(net, "lens", "pinhole") == "pinhole")
+    keep_lens = cam.distortion is not None and not (focal_changed and undoes_lens(camera=cam, lifter=lifter,
+                                                                                   source=source))
     if cam.distortion is not None and not keep_lens:
         output_notes.append(f"2D undistorted with the camera's lens at its own focal length ({cam.alpha:.1f} px), then "
                             "lifted at the app's focal length: keypoints_2d is that undistorted 2D, and no "
@@ -421,12 +422,6 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       num_people=None if info is None else info.num_people,
                       detector=None if info is None else info.detector, warnings=tuple(warnings), source=source,
                       distortion=cam.distortion if keep_lens else None)
-
-
-def sentence(note: str) -> str:
-    """``note`` ending in one full stop (notes that end in ".", "?" or "!" get none added)."""
-    note = note.rstrip()
-    return note if note.endswith((".", "?", "!")) else note + "."
 
 
 def download_stem(sample: Sample) -> str:

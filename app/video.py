@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from lifter import PoseLifterError
+from lifter._text import sentence
 from lifter.video import (
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
@@ -38,7 +39,7 @@ from lifter.video import (
     track_lifted,
 )
 
-from .core import lens_free_2d
+from .core import lens_free_2d, undoes_lens
 from .samples import Sample
 from .upload import (
     MAX_CANVAS_SIDE,
@@ -48,7 +49,6 @@ from .upload import (
     check_upload,
     display_canvas,
     safe_name,
-    sentence,
     upload_camera,
 )
 
@@ -171,7 +171,7 @@ class VideoSequence:
         seen = [fr for fr in rec.frames if fr.people]
         kp_given = [np.stack([p.keypoints_2d for p in fr.people]) for fr in seen]
         kp = [lens_free_2d(k, camera=self.camera, lifter=lifter, source=src) for k in kp_given]
-        undistorted = rec.distortion is not None and getattr(net, "lens", "pinhole") == "pinhole"
+        undistorted = undoes_lens(camera=self.camera, lifter=lifter, source=src)
         lifted_by_index: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         output_notes: dict[str, tuple[int, int, str]] = {}
         if seen:

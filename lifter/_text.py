@@ -1,4 +1,5 @@
-"""Docstrings as plain text for ``--help`` (torch-free: ``poselifter-app --help`` uses it without loading a model)."""
+"""Text helpers: docstrings as plain text for ``--help`` (torch-free: ``poselifter-app --help`` uses it without
+loading a model), notes as sentences."""
 
 from __future__ import annotations
 
@@ -10,3 +11,10 @@ def plain_text(doc: str | None) -> str:
     as their plain names."""
     text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", doc or "")
     return re.sub(r"``([^`]+)``", r"\1", text)
+
+
+def sentence(note: str) -> str:
+    """``note`` ending in one full stop (notes that end in ".", "?" or "!" get none added), for notes joined into
+    one message."""
+    note = note.rstrip()
+    return note if note.endswith((".", "?", "!")) else note + "."

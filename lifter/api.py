@@ -518,9 +518,10 @@ class Lifter:
             if focal_source != "given":
                 raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "
                                       "(px) too, or leave distortion out")
-            dist = check_distortion(distortion, lead=lead)
-            if self.lens == "pinhole":
-                kp = undistort_pixels(kp, focal=f, principal_point=pp, k=dist[..., :3], p=dist[..., 3:])
+            if self.lens == "pinhole":  # (undistort_pixels checks the coefficients)
+                kp = undistort_pixels(kp, focal=f, principal_point=pp, distortion=distortion)
+            else:  # (taken as it is, but checked all the same)
+                check_distortion(distortion, lead=lead)
         in_notes = tuple(input_warnings(kp, f if focal_source == "given" else None))
         if warn:
             for message in in_notes:

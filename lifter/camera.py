@@ -166,30 +166,37 @@ def check_distortion(distortion: ArrayLike, *, lead: tuple[int, ...] = ()) -> np
     return d
 
 
-def undistort_pixels(keypoints: np.ndarray, *, focal: ArrayLike, principal_point: ArrayLike, k: ArrayLike,
-                     p: ArrayLike) -> np.ndarray:
+def undistort_pixels(keypoints: np.ndarray, *, focal: ArrayLike, principal_point: ArrayLike,
+                     k: ArrayLike | None = None, p: ArrayLike | None = None,
+                     distortion: ArrayLike | None = None) -> np.ndarray:
     """Pixels ``(..., J, 2)`` of a camera with lens distortion ``k``, ``p`` (:func:`distort`'s form) mapped to the
     pixels an ideal pinhole camera with the same intrinsics would see; ``focal``, ``principal_point`` (px) and
-    ``k`` ``(..., 3)``, ``p`` ``(..., 2)`` broadcast over the leading dimensions, as in :func:`project`. For a
-    projection ``project(X, k=k, p=p)`` this gives ``project(X)``. Joints with a non-finite coordinate (missing)
-    come out NaN."""
+    ``k`` ``(..., 3)``, ``p`` ``(..., 2)`` broadcast over the leading dimensions, as in :func:`project`. The lens may
+    instead be given as ``distortion`` ``(k1, k2, k3, p1, p2)`` or ``(..., 5)`` (:func:`check_distortion`, as
+    :meth:`lifter.Lifter.lift` takes it). For a projection ``project(X, k=k, p=p)`` this gives ``project(X)``.
+    Joints with a non-finite coordinate (missing) come out NaN."""
     uv = np.asarray(keypoints, np.float64)
     if uv.ndim < 2 or uv.shape[-1] != 2:
         raise PoseLifterError(f"keypoints: expected shape (..., J, 2), got {uv.shape}")
     lead = uv.shape[:-2]
-    k_ = np.asarray(k, np.float64) if k is not None else None
-    p_ = np.asarray(p, np.float64) if p is not None else None
-    if k_ is None or p_ is None or k_.shape[-1:] != (3,) or p_.shape[-1:] != (2,):
-        raise PoseLifterError(f"undistort_pixels: k must be (k1, k2, k3) and p (p1, p2), or per pose (..., 3) and "
-                              f"(..., 2); got shapes {None if k_ is None else k_.shape} and "
-                              f"{None if p_ is None else p_.shape}")
-    try:
-        common = np.broadcast_shapes(k_.shape[:-1], p_.shape[:-1])
-    except ValueError:
-        raise PoseLifterError(f"undistort_pixels: k {k_.shape} and p {p_.shape} have different leading "
-                              "shapes") from None
-    d = check_distortion(np.concatenate([np.broadcast_to(k_, common + (3,)), np.broadcast_to(p_, common + (2,))],
-                                        axis=-1), lead=lead)
+    if distortion is not None:
+        if k is not None or p is not None:
+            raise PoseLifterError("undistort_pixels: give the lens as k and p, or as distortion, not both")
+        d = check_distortion(distortion, lead=lead)
+    else:
+        k_ = np.asarray(k, np.float64) if k is not None else None
+        p_ = np.asarray(p, np.float64) if p is not None else None
+        if k_ is None or p_ is None or k_.shape[-1:] != (3,) or p_.shape[-1:] != (2,):
+            raise PoseLifterError(f"undistort_pixels: k must be (k1, k2, k3) and p (p1, p2), or per pose (..., 3) "
+                                  f"and (..., 2); got shapes {None if k_ is None else k_.shape} and "
+                                  f"{None if p_ is None else p_.shape}")
+        try:
+            common = np.broadcast_shapes(k_.shape[:-1], p_.shape[:-1])
+        except ValueError:
+            raise PoseLifterError(f"undistort_pixels: k {k_.shape} and p {p_.shape} have different leading "
+                                  "shapes") from None
+        d = check_distortion(np.concatenate([np.broadcast_to(k_, common + (3,)), np.broadcast_to(p_, common + (2,))],
+                                            axis=-1), lead=lead)
     f = _last2(focal, name="focal", positive=True, scalar=True)
     c = _last2(principal_point, name="principal_point")
     return undistort((uv - c) / f, d[..., None, :3], d[..., None, 3:]) * f + c

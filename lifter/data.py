@@ -167,8 +167,8 @@ class PoseSamples:
             raise PoseLifterError(f"keypoints: expected shape ({len(self)}, J, 2), got {kp.shape}")
         if self.distortion is None:  # (ideal pinhole cameras: nothing to undistort)
             return kp.copy()
-        d = self.distortion.astype(np.float64)
-        return undistort_pixels(kp, focal=self.focal, principal_point=self.principal_point, k=d[:, :3], p=d[:, 3:])
+        return undistort_pixels(kp, focal=self.focal, principal_point=self.principal_point,
+                                distortion=self.distortion.astype(np.float64))
 
     def with_keypoints(self, keypoints_2d: np.ndarray) -> PoseSamples:
         """A copy whose 2D inputs are replaced (e.g. by detections or noisy 2D)."""

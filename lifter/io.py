@@ -37,7 +37,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError
-from .camera import MAX_DISTORTION_COEFFICIENT
+from .camera import MAX_DISTORTION_COEFFICIENT, check_distortion
 from .keypoints import H36M17, get_format, keypoint_formats
 from .skeleton import JOINT_NAMES
 
@@ -490,10 +490,10 @@ def _distortion_field(raw: Any, *, where: str) -> np.ndarray:
     if not (isinstance(raw, (list, tuple)) and len(raw) == 5 and all(_is_number(v) for v in raw)):
         count = f" ({len(raw)} values)" if isinstance(raw, (list, tuple)) else ""
         raise PoseLifterError(f"{where}: distortion must be {form}, got {_short(raw)}{count}")
-    arr = np.asarray(raw, np.float64)
-    if not (np.all(np.isfinite(arr)) and np.all(np.abs(arr) < MAX_DISTORTION_COEFFICIENT)):
-        raise PoseLifterError(f"{where}: distortion must be {form}, got {arr.tolist()}")
-    return arr
+    try:
+        return check_distortion(raw)  # (the library's one rule: finite, below MAX_DISTORTION_COEFFICIENT)
+    except PoseLifterError:
+        raise PoseLifterError(f"{where}: distortion must be {form}, got {[float(v) for v in raw]}") from None
 
 
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,

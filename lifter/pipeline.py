@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._checks import PoseLifterError, as_pair, input_warnings
+from ._text import sentence
 from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
@@ -47,8 +48,7 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     except PoseLifterError as exc:
         if not unread:
             raise
-        raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(
-            n if n.endswith((".", "?", ")")) else n + "." for n in unread)) from None
+        raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(sentence(n) for n in unread)) from None
 
 
 def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
