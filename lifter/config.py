@@ -142,6 +142,8 @@ class OptimConfig:
                                     "and the saved network use it", default=None)
     precision: Literal["fp32", "bf16"] = _help("matmul precision of the residual blocks in training (bf16 "
                                                "autocast; stem, head and loss stay float32)", default="fp32")
+    distill_weight: float = _help("with --teacher: share of the loss taken against the teacher's outputs for the "
+                                  "same 2D (the rest against the ground truth)", default=0.5)
 
     def __post_init__(self) -> None:
         _positive("batch_size", self.batch_size, integer=True)
@@ -151,6 +153,7 @@ class OptimConfig:
         _check(self.ema_decay is None or (isinstance(self.ema_decay, float) and 0.0 <= self.ema_decay < 1.0),
                f"ema_decay must be in [0, 1), got {self.ema_decay!r}")
         _check(self.precision in ("fp32", "bf16"), f"precision must be 'fp32' or 'bf16', got {self.precision!r}")
+        _prob("distill_weight", self.distill_weight)
 
 
 @dataclass(frozen=True)
@@ -177,7 +180,8 @@ class ScheduleConfig:
 
 @dataclass(frozen=True)
 class TrainConfig:
-    """A training run. ``init``: fine-tune from a shipped model name or checkpoint (its model config wins)."""
+    """A training run. ``init``: fine-tune from a shipped model name or checkpoint (its model config wins).
+    ``teacher``: distil a trained model (:func:`lifter.train.teacher_targets`), weighted by ``optim.distill_weight``."""
 
     model: ModelConfig = field(default_factory=ModelConfig)
     data: DataConfig = field(default_factory=DataConfig)
@@ -186,6 +190,9 @@ class TrainConfig:
     schedule: ScheduleConfig = field(default_factory=ScheduleConfig)
     init: str | None = _help("fine-tune: start from this shipped model name or checkpoint (keeps its model config)",
                              default=None)
+    teacher: str | None = _help("distil: also train against the outputs of this shipped model name or checkpoint for "
+                                "the same 2D (for detected 2D, the average of its detected networks, each with its "
+                                "flip-test default), weighted by --distill-weight", default=None)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -35,7 +35,7 @@ from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -49,9 +49,12 @@ from .config import TrainConfig
 from .data import H36M, PoseSamples
 from .detections import match_scale
 from .loss import poselifter_loss
-from .model import PoseLifterNet
+from .model import PoseLifterNet, forward_folded
 from .noise import ErrorModel
 from .skeleton import mirror
+
+if TYPE_CHECKING:
+    from .api import Lifter
 
 Batch = dict[str, torch.Tensor]
 """A training batch: ``kp`` (B,17,2) px, ``pp`` (B,2) px, ``focal`` (B,2) px, ``rel`` (B,17,3) mm root-relative,
@@ -230,8 +233,59 @@ def lr_factor(progress: float, cfg: TrainConfig) -> float:
     return lo + (1 - lo) * 0.5 * (1 + math.cos(math.pi * t))
 
 
-def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainConfig) -> torch.Tensor:
-    """The training loss (mm) of one batch."""
+def check_teacher(teacher: Lifter, codec: PoseCodec) -> None:
+    """Refuse a teacher whose networks read other features or predict another depth parameter than ``codec``:
+    their raw outputs would not be targets of the student's (:func:`teacher_targets`)."""
+    fields = ("input_space", "mode", "scale_definition", "conditioning", "depth_target")
+    for m in (teacher, *teacher.ensemble, *(() if teacher.clean is None else (teacher.clean,))):
+        differ = [f"{k} {getattr(m.config, k)!r} (trained: {getattr(codec.config, k)!r})" for k in fields
+                  if getattr(m.config, k) != getattr(codec.config, k)]
+        if m.codec.reference_focal != codec.reference_focal:
+            differ.append(f"reference focal {m.codec.reference_focal:g} px (trained: {codec.reference_focal:g})")
+        if differ:
+            raise PoseLifterError(
+                f"teacher network {m.name!r} reads other features or predicts another root-depth parameter than the "
+                f"network trained: {', '.join(differ)}; its outputs are not targets of this network: give a teacher "
+                "of the same kind, or train with these options set as the teacher's")
+
+
+@torch.no_grad()
+def teacher_targets(teacher: Lifter, batch: Batch) -> torch.Tensor:
+    """Raw outputs ``(B, 49)`` (mm; the depth parameter of the codec they share, :func:`check_teacher`) of a trained
+    model for the batch's 2D, as :meth:`lifter.api.Lifter.lift` makes them: for detected samples the average of its
+    detected networks (each with its flip-test default: the mirror image's output mapped back and averaged), for
+    clean samples its clean-2D network when it has one. Averaging raw outputs is averaging the decoded relative pose
+    and root depth, since every network of the teacher encodes the same features (the depth parameter is linear in
+    Z with one factor per input)."""
+
+    def average(lifter: Lifter, source: Any) -> torch.Tensor:
+        total: torch.Tensor | None = None
+        members = (lifter, *lifter.ensemble)
+        for m in members:
+            c = m.codec
+            rows = [batch["kp"]] + ([c.mirror_input(batch["kp"], batch["pp"])] if m.network_rows() == 2 else [])
+            outs = []
+            for kp in rows:
+                feats = c.encode(kp, principal_point=batch["pp"], focal=batch["focal"], source=source).features
+                folded = forward_folded(m.net, feats)
+                outs.append(c.destandardize(folded if folded is not None else m.net(feats)))
+            raw = outs[0] if len(outs) == 1 else 0.5 * (outs[0] + c.mirror_output(outs[1]))
+            total = raw if total is None else total + raw
+        assert total is not None
+        return total / len(members)
+
+    if teacher.clean is None:  # one set of networks for both sources (told which, if conditioned on it)
+        return average(teacher, batch["clean"])
+    detected = average(teacher, "detected")
+    if not bool(batch["clean"].any()):
+        return detected
+    return torch.where(batch["clean"][:, None], average(teacher.clean, "clean"), detected)
+
+
+def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainConfig, *,
+               teacher: Lifter | None = None) -> torch.Tensor:
+    """The training loss (mm) of one batch; with a ``teacher``, ``optim.distill_weight`` of it is taken against
+    :func:`teacher_targets` instead of the ground truth."""
     enc = codec.encode(batch["kp"], principal_point=batch["pp"], focal=batch["focal"], source=batch["clean"])
     target = codec.encode_targets(batch["rel"], batch["depth"], enc)
     autocast = torch.autocast(batch["kp"].device.type, dtype=torch.bfloat16) if cfg.optim.precision == "bf16" \
@@ -239,8 +293,14 @@ def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainC
     with autocast:
         out = net(enc.features)
     pred = codec.destandardize(out.float())
-    return poselifter_loss(pred, target, depth_weight=cfg.optim.depth_weight,
-                           depth_scale=codec.depth_loss_scale(enc))
+    scale = codec.depth_loss_scale(enc)
+    loss = poselifter_loss(pred, target, depth_weight=cfg.optim.depth_weight, depth_scale=scale)
+    if teacher is None:
+        return loss
+    w = cfg.optim.distill_weight
+    taught = poselifter_loss(pred, teacher_targets(teacher, batch), depth_weight=cfg.optim.depth_weight,
+                             depth_scale=scale)
+    return (1.0 - w) * loss + w * taught
 
 
 @torch.inference_mode()
@@ -313,6 +373,7 @@ def train(
     val_sets: dict[str, Batch] | None = None,
     init: tuple[PoseLifterNet, PoseCodec] | None = None,
     noise: ErrorModel | None = None,
+    teacher: Lifter | None = None,
     progress: bool = True,
     log: Callable[[str], None] = print,
     ctx: Dist | None = None,
@@ -321,8 +382,8 @@ def train(
     from ``data``), ``real_keypoints_2d`` aligned with them (needed when ``cfg.data.real_prob > 0``),
     ``val_sets`` for the learning curve (default: the test subjects at ``val_stride``, GT 2D only).
     ``init``: fine-tune a copy of this network and codec (``cfg.model`` is replaced by its config).
-    ``noise``: the error model (default: :func:`load_noise`). ``ctx``: the distributed context
-    (default: :func:`init_distributed`)."""
+    ``noise``: the error model (default: :func:`load_noise`). ``teacher``: the model to distil (default: ``cfg.teacher``
+    loaded, if set; :func:`teacher_targets`). ``ctx``: the distributed context (default: :func:`init_distributed`)."""
     ctx = ctx or init_distributed()
     torch.manual_seed(cfg.schedule.seed)
     # this rank's augmentation draws, made where the batches are made: on the training device
@@ -371,6 +432,15 @@ def train(
         net = PoseLifterNet(cfg.model)
         net.set_target_statistics(mean, std)
     net.to(ctx.device).train()
+    if teacher is None and cfg.teacher is not None:
+        from .api import Lifter  # (the api imports the training config's modules, not this one)
+
+        teacher = Lifter.load(cfg.teacher)
+    if teacher is not None:
+        check_teacher(teacher, codec)
+        teacher = copy.deepcopy(teacher)  # its networks move to the training device; the caller's stay put
+        for m in (teacher, *teacher.ensemble, *(() if teacher.clean is None else (teacher.clean,))):
+            m.net.to(ctx.device).eval()
     T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device, not copied to it
     model: torch.nn.Module = net
     if ctx.active:
@@ -391,7 +461,9 @@ def train(
     limit = f"max {cfg.schedule.max_minutes:g} min" if cfg.schedule.max_minutes else "no time limit"
     if ctx.main:
         log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}{asked}), {steps} steps "
-            f"({cfg.schedule.epochs:g} epochs), {limit}, {cfg.model}")
+            f"({cfg.schedule.epochs:g} epochs), {limit}, {cfg.model}"
+            + ("" if teacher is None else f", distilling {teacher.name!r} ({len(teacher.ensemble) + 1} detected "
+               f"network(s)) at weight {cfg.optim.distill_weight:g}"))
     curve: list[dict[str, float]] = []
     perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
     pos = 0
@@ -429,7 +501,7 @@ def train(
         idx = perm[pos + ctx.rank * lbs: pos + (ctx.rank + 1) * lbs]
         pos += gbs
         batch = make_batch(T, idx, cfg, gen, noise=noise)
-        loss = batch_loss(model, codec, batch, cfg)
+        loss = batch_loss(model, codec, batch, cfg, teacher=teacher)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()

@@ -28,10 +28,12 @@ from lifter.skeleton import mirror
 from lifter.train import (
     Dist,
     WeightAverage,
+    batch_loss,
     flip_batch,
     make_batch,
     samples_to_tensors,
     target_statistics,
+    teacher_targets,
     train,
     validation_sets,
 )
@@ -347,6 +349,95 @@ def test_training_with_real_rescale_trains_on_the_rescaled_detections(monkeypatc
 
 
 
+def _tiny_lifter(*, seed: int, symmetry: str = "none", flip_test: bool = False, conditioning: str = "none",
+                 **kw: object) -> Lifter:
+    """An untrained network with a codec of nontrivial target statistics (so destandardizing matters)."""
+    torch.manual_seed(seed)
+    cfg = ModelConfig(width=32, dropout=0.0, symmetry=symmetry, conditioning=conditioning)  # type: ignore[arg-type]
+    rng = np.random.default_rng(seed)
+    codec = PoseCodec(cfg, target_mean=rng.uniform(-80, 80, 49) + np.r_[np.zeros(48), 4000.0],
+                      target_std=rng.uniform(30, 90, 49))
+    return Lifter(PoseLifterNet(cfg), codec, name=f"tiny{seed}", flip_test=flip_test, **kw)  # type: ignore[arg-type]
+
+
+def test_teacher_targets_are_what_the_teacher_lifts():
+    """The distillation targets are the teacher's own lift, decoded through the student's codec: the average of its
+    detected networks (flip test where a network has it on) for detected samples, its clean network for clean
+    ones; relative pose in mm and the root depth (same 2D root ray)."""
+    teacher = _tiny_lifter(seed=1, flip_test=True, clean=_tiny_lifter(seed=2, flip_test=True),
+                           ensemble=[_tiny_lifter(seed=3, symmetry="mirror")])
+    s = synthetic_samples(40, seed=7)
+    T = samples_to_tensors(s)
+    clean = torch.arange(40) % 3 == 0
+    batch = {"kp": T["kp"], "pp": T["pp"], "focal": T["focal"], "rel": T["rel"], "depth": T["depth"], "clean": clean}
+    raw = teacher_targets(teacher, batch)
+    codec = _tiny_lifter(seed=9).codec  # any codec with the same features and depth parameter decodes them
+    enc = codec.encode(batch["kp"].double(), principal_point=batch["pp"].double(), focal=batch["focal"].double())
+    rel, depth = codec.split(raw.double(), enc)
+    for source, rows in (("detected", ~clean), ("clean", clean)):
+        ref = teacher.lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
+        np.testing.assert_allclose(rel.numpy()[rows.numpy()], ref.relative[rows.numpy()], atol=2e-3)
+        np.testing.assert_allclose(depth.numpy()[rows.numpy()], ref.root[rows.numpy(), 2], rtol=2e-6)
+    # without a separate clean network its networks answer every sample (a network conditioned on the source is
+    # told each sample's)
+    plain = _tiny_lifter(seed=1, flip_test=True, ensemble=[_tiny_lifter(seed=3, symmetry="mirror")])
+    np.testing.assert_allclose(teacher_targets(plain, batch).numpy()[~clean.numpy()], raw.numpy()[~clean.numpy()],
+                               rtol=1e-6, atol=1e-4)
+    torch.testing.assert_close(teacher_targets(plain, batch), teacher_targets(plain, {**batch, "clean": ~clean}))
+    told = _tiny_lifter(seed=6, conditioning="source")
+    raw = teacher_targets(told, batch).double()
+    assert not torch.allclose(raw, teacher_targets(told, {**batch, "clean": ~clean}).double())
+    for source, rows in (("detected", ~clean), ("clean", clean)):
+        ref = told.lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point, source=source)
+        np.testing.assert_allclose(codec.split(raw, enc)[1].numpy()[rows.numpy()], ref.root[rows.numpy(), 2], rtol=2e-6)
+
+
+def test_distillation_weight_splits_the_loss_and_training_follows_the_teacher():
+    s = synthetic_samples(512, seed=8)
+    T = samples_to_tensors(s)
+    batch = {"kp": T["kp"], "pp": T["pp"], "focal": T["focal"], "rel": T["rel"], "depth": T["depth"],
+             "clean": torch.zeros(512, dtype=torch.bool)}
+    student = _tiny_lifter(seed=4)
+    teacher = _tiny_lifter(seed=5)
+    cfg = tiny_config()
+    gt_loss = batch_loss(student.net, student.codec, batch, cfg)
+    w = {x: batch_loss(student.net, student.codec, batch, replace(cfg, optim=replace(cfg.optim, distill_weight=x)),
+                       teacher=teacher) for x in (0.0, 0.3, 1.0)}
+    torch.testing.assert_close(w[0.0], gt_loss)
+    assert abs((w[1.0] - gt_loss).item()) > 1.0  # the teacher's outputs are not the ground truth
+    torch.testing.assert_close(w[0.3], 0.7 * w[0.0] + 0.3 * w[1.0])
+    # trained at weight 1 towards a teacher that places every root 600 mm farther than the truth, the student
+    # learns the teacher's depth, not the truth; at weight 0 it learns the truth
+    base = train(replace(tiny_config(), optim=OptimConfig(batch_size=128, lr=3e-3),
+                         schedule=ScheduleConfig(epochs=20, eval_every=10_000)),
+                 train_samples=s, val_sets=validation_sets(s, None), progress=False, log=lambda _: None, ctx=Dist())
+    far = Lifter(base.net, PoseCodec(base.codec.config, target_mean=base.codec.target_mean,
+                                     target_std=base.codec.target_std), name="far")
+    enc = base.codec.encode(T["kp"], principal_point=T["pp"], focal=T["focal"])
+    far.codec.target_mean = far.codec.target_mean.copy()
+    far.codec.target_mean[-1] += float(base.codec.depth_parameter(torch.tensor(600.0), enc).mean())
+    depth = {}
+    for weight in (0.0, 1.0):
+        cfg = replace(tiny_config(), teacher="far (given)", optim=OptimConfig(batch_size=128, lr=3e-3, distill_weight=weight),
+                      schedule=ScheduleConfig(epochs=10, eval_every=10_000))
+        res = train(cfg, train_samples=s, init=(base.net, base.codec), teacher=far, val_sets=validation_sets(s, None),
+                    progress=False, log=lambda _: None, ctx=Dist())
+        lifted = Lifter(res.net, res.codec).lift(s.keypoints_2d, focal=s.focal, principal_point=s.principal_point)
+        depth[weight] = float(np.mean(lifted.root[:, 2] - s.root[:, 2]))
+    assert abs(depth[0.0]) < 150 and depth[1.0] > 400, depth
+
+
+def test_a_teacher_reading_other_features_is_refused():
+    s = synthetic_samples(64, seed=9)
+    pixel = Lifter(PoseLifterNet(ModelConfig(width=16, input_space="pixel", depth_target="canonical")),
+                   PoseCodec(ModelConfig(width=16, input_space="pixel", depth_target="canonical")), name="pixel")
+    with pytest.raises(PoseLifterError, match="teacher network 'pixel'.*input_space"):
+        train(tiny_config(), train_samples=s, teacher=pixel, val_sets=validation_sets(s, None), progress=False,
+              log=lambda _: None, ctx=Dist())
+    with pytest.raises(PoseLifterError, match="distill_weight must be a probability"):
+        OptimConfig(distill_weight=1.5)
+
+
 def test_zoom_is_refused_where_the_input_space_undoes_it():
     """Zoom augmentation scales 2D, principal point and focal together: the reference-camera codec maps that back
     exactly, so a camera-space run with zoom would spend its time on nothing; the error names the fix. Pixel-space
@@ -401,6 +492,12 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert f"fine-tuning from --init {out}" in err and "not repeat" not in err
     from lifter.checkpoint import sha256_file
     assert load_checkpoint(ft).meta["init_sha256"] == sha256_file(out)
+    taught = tmp_path / "taught.pt"
+    assert main(["train", "--out", str(taught), "--init", str(out), "--teacher", str(ft), "--distill-weight", "0.7",
+                 *quick, "--no-progress"]) == 0
+    assert "distilling 'ft' (1 detected network(s)) at weight 0.7" in capsys.readouterr().out
+    assert load_checkpoint(taught).meta["teacher_sha256"] == sha256_file(ft)
+    assert TrainConfig.from_dict(load_checkpoint(taught).train_config).teacher == str(ft)
     assert main(["train", "--config", str(ft), "--init", str(ft), "--out", str(tmp_path / "b.pt"), *quick]) == 0
     assert "is the --config checkpoint itself" in capsys.readouterr().err
     assert main(["train", "--config", str(ft), "--out", str(tmp_path / "c.pt"), *quick]) == 0
@@ -431,6 +528,13 @@ def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):
     assert f"{tmp_path / 't1.pt'} is a file, not a folder" in capsys.readouterr().err
     assert main(["train", "--out", str(tmp_path / "new" / "x.pt"), *nodata]) == 2  # writable: on to the data
     assert "Human3.6M data not found" in capsys.readouterr().err and (tmp_path / "new").is_dir()
+    # a teacher that cannot serve, or is not there, is refused before the data is read, naming what differs
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", "sh_mix", "--input-space", "camera", *nodata]) == 2
+    err = capsys.readouterr().err
+    assert "teacher network 'sh_mix'" in err and "input_space 'pixel' (trained: 'camera')" in err
+    assert "depth_target" not in err  # only what differs is named
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", str(tmp_path / "none.pt"), *nodata]) == 2
+    assert "none.pt" in capsys.readouterr().err
 
 
 def test_cli_output_paths_are_checked_before_the_work_and_ctrl_c_says_nothing_was_saved(tmp_path, capsys,

@@ -23,11 +23,12 @@ from .. import resources
 from .._checks import PoseLifterError
 from ..api import Lifter
 from ..checkpoint import load_checkpoint, sha256_file
+from ..codec import PoseCodec
 from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
-from ..train import init_distributed, save_training_outputs, train, validation_sets
+from ..train import check_teacher, init_distributed, save_training_outputs, train, validation_sets
 from ._help import plain_text
 
 
@@ -61,15 +62,6 @@ def run(args: argparse.Namespace) -> int:
     ctx = init_distributed()
     if args.threads:
         torch.set_num_threads(args.threads)
-    data = H36M(args.h36m)
-    d = cfg.data
-    samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
-                                 max_frames_per_sequence=d.max_frames_per_sequence, lens=d.lens)
-    real = load_sh_detections(samples, data=data, lens=d.lens)[0] if d.real_prob > 0 else None
-    val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence,
-                             lens=d.lens)
-    val_det = (load_sh_detections(val, data=data, lens=d.lens)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file()
-               else None)
     init, init_sha = None, None
     if cfg.init is not None:
         lifter = Lifter.load(cfg.init)
@@ -81,12 +73,27 @@ def run(args: argparse.Namespace) -> int:
                 print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
             for line in repeat_notes(args.config, cfg.init, init_sha):
                 print(f"note: {line}", file=sys.stderr)
+    teacher = Lifter.load(cfg.teacher) if cfg.teacher is not None else None
+    if teacher is not None:  # (refused before the data is read)
+        check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model))
+    data = H36M(args.h36m)
+    d = cfg.data
+    samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
+                                 max_frames_per_sequence=d.max_frames_per_sequence, lens=d.lens)
+    real = load_sh_detections(samples, data=data, lens=d.lens)[0] if d.real_prob > 0 else None
+    val = data.load_protocol(d.protocol, "test", stride=d.val_stride, max_frames_per_sequence=d.max_frames_per_sequence,
+                             lens=d.lens)
+    val_det = (load_sh_detections(val, data=data, lens=d.lens)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file()
+               else None)
     result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
-                   val_sets=validation_sets(val, val_det), init=init, progress=not args.no_progress, ctx=ctx)
+                   val_sets=validation_sets(val, val_det), init=init, teacher=teacher, progress=not args.no_progress,
+                   ctx=ctx)
     if ctx.main:
         meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
         if init_sha is not None:
             meta["init_sha256"] = init_sha
+        if cfg.teacher is not None:
+            meta["teacher_sha256"] = init_sha256(cfg.teacher)
         out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     if ctx.active:
