@@ -479,7 +479,7 @@ def forward_folded(net: PoseLifterNet, features: torch.Tensor) -> torch.Tensor |
     if folded is None:
         return None
     (w0, b0), blocks, (wh, bh), maps = folded  # maps: in_perm, in_sign, out_perm, out_scale, out_offset
-    out = torch.empty((features.shape[0], NUM_OUTPUTS), dtype=torch.float32)
+    out = torch.empty((features.shape[0], NUM_OUTPUTS), dtype=torch.float32, device=features.device)
     step = FOLDED_ROWS // 2 if maps else FOLDED_ROWS
     for s in range(0, features.shape[0], step):
         x = features[s:s + step]

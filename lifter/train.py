@@ -233,30 +233,43 @@ def lr_factor(progress: float, cfg: TrainConfig) -> float:
     return lo + (1 - lo) * 0.5 * (1 + math.cos(math.pi * t))
 
 
-def check_teacher(teacher: Lifter, codec: PoseCodec) -> None:
-    """Refuse a teacher whose networks read other features or predict another depth parameter than ``codec``:
-    their raw outputs would not be targets of the student's (:func:`teacher_targets`)."""
+def teacher_networks(teacher: Lifter, *, clean_samples: bool = True) -> list[Lifter]:
+    """The networks of ``teacher`` that :func:`teacher_targets` runs: its detected networks, and its clean-2D network
+    when it has one and some samples are clean (``clean_samples``)."""
+    extra = [teacher.clean] if teacher.clean is not None and clean_samples else []
+    return [teacher, *teacher.ensemble, *extra]
+
+
+def check_teacher(teacher: Lifter, codec: PoseCodec, *, lens: str) -> None:
+    """Refuse a teacher whose networks read other features, predict another depth parameter than ``codec``, or
+    learned other 2D than the ``lens`` trained on (``data.lens``): their raw outputs would not be targets of the
+    student's (:func:`teacher_targets`)."""
     fields = ("input_space", "mode", "scale_definition", "conditioning", "depth_target")
-    for m in (teacher, *teacher.ensemble, *(() if teacher.clean is None else (teacher.clean,))):
-        differ = [f"{k} {getattr(m.config, k)!r} (trained: {getattr(codec.config, k)!r})" for k in fields
+    flags = {"input_space": "--input-space", "mode": "--mode", "scale_definition": "--scale-definition",
+             "conditioning": "--conditioning", "depth_target": "--depth-target"}
+    for m in teacher_networks(teacher):
+        differ = [f"{k} {getattr(m.config, k)!r} (trained: {getattr(codec.config, k)!r}; {flags[k]})" for k in fields
                   if getattr(m.config, k) != getattr(codec.config, k)]
+        if m.lens != lens:
+            differ.append(f"lens {m.lens!r} (trained: {lens!r}; --lens)")
         if m.codec.reference_focal != codec.reference_focal:
             differ.append(f"reference focal {m.codec.reference_focal:g} px (trained: {codec.reference_focal:g})")
         if differ:
             raise PoseLifterError(
-                f"teacher network {m.name!r} reads other features or predicts another root-depth parameter than the "
-                f"network trained: {', '.join(differ)}; its outputs are not targets of this network: give a teacher "
-                "of the same kind, or train with these options set as the teacher's")
+                f"teacher network {m.name!r} reads other 2D or features, or predicts another root-depth parameter, than "
+                f"the network trained: {', '.join(differ)}; its outputs are not targets of this network: give a "
+                "teacher of the same kind, or train with the options named set as the teacher's")
 
 
 @torch.no_grad()
-def teacher_targets(teacher: Lifter, batch: Batch) -> torch.Tensor:
+def teacher_targets(teacher: Lifter, batch: Batch, *, clean_samples: bool = True) -> torch.Tensor:
     """Raw outputs ``(B, 49)`` (mm; the depth parameter of the codec they share, :func:`check_teacher`) of a trained
     model for the batch's 2D, as :meth:`lifter.api.Lifter.lift` makes them: for detected samples the average of its
     detected networks (each with its flip-test default: the mirror image's output mapped back and averaged), for
     clean samples its clean-2D network when it has one. Averaging raw outputs is averaging the decoded relative pose
     and root depth, since every network of the teacher encodes the same features (the depth parameter is linear in
-    Z with one factor per input)."""
+    Z with one factor per input). ``clean_samples=False`` (no sample of the run is clean: ``data.clean_prob`` 0)
+    skips the clean network. Computed on the batch's device, with nothing read back to the host."""
 
     def average(lifter: Lifter, source: Any) -> torch.Tensor:
         total: torch.Tensor | None = None
@@ -277,9 +290,22 @@ def teacher_targets(teacher: Lifter, batch: Batch) -> torch.Tensor:
     if teacher.clean is None:  # one set of networks for both sources (told which, if conditioned on it)
         return average(teacher, batch["clean"])
     detected = average(teacher, "detected")
-    if not bool(batch["clean"].any()):
+    if not clean_samples:
         return detected
     return torch.where(batch["clean"][:, None], average(teacher.clean, "clean"), detected)
+
+
+def teacher_roles(teacher: Lifter, *, clean_prob: float) -> str:
+    """Which of the teacher's networks answer which samples of a run with ``data.clean_prob``, for the log."""
+    n = len(teacher.ensemble) + 1
+    nets = "its detected network" if n == 1 else f"the average of its {n} detected networks"
+    if teacher.clean is None:
+        return f"{nets}, for every sample"
+    if clean_prob <= 0:
+        return f"{nets}, for every sample (none is clean)"
+    if clean_prob >= 1:
+        return "its clean-2D network, for every sample (all are clean: --clean-prob 1)"
+    return f"{nets} for detected samples, its clean-2D network for clean ones"
 
 
 def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainConfig, *,
@@ -298,8 +324,8 @@ def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainC
     if teacher is None:
         return loss
     w = cfg.optim.distill_weight
-    taught = poselifter_loss(pred, teacher_targets(teacher, batch), depth_weight=cfg.optim.depth_weight,
-                             depth_scale=scale)
+    taught = poselifter_loss(pred, teacher_targets(teacher, batch, clean_samples=cfg.data.clean_prob > 0),
+                             depth_weight=cfg.optim.depth_weight, depth_scale=scale)
     return (1.0 - w) * loss + w * taught
 
 
@@ -437,9 +463,9 @@ def train(
 
         teacher = Lifter.load(cfg.teacher)
     if teacher is not None:
-        check_teacher(teacher, codec)
+        check_teacher(teacher, codec, lens=cfg.data.lens)
         teacher = copy.deepcopy(teacher)  # its networks move to the training device; the caller's stay put
-        for m in (teacher, *teacher.ensemble, *(() if teacher.clean is None else (teacher.clean,))):
+        for m in teacher_networks(teacher):
             m.net.to(ctx.device).eval()
     T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device, not copied to it
     model: torch.nn.Module = net
@@ -462,8 +488,8 @@ def train(
     if ctx.main:
         log(f"training on {n} samples, global batch {gbs} ({ctx.world} process(es) x {lbs}{asked}), {steps} steps "
             f"({cfg.schedule.epochs:g} epochs), {limit}, {cfg.model}"
-            + ("" if teacher is None else f", distilling {teacher.name!r} ({len(teacher.ensemble) + 1} detected "
-               f"network(s)) at weight {cfg.optim.distill_weight:g}"))
+            + ("" if teacher is None else f", distilling {teacher.name!r} at weight {cfg.optim.distill_weight:g} ("
+               + teacher_roles(teacher, clean_prob=cfg.data.clean_prob) + ")"))
     curve: list[dict[str, float]] = []
     perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
     pos = 0

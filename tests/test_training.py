@@ -392,6 +392,24 @@ def test_teacher_targets_are_what_the_teacher_lifts():
         np.testing.assert_allclose(codec.split(raw, enc)[1].numpy()[rows.numpy()], ref.root[rows.numpy(), 2], rtol=2e-6)
 
 
+def test_teacher_targets_stay_on_the_batchs_device_and_read_nothing_back():
+    """On the meta device (no data, and any read back to the host raises), the targets come out on the batch's
+    device: what a GPU run needs (the folded inference path writes on the features' device)."""
+    import copy
+
+    from lifter.train import teacher_networks
+
+    teacher = copy.deepcopy(_tiny_lifter(seed=1, flip_test=True, clean=_tiny_lifter(seed=2, flip_test=True),
+                                         ensemble=[_tiny_lifter(seed=3, symmetry="mirror")]))
+    for m in teacher_networks(teacher):
+        m.net.to("meta")
+    T = samples_to_tensors(synthetic_samples(8))
+    batch = {k: v.to("meta") for k, v in T.items()} | {"clean": (torch.arange(8) % 2 == 0).to("meta")}
+    for clean_samples in (True, False):
+        out = teacher_targets(teacher, batch, clean_samples=clean_samples)
+        assert out.device.type == "meta" and out.shape == (8, 49)
+
+
 def test_distillation_weight_splits_the_loss_and_training_follows_the_teacher():
     s = synthetic_samples(512, seed=8)
     T = samples_to_tensors(s)
@@ -431,8 +449,13 @@ def test_a_teacher_reading_other_features_is_refused():
     s = synthetic_samples(64, seed=9)
     pixel = Lifter(PoseLifterNet(ModelConfig(width=16, input_space="pixel", depth_target="canonical")),
                    PoseCodec(ModelConfig(width=16, input_space="pixel", depth_target="canonical")), name="pixel")
-    with pytest.raises(PoseLifterError, match="teacher network 'pixel'.*input_space"):
+    with pytest.raises(PoseLifterError, match="teacher network 'pixel'.*input_space 'pixel' .trained: 'camera'; --input"):
         train(tiny_config(), train_samples=s, teacher=pixel, val_sets=validation_sets(s, None), progress=False,
+              log=lambda _: None, ctx=Dist())
+    # a teacher that learned undistorted 2D is not given Human3.6M's distorted 2D (the run's data.lens)
+    pinhole = _tiny_lifter(seed=1, conditioning="source", train_config={"data": {"lens": "pinhole"}})
+    with pytest.raises(PoseLifterError, match=r"lens 'pinhole' \(trained: 'h36m'; --lens\)"):
+        train(tiny_config(), train_samples=s, teacher=pinhole, val_sets=validation_sets(s, None), progress=False,
               log=lambda _: None, ctx=Dist())
     with pytest.raises(PoseLifterError, match="distill_weight must be a probability"):
         OptimConfig(distill_weight=1.5)
@@ -495,9 +518,17 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     taught = tmp_path / "taught.pt"
     assert main(["train", "--out", str(taught), "--init", str(out), "--teacher", str(ft), "--distill-weight", "0.7",
                  *quick, "--no-progress"]) == 0
-    assert "distilling 'ft' (1 detected network(s)) at weight 0.7" in capsys.readouterr().out
+    assert "distilling 'ft' at weight 0.7 (its detected network, for every sample)" in capsys.readouterr().out
     assert load_checkpoint(taught).meta["teacher_sha256"] == sha256_file(ft)
     assert TrainConfig.from_dict(load_checkpoint(taught).train_config).teacher == str(ft)
+    ft_bytes = ft.read_bytes()
+    ft.write_bytes(out.read_bytes())  # the teacher file now holds other weights: repeating says so
+    assert main(["train", "--config", str(taught), "--out", str(tmp_path / "t2.pt"), *quick]) == 0
+    assert f"is not what {taught} distilled" in capsys.readouterr().err
+    ft.unlink()  # and a teacher that is gone names the option and the run it came from
+    assert main(["train", "--config", str(taught), "--out", str(tmp_path / "t3.pt"), *quick]) == 2
+    assert f"--teacher {ft} (from the --config run {taught}" in capsys.readouterr().err
+    ft.write_bytes(ft_bytes)
     assert main(["train", "--config", str(ft), "--init", str(ft), "--out", str(tmp_path / "b.pt"), *quick]) == 0
     assert "is the --config checkpoint itself" in capsys.readouterr().err
     assert main(["train", "--config", str(ft), "--out", str(tmp_path / "c.pt"), *quick]) == 0
@@ -531,10 +562,12 @@ def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):
     # a teacher that cannot serve, or is not there, is refused before the data is read, naming what differs
     assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", "sh_mix", "--input-space", "camera", *nodata]) == 2
     err = capsys.readouterr().err
-    assert "teacher network 'sh_mix'" in err and "input_space 'pixel' (trained: 'camera')" in err
+    assert "teacher network 'sh_mix'" in err and "input_space 'pixel' (trained: 'camera'; --input-space)" in err
     assert "depth_target" not in err  # only what differs is named
     assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", str(tmp_path / "none.pt"), *nodata]) == 2
     assert "none.pt" in capsys.readouterr().err
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--distill-weight", "0.3", *nodata]) == 2
+    assert "no --teacher is given" in capsys.readouterr().err
 
 
 def test_cli_output_paths_are_checked_before_the_work_and_ctrl_c_says_nothing_was_saved(tmp_path, capsys,

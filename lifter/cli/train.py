@@ -12,6 +12,7 @@ batch is split across the processes and rank 0 writes the checkpoint (:mod:`lift
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -50,6 +51,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     base = TrainConfig.load(args.config) if args.config is not None else None
     cfg = config_from_args(args, base)
+    if getattr(args, "cfg__optim__distill_weight", None) is not None and cfg.teacher is None:
+        raise PoseLifterError("--distill-weight weighs the loss against a teacher's outputs, and no --teacher is "
+                              "given: add --teacher MODEL (a shipped name or checkpoint), or drop --distill-weight")
     if args.print_config:
         print(cfg.to_json())
         return 0
@@ -64,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     init, init_sha = None, None
     if cfg.init is not None:
-        lifter = Lifter.load(cfg.init)
+        lifter = load_option("--init", cfg.init, args)
         init = (lifter.net, lifter.codec)
         init_sha = init_sha256(cfg.init)
         if ctx.main:
@@ -73,9 +77,14 @@ def run(args: argparse.Namespace) -> int:
                 print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
             for line in repeat_notes(args.config, cfg.init, init_sha):
                 print(f"note: {line}", file=sys.stderr)
-    teacher = Lifter.load(cfg.teacher) if cfg.teacher is not None else None
-    if teacher is not None:  # (refused before the data is read)
-        check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model))
+    teacher, teacher_sha = None, None
+    if cfg.teacher is not None:  # (refused before the data is read)
+        teacher = load_option("--teacher", cfg.teacher, args)
+        check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model), lens=cfg.data.lens)
+        teacher_sha = teacher_sha256(cfg.teacher)
+        if ctx.main:
+            for line in teacher_repeat_notes(args.config, cfg.teacher, teacher_sha):
+                print(f"note: {line}", file=sys.stderr)
     data = H36M(args.h36m)
     d = cfg.data
     samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
@@ -92,14 +101,48 @@ def run(args: argparse.Namespace) -> int:
         meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
         if init_sha is not None:
             meta["init_sha256"] = init_sha
-        if cfg.teacher is not None:
-            meta["teacher_sha256"] = init_sha256(cfg.teacher)
+        if teacher_sha is not None:
+            meta["teacher_sha256"] = teacher_sha
         out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     if ctx.active:
         dist.barrier()
         dist.destroy_process_group()
     return 0
+
+
+def load_option(option: str, ref: str, args: argparse.Namespace) -> Lifter:
+    """The model ``--init`` / ``--teacher`` names, its load errors naming the option (and the ``--config`` run it came
+    from, when not given on the command line)."""
+    try:
+        return Lifter.load(ref)
+    except (PoseLifterError, OSError) as exc:
+        given = getattr(args, f"cfg____{option.lstrip('-')}", None) is not None
+        where = "" if given or args.config is None else f" (from the --config run {args.config}; relative paths are " \
+            "read from the current folder: give the option again to replace it)"
+        raise PoseLifterError(f"{option} {ref}{where}: {exc}") from None
+
+
+def teacher_sha256(ref: str) -> str:
+    """The sha256 of the networks ``--teacher`` names: for a shipped model, of its registry entry's sha256 of every
+    network file (detected, ensemble members, clean-2D); else the checkpoint file's own."""
+    if ref == "default" or ref in resources.model_names():
+        entry = resources.model_entry(ref)
+        sums = [entry.get("sha256", ""), *entry.get("ensemble_sha256", []), entry.get("clean_sha256", "")]
+        return hashlib.sha256(" ".join(str(x) for x in sums).encode()).hexdigest()
+    return sha256_file(ref)
+
+
+def teacher_repeat_notes(config: Path | None, teacher: str, sha: str) -> list[str]:
+    """Why ``--config RUN.pt`` with this ``--teacher`` would not repeat that run: not the networks it distilled
+    (``meta["teacher_sha256"]``)."""
+    if config is None or config.suffix != ".pt":
+        return []
+    stored = load_checkpoint(config).meta.get("teacher_sha256")
+    if isinstance(stored, str) and stored != sha:
+        return [f"--teacher {teacher} (sha256 {sha[:12]}) is not what {config} distilled ({stored[:12]}): this does "
+                "not repeat that run"]
+    return []
 
 
 def init_sha256(ref: str) -> str:
