@@ -144,8 +144,12 @@ class VideoSequence:
         rec = self.record
         same = (lifter is self.uploaded_with if self.uploaded_with is not None
                 else getattr(lifter, "name", None) == rec.model)
-        return same and abs(math.sqrt(float(focal[0]) * float(focal[1]))
-                            - math.sqrt(rec.focal[0] * rec.focal[1])) <= FOCAL_SAME_PX
+        return same and self._upload_focal(focal)
+
+    def _upload_focal(self, focal: tuple[float, float]) -> bool:
+        """Whether ``focal`` is the upload's focal length, within :data:`FOCAL_SAME_PX` (alpha, px)."""
+        f = self.record.focal
+        return abs(math.sqrt(float(focal[0]) * float(focal[1])) - math.sqrt(f[0] * f[1])) <= FOCAL_SAME_PX
 
     def record_at(self, lifter: Any, focal: tuple[float, float]) -> SequenceRecord:
         """The whole sequence as ``poselifter lift`` writes it, for ``lifter`` at ``focal``: the upload's record
@@ -158,7 +162,7 @@ class VideoSequence:
         if self.is_upload_pair(lifter, focal):
             return rec
         f = (float(focal[0]), float(focal[1]))
-        same_focal = abs(math.sqrt(f[0] * f[1]) - math.sqrt(rec.focal[0] * rec.focal[1])) <= FOCAL_SAME_PX
+        same_focal = self._upload_focal(f)
         if same_focal:  # (another model at the upload's focal length)
             f = (float(rec.focal[0]), float(rec.focal[1]))
         name = str(getattr(lifter, "name", "custom"))
@@ -169,21 +173,23 @@ class VideoSequence:
         src = "clean" if rec.source == "clean" else "detected"
         net = lifter.network_for(src) if hasattr(lifter, "network_for") else lifter
         seen = [fr for fr in rec.frames if fr.people]
-        kp_given = [np.stack([p.keypoints_2d for p in fr.people]) for fr in seen]
-        kp = [lens_free_2d(k, camera=self.camera, lifter=lifter, source=src) for k in kp_given]
         undistorted = undoes_lens(camera=self.camera, lifter=lifter, source=src)
         lifted_by_index: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         output_notes: dict[str, tuple[int, int, str]] = {}
         if seen:
             pp = np.asarray(rec.principal_point, np.float64)
-            res = lifter.lift(np.concatenate(kp), focal=f, principal_point=pp, source=src, warn=False)
+            # every frame's people in one array: undistorted (if at all) and lifted in one call each
+            kp = lens_free_2d(np.stack([p.keypoints_2d for fr in seen for p in fr.people]), camera=self.camera,
+                              lifter=lifter, source=src)
+            res = lifter.lift(kp, focal=f, principal_point=pp, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             k = 0
-            for fr, q, given in zip(seen, kp, kp_given):
-                c = len(q)
-                lifted_by_index[fr.index] = (q if undistorted else given, root[k:k + c], rel[k:k + c])
+            for fr in seen:
+                c = len(fr.people)
+                q = kp[k:k + c] if undistorted else np.stack([p.keypoints_2d for p in fr.people])
+                lifted_by_index[fr.index] = (q, root[k:k + c], rel[k:k + c])
                 if getattr(res, "warnings", ()) and hasattr(net, "output_notes"):
-                    collect_output_notes(output_notes, fr.index, net.output_notes(q, pp, root[k:k + c]))
+                    collect_output_notes(output_notes, fr.index, net.output_notes(kp[k:k + c], pp, root[k:k + c]))
                 k += c
         lifted = []
         for fr in rec.frames:  # (a frame with nobody keeps its place)

@@ -272,17 +272,23 @@ def teacher_targets(teacher: Lifter, batch: Batch, *, clean_samples: bool = True
     skips the clean network. Computed on the batch's device, with nothing read back to the host."""
 
     def average(lifter: Lifter, source: Any) -> torch.Tensor:
+        # every network encodes the same features (check_teacher): each input once, the mirror image only if a
+        # network has the flip test; a network with it runs both rows in one pass, as Lifter.lift does
+        c, n = lifter.codec, len(batch["kp"])
+        plain = c.encode(batch["kp"], principal_point=batch["pp"], focal=batch["focal"], source=source).features
+        both: torch.Tensor | None = None
         total: torch.Tensor | None = None
         members = (lifter, *lifter.ensemble)
         for m in members:
-            c = m.codec
-            rows = [batch["kp"]] + ([c.mirror_input(batch["kp"], batch["pp"])] if m.network_rows() == 2 else [])
-            outs = []
-            for kp in rows:
-                feats = c.encode(kp, principal_point=batch["pp"], focal=batch["focal"], source=source).features
-                folded = forward_folded(m.net, feats)
-                outs.append(c.destandardize(folded if folded is not None else m.net(feats)))
-            raw = outs[0] if len(outs) == 1 else 0.5 * (outs[0] + c.mirror_output(outs[1]))
+            if m.network_rows() == 2 and both is None:
+                mirrored = c.mirror_input(batch["kp"], batch["pp"])
+                both = torch.cat([plain, c.encode(mirrored, principal_point=batch["pp"], focal=batch["focal"],
+                                                  source=source).features])
+            feats = both if both is not None and m.network_rows() == 2 else plain
+            folded = forward_folded(m.net, feats)
+            raw = m.codec.destandardize(folded if folded is not None else m.net(feats))
+            if len(raw) > n:
+                raw = 0.5 * (raw[:n] + m.codec.mirror_output(raw[n:]))
             total = raw if total is None else total + raw
         assert total is not None
         return total / len(members)

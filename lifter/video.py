@@ -188,7 +188,7 @@ OUTPUT_NOTE_LINE: Final[re.Pattern[str]] = re.compile(r"frame \d+: ")
 
 
 def output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
-    """The record's lines for :func:`_collect_output_notes`: the first frame's note, and how many frames had it."""
+    """The record's lines for :func:`collect_output_notes`: the first frame's note, and how many frames had it."""
     return [f"frame {first}: {message}" + (f" ({n} frames like it)" if n > 1 else "")
             for first, n, message in acc.values()]
 
@@ -533,7 +533,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
             collect_output_notes(output_notes, i,
-                                  lifter.network_for(ks.source).output_notes(kp17[k:k + c], pp, root[k:k + c]))
+                                 lifter.network_for(ks.source).output_notes(kp17[k:k + c], pp, root[k:k + c]))
         k += c
     warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)

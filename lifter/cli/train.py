@@ -70,21 +70,20 @@ def run(args: argparse.Namespace) -> int:
     if cfg.init is not None:
         lifter = load_option("--init", cfg.init, args)
         init = (lifter.net, lifter.codec)
-        init_sha = init_sha256(cfg.init)
+        init_sha = weights_sha256(cfg.init)
         if ctx.main:
             print(f"fine-tuning from --init {cfg.init} (sha256 {init_sha[:12]}; {lifter.name})", file=sys.stderr)
             if lifter.config != cfg.model:
                 print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
-            for line in repeat_notes(args.config, cfg.init, init_sha):
-                print(f"note: {line}", file=sys.stderr)
     teacher, teacher_sha = None, None
     if cfg.teacher is not None:  # (refused before the data is read)
         teacher = load_option("--teacher", cfg.teacher, args)
         check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model), lens=cfg.data.lens)
-        teacher_sha = teacher_sha256(cfg.teacher)
-        if ctx.main:
-            for line in teacher_repeat_notes(args.config, cfg.teacher, teacher_sha):
-                print(f"note: {line}", file=sys.stderr)
+        teacher_sha = weights_sha256(cfg.teacher, every_network=True)
+    if ctx.main:
+        for line in repeat_notes(args.config, init=None if init_sha is None else (str(cfg.init), init_sha),
+                                 teacher=None if teacher_sha is None else (str(cfg.teacher), teacher_sha)):
+            print(f"note: {line}", file=sys.stderr)
     data = H36M(args.h36m)
     d = cfg.data
     samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
@@ -123,45 +122,42 @@ def load_option(option: str, ref: str, args: argparse.Namespace) -> Lifter:
         raise PoseLifterError(f"{option} {ref}{where}: {exc}") from None
 
 
-def teacher_sha256(ref: str) -> str:
-    """The sha256 of the networks ``--teacher`` names: for a shipped model, of its registry entry's sha256 of every
-    network file (detected, ensemble members, clean-2D); else the checkpoint file's own."""
-    if ref == "default" or ref in resources.model_names():
-        entry = resources.model_entry(ref)
-        sums = [entry.get("sha256", ""), *entry.get("ensemble_sha256", []), entry.get("clean_sha256", "")]
-        return hashlib.sha256(" ".join(str(x) for x in sums).encode()).hexdigest()
-    return sha256_file(ref)
+def weights_sha256(ref: str, *, every_network: bool = False) -> str:
+    """The sha256 of the weights ``ref`` names: a checkpoint file's own; for a shipped model, its registry entry's
+    sha256 of the network ``--init`` starts from (its first detected network), or with ``every_network`` (what
+    ``--teacher`` runs) the sha256 of the entry's sha256 of every network file (detected, ensemble members,
+    clean-2D)."""
+    if ref != "default" and ref not in resources.model_names():
+        return sha256_file(ref)
+    entry = resources.model_entry(ref)
+    if not every_network:
+        return str(entry.get("sha256", ""))
+    sums = [entry.get("sha256", ""), *entry.get("ensemble_sha256", []), entry.get("clean_sha256", "")]
+    return hashlib.sha256(" ".join(str(x) for x in sums).encode()).hexdigest()
 
 
-def teacher_repeat_notes(config: Path | None, teacher: str, sha: str) -> list[str]:
-    """Why ``--config RUN.pt`` with this ``--teacher`` would not repeat that run: not the networks it distilled
-    (``meta["teacher_sha256"]``)."""
-    if config is None or config.suffix != ".pt":
+def repeat_notes(config: Path | None, *, init: tuple[str, str] | None = None,
+                 teacher: tuple[str, str] | None = None) -> list[str]:
+    """Why ``--config RUN.pt`` with this ``init`` / ``teacher`` (``(ref, sha256)``) would not repeat that run: the
+    init weights are that run's own result, or not the weights it started from (``meta["init_sha256"]``); the
+    teacher is not the one it distilled (``meta["teacher_sha256"]``). The checkpoint is read once."""
+    if config is None or config.suffix != ".pt" or (init is None and teacher is None):
         return []
-    stored = load_checkpoint(config).meta.get("teacher_sha256")
-    if isinstance(stored, str) and stored != sha:
-        return [f"--teacher {teacher} (sha256 {sha[:12]}) is not what {config} distilled ({stored[:12]}): this does "
-                "not repeat that run"]
-    return []
-
-
-def init_sha256(ref: str) -> str:
-    """The sha256 of the weights ``--init`` names: a shipped model's registry entry, else the file's own."""
-    if ref == "default" or ref in resources.model_names():
-        return str(resources.model_entry(ref).get("sha256", ""))
-    return sha256_file(ref)
-
-
-def repeat_notes(config: Path | None, init: str, init_sha: str) -> list[str]:
-    """Why ``--config RUN.pt`` with this ``--init`` would not repeat that run: the init weights are that run's own
-    result, or not the weights it started from (``meta["init_sha256"]``, recorded since this check existed)."""
-    if config is None or config.suffix != ".pt":
-        return []
-    if sha256_file(config) == init_sha:
-        return [f"--init {init} is the --config checkpoint itself: this fine-tunes that run's result again, it does "
-                "not repeat the run (give --init the weights it started from)"]
-    stored = load_checkpoint(config).meta.get("init_sha256")
-    if isinstance(stored, str) and stored != init_sha:
-        return [f"--init {init} (sha256 {init_sha[:12]}) is not what {config} started from ({stored[:12]}): this does "
-                "not repeat that run"]
-    return []
+    notes: list[str] = []
+    meta = load_checkpoint(config).meta
+    if init is not None:
+        ref, sha = init
+        stored = meta.get("init_sha256")
+        if sha256_file(config) == sha:
+            notes.append(f"--init {ref} is the --config checkpoint itself: this fine-tunes that run's result again, "
+                         "it does not repeat the run (give --init the weights it started from)")
+        elif isinstance(stored, str) and stored != sha:
+            notes.append(f"--init {ref} (sha256 {sha[:12]}) is not what {config} started from ({stored[:12]}): this "
+                         "does not repeat that run")
+    if teacher is not None:
+        ref, sha = teacher
+        stored = meta.get("teacher_sha256")
+        if isinstance(stored, str) and stored != sha:
+            notes.append(f"--teacher {ref} (sha256 {sha[:12]}) is not what {config} distilled ({stored[:12]}): this "
+                         "does not repeat that run")
+    return notes
