@@ -336,10 +336,17 @@ class Lifter:
     @classmethod
     def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> Lifter:
         """Shipped weights by name (``"default"``, or one of :func:`available_models`), checked against their
-        sha256; or a checkpoint path (``.pt``) of your own. ``quantize=True``: see :meth:`quantized`."""
+        sha256; or a checkpoint path (``.pt``) of your own; or several joined by ``+`` (``"a.pt+b.pt"``): an
+        ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
+        ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see :meth:`quantized`."""
         ref = str(name)
         if ref != "default" and ref not in assets.model_names() and (ref.endswith(".pt") or Path(ref).is_file()):
-            return cls.from_checkpoint(ref, quantize=quantize)  # shipped names win over same-named local files
+            # shipped names win over same-named local files; a file whose name holds "+" is that file
+            if "+" in ref and not Path(ref).is_file():
+                first, *more = ref.split("+")
+                return cls.from_checkpoint(first, name="+".join(Path(p).stem for p in (first, *more)),
+                                           quantize=quantize, ensemble=more)
+            return cls.from_checkpoint(ref, quantize=quantize)
         entry = assets.model_entry(ref)
         ck = load_checkpoint(assets.read_bytes(entry["file"]), expected_sha256=entry.get("sha256"),
                              name=f"shipped model {entry['name']!r} ({entry['file']})")

@@ -238,10 +238,14 @@ def quick_table(
     focal: np.ndarray,
     pp: np.ndarray,
     dist: np.ndarray,
+    *,
+    flip_test: bool | None = None,
 ) -> str:
-    """MPJPE / PA-MPJPE / MRPE of each lifter on BlazePose, SH and GT 2D of the detected frames (true camera)."""
+    """MPJPE / PA-MPJPE / MRPE of each lifter on BlazePose, SH and GT 2D of the detected frames (true camera);
+    ``flip_test``: forced on or off for every network, or None for each model's own default."""
     L = [
-        f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm",
+        f"84 H36M demo photos, {int(ok.sum())} with a BlazePose detection; true focal and principal point; mm"
+        + ("" if flip_test is None else f"; flip test {'on' if flip_test else 'off'} in every lifter"),
         "",
         "MPJPE / PA-MPJPE / MRPE (mean signed root-depth error, + = too far)",
         "",
@@ -257,8 +261,8 @@ def quick_table(
             (gt2d[ok], "clean"),
         )
         for kp, src in inputs:
-            m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src,
-                                     distortion=dist[ok]).absolute, gt3d[ok])
+            m = pose_metrics(lf.lift(kp, focal=focal[ok], principal_point=pp[ok], source=src, distortion=dist[ok],
+                                     flip_test=flip_test).absolute, gt3d[ok])
             cells.append(f"{m['mpjpe']:.1f} / {m['pa_mpjpe']:.1f} / {m['mrpe']:.1f} ({m['root_z_bias']:+.0f})")
         L.append(f"| {ref if ref.endswith('.pt') else lf.name} | " + " | ".join(cells) + " |")
     return "\n".join(L)
@@ -268,7 +272,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument(
-        "--model", "--weights", dest="weights", default="default", help="shipped model name or checkpoint .pt"
+        "--model", "--weights", dest="weights", default="default",
+        help="shipped model name, checkpoint .pt, or A.pt+B.pt (an ensemble)",
     )
     ap.add_argument(
         "--full",
@@ -297,8 +302,14 @@ def main() -> int:
         default=[],
         help="more lifters (names or .pt) to compare on BlazePose 2D, all frames and held-out camera",
     )
+    ap.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
+                    help="quick table: average each pose with its mirror image's lift in every lifter (on) or in none "
+                    "(off); default: each model's own setting (on for the shipped default, off for a checkpoint "
+                    "that does not say)")
     ap.add_argument("--threads", type=int, default=1)
     args = ap.parse_args()
+    if args.full and args.flip_test is not None:
+        ap.error("--flip-test / --no-flip-test set the quick table's lifts; the --full report keeps each model's own")
     import torch
 
     torch.set_num_threads(args.threads)
@@ -332,6 +343,7 @@ def main() -> int:
                 focal,
                 pp,
                 dist,
+                flip_test=args.flip_test,
             )
         )
         return 0

@@ -554,6 +554,27 @@ def test_checkpoint_ensemble_members_keep_their_own_flip_test_default(tmp_path, 
     assert "ensemble" in repr(loaded)
 
 
+def test_load_joins_checkpoints_with_plus_into_an_ensemble(tmp_path, keypoints, monkeypatch):
+    """``Lifter.load("a.pt+b.pt")`` (what ``poselifter evaluate`` and ``lift`` take) is
+    ``from_checkpoint("a.pt", ensemble=["b.pt"])``; a file whose own name holds "+" stays one checkpoint, and a
+    missing part is named."""
+    a, b = tiny_lifter(32, seed=3, name="a"), tiny_lifter(32, seed=4, name="b")
+    pa = save_checkpoint(tmp_path / "a.pt", a.net, a.codec)
+    pb = save_checkpoint(tmp_path / "b.pt", b.net, b.codec, meta={"inference": {"flip_test": True}})
+    kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
+    joined = Lifter.load(f"{pa}+{pb}")
+    assert joined.name == "a+b" and len(joined.ensemble) == 1 and joined.ensemble[0].flip_test
+    want = Lifter.from_checkpoint(pa, ensemble=[pb]).lift(keypoints, **kw).absolute
+    np.testing.assert_array_equal(joined.lift(keypoints, **kw).absolute, want)
+    assert not np.allclose(want, a.lift(keypoints, **kw).absolute, atol=1e-3)  # b takes part
+    plus = save_checkpoint(tmp_path / "x+y.pt", a.net, a.codec)
+    monkeypatch.chdir(tmp_path)
+    assert not Lifter.load("x+y.pt").ensemble
+    with pytest.raises(CheckpointError, match="not found: .*missing.pt"):
+        Lifter.load(f"{pa}+missing.pt")
+    assert plus.is_file()
+
+
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [

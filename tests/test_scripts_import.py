@@ -9,6 +9,7 @@ import runpy
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,3 +29,27 @@ def test_script_imports(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         os.environ.clear()
         os.environ.update(env)
     assert callable(namespace.get("main")), f"{path.name}: no main()"
+
+
+def test_eval_cascade_quick_table_flip_switch(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``scripts/eval_cascade.py --flip-test / --no-flip-test`` reaches every lifter of its quick table, an
+    ensemble written ``a.pt+b.pt`` included; without it each model keeps its own default (off for these)."""
+    from conftest import random_pose_cam, tiny_lifter
+
+    from lifter.camera import project
+    from lifter.checkpoint import save_checkpoint
+
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    ns = runpy.run_path(str(ROOT / "scripts" / "eval_cascade.py"), run_name="imported_by_test")
+    a, b = tiny_lifter(32, seed=3), tiny_lifter(32, seed=4)
+    pa = save_checkpoint(tmp_path / "a.pt", a.net, a.codec)
+    pb = save_checkpoint(tmp_path / "b.pt", b.net, b.codec)
+    rng = np.random.default_rng(0)
+    gt3d = random_pose_cam(rng, 4)
+    focal, pp = np.full((4, 2), 1145.0), np.tile([512.0, 515.0], (4, 1))
+    gt2d = project(gt3d, focal=1145.0, principal_point=(512.0, 515.0))
+    args = ([str(pa), f"{pa}+{pb}"], gt2d + 3.0, np.ones(4, bool), gt2d, gt2d, gt3d, focal, pp, np.zeros((4, 5)))
+    own, off, on = (ns["quick_table"](*args, flip_test=f) for f in (None, False, True))
+    assert own.splitlines()[2:] == off.splitlines()[2:] and on.splitlines()[2:] != off.splitlines()[2:]
+    assert "flip test on in every lifter" in on.splitlines()[0] and "flip test" not in own.splitlines()[0]
+    assert f"| {pa}+{pb} |" in on

@@ -55,7 +55,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("evaluate", help="evaluate lifters on Human3.6M and print the results table",
                        formatter_class=HelpFormatter)
     p.add_argument("weights", nargs="*", default=["default"],
-                   help="checkpoint paths or shipped model names; LABEL=PATH to name a row")
+                   help="checkpoint paths or shipped model names; LABEL=PATH to name a row; A.pt+B.pt: the "
+                        "checkpoints' lifts of detected 2D averaged (an ensemble)")
     p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2),
                    help="test subjects: 1 = S9 and S11 (trained on S1, 5, 6, 7, 8), "

@@ -219,7 +219,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                                                        "track, <name>_track<ID>.bvh)")
     p.add_argument("--weights", default="default",
                    help="lifter: 'default' (one model for every input: images are lifted as detector output, keypoint "
-                        "files as their 'source' field says), another shipped name or a checkpoint .pt")
+                        "files as their 'source' field says), another shipped name, a checkpoint .pt, or A.pt+B.pt "
+                        "(their lifts averaged)")
     p.add_argument("--detector", default="blazepose",
                    help="2D estimator for images and videos: 'blazepose' (MediaPipe, the 'detect' extra), or one "
                    "registered with lifter.detect.register_estimator")
