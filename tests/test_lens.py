@@ -52,9 +52,62 @@ def test_undistort_pixels_per_pose_lenses_and_missing_joints(rng):
     np.testing.assert_allclose(u[ok], pin[ok], atol=1e-7)
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000))
+def test_distort_jacobian_is_the_derivative_of_distort(seed):
+    """``distort_jacobian`` (what the undistortion's Newton steps use) against central differences of
+    ``distort``, rows x_d, y_d and columns x, y; and its ``gain`` is the factor ``distort`` scales by."""
+    rng = np.random.default_rng(seed)
+    k, p = rng.uniform(-0.5, 0.5, 3), rng.uniform(-0.05, 0.05, 2)
+    xy = rng.uniform(-1.2, 1.2, (20, 2))
+    J, gain = cam.distort_jacobian(xy, k, p)
+    h = 1e-6
+    for col in range(2):
+        e = np.zeros(2)
+        e[col] = h
+        np.testing.assert_allclose(J[:, :, col], (cam.distort(xy + e, k, p) - cam.distort(xy - e, k, p)) / (2 * h),
+                                   atol=1e-7)
+    r2 = (xy**2).sum(-1)
+    np.testing.assert_allclose(cam.distort(xy, k, p), xy * gain[:, None] + p[::-1] * r2[:, None], atol=1e-12)
+
+
 def test_undistort_refuses_a_lens_it_cannot_invert():
-    with pytest.raises(PoseLifterError, match="did not converge.*too strong.*undistort the 2D yourself"):
-        cam.undistort(np.array([[1.5, 1.5]]), (-0.6, 0.0, 0.0), (0.0, 0.0))
+    """k1 = -0.6 folds at r = 0.75 (r (1 - 0.6 r^2) peaks at 0.50): no point on the lens's own side reaches
+    r_d = 2.1. A point past the fold does (x = -1.331 (1, 1) gives x_d = (1.5, 1.5)), and must not be returned."""
+    k, p = (-0.6, 0.0, 0.0), (0.0, 0.0)
+    np.testing.assert_allclose(cam.distort(np.array([-1.3313, -1.3313]), k, p), [1.5, 1.5], atol=1e-3)
+    with pytest.raises(PoseLifterError, match="1 point.*no inverse through this lens.*too strong.*undistort the 2D "
+                                              "yourself"):
+        cam.undistort(np.array([[0.1, 0.1], [1.5, 1.5]]), k, p)
+
+
+@settings(max_examples=60, deadline=None)
+@given(k1=st.floats(-0.5, 0.5), k2=st.floats(-0.3, 0.3), k3=st.floats(-0.1, 0.1), p1=st.floats(-0.01, 0.01),
+       p2=st.floats(-0.01, 0.01), seed=st.integers(0, 10_000), reach=st.floats(0.05, 0.8))
+def test_undistort_inverts_any_lens_up_to_its_fold(k1, k2, k3, p1, p2, seed, reach):
+    """Points anywhere inside the radius where the radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops rising (to
+    `reach` of it, at most r = 3: 72 deg off the axis) come back exactly. The fixed-point iteration used before
+    stopped short beyond r ~ 1.2 with Human3.6M's own lens, and where the pincushion pushes x_d past the fold."""
+    k, p = (k1, k2, k3), (p1, p2)
+    r = np.linspace(0.0, 3.0, 3001)
+    rising = np.diff(r * (1 + k1 * r**2 + k2 * r**4 + k3 * r**6)) > 0
+    r_fold = r[np.argmin(rising)] if not rising.all() else 3.0
+    rng = np.random.default_rng(seed)
+    radius, angle = rng.uniform(0.0, reach * r_fold, 64), rng.uniform(0.0, 2 * np.pi, 64)
+    xy = np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=-1)
+    np.testing.assert_allclose(cam.undistort(cam.distort(xy, k, p), k, p), xy, atol=1e-9)
+
+
+def test_undistort_beyond_the_old_iterations_reach():
+    """Cases the fixed-point iteration refused: Human3.6M's lens 1.2-2 focal lengths off the centre (a short focal
+    length typed for a wide photo), and a pincushion lens whose distorted point lies past its fold."""
+    k, p = H36M_LENS
+    xy = np.array([[1.2, 0.0], [0.96, 0.72], [1.28, 0.96], [-1.6, 1.2]])
+    np.testing.assert_allclose(cam.undistort(cam.distort(xy, k, p), k, p), xy, atol=1e-10)
+    k, p = (0.16, 0.05, -0.034), (0.001, 0.002)  # r (1 + 0.16 r^2 + ...) stops rising at r = 1.586
+    xy = np.array([[1.26, 0.61]])  # r = 1.40
+    assert np.hypot(*cam.distort(xy, k, p)[0]) > 1.6  # x_d itself lies past the fold
+    np.testing.assert_allclose(cam.undistort(cam.distort(xy, k, p), k, p), xy, atol=1e-10)
 
 
 def test_undistort_converges_for_a_wide_angle_lens_near_the_border():
