@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import os
+import re
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -25,7 +26,15 @@ import torch
 from numpy.typing import ArrayLike
 
 from . import resources as assets
-from ._checks import PoseLifterError, PoseLifterWarning, as_pair, as_points, input_warnings, where_in_batch
+from ._checks import (
+    CheckpointError,
+    PoseLifterError,
+    PoseLifterWarning,
+    as_pair,
+    as_points,
+    input_warnings,
+    where_in_batch,
+)
 from .camera import (
     CANONICAL_FOCAL,
     DEFAULT_DIAGONAL_FOV_DEG,
@@ -176,6 +185,15 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
         raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
                               f"shape {lead}: its last axis is {_PAIRS.get(name, '(x, y)')}, so give (2,) for "
                               f"every pose, {lead + (2,)} for each{per_first}") from None
+
+
+
+def ensemble_parts(ref: str) -> list[str]:
+    """The checkpoint paths of ``"a.pt+b.pt"`` (split only after ``.pt``, so folders named ``run+1`` stay whole),
+    or ``[ref]`` for one path, or for an existing file whose own name holds ``+``."""
+    if Path(ref).is_file():
+        return [ref]
+    return re.split(r"(?<=\.pt)\+", ref)
 
 
 class Lifter:
@@ -342,11 +360,17 @@ class Lifter:
         ref = str(name)
         if ref != "default" and ref not in assets.model_names() and (ref.endswith(".pt") or Path(ref).is_file()):
             # shipped names win over same-named local files; a file whose name holds "+" is that file
-            if "+" in ref and not Path(ref).is_file():
-                first, *more = ref.split("+")
-                return cls.from_checkpoint(first, name="+".join(Path(p).stem for p in (first, *more)),
-                                           quantize=quantize, ensemble=more)
+            if len(parts := ensemble_parts(ref)) > 1:
+                for part in parts:
+                    if not Path(part).is_file():
+                        raise CheckpointError(f"weights file not found: {part} (in {ref!r}, read as checkpoints joined "
+                                              "by '+' into an ensemble: A.pt+B.pt)")
+                return cls.from_checkpoint(parts[0], name="+".join(Path(p).stem for p in parts), quantize=quantize,
+                                           ensemble=parts[1:])
             return cls.from_checkpoint(ref, quantize=quantize)
+        if "+" in ref and ref not in assets.model_names() and not Path(ref).is_file():
+            raise PoseLifterError(f"{ref!r}: '+' joins checkpoint files ending in .pt into an ensemble (A.pt+B.pt); "
+                                  "shipped models cannot be joined (the default already averages its networks)")
         entry = assets.model_entry(ref)
         ck = load_checkpoint(assets.read_bytes(entry["file"]), expected_sha256=entry.get("sha256"),
                              name=f"shipped model {entry['name']!r} ({entry['file']})")

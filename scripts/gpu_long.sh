@@ -10,7 +10,7 @@
 # The schedule asks for EP epochs (300, the paper's: ~88M samples of the 293k); the lr follows
 # max(step / steps, elapsed / M minutes), so a run that the time limit stops still ends its cosine decay.
 # Then paper<WA> is evaluated on the machine's CPUs (its checkpoint, 135 MB in float16, cannot come back):
-# GT 2D stride 5 told "clean", SH detections stride 5 with no source (flip test on). The width-WB and WC
+# GT 2D stride 5 told "clean", SH detections stride 5 told "detected", their default (flip test on). The width-WB and WC
 # checkpoints come back in OUT and are evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (every 5th frame of every subject; never committed).

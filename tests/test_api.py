@@ -567,12 +567,34 @@ def test_load_joins_checkpoints_with_plus_into_an_ensemble(tmp_path, keypoints, 
     want = Lifter.from_checkpoint(pa, ensemble=[pb]).lift(keypoints, **kw).absolute
     np.testing.assert_array_equal(joined.lift(keypoints, **kw).absolute, want)
     assert not np.allclose(want, a.lift(keypoints, **kw).absolute, atol=1e-3)  # b takes part
-    plus = save_checkpoint(tmp_path / "x+y.pt", a.net, a.codec)
+    save_checkpoint(tmp_path / "x+y.pt", a.net, a.codec)
     monkeypatch.chdir(tmp_path)
     assert not Lifter.load("x+y.pt").ensemble
-    with pytest.raises(CheckpointError, match="not found: .*missing.pt"):
+    with pytest.raises(CheckpointError, match="not found: .*missing.pt .*read as checkpoints joined by '\\+'"):
         Lifter.load(f"{pa}+missing.pt")
-    assert plus.is_file()
+    folder = tmp_path / "run+1"  # '+' inside a folder's name is not a join
+    folder.mkdir()
+    fa, fb = (save_checkpoint(folder / n, m.net, m.codec) for n, m in (("a.pt", a), ("b.pt", b)))
+    assert len(Lifter.load(f"{fa}+{fb}").ensemble) == 1
+    with pytest.raises(PoseLifterError, match="shipped models cannot be joined"):
+        Lifter.load("universal+sh_mix")
+
+
+def test_evaluate_labels_leave_paths_with_equals_signs_whole(tmp_path):
+    """``poselifter evaluate LABEL=REF``: a path that holds '=' (a run folder ``lr=1e-3``) is a path, with or
+    without a label; shipped names and '+' ensembles are recognised after the label."""
+    from lifter.cli.evaluate import split_label
+
+    a = tiny_lifter(32, seed=3)
+    folder = tmp_path / "lr=1e-3"
+    folder.mkdir()
+    pa = str(save_checkpoint(folder / "a.pt", a.net, a.codec))
+    assert split_label(pa) == (pa, pa)
+    assert split_label(f"mine={pa}") == ("mine", pa)
+    assert split_label(f"two={pa}+{pa}") == ("two", f"{pa}+{pa}")
+    assert split_label("x=universal") == ("x", "universal") and split_label("a=b=default") == ("a=b", "default")
+    assert split_label("universal") == ("universal", "universal")
+    assert split_label("lbl=missing.pt") == ("lbl", "missing.pt")  # (Lifter.load then names the missing file)
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import random_pose_cam, requires_h36m, tiny_lifter
-from hypothesis import given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from lifter import Lifter, PoseLifterError
@@ -96,6 +96,44 @@ def test_undistort_inverts_any_lens_up_to_its_fold(k1, k2, k3, p1, p2, seed, rea
     radius, angle = rng.uniform(0.0, reach * r_fold, 64), rng.uniform(0.0, 2 * np.pi, 64)
     xy = np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=-1)
     np.testing.assert_allclose(cam.undistort(cam.distort(xy, k, p), k, p), xy, atol=1e-9)
+
+
+@settings(max_examples=200, deadline=None)
+@given(k1=st.floats(-0.6, 0.6), k2=st.floats(-0.4, 0.4), k3=st.floats(-0.15, 0.15), r_d=st.floats(0.0, 3.0))
+@example(k1=-0.6, k2=0.1, k3=0.0, r_d=1.0)  # folds at r = 0.83 (g_max 0.53) and rises again past r = 2.2
+def test_undistort_of_a_radial_lens_finds_the_own_side_point_or_refuses(k1, k2, k3, r_d):
+    """For a radial lens the answer is known: the distorted radius r_d has an inverse on the lens's own side iff it
+    is below the radial map's first maximum g_max (where r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops rising at r_fold),
+    and that inverse has r <= r_fold. Anything else (a point further out that the lens also sends to r_d, in the
+    second rising region of a curve that falls and rises again) must be refused, not returned."""
+    k = (k1, k2, k3)
+    r = np.linspace(0.0, 4.0, 40_001)
+    g = r * (1 + k1 * r**2 + k2 * r**4 + k3 * r**6)
+    falls = np.diff(g) <= 0
+    fold = int(np.argmax(falls)) if falls.any() else len(r) - 1
+    g_max, r_fold = g[: fold + 1].max(), r[fold]
+    assume(abs(r_d - g_max) > 1e-3)  # (the grid's resolution)
+    xd = np.array([[r_d * 0.8, r_d * 0.6]])
+    if r_d < g_max:
+        x = cam.undistort(xd, k, (0.0, 0.0))
+        assert np.hypot(*x[0]) <= r_fold + 1e-3
+        np.testing.assert_allclose(cam.distort(x, k, (0.0, 0.0)), xd, atol=1e-9)
+    else:
+        with pytest.raises(PoseLifterError, match="no inverse through this lens"):
+            cam.undistort(xd, k, (0.0, 0.0))
+
+
+def test_undistort_broadcasts_points_against_per_pose_lenses():
+    """One point against 4 lenses gives 4 answers, as ``distort`` broadcasts; shapes that do not broadcast are
+    refused by name."""
+    k = np.array([[-0.2, 0.2, 0.0], [0.1, 0.0, 0.0], [0.0, 0.0, 0.0], [-0.3, 0.1, 0.0]])
+    p = np.zeros((4, 2))
+    xy = np.array([0.3, 0.2])
+    out = cam.undistort(xy, k, p)
+    assert out.shape == (4, 2)
+    np.testing.assert_allclose(cam.distort(out, k, p), np.broadcast_to(xy, (4, 2)), atol=1e-12)
+    with pytest.raises(PoseLifterError, match=r"points \(3, 2\), k \(4, 3\) .* do not broadcast"):
+        cam.undistort(np.zeros((3, 2)), k, p)
 
 
 def test_undistort_beyond_the_old_iterations_reach():

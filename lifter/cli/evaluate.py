@@ -13,12 +13,13 @@ import numpy as np
 import torch
 
 from .._checks import PoseLifterError
-from ..api import Lifter
+from ..api import Lifter, ensemble_parts
 from ..data import H36M
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
+from ..resources import model_names
 from ._help import HelpFormatter, positive_int
 
 
@@ -113,16 +114,34 @@ def check_evaluate_options(args: argparse.Namespace) -> None:
                               "reports only the learned-root MRPE per focal factor; run those without --focal-scales")
 
 
+def split_label(spec: str) -> tuple[str, str]:
+    """``LABEL=REF`` -> ``(LABEL, REF)``. A spec that is itself a model (a shipped name, an existing file, whose path
+    may hold '=', or files joined by '+') is its own label; else the first '=' followed by one splits it, else the
+    last '=' (and :meth:`lifter.Lifter.load` names what it cannot find)."""
+
+    def known(ref: str) -> bool:
+        return (ref == "default" or ref in model_names()
+                or all(Path(part).is_file() for part in ensemble_parts(ref)))
+
+    if known(spec):
+        return spec, spec
+    for i, ch in enumerate(spec):
+        if ch == "=" and known(spec[i + 1:]):
+            return spec[:i], spec[i + 1:]
+    label, _, ref = spec.rpartition("=")
+    return label or ref, ref
+
+
 def run(args: argparse.Namespace) -> int:
     check_evaluate_options(args)
     torch.set_num_threads(args.threads)
     lifters = []
     for spec in args.weights:
-        label, _, ref = spec.rpartition("=")
+        label, ref = split_label(spec)
         lifter = Lifter.load(ref)
-        lifters.append((label or ref, lifter))
+        lifters.append((label, lifter))
         if args.quantize:
-            lifters.append(((label or ref) + " (int8)", lifter.quantized()))
+            lifters.append((label + " (int8)", lifter.quantized()))
     data = H36M(args.h36m)
     samples = data.load_protocol(args.protocol, "test", stride=args.stride,
                                  max_frames_per_sequence=args.max_frames_per_sequence)
