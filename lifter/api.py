@@ -187,7 +187,6 @@ def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray
                               f"every pose, {lead + (2,)} for each{per_first}") from None
 
 
-
 def ensemble_parts(ref: str) -> list[str]:
     """The checkpoint paths of ``"a.pt+b.pt"`` (split only after ``.pt``, so folders named ``run+1`` stay whole),
     or ``[ref]`` for one path, or for an existing file whose own name holds ``+``."""
@@ -357,8 +356,8 @@ class Lifter:
         sha256; or a checkpoint path (``.pt``) of your own; or several joined by ``+`` (``"a.pt+b.pt"``): an
         ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
         ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see :meth:`quantized`."""
-        ref = str(name)
-        if ref != "default" and ref not in assets.model_names() and (ref.endswith(".pt") or Path(ref).is_file()):
+        ref, shipped = str(name), assets.model_names()
+        if ref != "default" and ref not in shipped and (ref.endswith(".pt") or Path(ref).is_file()):
             # shipped names win over same-named local files; a file whose name holds "+" is that file
             if len(parts := ensemble_parts(ref)) > 1:
                 for part in parts:
@@ -368,7 +367,7 @@ class Lifter:
                 return cls.from_checkpoint(parts[0], name="+".join(Path(p).stem for p in parts), quantize=quantize,
                                            ensemble=parts[1:])
             return cls.from_checkpoint(ref, quantize=quantize)
-        if "+" in ref and ref not in assets.model_names() and not Path(ref).is_file():
+        if "+" in ref and ref not in shipped and not Path(ref).is_file():
             raise PoseLifterError(f"{ref!r}: '+' joins checkpoint files ending in .pt into an ensemble (A.pt+B.pt); "
                                   "shipped models cannot be joined (the default already averages its networks)")
         entry = assets.model_entry(ref)

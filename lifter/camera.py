@@ -85,6 +85,14 @@ def camera_to_world(points_cam: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.
     return np.einsum("ji,...j->...i", np.asarray(R, np.float64), np.asarray(points_cam, np.float64) - np.asarray(t))
 
 
+def _lens_terms(xy: np.ndarray, k: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``r2 = |x|^2`` and the factor ``radial + tan`` ``(...)`` of :func:`distort`'s lens model (the one place
+    that writes it; :func:`distort_jacobian` differentiates it)."""
+    x, y = xy[..., 0], xy[..., 1]
+    r2 = x * x + y * y
+    return r2, 1.0 + k[..., 0] * r2 + k[..., 1] * r2**2 + k[..., 2] * r2**3 + p[..., 0] * y + p[..., 1] * x
+
+
 def distort(xy: np.ndarray, k: ArrayLike, p: ArrayLike) -> np.ndarray:
     """Apply the H36M / Brown-Conrady lens distortion to normalized image points ``(..., 2)``.
 
@@ -94,10 +102,8 @@ def distort(xy: np.ndarray, k: ArrayLike, p: ArrayLike) -> np.ndarray:
     """
     k = np.asarray(k, np.float64)
     p = np.asarray(p, np.float64)
-    r2 = np.sum(xy**2, axis=-1, keepdims=True)
-    radial = 1.0 + k[..., 0:1] * r2 + k[..., 1:2] * r2**2 + k[..., 2:3] * r2**3
-    tan = p[..., 0:1] * xy[..., 1:2] + p[..., 1:2] * xy[..., 0:1]
-    return xy * (radial + tan) + p[..., ::-1] * r2
+    r2, gain = _lens_terms(xy, k, p)
+    return xy * gain[..., None] + p[..., ::-1] * r2[..., None]
 
 
 def distort_jacobian(xy: np.ndarray, k: ArrayLike, p: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -108,8 +114,7 @@ def distort_jacobian(xy: np.ndarray, k: ArrayLike, p: ArrayLike) -> tuple[np.nda
     p = np.asarray(p, np.float64)
     x, y = xy[..., 0], xy[..., 1]
     k1, k2, k3, p1, p2 = k[..., 0], k[..., 1], k[..., 2], p[..., 0], p[..., 1]
-    r2 = x * x + y * y
-    gain = 1.0 + k1 * r2 + k2 * r2**2 + k3 * r2**3 + p1 * y + p2 * x
+    r2, gain = _lens_terms(xy, k, p)
     dr = k1 + 2.0 * k2 * r2 + 3.0 * k3 * r2**2  # d radial / d r2
     sx, sy = 2.0 * x * dr + p2, 2.0 * y * dr + p1  # d gain / dx, d gain / dy
     J = np.stack([np.stack([gain + x * sx + 2.0 * p2 * x, x * sy + 2.0 * p2 * y], axis=-1),
@@ -180,52 +185,50 @@ def undistort(xy_distorted: np.ndarray, k: ArrayLike, p: ArrayLike, *,
     k_, p_ = np.broadcast_to(k_, lead + (3,)), np.broadcast_to(p_, lead + (2,))
     missing = ~np.all(np.isfinite(xd), axis=-1, keepdims=True)
     target = np.where(missing, 0.0, xd)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        rises = _radial_fold_test(k_)
 
-    def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """distort(x) - x_d, its largest |component|, the Jacobian and whether x lies on the lens's own side of its
-        fold: the radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) rises all the way from the centre to |x| (a lens
-        whose curve falls and rises again has a second region beyond, which the local tests alone would accept),
-        the map keeps its orientation there as at the centre (both eigenvalues of the Jacobian with positive real
-        part: det > 0 and trace > 0), and it does not mirror the point through the centre (radial + tan > 0)."""
+    def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The largest |component| of distort(x) - x_d, the Newton step J^-1 (distort(x) - x_d), and whether x lies
+        on the lens's own side of its fold: the radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) rises all the way from
+        the centre to |x| (a lens whose curve falls and rises again has a second region beyond, which the local
+        tests alone would accept), the map keeps its orientation there as at the centre (both eigenvalues of the
+        Jacobian J with positive real part: det > 0 and trace > 0), and it does not mirror the point through the
+        centre (radial + tan > 0)."""
         F = distort(x, k_, p_) - target
         J, gain = distort_jacobian(x, k_, p_)
-        det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+        (a, b), (c, d) = (J[..., 0, 0], J[..., 0, 1]), (J[..., 1, 0], J[..., 1, 1])
+        det = a * d - b * c
+        step = np.stack([d * F[..., 0] - b * F[..., 1], a * F[..., 1] - c * F[..., 0]], axis=-1) / det[..., None]
         res = np.max(np.abs(np.nan_to_num(F, nan=np.inf)), axis=-1)
-        local = (det > 0) & (J[..., 0, 0] + J[..., 1, 1] > 0) & (gain > 0)
-        return F, res, J, local & rises(np.sum(x * x, axis=-1))
+        return res, step, (det > 0) & (a + d > 0) & (gain > 0) & rises(np.sum(x * x, axis=-1))
 
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # (a point without an inverse: see below)
+        rises = _radial_fold_test(k_)
         x = target.copy()
-        F, res, J, on_side = evaluate(x)
+        res, step, on_side = evaluate(x)
         for _ in range(64):  # start on the lens's own side: x_d, drawn towards the centre where it is past the fold
             if np.all(on_side):
                 break
             x = np.where(on_side[..., None], x, 0.5 * x)
-            F, res, J, on_side = evaluate(x)
+            res, step, on_side = evaluate(x)
         for _ in range(max_iterations):
-            if not np.any(res > 1e-12):
+            todo = res > 1e-12
+            if not np.any(todo):
                 break
-            det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
-            step = np.stack([J[..., 1, 1] * F[..., 0] - J[..., 0, 1] * F[..., 1],
-                             J[..., 0, 0] * F[..., 1] - J[..., 1, 0] * F[..., 0]], axis=-1) / det[..., None]
-            step = np.where(np.isfinite(step) & (res > 1e-12)[..., None], step, 0.0)
+            step = np.where(np.isfinite(step) & todo[..., None], step, 0.0)
             t = np.ones(res.shape)
             trial = x - step
-            F_t, res_t, J_t, side_t = evaluate(trial)
+            res_t, step_t, side_t = evaluate(trial)
             taken = (res_t <= res) & side_t
             for _ in range(40):  # halve each point's step while it raises the residual or crosses the fold
                 if np.all(taken):
                     break
                 t = np.where(taken, t, 0.5 * t)
                 trial = x - t[..., None] * step
-                F_t, res_t, J_t, side_t = evaluate(trial)
+                res_t, step_t, side_t = evaluate(trial)
                 taken = (res_t <= res) & side_t
             moved = taken & (res_t < res)
             x = np.where(taken[..., None], trial, x)
-            F = np.where(taken[..., None], F_t, F)
-            J = np.where(taken[..., None, None], J_t, J)
+            step = np.where(taken[..., None], step_t, step)
             res = np.where(taken, res_t, res)
             on_side = np.where(taken, side_t, on_side)
             if not np.any(moved):  # no point got closer: stuck

@@ -119,9 +119,10 @@ def split_label(spec: str) -> tuple[str, str]:
     may hold '=', or files joined by '+') is its own label; else the first '=' followed by one splits it, else the
     last '=' (and :meth:`lifter.Lifter.load` names what it cannot find)."""
 
+    shipped = model_names()
+
     def known(ref: str) -> bool:
-        return (ref == "default" or ref in model_names()
-                or all(Path(part).is_file() for part in ensemble_parts(ref)))
+        return ref == "default" or ref in shipped or all(Path(part).is_file() for part in ensemble_parts(ref))
 
     if known(spec):
         return spec, spec
