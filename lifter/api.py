@@ -90,6 +90,19 @@ def available_models() -> list[str]:
     return assets.model_names()
 
 
+class OutputNote(str):
+    """A note on a lift's output (an entry of :attr:`LiftResult.warnings`): the text, and its ``kind``,
+    ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on) or ``"behind-camera"``
+    (a root at Z <= 0), by which the video records count the frames that had it."""
+
+    kind: str
+
+    def __new__(cls, text: str, *, kind: str = "") -> OutputNote:
+        note = super().__new__(cls, text)
+        note.kind = kind
+        return note
+
+
 @dataclass(frozen=True, eq=False)
 class LiftResult:
     """Lifted poses for inputs of leading shape ``(...)``. All 3D in mm, camera frame (OpenCV).
@@ -287,7 +300,7 @@ class Lifter:
         separate clean-2D network, else this one (with its :attr:`ensemble`)."""
         return self.clean if source == "clean" and self.clean is not None else self
 
-    def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike) -> list[str]:
+    def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         and for a pixel-space network 2D poses outside :attr:`trained_pixel_range`. For callers that show one pose
@@ -295,7 +308,7 @@ class Lifter:
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
-        notes: list[str] = []
+        notes: list[OutputNote] = []
         span = self.trained_pixel_range
         if span is not None and root.size:
             loc, scale = location_and_scale(np.asarray(keypoints, np.float64))
@@ -303,18 +316,19 @@ class Lifter:
             outside = (scale < span[0] * (1 - 1e-6)) | (scale > span[1] * (1 + 1e-6)) | (offset > span[2] * (1 + 1e-6))
             if np.any(outside):
                 first = np.unravel_index(int(np.argmax(outside)), outside.shape) if outside.ndim else ()
-                notes.append(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
+                notes.append(OutputNote(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
                              f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
                              f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
                              f"{where_in_batch(outside)}: its depth is an extrapolation (it can place people behind "
                              "the camera): use the default model, which is exact at any image size, or scale the "
-                             "image and its intrinsics down")
+                             "image and its intrinsics down", kind="pixel-range"))
         behind = root[..., 2] <= 0
         if np.any(behind):
-            notes.append(f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
-                         f"{where_in_batch(behind)}: the 2D is outside what it was trained on; the result is not a "
-                         "valid pose" + ("" if self.config.input_space == "camera" else
-                                         " (a pixel-space model: use the default model)"))
+            notes.append(OutputNote(
+                f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
+                f"{where_in_batch(behind)}: the 2D is outside what it was trained on; the result is not a valid pose"
+                + ("" if self.config.input_space == "camera" else " (a pixel-space model: use the default model)"),
+                kind="behind-camera"))
         return notes
 
     # -- construction --------------------------------------------------------------------------------
@@ -613,7 +627,7 @@ class Lifter:
         out = self._network(np.ascontiguousarray(feats, np.float32))
         raw = codec.destandardize(out.astype(np.float64))
         if flip_test:
-            raw = 0.5 * (raw[: len(kp)] + codec.mirror_output(raw[len(kp):]))
+            raw = codec.flip_average(raw, len(kp))
         # float64 from here on: the features alone were float32
         alpha_in = alpha if codec.config.input_space == "pixel" else np.full_like(alpha, codec.reference_focal)
         enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha)

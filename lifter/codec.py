@@ -37,6 +37,7 @@ import numpy as np
 import torch
 
 from ._array import namespace as array_namespace
+from ._checks import PoseLifterError
 from .camera import CANONICAL_FOCAL, backproject_generic, to_reference_camera
 from .model import NUM_OUTPUTS, ModelConfig
 from .normalization import location_and_scale, pose_features
@@ -229,6 +230,16 @@ class PoseCodec:
         full = xp.concat([xp.zeros_like(rel[..., :1, :]), rel], axis=-2)
         back = mirror(full)[..., 1:, :]
         return xp.concat([xp.reshape(back, (*raw.shape[:-1], NUM_OUTPUTS - 1)), raw[..., -1:]], axis=-1)  # type: ignore[index, attr-defined]
+
+    @classmethod
+    def flip_average(cls, raw: A, n: int) -> A:
+        """The flip test's answer for ``n`` inputs from raw outputs ``(2n, 49)``: the inputs' rows, then their
+        mirror images' rows (:meth:`mirror_input`), whose outputs are mapped back (:meth:`mirror_output`) and
+        averaged with the first ``n``. The one implementation that :meth:`lifter.Lifter.lift` (numpy) and
+        distillation's teacher (:func:`lifter.train.teacher_targets`, torch) share."""
+        if raw.shape[0] != 2 * n:
+            raise PoseLifterError(f"flip_average: {raw.shape[0]} rows of raw outputs, expected 2 x {n} (inputs, then mirror images)")
+        return 0.5 * (raw[:n] + cls.mirror_output(raw[n:]))  # type: ignore[index, operator]
 
     @staticmethod
     def mirror_input(keypoints: A, principal_point: Any) -> A:

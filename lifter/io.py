@@ -481,6 +481,11 @@ def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_l
                else ""))
 
 
+def distortion_tuple(distortion: np.ndarray | None) -> tuple[float, ...] | None:
+    """A file's ``distortion`` array ``(5,)`` as the records hold it: ``(k1, k2, k3, p1, p2)`` floats, or None."""
+    return None if distortion is None else tuple(float(v) for v in np.asarray(distortion).reshape(-1))
+
+
 def _distortion_field(raw: Any, *, where: str) -> np.ndarray:
     """A keypoint file's ``distortion``: five finite numbers ``[k1, k2, k3, p1, p2]`` below
     :data:`lifter.camera.MAX_DISTORTION_COEFFICIENT` in magnitude."""

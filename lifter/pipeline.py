@@ -25,7 +25,7 @@ from ._text import sentence
 from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
-from .io import LiftRecord, PersonResult, parse_keypoint_json
+from .io import LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
 from .keypoints import convert, placeholder_notes
 
 
@@ -191,7 +191,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=kf.image_size, model=lifter.name, source_format=kf.format,
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
-                      people=lifted, distortion=None if kf.distortion is None else tuple(kf.distortion.tolist()))
+                      people=lifted, distortion=distortion_tuple(kf.distortion))
 
 
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,

@@ -288,7 +288,7 @@ def teacher_targets(teacher: Lifter, batch: Batch, *, clean_samples: bool = True
             folded = forward_folded(m.net, feats)
             raw = m.codec.destandardize(folded if folded is not None else m.net(feats))
             if len(raw) > n:
-                raw = 0.5 * (raw[:n] + m.codec.mirror_output(raw[n:]))
+                raw = m.codec.flip_average(raw, n)
             total = raw if total is None else total + raw
         assert total is not None
         return total / len(members)

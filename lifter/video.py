@@ -33,7 +33,7 @@ import numpy as np
 from ._checks import PoseLifterError, as_pair
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, check_max_side, image_from_array, people_h36m
-from .io import parse_keypoint_sequence
+from .io import distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
@@ -175,10 +175,11 @@ class FrameResult:
 
 
 def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
-    """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note (a pixel
-    model outside its trained sizes, roots behind the camera), with its first frame and how many frames had it."""
+    """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note
+    (:attr:`lifter.api.OutputNote.kind`: a pixel model outside its trained sizes, roots behind the camera; any
+    other note by its text), with its first frame and how many frames had it."""
     for note in notes:
-        kind = "pixel-range" if "reads pixels" in note else "behind-camera" if "behind the camera" in note else note
+        kind = getattr(note, "kind", note)
         first, n, message = acc.get(kind, (frame, 0, note))
         acc[kind] = (first, n + 1, message)
 
@@ -544,7 +545,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
-                          distortion=None if ks.distortion is None else tuple(ks.distortion.tolist()))
+                          distortion=distortion_tuple(ks.distortion))
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",

@@ -115,6 +115,26 @@ def test_mirror_output_is_an_involution_on_poses():
     np.testing.assert_array_equal(back[:, 48], raw[:, 48])
 
 
+def test_flip_average_is_one_rule_for_numpy_and_torch():
+    """The flip test's merge: the mirror rows mapped back and averaged with the plain rows, the same in numpy
+    (Lifter.lift) and torch (distillation's teacher); an output already mirror-equivariant is returned as it is."""
+    import pytest
+    import torch
+
+    from lifter._checks import PoseLifterError
+
+    rng = np.random.default_rng(1)
+    plain = rng.normal(0, 300, (3, 49))
+    equivariant = np.concatenate([plain, PoseCodec.mirror_output(plain)])  # a network that mirrors exactly
+    np.testing.assert_allclose(PoseCodec.flip_average(equivariant, 3), plain, atol=1e-9)
+    raw = rng.normal(0, 300, (6, 49))
+    expected = 0.5 * (raw[:3] + PoseCodec.mirror_output(raw[3:]))
+    np.testing.assert_allclose(PoseCodec.flip_average(raw, 3), expected)
+    np.testing.assert_allclose(PoseCodec.flip_average(torch.from_numpy(raw), 3).numpy(), expected)
+    with pytest.raises(PoseLifterError, match="6 rows of raw outputs, expected 2 x 2"):
+        PoseCodec.flip_average(raw, 2)
+
+
 def test_source_feature():
     codec = PoseCodec(ModelConfig())
     kp = project(_pose(), focal=F, principal_point=C)
