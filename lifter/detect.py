@@ -1074,6 +1074,10 @@ def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
     return out
 
 
+SMALL_IMAGE_PX: Final[int] = 64
+"""An image whose shorter side is below this many px gets its size named when nobody is found in it."""
+
+
 def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseEstimator2D,
                   max_side: int = DEFAULT_MAX_SIDE_PX, max_people: int | None = None) -> list[DetectedPose]:
     """Everyone in an image (a path or a :class:`LoadedImage`), largest first, in H36M-17 (see
@@ -1084,6 +1088,9 @@ def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: Pos
     if not people:
         where = f"{img.path}: " if img.path is not None else ""
         extra = f" (searched a copy downscaled by {img.scale:.3g})" if img.scale < 1.0 else ""
+        w, h = img.size
+        if min(w, h) < SMALL_IMAGE_PX:  # (the detector's own input is 256 px: a person needs some pixels of it)
+            extra += f" in this {w} x {h} px image: a person needs to be tens of pixels tall to be found"
         raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
     if max_people is not None and len(people) > max_people:
         from dataclasses import replace

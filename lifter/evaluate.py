@@ -6,6 +6,7 @@ within each action.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
@@ -13,6 +14,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from ._checks import PoseLifterWarning
 from .analytic import analytic_root
 from .api import Lifter
 from .camera import project
@@ -53,8 +55,11 @@ class Predictions:
 def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = None, analytic: bool = False,
             batch_size: int = 8192, progress: bool = True, source: Source = "detected") -> Predictions:
     """Lift every sample (its own camera, with its lens distortion for H36M's own 2D:
-    :attr:`~lifter.data.PoseSamples.input_distortion`) told ``source``; optionally also the analytic root."""
+    :attr:`~lifter.data.PoseSamples.input_distortion`) told ``source``; optionally also the analytic root.
+    What :meth:`lifter.Lifter.lift` would warn of is warned once per kind of note (:class:`lifter.PoseLifterWarning`),
+    from the first batch that had it, with how many batches did."""
     rel, root, aroot = [], [], []
+    notes: dict[str, tuple[int, int, str]] = {}  # kind -> (first sample of the first batch with it, batches, text)
     n = len(samples)
     bar = tqdm(range(0, n, batch_size), disable=None if progress else True, desc=f"lifting ({lifter.name})",
                unit="batch")  # (None: no bar when stderr is not a terminal)
@@ -63,12 +68,21 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
         dist = samples.input_distortion
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
                           principal_point=samples.principal_point[sl], flip_test=flip_test, source=source,
-                          distortion=None if dist is None else dist[sl])
+                          distortion=None if dist is None else dist[sl], warn=False)
+        for note in (*res.input_warnings, *res.warnings):
+            kind = getattr(note, "kind", note)
+            first, count, text = notes.get(kind, (s, 0, note))
+            notes[kind] = (first, count + 1, text)
         rel.append(res.relative)
         root.append(res.root)
         if analytic:  # from the 2D the networks lifted (undistorted for a pinhole lifter)
             aroot.append(analytic_root(res.keypoints_2d, res.relative, focal=samples.focal[sl],
                                        principal_point=samples.principal_point[sl]))
+    batches = -(-n // batch_size)
+    for first, count, text in notes.values():
+        where = (f"samples {first}-{min(n, first + batch_size) - 1}" if batches > 1 else "")
+        more = f"; so in {count} of {batches} batches of up to {batch_size} samples" if batches > 1 else ""
+        warnings.warn(PoseLifterWarning(f"{where + ': ' if where else ''}{text}{more}"), stacklevel=2)
     return Predictions(np.concatenate(rel), np.concatenate(root), np.concatenate(aroot) if analytic else None)
 
 

@@ -42,6 +42,9 @@ from .keypoints import H36M17, get_format, keypoint_formats
 from .skeleton import JOINT_NAMES
 
 FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose25", 33: "blazepose33"}
+LAYOUT_FORMATS: Final[dict[str, str]] = {"openpose25": "OpenPose's 'pose_keypoints_2d' layout",
+                                          "coco17": "a list of COCO results"}
+"""The formats a file's layout implies when it has no ``format``, with the layout."""
 """Keypoint format assumed from the joint count when a JSON file names none."""
 
 
@@ -362,9 +365,11 @@ def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
 
 
 def _people_of(d: Any, p: Path, fmt: str | None
-               ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any]]:
+               ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any], bool]:
     """The people in one decoded frame object as ``(position in the file's list, raw keypoint list, person id)``
-    (people without keypoints left out), the format it implies and its camera fields (module docstring layouts)."""
+    (people without keypoints left out), the format it implies, its camera fields (module docstring layouts), and
+    whether that format is only the layout's (:data:`LAYOUT_FORMATS`: no ``format`` given)."""
+    given = fmt
     meta: dict[str, Any] = {}
     ids: list[str | int | None] = []
     if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
@@ -405,7 +410,8 @@ def _people_of(d: Any, p: Path, fmt: str | None
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
                               f"{_short(fmt)}")
     ids = ids or [None] * len(people)
-    return [(i, q, pid) for i, (q, pid) in enumerate(zip(people, ids)) if q is not None and q != []], fmt, meta
+    kept = [(i, q, pid) for i, (q, pid) in enumerate(zip(people, ids)) if q is not None and q != []]
+    return kept, fmt, meta, fmt in LAYOUT_FORMATS and fmt != given and not (isinstance(d, dict) and d.get("format"))
 
 
 def _needs(fmt: str) -> str:
@@ -420,11 +426,12 @@ def _who(k: int, pid: str | int | None, n: int) -> str:
             else f"the person at position {k + 1} in the file" + ("" if pid is None else f" (id {pid!r})"))
 
 
-def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str]
-                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
+def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
+                   *, layout_format: bool = False) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
     for each, its ``(position in the file, person id)``; and the people left out because a joint the lifter needs
-    is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each."""
+    is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each.
+    layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages."""
     parsed = []
     for _, q, _ in people:
         xy, conf = _rows(q, str(p))
@@ -462,7 +469,12 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
     out, kept, dropped = [], [], []
     for (xy, missing), (pos, pid) in zip(parsed, identity):
         if len(xy) != f.num_joints:
-            raise PoseLifterError(f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}")
+            same = [n for n in keypoint_formats() if get_format(n).num_joints == len(xy)]
+            raise PoseLifterError(
+                f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}"
+                + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
+                + (f": give the file's format, {' or '.join(repr(n) for n in same)} ('format' in the file, or "
+                   "--format on the command line)" if same else ""))
         if missing.any():
             bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
             if bad:
@@ -522,10 +534,10 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     notes: list[str] = []
     if isinstance(d, dict) and "frames" in d:
         raise PoseLifterError(f"{p}: a keypoint sequence ('frames'); read it with parse_keypoint_sequence")
-    people, fmt, meta = _people_of(d, p, default_format)
+    people, fmt, meta, layout_format = _people_of(d, p, default_format)
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
-    arrays, fmt, identity, dropped = _people_arrays(people, p, fmt, notes)
+    arrays, fmt, identity, dropped = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
     if dropped and not arrays:
         raise PoseLifterError(f"{p}: {_missing_message(fmt, dropped, nobody_left=True)}")
     if dropped:
@@ -622,9 +634,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             frames.append([])
             ids.append([])
             continue
-        people, f_fmt, _ = _people_of(fr, where, fmt)
+        people, f_fmt, _, layout_format = _people_of(fr, where, fmt)
         arrays, f_fmt, identity, gone = _people_arrays(people, where, f_fmt,
-                                                       notes if fmt is None and not frames else [])
+                                                       notes if fmt is None and not frames else [],
+                                                       layout_format=layout_format)
         if fmt is None:
             fmt = f_fmt
         elif f_fmt != fmt:

@@ -144,3 +144,33 @@ def test_virtual_camera_samples(h36m):
     np.testing.assert_array_equal(v.pose_3d, s.pose_3d)
     np.testing.assert_allclose(v.keypoints_2d, project(s.pose_3d, focal=v.focal, principal_point=v.principal_point),
                                atol=1e-3)
+
+
+@requires_h36m
+def test_evaluation_notes_are_said_once_per_kind_with_the_batches_that_had_them(h36m, capsys):
+    """predict() lifts in batches; a pixel-space model's notes (2D outside its trained sizes, roots behind the
+    camera) come once per kind, from the first batch that had them, with how many batches did, not once per batch."""
+    import warnings
+
+    from lifter import Lifter, PoseLifterWarning
+    from lifter.evaluate import predict, virtual_camera_samples
+
+    s = virtual_camera_samples(h36m.load([9], stride=100, max_frames_per_sequence=4), focal_scale=6.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        predict(Lifter.from_pretrained("gt"), s, batch_size=16, progress=False)
+    said = [str(w.message) for w in caught if issubclass(w.category, PoseLifterWarning)]
+    batches = -(-len(s) // 16)
+    assert batches > 2 and len(said) == 2, said
+    assert said[0].startswith("samples 0-15: model 'gt' reads pixels") and said[0].endswith(
+        f"; so in {batches} of {batches} batches of up to 16 samples"), said[0]
+    assert "behind the camera" in said[1] and "of up to 16 samples" in said[1], said[1]
+    # poselifter evaluate prints them as the other commands print notes, not in Python's warning form (user trial)
+    from lifter.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default", PoseLifterWarning)  # (shown, also in a run that makes them errors)
+        assert main(["evaluate", "gt", "--focal-scales", "6", "--stride", "100", "--max-frames-per-sequence", "4",
+                     "--h36m", str(h36m.root)]) == 0
+    err = capsys.readouterr().err
+    assert "note: model 'gt' reads pixels" in err and "PoseLifterWarning" not in err and "evaluate.py" not in err, err

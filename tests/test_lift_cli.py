@@ -368,8 +368,14 @@ def test_detect_pose_picks_largest_and_maps_back(tmp_path, kp17):
     assert det.num_people == 2 and any("2 people found; using the largest" in w for w in det.warnings)
     from lifter.detect import NoPersonError
 
-    with pytest.raises(NoPersonError, match="no person"):
+    with pytest.raises(NoPersonError, match="no person") as caught:
         detect_pose(img, estimator=_StubEstimator([]))
+    assert "px image" not in str(caught.value)
+    tiny = tmp_path / "tiny.png"  # (a 1 x 1 image: the message names its size, user trial)
+    Image.new("RGB", (1, 1)).save(tiny)
+    with pytest.raises(NoPersonError, match=r"no person found by the stub 2D detector in this 1 x 1 px image: a "
+                                            "person needs to be tens of pixels tall"):
+        detect_pose(load_image(tiny), estimator=_StubEstimator([]))
 
 
 def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
@@ -592,6 +598,13 @@ def _kp_json(path: Path, kp17: np.ndarray, **extra) -> Path:
     ({"keypoints": [[True, False]] * 17}, "found [true, false]"),
     ({"keypoints": [[1.0, 2.0]] * 17, "format": 7}, "'format' must be a string"),
     ({"keypoints": [[1.0, 2.0]] * 17, "source": "gt"}, "'source' must be"),
+    # a layout that implies a format with another joint count: the formats with the file's count are named
+    ({"people": [{"pose_keypoints_2d": [1.0, 2.0, 1.0] * 17}]}, "format 'openpose25' has 25 joints, the file has 17 "
+     "(OpenPose's 'pose_keypoints_2d' layout implies 'openpose25' when the file has no 'format'): give the file's "
+     "format, 'coco17' or 'h36m17'"),
+    ([{"keypoints": [1.0, 2.0, 1.0] * 16}], "(a list of COCO results implies 'coco17' when the file has no 'format'): "
+     "give the file's format, 'sh16'"),
+    ({"keypoints": [[1.0, 2.0]] * 16, "format": "coco17"}, "format 'coco17' has 17 joints, the file has 16: give"),
 ])
 def test_malformed_keypoint_files_get_clear_messages(tmp_path, weights, kp17, capsys, content, expected):
     bad = tmp_path / "bad.json"

@@ -7,12 +7,14 @@ With no model it evaluates the shipped default on GT 2D told ``source="clean"``,
 from __future__ import annotations
 
 import argparse
+import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from .._checks import PoseLifterError
+from .._checks import PoseLifterError, PoseLifterWarning
 from ..api import Lifter, ensemble_parts
 from ..data import H36M
 from ..detections import with_sh_detections
@@ -134,6 +136,20 @@ def split_label(spec: str) -> tuple[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    with warnings.catch_warnings():  # the lifter's notes as the other commands print them, not Python's form
+        warnings.showwarning = _note
+        return _run(args)
+
+
+def _note(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+    """``warnings.showwarning`` for this command: a :class:`PoseLifterWarning` as a ``note:`` line on stderr."""
+    if issubclass(category, PoseLifterWarning):
+        print(f"note: {message}", file=sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, *_), end="", file=sys.stderr)  # type: ignore[arg-type]
+
+
+def _run(args: argparse.Namespace) -> int:
     check_evaluate_options(args)
     torch.set_num_threads(args.threads)
     lifters = []
