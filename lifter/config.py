@@ -122,10 +122,17 @@ class AugmentConfig:
                        "refuses it in the reference camera, where it is an exact symmetry)", default=False)
     zoom_sigma: float = _help("zoom: std of log2(scale)", default=0.25)
     zoom_clip: float = _help("zoom: |log2(scale)| limit (0.5: x0.71..x1.41)", default=0.5)
+    rotate_deg: float = _help("turn the camera about its centre by a pan and a tilt each uniform in +-this many degrees "
+                              "(0: off): the 3D turns with it and every 2D point, detections included, moves as "
+                              "that camera would see it (the homography K R K^-1), so where a person stands in the "
+                              "image no longer tells their depth by the training cameras' pose (pinhole 2D only)",
+                              default=0.0)
 
     def __post_init__(self) -> None:
         _booleans(self)
         _prob("flip_prob", self.flip_prob)
+        _check(isinstance(self.rotate_deg, (int, float)) and 0.0 <= self.rotate_deg <= 45.0,
+               f"rotate_deg must be in [0, 45] degrees, got {self.rotate_deg!r}")
         _positive("zoom_sigma", self.zoom_sigma, allow_zero=True)
         _positive("zoom_clip", self.zoom_clip, allow_zero=True)
 

@@ -147,13 +147,46 @@ def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torc
     return torch.where(m, PoseCodec.mirror_input(kp, pp), kp), torch.where(m, mirror(rel), rel)
 
 
+def camera_turn(pan: torch.Tensor, tilt: torch.Tensor) -> torch.Tensor:
+    """Rotations ``(B, 3, 3)`` of the camera frame (OpenCV: +x right, +y down, +z forward) for a camera turned
+    by ``pan`` (about its y axis) and then ``tilt`` (about its new x axis), radians ``(B,)``: a point ``X`` of the
+    old frame is ``R @ X`` in the turned camera's frame."""
+    cp, sp, ct, st = torch.cos(pan), torch.sin(pan), torch.cos(tilt), torch.sin(tilt)
+    one, zero = torch.ones_like(pan), torch.zeros_like(pan)
+    r_pan = torch.stack([cp, zero, -sp, zero, one, zero, sp, zero, cp], -1).reshape(-1, 3, 3)
+    r_tilt = torch.stack([one, zero, zero, zero, ct, st, zero, -st, ct], -1).reshape(-1, 3, 3)
+    return r_tilt @ r_pan
+
+
+def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor, depth: torch.Tensor,
+                 root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator
+                 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``)
+    would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections included) moved by the homography
+    ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
+    ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
+    back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px."""
+    bs, dev = len(kp), kp.device
+    a = torch.deg2rad(torch.tensor(max_deg, device=dev))
+    r = camera_turn(a * (2 * torch.rand(bs, generator=gen, device=dev) - 1),
+                    a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)).to(kp.dtype)
+
+    def turn_2d(u: torch.Tensor) -> torch.Tensor:  # (B, n, 2) px -> (B, n, 2) px
+        ray = torch.cat([(u - pp[:, None]) / f[:, None], torch.ones_like(u[..., :1])], -1) @ r.transpose(1, 2)
+        return pp[:, None] + f[:, None] * ray[..., :2] / ray[..., 2:]
+
+    root = torch.cat([(root_2d - pp) / f, torch.ones_like(depth[:, None])], -1) * depth[:, None]
+    return turn_2d(kp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
+
+
 def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
                noise: ErrorModel | None = None) -> Batch:
     """One training batch (:data:`Batch`) of the samples ``idx`` (module docstring for the order).
 
     Sources: clean with ``cfg.data.clean_prob``; else the real detection with ``real_prob`` where there is
     one; else GT 2D with ``noise`` at a level uniform in ``[noise_level_min, noise_level_max]`` (GT 2D
-    without noise when ``noise`` is None). Noise is drawn after flip and zoom, so it follows the shown size."""
+    without noise when ``noise`` is None). The camera turn (``augment.rotate_deg``) follows the flip; noise is drawn
+    after flip, turn and zoom, so it follows the shown size."""
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
     rel, depth = T["rel"][idx], T["depth"][idx]
@@ -166,8 +199,14 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
         kp = torch.where(real[:, None, None], T["real"][idx], kp)
     else:
         real = torch.zeros_like(real)
+    root_2d = T["kp"][idx][:, 0]  # the true root's 2D (pinhole where rotate_deg is used)
     if cfg.augment.flip_prob > 0:
-        kp, rel = flip_batch(kp, pp, rel, torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob)
+        flipped = torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob
+        kp, rel = flip_batch(kp, pp, rel, flipped)
+        if cfg.augment.rotate_deg > 0:  # (the true root's 2D, mirrored with the rest)
+            root_2d = torch.where(flipped[:, None], PoseCodec.mirror_input(T["kp"][idx], pp)[:, 0], root_2d)
+    if cfg.augment.rotate_deg > 0:
+        kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen)
     if cfg.augment.zoom:
         a = cfg.augment
         s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen, device=dev)).clamp(-a.zoom_clip, a.zoom_clip))
@@ -438,6 +477,10 @@ def train(
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
         cfg = replace(cfg, model=init[0].config)
+    if cfg.augment.rotate_deg > 0 and cfg.data.lens != "pinhole":
+        raise PoseLifterError(f"--rotate-deg turns the camera and moves the 2D as a pinhole camera would see it; this "
+                              f"run's 2D is {cfg.data.lens!r} (with lens distortion): add --lens pinhole, or drop "
+                              "--rotate-deg")
     if cfg.augment.zoom and cfg.model.input_space == "camera":
         raise PoseLifterError("--zoom scales the 2D, principal point and focal together, which the reference-camera "
                               "input (input_space 'camera') undoes exactly: the network would see the same input "

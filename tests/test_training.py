@@ -693,3 +693,44 @@ def test_ddp_cli_writes_one_checkpoint(tmp_path):
     lifter = Lifter.from_checkpoint(out)
     assert lifter.meta["world_size"] == 2  # a batch of 65 over 2 processes is 64, and the log says so
     assert "global batch 64 (2 process(es) x 32; 65 asked, rounded down to a multiple of 2)" in proc.stdout
+
+
+def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
+    """rotate_batch: the turned 2D is the pinhole projection of the turned 3D (clean 2D exactly; any 2D by the same
+    homography), the root stays at the same distance from the camera centre, and make_batch with a flip and a turn
+    keeps every sample a physically consistent one (2D root = projection of the 3D root)."""
+    from lifter.camera import project
+    from lifter.config import AugmentConfig, DataConfig, TrainConfig
+    from lifter.train import camera_turn, make_batch, rotate_batch
+
+    g = torch.Generator().manual_seed(0)
+    n = 64
+    root = torch.stack([torch.empty(n).uniform_(-1500, 1500, generator=g), torch.empty(n).uniform_(-800, 800, generator=g),
+                        torch.empty(n).uniform_(3000, 7000, generator=g)], -1).double()
+    rel = torch.randn(n, 17, 3, generator=g, dtype=torch.float64) * 300
+    rel[:, 0] = 0
+    f = torch.tensor([[1145.0, 1143.0]], dtype=torch.float64).expand(n, 2)
+    pp = torch.tensor([[512.0, 515.0]], dtype=torch.float64).expand(n, 2)
+    kp = torch.from_numpy(project((root[:, None] + rel).numpy(), focal=f.numpy(), principal_point=pp.numpy()))
+    kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=20.0, gen=torch.Generator().manual_seed(1))
+    r = camera_turn(*(torch.deg2rad(torch.tensor(20.0)) * (2 * torch.rand(2, n, generator=torch.Generator().manual_seed(1)) - 1))).double()
+    turned = (root[:, None] + rel) @ r.transpose(1, 2)
+    np.testing.assert_allclose(rel2.numpy(), (turned - turned[:, :1]).numpy(), atol=1e-9)
+    np.testing.assert_allclose(depth2.numpy(), turned[:, 0, 2].numpy(), rtol=1e-12)
+    np.testing.assert_allclose(kp2.numpy(), project(turned.numpy(), focal=f.numpy(), principal_point=pp.numpy()), atol=1e-9)
+    assert not torch.allclose(kp2, kp) and torch.allclose(turned[:, 0].norm(dim=-1), root.norm(dim=-1))
+    angle = torch.rad2deg(torch.arccos(((r.diagonal(dim1=1, dim2=2).sum(-1) - 1) / 2).clamp(-1, 1)))
+    assert float(angle.max()) <= 20 * 2 ** 0.5 + 1e-6 and float(angle.max()) > 10  # pan and tilt, each within +-20 deg
+    # through make_batch, flipped and turned: the samples stay consistent (float32)
+    T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
+    root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
+    again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
+                    principal_point=b["pp"].double().numpy())
+    np.testing.assert_allclose(b["kp"].numpy(), again, atol=2e-3)
+    assert not np.allclose(b["depth"].numpy(), T["depth"].numpy())
+    with pytest.raises(PoseLifterError, match="add --lens pinhole"):
+        from lifter.train import train
+        train(TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(rotate_deg=5.0)), data=None,
+              train_samples=None)
