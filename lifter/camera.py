@@ -367,6 +367,31 @@ def backproject_generic(uv: ArrayT, depth: Any, focal: Any, principal_point: Any
     return xp.concat([xy, z], axis=-1)
 
 
+def camera_turn(pan: ArrayT, tilt: ArrayT) -> ArrayT:
+    """Rotations ``(..., 3, 3)`` for a camera turned about its centre by ``pan`` (about its y axis, + turns it to
+    the right) and then ``tilt`` (about its new x axis, + turns it up), radians ``(...)``, numpy or torch, in the
+    OpenCV camera frame (+x right, +y down, +z forward): a point ``X`` (mm) of the old camera frame is ``R @ X`` in
+    the turned camera's."""
+    xp = array_namespace(pan)
+    cp, sp, ct, st = xp.cos(pan), xp.sin(pan), xp.cos(tilt), xp.sin(tilt)
+    one, zero = xp.ones_like(pan), xp.zeros_like(pan)
+    r_pan = xp.reshape(xp.stack([cp, zero, -sp, zero, one, zero, sp, zero, cp], axis=-1), (*pan.shape, 3, 3))
+    r_tilt = xp.reshape(xp.stack([one, zero, zero, zero, ct, st, zero, -st, ct], axis=-1), (*pan.shape, 3, 3))
+    return r_tilt @ r_pan
+
+
+def turn_pixels(uv: ArrayT, rotation: Any, focal: Any, principal_point: Any) -> ArrayT:
+    """Pixels ``(..., J, 2)`` of a pinhole camera as the same camera turned by ``rotation`` ``(..., 3, 3)``
+    (:func:`camera_turn`) sees them: the homography ``K R K^-1``, numpy or torch. ``focal``, ``principal_point``:
+    ``(fx, fy)``, ``(cx, cy)`` px or ``(..., 2)``. Exact for any 2D (a detector's too), since a turn about the
+    centre keeps every viewing ray; the turn must keep the points in front of the camera."""
+    xp = array_namespace(uv)
+    f = _pair(focal, uv)[..., None, :]
+    c = _pair(principal_point, uv)[..., None, :]
+    ray = xp.concat([(uv - c) / f, xp.ones_like(uv[..., :1])], axis=-1) @ xp.matrix_transpose(rotation)
+    return c + f * ray[..., :2] / ray[..., 2:]
+
+
 def backproject(uv: ArrayLike, depth: ArrayLike, *, focal: ArrayLike, principal_point: ArrayLike) -> np.ndarray:
     """Pinhole back-projection of pixels ``(..., 2)`` at depth ``(...)`` mm to camera-frame ``(..., 3)``.
 

@@ -17,7 +17,7 @@ from tqdm.auto import tqdm
 from ._checks import PoseLifterWarning
 from .analytic import analytic_root
 from .api import Lifter
-from .camera import project
+from .camera import camera_turn, project, turn_pixels
 from .codec import Source
 from .data import ACTIONS, PoseSamples
 from .metrics import AUC_THRESHOLDS_MM, mpjpe, pa_mpjpe, pck, pck_curve, root_errors
@@ -147,6 +147,21 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
                    image_size=np.round(samples.image_size * focal_scale).astype(np.int32))
 
 
+def turned_camera_samples(samples: PoseSamples, *, pan_deg: float, tilt_deg: float) -> PoseSamples:
+    """The samples as their cameras turned about their centres would see them (:func:`lifter.camera.camera_turn`:
+    + pan to the right, + tilt up, degrees): the 3D (camera frame, mm) turned, and the 2D, ground truth or a
+    detector's, undistorted where it is H36M's own (:meth:`PoseSamples.undistort`) and moved by the homography
+    ``K R K^-1`` (:func:`lifter.camera.turn_pixels`), so pinhole 2D with the same intrinsics. Another camera pose
+    than the training cameras' (their height and tilt), with the same people and the same 2D errors."""
+    r = camera_turn(np.array(np.deg2rad(pan_deg)), np.array(np.deg2rad(tilt_deg)))
+    kp = samples.keypoints_2d.astype(np.float64)
+    if samples.lens == "h36m" and samples.distortion is not None:
+        kp = samples.undistort(kp)
+    kp = turn_pixels(kp, r, samples.focal.astype(np.float64), samples.principal_point.astype(np.float64))
+    return replace(samples, keypoints_2d=kp.astype(np.float32), lens="pinhole",
+                   pose_3d=(samples.pose_3d.astype(np.float64) @ r.T).astype(np.float32))
+
+
 def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float],
                 principal_shift: tuple[float, float] = (0.0, 0.0), flip_test: bool | None = None,
                 source: Source = "clean") -> list[EvalRow]:
@@ -171,5 +186,5 @@ def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tupl
     return "\n".join(lines)
 
 
-__all__ = ["virtual_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score",
+__all__ = ["virtual_camera_samples", "turned_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score",
            "evaluate_lifter", "format_table", "format_per_action", "AUC_THRESHOLDS_MM"]

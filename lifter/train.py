@@ -44,6 +44,7 @@ from tqdm.auto import tqdm
 
 from ._checks import PoseLifterError
 from .checkpoint import save_checkpoint
+from .camera import backproject_generic, camera_turn, turn_pixels
 from .codec import PoseCodec
 from .config import TrainConfig
 from .data import H36M, PoseSamples
@@ -147,17 +148,6 @@ def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torc
     return torch.where(m, PoseCodec.mirror_input(kp, pp), kp), torch.where(m, mirror(rel), rel)
 
 
-def camera_turn(pan: torch.Tensor, tilt: torch.Tensor) -> torch.Tensor:
-    """Rotations ``(B, 3, 3)`` of the camera frame (OpenCV: +x right, +y down, +z forward) for a camera turned
-    by ``pan`` (about its y axis) and then ``tilt`` (about its new x axis), radians ``(B,)``: a point ``X`` of the
-    old frame is ``R @ X`` in the turned camera's frame."""
-    cp, sp, ct, st = torch.cos(pan), torch.sin(pan), torch.cos(tilt), torch.sin(tilt)
-    one, zero = torch.ones_like(pan), torch.zeros_like(pan)
-    r_pan = torch.stack([cp, zero, -sp, zero, one, zero, sp, zero, cp], -1).reshape(-1, 3, 3)
-    r_tilt = torch.stack([one, zero, zero, zero, ct, st, zero, -st, ct], -1).reshape(-1, 3, 3)
-    return r_tilt @ r_pan
-
-
 def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor, depth: torch.Tensor,
                  root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator
                  ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -170,13 +160,8 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
     a = torch.deg2rad(torch.tensor(max_deg, device=dev))
     r = camera_turn(a * (2 * torch.rand(bs, generator=gen, device=dev) - 1),
                     a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)).to(kp.dtype)
-
-    def turn_2d(u: torch.Tensor) -> torch.Tensor:  # (B, n, 2) px -> (B, n, 2) px
-        ray = torch.cat([(u - pp[:, None]) / f[:, None], torch.ones_like(u[..., :1])], -1) @ r.transpose(1, 2)
-        return pp[:, None] + f[:, None] * ray[..., :2] / ray[..., 2:]
-
-    root = torch.cat([(root_2d - pp) / f, torch.ones_like(depth[:, None])], -1) * depth[:, None]
-    return turn_2d(kp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
+    root = backproject_generic(root_2d, depth, f, pp)
+    return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
 
 def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,

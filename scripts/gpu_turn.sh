@@ -11,6 +11,9 @@
 #   detected<WB>_rot<A> width WB, pan and tilt each uniform in +-A degrees (10)
 #   detected<WB>_rot<B> width WB, +-B degrees (20)
 #   mirror<WC>_rot<A>   width WC (512), mirror-equivariant, +-A degrees
+# SET=b trains the rest of a turned default instead, two runs:
+#   clean<WB>_rot<B>    width WB, exact 2D only (--clean-prob 1, no detections or noise), +-B degrees
+#   mirror<WC>_rot<B>   width WC, mirror-equivariant, the detected recipe, +-B degrees
 # Every checkpoint comes back in OUT and is evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
@@ -38,11 +41,17 @@ train_run() { # name port args...
     --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "${RECIPE[@]}" "$@" > "$R/$name.log" 2>&1
   echo "$name exit $?" >> "$R/$name.log"
 }
-NAMES=("detected$WB" "detected${WB}_rot$A" "detected${WB}_rot$B" "mirror${WC}_rot$A")
-train_run "${NAMES[0]}" 29521 --width "$WB" &
-train_run "${NAMES[1]}" 29522 --width "$WB" --rotate-deg "$A" &
-train_run "${NAMES[2]}" 29523 --width "$WB" --rotate-deg "$B" &
-train_run "${NAMES[3]}" 29524 --width "$WC" --symmetry mirror --rotate-deg "$A" &
+if [ "${SET:-a}" = b ]; then  # the rest of a default turned by +-B degrees: its clean network and mirror member
+  NAMES=("clean${WB}_rot$B" "mirror${WC}_rot$B")
+  train_run "${NAMES[0]}" 29525 --width "$WB" --rotate-deg "$B" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
+  train_run "${NAMES[1]}" 29526 --width "$WC" --symmetry mirror --rotate-deg "$B" &
+else
+  NAMES=("detected$WB" "detected${WB}_rot$A" "detected${WB}_rot$B" "mirror${WC}_rot$A")
+  train_run "${NAMES[0]}" 29521 --width "$WB" &
+  train_run "${NAMES[1]}" 29522 --width "$WB" --rotate-deg "$A" &
+  train_run "${NAMES[2]}" 29523 --width "$WB" --rotate-deg "$B" &
+  train_run "${NAMES[3]}" 29524 --width "$WC" --symmetry mirror --rotate-deg "$A" &
+fi
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
 FAILED=()

@@ -180,3 +180,28 @@ def test_camera_centre_is_where_camera_frame_origin_lies_in_the_world():
     np.testing.assert_allclose(c.centre, -R.T @ c.t, atol=1e-9)
     pts = rng.normal(0, 1000, (4, 17, 3))
     np.testing.assert_allclose(c.camera_to_world(c.world_to_camera(pts)), pts, atol=1e-9)
+
+
+def test_camera_turn_convention_and_homography():
+    """camera_turn: + pan turns the camera right (what is ahead moves left in the image), + tilt turns it up (what
+    is ahead moves down), a rotation; turn_pixels equals projecting the turned 3D, numpy and torch alike."""
+    import torch
+
+    from lifter.camera import camera_turn, project, turn_pixels
+
+    ahead = np.array([0.0, 0.0, 1000.0])
+    right = camera_turn(np.array(np.deg2rad(10.0)), np.array(0.0))
+    up = camera_turn(np.array(0.0), np.array(np.deg2rad(10.0)))
+    assert (right @ ahead)[0] < 0 and abs((right @ ahead)[1]) < 1e-12
+    assert (up @ ahead)[1] > 0 and abs((up @ ahead)[0]) < 1e-12
+    rng = np.random.default_rng(3)
+    r = camera_turn(rng.uniform(-0.4, 0.4, 5), rng.uniform(-0.4, 0.4, 5))
+    np.testing.assert_allclose(r @ np.swapaxes(r, -1, -2), np.broadcast_to(np.eye(3), (5, 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(r), 1.0)
+    pts = rng.uniform([-800, -800, 3000], [800, 800, 6000], (5, 17, 3))
+    f, c = np.array([1145.0, 1143.5]), np.array([512.0, 515.0])
+    uv = project(pts, focal=f, principal_point=c)
+    expected = project(pts @ np.swapaxes(r, -1, -2), focal=f, principal_point=c)
+    np.testing.assert_allclose(turn_pixels(uv, r, f, c), expected, atol=1e-9)
+    got = turn_pixels(torch.from_numpy(uv), torch.from_numpy(r), torch.from_numpy(f), torch.from_numpy(c))
+    np.testing.assert_allclose(got.numpy(), expected, atol=1e-9)

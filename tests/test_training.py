@@ -701,7 +701,8 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     keeps every sample a physically consistent one (2D root = projection of the 3D root)."""
     from lifter.camera import project
     from lifter.config import AugmentConfig, DataConfig, TrainConfig
-    from lifter.train import camera_turn, make_batch, rotate_batch
+    from lifter.camera import camera_turn
+    from lifter.train import make_batch, rotate_batch
 
     g = torch.Generator().manual_seed(0)
     n = 64
