@@ -50,3 +50,12 @@ ev universal_sh_s5 universal sh_mix --inputs sh --stride 5 --analytic-root
 python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/bench_invariance.json" \
   | tee "$OUT/bench_invariance.txt"
 python scripts/eval_cascade.py --model universal --compare sh_mix blazepose gt | tee "$OUT/cascade_universal.txt"
+# The default since the camera-turn stop, universal_turn, beside universal ("Any camera pose" in the README).
+ev focal_sweep_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --stride 50
+python benchmarks/bench_invariance.py --models universal_turn,universal --json "$OUT/bench_invariance_turn.json" \
+  | tee "$OUT/bench_invariance_turn.txt"
+python scripts/eval_cascade.py --model universal_turn --compare universal | tee "$OUT/photos_turn.txt"
+python scripts/turned_cameras.py universal universal_turn | tee "$OUT/turned_cameras_detected.txt"
+python scripts/turned_cameras.py universal universal_turn --source clean | tee "$OUT/turned_cameras_clean.txt"
+python scripts/root_smoothness.py universal universal_turn | tee "$OUT/root_smoothness_detected.txt"
+python scripts/root_smoothness.py universal universal_turn --source clean | tee "$OUT/root_smoothness_clean.txt"

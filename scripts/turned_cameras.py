@@ -4,7 +4,7 @@ Human3.6M's four cameras stand at one height and tilt, in training and test alik
 person's depth from where they stand in the image (lower in the image: nearer) and be rewarded for it on the test
 subjects. A photo from another camera pose breaks that cue. This turns each test camera about its centre
 (:func:`lifter.evaluate.turned_camera_samples`: the 3D turned, the 2D moved by ``K R K^-1``, the same people and
-the same detector errors) and evaluates every model on the turned views: ground-truth 2D told ``--source`` and the
+the same detector errors), and also tilts each camera level ("level"), and evaluates every model on the turned views: ground-truth 2D told ``--source`` and the
 real SH detections told "detected", MPJPE / MRPE (mm), S9 + S11, every ``--stride``-th frame.
 
     python scripts/turned_cameras.py [MODEL ...] [--turns 0:0,0:-10,0:10,0:-20,0:20,20:0] [--stride 50]
@@ -13,11 +13,16 @@ real SH detections told "detected", MPJPE / MRPE (mm), S9 + S11, every ``--strid
 from __future__ import annotations
 
 import argparse
+import json
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
 
 from lifter import Lifter
 from lifter.cli._help import add_h36m_arguments
 from lifter.cli.evaluate import split_label
-from lifter.data import H36M
+from lifter.data import CAMERA_IDS, H36M, PoseSamples
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter, turned_camera_samples
 
@@ -45,13 +50,42 @@ def main() -> None:
     models = [(label, Lifter.load(ref)) for label, ref in (split_label(m) for m in args.models)]
     print(f"Protocol 1 test, stride {args.stride}: {len(gt)} poses (GT 2D, told {args.source!r}), {len(sh)} with SH "
           f"detections ({dropped} without); cameras turned by pan:tilt degrees (+ right, + up); MPJPE / MRPE mm")
-    head = " | ".join(f"{p:+g}:{t:+g}" for p, t in args.turns)
+    pitch = camera_pitch_deg(data)
+    print("'level': each test camera tilted up by its own downward pitch (" + ", ".join(
+        f"{cam} {p:.1f}" for cam, p in sorted(pitch.items())) + " deg, mean over subjects), so its axis is horizontal: a "
+        "camera at Human3.6M's height (about 1.5 m) held level, as a photo is usually taken")
+    head = " | ".join(f"{p:+g}:{t:+g}" for p, t in args.turns) + " | level"
     for kind, samples, source in (("GT 2D", gt, args.source), ("SH detections", sh, "detected")):
-        print(f"\n{kind}\n| model | {head} |\n|---|" + "---|" * len(args.turns))
+        print(f"\n{kind}\n| model | {head} |\n|---|" + "---|" * (len(args.turns) + 1))
         views = [turned_camera_samples(samples, pan_deg=p, tilt_deg=t) for p, t in args.turns]
+        views.append(level_samples(samples, pitch))
         for label, m in models:
             rows = [evaluate_lifter(m, v, label=label, progress=False, source=source)[0] for v in views]
             print(f"| {label} | " + " | ".join(f"{r.mpjpe:.1f} / {r.mrpe:.1f}" for r in rows) + " |")
+
+
+def camera_pitch_deg(data: H36M) -> dict[str, float]:
+    """Each camera's downward pitch (degrees below the horizon, world +z up), the mean over the subjects."""
+    cams = json.loads((Path(data.root) / "cameras.json").read_text())["cameras"]
+    out: dict[str, list[float]] = {}
+    for key, cam in cams.items():
+        axis = np.asarray(cam["R"], np.float64)[2]  # the optical axis in world coordinates
+        out.setdefault(key.split("/")[1], []).append(float(np.degrees(np.arcsin(-axis[2]))))
+    return {k: float(np.mean(v)) for k, v in out.items()}
+
+
+def level_samples(samples: PoseSamples, pitch: dict[str, float]) -> PoseSamples:
+    """The samples with each camera tilted up by its own pitch (:func:`camera_pitch_deg`)."""
+    parts = []
+    for c in np.unique(samples.camera):
+        idx = np.flatnonzero(samples.camera == c)
+        parts.append((idx, turned_camera_samples(samples.subset(idx), pan_deg=0.0, tilt_deg=pitch[CAMERA_IDS[c]])))
+    order = np.argsort(np.concatenate([i for i, _ in parts]))
+    joined = {f.name: getattr(parts[0][1], f.name) for f in fields(parts[0][1])}
+    for k, v in joined.items():
+        if isinstance(v, np.ndarray):
+            joined[k] = np.concatenate([getattr(p, k) for _, p in parts])[order]
+    return PoseSamples(**joined)
 
 
 if __name__ == "__main__":
