@@ -30,6 +30,7 @@ import json
 import math
 import os
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
@@ -414,6 +415,12 @@ def _people_of(d: Any, p: Path, fmt: str | None
     return kept, fmt, meta, fmt in LAYOUT_FORMATS and fmt != given and not (isinstance(d, dict) and d.get("format"))
 
 
+def _one_of(names: Sequence[str]) -> str:
+    """``'a'``, ``'a' or 'b'``, ``one of 'a', 'b', 'c'``: format names for messages."""
+    quoted = [repr(n) for n in names]
+    return " or ".join(quoted) if len(quoted) <= 2 else "one of " + ", ".join(quoted)
+
+
 def _needs(fmt: str) -> str:
     """What a person must give, for the messages on missing joints."""
     return ("the lifter needs all 17 joints" if fmt == H36M17
@@ -473,8 +480,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             raise PoseLifterError(
                 f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}"
                 + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
-                + (f": give the file's format, {' or '.join(repr(n) for n in same)} ('format' in the file, or "
-                   "--format on the command line)" if same else ""))
+                + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format on the command line)"
+                   if same else ""))
         if missing.any():
             bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
             if bad:

@@ -601,7 +601,7 @@ def _kp_json(path: Path, kp17: np.ndarray, **extra) -> Path:
     # a layout that implies a format with another joint count: the formats with the file's count are named
     ({"people": [{"pose_keypoints_2d": [1.0, 2.0, 1.0] * 17}]}, "format 'openpose25' has 25 joints, the file has 17 "
      "(OpenPose's 'pose_keypoints_2d' layout implies 'openpose25' when the file has no 'format'): give the file's "
-     "format, 'coco17' or 'h36m17'"),
+     "format, "),  # (the formats with 17 joints: 'coco17' or 'h36m17', and any a test registered)
     ([{"keypoints": [1.0, 2.0, 1.0] * 16}], "(a list of COCO results implies 'coco17' when the file has no 'format'): "
      "give the file's format, 'sh16'"),
     ({"keypoints": [[1.0, 2.0]] * 16, "format": "coco17"}, "format 'coco17' has 17 joints, the file has 16: give"),
