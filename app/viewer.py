@@ -81,6 +81,10 @@ from .viser_hooks import limit_uploads, report_rejected_values
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
 
+INFO_MESSAGE_SECONDS: float = 8.0
+"""A note in the readout's status line (not an error) stays at least this long: the step that shows it (a camera
+switch that resets the focal length) sets controls whose callbacks succeed right after it, and a success would
+otherwise clear it before anyone reads it (user trial). An error is cleared by the next success."""
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
 its range is clamped (and the box rewritten) only when the tab has sent nothing newer for this long, so a value
@@ -179,6 +183,7 @@ class SessionView:
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self._message_count = 0
+        self._message_at = 0.0  # (time.monotonic() of the last message)
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -254,7 +259,8 @@ class SessionView:
     def _guarded(self, func: Callable[..., Any], *args: Any, **kwargs: Any) -> bool:
         """Run ``func``: True on success; a :class:`PoseLifterError` (or any other error, logged) becomes a
         message and False. Never raises (callbacks run in viser's threads). A success that showed no message
-        clears the status line."""
+        clears the status line: an error at once, a note (``ℹ️``) once it has been shown for
+        :data:`INFO_MESSAGE_SECONDS` (the controls that the step showing it set call back right after it)."""
         n = self._message_count
         try:
             func(*args, **kwargs)
@@ -265,8 +271,10 @@ class SessionView:
             log.error("%s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
             self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
             return False
-        if self._message_count == n and self.gui.readout.status.content:
-            self.gui.readout.status.content = ""
+        status = self.gui.readout.status.content
+        if self._message_count == n and status and (
+                not status.startswith("ℹ️") or time.monotonic() - self._message_at > INFO_MESSAGE_SECONDS):
+            self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
         return True
 
     def show_message(self, text: str, *, error: bool = False) -> None:
@@ -274,6 +282,7 @@ class SessionView:
         self.messages.append(text)
         self.messages = self.messages[-20:]
         self._message_count += 1
+        self._message_at = time.monotonic()
         try:
             self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
@@ -579,8 +588,9 @@ class SessionView:
             self._fallback_said.add(seq_key)
             self.show_message(note)
         if not kept and chosen:
-            self.show_message(f"focal length set to this camera's {st.focal_px:.0f} px (it was {old.focal_px:.0f} px: "
-                              "another camera)")
+            uploaded = sample.key.split("/")[0] in ("upload", "video")  # (a photo, keypoint file or video)
+            self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s {st.focal_px:.0f} "
+                              f"px (it was {old.focal_px:.0f} px: {'a new input' if uploaded else 'another camera'})")
         cam = sample.camera
         view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)

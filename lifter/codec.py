@@ -238,7 +238,8 @@ class PoseCodec:
         averaged with the first ``n``. The one implementation that :meth:`lifter.Lifter.lift` (numpy) and
         distillation's teacher (:func:`lifter.train.teacher_targets`, torch) share."""
         if raw.shape[0] != 2 * n:
-            raise PoseLifterError(f"flip_average: {raw.shape[0]} rows of raw outputs, expected 2 x {n} (inputs, then mirror images)")
+            raise PoseLifterError(f"flip_average: {raw.shape[0]} rows of raw outputs, expected 2 x {n} (inputs, then "
+                                  "mirror images)")
         return 0.5 * (raw[:n] + cls.mirror_output(raw[n:]))  # type: ignore[index, operator]
 
     @staticmethod

@@ -186,5 +186,6 @@ def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tupl
     return "\n".join(lines)
 
 
-__all__ = ["virtual_camera_samples", "turned_camera_samples", "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score",
+__all__ = ["virtual_camera_samples", "turned_camera_samples",
+           "focal_sweep", "format_focal_table", "EvalRow", "Predictions", "predict", "score",
            "evaluate_lifter", "format_table", "format_per_action", "AUC_THRESHOLDS_MM"]

@@ -434,7 +434,8 @@ def _who(k: int, pid: str | int | None, n: int) -> str:
 
 
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
-                   *, layout_format: bool = False) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
+                   *, layout_format: bool = False
+                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
     for each, its ``(position in the file, person id)``; and the people left out because a joint the lifter needs
     is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each.

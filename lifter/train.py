@@ -43,8 +43,8 @@ import torch.distributed as dist
 from tqdm.auto import tqdm
 
 from ._checks import PoseLifterError
-from .checkpoint import save_checkpoint
 from .camera import backproject_generic, camera_turn, turn_pixels
+from .checkpoint import save_checkpoint
 from .codec import PoseCodec
 from .config import TrainConfig
 from .data import H36M, PoseSamples

@@ -4,7 +4,8 @@ Human3.6M's four cameras stand at one height and tilt, in training and test alik
 person's depth from where they stand in the image (lower in the image: nearer) and be rewarded for it on the test
 subjects. A photo from another camera pose breaks that cue. This turns each test camera about its centre
 (:func:`lifter.evaluate.turned_camera_samples`: the 3D turned, the 2D moved by ``K R K^-1``, the same people and
-the same detector errors), and also tilts each camera level ("level"), and evaluates every model on the turned views: ground-truth 2D told ``--source`` and the
+the same detector errors), and also tilts each camera level ("level"), and evaluates every model on the
+turned views: ground-truth 2D told ``--source`` and the
 real SH detections told "detected", MPJPE / MRPE (mm), S9 + S11, every ``--stride``-th frame.
 
     python scripts/turned_cameras.py [MODEL ...] [--turns 0:0,0:-10,0:10,0:-20,0:20,20:0] [--stride 50]
@@ -52,8 +53,8 @@ def main() -> None:
           f"detections ({dropped} without); cameras turned by pan:tilt degrees (+ right, + up); MPJPE / MRPE mm")
     pitch = camera_pitch_deg(data)
     print("'level': each test camera tilted up by its own downward pitch (" + ", ".join(
-        f"{cam} {p:.1f}" for cam, p in sorted(pitch.items())) + " deg, mean over subjects), so its axis is horizontal: a "
-        "camera at Human3.6M's height (about 1.5 m) held level, as a photo is usually taken")
+        f"{cam} {p:.1f}" for cam, p in sorted(pitch.items())) + " deg, mean over subjects), so its axis is "
+        "horizontal: a camera at Human3.6M's height (about 1.5 m) held level, as a photo is usually taken")
     head = " | ".join(f"{p:+g}:{t:+g}" for p, t in args.turns) + " | level"
     for kind, samples, source in (("GT 2D", gt, args.source), ("SH detections", sh, "detected")):
         print(f"\n{kind}\n| model | {head} |\n|---|" + "---|" * (len(args.turns) + 1))

@@ -183,7 +183,8 @@ def test_pixel_models_warn_outside_the_2d_sizes_they_were_trained_on(tmp_path):
     assert "use the default model" in said[0]
     assert "1 of 2 root(s) behind the camera (Z <= 0) (pose at index (1,)" in said[1]
     assert res.to_dict()["warnings"] == said
-    assert [getattr(n, "kind", None) for n in res.warnings] == ["pixel-range", "behind-camera"]  # (videos count by kind)
+    # (the video records count them by kind)
+    assert [getattr(n, "kind", None) for n in res.warnings] == ["pixel-range", "behind-camera"]
     # what the records (CLI, files) carry: a keypoint file of the 4x view
     from lifter.pipeline import lift_keypoint_file
 

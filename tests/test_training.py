@@ -699,9 +699,8 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     """rotate_batch: the turned 2D is the pinhole projection of the turned 3D (clean 2D exactly; any 2D by the same
     homography), the root stays at the same distance from the camera centre, and make_batch with a flip and a turn
     keeps every sample a physically consistent one (2D root = projection of the 3D root)."""
-    from lifter.camera import project
+    from lifter.camera import camera_turn, project
     from lifter.config import AugmentConfig, DataConfig, TrainConfig
-    from lifter.camera import camera_turn
     from lifter.train import make_batch, rotate_batch
 
     g = torch.Generator().manual_seed(0)
