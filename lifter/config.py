@@ -201,6 +201,11 @@ class TrainConfig:
                                 "the same 2D (for detected 2D, the average of its detected networks, each with its "
                                 "flip-test default), weighted by --distill-weight", default=None)
 
+    def __post_init__(self) -> None:
+        _check(self.augment.rotate_deg == 0 or self.data.lens == "pinhole",
+               f"rotate_deg turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
+               f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop --rotate-deg")
+
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 

@@ -462,10 +462,6 @@ def train(
         raise PoseLifterError("data.real_prob > 0 needs the real detections of the training samples")
     if init is not None:
         cfg = replace(cfg, model=init[0].config)
-    if cfg.augment.rotate_deg > 0 and cfg.data.lens != "pinhole":
-        raise PoseLifterError(f"--rotate-deg turns the camera and moves the 2D as a pinhole camera would see it; this "
-                              f"run's 2D is {cfg.data.lens!r} (with lens distortion): add --lens pinhole, or drop "
-                              "--rotate-deg")
     if cfg.augment.zoom and cfg.model.input_space == "camera":
         raise PoseLifterError("--zoom scales the 2D, principal point and focal together, which the reference-camera "
                               "input (input_space 'camera') undoes exactly: the network would see the same input "
