@@ -24,29 +24,14 @@ set -u
 OUT=${OUT:?set OUT to the folder for the results}
 M=${M:-6}; BS=${BS:-2048}; LR=${LR:-1e-3}; EP=${EP:-300}; WA=${WA:-4096}; WB=${WB:-1024}; WC=${WC:-512}
 TH=${TH:-5}; EV=${EV:-1}; EVS=${EVS:-5}; EVT=${EVT:-170}; D=${H36M:-.gpu/h36m5}
-if [ ! -f "$D/poses3d_world_17j_mm.npz" ]; then
-  echo "gpu_long.sh: no Human3.6M data at $D: run python scripts/compact_h36m.py --out $D, or set H36M=<folder>" >&2
-  exit 2
-fi
-# shellcheck source=scripts/gpu_setup.sh
-. scripts/gpu_setup.sh  # wheels, PYTHONPATH, R and OUT, R/env.txt, nvidia-smi dmon (DMON)
-RECIPE=(--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16
-        --clean-prob 0 --real-prob 0.5 --real-rescale --error-model assets/error_model/blazepose_demo_train.json
-        --noise-level-min 0.25 --noise-level-max 1.5 --lens pinhole --epochs "$EP" --batch-size "$BS" --lr "$LR"
-        --no-progress)
-train_run() { # name port args...
-  local name=$1 port=$2; shift 2
-  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port "$port" -m lifter train --h36m "$D" \
-    --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "${RECIPE[@]}" "$@" > "$R/$name.log" 2>&1
-  echo "$name exit $?" >> "$R/$name.log"
-}
+# shellcheck source=scripts/gpu_detected.sh
+. scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 NAMES=("paper$WA" "detected$WB" "mirror$WC")
 train_run "paper$WA" 29511 --width "$WA" --dropout 0.5 --eval-every 500 &
 train_run "detected$WB" 29512 --width "$WB" --eval-every 1000 &
 train_run "mirror$WC" 29513 --width "$WC" --symmetry mirror --eval-every 1000 &
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
-FAILED=()
 failed() { FAILED+=("$1"); echo "FAILED: $1" >&2; grep -m 3 -E "error: |Error: " "$1" >&2; }
 for n in "${NAMES[@]}"; do
   tail -n 2 "$R/$n.log"
@@ -69,10 +54,4 @@ if [ "$EV" = 1 ] && [ -f "$R/paper$WA.pt" ]; then
     [ "$(tail -n 1 "$f")" = "exit 0" ] || failed "$f"
   done
 fi
-tar czf "$OUT/results.tgz" --exclude='*.pt' -C runs/gpu "$STAMP"
-cat "$R"/*.log > "$OUT/logs.txt"
-if [ ${#FAILED[@]} -gt 0 ]; then
-  echo "gpu_long.sh: ${#FAILED[@]} step(s) failed: ${FAILED[*]}" >&2
-  exit 1
-fi
-echo "gpu_long.sh: results in $R and $OUT"
+finish

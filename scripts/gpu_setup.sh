@@ -1,4 +1,5 @@
-# Shared set-up of the device-machine scripts (sourced by scripts/gpu_train.sh and scripts/gpu_clean_stride.sh, from
+# Shared set-up of the device-machine scripts (sourced by scripts/gpu_train.sh, scripts/gpu_clean_stride.sh and
+# scripts/gpu_detected.sh, from
 # the repository root): installs the wheels carried in .gpu/whl (pure-Python dependencies missing there), puts the
 # repository on PYTHONPATH, makes this run's folder R=runs/gpu/<UTC time> and OUT, writes R/env.txt (GPU, CPUs,
 # torch) and starts `nvidia-smi dmon` into R/dmon.txt (its pid in DMON; empty without nvidia-smi).

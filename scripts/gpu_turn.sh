@@ -25,22 +25,9 @@ set -u
 OUT=${OUT:?set OUT to the folder for the results}
 M=${M:-6}; BS=${BS:-2048}; LR=${LR:-1e-3}; EP=${EP:-300}; WB=${WB:-1024}; WC=${WC:-512}; A=${A:-10}; B=${B:-20}
 TH=${TH:-3}; D=${H36M:-.gpu/h36m5}
-if [ ! -f "$D/poses3d_world_17j_mm.npz" ]; then
-  echo "gpu_turn.sh: no Human3.6M data at $D: run python scripts/compact_h36m.py --out $D, or set H36M=<folder>" >&2
-  exit 2
-fi
-# shellcheck source=scripts/gpu_setup.sh
-. scripts/gpu_setup.sh  # wheels, PYTHONPATH, R and OUT, R/env.txt, nvidia-smi dmon (DMON)
-RECIPE=(--input-space camera --depth-target size --conditioning none --ema-decay 0.999 --precision bf16
-        --clean-prob 0 --real-prob 0.5 --real-rescale --error-model assets/error_model/blazepose_demo_train.json
-        --noise-level-min 0.25 --noise-level-max 1.5 --lens pinhole --epochs "$EP" --batch-size "$BS" --lr "$LR"
-        --no-progress --eval-every 1000)
-train_run() { # name port args...
-  local name=$1 port=$2; shift 2
-  OMP_NUM_THREADS=$TH torchrun --nnodes 1 --nproc_per_node 1 --master_port "$port" -m lifter train --h36m "$D" \
-    --threads "$TH" --max-minutes "$M" --out "$R/$name.pt" "${RECIPE[@]}" "$@" > "$R/$name.log" 2>&1
-  echo "$name exit $?" >> "$R/$name.log"
-}
+# shellcheck source=scripts/gpu_detected.sh
+. scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
+RECIPE+=(--eval-every 1000)
 if [ "${SET:-a}" = b ]; then  # the rest of a default turned by +-B degrees: its clean network and mirror member
   NAMES=("clean${WB}_rot$B" "mirror${WC}_rot$B")
   train_run "${NAMES[0]}" 29525 --width "$WB" --rotate-deg "$B" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
@@ -54,16 +41,9 @@ else
 fi
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
-FAILED=()
 for n in "${NAMES[@]}"; do
   tail -n 2 "$R/$n.log"
   if [ "$(tail -n 1 "$R/$n.log")" = "$n exit 0" ]; then cp "$R/$n.pt" "$OUT/"
   else FAILED+=("$n"); echo "FAILED: $n" >&2; grep -m 3 -E "error: |Error: " "$R/$n.log" >&2; fi
 done
-tar czf "$OUT/results.tgz" --exclude='*.pt' -C runs/gpu "$STAMP"
-cat "$R"/*.log > "$OUT/logs.txt"
-if [ ${#FAILED[@]} -gt 0 ]; then
-  echo "gpu_turn.sh: ${#FAILED[@]} training(s) failed: ${FAILED[*]}" >&2
-  exit 1
-fi
-echo "gpu_turn.sh: results in $R and $OUT"
+finish
