@@ -103,6 +103,16 @@ class OutputNote(str):
         return note
 
 
+def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
+    """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``: one entry per kind of note
+    (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind the camera; any
+    other note by its text), with its first frame and how many frames had it."""
+    for note in notes:
+        kind = getattr(note, "kind", note)
+        first, n, message = acc.get(kind, (frame, 0, note))
+        acc[kind] = (first, n + 1, message)
+
+
 @dataclass(frozen=True, eq=False)
 class LiftResult:
     """Lifted poses for inputs of leading shape ``(...)``. All 3D in mm, camera frame (OpenCV).

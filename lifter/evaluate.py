@@ -12,11 +12,12 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from tqdm.auto import tqdm
 
 from ._checks import PoseLifterWarning
 from .analytic import analytic_root
-from .api import Lifter
+from .api import Lifter, collect_output_notes
 from .camera import camera_turn, project, turn_pixels
 from .codec import Source
 from .data import ACTIONS, PoseSamples
@@ -69,10 +70,7 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
                           principal_point=samples.principal_point[sl], flip_test=flip_test, source=source,
                           distortion=None if dist is None else dist[sl], warn=False)
-        for note in (*res.input_warnings, *res.warnings):
-            kind = getattr(note, "kind", note)
-            first, count, text = notes.get(kind, (s, 0, note))
-            notes[kind] = (first, count + 1, text)
+        collect_output_notes(notes, s, (*res.input_warnings, *res.warnings))
         rel.append(res.relative)
         root.append(res.root)
         if analytic:  # from the 2D the networks lifted (undistorted for a pinhole lifter)
@@ -147,19 +145,21 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
                    image_size=np.round(samples.image_size * focal_scale).astype(np.int32))
 
 
-def turned_camera_samples(samples: PoseSamples, *, pan_deg: float, tilt_deg: float) -> PoseSamples:
+def turned_camera_samples(samples: PoseSamples, *, pan_deg: ArrayLike, tilt_deg: ArrayLike) -> PoseSamples:
     """The samples as their cameras turned about their centres would see them (:func:`lifter.camera.camera_turn`:
-    + pan to the right, + tilt up, degrees): the 3D (camera frame, mm) turned, and the 2D, ground truth or a
-    detector's, undistorted where it is H36M's own (:meth:`PoseSamples.undistort`) and moved by the homography
-    ``K R K^-1`` (:func:`lifter.camera.turn_pixels`), so pinhole 2D with the same intrinsics. Another camera pose
-    than the training cameras' (their height and tilt), with the same people and the same 2D errors."""
-    r = camera_turn(np.array(np.deg2rad(pan_deg)), np.array(np.deg2rad(tilt_deg)))
+    + pan to the right, + tilt up, degrees; one turn for all, or one per sample ``(N,)``): the 3D (camera frame,
+    mm) turned, and the 2D, ground truth or a detector's, undistorted where it is H36M's own
+    (:meth:`PoseSamples.undistort`) and moved by the homography ``K R K^-1`` (:func:`lifter.camera.turn_pixels`),
+    so pinhole 2D with the same intrinsics. Another camera pose than the training cameras' (their height and
+    tilt), with the same people and the same 2D errors."""
+    pan, tilt = (np.broadcast_to(np.deg2rad(np.asarray(a, np.float64)), (len(samples),)) for a in (pan_deg, tilt_deg))
+    r = camera_turn(pan, tilt)  # (N, 3, 3)
     kp = samples.keypoints_2d.astype(np.float64)
     if samples.lens == "h36m" and samples.distortion is not None:
         kp = samples.undistort(kp)
     kp = turn_pixels(kp, r, samples.focal.astype(np.float64), samples.principal_point.astype(np.float64))
-    return replace(samples, keypoints_2d=kp.astype(np.float32), lens="pinhole",
-                   pose_3d=(samples.pose_3d.astype(np.float64) @ r.T).astype(np.float32))
+    turned = samples.pose_3d.astype(np.float64) @ np.swapaxes(r, -1, -2)
+    return replace(samples, keypoints_2d=kp.astype(np.float32), lens="pinhole", pose_3d=turned.astype(np.float32))
 
 
 def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float],

@@ -175,6 +175,7 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
     rel, depth = T["rel"][idx], T["depth"][idx]
+    gt = kp  # the true 2D, before a real detection replaces it
     bs, dev = len(idx), kp.device
     u = torch.rand(bs, generator=gen, device=dev)
     clean = u < d.clean_prob
@@ -184,13 +185,13 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
         kp = torch.where(real[:, None, None], T["real"][idx], kp)
     else:
         real = torch.zeros_like(real)
-    root_2d = T["kp"][idx][:, 0]  # the true root's 2D (pinhole where rotate_deg is used)
     if cfg.augment.flip_prob > 0:
         flipped = torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob
         kp, rel = flip_batch(kp, pp, rel, flipped)
         if cfg.augment.rotate_deg > 0:  # (the true root's 2D, mirrored with the rest)
-            root_2d = torch.where(flipped[:, None], PoseCodec.mirror_input(T["kp"][idx], pp)[:, 0], root_2d)
+            gt = torch.where(flipped[:, None, None], PoseCodec.mirror_input(gt, pp), gt)
     if cfg.augment.rotate_deg > 0:
+        root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg with distorted 2D)
         kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen)
     if cfg.augment.zoom:
         a = cfg.augment

@@ -31,6 +31,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair
+from .api import collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, check_max_side, image_from_array, people_h36m
 from .io import distortion_tuple, parse_keypoint_sequence
@@ -172,16 +173,6 @@ class FrameResult:
 
     def to_json(self) -> dict[str, Any]:
         return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
-
-
-def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
-    """Gather :attr:`lifter.LiftResult.warnings` of one frame into ``acc``: one entry per kind of note
-    (:attr:`lifter.api.OutputNote.kind`: a pixel model outside its trained sizes, roots behind the camera; any
-    other note by its text), with its first frame and how many frames had it."""
-    for note in notes:
-        kind = getattr(note, "kind", note)
-        first, n, message = acc.get(kind, (frame, 0, note))
-        acc[kind] = (first, n + 1, message)
 
 
 OUTPUT_NOTE_LINE: Final[re.Pattern[str]] = re.compile(r"frame \d+: ")

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -77,16 +76,8 @@ def camera_pitch_deg(data: H36M) -> dict[str, float]:
 
 def level_samples(samples: PoseSamples, pitch: dict[str, float]) -> PoseSamples:
     """The samples with each camera tilted up by its own pitch (:func:`camera_pitch_deg`)."""
-    parts = []
-    for c in np.unique(samples.camera):
-        idx = np.flatnonzero(samples.camera == c)
-        parts.append((idx, turned_camera_samples(samples.subset(idx), pan_deg=0.0, tilt_deg=pitch[CAMERA_IDS[c]])))
-    order = np.argsort(np.concatenate([i for i, _ in parts]))
-    joined = {f.name: getattr(parts[0][1], f.name) for f in fields(parts[0][1])}
-    for k, v in joined.items():
-        if isinstance(v, np.ndarray):
-            joined[k] = np.concatenate([getattr(p, k) for _, p in parts])[order]
-    return PoseSamples(**joined)
+    tilt = np.array([pitch[CAMERA_IDS[c]] for c in samples.camera])
+    return turned_camera_samples(samples, pan_deg=0.0, tilt_deg=tilt)
 
 
 if __name__ == "__main__":
