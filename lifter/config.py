@@ -127,12 +127,17 @@ class AugmentConfig:
                               "that camera would see it (the homography K R K^-1), so where a person stands in the "
                               "image no longer tells their depth by the training cameras' pose (pinhole 2D only)",
                               default=0.0)
+    roll_deg: float = _help("roll the camera about its optical axis by an angle uniform in "
+                            "+-this many degrees (0: off), after the pan and tilt of rotate_deg if any: the picture "
+                            "turns in its plane, as a hand-held photo's often does (pinhole 2D only)", default=0.0)
 
     def __post_init__(self) -> None:
         _booleans(self)
         _prob("flip_prob", self.flip_prob)
-        _check(isinstance(self.rotate_deg, (int, float)) and 0.0 <= self.rotate_deg <= 45.0,
-               f"rotate_deg must be in [0, 45] degrees, got {self.rotate_deg!r}")
+        for name in ("rotate_deg", "roll_deg"):
+            value = getattr(self, name)
+            _check(isinstance(value, (int, float)) and 0.0 <= value <= 45.0,
+                   f"{name} must be in [0, 45] degrees, got {value!r}")
         _positive("zoom_sigma", self.zoom_sigma, allow_zero=True)
         _positive("zoom_clip", self.zoom_clip, allow_zero=True)
 
@@ -202,9 +207,11 @@ class TrainConfig:
                                 "flip-test default), weighted by --distill-weight", default=None)
 
     def __post_init__(self) -> None:
-        _check(self.augment.rotate_deg == 0 or self.data.lens == "pinhole",
-               f"rotate_deg turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
-               f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop --rotate-deg")
+        for name in ("rotate_deg", "roll_deg"):
+            _check(getattr(self.augment, name) == 0 or self.data.lens == "pinhole",
+                   f"{name} turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
+                   f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop "
+                   f"--{name.replace('_', '-')}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

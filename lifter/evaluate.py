@@ -145,15 +145,18 @@ def virtual_camera_samples(samples: PoseSamples, *, focal_scale: float,
                    image_size=np.round(samples.image_size * focal_scale).astype(np.int32))
 
 
-def turned_camera_samples(samples: PoseSamples, *, pan_deg: ArrayLike, tilt_deg: ArrayLike) -> PoseSamples:
+def turned_camera_samples(samples: PoseSamples, *, pan_deg: ArrayLike, tilt_deg: ArrayLike,
+                          roll_deg: ArrayLike = 0.0) -> PoseSamples:
     """The samples as their cameras turned about their centres would see them (:func:`lifter.camera.camera_turn`:
-    + pan to the right, + tilt up, degrees; one turn for all, or one per sample ``(N,)``): the 3D (camera frame,
+    + pan to the right, + tilt up, + roll clockwise seen from behind the camera, degrees; one turn for all, or one
+    per sample ``(N,)``): the 3D (camera frame,
     mm) turned, and the 2D, ground truth or a detector's, undistorted where it is H36M's own
     (:meth:`PoseSamples.undistort`) and moved by the homography ``K R K^-1`` (:func:`lifter.camera.turn_pixels`),
     so pinhole 2D with the same intrinsics. Another camera pose than the training cameras' (their height and
     tilt), with the same people and the same 2D errors."""
-    pan, tilt = (np.broadcast_to(np.deg2rad(np.asarray(a, np.float64)), (len(samples),)) for a in (pan_deg, tilt_deg))
-    r = camera_turn(pan, tilt)  # (N, 3, 3)
+    pan, tilt, roll = (np.broadcast_to(np.deg2rad(np.asarray(a, np.float64)), (len(samples),))
+                       for a in (pan_deg, tilt_deg, roll_deg))
+    r = camera_turn(pan, tilt, roll)  # (N, 3, 3)
     kp = samples.keypoints_2d.astype(np.float64)
     if samples.lens == "h36m" and samples.distortion is not None:
         kp = samples.undistort(kp)

@@ -149,17 +149,22 @@ def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torc
 
 
 def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor, depth: torch.Tensor,
-                 root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator
+                 root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator, max_roll_deg: float = 0.0
                  ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``)
-    would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections included) moved by the homography
+    """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``),
+    and with ``max_roll_deg`` a roll about its optical axis (uniform in ``+-max_roll_deg``; drawn after the pan and
+    tilt, so runs without it draw as before), would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections included) moved by the homography
     ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
     ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
     back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px."""
     bs, dev = len(kp), kp.device
     a = torch.deg2rad(torch.tensor(max_deg, device=dev))
-    r = camera_turn(a * (2 * torch.rand(bs, generator=gen, device=dev) - 1),
-                    a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)).to(kp.dtype)
+    pan = a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
+    tilt = a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
+    roll = None
+    if max_roll_deg > 0:
+        roll = torch.deg2rad(torch.tensor(max_roll_deg, device=dev)) * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
+    r = camera_turn(pan, tilt, roll).to(kp.dtype)
     root = backproject_generic(root_2d, depth, f, pp)
     return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
@@ -188,11 +193,12 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     if cfg.augment.flip_prob > 0:
         flipped = torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob
         kp, rel = flip_batch(kp, pp, rel, flipped)
-        if cfg.augment.rotate_deg > 0:  # (the true root's 2D, mirrored with the rest)
+        if cfg.augment.rotate_deg > 0 or cfg.augment.roll_deg > 0:  # (the true root's 2D, mirrored with the rest)
             gt = torch.where(flipped[:, None, None], PoseCodec.mirror_input(gt, pp), gt)
-    if cfg.augment.rotate_deg > 0:
-        root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg with distorted 2D)
-        kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen)
+    if cfg.augment.rotate_deg > 0 or cfg.augment.roll_deg > 0:
+        root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg and roll_deg with distorted 2D)
+        kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen,
+                                      max_roll_deg=cfg.augment.roll_deg)
     if cfg.augment.zoom:
         a = cfg.augment
         s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen, device=dev)).clamp(-a.zoom_clip, a.zoom_clip))

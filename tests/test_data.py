@@ -147,6 +147,31 @@ def test_virtual_camera_samples(h36m):
 
 
 @requires_h36m
+def test_turned_camera_samples_with_a_roll_project_the_turned_3d(h36m):
+    """turned_camera_samples: H36M's distorted 2D is undistorted, then moved as the turned camera (pan, tilt and
+    roll, one per sample) sees it: the pinhole projection of the turned 3D; a roll keeps each joint's depth and its
+    ray's angle from the optical axis (its distance from the principal point in focal units: fx and fy differ)."""
+    from lifter.evaluate import turned_camera_samples
+
+    s = h36m.load([9], stride=200, max_frames_per_sequence=2)
+    n = len(s)
+    rng = np.random.default_rng(0)
+    v = turned_camera_samples(s, pan_deg=rng.uniform(-20, 20, n), tilt_deg=rng.uniform(-20, 20, n),
+                              roll_deg=rng.uniform(-30, 30, n))
+    assert v.lens == "pinhole"
+    np.testing.assert_allclose(v.keypoints_2d, project(v.pose_3d, focal=v.focal, principal_point=v.principal_point),
+                               atol=1e-2)
+    rolled = turned_camera_samples(s, pan_deg=0.0, tilt_deg=0.0, roll_deg=25.0)
+    np.testing.assert_allclose(rolled.pose_3d[..., 2], s.pose_3d[..., 2], atol=1e-2)
+    flat = turned_camera_samples(s, pan_deg=0.0, tilt_deg=0.0)  # the undistorted 2D, unturned
+    def radius(x):
+        return np.linalg.norm((x.keypoints_2d - x.principal_point[:, None]) / x.focal[:, None], axis=-1)
+
+    np.testing.assert_allclose(radius(rolled), radius(flat), atol=1e-5)
+    assert np.abs(rolled.keypoints_2d - flat.keypoints_2d).max() > 50  # px: it did turn
+
+
+@requires_h36m
 def test_evaluation_notes_are_said_once_per_kind_with_the_batches_that_had_them(h36m, capsys):
     """predict() lifts in batches; a pixel-space model's notes (2D outside its trained sizes, roots behind the
     camera) come once per kind, from the first batch that had them, with how many batches did, not once per batch."""

@@ -184,7 +184,8 @@ def test_camera_centre_is_where_camera_frame_origin_lies_in_the_world():
 
 def test_camera_turn_convention_and_homography():
     """camera_turn: + pan turns the camera right (what is ahead moves left in the image), + tilt turns it up (what
-    is ahead moves down), a rotation; turn_pixels equals projecting the turned 3D, numpy and torch alike."""
+    is ahead moves down), + roll turns it clockwise seen from behind (what is to the right moves up: the picture
+    turns counter-clockwise), a rotation; turn_pixels equals projecting the turned 3D, numpy and torch alike."""
     import torch
 
     from lifter.camera import camera_turn, project, turn_pixels
@@ -194,8 +195,13 @@ def test_camera_turn_convention_and_homography():
     up = camera_turn(np.array(0.0), np.array(np.deg2rad(10.0)))
     assert (right @ ahead)[0] < 0 and abs((right @ ahead)[1]) < 1e-12
     assert (up @ ahead)[1] > 0 and abs((up @ ahead)[0]) < 1e-12
+    clockwise = camera_turn(np.array(0.0), np.array(0.0), np.array(np.deg2rad(10.0)))
+    to_the_right = clockwise @ np.array([500.0, 0.0, 1000.0])
+    assert to_the_right[1] < 0 and to_the_right[0] > 0 and to_the_right[2] == 1000.0
+    np.testing.assert_allclose(camera_turn(np.array(0.3), np.array(-0.2), np.array(0.0)),
+                               camera_turn(np.array(0.3), np.array(-0.2)), atol=0)
     rng = np.random.default_rng(3)
-    r = camera_turn(rng.uniform(-0.4, 0.4, 5), rng.uniform(-0.4, 0.4, 5))
+    r = camera_turn(*rng.uniform(-0.4, 0.4, (3, 5)))
     np.testing.assert_allclose(r @ np.swapaxes(r, -1, -2), np.broadcast_to(np.eye(3), (5, 3, 3)), atol=1e-12)
     np.testing.assert_allclose(np.linalg.det(r), 1.0)
     pts = rng.uniform([-800, -800, 3000], [800, 800, 6000], (5, 17, 3))

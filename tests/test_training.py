@@ -732,3 +732,49 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     assert not np.allclose(b["depth"].numpy(), T["depth"].numpy())
     with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --rotate-deg"):
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(rotate_deg=5.0))
+
+
+def test_a_camera_roll_turns_the_picture_about_the_principal_point():
+    """rotate_batch with max_roll_deg: the roll is drawn after pan and tilt (so runs without it draw as before),
+    a roll alone turns every 2D point about the principal point by the same angle (the picture turned in its plane),
+    the root's distance from the camera centre is kept, and make_batch with a flip and a roll (no pan or tilt) keeps
+    every sample physically consistent. The config refuses a roll with distorted 2D."""
+    from lifter.camera import camera_turn, project
+    from lifter.config import AugmentConfig, DataConfig, TrainConfig
+    from lifter.train import make_batch, rotate_batch
+
+    g = torch.Generator().manual_seed(4)
+    n = 32
+    root = torch.stack([torch.empty(n).uniform_(-1000, 1000, generator=g), torch.empty(n).uniform_(-600, 600, generator=g),
+                        torch.empty(n).uniform_(3000, 6000, generator=g)], -1).double()
+    rel = torch.randn(n, 17, 3, generator=g, dtype=torch.float64) * 300
+    rel[:, 0] = 0
+    f = torch.tensor([[1000.0, 1000.0]], dtype=torch.float64).expand(n, 2)
+    pp = torch.tensor([[500.0, 400.0]], dtype=torch.float64).expand(n, 2)
+    kp = torch.from_numpy(project((root[:, None] + rel).numpy(), focal=f.numpy(), principal_point=pp.numpy()))
+    kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=0.0, max_roll_deg=30.0,
+                                     gen=torch.Generator().manual_seed(5))
+    draws = torch.rand(3, n, generator=torch.Generator().manual_seed(5), dtype=torch.float32)
+    roll = torch.deg2rad(torch.tensor(30.0)) * (2 * draws[2] - 1)
+    assert float(roll.abs().max()) > 0.2
+    # the picture turns counter-clockwise on screen by the roll: image "up" is -y
+    d = kp - pp[:, None]
+    c, s_ = torch.cos(roll).double()[:, None], torch.sin(roll).double()[:, None]
+    expected = pp[:, None] + torch.stack([c * d[..., 0] + s_ * d[..., 1], -s_ * d[..., 0] + c * d[..., 1]], -1)
+    np.testing.assert_allclose(kp2.numpy(), expected.numpy(), atol=1e-6)
+    r = camera_turn(torch.zeros(n), torch.zeros(n), roll).double()
+    turned = (root[:, None] + rel) @ r.transpose(1, 2)
+    np.testing.assert_allclose(rel2.numpy(), (turned - turned[:, :1]).numpy(), atol=1e-6)
+    np.testing.assert_allclose(depth2.numpy(), root[:, 2].numpy(), rtol=1e-12)  # a roll keeps the depth
+    T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5, roll_deg=20.0))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
+    root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
+    again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
+                    principal_point=b["pp"].double().numpy())
+    np.testing.assert_allclose(b["kp"].numpy(), again, atol=2e-3)
+    assert not np.allclose(b["kp"].numpy(), T["kp"].numpy(), atol=1.0)
+    with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --roll-deg"):
+        TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(roll_deg=5.0))
+    with pytest.raises(PoseLifterError, match=r"roll_deg must be in \[0, 45\] degrees"):
+        AugmentConfig(roll_deg=60.0)
