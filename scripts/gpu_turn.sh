@@ -14,6 +14,19 @@
 # SET=b trains the rest of a turned default instead, two runs:
 #   clean<WB>_rot<B>    width WB, exact 2D only (--clean-prob 1, no detections or noise), +-B degrees
 #   mirror<WC>_rot<B>   width WC, mirror-equivariant, the detected recipe, +-B degrees
+# SET=c tries to win back what the turn costs on Human3.6M's own cameras (the turned networks' validation curves are
+# flat from ~14M samples, so a longer schedule alone would not), five runs, all +-B degrees, lr LRF (3e-4) for the
+# fine-tunes:
+#   ftu<WB>_rot<B>     fine-tuned from the previous default's width-1024 member (assets/weights/universal.pt)
+#   ftu<WC>m_rot<B>    fine-tuned from its mirror member (assets/weights/universal_member2.pt)
+#   real75_<WB>_rot<B> width WB from scratch, 75 % of the samples the real SH detections (not 50 %)
+#   real75_<WC>m_rot<B> the mirror shape, the same
+#   drop40_<WB>_rot<B> width WB from scratch, dropout 0.4 (not 0.25), seed 1
+# SET=d adds a roll (the camera turned about its optical axis, as a hand-held photo often is) to the shipped turned
+# default: each of its three networks fine-tuned from its shipped file with the same turn and a roll within +-10 and
+# +-20 degrees, lr LRF (3e-4), six runs at once (TH 2 threads each is enough):
+#   roll<R>_<WB>, roll<R>_<WC>m  the detected networks (assets/weights/universal_turn.pt, universal_turn_member2.pt)
+#   roll<R>_clean                the clean network (universal_turn_clean.pt), exact 2D only
 # Every checkpoint comes back in OUT and is evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
@@ -28,7 +41,26 @@ TH=${TH:-3}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 RECIPE+=(--eval-every 1000)
-if [ "${SET:-a}" = b ]; then  # the rest of a default turned by +-B degrees: its clean network and mirror member
+if [ "${SET:-a}" = d ]; then  # a roll on top of the turn, fine-tuned from the shipped turned default
+  LRF=${LRF:-3e-4}; NAMES=()
+  for roll in 10 20; do  # (ports 2951x for +-10, 2952x for +-20: a backgrounded $((port++)) would not count up)
+    NAMES+=("roll${roll}_$WB" "roll${roll}_${WC}m" "roll${roll}_clean")
+    train_run "roll${roll}_$WB" "295${roll:0:1}1" --init assets/weights/universal_turn.pt --lr "$LRF" --rotate-deg "$B" \
+      --roll-deg "$roll" &
+    train_run "roll${roll}_${WC}m" "295${roll:0:1}2" --init assets/weights/universal_turn_member2.pt --lr "$LRF" \
+      --rotate-deg "$B" --roll-deg "$roll" &
+    train_run "roll${roll}_clean" "295${roll:0:1}3" --init assets/weights/universal_turn_clean.pt --lr "$LRF" \
+      --rotate-deg "$B" --roll-deg "$roll" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
+  done
+elif [ "${SET:-a}" = c ]; then  # fine-tunes from the previous default, more real detections, more dropout
+  LRF=${LRF:-3e-4}
+  NAMES=("ftu${WB}_rot$B" "ftu${WC}m_rot$B" "real75_${WB}_rot$B" "real75_${WC}m_rot$B" "drop40_${WB}_rot$B")
+  train_run "${NAMES[0]}" 29531 --init assets/weights/universal.pt --lr "$LRF" --rotate-deg "$B" &
+  train_run "${NAMES[1]}" 29532 --init assets/weights/universal_member2.pt --lr "$LRF" --rotate-deg "$B" &
+  train_run "${NAMES[2]}" 29533 --width "$WB" --real-prob 0.75 --rotate-deg "$B" &
+  train_run "${NAMES[3]}" 29534 --width "$WC" --symmetry mirror --real-prob 0.75 --rotate-deg "$B" &
+  train_run "${NAMES[4]}" 29535 --width "$WB" --dropout 0.4 --seed 1 --rotate-deg "$B" &
+elif [ "${SET:-a}" = b ]; then  # the rest of a default turned by +-B degrees: its clean network and mirror member
   NAMES=("clean${WB}_rot$B" "mirror${WC}_rot$B")
   train_run "${NAMES[0]}" 29525 --width "$WB" --rotate-deg "$B" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
   train_run "${NAMES[1]}" 29526 --width "$WC" --symmetry mirror --rotate-deg "$B" &

@@ -5,10 +5,12 @@ person's depth from where they stand in the image (lower in the image: nearer) a
 subjects. A photo from another camera pose breaks that cue. This turns each test camera about its centre
 (:func:`lifter.evaluate.turned_camera_samples`: the 3D turned, the 2D moved by ``K R K^-1``, the same people and
 the same detector errors), and also tilts each camera level ("level"), and evaluates every model on the
-turned views: ground-truth 2D told ``--source`` and the
-real SH detections told "detected", MPJPE / MRPE (mm), S9 + S11, every ``--stride``-th frame.
+turned views: ground-truth 2D told ``--source`` and the real SH detections told "detected", MPJPE / MRPE (mm),
+S9 + S11, every ``--stride``-th frame. A third angle turns the camera about its optical axis (roll: the picture
+turned in its plane, as a hand-held phone often is).
 
     python scripts/turned_cameras.py [MODEL ...] [--turns 0:0,0:-10,0:10,0:-20,0:20,20:0] [--stride 50]
+    python scripts/turned_cameras.py universal_turn --turns 0:0:0,0:0:5,0:0:-10,0:0:10,0:0:20,0:0:45
 """
 
 from __future__ import annotations
@@ -27,11 +29,13 @@ from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter, turned_camera_samples
 
 
-def _turns(text: str) -> list[tuple[float, float]]:
+def _turns(text: str) -> list[tuple[float, float, float]]:
     out = []
     for item in text.split(","):
-        pan, _, tilt = item.partition(":")
-        out.append((float(pan), float(tilt)))
+        parts = [float(a) for a in item.split(":")]
+        if not 2 <= len(parts) <= 3:
+            raise argparse.ArgumentTypeError(f"a turn is pan:tilt or pan:tilt:roll degrees, got {item!r}")
+        out.append((parts[0], parts[1], parts[2] if len(parts) == 3 else 0.0))
     return out
 
 
@@ -39,7 +43,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("models", nargs="*", default=["default"])
     ap.add_argument("--turns", type=_turns, default=_turns("0:0,0:-10,0:10,0:-20,0:20,20:0"),
-                    help="pan:tilt pairs in degrees (+ pan: right, + tilt: up), comma-separated")
+                    help="pan:tilt or pan:tilt:roll in degrees (+ pan: right, + tilt: up, + roll: clockwise seen from "
+                    "behind the camera), comma-separated")
     ap.add_argument("--source", choices=["detected", "clean"], default="detected",
                     help="what the ground-truth 2D is told (the SH detections are told 'detected')")
     add_h36m_arguments(ap, stride=50)
@@ -49,15 +54,16 @@ def main() -> None:
     sh, dropped = with_sh_detections(gt, data=data)
     models = [(label, Lifter.load(ref)) for label, ref in (split_label(m) for m in args.models)]
     print(f"Protocol 1 test, stride {args.stride}: {len(gt)} poses (GT 2D, told {args.source!r}), {len(sh)} with SH "
-          f"detections ({dropped} without); cameras turned by pan:tilt degrees (+ right, + up); MPJPE / MRPE mm")
+          f"detections ({dropped} without); cameras turned by pan:tilt[:roll] degrees (+ right, + up, + clockwise "
+          "seen from behind); MPJPE / MRPE mm")
     pitch = camera_pitch_deg(data)
     print("'level': each test camera tilted up by its own downward pitch (" + ", ".join(
         f"{cam} {p:.1f}" for cam, p in sorted(pitch.items())) + " deg, mean over subjects), so its axis is "
         "horizontal: a camera at Human3.6M's height (about 1.5 m) held level, as a photo is usually taken")
-    head = " | ".join(f"{p:+g}:{t:+g}" for p, t in args.turns) + " | level"
+    head = " | ".join(f"{p:+g}:{t:+g}" + (f":{r:+g}" if r else "") for p, t, r in args.turns) + " | level"
     for kind, samples, source in (("GT 2D", gt, args.source), ("SH detections", sh, "detected")):
         print(f"\n{kind}\n| model | {head} |\n|---|" + "---|" * (len(args.turns) + 1))
-        views = [turned_camera_samples(samples, pan_deg=p, tilt_deg=t) for p, t in args.turns]
+        views = [turned_camera_samples(samples, pan_deg=p, tilt_deg=t, roll_deg=r) for p, t, r in args.turns]
         views.append(level_samples(samples, pitch))
         for label, m in models:
             rows = [evaluate_lifter(m, v, label=label, progress=False, source=source)[0] for v in views]
