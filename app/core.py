@@ -368,6 +368,12 @@ def lift_source(state: SessionState) -> Literal["clean", "detected"]:
     return "detected" if state.input_kind == "detected" else "clean"
 
 
+def focal_text(alpha: float) -> str:
+    """A focal length (px) as the readout writes it: whole pixels, with one decimal when it is 0.05 px or more from
+    a whole number (a typed 1144.5 reads "1144.5", not "1144")."""
+    return f"{alpha:.1f}" if abs(alpha - round(alpha)) >= 0.05 else f"{alpha:.0f}"
+
+
 def _focal_origin(state: SessionState) -> str:
     up = state.sample.upload
     if up is None:
@@ -424,12 +430,12 @@ def spread_details(spread: Spread) -> str:
 
 def readout_markdown(frame: Frame, state: SessionState) -> str:
     """The readout panel (numbers without thousands separators): ``Focal N px`` (the focal length this frame
-    was lifted with, and the camera's), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, which 2D was
+    was lifted with, and the camera's; :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, which 2D was
     lifted (:func:`input_line`), the spread of the uncertainty cloud (:func:`spread_line`) and the metrics."""
     X, Y, Z = frame.root
     alpha = frame.alpha
     lines = [
-        f"**Focal {alpha:.0f} px** ({_focal_origin(state)}: {state.sample.camera.alpha:.0f} px)",
+        f"**Focal {focal_text(alpha)} px** ({_focal_origin(state)}: {focal_text(state.sample.camera.alpha)} px)",
         f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm",
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px",
     ]

@@ -189,8 +189,10 @@ def test_focal_and_joint_boxes_take_a_decimal_and_step_by_1_px(view: SessionView
         assert handle.precision == 1 and handle.step == 1.0
     view.gui.lift.focal.value = 1144.5
     assert view.state.focal_px == 1144.5 and view.frame.alpha == pytest.approx(1144.5)
+    assert wait_for(lambda: _focal_in_readout(view) == 1144.5, timeout=10)  # the readout says the typed decimal
     view.gui.lift.focal.value = 1144.0  # (not swallowed as "the same whole px")
     assert view.state.focal_px == 1144.0
+    assert wait_for(lambda: "**Focal 1144 px**" in view.gui.readout.readout.content, timeout=10)
     view.gui.lift.focal.value = 1144.6
     assert view.state.focal_px == 1144.6 and view.gui.lift.focal.value == 1144.6
 
@@ -625,12 +627,12 @@ def _send_value(tab: FakeTab, handle, value) -> None:
     tab.send(_messages.GuiUpdateMessage(handle._impl.uuid, {"value": value}))
 
 
-def _focal_in_readout(view: SessionView) -> int:
+def _focal_in_readout(view: SessionView) -> float:
     import re
 
-    m = re.search(r"\*\*Focal (\d+) px\*\*", view.gui.readout.readout.content)
+    m = re.search(r"\*\*Focal (\d+(?:\.\d)?) px\*\*", view.gui.readout.readout.content)
     assert m, view.gui.readout.readout.content
-    return int(m.group(1))
+    return float(m.group(1))
 
 
 def test_a_chosen_focal_replaced_by_another_camera_is_said(view: SessionView, app: PoseLifterApp) -> None:
@@ -1297,7 +1299,7 @@ def test_a_typed_focal_is_replaced_by_a_new_cameras_at_once(app: PoseLifterApp) 
         cam = app.demo.get(other).camera.alpha
         assert v.state.focal_px == pytest.approx(cam) and v.gui.lift.focal.value == pytest.approx(cam, abs=0.05)
         time.sleep(0.5)
-        assert v.state.focal_px == pytest.approx(cam) and _focal_in_readout(v) == round(cam)
+        assert v.state.focal_px == pytest.approx(cam) and _focal_in_readout(v) == pytest.approx(cam, abs=0.05)
 
 
 def test_compute_frame_gives_a_pinhole_lifter_the_cameras_lens(app: PoseLifterApp) -> None:
