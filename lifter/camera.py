@@ -371,16 +371,17 @@ def camera_turn(pan: ArrayT, tilt: ArrayT, roll: ArrayT | None = None) -> ArrayT
     """Rotations ``(..., 3, 3)`` for a camera turned about its centre by ``pan`` (about its y axis, + turns it to
     the right), then ``tilt`` (about its new x axis, + turns it up), then ``roll`` (about its new optical axis,
     + turns it clockwise as seen from behind, so the image content turns counter-clockwise on screen; default 0),
-    radians ``(...)``, numpy or torch, in the OpenCV camera frame (+x right, +y down, +z forward): a point ``X``
-    (mm) of the old camera frame is ``R @ X`` in the turned camera's."""
+    radians ``(...)`` (broadcast together), numpy or torch, in the OpenCV camera frame (+x right, +y down,
+    +z forward): a point ``X`` (mm) of the old camera frame is ``R @ X`` in the turned camera's."""
     xp = array_namespace(pan)
+    pan, tilt, *rest = xp.broadcast_arrays(pan, tilt, *([] if roll is None else [roll]))  # (one angle may be shared)
     cp, sp, ct, st = xp.cos(pan), xp.sin(pan), xp.cos(tilt), xp.sin(tilt)
     one, zero = xp.ones_like(pan), xp.zeros_like(pan)
     r_pan = xp.reshape(xp.stack([cp, zero, -sp, zero, one, zero, sp, zero, cp], axis=-1), (*pan.shape, 3, 3))
     r_tilt = xp.reshape(xp.stack([one, zero, zero, zero, ct, st, zero, -st, ct], axis=-1), (*pan.shape, 3, 3))
-    if roll is None:
+    if not rest:
         return r_tilt @ r_pan
-    cr, sr = xp.cos(roll), xp.sin(roll)
+    cr, sr = xp.cos(rest[0]), xp.sin(rest[0])
     r_roll = xp.reshape(xp.stack([cr, sr, zero, -sr, cr, zero, zero, zero, one], axis=-1), (*pan.shape, 3, 3))
     return r_roll @ r_tilt @ r_pan
 

@@ -175,7 +175,7 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
 
     Sources: clean with ``cfg.data.clean_prob``; else the real detection with ``real_prob`` where there is
     one; else GT 2D with ``noise`` at a level uniform in ``[noise_level_min, noise_level_max]`` (GT 2D
-    without noise when ``noise`` is None). The camera turn (``augment.rotate_deg``) follows the flip; noise is drawn
+    without noise when ``noise`` is None). The camera turn and roll (``augment.rotate_deg``, ``roll_deg``) follow the flip; noise is drawn
     after flip, turn and zoom, so it follows the shown size."""
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]

@@ -24,33 +24,35 @@
 #   drop40_<WB>_rot<B> width WB from scratch, dropout 0.4 (not 0.25), seed 1
 # SET=d adds a roll (the camera turned about its optical axis, as a hand-held photo often is) to the shipped turned
 # default: each of its three networks fine-tuned from its shipped file with the same turn and a roll within +-10 and
-# +-20 degrees, lr LRF (3e-4), six runs at once (TH 2 threads each is enough):
+# +-20 degrees, lr LRF (3e-4), six runs at once (TH defaults to 2 threads each here: 12 of the 16 cores):
 #   roll<R>_<WB>, roll<R>_<WC>m  the detected networks (assets/weights/universal_turn.pt, universal_turn_member2.pt)
 #   roll<R>_clean                the clean network (universal_turn_clean.pt), exact 2D only
 # Every checkpoint comes back in OUT and is evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
-# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, TH CPU threads per
-# process (3), H36M data folder (.gpu/h36m5), OUT folder for what comes back: the four .pt, results.tgz (logs,
-# curves, env, dmon), logs.txt. Exits 1 when a training failed.
+# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a, b, c or d), LRF
+# the fine-tunes' lr (3e-4), TH CPU threads per process (3; 2 with SET=d), H36M data folder (.gpu/h36m5), OUT folder
+# for what comes back: each run's .pt (4, 2, 5 or 6), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
+# a training failed.
 #   M=6 OUT=/tmp/out bash scripts/gpu_turn.sh
 set -u
 OUT=${OUT:?set OUT to the folder for the results}
 M=${M:-6}; BS=${BS:-2048}; LR=${LR:-1e-3}; EP=${EP:-300}; WB=${WB:-1024}; WC=${WC:-512}; A=${A:-10}; B=${B:-20}
-TH=${TH:-3}; D=${H36M:-.gpu/h36m5}
+TH=${TH:-$([ "${SET:-a}" = d ] && echo 2 || echo 3)}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 RECIPE+=(--eval-every 1000)
 if [ "${SET:-a}" = d ]; then  # a roll on top of the turn, fine-tuned from the shipped turned default
-  LRF=${LRF:-3e-4}; NAMES=()
-  for roll in 10 20; do  # (ports 2951x for +-10, 2952x for +-20: a backgrounded $((port++)) would not count up)
+  LRF=${LRF:-3e-4}; NAMES=(); port=29540
+  for roll in 10 20; do  # (the port counted up here, in this shell: a backgrounded $((port++)) would not count)
     NAMES+=("roll${roll}_$WB" "roll${roll}_${WC}m" "roll${roll}_clean")
-    train_run "roll${roll}_$WB" "295${roll:0:1}1" --init assets/weights/universal_turn.pt --lr "$LRF" --rotate-deg "$B" \
+    train_run "roll${roll}_$WB" "$port" --init assets/weights/universal_turn.pt --lr "$LRF" --rotate-deg "$B" \
       --roll-deg "$roll" &
-    train_run "roll${roll}_${WC}m" "295${roll:0:1}2" --init assets/weights/universal_turn_member2.pt --lr "$LRF" \
+    train_run "roll${roll}_${WC}m" "$((port + 1))" --init assets/weights/universal_turn_member2.pt --lr "$LRF" \
       --rotate-deg "$B" --roll-deg "$roll" &
-    train_run "roll${roll}_clean" "295${roll:0:1}3" --init assets/weights/universal_turn_clean.pt --lr "$LRF" \
+    train_run "roll${roll}_clean" "$((port + 2))" --init assets/weights/universal_turn_clean.pt --lr "$LRF" \
       --rotate-deg "$B" --roll-deg "$roll" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
+    port=$((port + 10))
   done
 elif [ "${SET:-a}" = c ]; then  # fine-tunes from the previous default, more real detections, more dropout
   LRF=${LRF:-3e-4}

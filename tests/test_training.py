@@ -736,9 +736,9 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
 
 def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     """rotate_batch with max_roll_deg: the roll is drawn after pan and tilt (so runs without it draw as before),
-    a roll alone turns every 2D point about the principal point by the same angle (the picture turned in its plane),
-    the root's distance from the camera centre is kept, and make_batch with a flip and a roll (no pan or tilt) keeps
-    every sample physically consistent. The config refuses a roll with distorted 2D."""
+    a roll alone turns every 2D point about the principal point by the same angle (the picture turned in its plane)
+    and keeps the root's depth, and make_batch with a flip, a turn and a roll keeps every sample physically
+    consistent. The config refuses a roll with distorted 2D."""
     from lifter.camera import camera_turn, project
     from lifter.config import AugmentConfig, DataConfig, TrainConfig
     from lifter.train import make_batch, rotate_batch
@@ -756,6 +756,9 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
                                      gen=torch.Generator().manual_seed(5))
     draws = torch.rand(3, n, generator=torch.Generator().manual_seed(5), dtype=torch.float32)
     roll = torch.deg2rad(torch.tensor(30.0)) * (2 * draws[2] - 1)
+    g = torch.Generator().manual_seed(5)  # without a roll: two draws (pan, tilt), as before the roll existed
+    rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=10.0, gen=g)
+    assert torch.equal(torch.rand(n, generator=g), draws[2])
     assert float(roll.abs().max()) > 0.2
     # the picture turns counter-clockwise on screen by the roll: image "up" is -y
     d = kp - pp[:, None]
@@ -767,7 +770,8 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     np.testing.assert_allclose(rel2.numpy(), (turned - turned[:, :1]).numpy(), atol=1e-6)
     np.testing.assert_allclose(depth2.numpy(), root[:, 2].numpy(), rtol=1e-12)  # a roll keeps the depth
     T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
-    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5, roll_deg=20.0))
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                      augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0, roll_deg=20.0))
     b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
     root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
     again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
