@@ -205,6 +205,51 @@ def test_video_bad_and_resized_frames_are_reported_and_skipped(tmp_path, lifter,
     assert any("2 bad frame(s) skipped: 4, 5" in w for w in rec.warnings)
 
 
+def _portrait_phone_clip(path: Path, n: int = 4) -> Path:
+    """An MP4 stored 320 x 240 (landscape) with a 90 deg display matrix in its track header, as a phone writes a
+    portrait video; a bright block in the stored frames' top-left corner shows which way is up."""
+    import struct
+
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 10.0, (W, H))
+    if not vw.isOpened():
+        pytest.skip("this OpenCV build writes no MPEG-4 video")
+    for _ in range(n):
+        frame = np.zeros((H, W, 3), np.uint8)
+        frame[:40, :80] = 255
+        vw.write(frame)
+    vw.release()
+    data = bytearray(path.read_bytes())
+    i = data.find(b"tkhd")
+    assert i > 0 and data.find(b"tkhd", i + 4) < 0  # one track
+    matrix = i + 8 + (20 if data[i + 4] == 0 else 32) + 16  # box name, version/flags, times/ids, reserved/layer/...
+    assert struct.unpack(">9i", data[matrix:matrix + 36]) == (1 << 16, 0, 0, 0, 1 << 16, 0, 0, 0, 1 << 30)
+    data[matrix:matrix + 36] = struct.pack(">9i", 0, 1 << 16, 0, -(1 << 16), 0, 0, 0, 0, 1 << 30)  # 90 deg
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_a_portrait_phone_video_is_lifted_upright(tmp_path, lifter):
+    """Phones store a portrait video landscape with a rotation in its header; read as stored, every person would
+    lie on their side (a 90 deg camera roll, far outside what the lifter was trained on). The frames reach the 2D
+    estimator upright, and the record's image size and default principal point are the upright frame's."""
+    clip = _portrait_phone_clip(tmp_path / "portrait.mp4")
+    seen: list[tuple[tuple[int, ...], np.ndarray]] = []
+
+    class Recorder(ScriptedEstimator):
+        def detect(self, image: np.ndarray) -> list:
+            seen.append((image.shape, np.argwhere(image[..., 0] > 128).mean(0)))
+            return super().detect(image)
+
+    person = _person(np.random.default_rng(2), 120.0)[:, ::-1] * [0.75, 1.0] + [30.0, 40.0]  # inside 240 x 320
+    rec = lift_video(clip, lifter=lifter, estimator=Recorder([[person]] * 4), focal=F)
+    assert rec.image_size == (H, W)  # (width, height) upright: 240 x 320
+    assert seen and all(shape == (W, H, 3) for shape, _ in seen)
+    row, col = seen[0][1]
+    assert row < 60 and col > H - 60, seen[0]  # the stored top-left block is now top-right: turned 90 deg clockwise
+    assert rec.frames and rec.frames[0].people
+    np.testing.assert_allclose(rec.principal_point, (H / 2, W / 2))
+
+
 def test_video_errors(tmp_path, lifter):
     est = ScriptedEstimator([])
     (tmp_path / "empty.mp4").write_bytes(b"")
