@@ -211,3 +211,5 @@ def test_camera_turn_convention_and_homography():
     np.testing.assert_allclose(turn_pixels(uv, r, f, c), expected, atol=1e-9)
     got = turn_pixels(torch.from_numpy(uv), torch.from_numpy(r), torch.from_numpy(f), torch.from_numpy(c))
     np.testing.assert_allclose(got.numpy(), expected, atol=1e-9)
+    # turning back by R^T undoes a turn (README, "Camera roll": a known roll undone before lifting)
+    np.testing.assert_allclose(turn_pixels(turn_pixels(uv, r, f, c), np.swapaxes(r, -1, -2), f, c), uv, atol=1e-9)
