@@ -48,6 +48,7 @@ from .core import (
     compute_frame,
     focal_max,
     focal_min,
+    focal_text,
     lift_source,
     readout_markdown,
     spread_details,
@@ -589,8 +590,9 @@ class SessionView:
             self.show_message(note)
         if not kept and chosen:
             uploaded = sample.key.split("/")[0] in ("upload", "video")  # (a photo, keypoint file or video)
-            self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s {st.focal_px:.0f} "
-                              f"px (it was {old.focal_px:.0f} px: {'a new input' if uploaded else 'another camera'})")
+            self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
+                              f"{focal_text(st.focal_px)} px (it was {focal_text(old.focal_px)} px: "
+                              f"{'a new input' if uploaded else 'another camera'})")
         cam = sample.camera
         view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)

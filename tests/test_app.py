@@ -14,7 +14,7 @@ from lifter import project
 viser = pytest.importorskip("viser")
 
 from conftest import require_shipped_models  # noqa: E402
-from poselifter_app.core import FOCAL_MIN_PX  # noqa: E402
+from poselifter_app.core import FOCAL_MIN_PX, focal_text  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
 from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
@@ -644,7 +644,7 @@ def test_a_chosen_focal_replaced_by_another_camera_is_said(view: SessionView, ap
     view.select_demo(other)
     cam = app.demo.get(other).camera.alpha
     assert view.state.focal_px == pytest.approx(cam)
-    assert f"focal length set to this camera's {cam:.0f} px (it was 2000 px" in view.messages[-1], view.messages
+    assert f"focal length set to this camera's {focal_text(cam)} px (it was 2000 px" in view.messages[-1], view.messages
     # the note stays in the status line while the controls it set call back (in a tab they echo at once; user trial:
     # it was cleared before anyone could read it), and an error would not
     assert "focal length set to this camera's" in view.gui.readout.status.content
