@@ -123,13 +123,13 @@ class AugmentConfig:
     zoom_sigma: float = _help("zoom: std of log2(scale)", default=0.25)
     zoom_clip: float = _help("zoom: |log2(scale)| limit (0.5: x0.71..x1.41)", default=0.5)
     rotate_deg: float = _help("turn the camera about its centre by a pan and a tilt each uniform in +-this many degrees "
-                              "(0: off): the 3D turns with it and every 2D point, detections included, moves as "
-                              "that camera would see it (the homography K R K^-1), so where a person stands in the "
-                              "image no longer tells their depth by the training cameras' pose (pinhole 2D only)",
-                              default=0.0)
-    roll_deg: float = _help("roll the camera about its optical axis by an angle uniform in "
-                            "+-this many degrees (0: off), after the pan and tilt of rotate_deg if any: the picture "
-                            "turns in its plane, as a hand-held photo's often does (pinhole 2D only)", default=0.0)
+                              "(0: off, at most 45): the 3D turns with it and every 2D point, detections included, "
+                              "moves as that camera would see it (the homography K R K^-1), so where a person stands "
+                              "in the image no longer tells their depth by the training cameras' pose (needs --lens "
+                              "pinhole)", default=0.0)
+    roll_deg: float = _help("roll the camera about its optical axis by an angle uniform in +-this many degrees (0: "
+                            "off, at most 45), after the pan and tilt of --rotate-deg if any: the picture turns in "
+                            "its plane, as a hand-held photo's often does (needs --lens pinhole)", default=0.0)
 
     def __post_init__(self) -> None:
         _booleans(self)
