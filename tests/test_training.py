@@ -695,6 +695,35 @@ def test_ddp_cli_writes_one_checkpoint(tmp_path):
     assert "global batch 64 (2 process(es) x 32; 65 asked, rounded down to a multiple of 2)" in proc.stdout
 
 
+def _scene(n: int, *, seed: int, x: float, y: float, z: tuple[float, float], focal: tuple[float, float],
+           pp: tuple[float, float]) -> tuple[torch.Tensor, ...]:
+    """``n`` random poses (float64) in front of a pinhole camera: roots uniform in +-x, +-y, z mm, root-relative
+    joints ~300 mm; returns root ``(n, 3)``, rel ``(n, 17, 3)``, focal and principal point ``(n, 2)``, 2D ``(n, 17,
+    2)`` px (their projection)."""
+    from lifter.camera import project
+
+    g = torch.Generator().manual_seed(seed)
+    root = torch.stack([torch.empty(n).uniform_(-x, x, generator=g), torch.empty(n).uniform_(-y, y, generator=g),
+                        torch.empty(n).uniform_(*z, generator=g)], -1).double()
+    rel = torch.randn(n, 17, 3, generator=g, dtype=torch.float64) * 300
+    rel[:, 0] = 0
+    f = torch.tensor([focal], dtype=torch.float64).expand(n, 2)
+    c = torch.tensor([pp], dtype=torch.float64).expand(n, 2)
+    kp = torch.from_numpy(project((root[:, None] + rel).numpy(), focal=f.numpy(), principal_point=c.numpy()))
+    return root, rel, f, c, kp
+
+
+def _assert_physically_consistent(b: dict[str, torch.Tensor]) -> None:
+    """Every sample of a training batch: its 2D is the projection of its 3D (root from the 2D root and depth)."""
+    from lifter.camera import project
+
+    n = len(b["kp"])
+    root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
+    again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
+                    principal_point=b["pp"].double().numpy())
+    np.testing.assert_allclose(b["kp"].numpy(), again, atol=2e-3)
+
+
 def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     """rotate_batch: the turned 2D is the pinhole projection of the turned 3D (clean 2D exactly; any 2D by the same
     homography), the root stays at the same distance from the camera centre, and make_batch with a flip and a turn
@@ -703,15 +732,8 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     from lifter.config import AugmentConfig, DataConfig, TrainConfig
     from lifter.train import make_batch, rotate_batch
 
-    g = torch.Generator().manual_seed(0)
     n = 64
-    root = torch.stack([torch.empty(n).uniform_(-1500, 1500, generator=g), torch.empty(n).uniform_(-800, 800, generator=g),
-                        torch.empty(n).uniform_(3000, 7000, generator=g)], -1).double()
-    rel = torch.randn(n, 17, 3, generator=g, dtype=torch.float64) * 300
-    rel[:, 0] = 0
-    f = torch.tensor([[1145.0, 1143.0]], dtype=torch.float64).expand(n, 2)
-    pp = torch.tensor([[512.0, 515.0]], dtype=torch.float64).expand(n, 2)
-    kp = torch.from_numpy(project((root[:, None] + rel).numpy(), focal=f.numpy(), principal_point=pp.numpy()))
+    root, rel, f, pp, kp = _scene(n, seed=0, x=1500, y=800, z=(3000, 7000), focal=(1145.0, 1143.0), pp=(512.0, 515.0))
     kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=20.0, gen=torch.Generator().manual_seed(1))
     r = camera_turn(*(torch.deg2rad(torch.tensor(20.0)) * (2 * torch.rand(2, n, generator=torch.Generator().manual_seed(1)) - 1))).double()
     turned = (root[:, None] + rel) @ r.transpose(1, 2)
@@ -725,10 +747,7 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
     T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
     cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0))
     b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
-    root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
-    again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
-                    principal_point=b["pp"].double().numpy())
-    np.testing.assert_allclose(b["kp"].numpy(), again, atol=2e-3)
+    _assert_physically_consistent(b)
     assert not np.allclose(b["depth"].numpy(), T["depth"].numpy())
     with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --rotate-deg"):
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(rotate_deg=5.0))
@@ -739,19 +758,12 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     a roll alone turns every 2D point about the principal point by the same angle (the picture turned in its plane)
     and keeps the root's depth, and make_batch with a flip, a turn and a roll keeps every sample physically
     consistent. The config refuses a roll with distorted 2D."""
-    from lifter.camera import camera_turn, project
+    from lifter.camera import camera_turn
     from lifter.config import AugmentConfig, DataConfig, TrainConfig
     from lifter.train import make_batch, rotate_batch
 
-    g = torch.Generator().manual_seed(4)
     n = 32
-    root = torch.stack([torch.empty(n).uniform_(-1000, 1000, generator=g), torch.empty(n).uniform_(-600, 600, generator=g),
-                        torch.empty(n).uniform_(3000, 6000, generator=g)], -1).double()
-    rel = torch.randn(n, 17, 3, generator=g, dtype=torch.float64) * 300
-    rel[:, 0] = 0
-    f = torch.tensor([[1000.0, 1000.0]], dtype=torch.float64).expand(n, 2)
-    pp = torch.tensor([[500.0, 400.0]], dtype=torch.float64).expand(n, 2)
-    kp = torch.from_numpy(project((root[:, None] + rel).numpy(), focal=f.numpy(), principal_point=pp.numpy()))
+    root, rel, f, pp, kp = _scene(n, seed=4, x=1000, y=600, z=(3000, 6000), focal=(1000.0, 1000.0), pp=(500.0, 400.0))
     kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=0.0, max_roll_deg=30.0,
                                      gen=torch.Generator().manual_seed(5))
     draws = torch.rand(3, n, generator=torch.Generator().manual_seed(5), dtype=torch.float32)
@@ -773,10 +785,7 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
                       augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0, roll_deg=20.0))
     b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
-    root_b = torch.cat([(b["kp"][:, 0] - b["pp"]) / b["focal"], torch.ones(n, 1)], -1) * b["depth"][:, None]
-    again = project((root_b[:, None] + b["rel"]).double().numpy(), focal=b["focal"].double().numpy(),
-                    principal_point=b["pp"].double().numpy())
-    np.testing.assert_allclose(b["kp"].numpy(), again, atol=2e-3)
+    _assert_physically_consistent(b)
     assert not np.allclose(b["kp"].numpy(), T["kp"].numpy(), atol=1.0)
     with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --roll-deg"):
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(roll_deg=5.0))
