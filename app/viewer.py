@@ -184,7 +184,7 @@ class SessionView:
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self._message_count = 0
-        self._message_at = 0.0  # (time.monotonic() of the last message)
+        self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -272,9 +272,7 @@ class SessionView:
             log.error("%s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
             self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
             return False
-        status = self.gui.readout.status.content
-        if self._message_count == n and status and (
-                not status.startswith("ℹ️") or time.monotonic() - self._message_at > INFO_MESSAGE_SECONDS):
+        if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
             self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
         return True
 
@@ -283,7 +281,7 @@ class SessionView:
         self.messages.append(text)
         self.messages = self.messages[-20:]
         self._message_count += 1
-        self._message_at = time.monotonic()
+        self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
         try:
             self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
@@ -1092,6 +1090,7 @@ class SessionView:
             last[0] = now
             text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
             self.gui.readout.status.content = "⏳ " + text
+            self._note_until = 0.0  # (progress, not a note: the next success clears it)
             if note is not None:
                 note.body = text
 

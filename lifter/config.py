@@ -141,6 +141,11 @@ class AugmentConfig:
         _positive("zoom_sigma", self.zoom_sigma, allow_zero=True)
         _positive("zoom_clip", self.zoom_clip, allow_zero=True)
 
+    @property
+    def turns_camera(self) -> bool:
+        """Whether the samples' cameras are turned (``rotate_deg`` or ``roll_deg`` above 0)."""
+        return self.rotate_deg > 0 or self.roll_deg > 0
+
 
 @dataclass(frozen=True)
 class OptimConfig:

@@ -153,8 +153,8 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
                  ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``),
     and with ``max_roll_deg`` a roll about its optical axis (uniform in ``+-max_roll_deg``; drawn after the pan and
-    tilt, so runs without it draw as before), would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections included) moved by the homography
-    ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
+    tilt, so runs without it draw as before), would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections
+    included) moved by the homography ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
     ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
     back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px."""
     bs, dev = len(kp), kp.device
@@ -175,8 +175,8 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
 
     Sources: clean with ``cfg.data.clean_prob``; else the real detection with ``real_prob`` where there is
     one; else GT 2D with ``noise`` at a level uniform in ``[noise_level_min, noise_level_max]`` (GT 2D
-    without noise when ``noise`` is None). The camera turn and roll (``augment.rotate_deg``, ``roll_deg``) follow the flip; noise is drawn
-    after flip, turn and zoom, so it follows the shown size."""
+    without noise when ``noise`` is None). The camera turn and roll (``augment.rotate_deg``, ``roll_deg``) follow
+    the flip; noise is drawn after flip, turn and zoom, so it follows the shown size."""
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
     rel, depth = T["rel"][idx], T["depth"][idx]
@@ -193,9 +193,9 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     if cfg.augment.flip_prob > 0:
         flipped = torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob
         kp, rel = flip_batch(kp, pp, rel, flipped)
-        if cfg.augment.rotate_deg > 0 or cfg.augment.roll_deg > 0:  # (the true root's 2D, mirrored with the rest)
+        if cfg.augment.turns_camera:  # (the true root's 2D, mirrored with the rest)
             gt = torch.where(flipped[:, None, None], PoseCodec.mirror_input(gt, pp), gt)
-    if cfg.augment.rotate_deg > 0 or cfg.augment.roll_deg > 0:
+    if cfg.augment.turns_camera:
         root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg and roll_deg with distorted 2D)
         kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen,
                                       max_roll_deg=cfg.augment.roll_deg)

@@ -59,3 +59,9 @@ python scripts/turned_cameras.py universal universal_turn | tee "$OUT/turned_cam
 python scripts/turned_cameras.py universal universal_turn --source clean | tee "$OUT/turned_cameras_clean.txt"
 python scripts/root_smoothness.py universal universal_turn | tee "$OUT/root_smoothness_detected.txt"
 python scripts/root_smoothness.py universal universal_turn --source clean | tee "$OUT/root_smoothness_clean.txt"
+# Camera roll and turns beyond the trained +-20 deg, on the shipped default ("Camera roll" and the known limits in
+# the README; the roll-trained networks' table is docs/results/gpu_roll/README.md's command, on checkpoints not shipped).
+python scripts/turned_cameras.py universal_turn universal --turns 0:0:0,0:0:5,0:0:-10,0:0:10,0:0:-20,0:0:20 \
+  --source clean | tee "$OUT/roll_shipped_s50.txt"
+python scripts/turned_cameras.py universal_turn --turns 0:0,0:-30,0:30,0:40,30:0,45:0,30:30 --source clean \
+  | tee "$OUT/turned_cameras_wide.txt"
