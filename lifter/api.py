@@ -640,7 +640,11 @@ class Lifter:
             raw = codec.flip_average(raw, len(kp))
         # float64 from here on: the features alone were float32
         alpha_in = alpha if codec.config.input_space == "pixel" else np.full_like(alpha, codec.reference_focal)
-        enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha)
+        rotation = ray_norm = None
+        if codec.config.view == "look_at":  # the turn again in float64, as the decoding is
+            _, rotation, ray_norm = codec.look_at(codec.input_space(kp, pp, f)[0])
+        enc64 = Encoded(features=enc.features, sigma_in=enc.sigma_in.astype(np.float64), alpha_in=alpha_in, alpha=alpha,
+                        rotation=rotation, ray_norm=ray_norm)
         dec = codec.decode(raw, enc64, root_2d=kp[:, 0], principal_point=pp, focal=f)
         return dec.relative, dec.root, dec.canonical_depth
 

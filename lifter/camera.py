@@ -386,6 +386,21 @@ def camera_turn(pan: ArrayT, tilt: ArrayT, roll: ArrayT | None = None) -> ArrayT
     return r_roll @ r_tilt @ r_pan
 
 
+def look_at_rotation(direction: ArrayT) -> ArrayT:
+    """Rotations ``(..., 3, 3)`` that turn a camera about its centre to look along ``direction`` ``(..., 3)`` (any
+    length, in front of the camera: z > 0), numpy or torch, OpenCV frame: a point ``X`` (mm) of the camera frame
+    is ``R @ X`` in the turned camera's, and ``R @ direction`` lies on its optical axis. The smallest such turn
+    (about the axis ``direction x z``), so it commutes with the mirror ``x -> -x``: the mirrored direction's
+    rotation is ``M R M``, ``M = diag(-1, 1, 1)``. With ``d`` the unit direction ``(a, b, c)`` this is
+    ``I + [v]x + [v]x^2 / (1 + c)``, ``v = d x z``."""
+    xp = array_namespace(direction)
+    d = direction / xp.sqrt(xp.sum(direction * direction, axis=-1, keepdims=True))
+    a, b, c = d[..., 0], d[..., 1], d[..., 2]
+    w = 1.0 / (1.0 + c)
+    rows = [1 - a * a * w, -a * b * w, -a, -a * b * w, 1 - b * b * w, -b, a, b, c]
+    return xp.reshape(xp.stack(rows, axis=-1), (*c.shape, 3, 3))
+
+
 def turn_pixels(uv: ArrayT, rotation: Any, focal: Any, principal_point: Any) -> ArrayT:
     """Pixels ``(..., J, 2)`` of a pinhole camera as the same camera turned by ``rotation`` ``(..., 3, 3)``
     (:func:`camera_turn`) sees them: the homography ``K R K^-1``, numpy or torch. ``focal``, ``principal_point``:

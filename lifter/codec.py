@@ -10,18 +10,22 @@ One object (:class:`PoseCodec`) owns every convention between the data and the n
      ``"pixel"``: image pixels, ``p - c`` (the paper); ``"camera"``: the reference camera of focal
      F0 = 1000 px, ``(p - c) F0 / f`` (:func:`lifter.camera.to_reference_camera`), where image
      resolution and focal length are exact symmetries;
+  1b. with ``view="look_at"`` (:meth:`PoseCodec.look_at`), the reference camera turned about its centre to look at
+     the 2D root: an exact change of view (every viewing ray kept) after which the root is at the principal point;
   2. the normalization layer (:func:`lifter.normalization.pose_features`): normalized pose, location
      ``u`` and scale ``sigma`` (kilo-px);
   3. with ``conditioning="source"``, one more feature: 1 for exact 2D (``"clean"``), 0 for detector
      output (``"detected"``).
 
-* **targets** (:meth:`PoseCodec.encode_targets`): the root-relative pose (48 numbers, joints 1..16, mm)
+* **targets** (:meth:`PoseCodec.encode_targets`): the root-relative pose (48 numbers, joints 1..16, mm; looking
+  at the root, in that turned camera's frame)
   and the depth parameter of :class:`lifter.model.ModelConfig`'s ``depth_target``, in mm;
   **standardization** (:meth:`PoseCodec.standardize` / :meth:`PoseCodec.destandardize`) with the
   training targets' mean and std, which the codec stores (and the checkpoint with it).
 
 * **decode** (:meth:`PoseCodec.decode`): network outputs in mm -> :class:`Decoded` relative pose,
-  root depth Z, canonical depth ``Z F0 / alpha`` and the absolute root, which back-projects the
+  root depth Z, canonical depth ``Z F0 / alpha`` and the absolute root (the pose turned back to the camera
+  frame when the network looked at the root), which back-projects the
   input's 2D root at depth Z (PoseLifter Eq. 5-6).
 
 Units: px and mm. Camera frame: OpenCV (+x right, +y down, +z forward). ``alpha = sqrt(fx fy)`` px.
@@ -38,7 +42,7 @@ import torch
 
 from ._array import namespace as array_namespace
 from ._checks import PoseLifterError
-from .camera import CANONICAL_FOCAL, backproject_generic, to_reference_camera
+from .camera import CANONICAL_FOCAL, backproject_generic, look_at_rotation, to_reference_camera, turn_pixels
 from .model import NUM_OUTPUTS, ModelConfig
 from .normalization import location_and_scale, pose_features
 from .skeleton import NUM_JOINTS, mirror
@@ -58,12 +62,18 @@ class Encoded(Generic[A]):
     features: ``(..., F)`` network inputs. sigma_in: ``(...)`` the 2D scale in the input space (px of
     the input camera). alpha_in: ``(...)`` the input camera's focal length (px): ``alpha`` for the
     pixel space, F0 for the reference camera. alpha: ``(...)`` the real camera's ``sqrt(fx fy)`` px.
+    rotation, ray_norm: with ``view="look_at"`` (:class:`~lifter.model.ModelConfig`), the turn ``(..., 3, 3)`` from
+    the camera frame to the virtual camera that looks at the 2D root (:func:`lifter.camera.look_at_rotation`), and
+    the length ``(...)`` of the 2D root's viewing ray ``(x/f, y/f, 1)``: the root's depth in that camera is ``Z *
+    ray_norm``. None otherwise.
     """
 
     features: A
     sigma_in: A
     alpha_in: A
     alpha: A
+    rotation: A | None = None
+    ray_norm: A | None = None
 
 
 @dataclass(frozen=True)
@@ -124,7 +134,7 @@ class PoseCodec:
         """Everything :meth:`encode` depends on besides its arguments: two codecs with equal keys give equal
         encodings of the same input (an ensemble encodes once for its networks that share one)."""
         c = self.config
-        return (c.input_space, c.mode, c.scale_definition, c.conditioning, self.reference_focal)
+        return (c.input_space, c.view, c.mode, c.scale_definition, c.conditioning, self.reference_focal)
 
     def input_space(self, keypoints: A, principal_point: Any, focal: Any) -> tuple[A, A, A]:
         """Keypoints ``(..., 17, 2)`` in the input space, relative to its principal point; the input camera's
@@ -148,13 +158,29 @@ class PoseCodec:
         """
         xp = array_namespace(keypoints)
         k, alpha_in, alpha = self.input_space(keypoints, principal_point, focal)
+        rotation = ray_norm = None
+        if self.config.view == "look_at":
+            k, rotation, ray_norm = self.look_at(k)
         u, sigma = location_and_scale(k, scale_definition=self.config.scale_definition)
         feats = pose_features(k, mode=self.config.mode, scale_definition=self.config.scale_definition,
                               location_scale=(u, sigma))
         if self.config.conditioning == "source":
             flag = self.source_flag(source, like=sigma)
             feats = xp.concat([feats, flag[..., None]], axis=-1)
-        return Encoded(features=feats, sigma_in=sigma, alpha_in=alpha_in, alpha=alpha)  # type: ignore[return-value]
+        return Encoded(features=feats, sigma_in=sigma, alpha_in=alpha_in, alpha=alpha, rotation=rotation,  # type: ignore[return-value]
+                       ray_norm=ray_norm)
+
+    def look_at(self, k: A) -> tuple[A, A, A]:
+        """``view="look_at"``: keypoints ``(..., 17, 2)`` of the reference camera (px at F0, relative to its principal
+        point) as the camera turned to look at their root (joint 0) sees them, the root then at 0; the turn
+        ``(..., 3, 3)`` and the root ray's length ``(...)`` (:class:`Encoded`). The turn is exact for any 2D (the
+        viewing rays are kept), so the network reads the pose free of where it stands in the image."""
+        xp = array_namespace(k)
+        f0 = self.reference_focal
+        root_ray = xp.concat([k[..., 0, :] / f0, xp.ones_like(k[..., 0, :1])], axis=-1)  # type: ignore[index]
+        rotation = look_at_rotation(root_ray)
+        return (turn_pixels(k, rotation, f0, xp.zeros_like(k[..., 0, :])),  # type: ignore[index]
+                rotation, xp.sqrt(xp.sum(root_ray * root_ray, axis=-1)))
 
     @staticmethod
     def source_flag(source: Any, *, like: A) -> A:
@@ -171,10 +197,13 @@ class PoseCodec:
         """``dZ / dparameter``: mm of root depth per unit of the network's depth output (the map is linear)."""
         t = self.config.depth_target
         if t == "canonical":
-            return enc.alpha_in / self.reference_focal  # type: ignore[operator]
-        if t == "absolute":
+            unit = enc.alpha_in / self.reference_focal  # type: ignore[operator]
+        elif t == "absolute":
             return 1.0
-        return enc.alpha_in / enc.sigma_in  # type: ignore[operator]
+        else:
+            unit = enc.alpha_in / enc.sigma_in  # type: ignore[operator]
+        # looking at the root, the network's camera has the root on its axis at depth Z * ray_norm
+        return unit if enc.ray_norm is None else unit / enc.ray_norm  # type: ignore[operator]
 
     def depth_parameter(self, depth: A, enc: Encoded[A]) -> A:
         """The network's depth output for root depth Z ``(...)`` mm (:class:`~lifter.model.ModelConfig`)."""
@@ -191,9 +220,12 @@ class PoseCodec:
         return unit * (self.reference_focal / enc.alpha)  # type: ignore[operator]
 
     def encode_targets(self, relative: A, depth: A, enc: Encoded[A]) -> A:
-        """Raw targets ``(..., 49)`` mm: joints 1..16 of the root-relative pose ``(..., 17, 3)`` (xyz per joint),
-        then :meth:`depth_parameter` of the root depth ``(...)`` mm."""
+        """Raw targets ``(..., 49)`` mm: joints 1..16 of the root-relative pose ``(..., 17, 3)`` (camera frame, xyz
+        per joint; with ``view="look_at"`` turned into the frame of the camera looking at the root), then
+        :meth:`depth_parameter` of the root depth ``(...)`` mm."""
         xp = array_namespace(relative)
+        if enc.rotation is not None:
+            relative = relative @ xp.matrix_transpose(enc.rotation)  # type: ignore[operator]
         rel = relative[..., 1:, :]  # type: ignore[index]
         flat = xp.reshape(rel, (*rel.shape[:-2], 3 * (NUM_JOINTS - 1)))
         return xp.concat([flat, self.depth_parameter(depth, enc)[..., None]], axis=-1)  # type: ignore[index]
@@ -207,10 +239,13 @@ class PoseCodec:
 
     # -- decode ---------------------------------------------------------------------------------------
     def split(self, raw: A, enc: Encoded[A]) -> tuple[A, A]:
-        """Raw outputs ``(..., 49)`` mm -> relative pose ``(..., 17, 3)`` (root row zero) and root depth Z ``(...)``."""
+        """Raw outputs ``(..., 49)`` mm -> relative pose ``(..., 17, 3)`` (camera frame, root row zero) and root depth
+        Z ``(...)``."""
         xp = array_namespace(raw)
         rel = xp.reshape(raw[..., : NUM_OUTPUTS - 1], (*raw.shape[:-1], NUM_JOINTS - 1, 3))  # type: ignore[index, attr-defined]
         rel = xp.concat([xp.zeros_like(rel[..., :1, :]), rel], axis=-2)
+        if enc.rotation is not None:  # back from the frame of the camera looking at the root
+            rel = rel @ enc.rotation  # type: ignore[operator]
         return rel, self.depth_from_parameter(raw[..., -1], enc)  # type: ignore[index]
 
     def decode(self, raw: A, enc: Encoded[A], *, root_2d: A, principal_point: Any, focal: Any) -> Decoded[A]:

@@ -363,7 +363,9 @@ def _model_help(name: str) -> str:
             "input_space": "'camera': 2D mapped to the reference camera (resolution/focal invariant); 'pixel': the "
                            "paper's image pixels",
             "depth_target": "root depth output: canonical Z*F0/f, absolute Z (pixel only) or size Z*sigma/f",
-            "conditioning": "'source': one input feature says whether the 2D is exact or detected"}.get(name, name)
+            "conditioning": "'source': one input feature says whether the 2D is exact or detected",
+            "view": "'look_at': the 2D turned (exactly) to a camera looking at the root, the pose predicted in its "
+                    "frame; 'camera': as seen"}.get(name, name)
 
 
 def config_from_args(args: argparse.Namespace, base: TrainConfig | None = None) -> TrainConfig:

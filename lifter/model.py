@@ -30,6 +30,7 @@ InputSpace = Literal["pixel", "camera"]
 DepthTarget = Literal["canonical", "absolute", "size"]
 Conditioning = Literal["none", "source"]
 Symmetry = Literal["none", "mirror"]
+View = Literal["camera", "look_at"]
 NUM_OUTPUTS: Final[int] = 3 * (NUM_JOINTS - 1) + 1
 MAX_WIDTH: Final[int] = 8192
 MAX_BLOCKS: Final[int] = 16
@@ -57,6 +58,13 @@ class ModelConfig:
         every hidden layer, and the head averages the two streams' outputs with the mirror mapped back. One
         pass then gives what flip-test averaging gives with two, and ``width`` is the width of each stream.
         ``"none"``: the paper's MLP.
+    view: ``"camera"``: the network reads the 2D and predicts the pose in the (reference) camera's frame.
+        ``"look_at"`` (``input_space="camera"`` only): the codec first turns the reference camera about its centre
+        to look at the 2D root (:meth:`lifter.codec.PoseCodec.look_at`), an exact change of view, so the network
+        reads the pose as if it stood at the image centre, predicts the relative pose in that camera's frame and
+        the root's depth along its axis, and the codec turns them back. Where the person stands in the image then
+        no longer reaches the network (nor can a camera pan or tilt move the input, except for the small roll
+        it gives the turned camera).
     """
 
     width: int = 1024
@@ -68,6 +76,7 @@ class ModelConfig:
     depth_target: DepthTarget = "canonical"
     conditioning: Conditioning = "source"
     symmetry: Symmetry = "none"
+    view: View = "camera"
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("width", 1, MAX_WIDTH), ("num_blocks", 1, MAX_BLOCKS)):
@@ -79,13 +88,16 @@ class ModelConfig:
             raise PoseLifterError(f"model config: dropout must be a number in [0, 1), got {d!r}")
         for name, allowed in (("mode", NORM_MODES), ("scale_definition", SCALE_DEFINITIONS),
                               ("input_space", get_args(InputSpace)), ("depth_target", get_args(DepthTarget)),
-                              ("conditioning", get_args(Conditioning)), ("symmetry", get_args(Symmetry))):
+                              ("conditioning", get_args(Conditioning)), ("symmetry", get_args(Symmetry)),
+                              ("view", get_args(View))):
             if getattr(self, name) not in allowed:
                 raise PoseLifterError(f"model config: {name} is {getattr(self, name)!r}; expected one of "
                                       f"{list(allowed)}")
         if self.input_space == "camera" and self.depth_target == "absolute":
             raise PoseLifterError("model config: in the reference camera the canonical depth is the absolute depth; "
                                   "use depth_target='canonical' (or 'size') with input_space='camera'")
+        if self.view == "look_at" and self.input_space != "camera":
+            raise PoseLifterError("model config: view='look_at' needs the viewing rays: use input_space='camera'")
         if self.depth_target == "size" and self.mode not in ("scale", "both"):
             raise PoseLifterError("model config: depth_target='size' needs the scale feature (mode 'scale' or 'both')")
 

@@ -213,9 +213,11 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
 
 def target_statistics(codec: PoseCodec, T: Batch) -> tuple[np.ndarray, np.ndarray]:
     """Mean and std ``(49,)`` of the raw targets (mm) of the clean training samples and their mirror images."""
-    enc = codec.encode(T["kp"].double(), principal_point=T["pp"].double(), focal=T["focal"].double(), source="clean")
-    y = codec.encode_targets(T["rel"].double(), T["depth"].double(), enc)
-    y_m = codec.encode_targets(mirror(T["rel"].double()), T["depth"].double(), enc)
+    kp, pp, f = T["kp"].double(), T["pp"].double(), T["focal"].double()
+    y = codec.encode_targets(T["rel"].double(), T["depth"].double(),
+                             codec.encode(kp, principal_point=pp, focal=f, source="clean"))
+    y_m = codec.encode_targets(mirror(T["rel"].double()), T["depth"].double(),  # (the mirror image's own view)
+                               codec.encode(PoseCodec.mirror_input(kp, pp), principal_point=pp, focal=f, source="clean"))
     y = torch.cat([y, y_m])
     return y.mean(0).numpy(), y.std(0).numpy()
 
@@ -275,8 +277,8 @@ def check_teacher(teacher: Lifter, codec: PoseCodec, *, lens: str) -> None:
     """Refuse a teacher whose networks read other features, predict another depth parameter than ``codec``, or
     learned other 2D than the ``lens`` trained on (``data.lens``): their raw outputs would not be targets of the
     student's (:func:`teacher_targets`)."""
-    fields = ("input_space", "mode", "scale_definition", "conditioning", "depth_target")
-    flags = {"input_space": "--input-space", "mode": "--mode", "scale_definition": "--scale-definition",
+    fields = ("input_space", "view", "mode", "scale_definition", "conditioning", "depth_target")
+    flags = {"input_space": "--input-space", "view": "--view", "mode": "--mode", "scale_definition": "--scale-definition",
              "conditioning": "--conditioning", "depth_target": "--depth-target"}
     for m in teacher_networks(teacher):
         differ = [f"{k} {getattr(m.config, k)!r} (trained: {getattr(codec.config, k)!r}; {flags[k]})" for k in fields

@@ -27,12 +27,17 @@
 # +-20 degrees, lr LRF (3e-4), six runs at once (TH defaults to 2 threads each here: 12 of the 16 cores):
 #   roll<R>_<WB>, roll<R>_<WC>m  the detected networks (assets/weights/universal_turn.pt, universal_turn_member2.pt)
 #   roll<R>_clean                the clean network (universal_turn_clean.pt), exact 2D only
+# SET=e tries the look-at view (--view look_at: the 2D turned, exactly, to a camera looking at the person's root, the
+# pose predicted in that camera's frame and turned back), which takes where the person stands in the image away from
+# the network by construction; five runs at once, from scratch:
+#   la<WB>_rot<B>, la<WC>m_rot<B>, laclean<WB>_rot<B>  the three network shapes of the default, turned +-B degrees
+#   la<WB>, la<WC>m                                     the two detected shapes without the turn
 # Every checkpoint comes back in OUT and is evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
-# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a, b, c or d), LRF
+# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a, b, c, d or e), LRF
 # the fine-tunes' lr (3e-4), TH CPU threads per process (3; 2 with SET=d), H36M data folder (.gpu/h36m5), OUT folder
-# for what comes back: each run's .pt (4, 2, 5 or 6), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
+# for what comes back: each run's .pt (4, 2, 5, 6 or 5), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
 # a training failed.
 #   M=6 OUT=/tmp/out bash scripts/gpu_turn.sh
 set -u
@@ -42,7 +47,15 @@ TH=${TH:-$([ "${SET:-a}" = d ] && echo 2 || echo 3)}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 RECIPE+=(--eval-every 1000)
-if [ "${SET:-a}" = d ]; then  # a roll on top of the turn, fine-tuned from the shipped turned default
+if [ "${SET:-a}" = e ]; then  # the look-at view
+  NAMES=("la${WB}_rot$B" "la${WC}m_rot$B" "laclean${WB}_rot$B" "la$WB" "la${WC}m")
+  train_run "${NAMES[0]}" 29551 --view look_at --width "$WB" --rotate-deg "$B" &
+  train_run "${NAMES[1]}" 29552 --view look_at --width "$WC" --symmetry mirror --rotate-deg "$B" &
+  train_run "${NAMES[2]}" 29553 --view look_at --width "$WB" --rotate-deg "$B" --clean-prob 1.0 --real-prob 0 \
+    --no-real-rescale &
+  train_run "${NAMES[3]}" 29554 --view look_at --width "$WB" &
+  train_run "${NAMES[4]}" 29555 --view look_at --width "$WC" --symmetry mirror &
+elif [ "${SET:-a}" = d ]; then  # a roll on top of the turn, fine-tuned from the shipped turned default
   LRF=${LRF:-3e-4}; NAMES=(); port=29540
   for roll in 10 20; do  # (the port counted up here, in this shell: a backgrounded $((port++)) would not count)
     NAMES+=("roll${roll}_$WB" "roll${roll}_${WC}m" "roll${roll}_clean")

@@ -81,6 +81,94 @@ def test_targets_decode_back_to_the_3d(space, target):
     np.testing.assert_allclose(codec.destandardize(codec.standardize(raw)), raw)
 
 
+@pytest.mark.parametrize("target", ["canonical", "size"])
+def test_look_at_targets_decode_back_to_the_3d(target):
+    """view='look_at': the targets are the pose in the frame of the camera looking at the root and the root's depth
+    along its axis; decoding turns them back to the camera frame exactly."""
+    codec = PoseCodec(ModelConfig(view="look_at", depth_target=target, conditioning="none"))
+    pose = _pose(n=6)
+    kp = project(pose, focal=F, principal_point=C)
+    enc = codec.encode(kp, principal_point=C, focal=F)
+    rel = pose - pose[:, :1]
+    raw = codec.encode_targets(rel, pose[:, 0, 2], enc)
+    np.testing.assert_allclose(raw[:, :48].reshape(6, 16, 3), (rel @ enc.rotation.transpose(0, 2, 1))[:, 1:],
+                               atol=1e-9)
+    assert not np.allclose(raw[:, :48], rel[:, 1:].reshape(6, 48), atol=1.0)  # (the turn is not the identity)
+    dec = codec.decode(raw, enc, root_2d=kp[:, 0], principal_point=C, focal=F)
+    np.testing.assert_allclose(dec.relative, rel, atol=1e-9)
+    np.testing.assert_allclose(dec.depth, pose[:, 0, 2], rtol=1e-12)
+    np.testing.assert_allclose(dec.root, pose[:, 0], rtol=1e-9)
+    if target == "canonical":  # the root's distance from the camera centre (it is on the turned camera's axis)
+        np.testing.assert_allclose(raw[:, 48], np.linalg.norm(pose[:, 0], axis=-1), rtol=1e-12)
+
+
+def test_look_at_puts_the_root_on_the_axis_and_keeps_the_rays():
+    """The turned camera sees the root at its principal point, and every joint on its own viewing ray."""
+    from lifter.camera import look_at_rotation
+
+    codec = PoseCodec(ModelConfig(view="look_at"))
+    pose = _pose(n=5)
+    kp = project(pose, focal=F, principal_point=C)
+    k_v, rot, ray_norm = codec.look_at(to_reference_camera(kp, focal=F, principal_point=C))
+    np.testing.assert_allclose(k_v[:, 0], 0.0, atol=1e-9)
+    turned = pose @ rot.transpose(0, 2, 1)  # the 3D in the turned camera, projected with F0
+    np.testing.assert_allclose(k_v, 1000.0 * turned[..., :2] / turned[..., 2:], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(ray_norm, np.linalg.norm(pose[:, 0], axis=-1) / pose[:, 0, 2], rtol=1e-12)
+    np.testing.assert_allclose(rot @ rot.transpose(0, 2, 1), np.broadcast_to(np.eye(3), (5, 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(rot), 1.0, rtol=1e-12)
+    on_axis = look_at_rotation(np.array([0.0, 0.0, 2.0]))
+    np.testing.assert_allclose(on_axis, np.eye(3), atol=1e-15)  # a root at the principal point: no turn
+    t = look_at_rotation(torch.tensor(pose[:, 0]))  # torch, the same
+    np.testing.assert_allclose(t.numpy(), rot, atol=1e-12)
+
+
+@settings(max_examples=30, deadline=None)
+@given(pan=st.floats(-25, 25), tilt=st.floats(-25, 25), seed=st.integers(0, 10_000))
+def test_look_at_features_do_not_follow_a_camera_turn_except_its_roll(pan, tilt, seed):
+    """A camera turned about its centre (pan, tilt) sees the same scene: looking at the root, the network's input
+    differs only by a turn of the picture about its centre (the roll the turn gives the looking camera), so the
+    2D scale is the same and the normalized pose the same up to an in-plane rotation."""
+    from lifter.camera import camera_turn, turn_pixels
+    from lifter.normalization import location_and_scale
+
+    codec = PoseCodec(ModelConfig(view="look_at", conditioning="none"))
+    kp = project(_pose(seed, n=1), focal=F, principal_point=C)
+    r = camera_turn(np.deg2rad(pan), np.deg2rad(tilt))
+    kp2 = turn_pixels(kp, r, F, C)
+    a, b = (codec.look_at(to_reference_camera(k, focal=F, principal_point=C))[0][0] for k in (kp, kp2))
+    np.testing.assert_allclose(location_and_scale(b)[1], location_and_scale(a)[1], rtol=1e-9)
+    # the best in-plane rotation of a onto b leaves nothing
+    u, _, vt = np.linalg.svd(a.T @ b)
+    rot2 = u @ vt
+    assert np.linalg.det(rot2) > 0
+    np.testing.assert_allclose(a @ rot2, b, atol=1e-6 * np.abs(a).max())
+
+
+def test_look_at_mirror_and_flip_test():
+    """The look-at turn commutes with the mirror: the mirrored input's features are the mirrored features (what the
+    mirror-equivariant network and the flip test assume), and its targets are the mirrored targets."""
+    from lifter.normalization import feature_mirror
+
+    codec = PoseCodec(ModelConfig(view="look_at", conditioning="none"))
+    pose = _pose(n=4)
+    kp = project(pose, focal=F, principal_point=C)
+    enc = codec.encode(kp, principal_point=C, focal=F)
+    enc_m = codec.encode(PoseCodec.mirror_input(kp, C), principal_point=C, focal=F)
+    perm, sign = feature_mirror("both")
+    np.testing.assert_allclose(enc_m.features, enc.features[:, perm] * sign, atol=1e-9)
+    rel = pose - pose[:, :1]
+    t = codec.encode_targets(rel, pose[:, 0, 2], enc)
+    t_m = codec.encode_targets(mirror(rel), pose[:, 0, 2], enc_m)
+    np.testing.assert_allclose(PoseCodec.mirror_output(t_m), t, atol=1e-9)
+
+
+def test_look_at_needs_the_reference_camera():
+    from lifter._checks import PoseLifterError
+
+    with pytest.raises(PoseLifterError, match="view='look_at' needs the viewing rays: use input_space='camera'"):
+        ModelConfig(view="look_at", input_space="pixel", conditioning="none")
+
+
 def test_size_target_is_focal_invariant():
     """``size`` = Z sigma / f: the same scene through another focal length has the same size target."""
     codec = PoseCodec(ModelConfig(input_space="pixel", depth_target="size", conditioning="none"))
@@ -195,11 +283,11 @@ def test_shape_checks():
 
 
 @settings(max_examples=25, deadline=None)
-@given(k=st.floats(0.1, 10.0), seed=st.integers(0, 1000))
-def test_lift_is_resolution_invariant(k, seed):
+@given(k=st.floats(0.1, 10.0), seed=st.integers(0, 1000), view=st.sampled_from(["camera", "look_at"]))
+def test_lift_is_resolution_invariant(k, seed, view):
     """The property the product promises: a scaled image with scaled intrinsics lifts to the same root and pose
     (within 0.5 %; in practice float32 rounding)."""
-    lifter = tiny_lifter(64)
+    lifter = tiny_lifter(64, view=view)
     kp = project(_pose(seed, n=3), focal=F, principal_point=C)
     a = lifter.lift(kp, focal=F, principal_point=C)
     b = lifter.lift(kp * k, focal=F * k, principal_point=C * k)

@@ -91,11 +91,12 @@ def test_output_mirror_is_the_codec_mirror_and_an_involution():
 
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.sampled_from([1, 3, NUMPY_MAX_BATCH + 5]),
-       source=st.sampled_from(["clean", "detected"]))
-def test_mirror_net_is_equivariant_in_one_pass(seed, n, source):
+       source=st.sampled_from(["clean", "detected"]), view=st.sampled_from(["camera", "look_at"]))
+def test_mirror_net_is_equivariant_in_one_pass(seed, n, source, view):
     """Any weights: lifting the mirror image gives the mirrored result (numpy path for small batches, the torch
-    module for large ones), and flip-test would change nothing."""
-    lifter = _mirror_lifter(seed % 7, conditioning="source")
+    module for large ones), and flip-test would change nothing; looking at the root too (the turn commutes with
+    the mirror)."""
+    lifter = _mirror_lifter(seed % 7, conditioning="source", view=view)
     kp = _poses(n, seed)
     res = lifter.lift(kp, focal=F, principal_point=PP, source=source)
     mir = lifter.lift(lifter.codec.mirror_input(kp, PP), focal=F, principal_point=PP, source=source)
