@@ -24,7 +24,8 @@
 #   drop40_<WB>_rot<B> width WB from scratch, dropout 0.4 (not 0.25), seed 1
 # SET=d adds a roll (the camera turned about its optical axis, as a hand-held photo often is) to the shipped turned
 # default: each of its three networks fine-tuned from its shipped file with the same turn and a roll within +-10 and
-# +-20 degrees, lr LRF (3e-4), six runs at once (TH defaults to 2 threads each here: 12 of the 16 cores):
+# +-20 degrees (ROLLS, default "10 20"; a roll of 0 is the control: the same fine-tune without a roll), lr LRF (3e-4),
+# six runs at once (TH defaults to 2 threads each here: 12 of the 16 cores):
 #   roll<R>_<WB>, roll<R>_<WC>m  the detected networks (assets/weights/universal_turn.pt, universal_turn_member2.pt)
 #   roll<R>_clean                the clean network (universal_turn_clean.pt), exact 2D only
 # SET=e tries the look-at view (--view look_at: the 2D turned, exactly, to a camera looking at the person's root, the
@@ -57,14 +58,15 @@ if [ "${SET:-a}" = e ]; then  # the look-at view
   train_run "${NAMES[4]}" 29555 --view look_at --width "$WC" --symmetry mirror &
 elif [ "${SET:-a}" = d ]; then  # a roll on top of the turn, fine-tuned from the shipped turned default
   LRF=${LRF:-3e-4}; NAMES=(); port=29540
-  for roll in 10 20; do  # (the port counted up here, in this shell: a backgrounded $((port++)) would not count)
+  for roll in ${ROLLS:-10 20}; do  # (the port counted up here, in this shell: a backgrounded $((port++)) would not count)
     NAMES+=("roll${roll}_$WB" "roll${roll}_${WC}m" "roll${roll}_clean")
+    ROLL=(--roll-deg "$roll"); [ "$roll" = 0 ] && ROLL=()  # roll 0: the control, the same fine-tune without a roll
     train_run "roll${roll}_$WB" "$port" --init assets/weights/universal_turn.pt --lr "$LRF" --rotate-deg "$B" \
-      --roll-deg "$roll" &
+      "${ROLL[@]}" &
     train_run "roll${roll}_${WC}m" "$((port + 1))" --init assets/weights/universal_turn_member2.pt --lr "$LRF" \
-      --rotate-deg "$B" --roll-deg "$roll" &
+      --rotate-deg "$B" "${ROLL[@]}" &
     train_run "roll${roll}_clean" "$((port + 2))" --init assets/weights/universal_turn_clean.pt --lr "$LRF" \
-      --rotate-deg "$B" --roll-deg "$roll" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
+      --rotate-deg "$B" "${ROLL[@]}" --clean-prob 1.0 --real-prob 0 --no-real-rescale &
     port=$((port + 10))
   done
 elif [ "${SET:-a}" = c ]; then  # fine-tunes from the previous default, more real detections, more dropout
