@@ -11,6 +11,7 @@ turned in its plane, as a hand-held phone often is).
 
     python scripts/turned_cameras.py [MODEL ...] [--turns 0:0,0:-10,0:10,0:-20,0:20,20:0] [--stride 50]
     python scripts/turned_cameras.py universal_turn --turns 0:0:0,0:0:5,0:0:-10,0:0:10,0:0:20,0:0:45
+    python scripts/turned_cameras.py universal_turn pair=A.pt+B.pt --flip-test   # checkpoints, with the flip test
 """
 
 from __future__ import annotations
@@ -47,6 +48,10 @@ def main() -> None:
                     "behind the camera), comma-separated")
     ap.add_argument("--source", choices=["detected", "clean"], default="detected",
                     help="what the ground-truth 2D is told (the SH detections are told 'detected')")
+    ap.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
+                    help="average each pose with its mirror image's lift in every network (on) or in none (off); "
+                    "default: each model's own setting (on for the shipped default's width-1024 networks, off for a "
+                    "checkpoint that does not say)")
     add_h36m_arguments(ap, stride=50)
     args = ap.parse_args()
     data = H36M(args.h36m)
@@ -66,7 +71,8 @@ def main() -> None:
         views = [turned_camera_samples(samples, pan_deg=p, tilt_deg=t, roll_deg=r) for p, t, r in args.turns]
         views.append(level_samples(samples, pitch))
         for label, m in models:
-            rows = [evaluate_lifter(m, v, label=label, progress=False, source=source)[0] for v in views]
+            rows = [evaluate_lifter(m, v, label=label, progress=False, source=source, flip_test=args.flip_test)[0]
+                    for v in views]
             print(f"| {label} | " + " | ".join(f"{r.mpjpe:.1f} / {r.mrpe:.1f}" for r in rows) + " |")
 
 
