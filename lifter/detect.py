@@ -96,6 +96,12 @@ DOUBTFUL_SCORE: Final[float] = 0.5
 """A person lifted from a photo whose mean landmark score is below this gets a note that the detector is unsure
 (:func:`lifter.pipeline.detector_doubt_notes`)."""
 
+UNSURE_JOINT_SCORE: Final[float] = 0.3
+"""A joint of a person lifted from a photo whose H36M joint score (:func:`h36m_joint_scores`) is below this gets
+named in a note (:func:`lifter.pipeline.joint_doubt_notes`). On the 84 Human3.6M demo photos BlazePose scores 31 of
+the 1428 joints below it (elbows and wrists), and those are 19-29 px off (median; 5.5 px for joints scored above
+0.8): ``python scripts/joint_scores.py``."""
+
 WINDOW_FRACTION: Final[float] = 0.5
 """``multi="windows"``: the search windows are this fraction of the image's longer side wide (full height)."""
 WINDOW_MIN_INSIDE: Final[float] = 0.8
@@ -1048,6 +1054,14 @@ class DetectedPose:
     warnings: tuple[str, ...] = ()
 
 
+def h36m_joint_scores(scores: np.ndarray, keypoint_format: str) -> np.ndarray:
+    """A detector's scores ``(..., K)`` (0-1, in its ``keypoint_format``) as scores ``(..., 17)`` of the H36M joints
+    :func:`lifter.convert` makes from them: each the lowest score of the joints its rule reads."""
+    rules = get_format(keypoint_format).to_h36m
+    s = np.asarray(scores, np.float64)
+    return np.stack([np.min(s[..., [k for k, _ in rule]], axis=-1) for rule in rules], axis=-1)
+
+
 def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
                 near: list[np.ndarray] | None = None) -> list[DetectedPose]:
     """Everyone ``estimator`` finds in a loaded image, largest (box area) first, each converted to H36M-17
@@ -1066,11 +1080,9 @@ def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
     out = []
     for det in found:
         d = det.scaled(1.0 / image.scale) if image.scale != 1.0 else det
-        fmt = get_format(d.keypoint_format)
         kp17 = convert(d.keypoints, src=d.keypoint_format)
-        scores = np.array([min(float(d.scores[k]) for k, _ in rule) for rule in fmt.to_h36m])
-        out.append(DetectedPose(keypoints_2d=kp17, scores=scores, raw=d, num_people=len(found),
-                                image_size=image.size, seconds=dt, warnings=tuple(image.notes)))
+        out.append(DetectedPose(keypoints_2d=kp17, scores=h36m_joint_scores(d.scores, d.keypoint_format), raw=d,
+                                num_people=len(found), image_size=image.size, seconds=dt, warnings=tuple(image.notes)))
     return out
 
 
@@ -1116,7 +1128,8 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 
 __all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
-           "MIN_MAX_SIDE_PX", "DOUBTFUL_SCORE", "check_max_side", "ExifCamera", "FocalGuess", "ImageError",
+           "MIN_MAX_SIDE_PX", "DOUBTFUL_SCORE", "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
+           "ExifCamera", "FocalGuess", "ImageError",
            "LoadedImage", "MissingDependencyError", "NoPersonError",
            "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",
            "ensure_pose_task", "people_h36m", "focal_from_exif",

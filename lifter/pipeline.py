@@ -143,6 +143,25 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
             "2D, and so the 3D, may be wrong; is the person large and sharp enough in the image?"]
 
 
+def joint_doubt_notes(scores: np.ndarray) -> list[str]:
+    """A note naming, for each detected person (``scores`` ``(people, 17)``, largest first, H36M order), the joints
+    whose score is below :data:`lifter.detect.UNSURE_JOINT_SCORE`: such joints are several times further off than
+    the others on the demo photos (an occluded or blurred wrist, most often), and their 3D with them."""
+    from .detect import UNSURE_JOINT_SCORE
+    from .skeleton import JOINT_NAMES
+
+    s = np.asarray(scores, np.float64).reshape(-1, len(JOINT_NAMES))
+    who = []
+    for i, row in enumerate(s):
+        low = [f"{JOINT_NAMES[j]} ({row[j]:.2f})" for j in np.flatnonzero(row < UNSURE_JOINT_SCORE)]
+        if low:
+            who.append((f"person {i + 1}: " if len(s) > 1 else "") + ", ".join(low))
+    if not who:
+        return []
+    return [f"the detector is unsure of some joints (score below {UNSURE_JOINT_SCORE:g}): {'; '.join(who)}: their 2D, "
+            "and so their 3D, may be off (an occluded or blurred limb?)"]
+
+
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None, notes: list[str] | None = None,
                 distortion: ArrayLike | None = None) -> tuple[PersonResult, ...]:
@@ -219,6 +238,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     kp_people = np.stack([d.keypoints_2d for d in dets])
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
+    notes += joint_doubt_notes(np.stack([d.scores for d in dets]))
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
                          scores=np.stack([d.scores for d in dets]), notes=notes)
     top, det = lifted[0], dets[0]

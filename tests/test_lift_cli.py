@@ -345,14 +345,14 @@ class _StubEstimator:
     name = "stub"
     keypoint_format = "h36m17"
 
-    def __init__(self, people: list[np.ndarray], visibility: float = 1.0) -> None:
+    def __init__(self, people: list[np.ndarray], visibility: float | np.ndarray = 1.0) -> None:
         self.people = people
         self.visibility = visibility
         self.seen: tuple[int, ...] | None = None
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         self.seen = image.shape
-        return [Detection(keypoints=k, scores=np.full(17, self.visibility), bbox_xywh=bbox_of(k),
+        return [Detection(keypoints=k, scores=np.broadcast_to(self.visibility, (17,)).copy(), bbox_xywh=bbox_of(k),
                           keypoint_format="h36m17") for k in self.people]
 
 
@@ -544,6 +544,44 @@ def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, wei
     assert not any("outside" in w or "unsure" in w for w in rec.warnings), rec.warnings
     with pytest.raises(PoseLifterError, match=r"max_side must be a whole number of px >= 256"):
         load_image(p, max_side=10)
+
+
+def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
+    """Joints scored below UNSURE_JOINT_SCORE (on the demo photos 19-29 px off, median, against 5.5 for well-scored
+    ones) are named in a note, per person; a person whose joints are all scored well gets none."""
+    from lifter.detect import UNSURE_JOINT_SCORE, load_image
+    from lifter.pipeline import joint_doubt_notes, lift_image
+
+    assert UNSURE_JOINT_SCORE == 0.3
+    p = tmp_path / "photo.png"
+    Image.new("RGB", (1000, 1000), (50, 60, 70)).save(p)
+    scores = np.full(17, 0.95)
+    scores[[12, 16]] = [0.25, 0.12]  # l_elbow, r_wrist
+    lifter = Lifter.from_checkpoint(weights)
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([kp17], visibility=scores), focal=1000.0)
+    assert ("the detector is unsure of some joints (score below 0.3): l_elbow (0.25), r_wrist (0.12): their 2D, and so "
+            "their 3D, may be off (an occluded or blurred limb?)") in rec.warnings, rec.warnings
+    assert not any("mean landmark score" in w for w in rec.warnings)  # the person as a whole is seen well
+    two = np.stack([np.full(17, 0.9), scores])
+    assert joint_doubt_notes(two) == ["the detector is unsure of some joints (score below 0.3): person 2: l_elbow "
+                                      "(0.25), r_wrist (0.12): their 2D, and so their 3D, may be off (an occluded or "
+                                      "blurred limb?)"]
+    assert joint_doubt_notes(np.full((2, 17), 0.3)) == []  # (at the threshold: not below it)
+
+
+def test_h36m_joint_scores_take_the_lowest_source_joint():
+    """A converted joint is as sure as the least sure joint it is made from (BlazePose's pelvis reads its hips and
+    shoulders)."""
+    from lifter.detect import h36m_joint_scores
+    from lifter.keypoints import get_format
+
+    rules = get_format("blazepose33").to_h36m
+    s33 = np.linspace(0.1, 0.9, 33)
+    out = h36m_joint_scores(np.stack([s33, s33[::-1]]), "blazepose33")
+    assert out.shape == (2, 17)
+    for j, rule in enumerate(rules):
+        assert out[0, j] == min(s33[k] for k, _ in rule) and out[1, j] == min(s33[::-1][k] for k, _ in rule)
+    assert len(rules[0]) > 1 and len({out[0, 0], *(s33[k] for k, _ in rules[0])}) > 1  # (a real minimum)
 
 
 def test_images_are_lifted_as_detections_and_keypoint_files_say_what_they_are(tmp_path, weights, kp17, capsys):
