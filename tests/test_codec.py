@@ -237,9 +237,11 @@ def test_source_feature():
     assert PoseCodec(ModelConfig(conditioning="none")).encode(kp, principal_point=C, focal=F).features.shape == (4, 37)
 
 
+@pytest.mark.parametrize("view", ["camera", "look_at"])
 @pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
-def test_numpy_and_torch_agree(dtype):
-    codec = PoseCodec(ModelConfig(depth_target="size"), target_mean=np.arange(49.0), target_std=np.full(49, 3.0))
+def test_numpy_and_torch_agree(dtype, view):
+    codec = PoseCodec(ModelConfig(depth_target="size", view=view), target_mean=np.arange(49.0),
+                      target_std=np.full(49, 3.0))
     pose = _pose()
     kp = project(pose, focal=F, principal_point=C)
     enc_np = codec.encode(kp, principal_point=C, focal=F, source="clean")
@@ -255,9 +257,10 @@ def test_numpy_and_torch_agree(dtype):
     np.testing.assert_allclose(dec_t.relative.numpy(), dec_np.relative, rtol=max(tol, 1e-6), atol=1e-4)
 
 
-def test_gradcheck_encode_and_decode():
+@pytest.mark.parametrize("view", ["camera", "look_at"])
+def test_gradcheck_encode_and_decode(view):
     """Encode and decode are differentiable (float64 gradcheck), e.g. for fitting 2D to a 3D target."""
-    codec = PoseCodec(ModelConfig(depth_target="size"))
+    codec = PoseCodec(ModelConfig(depth_target="size", view=view))
     kp = torch.tensor(project(_pose(n=2), focal=F, principal_point=C), dtype=torch.float64, requires_grad=True)
     f = torch.tensor(F, dtype=torch.float64, requires_grad=True)
     c = torch.tensor(C, dtype=torch.float64)
