@@ -669,7 +669,8 @@ class Lifter:
 
     def __repr__(self) -> str:
         c = self.config
-        return (f"Lifter(name={self.name!r}, input_space={c.input_space!r}, depth_target={c.depth_target!r}, "
+        return (f"Lifter(name={self.name!r}, input_space={c.input_space!r}, "
+                + (f"view={c.view!r}, " if c.view != "camera" else "") + f"depth_target={c.depth_target!r}, "
                 f"conditioning={c.conditioning!r}, width={c.width}, flip_test={self.flip_test}"
                 + (", separate clean-2D network" if self.clean is not None else "")
                 + (f", ensemble of {1 + len(self.ensemble)} networks" if self.ensemble else "") + ")")

@@ -217,6 +217,10 @@ class TrainConfig:
                    f"{name} turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
                    f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop "
                    f"--{name.replace('_', '-')}")
+        _check(self.model.view == "camera" or self.data.lens == "pinhole",
+               f"view={self.model.view!r} turns the camera to look at the root, which moves the 2D as a pinhole camera "
+               f"would see it; this run's 2D is lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or "
+               "drop --view")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -100,7 +100,7 @@ UNSURE_JOINT_SCORE: Final[float] = 0.3
 """A joint of a person lifted from a photo whose H36M joint score (:func:`h36m_joint_scores`) is below this gets
 named in a note (:func:`lifter.pipeline.joint_doubt_notes`). On the 84 Human3.6M demo photos BlazePose scores 31 of
 the 1428 joints below it (elbows and wrists), and those are 19-29 px off (median; 5.5 px for joints scored above
-0.8): ``python scripts/joint_scores.py``."""
+0.8): ``python scripts/joint_scores.py`` (``docs/results/joint_scores.txt``)."""
 
 WINDOW_FRACTION: Final[float] = 0.5
 """``multi="windows"``: the search windows are this fraction of the image's longer side wide (full height)."""

@@ -63,8 +63,8 @@ class ModelConfig:
         to look at the 2D root (:meth:`lifter.codec.PoseCodec.look_at`), an exact change of view, so the network
         reads the pose as if it stood at the image centre, predicts the relative pose in that camera's frame and
         the root's depth along its axis, and the codec turns them back. Where the person stands in the image then
-        no longer reaches the network (nor can a camera pan or tilt move the input, except for the small roll
-        it gives the turned camera).
+        reaches the network only as the small in-plane turn that looking at an off-centre root gives the turned
+        camera (so a camera pan or tilt changes the input only by such a turn). Pinhole (undistorted) 2D.
     """
 
     width: int = 1024

@@ -289,7 +289,8 @@ def check_teacher(teacher: Lifter, codec: PoseCodec, *, lens: str) -> None:
             differ.append(f"reference focal {m.codec.reference_focal:g} px (trained: {codec.reference_focal:g})")
         if differ:
             raise PoseLifterError(
-                f"teacher network {m.name!r} reads other 2D or features, or predicts another root-depth parameter, than "
+                f"teacher network {m.name!r} reads other 2D or features, or predicts in another frame or another "
+                "root-depth parameter, than "
                 f"the network trained: {', '.join(differ)}; its outputs are not targets of this network: give a "
                 "teacher of the same kind, or train with the options named set as the teacher's")
 

@@ -98,8 +98,9 @@ def test_look_at_targets_decode_back_to_the_3d(target):
     np.testing.assert_allclose(dec.relative, rel, atol=1e-9)
     np.testing.assert_allclose(dec.depth, pose[:, 0, 2], rtol=1e-12)
     np.testing.assert_allclose(dec.root, pose[:, 0], rtol=1e-9)
-    if target == "canonical":  # the root's distance from the camera centre (it is on the turned camera's axis)
-        np.testing.assert_allclose(raw[:, 48], np.linalg.norm(pose[:, 0], axis=-1), rtol=1e-12)
+    # the root's distance from the camera centre (it is on the turned camera's axis), times sigma / F0 for "size"
+    dist = np.linalg.norm(pose[:, 0], axis=-1)
+    np.testing.assert_allclose(raw[:, 48], dist if target == "canonical" else dist * enc.sigma_in / 1000.0, rtol=1e-12)
 
 
 def test_look_at_puts_the_root_on_the_axis_and_keeps_the_rays():
@@ -160,6 +161,19 @@ def test_look_at_mirror_and_flip_test():
     t = codec.encode_targets(rel, pose[:, 0, 2], enc)
     t_m = codec.encode_targets(mirror(rel), pose[:, 0, 2], enc_m)
     np.testing.assert_allclose(PoseCodec.mirror_output(t_m), t, atol=1e-9)
+
+
+def test_look_at_flip_test_is_the_average_with_the_mirror_image():
+    """Lifting with the flip test (the float64 turn of Lifter.lift, then flip_average in the turned frame) gives the
+    average of the lift and the mirrored lift of the mirror image."""
+    lifter = tiny_lifter(64, view="look_at")
+    kp = project(_pose(3, n=5), focal=F, principal_point=C)
+    a = lifter.lift(kp, focal=F, principal_point=C, flip_test=False)
+    b = lifter.lift(PoseCodec.mirror_input(kp, C), focal=F, principal_point=C, flip_test=False)
+    both = lifter.lift(kp, focal=F, principal_point=C, flip_test=True)
+    np.testing.assert_allclose(both.relative, 0.5 * (a.relative + mirror(b.relative)), atol=1e-3)
+    np.testing.assert_allclose(both.root[:, 2], 0.5 * (a.root[:, 2] + b.root[:, 2]), rtol=1e-5)
+    assert np.abs(a.relative - mirror(b.relative)).max() > 1.0  # (the untrained network is not equivariant)
 
 
 def test_look_at_needs_the_reference_camera():
@@ -269,7 +283,8 @@ def test_gradcheck_encode_and_decode(view):
 
     def dec(r: torch.Tensor, k: torch.Tensor) -> torch.Tensor:
         enc = codec.encode(k, principal_point=c, focal=f)
-        return codec.decode(r, enc, root_2d=k[:, 0], principal_point=c, focal=f).root
+        d = codec.decode(r, enc, root_2d=k[:, 0], principal_point=c, focal=f)
+        return torch.cat([d.root.flatten(), d.relative.flatten()])  # (the look-at view turns the pose back)
 
     assert torch.autograd.gradcheck(dec, (raw, kp))
 

@@ -94,8 +94,7 @@ def test_output_mirror_is_the_codec_mirror_and_an_involution():
        source=st.sampled_from(["clean", "detected"]), view=st.sampled_from(["camera", "look_at"]))
 def test_mirror_net_is_equivariant_in_one_pass(seed, n, source, view):
     """Any weights: lifting the mirror image gives the mirrored result (numpy path for small batches, the torch
-    module for large ones), and flip-test would change nothing; looking at the root too (the turn commutes with
-    the mirror)."""
+    module for large ones); looking at the root too (the turn commutes with the mirror)."""
     lifter = _mirror_lifter(seed % 7, conditioning="source", view=view)
     kp = _poses(n, seed)
     res = lifter.lift(kp, focal=F, principal_point=PP, source=source)

@@ -789,5 +789,8 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     assert not np.allclose(b["kp"].numpy(), T["kp"].numpy(), atol=1.0)
     with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --roll-deg"):
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(roll_deg=5.0))
+    with pytest.raises(PoseLifterError, match="view='look_at' .* lens='h36m' .* add --lens pinhole, or drop --view"):
+        TrainConfig(model=ModelConfig(view="look_at"), data=DataConfig(lens="h36m"))
+    assert TrainConfig(model=ModelConfig(view="look_at"), data=DataConfig(lens="pinhole")).model.view == "look_at"
     with pytest.raises(PoseLifterError, match=r"roll_deg must be in \[0, 45\] degrees"):
         AugmentConfig(roll_deg=60.0)
