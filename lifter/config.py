@@ -212,15 +212,14 @@ class TrainConfig:
                                 "flip-test default), weighted by --distill-weight", default=None)
 
     def __post_init__(self) -> None:
-        for name in ("rotate_deg", "roll_deg"):
-            _check(getattr(self.augment, name) == 0 or self.data.lens == "pinhole",
-                   f"{name} turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
-                   f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop "
-                   f"--{name.replace('_', '-')}")
-        _check(self.model.view == "camera" or self.data.lens == "pinhole",
-               f"view={self.model.view!r} turns the camera to look at the root, which moves the 2D as a pinhole camera "
-               f"would see it; this run's 2D is lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or "
-               "drop --view")
+        turns = [(name, f"--{name.replace('_', '-')}") for name in ("rotate_deg", "roll_deg")
+                 if getattr(self.augment, name) != 0]
+        if self.model.view != "camera":
+            turns.append((f"view={self.model.view!r} (to look at the root)", "--view"))
+        for what, flag in turns:  # each moves the 2D by a homography, which holds for pinhole 2D only
+            _check(self.data.lens == "pinhole",
+                   f"{what} turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
+                   f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop {flag}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -238,9 +238,9 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     kp_people = np.stack([d.keypoints_2d for d in dets])
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
-    notes += joint_doubt_notes(np.stack([d.scores for d in dets]))
-    lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected",
-                         scores=np.stack([d.scores for d in dets]), notes=notes)
+    scores = np.stack([d.scores for d in dets])
+    notes += joint_doubt_notes(scores)
+    lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected", scores=scores, notes=notes)
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
     if len(dets) > 1:

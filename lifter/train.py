@@ -158,13 +158,12 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
     ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
     back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px."""
     bs, dev = len(kp), kp.device
-    a = torch.deg2rad(torch.tensor(max_deg, device=dev))
-    pan = a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
-    tilt = a * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
-    roll = None
-    if max_roll_deg > 0:
-        roll = torch.deg2rad(torch.tensor(max_roll_deg, device=dev)) * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
-    r = camera_turn(pan, tilt, roll).to(kp.dtype)
+
+    def uniform(deg: float) -> torch.Tensor:  # (B,) radians, uniform in +-deg
+        return torch.deg2rad(torch.tensor(deg, device=dev)) * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
+
+    pan, tilt = uniform(max_deg), uniform(max_deg)
+    r = camera_turn(pan, tilt, uniform(max_roll_deg) if max_roll_deg > 0 else None).to(kp.dtype)
     root = backproject_generic(root_2d, depth, f, pp)
     return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
