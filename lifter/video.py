@@ -241,6 +241,35 @@ def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]
     return out
 
 
+def track_doubt_notes(frames: list[FrameResult], *, max_joints: int = 4) -> list[str]:
+    """One note per track that has joints the detector scored below :data:`lifter.detect.UNSURE_JOINT_SCORE`: the
+    (at most ``max_joints``) most often unsure joints, each with its count of frames and its first frame (the video
+    form of :func:`lifter.pipeline.joint_doubt_notes`, which would repeat on every frame). Tracks without scores
+    are skipped."""
+    from .detect import UNSURE_JOINT_SCORE
+
+    if max_joints < 1:
+        raise PoseLifterError(f"max_joints must be >= 1, got {max_joints}")
+    notes: list[str] = []
+    for tid, seen in sorted(_tracks(frames).items()):
+        rows = [(i, np.asarray(q.scores, np.float64).reshape(-1)) for i, q in seen if q.scores is not None]
+        if not rows:
+            continue
+        low = np.stack([r for _, r in rows]) < UNSURE_JOINT_SCORE  # (frames, 17)
+        counts = low.sum(0)
+        joints = sorted(np.flatnonzero(counts), key=lambda j: (-int(counts[j]), int(j)))
+        if not joints:
+            continue
+        first = [rows[int(np.argmax(low[:, j]))][0] for j in joints]
+        named = [f"{JOINT_NAMES[j]} in {int(counts[j])} of {len(rows)} frames (first {fi})"
+                 for j, fi in zip(joints[:max_joints], first[:max_joints])]
+        more = f" and {len(joints) - max_joints} more joint(s)" if len(joints) > max_joints else ""
+        notes.append(f"track {tid}: the detector is unsure (score below {UNSURE_JOINT_SCORE:g}) of "
+                     f"{', '.join(named)}{more}: their 2D, and so their 3D, may be off in those frames (an occluded "
+                     "or blurred limb?)")
+    return notes
+
+
 def _frames_summary(idx: list[int], n: int = 8) -> str:
     return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
 
@@ -454,6 +483,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
+    warnings.extend(track_doubt_notes(frames))
     warnings.extend(output_note_lines(output_notes))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
@@ -541,4 +571,5 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
-           "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_lifted"]
+           "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
+           "track_lifted"]

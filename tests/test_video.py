@@ -160,6 +160,65 @@ def test_video_two_people_tracked_and_smoothed(tmp_path, lifter):
     assert areas[0] > areas[1]  # largest first
 
 
+class UnsureWristEstimator(ScriptedEstimator):
+    """The scripted people, with the right-hand person's right wrist scored 0.1 in frames 5-9 and the left-hand
+    person's left elbow scored exactly at the threshold (0.3, not below it) everywhere."""
+
+    def detect(self, image: np.ndarray) -> list:
+        from lifter.detect import UNSURE_JOINT_SCORE
+        from lifter.skeleton import JOINT_NAMES
+
+        i = self.n
+        import dataclasses
+
+        people = super().detect(image)
+        out = []
+        for d in people:
+            s = np.ones(17)
+            right = float(d.keypoints[:, 0].mean()) > W / 2
+            if right and 5 <= i <= 9:
+                s[JOINT_NAMES.index("r_wrist")] = 0.1
+            if not right:
+                s[JOINT_NAMES.index("l_elbow")] = UNSURE_JOINT_SCORE
+            out.append(dataclasses.replace(d, scores=s))
+        return out
+
+
+def test_video_names_the_joints_the_detector_was_unsure_of_once_per_track(tmp_path, lifter):
+    clip = _write_clip(tmp_path / "walk.avi", 20)
+    rec = lift_video(clip, lifter=lifter, estimator=UnsureWristEstimator(_script(20, nobody=(7,))), focal=F)
+    unsure = [w for w in rec.warnings if "unsure" in w]
+    (tid,) = [q.track_id for q in rec.frames[0].people if q.keypoints_2d[:, 0].mean() > W / 2]
+    # frames 5-9, but nobody in frame 7: 4 of the 19 frames the track was seen in; the other's elbow at 0.3 is not
+    # named
+    assert unsure == [f"track {tid}: the detector is unsure (score below 0.3) of r_wrist in 4 of 19 frames (first 5): "
+                      "their 2D, and so their 3D, may be off in those frames (an occluded or blurred limb?)"]
+    calm = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(20)), focal=F)
+    assert not [w for w in calm.warnings if "unsure" in w]
+
+
+def test_track_doubt_notes_ranks_joints_and_caps_the_list():
+    from lifter.video import FrameResult, PersonState, track_doubt_notes
+
+    def person(scores):
+        z = np.zeros((17, 3))
+        return PersonState(track_id=3, keypoints_2d=np.zeros((17, 2)), root=np.zeros(3), relative=z,
+                           root_raw=np.zeros(3), relative_raw=z, canonical_depth=4000.0, scores=scores)
+
+    frames = []
+    for i in range(6):
+        s = np.ones(17)
+        s[:5] = [0.0 if i < n else 1.0 for n in (1, 6, 2, 3, 2)]  # joints 0-4 unsure in 1, 6, 2, 3, 2 frames
+        frames.append(FrameResult(index=10 + i, time_s=i / 25, people=[person(s)]))
+    frames.append(FrameResult(index=16, time_s=0.3, people=[person(None)]))  # (no scores: not counted)
+    (note,) = track_doubt_notes(frames, max_joints=3)
+    assert note.startswith("track 3: the detector is unsure (score below 0.3) of r_hip in 6 of 6 frames (first 10), "
+                           "r_ankle in 3 of 6 frames (first 10), r_knee in 2 of 6 frames (first 10) and 2 more "
+                           "joint(s)")
+    with pytest.raises(PoseLifterError, match="max_joints must be >= 1"):
+        track_doubt_notes(frames, max_joints=0)
+
+
 def test_video_max_people_and_duration_bound(tmp_path, lifter):
     clip = _write_clip(tmp_path / "c.avi", 30, fps=10.0)
     rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_people=1,
