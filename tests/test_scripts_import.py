@@ -53,3 +53,10 @@ def test_eval_cascade_quick_table_flip_switch(tmp_path: Path, monkeypatch: pytes
     assert own.splitlines()[2:] == off.splitlines()[2:] and on.splitlines()[2:] != off.splitlines()[2:]
     assert "flip test on in every lifter" in on.splitlines()[0] and "flip test" not in own.splitlines()[0]
     assert f"| {pa}+{pb} |" in on
+
+
+def test_detector_crops_box_is_a_grown_square_clipped_to_the_image() -> None:
+    ns = runpy.run_path(str(ROOT / "scripts" / "detector_crops.py"), run_name="imported_by_test")
+    crop_box = ns["crop_box"]
+    assert crop_box(np.array([400.0, 300.0, 100.0, 200.0]), 0.25, 1000, 1000) == (300, 250, 600, 550)  # 300 px square
+    assert crop_box(np.array([10.0, 20.0, 100.0, 200.0]), 0.5, 1000, 250) == (0, 0, 260, 250)  # clipped at 0 and H
