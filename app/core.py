@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, field, fields
-from typing import Any, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 
@@ -419,13 +419,23 @@ def spread_line(spread: Spread) -> str:
             f"({JOINT_NAMES[worst]})")
 
 
+CLOUD_CAVEAT: Final[str] = (
+    "The cloud is the fitted mixture's uncertainty, not a detector's: its errors are independent per joint, and the "
+    "default lifts its draws with more root error, and nearer the camera, than real detections of the same 2D error "
+    "(README, The app).")
+"""Said under the cloud's numbers (measured: ``python scripts/noise_vs_detections.py``)."""
+
+
 def spread_details(spread: Spread) -> str:
-    """Every joint's depth spread (σ of Z relative to the root, mm) and the root's own σ Z, small print."""
+    """Every joint's depth spread (σ of Z relative to the root, mm) and the root's own σ Z, small print, with what
+    the cloud is not: a real detector's uncertainty (the mixture's draws are lifted worse, and nearer, than real
+    detections of the same 2D error: README, "The app"; ``scripts/noise_vs_detections.py``)."""
     from lifter.skeleton import JOINT_NAMES
 
     parts = [f"root σZ {spread.root_std[2]:.0f}"]
     parts += [f"{JOINT_NAMES[j]} {spread.joint_depth_std[j]:.0f}" for j in range(1, NUM_JOINTS)]
-    return "<small>**Depth σ per joint** (mm; joints relative to the root): " + " · ".join(parts) + "</small>"
+    return ("<small>**Depth σ per joint** (mm; joints relative to the root): " + " · ".join(parts) + ". "
+            f"{CLOUD_CAVEAT}</small>")
 
 
 def readout_markdown(frame: Frame, state: SessionState) -> str:

@@ -855,6 +855,9 @@ def test_per_joint_clouds_and_spread_readout(view: SessionView) -> None:
     md = view.gui.readout.readout.content
     assert f"**Z {sp.root_std[2]:.0f}** mm" in md and "joint depth σ" in md
     assert f"r_wrist {sp.joint_depth_std[16]:.0f}" in view.gui.readout.spread.content
+    from app.core import CLOUD_CAVEAT
+
+    assert CLOUD_CAVEAT in view.gui.readout.spread.content  # what the cloud is not (README, noise level)
     view.gui.noise.level.value = 0.0
     assert view.frame.spread is None and not view.scene.pose.cloud.visible and view.gui.readout.spread.content == ""
 
