@@ -193,7 +193,19 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
         bad = next((r for r in raw if not (_is_row(r) or _is_number(r))), None) if raw else None
         raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}")
     conf = a[:, 2] if a.shape[1] == 3 else None
+    if conf is not None:
+        c = conf[np.isfinite(conf)]
+        if c.size and float(c.max()) > MAX_CONFIDENCE:
+            raise PoseLifterError(
+                f"{where}: the third value of each keypoint row is read as a confidence (0 to 1, or COCO's visibility "
+                f"flags 0, 1, 2), but it reaches {float(c.max()):.4g}: is this a 3D pose (x, y, z)? The lifter takes "
+                "2D image coordinates in px: give [x, y] or [x, y, confidence] rows")
     return a[:, :2], conf
+
+
+MAX_CONFIDENCE: Final[float] = 2.0
+"""The largest third value a keypoint row may have (a confidence in [0, 1], or COCO's visibility flag 0, 1 or 2); more
+is refused: it is most likely a z coordinate (a 3D pose given as 2D)."""
 
 
 def _short(v: Any, n: int = 60) -> str:
@@ -300,7 +312,9 @@ _FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
     "calibration": "focal and principal_point", "pp": "principal_point", "cx": "principal_point",
     "cy": "principal_point", "resolution": "image_size", "width": "image_size", "height": "image_size",
     "image_width": "image_size", "image_height": "image_size", "keypoint_format": "format", "fmt": "format",
-    "framerate": "fps", "frame_rate": "fps"}
+    "framerate": "fps", "frame_rate": "fps", "focal_px": "focal", "focal_length_px": "focal", "f_px": "focal",
+    "focal_pixels": "focal", "image_shape": "image_size", "img_shape": "image_size", "imsize": "image_size",
+    "keypoint": "keypoints", "kpts": "keypoints", "joints": "keypoints", "landmarks": "keypoints"}
 """Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
 
 _FIELD_LETTERS: Final[dict[str, str]] = {
@@ -324,6 +338,28 @@ _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
 as keypoint files: not noted as unread."""
 
 
+def _one_typo(key: str) -> str | None:
+    """The field of :data:`READ_FIELDS` that ``key`` (5 letters or more) misspells by one letter changed, added,
+    dropped or swapped with its neighbour (``"sourse"``, ``"fromat"``), else None: a short name scores below
+    difflib's cutoff for such a slip."""
+    k = key.lower()
+    if len(k) < 5:
+        return None
+    for name in READ_FIELDS:
+        if abs(len(name) - len(k)) > 1 or name == k:
+            continue
+        if len(name) == len(k):
+            diff = [i for i in range(len(k)) if k[i] != name[i]]
+            if len(diff) == 1 or (len(diff) == 2 and diff[1] == diff[0] + 1 and k[diff[0]] == name[diff[1]]
+                                  and k[diff[1]] == name[diff[0]]):
+                return name
+        else:
+            short, long_ = (k, name) if len(k) < len(name) else (name, k)
+            if any(long_[:i] + long_[i + 1:] == short for i in range(len(long_))):
+                return name
+    return None
+
+
 def unread_field_notes(meta: dict[str, Any]) -> list[str]:
     """Notes for top-level fields of a keypoint file or sequence that look meant for a field it is read by
     (:data:`READ_FIELDS`) but are not, e.g. OpenCV's ``dist_coeffs`` or a misspelled ``distorsion``: their values
@@ -333,7 +369,7 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
         if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS or key in _OTHER_FIELDS:
             continue
         ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(
-            iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None)
+            iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None) or _one_typo(key)
         if ours is None or all(n in meta for n in ours.split(" and ")):
             continue  # (not like any of ours, or ours is there too: fx beside focal, width beside image_size)
         names = " and ".join(f"{n!r}" for n in ours.split(" and "))
@@ -394,6 +430,12 @@ def _people_of(d: Any, p: Path, fmt: str | None
         if isinstance(meta.get("format"), str):
             fmt = meta["format"]
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
+        images = sorted({str(q["image_id"]) for q in d if q.get("image_id") is not None})
+        if len(images) > 1:
+            shown = ", ".join(images[:5]) + (", ..." if len(images) > 5 else "")
+            raise PoseLifterError(f"{p}: a list of people from {len(images)} images (image_id {shown}); a keypoint "
+                                  "file is one image, seen by one camera: split the list by image_id into one file "
+                                  "per image (or give a sequence with 'frames')")
         people = [q.get("keypoints") for q in d]
         ids = [_person_id(q) for q in d]
         fmt = fmt or "coco17"
@@ -404,9 +446,18 @@ def _people_of(d: Any, p: Path, fmt: str | None
         fmt = d.get("format") or fmt
     elif isinstance(d, list):
         people = [d]
+    elif isinstance(d, dict) and "keypoints_2d" in d:  # a person of poselifter's own output, on its own
+        people = [d["keypoints_2d"]]
+        ids = [_person_id(d)]
+        meta = d
+        fmt = d.get("format") or fmt or H36M17
     else:
+        keys = [k for k in d if isinstance(k, str)] if isinstance(d, dict) else []
+        near = [k for k in keys if _FIELD_NAMES_ELSEWHERE.get(k.lower()) == "keypoints"] or \
+            difflib.get_close_matches("keypoints", keys, n=1, cutoff=0.75)
         raise PoseLifterError(f"{p}: expected an object with 'keypoints', a list of [x, y] rows, OpenPose "
-                              "'people' or a list of people")
+                              "'people' or a list of people"
+                              + (f" (the file has {near[0]!r}: did you mean 'keypoints'?)" if near else ""))
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got "
                               f"{_short(fmt)}")

@@ -96,7 +96,31 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
     else:
         assert image_size is not None  # (checked above)
         pp = np.asarray(image_size, np.float64) / 2.0
+    notes += principal_point_notes(pp, image_size)
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
+
+
+PRINCIPAL_POINT_EDGE: float = 0.05
+"""A principal point within this share of the image's width / height of its edge, or outside it, gets a note."""
+
+
+def principal_point_notes(pp: Any, image_size: tuple[int, int] | None) -> list[str]:
+    """A note when the principal point ``pp`` ``(cx, cy)`` px lies outside the ``image_size`` image or within
+    :data:`PRINCIPAL_POINT_EDGE` of its edge (None: not checked): a camera's principal point lies near the image
+    centre, and only a crop moves it far; the image size given as the principal point is a common slip. Every
+    root then lies off to the side by as much (mm, at its depth)."""
+    if image_size is None:
+        return []
+    W, H = image_size
+    c = np.asarray(pp, np.float64).reshape(-1)
+    e = PRINCIPAL_POINT_EDGE
+    if e * W <= c[0] <= (1 - e) * W and e * H <= c[1] <= (1 - e) * H:
+        return []
+    slip = " (it equals the image size: was that given as the principal point?)" if np.allclose(c, (W, H)) else ""
+    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {'outside' if not (0 <= c[0] <= W and 0 <= c[1] <= H) else 'at'} "
+            f"the edge of the {W} x {H} px image{slip}; a camera's is usually near the image centre ({W / 2:g}, "
+            f"{H / 2:g}), and the 3D is placed off to the side by as much. Leave it out to use the centre, or give "
+            "the calibrated one"]
 
 
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
@@ -115,6 +139,7 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     if not len(k):
         return notes
     notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES)
+    notes += upside_down_notes(k, detected=detected)
     if image_size is not None:
         W, H = image_size
         outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
@@ -125,6 +150,25 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
                          "by the frame, or half-invented): their 3D is uncertain" if detected else
                          f"{n} lie mostly outside the {W} x {H} px image: are the keypoints in this image's pixels?")
     return notes
+
+
+def upside_down_notes(kp17: np.ndarray, *, detected: bool = False) -> list[str]:
+    """A note when most of the poses ``(n, 17, 2)`` px (H36M order) have the head below both ankles in the image:
+    the 2D then likely has its y axis pointing up, where this package expects image y to grow downward (OpenCV);
+    a handstand looks the same, hence a note, not an error. Not for the package's own detector (``detected``)."""
+    from .skeleton import JOINT_NAMES
+
+    k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
+    if detected or not len(k):
+        return []
+    head = k[:, JOINT_NAMES.index("head_top"), 1]
+    ankles = k[:, [JOINT_NAMES.index("r_ankle"), JOINT_NAMES.index("l_ankle")], 1]
+    down = head > ankles.max(1)
+    if float(down.mean()) <= 0.5:
+        return []
+    return [f"the head is below both ankles in {int(down.sum())} of {len(k)} pose(s): this package takes image y "
+            "growing downward (OpenCV, +y down); if your keypoints' y grows upward, give y' = image height - y "
+            "(an upside-down person, e.g. a handstand, is lifted as given)"]
 
 
 def detector_doubt_notes(visibility: list[float]) -> list[str]:

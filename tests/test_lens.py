@@ -462,3 +462,16 @@ def test_unread_field_notes_name_the_right_field_and_spare_other_formats():
                                "keypoints_3d": [], "center": [1, 2], "score": 0.9}) == []
     assert unread_field_notes({"fx": 1, "focal": 1, "width": 2, "height": 3, "image_size": [2, 3]}) == []
     assert unread_field_notes({"fx": 1}) == ["'fx' is not read: did you mean 'focal'?"]
+
+
+def test_one_letter_slips_of_short_field_names_get_a_note():
+    """A helper's trial: "sourse" (a one-letter slip of a short name) scored below difflib's cutoff and was dropped
+    silently, and "focal_px" / "image_shape" got no note. Other formats' and unrelated fields stay unnoted."""
+    from lifter.io import unread_field_notes
+
+    assert unread_field_notes({"sourse": "clean"}) == ["'sourse' is not read: did you mean 'source'?"]
+    assert unread_field_notes({"fromat": "coco17"}) == ["'fromat' is not read: did you mean 'format'?"]  # swapped
+    assert unread_field_notes({"sources": "clean"}) == ["'sources' is not read: did you mean 'source'?"]  # added
+    assert unread_field_notes({"focal_px": 800}) == ["'focal_px' is not read: did you mean 'focal'?"]
+    assert unread_field_notes({"image_shape": [8, 6]}) == ["'image_shape' is not read: did you mean 'image_size'?"]
+    assert unread_field_notes({"scores": [1], "person": 1, "frame": 2, "notes": "x", "people_count": 3}) == []

@@ -756,3 +756,47 @@ def test_lift_image_refuses_an_array_with_the_way_to_pass_one(weights):
 
     with pytest.raises(PoseLifterError, match="missing.jpg"):  # any path object is a path: to the file check
         lift_image(PurePosixPath("/nonexistent/missing.jpg"), lifter=lifter, estimator=None)  # type: ignore[arg-type]
+
+
+def test_keypoint_file_slips_are_refused_or_noted(tmp_path, weights, kp17, capsys):
+    """A helper's trial: a 3D pose in a keypoint file was lifted with z read as a confidence; a COCO results list of
+    several images was lifted as several people of one photo; a principal point equal to the image size, and y
+    growing upward, were lifted without a word."""
+    cam = {"focal": 1000.0, "principal_point": [640.0, 360.0], "image_size": [1280, 720], "format": "h36m17"}
+    three_d = np.concatenate([kp17, np.full((17, 1), 4000.0)], 1)
+    (tmp_path / "a.json").write_text(json.dumps({"keypoints": three_d.tolist(), **cam}))
+    code, err = run([str(tmp_path / "a.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 1 and "reaches 4000: is this a 3D pose (x, y, z)?" in err
+    flags = np.concatenate([kp17, np.full((17, 1), 2.0)], 1)  # COCO visibility flag 2: still read
+    (tmp_path / "b.json").write_text(json.dumps({"keypoints": flags.tolist(), **cam}))
+    assert run([str(tmp_path / "b.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)[0] == 0
+    coco = [v for r in coco_from_h36m(kp17) for v in (*r, 0.9)]
+    (tmp_path / "c.json").write_text(json.dumps([{"image_id": i, "category_id": 1, "keypoints": coco} for i in (7, 8)]))
+    code, err = run([str(tmp_path / "c.json"), "--weights", str(weights), "--out", str(tmp_path / "o"), "--focal",
+                     "1000", "--principal-point", "640", "360"], capsys)
+    assert code == 1 and "a list of people from 2 images (image_id 7, 8)" in err and "split the list by image_id" in err
+    (tmp_path / "d.json").write_text(json.dumps([{"image_id": 7, "category_id": 1, "keypoints": coco}] * 2))
+    code, err = run([str(tmp_path / "d.json"), "--weights", str(weights), "--out", str(tmp_path / "o"), "--focal",
+                     "1000", "--principal-point", "640", "360"], capsys)
+    assert code == 0 and "2 people in the file" in err  # one image: its people
+    (tmp_path / "e.json").write_text(json.dumps({"keypoints": kp17.tolist(), **cam, "principal_point": [1280, 720]}))
+    code, err = run([str(tmp_path / "e.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "the principal point (1280, 720) px lies at the edge of the 1280 x 720 px image (it " \
+        "equals the image size" in err
+    import lifter
+
+    walk = lifter.demo_sample("walking")  # (upright; the random fixture pose is not always)
+    W, H = walk.image_size
+    up = walk.keypoints_2d * [1, -1] + [0, H]
+    wcam = {"focal": walk.focal.tolist(), "principal_point": walk.principal_point.tolist(), "image_size": [W, H]}
+    (tmp_path / "f.json").write_text(json.dumps({"keypoints": up.tolist(), **wcam}))
+    code, err = run([str(tmp_path / "f.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "the head is below both ankles in 1 of 1 pose(s)" in err
+    (tmp_path / "g.json").write_text(json.dumps({"keypoints": walk.keypoints_2d.tolist(), **wcam}))
+    code, err = run([str(tmp_path / "g.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "principal point" not in err and "head is below" not in err
+    (tmp_path / "h.json").write_text(json.dumps({"kpts": kp17.tolist(), **cam}))
+    code, err = run([str(tmp_path / "h.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 1 and "(the file has 'kpts': did you mean 'keypoints'?)" in err
+    (tmp_path / "i.json").write_text(json.dumps({"keypoints_2d": kp17.tolist(), **cam}))  # one person of our output
+    assert run([str(tmp_path / "i.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)[0] == 0
