@@ -117,10 +117,10 @@ def principal_point_notes(pp: Any, image_size: tuple[int, int] | None) -> list[s
     if e * W <= c[0] <= (1 - e) * W and e * H <= c[1] <= (1 - e) * H:
         return []
     slip = " (it equals the image size: was that given as the principal point?)" if np.allclose(c, (W, H)) else ""
-    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {'outside' if not (0 <= c[0] <= W and 0 <= c[1] <= H) else 'at'} "
-            f"the edge of the {W} x {H} px image{slip}; a camera's is usually near the image centre ({W / 2:g}, "
-            f"{H / 2:g}), and the 3D is placed off to the side by as much. Leave it out to use the centre, or give "
-            "the calibrated one"]
+    where = "at the edge of" if 0 <= c[0] <= W and 0 <= c[1] <= H else "outside"
+    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {where} the {W} x {H} px image{slip}; a camera's "
+            f"is usually near the image centre ({W / 2:g}, {H / 2:g}), and the 3D is placed off to the side by as "
+            "much. Leave it out to use the centre, or give the calibrated one"]
 
 
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")

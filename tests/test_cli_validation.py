@@ -246,3 +246,17 @@ def test_lift_good_camera_fields_still_work(tmp_path, weights, kp_file, capsys):
 def _save_tiny(path, width: int):
     lf = tiny_lifter(width)
     return save_checkpoint(path, lf.net, lf.codec)
+
+
+def test_output_into_a_closed_pipe_is_not_a_traceback():
+    """``poselifter train --print-config | head -1`` ended in a BrokenPipeError traceback (a helper's trial): a
+    reader that closed the pipe now ends the command quietly with the shell's status for it (141)."""
+    import subprocess
+    import sys
+
+    p = subprocess.Popen([sys.executable, "-m", "lifter", "train", "--print-config"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    assert p.stdout is not None and p.stderr is not None
+    p.stdout.close()  # (the reader is gone before the first write)
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 141 and "Traceback" not in err and "BrokenPipeError" not in err, err

@@ -32,6 +32,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (PoseLifterError, FileNotFoundError) as exc:
         print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # (output piped into `head` and the like, which closed the pipe: not an error of ours)
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # (else Python's exit flush of stdout fails again, with a message)
+        return 141  # (128 + SIGPIPE, what a shell reports for a command that died of a closed pipe)
     except KeyboardInterrupt:  # (Ctrl-C: one line, not a traceback through the libraries' threads)
         lost = " (no checkpoint was written: a run saves at its end)" if args.command == "train" else ""
         print(f"poselifter {args.command}: interrupted{lost}", file=sys.stderr)
