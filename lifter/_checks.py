@@ -108,7 +108,8 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
     elif scalar and arr.shape[-1] == 1:
         arr = np.concatenate([arr, arr], axis=-1)
     if arr.ndim == 0 or arr.shape[-1] != 2:
-        expected = "a scalar or shape (..., 2)" if scalar else "a pair (x, y) or shape (..., 2)"
+        pair = "(width, height)" if "size" in name else "(x, y)"
+        expected = "a scalar or shape (..., 2)" if scalar else f"a pair {pair} or shape (..., 2)"
         hint = (f" (one value per pose: give shape {tuple(arr.shape) + (1,)}, e.g. {name}[:, None]; a bare (2,) "
                 "always means (fx, fy))" if scalar and arr.ndim >= 1 and arr.shape[-1] > 2 else "")
         raise PoseLifterError(f"{name}: expected {expected}, got "

@@ -381,6 +381,9 @@ class Lifter:
         ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
         ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see :meth:`quantized`."""
         ref, shipped = str(name), assets.model_names()
+        if "+" in ref and not Path(ref).is_file() and any(part in (*shipped, "default") for part in ref.split("+")):
+            raise PoseLifterError(f"{ref!r}: shipped models cannot be joined by '+' (the default already averages its "
+                                  "networks); '+' joins checkpoint files ending in .pt into an ensemble (A.pt+B.pt)")
         if ref != "default" and ref not in shipped and (ref.endswith(".pt") or Path(ref).is_file()):
             # shipped names win over same-named local files; a file whose name holds "+" is that file
             if len(parts := ensemble_parts(ref)) > 1:
@@ -441,7 +444,7 @@ class Lifter:
             raise PoseLifterError(
                 f"model {self.name!r} has {len(names)} networks ({', '.join(names)}) and a checkpoint holds one, so "
                 "the file would not lift like this model: save one of them, e.g. "
-                f"lifter.networks()[{names[0]!r}].save(path), or refer to this model by its name "
+                f"model.networks()[{names[0]!r}].save(path) (model: this Lifter), or refer to this model by its name "
                 f"(Lifter.from_pretrained({self.name!r}))")
         if any(isinstance(m, QuantizedCoupledLinear) or type(m).__module__.startswith("torch.ao.nn.quantized")
                for m in self.net.modules()):

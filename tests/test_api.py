@@ -576,8 +576,9 @@ def test_load_joins_checkpoints_with_plus_into_an_ensemble(tmp_path, keypoints, 
     folder.mkdir()
     fa, fb = (save_checkpoint(folder / n, m.net, m.codec) for n, m in (("a.pt", a), ("b.pt", b)))
     assert len(Lifter.load(f"{fa}+{fb}").ensemble) == 1
-    with pytest.raises(PoseLifterError, match="shipped models cannot be joined"):
-        Lifter.load("universal+sh_mix")
+    for ref in ("universal+sh_mix", "universal+my.pt", "my.pt+universal"):  # (the last two: 'file not found' before)
+        with pytest.raises(PoseLifterError, match="shipped models cannot be joined"):
+            Lifter.load(ref)
 
 
 def test_evaluate_labels_leave_paths_with_equals_signs_whole(tmp_path):
@@ -602,7 +603,7 @@ def test_evaluate_labels_leave_paths_with_equals_signs_whole(tmp_path):
     [
         (dict(focal=1000.0, principal_point=400.0), r"principal_point: expected a pair \(x, y\)"),
         (dict(focal=1000.0, principal_point=(400.0,)), r"principal_point: expected a pair \(x, y\)"),
-        (dict(focal=None, image_size=800), r"image_size: expected a pair \(x, y\)"),
+        (dict(focal=None, image_size=800), r"image_size: expected a pair \(width, height\)"),
         (dict(focal="800", principal_point=(400.0, 300.0)), "focal: strings are not numbers"),
         (dict(focal=4.2, principal_point=(400.0, 300.0)), "focal: 4.2 px is too small.*not mm"),
         (dict(focal=(1000.0, 0.5), principal_point=(400.0, 300.0)), "focal: 0.5 px is too small"),
