@@ -146,7 +146,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
     with tabs.add_tab("Lift", viser.Icon.ADJUSTMENTS):
         lift = LiftGui(
             model=gui.add_dropdown("model", models or ["(none)"], initial_value=model or (models or ["(none)"])[0],
-                                   hint="shipped weights (assets/models.json)"),
+                                   hint="shipped weights (assets/models.json)"
+                                   + (f"; the app opened on {model}" if model else "")),
             focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
                                  marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
                                  hint="alpha = sqrt(fx fy); the root slides along its ray, further away as f grows"),

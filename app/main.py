@@ -1,8 +1,9 @@
 """``poselifter-app``: start the viser exploration app.
 
-Binds 127.0.0.1 by default (use ``--host 0.0.0.0`` to expose it on purpose) and prints the URL. Opens
-on the embedded demo samples; with Human3.6M (``--h36m DIR``, default ``../shared/data/h36m`` when it
-exists) the subject / sequence / camera / frame browser appears as well.
+Binds 127.0.0.1 by default (use ``--host 0.0.0.0`` to expose it on purpose) and prints the URL. Without
+Human3.6M it opens on the embedded demo samples; with it (``--h36m DIR``, default ``../shared/data/h36m`` when
+it exists; ``--no-h36m`` to leave it out) it opens on a Human3.6M frame, and the subject / sequence / camera /
+frame browser appears beside the demo samples.
 """
 
 from __future__ import annotations

@@ -123,11 +123,17 @@ def with_seed(state: SessionState, seed: object) -> SessionState:
     return state if s == state.seed else state.evolve(seed=s)
 
 
-def with_cloud_samples(state: SessionState, n: object) -> SessionState:
+def with_cloud_samples(state: SessionState, n: object) -> tuple[SessionState, str | None]:
+    """Noisy draws for the uncertainty cloud, a whole number in ``[0, MAX_CLOUD_SAMPLES]``: clamped with a note, as
+    the sliders' typed values are (so a value still being typed waits for the typing to pause, and "257" ends at
+    the maximum, not at the "25" typed on the way); not a whole number: refused."""
     k = _integer(n, "cloud samples")
+    note = None
     if not 0 <= k <= MAX_CLOUD_SAMPLES:
-        raise PoseLifterError(f"cloud samples must be in [0, {MAX_CLOUD_SAMPLES}], got {k}")
-    return state if k == state.cloud_samples else state.evolve(cloud_samples=k)
+        c = min(max(k, 0), MAX_CLOUD_SAMPLES)
+        note = f"cloud samples {k} is outside [0, {MAX_CLOUD_SAMPLES}]; set to {c}"
+        k = c
+    return (state if k == state.cloud_samples else state.evolve(cloud_samples=k)), note
 
 
 def with_joint(state: SessionState, joint: int, uv: object) -> SessionState:
@@ -366,5 +372,5 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         frame = int(fr.value) if fr.t > p.source.t else int(parts[4])
     else:  # another sequence: its start, unless the slider was moved since it was picked
         frame = int(fr.value) if fr.t > max(p.subject.t, p.sequence.t) else 0
-    frame = min(frame, h36m.num_frames(subject, sequence) - 1)
+    frame = min(max(frame, 0), h36m.num_frames(subject, sequence) - 1)
     return f"h36m/S{subject}/{sequence}/{p.camera.value}/{frame}"

@@ -97,6 +97,12 @@ range ("6" on the way to "6000"), so a slow typist gets this long (user trial: a
 the minimum with the cursor in front, and "6", "000" became "000100")."""
 
 
+def _sequence_of(key: str) -> str:
+    """What a status message is about, from a sample key: the sequence for a frame of one (``h36m/S9/Posing 1/
+    54138969``, ``video/3/clip.mp4``, ``motion``), else the sample itself (a demo sample, an uploaded photo)."""
+    return key.rsplit("/", 1)[0] if key.startswith(("h36m/", "video/", "motion/")) else key
+
+
 class LatestWins:
     """Runs ``work`` when asked, never twice at once; a request made while it runs makes it run once more
     afterwards (in the thread that is running it). The caller of :meth:`request` returns at once when another
@@ -185,6 +191,10 @@ class SessionView:
         self.messages: list[str] = []
         self._message_count = 0
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
+        self._status_about: str | None = None
+        """:func:`_sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
+        another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
+        under a Human3.6M frame)."""
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -282,6 +292,7 @@ class SessionView:
         self.messages = self.messages[-20:]
         self._message_count += 1
         self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
+        self._status_about = _sequence_of(self.state.sample.key) if hasattr(self, "state") else None
         try:
             self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
@@ -305,7 +316,7 @@ class SessionView:
         g = self.gui
         sync = self._on(self._runner.request)
         for name, handle in (("focal_px", g.lift.focal), ("noise_level", g.noise.level),
-                             ("frame", g.play.frame)):  # before the sync callback
+                             ("cloud_samples", g.noise.cloud), ("frame", g.play.frame)):  # before the sync callback
             handle.on_update(functools.partial(self._note_typed, name))
         for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame, *g.value_handles()]:
             h.on_update(sync)
@@ -354,10 +365,14 @@ class SessionView:
         """Make the state, scene and readout match what the GUI holds now (see the module docstring)."""
         with self.lock:
             self._pass_t0 = time.time()  # (before reading any control)
+            n = self._message_count
             try:
                 self._sync_pass()
             finally:
                 self._pass_t0 = math.inf
+            if (self._message_count == n and self.gui.readout.status.content and self._status_about is not None
+                    and _sequence_of(self.state.sample.key) != self._status_about):
+                self.gui.readout.status.content = ""  # (the message was about a sample no longer shown)
 
     def _put(self, handle: Any, value: Any) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
@@ -512,8 +527,8 @@ class SessionView:
         return self.app.sample(key)
 
     def _note_frame_past_end(self, key: str, video: Any) -> None:
-        """Say so when the frame asked for (typed in the slider's box) is past the sequence's end and the last frame
-        is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While the box is being typed in
+        """Say so when the frame asked for (typed in the slider's box) is past the sequence's end or before its start
+        and the last or first frame is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While the box is being typed in
         ("9999" on the way to "99999") the value is remembered and said once the typing settles
         (:data:`TYPING_SETTLE_S`), even if the slider has been set to the last frame meanwhile."""
         try:
@@ -530,18 +545,21 @@ class SessionView:
             return
         if int(f) == last and wanted > last:
             self._frame_note = (wanted, last)
-        elif not (int(f) == wanted == last and self._frame_note is not None and self._frame_note[1] == last):
-            self._frame_note = None  # another frame asked for since (the slider set to the last frame keeps it)
+        elif int(f) == 0 and wanted < 0:
+            self._frame_note = (wanted, 0)
+        elif not (self._frame_note is not None and int(f) == wanted == self._frame_note[1]):
+            self._frame_note = None  # another frame asked for since (the slider set to the end frame keeps it)
         if self._frame_note is None:
             return
         since = self._since_typed("frame")
         if since < TYPING_SETTLE_S:
             self._settle_later(TYPING_SETTLE_S - since + 0.05)
             return
-        wanted, last = self._frame_note
+        wanted, at = self._frame_note
         self._frame_note = None
-        self.show_message(f"frame {wanted} is past the end of this sequence (frames 0–{last}); showing frame {last}")
-        self._put(self.gui.play.frame, last)  # (said once: the slider shows the frame in use)
+        where = "past the end" if wanted > at else "before the start"
+        self.show_message(f"frame {wanted} is {where} of this sequence (frames 0–{last}); showing frame {at}")
+        self._put(self.gui.play.frame, at)  # (said once: the slider shows the frame in use)
 
     def sequence(self) -> SequenceSource | None:
         """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""
@@ -859,7 +877,8 @@ class SessionView:
             raise PoseLifterError(f"{name.replace('_', ' ')} must be an integer, got {value!r}")
         handle.value = typed
         self._runner.request()
-        if self._message_count != n and not self.messages[-1].startswith(("focal length", "noise level")):
+        if self._message_count != n and not self.messages[-1].startswith(("focal length", "noise level",
+                                                                          "cloud samples")):  # (clamped: a note)
             raise PoseLifterError(self.messages[-1])
 
     @control

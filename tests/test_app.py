@@ -277,7 +277,11 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
         view.move_joint(j, (300.0, 300.0))
     assert "degenerate" in view.messages[-1]
     assert view.move_joint(99, (1, 2)) is False
-    assert view.set_seed("abc") is False and view.set_cloud_samples(10**6) is False
+    assert view.set_seed("abc") is False and view.set_cloud_samples(2.5) is False
+    # out of range: clamped with a note, as the sliders are (a helper typed 257 and was left at the "25" on the way)
+    assert view.set_cloud_samples(257) is True and view.state.cloud_samples == 256
+    assert view.messages[-1] == "cloud samples 257 is outside [0, 256]; set to 256"
+    assert view.gui.noise.cloud.value == 256
     assert view.select_h36m(subject=9, sequence="x", camera="y", frame=0) is False  # no H36M here
     # the server still serves and the view still works
     with urllib.request.urlopen(f"http://127.0.0.1:{app.server.get_port()}/", timeout=10) as r:
@@ -679,6 +683,24 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
                         and any("7000 px is outside" in m for m in v.messages[n_msgs:]), timeout=10), v.messages
         time.sleep(TYPING_SETTLE_S)
         assert sum("7000 px is outside" in m for m in v.messages[n_msgs:]) == 1, v.messages  # said once
+
+
+def test_cloud_samples_typed_past_the_maximum_end_at_it_not_half_way(app: PoseLifterApp) -> None:
+    """A helper typed "257" into the cloud-samples box (maximum 256): "2" and "25" were applied on the way and the
+    refused "257" left the box at 25, a value never meant. It is now clamped, once the typing settles, to 256."""
+    import time
+
+    with open_tab(app) as (tab, v):
+        n_msgs = len(v.messages)
+        for typed in (2, 25, 257):
+            _send_value(tab, v.gui.noise.cloud, typed)
+            time.sleep(0.1)
+        time.sleep(0.1)
+        assert v.gui.noise.cloud.value == 257  # (still being typed: the box is left alone)
+        said = lambda: [m for m in v.messages[n_msgs:] if "cloud samples" in m]  # noqa: E731
+        assert wait_for(lambda: v.state.cloud_samples == 256 and v.gui.noise.cloud.value == 256 and said(), timeout=10)
+        assert said() == [
+            "cloud samples 257 is outside [0, 256]; set to 256"], v.messages[n_msgs:]
 
 
 def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> None:
@@ -1202,6 +1224,11 @@ def test_a_frame_past_the_sequence_end_is_said(h36m_app: PoseLifterApp) -> None:
     v.gui.play.frame.value = last - 1  # within the sequence: nothing said
     v.gui.play.frame.value = last
     assert len(v.messages) == n + 1
+    # before the start: the first frame, said the same way (a helper's -5 got an "Input problem" error instead)
+    v.gui.play.frame.value = -5
+    assert v.state.sample.key.endswith("/0") and v.gui.play.frame.value == 0
+    assert v.messages[-1] == f"frame -5 is before the start of this sequence (frames 0–{last}); showing frame 0"
+    assert len(v.messages) == n + 2 and v.gui.readout.status.content.count("before the start") == 1
 
 
 def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLifterApp) -> None:

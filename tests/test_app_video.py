@@ -191,3 +191,22 @@ def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(serv
     relifted = seq.record_at(lf, (3 * F, 3 * F))
     assert stale not in relifted.warnings and stale in seq.record.warnings
     assert all(w in relifted.warnings for w in seq.record.warnings if w != stale)
+
+
+def test_a_video_note_goes_when_another_sample_is_shown(server, tmp_path: Path) -> None:
+    """A browser trial: right after a video's note ("... press play"), switching the source to Human3.6M left the
+    note under the Human3.6M frame (a note stays a while, and no later event cleared it). A sync pass that shows
+    another sample, or sequence, and says nothing of its own now clears it; frames of the same video keep it."""
+    n = 8
+    est = ScriptedEstimator(_script(n), full_width=W)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    assert v.load_upload("walk.avi", _clip(tmp_path / "walk.avi", n)) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None and "press play" in v.gui.readout.status.content
+    v.gui.play.frame.value = 3  # another frame of the same video: the note stays (within its time)
+    assert wait_for(lambda: v.state.sample.key == f"{seq.key}/3")
+    assert "press play" in v.gui.readout.status.content
+    v.gui.sample.source.value = "demo sample"  # at once, well within the note's time
+    assert wait_for(lambda: v.state.sample.key.startswith("demo/"))
+    assert wait_for(lambda: v.gui.readout.status.content == ""), v.gui.readout.status.content
