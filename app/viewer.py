@@ -408,7 +408,9 @@ class SessionView:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False
             redraw, self._redraw_request = self._redraw_request, False
-        notes: list[str] = [r.message for r in rejected]
+        # (refused values are errors; clamped ones notes, which stay a while: a user trial saw "focal length 9000 px
+        # is outside ...; clamped" vanish within a second, when the settle timer's pass cleared it as an error)
+        notes: list[tuple[str, bool]] = [(r.message, r.refused) for r in rejected]
         if reset:
             st = ss.reset_joints(st)
         refused_drag = False
@@ -416,7 +418,7 @@ class SessionView:
             try:
                 st = ss.with_joint(st, j, uv)
             except PoseLifterError as exc:
-                notes.append(str(exc))
+                notes.append((str(exc), True))
                 refused_drag = True
         for r in rejected:
             self._set_control(r.control, r.value)
@@ -426,17 +428,17 @@ class SessionView:
             if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
                 self._last_plane = None
                 self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
-            for n in notes:
-                self.show_message(n, error=True)
+            for text, error in notes:
+                self.show_message(text, error=error)
             return
         try:
             self._apply(st)
         except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
-            notes.append(str(exc))
+            notes.append((str(exc), True))
             self._show_controls(old)
             self._draw_2d(old.keypoints)
-        for n in notes:
-            self.show_message(n, error=True)
+        for text, error in notes:
+            self.show_message(text, error=error)
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
