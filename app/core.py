@@ -353,7 +353,23 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others, caution=tuple(used.output_notes(noisy, pp, res.root[0])))
+                 others=others, caution=(*used.output_notes(noisy, pp, res.root[0]),
+                                         *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha)))
+
+
+def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float) -> list[str]:
+    """The readout's caution when the 2D pose ``(17, 2)`` px spans more than
+    :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at the focal length in use ``focal`` (px): no camera sees a
+    whole person that wide, so the lift leaves what the networks learned and bends (a teacher's slider at 100 px:
+    PA-MPJPE over 200 mm). The camera's own focal length ``camera_focal`` (px) is named."""
+    from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
+
+    view = float(pose_view_deg(np.asarray(keypoints, np.float64), focal))
+    if view <= MAX_PLAUSIBLE_VIEW_DEG:
+        return []
+    return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view:.0f}° of view (a whole person rarely "
+            f"spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): the lift is outside what "
+            f"the networks learned, and bends; the camera's own focal length is {camera_focal:.0f} px"]
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:

@@ -687,6 +687,19 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
         assert v.gui.readout.status.content.startswith("ℹ️ focal length 7000 px is outside"), v.gui.readout.status.content
 
 
+def test_a_focal_so_short_the_pose_spans_too_wide_a_view_is_cautioned(view: SessionView) -> None:
+    """A teacher's slider at the focal minimum bends the skeleton (PA-MPJPE over 200 mm on Human3.6M) with nothing in
+    the readout saying why (browser trial): the readout's caution names the view the pose spans, and the camera's
+    own focal; at the camera's focal there is none."""
+    assert view.select_demo("walking") is True
+    assert "spans" not in view.gui.readout.readout.content
+    assert view.set_focal(100.0) is True
+    md = view.gui.readout.readout.content
+    assert "**Caution** at 100 px this 2D pose spans 126° of view" in md and "own focal length is 800 px" in md, md
+    view.reset_focal()
+    assert "spans" not in view.gui.readout.readout.content
+
+
 def test_cloud_samples_typed_past_the_maximum_end_at_it_not_half_way(app: PoseLifterApp) -> None:
     """A helper typed "257" into the cloud-samples box (maximum 256): "2" and "25" were applied on the way and the
     refused "257" left the box at 25, a value never meant. It is now clamped, once the typing settles, to 256."""
