@@ -116,8 +116,10 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
     )
     joints2d = []
     for j in range(NUM_JOINTS):
+        # (markers on the image plane, not bodies: their shadows were a grey blob on the floor, a browser trial)
         h = scene.add_icosphere(f"/cam/joints2d/{JOINT_NAMES[j]}", radius=JOINT_RADIUS_M, subdivisions=2,
-                                color=(int(JOINT_RGB[j, 0]), int(JOINT_RGB[j, 1]), int(JOINT_RGB[j, 2])))
+                                color=(int(JOINT_RGB[j, 0]), int(JOINT_RGB[j, 1]), int(JOINT_RGB[j, 2])),
+                                cast_shadow=False, receive_shadow=False)
         h.on_drag(lambda event, j=j: on_drag(j, event))
         joints2d.append(h)
     pose = PoseNodes(
