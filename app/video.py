@@ -200,7 +200,9 @@ class VideoSequence:
         frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing)
         for new, old in zip(frames, rec.frames):  # (the tracker keeps each frame's order)
             for st, was in zip(new.people, old.people):
-                st.person_id = was.person_id
+                # (the tracker reads the 2D only, so it groups as the upload did; but its numbers differ once the
+                # upload's one-frame detections were left out: keep the upload's, which its notes and picker name)
+                st.person_id, st.track_id = was.person_id, was.track_id
         note = (f"lifted again in the app: model {name!r} at focal length {math.sqrt(f[0] * f[1]):.1f} px (the upload's: "
                 f"{rec.model!r} at {math.sqrt(rec.focal[0] * rec.focal[1]):.1f} px)")
         if undistorted:

@@ -191,6 +191,7 @@ class SessionView:
         self.messages: list[str] = []
         self._message_count = 0
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
+        self._last_was_error = False
         self._status_about: str | None = None
         """:func:`_sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
         another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
@@ -204,8 +205,8 @@ class SessionView:
         self._reset_request = False
         self._redraw_request = False
         self._flags = threading.Lock()
-        self._frame_note: tuple[int, int] | None = None
-        """(frame asked for, last frame) to be said once typing settles (:meth:`_note_frame_past_end`)."""
+        self._frame_note: tuple[int, int, str] | None = None
+        """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
         self._typed_uv: tuple[int, int, int, int, np.ndarray] | None = None
@@ -286,13 +287,17 @@ class SessionView:
             self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
         return True
 
-    def show_message(self, text: str, *, error: bool = False) -> None:
-        """Show ``text`` in the readout panel (and as a browser notification in a real tab)."""
+    def show_message(self, text: str, *, error: bool = False, about: str | None = None) -> None:
+        """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
+        or sample (:func:`_sequence_of`) it is about, when that is not the one shown now (a pass that shows another
+        one clears the message)."""
         self.messages.append(text)
         self.messages = self.messages[-20:]
         self._message_count += 1
         self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
-        self._status_about = _sequence_of(self.state.sample.key) if hasattr(self, "state") else None
+        self._last_was_error = error
+        self._status_about = about if about is not None else (
+            _sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
         try:
             self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
@@ -545,22 +550,25 @@ class SessionView:
         else:
             self._frame_note = None
             return
+        about = _sequence_of(key)
         if int(f) == last and wanted > last:
-            self._frame_note = (wanted, last)
+            self._frame_note = (wanted, last, about)
         elif int(f) == 0 and wanted < 0:
-            self._frame_note = (wanted, 0)
-        elif not (self._frame_note is not None and int(f) == wanted == self._frame_note[1]):
-            self._frame_note = None  # another frame asked for since (the slider set to the end frame keeps it)
+            self._frame_note = (wanted, 0, about)
+        elif not (self._frame_note is not None and int(f) == wanted == self._frame_note[1]
+                  and self._frame_note[2] == about):
+            self._frame_note = None  # another frame or sequence asked for since (the slider set to the end keeps it)
         if self._frame_note is None:
             return
         since = self._since_typed("frame")
         if since < TYPING_SETTLE_S:
             self._settle_later(TYPING_SETTLE_S - since + 0.05)
             return
-        wanted, at = self._frame_note
+        wanted, at, about = self._frame_note
         self._frame_note = None
         where = "past the end" if wanted > at else "before the start"
-        self.show_message(f"frame {wanted} is {where} of this sequence (frames 0–{last}); showing frame {at}")
+        self.show_message(f"frame {wanted} is {where} of this sequence (frames 0–{last}); showing frame {at}",
+                          about=about)
         self._put(self.gui.play.frame, at)  # (said once: the slider shows the frame in use)
 
     def sequence(self) -> SequenceSource | None:
@@ -879,8 +887,7 @@ class SessionView:
             raise PoseLifterError(f"{name.replace('_', ' ')} must be an integer, got {value!r}")
         handle.value = typed
         self._runner.request()
-        if self._message_count != n and not self.messages[-1].startswith(("focal length", "noise level",
-                                                                          "cloud samples")):  # (clamped: a note)
+        if self._message_count != n and self._last_was_error:  # (a clamped value is a note: applied)
             raise PoseLifterError(self.messages[-1])
 
     @control

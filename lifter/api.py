@@ -381,7 +381,8 @@ class Lifter:
         ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
         ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see :meth:`quantized`."""
         ref, shipped = str(name), assets.model_names()
-        if "+" in ref and not Path(ref).is_file() and any(part in (*shipped, "default") for part in ref.split("+")):
+        if "+" in ref and ref not in shipped and not Path(ref).is_file() and (
+                any(part in (*shipped, "default") for part in ref.split("+")) or not ref.endswith(".pt")):
             raise PoseLifterError(f"{ref!r}: shipped models cannot be joined by '+' (the default already averages its "
                                   "networks); '+' joins checkpoint files ending in .pt into an ensemble (A.pt+B.pt)")
         if ref != "default" and ref not in shipped and (ref.endswith(".pt") or Path(ref).is_file()):
@@ -394,9 +395,6 @@ class Lifter:
                 return cls.from_checkpoint(parts[0], name="+".join(Path(p).stem for p in parts), quantize=quantize,
                                            ensemble=parts[1:])
             return cls.from_checkpoint(ref, quantize=quantize)
-        if "+" in ref and ref not in shipped and not Path(ref).is_file():
-            raise PoseLifterError(f"{ref!r}: '+' joins checkpoint files ending in .pt into an ensemble (A.pt+B.pt); "
-                                  "shipped models cannot be joined (the default already averages its networks)")
         entry = assets.model_entry(ref)
         ck = load_checkpoint(assets.read_bytes(entry["file"]), expected_sha256=entry.get("sha256"),
                              name=f"shipped model {entry['name']!r} ({entry['file']})")

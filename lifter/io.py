@@ -5,10 +5,12 @@ Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17"
 "focal": F or [FX, FY], "principal_point": [CX, CY], "distortion": [K1, K2, K3, P1, P2], "source": "detected" |
 "clean"}`` (only ``keypoints`` is
 required; rows may have a third value, a confidence, where 0 marks a missing joint, as does ``null`` for a
-coordinate, a confidence or a whole row; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of
+coordinate, a confidence or a whole row; third values that look like coordinates are refused,
+:data:`Z_LIKE_THIRD_VALUE`; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of
 ``[x, y]`` rows, OpenPose's output ``{"people": [{"pose_keypoints_2d": [...]}, ...]}`` (format openpose25), a
-COCO-style list of people ``[{"keypoints": [...]}, ...]`` or a result this module wrote (:class:`LiftRecord`:
-``people[].keypoints_2d``, H36M order, with its camera; lift it again with another focal length or model).
+COCO-style list of people ``[{"keypoints": [...]}, ...]`` of one image (several ``image_id`` are refused: a file is
+one image, one camera) or a result this module wrote (:class:`LiftRecord`: ``people[].keypoints_2d``, H36M order,
+with its camera, or one such person on its own; lift it again with another focal length or model).
 Without ``format`` it is inferred from the joint count (17: h36m17; 16: sh16; 25: openpose25; 33:
 blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's output, the default) or ``"clean"``
 (exact: ground truth or hand-placed). Camera fields must be JSON numbers: ``image_size`` whole px in [1, 100000]
@@ -195,17 +197,23 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
     conf = a[:, 2] if a.shape[1] == 3 else None
     if conf is not None:
         c = conf[np.isfinite(conf)]
-        if c.size and float(c.max()) > MAX_CONFIDENCE:
+        if c.size and (float(np.median(np.abs(c))) > Z_LIKE_THIRD_VALUE or float(c.min()) < -Z_LIKE_THIRD_VALUE):
             raise PoseLifterError(
-                f"{where}: the third value of each keypoint row is read as a confidence (0 to 1, or COCO's visibility "
-                f"flags 0, 1, 2), but it reaches {float(c.max()):.4g}: is this a 3D pose (x, y, z)? The lifter takes "
-                "2D image coordinates in px: give [x, y] or [x, y, confidence] rows")
+                f"{where}: the third value of each keypoint row is read as a confidence, but these run from "
+                f"{float(c.min()):.4g} to {float(c.max()):.4g} (median size {float(np.median(np.abs(c))):.4g}), like a "
+                "coordinate: is this a 3D pose (x, y, z)? The lifter takes 2D image coordinates in px: give [x, y] or "
+                "[x, y, confidence] rows")
     return a[:, :2], conf
 
 
-MAX_CONFIDENCE: Final[float] = 2.0
-"""The largest third value a keypoint row may have (a confidence in [0, 1], or COCO's visibility flag 0, 1 or 2); more
-is refused: it is most likely a z coordinate (a 3D pose given as 2D)."""
+Z_LIKE_THIRD_VALUE: Final[float] = 50.0
+"""Keypoint rows whose third values have a median size above this, or go below minus this, are refused: those are
+coordinates (a 3D pose in mm or px given as 2D), not confidences. Detector scores may exceed 1 (Detectron2's and
+torchvision's keypoint scores are unbounded, RTMPose's SimCC scores pass 1; COCO's visibility flags go to 2): they
+are read, with a note when above 2 (:data:`SCORE_NOTE_ABOVE`), and only a value <= 0 marks a missing joint."""
+
+SCORE_NOTE_ABOVE: Final[float] = 2.0
+"""Third values above this get a note saying they are read as unnormalised scores."""
 
 
 def _short(v: Any, n: int = 60) -> str:
@@ -430,9 +438,10 @@ def _people_of(d: Any, p: Path, fmt: str | None
         if isinstance(meta.get("format"), str):
             fmt = meta["format"]
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
-        images = sorted({str(q["image_id"]) for q in d if q.get("image_id") is not None})
+        found = {q["image_id"] for q in d if q.get("image_id") is not None and isinstance(q["image_id"], (int, str))}
+        images = sorted(found, key=lambda i: (isinstance(i, str), i if isinstance(i, int) else 0, str(i)))
         if len(images) > 1:
-            shown = ", ".join(images[:5]) + (", ..." if len(images) > 5 else "")
+            shown = ", ".join(map(str, images[:5])) + (", ..." if len(images) > 5 else "")
             raise PoseLifterError(f"{p}: a list of people from {len(images)} images (image_id {shown}); a keypoint "
                                   "file is one image, seen by one camera: split the list by image_id into one file "
                                   "per image (or give a sequence with 'frames')")
@@ -492,12 +501,18 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
     is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each.
     layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages."""
     parsed = []
+    top = -math.inf
     for _, q, _ in people:
         xy, conf = _rows(q, str(p))
         missing = ~np.all(np.isfinite(xy), axis=1)
         if conf is not None:
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
+            if np.isfinite(conf).any():
+                top = max(top, float(np.nanmax(np.where(np.isfinite(conf), conf, np.nan))))
         parsed.append((xy, missing))
+    if top > SCORE_NOTE_ABOVE:
+        notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "
+                     "a missing joint)")
     if not parsed:
         return [], fmt or H36M17, [], []
 

@@ -118,9 +118,10 @@ def principal_point_notes(pp: Any, image_size: tuple[int, int] | None) -> list[s
         return []
     slip = " (it equals the image size: was that given as the principal point?)" if np.allclose(c, (W, H)) else ""
     where = "at the edge of" if 0 <= c[0] <= W and 0 <= c[1] <= H else "outside"
-    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {where} the {W} x {H} px image{slip}; a camera's "
-            f"is usually near the image centre ({W / 2:g}, {H / 2:g}), and the 3D is placed off to the side by as "
-            "much. Leave it out to use the centre, or give the calibrated one"]
+    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {where} the {W} x {H} px image{slip}; unless the "
+            f"image is a crop, a camera's lies near the centre ({W / 2:g}, {H / 2:g}), and a wrong one moves every "
+            "root sideways (by its error in px x depth / focal). Give the calibrated one, or leave it out to use the "
+            "centre"]
 
 
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
@@ -131,8 +132,9 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
                        focal_source: str = "user", detected: bool = False) -> list[str]:
     """Notes on 2D that the lifter takes but that look wrong, for the records (files, photos, videos): poses
     ``(n, 17, 2)`` px spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px or
-    with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of), or
-    lying mostly outside the ``image_size`` (None: not checked). detected: the 2D is this package's detector's
+    with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of),
+    upright but upside down (keypoints only: :func:`upside_down_notes`), or lying mostly outside the ``image_size``
+    (None: not checked). detected: the 2D is this package's detector's
     (photos, videos), not the user's keypoints, which changes the advice."""
     notes: list[str] = []
     k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
@@ -153,7 +155,8 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
 
 
 def upside_down_notes(kp17: np.ndarray, *, detected: bool = False) -> list[str]:
-    """A note when most of the poses ``(n, 17, 2)`` px (H36M order) have the head below both ankles in the image:
+    """A note when most of the poses ``(n, 17, 2)`` px (H36M order) are upright bodies upside down (taller than wide,
+    the head below both ankles by more than half the pose's height; a joint at (0, 0) gives no reading) in the image:
     the 2D then likely has its y axis pointing up, where this package expects image y to grow downward (OpenCV);
     a handstand looks the same, hence a note, not an error. Not for the package's own detector (``detected``)."""
     from .skeleton import JOINT_NAMES
@@ -161,9 +164,13 @@ def upside_down_notes(kp17: np.ndarray, *, detected: bool = False) -> list[str]:
     k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
     if detected or not len(k):
         return []
-    head = k[:, JOINT_NAMES.index("head_top"), 1]
-    ankles = k[:, [JOINT_NAMES.index("r_ankle"), JOINT_NAMES.index("l_ankle")], 1]
-    down = head > ankles.max(1)
+    head = k[:, JOINT_NAMES.index("head_top")]
+    ankles = k[:, [JOINT_NAMES.index("r_ankle"), JOINT_NAMES.index("l_ankle")]]
+    ext = k.max(1) - k.min(1)  # (x, y) extent of each pose
+    placeholder = np.all(head == 0, -1) | np.any(np.all(ankles == 0, -1), -1)  # a detector's (0, 0): no reading
+    # an upright body upside down: taller than wide, the head below both ankles by half the height (a person lying
+    # down, head a little lower than the feet, is neither)
+    down = (ext[:, 1] > ext[:, 0]) & (head[:, 1] - ankles[:, :, 1].max(1) > 0.5 * ext[:, 1]) & ~placeholder
     if float(down.mean()) <= 0.5:
         return []
     return [f"the head is below both ankles in {int(down.sum())} of {len(k)} pose(s): this package takes image y "

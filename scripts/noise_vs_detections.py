@@ -9,7 +9,8 @@ from their mean), and the default's MPJPE, MRPE (mean and median) and mean signe
 each frame with its true focal length, principal point and lens. The noisy inputs are the ground-truth 2D with draws
 from the shipped error models (``lifter.noise.ErrorModel.shipped``) at the slider's levels, lifted as the app lifts
 them (``source="detected"``), the SH mixture's draws without their uniform outliers (the authors' sampling), and the
-ground truth itself, lifted as detected 2D.
+ground truth itself, lifted as detected 2D, as it is and scaled about its mean to the size of each frame's detection
+(the 2D spread's ratio): the detection's size without its errors.
 """
 
 from __future__ import annotations
@@ -52,7 +53,11 @@ def main() -> int:
     lifter = Lifter.load(args.model)
     gt2, gt3 = s.keypoints_2d.astype(np.float64), s.pose_3d.astype(np.float64)
     rng = np.random.default_rng(args.seed)
-    rows: list[tuple[str, np.ndarray]] = [("real SH detections", det), ("ground truth, no noise", gt2)]
+    ratio = spread(det) / spread(gt2)  # each detection's 2D size against its ground truth's
+    mean = gt2.mean(-2, keepdims=True)
+    rows: list[tuple[str, np.ndarray]] = [("real SH detections", det), ("ground truth, no noise", gt2),
+                                          ("ground truth scaled to each detection's 2D size, no noise",
+                                           mean + (gt2 - mean) * ratio[:, None, None])]
     for name in ("sh_mixture", "blazepose_demo_train"):
         model = ErrorModel.shipped(name)
         for level in (0.5, 1.0):

@@ -278,6 +278,11 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     assert "degenerate" in view.messages[-1]
     assert view.move_joint(99, (1, 2)) is False
     assert view.set_seed("abc") is False and view.set_cloud_samples(2.5) is False
+    # refused values are errors, whatever the message's wording (a review: "focal length inf is not a finite number"
+    # passed as a clamped value's note, and set_focal returned True)
+    f0 = view.state.focal_px
+    assert view.set_focal(float("inf")) is False and view.set_noise(float("nan")) is False
+    assert view.state.focal_px == f0
     # out of range: clamped with a note, as the sliders are (a helper typed 257 and was left at the "25" on the way)
     assert view.set_cloud_samples(257) is True and view.state.cloud_samples == 256
     assert view.messages[-1] == "cloud samples 257 is outside [0, 256]; set to 256"

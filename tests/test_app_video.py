@@ -210,3 +210,25 @@ def test_a_video_note_goes_when_another_sample_is_shown(server, tmp_path: Path) 
     v.gui.sample.source.value = "demo sample"  # at once, well within the note's time
     assert wait_for(lambda: v.state.sample.key.startswith("demo/"))
     assert wait_for(lambda: v.gui.readout.status.content == ""), v.gui.readout.status.content
+
+
+def test_a_video_lifted_again_keeps_the_upload_s_track_ids(server, tmp_path: Path) -> None:
+    """A review: lifting a video again in the app (another focal) re-tracked it, and once the upload had left out a
+    one-frame detection the tracker numbered the tracks differently, so the download's notes and the person
+    picker named tracks the download did not have. The upload's track ids are kept."""
+    n = 12
+    both = _script(n)
+    flash = [p + [150.0, -60.0] for p in both[2][:1]]
+    script = [[both[i][0]] + (flash if i == 2 else []) + ([both[i][1]] if i >= 5 else []) for i in range(n)]
+    est = ScriptedEstimator(script, full_width=W)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    assert v.load_upload("walk.avi", _clip(tmp_path / "walk.avi", n)) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert isinstance(seq, vid.VideoSequence)
+    ids = sorted({p.track_id for fr in seq.record.frames for p in fr.people})
+    assert len(ids) == 2 and ids != [1, 2], ids  # (the flash took a number and was left out)
+    again = seq.record_at(app.pool.get(v.state.model), (F * 1.5, F * 1.5))
+    assert again is not seq.record
+    assert [[p.track_id for p in fr.people] for fr in again.frames] == \
+        [[p.track_id for p in fr.people] for fr in seq.record.frames]

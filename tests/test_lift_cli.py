@@ -766,15 +766,28 @@ def test_keypoint_file_slips_are_refused_or_noted(tmp_path, weights, kp17, capsy
     three_d = np.concatenate([kp17, np.full((17, 1), 4000.0)], 1)
     (tmp_path / "a.json").write_text(json.dumps({"keypoints": three_d.tolist(), **cam}))
     code, err = run([str(tmp_path / "a.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
-    assert code == 1 and "reaches 4000: is this a 3D pose (x, y, z)?" in err
-    flags = np.concatenate([kp17, np.full((17, 1), 2.0)], 1)  # COCO visibility flag 2: still read
+    assert code == 1 and "like a coordinate: is this a 3D pose (x, y, z)?" in err
+    rel = np.concatenate([kp17, np.linspace(-400, 300, 17)[:, None]], 1)  # root-relative z, mm: negative too
+    (tmp_path / "a2.json").write_text(json.dumps({"keypoints": rel.tolist(), **cam}))
+    code, err = run([str(tmp_path / "a2.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 1 and "is this a 3D pose" in err
+    flags = np.concatenate([kp17, np.full((17, 1), 2.0)], 1)  # COCO visibility flag 2: read, no note
     (tmp_path / "b.json").write_text(json.dumps({"keypoints": flags.tolist(), **cam}))
-    assert run([str(tmp_path / "b.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)[0] == 0
+    code, err = run([str(tmp_path / "b.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "unnormalised" not in err
+    scores = np.concatenate([kp17, np.linspace(0.5, 2.6, 17)[:, None]], 1)  # Detectron2-like scores above 1: read
+    (tmp_path / "b2.json").write_text(json.dumps({"keypoints": scores.tolist(), **cam}))
+    code, err = run([str(tmp_path / "b2.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "third values up to 2.6: read as a detector's unnormalised scores" in err
     coco = [v for r in coco_from_h36m(kp17) for v in (*r, 0.9)]
     (tmp_path / "c.json").write_text(json.dumps([{"image_id": i, "category_id": 1, "keypoints": coco} for i in (7, 8)]))
     code, err = run([str(tmp_path / "c.json"), "--weights", str(weights), "--out", str(tmp_path / "o"), "--focal",
                      "1000", "--principal-point", "640", "360"], capsys)
     assert code == 1 and "a list of people from 2 images (image_id 7, 8)" in err and "split the list by image_id" in err
+    (tmp_path / "c2.json").write_text(json.dumps([{"image_id": i, "keypoints": coco} for i in (10, 9, 100)]))
+    code, err = run([str(tmp_path / "c2.json"), "--weights", str(weights), "--out", str(tmp_path / "o"), "--focal",
+                     "1000", "--principal-point", "640", "360"], capsys)
+    assert code == 1 and "(image_id 9, 10, 100)" in err  # (in number order)
     (tmp_path / "d.json").write_text(json.dumps([{"image_id": 7, "category_id": 1, "keypoints": coco}] * 2))
     code, err = run([str(tmp_path / "d.json"), "--weights", str(weights), "--out", str(tmp_path / "o"), "--focal",
                      "1000", "--principal-point", "640", "360"], capsys)

@@ -24,6 +24,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _stdout_reader_gone() -> bool:
+    """Whether stdout is a pipe whose reader has closed it (poll reports an error on it); True where that cannot be
+    asked (no poll: Windows), as the broken pipe is then most likely stdout's."""
+    import select
+
+    if not hasattr(select, "poll"):
+        return True
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(ev & (select.POLLERR | select.POLLHUP) for _, ev in poller.poll(0))
+    except (OSError, ValueError):
+        return True
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -35,6 +50,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # (output piped into `head` and the like, which closed the pipe: not an error of ours)
         import os
 
+        if not _stdout_reader_gone():
+            raise  # (another pipe broke, not stdout: a real error)
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # (else Python's exit flush of stdout fails again, with a message)
         return 141  # (128 + SIGPIPE, what a shell reports for a command that died of a closed pipe)
