@@ -24,6 +24,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from eval_cascade import demo_cameras, demo_intrinsics  # noqa: E402
+
 from lifter.api import Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import get_estimator, load_image  # noqa: E402
@@ -54,10 +57,7 @@ def main() -> int:
     demo = h36m / "demo"
     ann = np.load(demo / "annotations.npz")
     data = H36M(h36m)
-    cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
-    focal = np.array([c.focal for c in cams])
-    pp = np.array([c.principal_point for c in cams])
-    dist = np.array([[*c.k, *c.p] for c in cams])
+    focal, pp, dist = demo_intrinsics(demo_cameras(data, ann))
     gt2d, gt3d = ann["p2d_gt"].astype(np.float64), ann["p3d_cam"].astype(np.float64)
     n = len(ann["image"])
     names = ["first pass"] + [f"crop grown {g:g}" for g in args.grows]

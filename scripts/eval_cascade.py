@@ -185,6 +185,19 @@ def pose_metrics(pred_abs: np.ndarray, gt_abs: np.ndarray) -> dict[str, Any]:
     }
 
 
+def demo_cameras(data: H36M, ann: Any) -> list[Any]:
+    """Each demo photo's Human3.6M camera (:meth:`lifter.data.H36M.camera`), from its annotations' subject and
+    camera."""
+    return [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
+
+
+def demo_intrinsics(cams: list[Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(focal (N, 2), principal point (N, 2), distortion (N, 5))`` px of :func:`demo_cameras`: the photos' 2D is
+    seen through Human3.6M's lenses, so each camera's distortion ``(k1, k2, k3, p1, p2)`` comes with it."""
+    return (np.array([c.focal for c in cams]), np.array([c.principal_point for c in cams]),
+            np.array([[*c.k, *c.p] for c in cams]))
+
+
 def detect_demo(
     demo: Path, images: np.ndarray, *, redetect: bool = False, cache_dir: Path = CACHE_DIR, max_people: int = 3
 ) -> dict[str, np.ndarray]:
@@ -318,10 +331,8 @@ def main() -> int:
     ann = np.load(demo / "annotations.npz")
     data = H36M(h36m_dir)
     n_all = len(ann["image"])
-    cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
-    focal = np.array([c.focal for c in cams])
-    pp = np.array([c.principal_point for c in cams])
-    dist = np.array([[*c.k, *c.p] for c in cams])  # the 2D is seen through H36M's lenses: each camera's distortion
+    cams = demo_cameras(data, ann)
+    focal, pp, dist = demo_intrinsics(cams)
     sizes = np.array([(c.width, c.height) for c in cams])
     gt2d = ann["p2d_gt"].astype(np.float64)
     gt3d = ann["p3d_cam"].astype(np.float64)
