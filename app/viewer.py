@@ -535,8 +535,8 @@ class SessionView:
 
     def _note_frame_past_end(self, key: str, video: Any) -> None:
         """Say so when the frame asked for (typed in the slider's box) is past the sequence's end or before its start
-        and the last or first frame is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While the box is being typed in
-        ("9999" on the way to "99999") the value is remembered and said once the typing settles
+        and the last or first frame is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While
+        the box is being typed in ("9999" on the way to "99999") the value is remembered and said once the typing settles
         (:data:`TYPING_SETTLE_S`), even if the slider has been set to the last frame meanwhile."""
         try:
             wanted = int(self.gui.play.frame.value)

@@ -439,7 +439,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
             fmt = meta["format"]
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
         found = {q["image_id"] for q in d if q.get("image_id") is not None and isinstance(q["image_id"], (int, str))}
-        images = sorted(found, key=lambda i: (isinstance(i, str), i if isinstance(i, int) else 0, str(i)))
+        images = sorted(found, key=lambda i: (isinstance(i, str), i))  # (numbers in number order, then names)
         if len(images) > 1:
             shown = ", ".join(map(str, images[:5])) + (", ..." if len(images) > 5 else "")
             raise PoseLifterError(f"{p}: a list of people from {len(images)} images (image_id {shown}); a keypoint "
@@ -507,8 +507,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
         missing = ~np.all(np.isfinite(xy), axis=1)
         if conf is not None:
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
-            if np.isfinite(conf).any():
-                top = max(top, float(np.nanmax(np.where(np.isfinite(conf), conf, np.nan))))
+            top = max([top, *conf[np.isfinite(conf)].tolist()])
         parsed.append((xy, missing))
     if top > SCORE_NOTE_ABOVE:
         notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "

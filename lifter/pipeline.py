@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, as_pair, input_warnings
+from ._checks import PoseLifterError, as_pair, input_warnings, zero_placeholders
 from ._text import sentence
 from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
@@ -141,7 +141,8 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     if not len(k):
         return notes
     notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES)
-    notes += upside_down_notes(k, detected=detected)
+    if not detected:  # (the package's own detector gives upright image coordinates)
+        notes += upside_down_notes(k)
     if image_size is not None:
         W, H = image_size
         outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
@@ -154,20 +155,20 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     return notes
 
 
-def upside_down_notes(kp17: np.ndarray, *, detected: bool = False) -> list[str]:
+def upside_down_notes(kp17: np.ndarray) -> list[str]:
     """A note when most of the poses ``(n, 17, 2)`` px (H36M order) are upright bodies upside down (taller than wide,
     the head below both ankles by more than half the pose's height; a joint at (0, 0) gives no reading) in the image:
     the 2D then likely has its y axis pointing up, where this package expects image y to grow downward (OpenCV);
-    a handstand looks the same, hence a note, not an error. Not for the package's own detector (``detected``)."""
+    a handstand looks the same, hence a note, not an error."""
     from .skeleton import JOINT_NAMES
 
     k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
-    if detected or not len(k):
+    if not len(k):
         return []
-    head = k[:, JOINT_NAMES.index("head_top")]
-    ankles = k[:, [JOINT_NAMES.index("r_ankle"), JOINT_NAMES.index("l_ankle")]]
+    h, ra, la = (JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
+    head, ankles = k[:, h], k[:, [ra, la]]
     ext = k.max(1) - k.min(1)  # (x, y) extent of each pose
-    placeholder = np.all(head == 0, -1) | np.any(np.all(ankles == 0, -1), -1)  # a detector's (0, 0): no reading
+    placeholder = zero_placeholders(k)[:, [h, ra, la]].any(1)  # a detector's (0, 0) for a missing joint: no reading
     # an upright body upside down: taller than wide, the head below both ankles by half the height (a person lying
     # down, head a little lower than the feet, is neither)
     down = (ext[:, 1] > ext[:, 0]) & (head[:, 1] - ankles[:, :, 1].max(1) > 0.5 * ext[:, 1]) & ~placeholder
