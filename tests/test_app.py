@@ -1282,6 +1282,33 @@ def test_a_frame_typed_past_the_end_is_said_once_typing_settles(h36m_app: PoseLi
         assert len(said) == 1 and said[0].startswith("frame 5000 is past the end"), said
 
 
+def test_a_pending_frame_note_is_not_said_about_another_sequence(h36m_app: PoseLifterApp) -> None:
+    """A frame typed past the end waits for the typing to settle before it is said. If another, longer sequence is
+    shown meanwhile, at the very frame number the note would name (the clamped last frame of the first), the note is
+    dropped: it must not say "past the end" of a sequence the typed frame is not past."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    h = h36m_app.h36m
+    s9 = sorted((h.num_frames(9, s.split("/", 1)[1]), s.split("/", 1)[1]) for s in h.data.sequences
+                if s.startswith("S9/"))
+    (n_short, short), (n_long, long) = s9[0], s9[-1]
+    assert n_long > n_short + 10
+    with open_tab(h36m_app) as (tab, v):
+        cam = h.camera_ids[0]
+        v.select_h36m(subject=9, sequence=short, camera=cam, frame=5)
+        n_msgs = len(v.messages)
+        _send_value(tab, v.gui.play.frame, 99999)  # typed: the note waits TYPING_SETTLE_S
+        assert wait_for(lambda: v.state.sample.key.endswith(f"/{n_short - 1}"), timeout=10)
+        v.select_h36m(subject=9, sequence=long, camera=cam, frame=n_short - 1)  # same frame number, another sequence
+        assert v.state.sample.key.endswith(f"{long}/{cam}/{n_short - 1}") and v.gui.play.frame.value == n_short - 1
+        time.sleep(TYPING_SETTLE_S + 0.5)
+        v._do(lambda: None)  # (a pass after the settling time)
+        assert not [m for m in v.messages[n_msgs:] if "past the end" in m], v.messages[n_msgs:]
+        assert "past the end" not in v.gui.readout.status.content
+
+
 def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
     """User trial (Chromium): typing 3000 into the focal box while a sequence played left the box at 1144.4 and the
     lift at 300 px (each frame rewrote the box under the keys); a slow typist's "6" was clamped to the minimum after
