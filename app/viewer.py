@@ -190,6 +190,10 @@ class SessionView:
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self._message_count = 0
+        self._status_lock = threading.Lock()
+        """Held while a message is recorded and shown, and while the status line is checked and cleared: an upload's
+        thread shows messages without :attr:`lock`, and a pass's "no message since, clear it" must not land between
+        its message's count and its text. Taken after :attr:`lock` when both are held, never before."""
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self._last_was_error = False
         self._status_about: str | None = None
@@ -283,23 +287,28 @@ class SessionView:
             log.error("%s failed:\n%s", getattr(func, "__name__", func), traceback.format_exc())
             self.show_message(f"internal error: {type(exc).__name__}: {exc}", error=True)
             return False
-        if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
-            self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
+        with self._status_lock:
+            if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
+                self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`_sequence_of`) it is about, when that is not the one shown now (a pass that shows another
         one clears the message)."""
-        self.messages.append(text)
-        self.messages = self.messages[-20:]
-        self._message_count += 1
-        self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
-        self._last_was_error = error
-        self._status_about = about if about is not None else (
-            _sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
+        with self._status_lock:
+            self.messages.append(text)
+            self.messages = self.messages[-20:]
+            self._message_count += 1
+            self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
+            self._last_was_error = error
+            self._status_about = about if about is not None else (
+                _sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
+            try:
+                self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
+            except Exception:  # noqa: BLE001
+                log.exception("could not show message %r", text)
         try:
-            self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             if isinstance(self.target, viser.ClientHandle):
                 self.target.add_notification(title="Input problem" if error else "poselifter", body=text,
                                              auto_close_seconds=6.0, color="red" if error else "blue")
@@ -375,9 +384,10 @@ class SessionView:
                 self._sync_pass()
             finally:
                 self._pass_t0 = math.inf
-            if (self._message_count == n and self.gui.readout.status.content and self._status_about is not None
-                    and _sequence_of(self.state.sample.key) != self._status_about):
-                self.gui.readout.status.content = ""  # (the message was about a sample no longer shown)
+            with self._status_lock:
+                if (self._message_count == n and self.gui.readout.status.content and self._status_about is not None
+                        and _sequence_of(self.state.sample.key) != self._status_about):
+                    self.gui.readout.status.content = ""  # (the message was about a sample no longer shown)
 
     def _put(self, handle: Any, value: Any) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
@@ -1117,8 +1127,9 @@ class SessionView:
                 return
             last[0] = now
             text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
-            self.gui.readout.status.content = "⏳ " + text
-            self._note_until = 0.0  # (progress, not a note: the next success clears it)
+            with self._status_lock:
+                self.gui.readout.status.content = "⏳ " + text
+                self._note_until = 0.0  # (progress, not a note: the next success clears it)
             if note is not None:
                 note.body = text
 
