@@ -51,7 +51,13 @@ python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/ben
   | tee "$OUT/bench_invariance.txt"
 python scripts/eval_cascade.py --model universal --compare sh_mix blazepose gt | tee "$OUT/cascade_universal.txt"
 # The default since the camera-turn stop, universal_turn, beside universal ("Any camera pose" in the README).
+ev clean_turn_s5 --stride 5                                    # the must-reach clean line (source="clean")
+ev sh_turn_s5 --inputs sh --stride 5                           # the must-reach SH line (no source: "detected")
+ev table3_default universal_turn universal --inputs sh --stride 50   # Table 3's and the shipped table's SH rows
 ev focal_sweep_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --stride 50
+ev focal_sweep_shifted_pp_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
+python scripts/pixel_convention.py | tee "$OUT/pixel_convention.txt"
+python scripts/wrong_focal.py | tee "$OUT/wrong_focal.txt"
 python benchmarks/bench_invariance.py --models universal_turn,universal --json "$OUT/bench_invariance_turn.json" \
   | tee "$OUT/bench_invariance_turn.txt"
 python scripts/eval_cascade.py --model universal_turn --compare universal | tee "$OUT/photos_turn.txt"
@@ -62,6 +68,6 @@ python scripts/root_smoothness.py universal universal_turn --source clean | tee 
 # Camera roll and turns beyond the trained +-20 deg, on the shipped default ("Camera roll" and the known limits in
 # the README; the roll-trained networks' table is docs/results/gpu_roll/README.md's command, on checkpoints not shipped).
 python scripts/turned_cameras.py universal_turn universal --turns 0:0:0,0:0:5,0:0:-10,0:0:10,0:0:-20,0:0:20 \
-  --source clean | tee "$OUT/roll_shipped_s50.txt"
+  --source clean | tee "$OUT/gpu_roll/roll_shipped_s50.txt"
 python scripts/turned_cameras.py universal_turn --turns 0:0,0:-30,0:30,0:40,30:0,45:0,30:30 --source clean \
   | tee "$OUT/turned_cameras_wide.txt"

@@ -114,13 +114,14 @@ def size_lines(lifter: Lifter, data: H36M, stride: int) -> list[str]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     add_h36m_arguments(ap, stride=50)
+    ap.add_argument("--model", default="default", help="a shipped model name or checkpoint (default: the default)")
     args = ap.parse_args()
     import torch
 
     torch.set_num_threads(2)
     h36m = args.h36m or default_h36m_dir()
     data = H36M(h36m)
-    lifter = Lifter.from_pretrained()
+    lifter = Lifter.from_pretrained() if args.model == "default" else Lifter.load(args.model)
     print(f"1. mean signed root-depth error of {lifter.name!r}, % of the true depth (+ = too far), Protocol 1 test, "
           f"every {args.stride}th frame")
     print("\n".join(depth_bias_table(lifter, data, args.stride)))
