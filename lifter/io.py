@@ -18,9 +18,11 @@ blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's outpu
 magnitude; ``distortion`` five finite numbers below 10 in magnitude, the lens that saw the 2D in Human3.6M's
 Brown-Conrady form (:func:`lifter.camera.distort`; needs the camera's focal length, in the file or given with it;
 without it the 2D is taken as undistorted); anything
-else fails with a message naming the field. A person missing a joint that the format's
-rules to H36M need is left out with a note naming them (a frame of a sequence then has one person fewer); a
-file where nobody is left fails.
+else fails with a message naming the field. MMPose's / RTMPose's ``keypoint_scores`` beside ``[x, y]`` rows are
+read as the rows' confidences. A missing face or mid-body joint of a detector format is stood in for, with a note
+(:data:`lifter.keypoints.STAND_INS`: a hidden ear, the nose, OpenPose's Neck and MidHip). A person still missing a
+joint that the format's rules to H36M need is left out with a note naming them (a frame of a sequence then has one
+person fewer); a file where nobody is left fails.
 
 Units: px for 2D, mm for 3D; camera frame OpenCV (+x right, +y down, +z forward).
 """
@@ -41,7 +43,7 @@ import numpy as np
 
 from ._checks import PoseLifterError
 from .camera import MAX_DISTORTION_COEFFICIENT, check_distortion
-from .keypoints import H36M17, get_format, keypoint_formats
+from .keypoints import H36M17, get_format, keypoint_formats, stand_in_missing
 from .skeleton import JOINT_NAMES
 
 FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose25", 33: "blazepose33"}
@@ -158,7 +160,14 @@ class KeypointFile:
     unread: tuple[str, ...] = ()
     """The notes (also in ``warnings``) on fields that were not read: camera fields inside a person, fields named
     otherwise than the ones read (:func:`unread_field_notes`). An error about a missing field repeats them."""
+    people_scores: tuple[np.ndarray | None, ...] = ()
+    """For each of ``people``: its ``(J,)`` confidences (the rows' third values or ``keypoint_scores``; a stood-in
+    joint has the lowest of its stand-ins'), None where the file gave none."""
 
+
+STAND_IN_NOTE: Final[str] = ("missing joint(s) stood in for: {what} (lifter.keypoints.STAND_INS); the head's and "
+                              "trunk's H36M joints made from them are approximate")
+"""The note when a missing face or mid-body joint was stood in for (``{what}``: which, from what)."""
 
 MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
 """Keypoint JSON files larger than this are refused before they are parsed."""
@@ -409,6 +418,29 @@ def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
     return sorted({k for q in objs for k in CAMERA_FIELDS if k in q})
 
 
+def _scored(q: dict[str, Any], p: Path) -> Any:
+    """A person object's ``keypoints``, with MMPose's / RTMPose's separate ``keypoint_scores`` (one per joint) made
+    their third values, so that they are read as every other confidence is (a score <= 0 marks a missing joint)."""
+    raw, scores = q.get("keypoints"), q.get("keypoint_scores")
+    if scores is None or raw is None:
+        return raw
+    if not (isinstance(scores, list) and all(_is_number(v) or v is None for v in scores)):
+        raise PoseLifterError(f"{p}: 'keypoint_scores' must be a list of numbers, one per joint, got {_short(scores)}")
+    if isinstance(raw, list) and raw and all(_is_row(r) or r is None for r in raw):
+        if any(r is not None and len(r) == 3 for r in raw):
+            raise PoseLifterError(f"{p}: a person has both a third value in each 'keypoints' row and "
+                                  "'keypoint_scores': give the confidences once (drop one of the two)")
+        rows = raw
+    elif isinstance(raw, list) and raw and all(_is_number(v) or v is None for v in raw) and len(raw) % 2 == 0 \
+            and len(raw) // 2 == len(scores):
+        rows = [raw[i:i + 2] for i in range(0, len(raw), 2)]
+    else:
+        return raw  # (not rows of [x, y]: _rows says what is wrong with it)
+    if len(rows) != len(scores):
+        raise PoseLifterError(f"{p}: {len(rows)} keypoints but {len(scores)} 'keypoint_scores': one score per joint")
+    return [None if r is None else [*r, c] for r, c in zip(rows, scores)]
+
+
 def _people_of(d: Any, p: Path, fmt: str | None
                ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any], bool]:
     """The people in one decoded frame object as ``(position in the file's list, raw keypoint list, person id)``
@@ -431,7 +463,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
                 people.append(q["keypoints_2d"])
                 fmt = fmt or H36M17
             elif isinstance(q, dict):
-                people.append(q.get("keypoints"))
+                people.append(_scored(q, p))
             else:
                 people.append(q)
         meta = {k: v for k, v in d.items() if k != "people"}
@@ -445,11 +477,11 @@ def _people_of(d: Any, p: Path, fmt: str | None
             raise PoseLifterError(f"{p}: a list of people from {len(images)} images (image_id {shown}); a keypoint "
                                   "file is one image, seen by one camera: split the list by image_id into one file "
                                   "per image (or give a sequence with 'frames')")
-        people = [q.get("keypoints") for q in d]
+        people = [_scored(q, p) for q in d]
         ids = [_person_id(q) for q in d]
         fmt = fmt or "coco17"
     elif isinstance(d, dict) and "keypoints" in d:
-        people = [d["keypoints"]]
+        people = [_scored(d, p)]
         ids = [_person_id(d)]
         meta = d
         fmt = d.get("format") or fmt
@@ -493,13 +525,29 @@ def _who(k: int, pid: str | int | None, n: int) -> str:
             else f"the person at position {k + 1} in the file" + ("" if pid is None else f" (id {pid!r})"))
 
 
+@dataclass
+class _People:
+    """What :func:`_people_arrays` found in one frame of a keypoint file."""
+
+    arrays: list[np.ndarray]
+    """Each person kept, ``(J, 2)`` px in ``format``, largest (box area) first."""
+    format: str
+    identity: list[tuple[int, str | int | None]]
+    """For each kept person: ``(position in the file's list, person id)``."""
+    dropped: list[tuple[str, list[str]]]
+    """The people left out because a joint the lifter needs is missing: ``(who, [joint names])``."""
+    scores: list[np.ndarray | None]
+    """For each kept person: their ``(J,)`` confidences as given (stood-in joints: their stand-ins' lowest), or None."""
+    stood_in: list[tuple[str, list[str]]]
+    """The people with missing joints stood in for (:func:`lifter.keypoints.stand_in_missing`): ``(who, phrases)``."""
+
+
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
-                   *, layout_format: bool = False
-                   ) -> tuple[list[np.ndarray], str, list[tuple[int, str | int | None]], list[tuple[str, list[str]]]]:
-    """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format;
-    for each, its ``(position in the file, person id)``; and the people left out because a joint the lifter needs
-    is missing (confidence 0 or null, or null / non-finite coordinates): ``(who, [joint names])`` each.
-    layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages."""
+                   *, layout_format: bool = False) -> _People:
+    """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format,
+    with a missing face or mid-body joint stood in for where the format allows (:data:`lifter.keypoints.STAND_INS`);
+    the people still missing a joint the lifter needs (confidence 0 or null, or null / non-finite coordinates) are
+    left out. layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages."""
     parsed = []
     top = -math.inf
     for _, q, _ in people:
@@ -508,15 +556,15 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
         if conf is not None:
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
             top = max([top, *conf[np.isfinite(conf)].tolist()])
-        parsed.append((xy, missing))
+        parsed.append((xy, missing, conf))
     if top > SCORE_NOTE_ABOVE:
         notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "
                      "a missing joint)")
     if not parsed:
-        return [], fmt or H36M17, [], []
+        return _People([], fmt or H36M17, [], [], [], [])
 
     def area(k: int) -> float:
-        xy, miss = parsed[k]
+        xy, miss, _ = parsed[k]
         ok = xy[~miss]
         with np.errstate(over="ignore"):  # absurd coordinates are refused later, with a message naming them
             return 0.0 if len(ok) < 2 else float(np.prod(ok.max(0) - ok.min(0)))
@@ -539,8 +587,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' in the "
                          "file, or --format on the command line, if they are another layout)")
     f = get_format(fmt)
-    out, kept, dropped = [], [], []
-    for (xy, missing), (pos, pid) in zip(parsed, identity):
+    out, kept, dropped, scores, stood_in = [], [], [], [], []
+    for (xy, missing, conf), (pos, pid) in zip(parsed, identity):
         if len(xy) != f.num_joints:
             same = [n for n in keypoint_formats() if get_format(n).num_joints == len(xy)]
             raise PoseLifterError(
@@ -549,14 +597,18 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                 + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format on the command line)"
                    if same else ""))
         if missing.any():
+            xy, missing, conf, said = stand_in_missing(xy, missing, src=fmt, scores=conf)
             bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
             if bad:
                 dropped.append((_who(pos, pid, len(people)), bad))
                 continue
+            if said:
+                stood_in.append((_who(pos, pid, len(people)), said))
             xy = np.where(missing[:, None], 0.0, xy)
         out.append(xy)
         kept.append((pos, pid))
-    return out, fmt, kept, dropped
+        scores.append(conf)
+    return _People(out, fmt, kept, dropped, scores, stood_in)
 
 
 def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
@@ -610,9 +662,13 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     people, fmt, meta, layout_format = _people_of(d, p, default_format)
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
-    arrays, fmt, identity, dropped = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
+    found = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
+    arrays, fmt, identity, dropped = found.arrays, found.format, found.identity, found.dropped
     if dropped and not arrays:
         raise PoseLifterError(f"{p}: {_missing_message(fmt, dropped, nobody_left=True)}")
+    if found.stood_in:
+        notes.append(STAND_IN_NOTE.format(what="; ".join(
+            (f"{who}: " if len(people) > 1 else "") + ", ".join(said) for who, said in found.stood_in)))
     if dropped:
         notes.append(f"{len(dropped)} of {len(people)} people left out: "
                      f"{_missing_message(fmt, dropped, nobody_left=False)}")
@@ -631,7 +687,7 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),
-                        unread=tuple(unread))
+                        unread=tuple(unread), people_scores=tuple(found.scores))
 
 
 MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
@@ -698,6 +754,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     dropped: list[tuple[int, tuple[str, list[str]]]] = []  # (frame, (who, joints))
+    stood_in: dict[str, list[int]] = {}  # "r_ear from l_ear" -> frames
     misplaced: dict[str, int] = {}  # camera field -> first frame that has it inside a frame or person
     for i, fr in enumerate(raw):
         for k in _misplaced_camera_fields(fr, frame_level=True):
@@ -708,9 +765,12 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             ids.append([])
             continue
         people, f_fmt, _, layout_format = _people_of(fr, where, fmt)
-        arrays, f_fmt, identity, gone = _people_arrays(people, where, f_fmt,
-                                                       notes if fmt is None and not frames else [],
-                                                       layout_format=layout_format)
+        found = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [],
+                               layout_format=layout_format)
+        arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
+        for _, said in found.stood_in:
+            for phrase in said:
+                stood_in.setdefault(phrase, []).append(i)
         if fmt is None:
             fmt = f_fmt
         elif f_fmt != fmt:
@@ -719,6 +779,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         ids.append([pid for _, pid in identity])
         dropped += [(i, g) for g in gone]
     fmt = fmt or H36M17
+    if stood_in:
+        notes.append(STAND_IN_NOTE.format(what="; ".join(
+            f"{phrase} in {len(at)} frame(s) (first {at[0]})" for phrase, at in stood_in.items())))
     if dropped:
         at = sorted({i for i, _ in dropped})
         joints = sorted({j for _, (_, bad) in dropped for j in bad})

@@ -404,6 +404,74 @@ register_format(KeypointFormat(
     description="OpenPose BODY_25 (MidHip and Neck used as mid-hips and mid-shoulders); rules as coco17",
 ))
 
+EAR_EYE_SPACING: Final[float] = 2.3
+"""The spacing of the ears over that of the eyes, both across the face: an adult's bitragion breadth (~145 mm) over
+the distance between the pupils (~63 mm). A hidden ear is the other ear moved by this times the eye-to-eye vector
+(:data:`STAND_INS`): right in a frontal view, and in a side view, where the eyes nearly coincide, the other ear."""
+
+_StandIn = tuple[str, tuple[tuple[str, float], ...]]
+
+
+def _stand_ins(fmt: str) -> dict[str, tuple[_StandIn, ...]]:
+    k = EAR_EYE_SPACING
+    eyes: _StandIn = ("the eyes' midpoint", (("l_eye", 0.5), ("r_eye", 0.5)))
+    table: dict[str, tuple[_StandIn, ...]] = {
+        "l_ear": (("r_ear moved across by the eyes", (("r_ear", 1.0), ("l_eye", k), ("r_eye", -k))),
+                  ("r_ear", (("r_ear", 1.0),)), eyes, ("l_eye", (("l_eye", 1.0),)), ("r_eye", (("r_eye", 1.0),))),
+        "r_ear": (("l_ear moved across by the eyes", (("l_ear", 1.0), ("r_eye", k), ("l_eye", -k))),
+                  ("l_ear", (("l_ear", 1.0),)), eyes, ("r_eye", (("r_eye", 1.0),)), ("l_eye", (("l_eye", 1.0),))),
+        "nose": (eyes, ("l_eye", (("l_eye", 1.0),)), ("r_eye", (("r_eye", 1.0),))),
+    }
+    if fmt == "openpose25":
+        table["neck"] = (("the shoulders' midpoint", (("l_shoulder", 0.5), ("r_shoulder", 0.5))),)
+        table["mid_hip"] = (("the hips' midpoint", (("l_hip", 0.5), ("r_hip", 0.5))),)
+    return table
+
+
+STAND_INS: Final[dict[str, dict[str, tuple[_StandIn, ...]]]] = {
+    fmt: _stand_ins(fmt) for fmt in ("coco17", "openpose25", "blazepose33")}
+"""For the detector formats, the face and mid-body joints that may be stood in for when missing: for each, its
+stand-ins in order of preference, ``(what, affine combination of given joints)``; the first whose joints were all
+given is used. Side views hide an ear (the other ear, moved across by :data:`EAR_EYE_SPACING` times the eyes'
+spacing), a turned head the nose (the eyes' midpoint); OpenPose's Neck and MidHip are the midpoints of the
+shoulders and hips. The limb joints (shoulders, elbows, wrists, hips, knees, ankles) have no stand-in: a person
+missing one is left out. What they cost on the demo photos: ``scripts/stand_in_error.py``."""
+
+
+def stand_in_missing(keypoints: np.ndarray, missing: np.ndarray, *, src: str, scores: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, list[str]]:
+    """Fill the missing face and mid-body joints of one person of format ``src`` from their :data:`STAND_INS`.
+
+    keypoints: ``(J, 2)`` px; missing: ``(J,)`` bool; scores: ``(J,)`` confidences or None. Returns the keypoints
+    with the stood-in joints filled, the joints still missing, the scores (a stood-in joint gets the lowest of the
+    joints it is made from), and one phrase per stood-in joint (``"nose from the eyes' midpoint"``) for the
+    caller's note. Joints given are never changed; a stand-in reads only joints given, never one stood in for.
+    Formats without stand-ins (h36m17, sh16) come back unchanged."""
+    table = STAND_INS.get(src)
+    xy = np.array(keypoints, np.float64, copy=True)
+    miss = np.array(missing, bool, copy=True)
+    sc = None if scores is None else np.array(scores, np.float64, copy=True)
+    said: list[str] = []
+    if not table or not miss.any():
+        return xy, miss, sc, said
+    idx = _index(get_format(src).joint_names)
+    given = ~np.asarray(missing, bool)
+    for joint, options in table.items():
+        j = idx[joint]
+        if not miss[j]:
+            continue
+        for what, combo in options:
+            ks = [idx[n] for n, _ in combo]
+            if all(given[k] for k in ks):
+                xy[j] = sum(w * xy[k] for k, (_, w) in zip(ks, combo))
+                miss[j] = False
+                if sc is not None:
+                    sc[j] = sc[ks].min()
+                said.append(f"{joint} from {what}")
+                break
+    return xy, miss, sc, said
+
+
 KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
@@ -487,5 +555,5 @@ def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 __all__: Sequence[str] = ("BLAZEPOSE33_JOINT_NAMES", "COCO17_JOINT_NAMES", "KEYPOINT_FORMATS", "KeypointFormat",
                           "OPENPOSE25_JOINT_NAMES", "SH16_JOINT_NAMES", "body_rules", "convert", "fit_line_weight",
-                          "placeholder_notes",
+                          "placeholder_notes", "EAR_EYE_SPACING", "STAND_INS", "stand_in_missing",
                           "get_format", "keypoint_formats", "register_format")

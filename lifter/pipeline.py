@@ -24,7 +24,15 @@ from ._checks import PoseLifterError, as_pair, input_warnings, zero_placeholders
 from ._text import sentence
 from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
-from .detect import DEFAULT_MAX_SIDE_PX, LoadedImage, PoseEstimator2D, detect_people, guess_focal, load_image
+from .detect import (
+    DEFAULT_MAX_SIDE_PX,
+    LoadedImage,
+    PoseEstimator2D,
+    detect_people,
+    guess_focal,
+    h36m_joint_scores,
+    load_image,
+)
 from .io import LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
 from .keypoints import convert, placeholder_notes
 
@@ -245,13 +253,20 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     raw = np.stack(people)
     kp17 = convert(raw, src=kf.format, warn=False)
     notes += placeholder_notes(raw, src=kf.format)  # (in the record, not a Python warning)
+    given = kf.people_scores[:len(people)]
+    scores = None
+    if given and all(c is not None for c in given):  # the file's confidences, as the H36M joints' (the lowest read)
+        conf = np.stack([np.asarray(c, np.float64) for c in given])
+        scores = h36m_joint_scores(conf, kf.format)
+        if float(np.nanmax(conf)) <= 1.0:  # (scores above 1 are another scale: no threshold to read them by)
+            notes += joint_doubt_notes(scores)
     f, src, pp, cam_notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread)
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
-    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, notes=cam_notes,
+    lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
                          distortion=kf.distortion)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
@@ -262,7 +277,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=kf.image_size, model=lifter.name, source_format=kf.format,
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
-                      people=lifted, distortion=distortion_tuple(kf.distortion))
+                      people=lifted, distortion=distortion_tuple(kf.distortion), scores=top.scores)
 
 
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,

@@ -813,3 +813,93 @@ def test_keypoint_file_slips_are_refused_or_noted(tmp_path, weights, kp17, capsy
     assert code == 1 and "(the file has 'kpts': did you mean 'keypoints'?)" in err
     (tmp_path / "i.json").write_text(json.dumps({"keypoints_2d": kp17.tolist(), **cam}))  # one person of our output
     assert run([str(tmp_path / "i.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)[0] == 0
+
+
+def test_mmpose_keypoint_scores_are_read_as_confidences(tmp_path, weights, kp17, capsys):
+    """User trial: MMPose / RTMPose write the scores beside the keypoints (``keypoint_scores``); they were ignored, so
+    a wrist scored 0 and placed 600 px away was lifted as given, with no note. They are now the joints' confidences:
+    0 marks a joint missing, low ones are named, and the record carries them as the H36M joints' scores."""
+    coco = coco_from_h36m(kp17)
+    scores = [0.9] * 17
+    cam = {"image_size": [1280, 720], "focal": 1000.0}
+    wrist = COCO17_JOINT_NAMES.index("l_wrist")
+    far = coco.copy()
+    far[wrist] = [1200.0, 700.0]
+    scores[wrist] = 0.0
+    p = tmp_path / "mmpose.json"
+    p.write_text(json.dumps([{"keypoints": far.tolist(), "keypoint_scores": scores, "bbox": [[0, 0, 10, 10]],
+                              "bbox_score": 0.9}]))
+    with pytest.raises(PoseLifterError, match=r"joint\(s\) missing .* \['l_wrist'\]"):
+        parse_keypoint_json(p)
+    scores[wrist] = 0.2  # seen, but unsure: lifted, named, and its score in the record
+    p.write_text(json.dumps({"people": [{"keypoints": coco.tolist(), "keypoint_scores": scores}], "format": "coco17",
+                             **cam}))
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    rec = json.loads((tmp_path / "o" / "mmpose.json").read_text())
+    assert rec["source_format"] == "coco17" and rec["scores"][JOINT_NAMES.index("l_wrist")] == pytest.approx(0.2)
+    assert rec["scores"][JOINT_NAMES.index("r_wrist")] == pytest.approx(0.9)
+    assert any("unsure of some joints (score below 0.3): l_wrist (0.20)" in w for w in rec["warnings"]), rec["warnings"]
+    # the same scores as third values give the same lift
+    (tmp_path / "rows.json").write_text(json.dumps({"keypoints": np.column_stack([coco, scores]).tolist(),
+                                                    "format": "coco17", **cam}))
+    code, err = run([str(tmp_path / "rows.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    rows = json.loads((tmp_path / "o" / "rows.json").read_text())
+    np.testing.assert_allclose(rows["absolute"], rec["absolute"])
+    assert rows["scores"] == rec["scores"]
+    for bad, msg in (({"keypoints": coco.tolist(), "keypoint_scores": scores[:5]},
+                      "17 keypoints but 5 'keypoint_scores'"),
+                     ({"keypoints": np.column_stack([coco, scores]).tolist(), "keypoint_scores": scores},
+                      "both a third value in each 'keypoints' row and 'keypoint_scores'"),
+                     ({"keypoints": coco.tolist(), "keypoint_scores": "high"}, "'keypoint_scores' must be a list")):
+        p.write_text(json.dumps({**bad, "format": "coco17"}))
+        with pytest.raises(PoseLifterError, match=msg):
+            parse_keypoint_json(p)
+
+
+def test_a_hidden_ear_nose_or_openpose_mid_joint_is_stood_in_for(tmp_path, weights, kp17, capsys):
+    """User trial: one ear hidden (any side view), a nose, or OpenPose's Neck / MidHip at confidence 0 got the whole
+    person refused. They are stood in for (the other ear, the eyes, the midpoints of the shoulders and hips), with
+    a note; a limb joint still is not."""
+    from lifter.keypoints import EAR_EYE_SPACING, stand_in_missing
+    from lifter.keypoints import OPENPOSE25_JOINT_NAMES as OP
+
+    cam = {"image_size": [1280, 720], "focal": 1000.0}
+    p = tmp_path / "op.json"
+    p.write_text(json.dumps({"people": [_openpose_person(kp17, missing=("r_ear", "neck", "mid_hip"))], **cam}))
+    kf = parse_keypoint_json(p)
+    assert any("stood in for: r_ear from l_ear moved across by the eyes, neck from the shoulders' midpoint, mid_hip "
+               "from the hips' midpoint" in w for w in kf.warnings), kf.warnings
+    xy = kf.keypoints  # the hidden ear: the other one, moved across by EAR_EYE_SPACING times the eyes' spacing
+    np.testing.assert_allclose(xy[OP.index("r_ear")], xy[OP.index("l_ear")]
+                               + EAR_EYE_SPACING * (xy[OP.index("r_eye")] - xy[OP.index("l_eye")]))
+    np.testing.assert_allclose(xy[OP.index("neck")], 0.5 * (xy[OP.index("l_shoulder")] + xy[OP.index("r_shoulder")]))
+    assert kf.people_scores[0][OP.index("r_ear")] == pytest.approx(0.9)
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "stood in for: r_ear from l_ear moved across by the eyes" in err, err
+    # COCO without ears: the eyes stand in; without a nose too: the eyes for both
+    coco = coco_from_h36m(kp17)
+    rows = np.column_stack([coco, np.full(17, 0.9)])
+    rows[[COCO17_JOINT_NAMES.index(n) for n in ("l_ear", "r_ear", "nose")], 2] = 0.0
+    (tmp_path / "c.json").write_text(json.dumps({"keypoints": rows.tolist(), "format": "coco17", **cam}))
+    kf = parse_keypoint_json(tmp_path / "c.json")
+    eyes = 0.5 * (coco[COCO17_JOINT_NAMES.index("l_eye")] + coco[COCO17_JOINT_NAMES.index("r_eye")])
+    for n in ("l_ear", "r_ear", "nose"):
+        np.testing.assert_allclose(kf.keypoints[COCO17_JOINT_NAMES.index(n)], eyes)
+    # a stand-in reads only joints that were given, and a limb joint has none
+    missing = np.isin(np.array(COCO17_JOINT_NAMES), ("l_ear", "r_ear", "l_eye", "r_eye", "r_wrist"))
+    _, still, _, said = stand_in_missing(coco, missing, src="coco17")
+    assert [COCO17_JOINT_NAMES[k] for k in np.flatnonzero(still)] == ["l_eye", "r_eye", "l_ear", "r_ear", "r_wrist"]
+    assert said == []
+    rows[COCO17_JOINT_NAMES.index("r_wrist"), 2] = 0.0
+    (tmp_path / "c.json").write_text(json.dumps({"keypoints": rows.tolist(), "format": "coco17", **cam}))
+    with pytest.raises(PoseLifterError, match=r"joint\(s\) missing .* \['r_wrist'\]"):
+        parse_keypoint_json(tmp_path / "c.json")
+    # a sequence says it once, with the frames
+    frames = [{"people": [_openpose_person(kp17 + [2.0 * i, 0.0], missing=("l_ear",) if i in (4, 9) else ())]}
+              for i in range(12)]
+    seq = tmp_path / "seq.json"
+    seq.write_text(json.dumps({"fps": 25, **cam, "frames": frames}))
+    code, err = run([str(seq), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "stood in for: l_ear from r_ear moved across by the eyes in 2 frame(s) (first 4)" in err, err
+    assert "left out" not in err
