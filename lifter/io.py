@@ -126,7 +126,8 @@ class LiftRecord:
             "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the upright full-resolution image",
             "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
             "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
-            "focal": r(self.focal), "focal_source": self.focal_source, "principal_point": r(self.principal_point),
+            "focal": r(self.focal), "focal_source": self.focal_source,
+            "metric_depth": self.focal_source != "default-fov", "principal_point": r(self.principal_point),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
@@ -347,7 +348,8 @@ never noted."""
 
 _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
     "input", "kind", "model", "joint_names", "units", "frame", "keypoints_2d", "absolute", "relative", "root",
-    "canonical_depth", "focal_source", "source_format", "detector", "num_people", "scores", "warnings", "tracks",
+    "canonical_depth", "focal_source", "metric_depth", "source_format", "detector", "num_people", "scores",
+    "warnings", "tracks",
     "num_frames", "num_frames_in_file", "first_frame", "last_frame", "bad_frames", "smoothing", "filter",
     "strength", "seconds_per_frame", "time_s", "error", "index", "root_unsmoothed", "track_id", "person_id",
     "input_index"))
@@ -684,6 +686,11 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     unread += unread_field_notes(meta)
     notes += unread
     image_size, focal, pp, source, dist = _camera_meta(meta, p)
+    if focal is not None and meta.get("focal_source") == "default-fov" and image_size is not None:
+        notes.append(f"the file's focal length ({_short(meta.get('focal'))} px) was assumed when it was written "
+                     "(focal_source 'default-fov'), not known: it is assumed again from the image size (give --focal "
+                     "if you know it)")
+        focal = None
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),

@@ -223,6 +223,7 @@ class SequenceRecord:
             "fps": round(self.fps, 4), "num_frames": len(self.frames), "num_frames_in_file": self.num_frames_in_file,
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
+            "metric_depth": self.focal_source != "default-fov",
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "detector": self.detector, "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},

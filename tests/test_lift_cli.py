@@ -181,6 +181,25 @@ def test_a_result_file_can_be_lifted_again(tmp_path, weights, kp17, capsys):
     # the same lift (the written 2D is rounded to 0.01 px)
     np.testing.assert_allclose(again["absolute"], first["absolute"], atol=0.2)
     np.testing.assert_allclose(again["people"][1]["absolute"], first["people"][1]["absolute"], atol=0.2)
+    assert first["metric_depth"] is True and again["focal_source"] == "keypoint-file"
+
+
+def test_an_assumed_focal_stays_assumed_when_a_result_is_read_back(tmp_path, weights, kp17, capsys):
+    """User trial: a result written with an assumed focal (focal_source "default-fov"), read back, came out as
+    focal_source "keypoint-file" with no note: a guess turned into a known focal. It is now assumed again, with a
+    note, and the output says whether its depths are metric."""
+    _kp_json(tmp_path / "k.json", kp17)  # image_size, no focal
+    assert run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)[0] == 0
+    first = json.loads((tmp_path / "o" / "k.json").read_text())
+    assert first["focal_source"] == "default-fov" and first["metric_depth"] is False
+    code, err = run([str(tmp_path / "o" / "k.json"), "--out", str(tmp_path / "o2"), "--weights", str(weights),
+                     "--fov", "50"], capsys)
+    assert code == 0, err
+    again = json.loads((tmp_path / "o2" / "k.json").read_text())
+    assert again["focal_source"] == "default-fov" and again["metric_depth"] is False
+    # assumed again, with this --fov
+    assert again["focal"][0] == pytest.approx(default_focal((1280, 720), fov_deg=50.0), abs=0.01)
+    assert "was assumed when it was written (focal_source 'default-fov'), not known" in err
 
 
 def _jpeg_bytes(size=(64, 48)) -> bytes:
@@ -903,3 +922,19 @@ def test_a_hidden_ear_nose_or_openpose_mid_joint_is_stood_in_for(tmp_path, weigh
     code, err = run([str(seq), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0 and "stood in for: l_ear from r_ear moved across by the eyes in 2 frame(s) (first 4)" in err, err
     assert "left out" not in err
+
+
+def test_inputs_after_the_options_are_read_too(tmp_path, weights, kp17, capsys):
+    """User trial: ``poselifter lift a.json --out DIR b.json`` failed with "unrecognized arguments: b.json" and the
+    top-level usage. Inputs are read wherever they stand; an unknown option is still an error, from lift's parser."""
+    for name in ("a", "b"):
+        _kp_json(tmp_path / f"{name}.json", kp17)
+    out = tmp_path / "o"
+    code, err = run([str(tmp_path / "a.json"), "--out", str(out), "--weights", str(weights), str(tmp_path / "b.json")],
+                    capsys)
+    assert code == 0 and "lifted 2 of 2" in err, err
+    assert (out / "a.json").is_file() and (out / "b.json").is_file()
+    with pytest.raises(SystemExit) as exc:
+        main(["lift", str(tmp_path / "a.json"), "--out", str(out), "--bogus", str(tmp_path / "b.json")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "usage: poselifter lift" in err and "unrecognized arguments: --bogus" in err, err

@@ -24,6 +24,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace:
+    """The arguments, with ``lift``'s inputs read wherever they stand (``lift a.json --out DIR b.json``: argparse
+    takes a positional list once, so inputs after an option were "unrecognized"); anything else left over is an
+    error from the sub-command's own parser, with its usage."""
+    args, extra = parser.parse_known_args(argv)
+    if not extra:
+        return args
+    subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))  # noqa: SLF001
+    own = subs.choices.get(args.command, parser)
+    if args.command == "lift" and not any(e.startswith("-") and e != "-" for e in extra):
+        args.inputs = [*args.inputs, *extra]
+        return args
+    own.error(f"unrecognized arguments: {' '.join(extra)}")
+    raise AssertionError("unreachable")  # (error() exits)
+
+
 def _stdout_reader_gone() -> bool:
     """Whether stdout is a pipe whose reader has closed it (poll reports an error on it); True where that cannot be
     asked (no poll: Windows), as the broken pipe is then most likely stdout's."""
@@ -41,7 +57,7 @@ def _stdout_reader_gone() -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = _parse(parser, argv)
     try:
         return int(args.func(args) or 0)
     except (PoseLifterError, FileNotFoundError) as exc:
