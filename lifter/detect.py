@@ -343,7 +343,10 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     except ImageError:
         raise
     except UnidentifiedImageError:
-        raise ImageError(f"{p}: not an image (or a format this tool cannot read)") from None
+        hint = (": keypoint arrays (.npy, .npz, .csv) are lifted through the Python API (lifter.Lifter.lift) or "
+                "written as a keypoint JSON file (README, 'keypoint JSON')"
+                if p.suffix.lower() in (".npy", ".npz", ".csv", ".txt", ".pkl", ".h5") else "")
+        raise ImageError(f"{p}: not an image (or a format this tool cannot read){hint}") from None
     except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise ImageError(f"{p}: unreadable or truncated image ({exc})") from None
     if orientation in (5, 6, 7, 8):

@@ -193,7 +193,7 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
             a = flat.reshape(-1, 2)
         else:
             raise PoseLifterError(f"{where}: a flat keypoint list of {n} numbers is not J x 2 or J x 3 for "
-                                  f"J in {sorted(FORMAT_BY_COUNT)}")
+                                  f"J in {sorted(FORMAT_BY_COUNT)}" + (COCO18_HINT if n in (36, 54) else ""))
     elif raw and all(_is_row(r) or r is None for r in raw) and any(r is not None for r in raw):
         widths = {len(r) for r in raw if r is not None}
         if len(widths) != 1:
@@ -215,6 +215,11 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
                 "[x, y, confidence] rows")
     return a[:, :2], conf
 
+
+COCO18_HINT: Final[str] = (
+    ". 18 joints: OpenPose's older COCO-18 model? It is not read: run OpenPose with its BODY_25 model (the default), "
+    "or drop the Neck (the second joint) and put the rest in COCO-17 order with \"format\": \"coco17\"")
+"""Added to the messages about 18 joints per person."""
 
 Z_LIKE_THIRD_VALUE: Final[float] = 50.0
 """Keypoint rows whose third values have a median size above this, or go below minus this, are refused: those are
@@ -443,6 +448,27 @@ def _scored(q: dict[str, Any], p: Path) -> Any:
     return [None if r is None else [*r, c] for r, c in zip(rows, scores)]
 
 
+def _mmpose_predictions(d: dict[str, Any], p: Path) -> list[Any]:
+    """The instances of an MMPose demo ``--save-predictions`` file (``{"meta_info": ..., "instance_info": [{"frame_id":
+    1, "instances": [{"keypoints": ..., "keypoint_scores": ...}, ...]}]}``) of one frame, as a list of people (COCO-17
+    unless the file says ``format``). Several frames are a video's: refused, with how to give them as a sequence."""
+    info = d["instance_info"]
+    if isinstance(info, list) and info and all(isinstance(f, dict) and "instances" in f for f in info):
+        if len(info) > 1:
+            raise PoseLifterError(f"{p}: an MMPose predictions file of {len(info)} frames ('instance_info'): a "
+                                  "keypoint sequence needs its frame rate; give it as {\"frames\": [{\"people\": "
+                                  "INSTANCES}, ...], \"fps\": FPS, \"format\": \"coco17\"} (README, 'keypoint JSON')")
+        people = info[0]["instances"]
+    elif isinstance(info, list) and all(isinstance(q, dict) for q in info):  # (an image demo's instances directly)
+        people = info
+    else:
+        raise PoseLifterError(f"{p}: 'instance_info' (an MMPose predictions file) must be a list of instances or of "
+                              f"frames with 'instances', got {_short(info)}")
+    if not isinstance(people, list):
+        raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(people)}")
+    return people
+
+
 def _people_of(d: Any, p: Path, fmt: str | None
                ) -> tuple[list[tuple[int, Any, str | int | None]], str | None, dict[str, Any], bool]:
     """The people in one decoded frame object as ``(position in the file's list, raw keypoint list, person id)``
@@ -451,6 +477,8 @@ def _people_of(d: Any, p: Path, fmt: str | None
     given = fmt
     meta: dict[str, Any] = {}
     ids: list[str | int | None] = []
+    if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
+        d = _mmpose_predictions(d, p)  # (MMPose's demo --save-predictions file: its one frame's instances)
     if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
         if not isinstance(d["people"], list):
             raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} or "
@@ -580,7 +608,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             counts = ", ".join(f"{get_format(n).num_joints} ({n})" for n in keypoint_formats())
             raise PoseLifterError(f"{p}: {J} joints per person, which no known keypoint format has; the formats and "
                                   f"their joint counts: {counts}. Give the joints of one of these formats (and "
-                                  "'format' where the count is shared)")
+                                  "'format' where the count is shared)" + (COCO18_HINT if J == 18 else ""))
         fmt = FORMAT_BY_COUNT[J]
         if J == 17:
             notes.append("17 joints without 'format': assumed H36M order (for COCO keypoints give \"format\": "

@@ -938,3 +938,47 @@ def test_inputs_after_the_options_are_read_too(tmp_path, weights, kp17, capsys):
         main(["lift", str(tmp_path / "a.json"), "--out", str(out), "--bogus", str(tmp_path / "b.json")])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "usage: poselifter lift" in err and "unrecognized arguments: --bogus" in err, err
+
+
+def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
+    """User trial: OpenPose's COCO-18 (54 numbers), an MMPose --save-predictions file and a .npy file got generic
+    messages. The first and last now say what to do; MMPose's file of one frame is read (its instances, COCO-17,
+    with their keypoint_scores), and one of several frames is refused with the sequence layout to use."""
+    from lifter.detect import ImageError, load_image
+
+    p = tmp_path / "k.json"
+    p.write_text(json.dumps({"people": [{"pose_keypoints_2d": [1.0, 2.0, 0.9] * 18}]}))
+    with pytest.raises(PoseLifterError, match="OpenPose's older COCO-18 model"):
+        parse_keypoint_json(p)
+    p.write_text(json.dumps({"keypoints": [[1.0, 2.0]] * 18}))
+    with pytest.raises(PoseLifterError, match="18 joints per person.*OpenPose's older COCO-18 model"):
+        parse_keypoint_json(p)
+    coco = coco_from_h36m(kp17)
+    inst = {"keypoints": coco.tolist(), "keypoint_scores": [0.9] * 17, "bbox": [[0, 0, 1, 1]], "bbox_score": 0.9}
+    p.write_text(json.dumps({"meta_info": {"dataset_name": "coco"}, "instance_info": [{"frame_id": 1,
+                                                                                        "instances": [inst]}]}))
+    kf = parse_keypoint_json(p)
+    assert kf.format == "coco17" and len(kf.people) == 1 and kf.people_scores[0] is not None
+    np.testing.assert_allclose(kf.keypoints, coco)
+    p.write_text(json.dumps({"meta_info": {}, "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
+    with pytest.raises(PoseLifterError, match=r"MMPose predictions file of 2 frames.*\"fps\": FPS"):
+        parse_keypoint_json(p)
+    npy = tmp_path / "kp.npy"
+    np.save(npy, kp17)
+    with pytest.raises(ImageError, match=r"lifted through the Python API \(lifter.Lifter.lift\)"):
+        load_image(npy)
+
+
+def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys):
+    """User trial: clip.mp4 and then clip.avi lifted into one folder: the second run replaced clip.json silently.
+    Replacing the result of another input is said; lifting the same input again is not."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    a, b = _kp_json(tmp_path / "a" / "k.json", kp17), _kp_json(tmp_path / "b" / "k.json", kp17 + 5)
+    out = tmp_path / "o"
+    for p in (a, a):
+        code, err = run([str(p), "--out", str(out), "--weights", str(weights)], capsys)
+        assert code == 0 and "replaces" not in err, err
+    code, err = run([str(b), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 0 and f"note: replaces {out / 'k.json'}, the result of another input ({a}) written before" in err
+    assert json.loads((out / "k.json").read_text())["input"] == str(b)

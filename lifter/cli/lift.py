@@ -55,8 +55,10 @@ input is processed; a photo with several people uses the largest and says so; im
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -359,6 +361,10 @@ def run_lift(args: argparse.Namespace) -> int:
                                          focal=focal, principal_point=pp, sensor_width_mm=args.sensor_width,
                                          fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
                                          max_people=args.max_people)
+                    earlier = _earlier_input(args.out / f"{name}.json", path)
+                    if earlier is not None:
+                        say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
+                            f"({earlier}) written before")
                     if seq is not None:
                         write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
                         for b in seq.bad_frames[:20]:
@@ -400,6 +406,25 @@ def run_lift(args: argparse.Namespace) -> int:
     print(f"lifted {ok} of {total} input(s) into {args.out}"
           + (f"; {failed} failed (see the messages above)" if failed else ""), file=sys.stderr)
     return 0 if ok else 1
+
+
+def _earlier_input(target: Path, path: Path) -> str | None:
+    """The ``input`` an existing result file ``target`` was written for, when that is not ``path`` (a result of
+    another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None. Reads only
+    the file's start (``input`` is its first field)."""
+    try:
+        with open(target, "rb") as fh:
+            head = fh.read(4096).decode("utf-8", "replace")
+    except OSError:
+        return None
+    m = re.match(r'\s*\{\s*"input":\s*("(?:[^"\\]|\\.)*")', head)
+    if m is None:
+        return None
+    try:
+        earlier = json.loads(m.group(1))
+    except ValueError:
+        return None
+    return None if Path(earlier).resolve() == path.resolve() else str(earlier)
 
 
 def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
