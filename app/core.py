@@ -354,22 +354,29 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
                  others=others, caution=(*used.output_notes(noisy, pp, res.root[0]),
-                                         *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha)))
+                                         *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
+                                                            input_space=lifter.input_space)))
 
 
-def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float) -> list[str]:
+def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
+                      input_space: Literal["pixel", "camera"] = "camera") -> list[str]:
     """The readout's caution when the 2D pose ``(17, 2)`` px spans more than
     :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at the focal length in use ``focal`` (px): no camera sees a
-    whole person that wide, so the lift leaves what the networks learned and bends (a teacher's slider at 100 px:
-    PA-MPJPE over 200 mm). The camera's own focal length ``camera_focal`` (px) is named."""
+    whole person that wide, so a lifter that reads the 2D through the focal (``input_space="camera"``, the default)
+    leaves what its networks learned and bends (a teacher's slider at 100 px: PA-MPJPE over 200 mm); a pixel-space
+    model (the paper's) lifts the same pose at every focal, and only its depth follows (a user trial: the caution
+    said it bent). The camera's own focal length ``camera_focal`` (px) is named."""
     from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
 
     view = float(pose_view_deg(np.asarray(keypoints, np.float64), focal))
     if view <= MAX_PLAUSIBLE_VIEW_DEG:
         return []
+    what = ("the lift is outside what the networks learned, and bends" if input_space == "camera" else
+            "no camera sees a person so; this pixel-space model lifts the same pose at every focal length, and only "
+            "the depth follows the slider")
     return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view:.0f}° of view (a whole person rarely "
-            f"spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): the lift is outside what "
-            f"the networks learned, and bends; the camera's own focal length is {camera_focal:.0f} px"]
+            f"spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the camera's "
+            f"own focal length is {camera_focal:.0f} px"]
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:
@@ -437,8 +444,8 @@ def spread_line(spread: Spread) -> str:
 
 CLOUD_CAVEAT: Final[str] = (
     "The cloud is the fitted mixture's uncertainty, not a detector's: its errors are independent per joint, and the "
-    "default lifts its draws with more root error, and nearer the camera, than real detections of the same 2D error "
-    "(README, The app).")
+    "default model lifts its draws with more root error, and nearer the camera, than real detections of the same 2D "
+    "error (measured for the default; README, The app).")
 """Said under the cloud's numbers (measured: ``python scripts/noise_vs_detections.py``)."""
 
 

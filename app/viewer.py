@@ -86,6 +86,10 @@ INFO_MESSAGE_SECONDS: float = 8.0
 """A note in the readout's status line (not an error) stays at least this long: the step that shows it (a camera
 switch that resets the focal length) sets controls whose callbacks succeed right after it, and a success would
 otherwise clear it before anyone reads it (user trial). An error is cleared by the next success."""
+TYPED_WHILE_PLAYING: str = ("a joint position typed while the sequence plays is not applied: each frame brings its "
+                            "own 2D; pause (play) to move a joint")
+"""Said (once) when the (u, v) boxes are typed into during playback."""
+
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
 its range is clamped (and the box rewritten) only when the tab has sent nothing newer for this long, so a value
@@ -196,6 +200,8 @@ class SessionView:
         its message's count and its text. Taken after :attr:`lock` when both are held, never before."""
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self._last_was_error = False
+        self._status_focal: float | None = None
+        """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_about: str | None = None
         """:func:`_sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
         another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
@@ -211,6 +217,8 @@ class SessionView:
         self._flags = threading.Lock()
         self._frame_note: tuple[int, int, str] | None = None
         """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
+        self._still_frame_typed: float | None = None
+        """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
         self._typed_uv: tuple[int, int, int, int, np.ndarray] | None = None
@@ -292,11 +300,14 @@ class SessionView:
                 self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
         return True
 
-    def show_message(self, text: str, *, error: bool = False, about: str | None = None) -> None:
+    def show_message(self, text: str, *, error: bool = False, about: str | None = None,
+                     focal: float | None = None) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`_sequence_of`) it is about, when that is not the one shown now (a pass that shows another
-        one clears the message)."""
+        one clears the message). ``focal``: the focal length (px) the message says was set; a pass that finds
+        another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed since)."""
         with self._status_lock:
+            self._status_focal = focal
             self.messages.append(text)
             self.messages = self.messages[-20:]
             self._message_count += 1
@@ -385,9 +396,10 @@ class SessionView:
             finally:
                 self._pass_t0 = math.inf
             with self._status_lock:
-                if (self._message_count == n and self.gui.readout.status.content and self._status_about is not None
-                        and _sequence_of(self.state.sample.key) != self._status_about):
-                    self.gui.readout.status.content = ""  # (the message was about a sample no longer shown)
+                if self._message_count == n and self.gui.readout.status.content and (
+                        (self._status_about is not None and _sequence_of(self.state.sample.key) != self._status_about)
+                        or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)):
+                    self.gui.readout.status.content = ""  # (about a sample no longer shown, or a focal since changed)
 
     def _put(self, handle: Any, value: Any) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
@@ -559,6 +571,12 @@ class SessionView:
             f, last = key.rsplit("/", 1)[1], video.num_frames - 1
         else:
             self._frame_note = None
+            typed = self._typed_at.get("frame")
+            if (typed is not None and typed != self._still_frame_typed and self.gui.play.frame.disabled
+                    and not key.startswith("motion/")):  # (a disabled slider's box still sends what is typed in it)
+                self._still_frame_typed = typed
+                self.show_message(f"frame {wanted}: this is a still sample, with no frames to go to (play switches "
+                                  "to the demo motion; a Human3.6M picker, or the source, shows Human3.6M's frames)")
             return
         about = _sequence_of(key)
         if int(f) == last and wanted > last:
@@ -602,8 +620,12 @@ class SessionView:
         toggles kept). Raises, changing nothing, when it cannot be lifted."""
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
-        same_camera = sample.camera is old.sample.camera or (
-            sample.camera.name == old.sample.camera.name and sample.key.split("/")[0] == old.sample.key.split("/")[0])
+        a, b = sample.camera, old.sample.camera
+        same_camera = a is b or (sample.key.split("/")[0] == old.sample.key.split("/")[0] and (
+            a.name == b.name or (a.width, a.height) == (b.width, b.height) and abs(a.alpha - b.alpha) <= 0.5
+            and np.allclose(a.principal_point, b.principal_point, atol=0.5)
+            and np.allclose((*a.k, *a.p), (*b.k, *b.p))))  # (one camera id's calibration is the
+        # same for every Human3.6M subject: a chosen focal is kept across subjects; a user trial saw it reset)
         kept = same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video")
         if kept:
             st = st.evolve(focal_px=old.focal_px)
@@ -628,7 +650,7 @@ class SessionView:
             uploaded = sample.key.split("/")[0] in ("upload", "video")  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
                               f"{focal_text(st.focal_px)} px (it was {focal_text(old.focal_px)} px: "
-                              f"{'a new input' if uploaded else 'another camera'})")
+                              f"{'a new input' if uploaded else 'another camera'})", focal=st.focal_px)
         cam = sample.camera
         view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)
@@ -969,6 +991,10 @@ class SessionView:
             self._do(self._note_typed_uv)
 
     def _note_typed_uv(self) -> None:
+        if self.playing:  # each frame brings its own 2D (a user trial: the typed value was dropped with no word)
+            if not self.messages or self.messages[-1] != TYPED_WHILE_PLAYING:  # (once, not per keystroke)
+                self.show_message(TYPED_WHILE_PLAYING)
+            return
         uv = np.asarray(self.gui.joints.uv.value, np.float64).reshape(2)
         with self._flags:
             seq = next(self._typed_seq)

@@ -659,6 +659,10 @@ def test_a_chosen_focal_replaced_by_another_camera_is_said(view: SessionView, ap
     assert "focal length set to this camera's" in view.gui.readout.status.content
     view._do(lambda: None)
     assert "focal length set to this camera's" in view.gui.readout.status.content
+    # a focal set since: the note no longer says what is in use, and goes (user trial: it stayed under 3000 px)
+    view.gui.lift.focal.value = 3000.0
+    assert view.state.focal_px == 3000.0 and "focal length set to" not in view.gui.readout.status.content
+    view.gui.lift.focal.value = cam
     n = len(view.messages)
     view.select_demo(names[0])  # the camera's own focal was in use: nothing to say
     assert not any("focal length set" in m for m in view.messages[n:]), view.messages[n:]
@@ -701,6 +705,12 @@ def test_a_focal_so_short_the_pose_spans_too_wide_a_view_is_cautioned(view: Sess
     assert view.set_focal(100.0) is True
     md = view.gui.readout.readout.content
     assert "**Caution** at 100 px this 2D pose spans 126° of view" in md and "own focal length is 800 px" in md, md
+    assert "and bends" in md
+    # a pixel-space model lifts the same pose at every focal length: its caution does not say it bends (user trial)
+    assert view.set_model("gt") is not False
+    md = view.gui.readout.readout.content
+    assert "spans 126° of view" in md and "this pixel-space model lifts the same pose at every focal length" in md, md
+    assert "bends" not in md
     view.reset_focal()
     assert "spans" not in view.gui.readout.readout.content
 
@@ -1408,3 +1418,50 @@ def test_compute_frame_gives_a_pinhole_lifter_the_cameras_lens(app: PoseLifterAp
         frame = compute_frame(st, lf, app.error_model)
         want = lf.lift(pinhole_2d, focal=f, principal_point=lens_cam.principal_point, source="clean", warn=False)
         np.testing.assert_allclose(frame.root, want.root, rtol=1e-9)
+
+
+def test_a_frame_typed_on_a_still_sample_is_answered(app: PoseLifterApp) -> None:
+    """User trial (Chromium): on a demo still, the disabled frame slider's box took "100" and nothing happened, with no
+    word. The tab's value is answered once: a still has no frames, and what does show frames."""
+    with open_tab(app) as (tab, v):
+        assert v.select_demo("standing") is True and v.gui.play.frame.disabled
+        n = len(v.messages)
+        _send_value(tab, v.gui.play.frame, 100)
+        assert wait_for(lambda: any("this is a still sample" in m for m in v.messages[n:]), timeout=10), v.messages
+        assert v.state.sample.key == "demo/standing"
+        v._do(lambda: None)  # (later passes do not say it again)
+        assert sum("this is a still sample" in m for m in v.messages[n:]) == 1
+
+
+def test_a_chosen_focal_is_kept_across_subjects_of_one_camera(h36m_app: PoseLifterApp) -> None:
+    """User trial: a focal chosen on camera 54138969 was reset, with "another camera", on switching S9 -> S11; that
+    camera's calibration is the same for every subject. It is kept; another camera still resets it, and says so."""
+    v = h36m_app.headless_view()
+    cam = h36m_app.h36m.camera_ids[0]
+    assert v.select_h36m(subject=9, sequence="Walking 1", camera=cam, frame=10) is not False
+    assert v.set_focal(3000.0) is True
+    n = len(v.messages)
+    v.gui.sample.subject.value = "S11"
+    assert v.state.sample.key.startswith("h36m/S11/") and v.state.focal_px == 3000.0
+    assert not any("another camera" in m for m in v.messages[n:]), v.messages[n:]
+    v.gui.sample.camera.value = h36m_app.h36m.camera_ids[1]
+    assert v.state.focal_px != 3000.0 and "another camera" in v.messages[-1]
+
+
+def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
+    """User trial (Chromium): a joint position typed while a sequence played was overwritten by the next frame and
+    dropped with no word. It is still not applied (each frame brings its own 2D), but the readout says why."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    with open_tab(app) as (tab, v):
+        v.gui.play.play.value = True  # the demo motion plays
+        assert wait_for(lambda: v.playing, timeout=5)
+        n = len(v.messages)
+        _send_value(tab, v.gui.joints.uv, (100.0, 100.0))
+        assert wait_for(lambda: any("typed while the sequence plays" in m for m in v.messages[n:]),
+                        timeout=TYPING_SETTLE_S + 5), v.messages[n:]
+        v.gui.play.play.value = True  # pause
+        assert wait_for(lambda: not v.playing, timeout=5)
+        time.sleep(0.2)
