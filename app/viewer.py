@@ -217,6 +217,8 @@ class SessionView:
         self._flags = threading.Lock()
         self._frame_note: tuple[int, int, str] | None = None
         """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
+        self._typed_while_playing_at = -math.inf
+        """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
         self._typed_at: dict[str, float] = {}
@@ -622,7 +624,8 @@ class SessionView:
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         a, b = sample.camera, old.sample.camera
         same_camera = a is b or (sample.key.split("/")[0] == old.sample.key.split("/")[0] and (
-            a.name == b.name or (a.width, a.height) == (b.width, b.height) and abs(a.alpha - b.alpha) <= 0.5
+            a.name == b.name or sample.key.startswith("h36m/") and (a.width, a.height) == (b.width, b.height)
+            and abs(a.alpha - b.alpha) <= 0.5
             and np.allclose(a.principal_point, b.principal_point, atol=0.5)
             and np.allclose((*a.k, *a.p), (*b.k, *b.p))))  # (one camera id's calibration is the
         # same for every Human3.6M subject: a chosen focal is kept across subjects; a user trial saw it reset)
@@ -641,6 +644,8 @@ class SessionView:
         if sample.key.startswith("video/"):
             self._last_upload = sample  # (coming back to the upload returns to this frame)
         self._show_sample_controls(st)
+        if self.gui.play.frame.disabled:  # a still: only a frame typed from now on is answered (not one typed before)
+            self._still_frame_typed = self._typed_at.get("frame")
         # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
         if note and seq_key not in self._fallback_said:
@@ -992,8 +997,10 @@ class SessionView:
 
     def _note_typed_uv(self) -> None:
         if self.playing:  # each frame brings its own 2D (a user trial: the typed value was dropped with no word)
-            if not self.messages or self.messages[-1] != TYPED_WHILE_PLAYING:  # (once, not per keystroke)
+            now = time.monotonic()
+            if now - self._typed_while_playing_at > TYPING_SETTLE_S:  # (once per burst of keys, not per keystroke)
                 self.show_message(TYPED_WHILE_PLAYING)
+            self._typed_while_playing_at = now
             return
         uv = np.asarray(self.gui.joints.uv.value, np.float64).reshape(2)
         with self._flags:

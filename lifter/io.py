@@ -161,10 +161,18 @@ class KeypointFile:
     unread: tuple[str, ...] = ()
     """The notes (also in ``warnings``) on fields that were not read: camera fields inside a person, fields named
     otherwise than the ones read (:func:`unread_field_notes`). An error about a missing field repeats them."""
+    assumed_focal: str | None = None
+    """The focal length (px, as text) the file says was assumed when this package wrote it (``focal_source``
+    ``"default-fov"``): not read as known (``focal`` is None); :data:`REASSUMED_NOTE` says so."""
     people_scores: tuple[np.ndarray | None, ...] = ()
     """For each of ``people``: its ``(J,)`` confidences (the rows' third values or ``keypoint_scores``; a stood-in
     joint has the lowest of its stand-ins'), None where the file gave none."""
 
+
+REASSUMED_NOTE: Final[str] = (
+    "the file's focal length ({focal} px) was assumed when it was written (focal_source 'default-fov'), not known: it "
+    "is assumed again from the image size (give --focal if you know it)")
+"""The note when a result written with an assumed focal is read back without a focal given (``{focal}``: px)."""
 
 STAND_IN_NOTE: Final[str] = ("missing joint(s) stood in for: {what} (lifter.keypoints.STAND_INS); the head's and "
                               "trunk's H36M joints made from them are approximate")
@@ -438,8 +446,13 @@ def _scored(q: dict[str, Any], p: Path) -> Any:
             raise PoseLifterError(f"{p}: a person has both a third value in each 'keypoints' row and "
                                   "'keypoint_scores': give the confidences once (drop one of the two)")
         rows = raw
-    elif isinstance(raw, list) and raw and all(_is_number(v) or v is None for v in raw) and len(raw) % 2 == 0 \
-            and len(raw) // 2 == len(scores):
+    elif isinstance(raw, list) and raw and all(_is_number(v) or v is None for v in raw):
+        if len(raw) == 3 * len(scores):
+            raise PoseLifterError(f"{p}: a person has both a confidence in its flat [x, y, c, ...] 'keypoints' and "
+                                  "'keypoint_scores': give the confidences once (drop one of the two)")
+        if len(raw) != 2 * len(scores):
+            raise PoseLifterError(f"{p}: {len(raw)} numbers in a flat 'keypoints' list but {len(scores)} "
+                                  "'keypoint_scores': one [x, y] pair per score")
         rows = [raw[i:i + 2] for i in range(0, len(raw), 2)]
     else:
         return raw  # (not rows of [x, y]: _rows says what is wrong with it)
@@ -478,7 +491,10 @@ def _people_of(d: Any, p: Path, fmt: str | None
     meta: dict[str, Any] = {}
     ids: list[str | int | None] = []
     if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
-        d = _mmpose_predictions(d, p)  # (MMPose's demo --save-predictions file: its one frame's instances)
+        # MMPose's demo --save-predictions file: its one frame's instances, as people, beside its other fields
+        d = {**{k: v for k, v in d.items() if k not in ("instance_info", "meta_info")},
+             "people": _mmpose_predictions(d, p)}
+        fmt = fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
     if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
         if not isinstance(d["people"], list):
             raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} or "
@@ -682,6 +698,16 @@ def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None,
     return image_size, focal, pp, source, dist
 
 
+def _written_assumed(focal: np.ndarray | None, meta: dict[str, Any], image_size: tuple[int, int] | None
+                     ) -> tuple[np.ndarray | None, str | None]:
+    """A result this package wrote with an assumed focal (``focal_source`` ``"default-fov"``) and read back: its
+    focal is not taken as known (None: assumed again from ``image_size``), and the written one (as text, px) is
+    returned for the note that says so (:func:`lifter.pipeline.resolve_camera`'s callers). Otherwise unchanged."""
+    if focal is None or meta.get("focal_source") != "default-fov" or image_size is None:
+        return focal, None
+    return None, _short(meta.get("focal"))
+
+
 def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
     """Read a keypoint JSON file (module docstring). Raises :class:`PoseLifterError` with the reason."""
     p = Path(path)
@@ -714,15 +740,11 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     unread += unread_field_notes(meta)
     notes += unread
     image_size, focal, pp, source, dist = _camera_meta(meta, p)
-    if focal is not None and meta.get("focal_source") == "default-fov" and image_size is not None:
-        notes.append(f"the file's focal length ({_short(meta.get('focal'))} px) was assumed when it was written "
-                     "(focal_source 'default-fov'), not known: it is assumed again from the image size (give --focal "
-                     "if you know it)")
-        focal = None
+    focal, assumed = _written_assumed(focal, meta, image_size)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),
-                        unread=tuple(unread), people_scores=tuple(found.scores))
+                        unread=tuple(unread), people_scores=tuple(found.scores), assumed_focal=assumed)
 
 
 MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
@@ -749,6 +771,8 @@ class KeypointSequence:
     have none; None when no frame has one."""
     unread: tuple[str, ...] = ()
     """The notes (also in ``warnings``) on fields that were not read (:attr:`KeypointFile.unread`)."""
+    assumed_focal: str | None = None
+    """As :attr:`KeypointFile.assumed_focal`."""
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -805,7 +829,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
         for _, said in found.stood_in:
             for phrase in said:
-                stood_in.setdefault(phrase, []).append(i)
+                at = stood_in.setdefault(phrase, [])
+                if not at or at[-1] != i:  # (frames, not people: two people of one frame count once)
+                    at.append(i)
         if fmt is None:
             fmt = f_fmt
         elif f_fmt != fmt:
@@ -835,10 +861,11 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     unread += unread_field_notes(d)
     notes += unread
     image_size, focal, pp, source, dist = _camera_meta(d, p)
+    focal, assumed = _written_assumed(focal, d, image_size)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None,
-                            unread=tuple(unread))
+                            unread=tuple(unread), assumed_focal=assumed)
 
 
 def _read_umask() -> int:

@@ -33,7 +33,7 @@ from .detect import (
     h36m_joint_scores,
     load_image,
 )
-from .io import LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
+from .io import REASSUMED_NOTE, LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
 from .keypoints import convert, placeholder_notes
 
 
@@ -265,6 +265,8 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread)
+    if kf.assumed_focal is not None and focal is None:
+        cam_notes.insert(0, REASSUMED_NOTE.format(focal=kf.assumed_focal))
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
                          distortion=kf.distortion)

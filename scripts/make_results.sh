@@ -52,12 +52,13 @@ python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/ben
 python scripts/eval_cascade.py --model universal --compare sh_mix blazepose gt | tee "$OUT/cascade_universal.txt"
 # The default since the camera-turn stop, universal_turn, beside universal ("Any camera pose" in the README).
 ev clean_turn_s5 --stride 5                                    # the must-reach clean line (source="clean")
-ev sh_turn_s5 --inputs sh --stride 5                           # the must-reach SH line (no source: "detected")
+# (the must-reach SH line, docs/results/sh_turn_s5.txt, keeps its own command and history at its top)
 ev table3_default universal_turn universal --inputs sh --stride 50   # Table 3's and the shipped table's SH rows
 ev focal_sweep_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 ev focal_sweep_shifted_pp_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
 python scripts/pixel_convention.py | tee "$OUT/pixel_convention.txt"
 python scripts/wrong_focal.py | tee "$OUT/wrong_focal.txt"
+python scripts/stand_in_error.py | tee "$OUT/stand_in_error.txt"
 python benchmarks/bench_invariance.py --models universal_turn,universal --json "$OUT/bench_invariance_turn.json" \
   | tee "$OUT/bench_invariance_turn.txt"
 python scripts/eval_cascade.py --model universal_turn --compare universal | tee "$OUT/photos_turn.txt"

@@ -1,11 +1,11 @@
 """What a stood-in joint costs (:data:`lifter.keypoints.STAND_INS`): the 84 Human3.6M demo photos' BlazePose
-detections (``scripts/eval_cascade.py``'s cache), written as COCO-17 and OpenPose BODY_25 joint sets, lifted by the
-default with every joint given and with one kind of joint removed and stood in for, as a keypoint file missing it
-would be. Per case: the pixel error of the two head joints made from the face (neck_nose, head_top) against the
-ground-truth 2D, and MPJPE / MRPE (mm) against the ground-truth 3D, true camera, ``source="detected"``.
+detections (``scripts/eval_cascade.py``'s cache), written as COCO-17 joints, lifted by the default with every joint
+given and with one kind of joint removed and stood in for, as a keypoint file missing it would be (:data:`CASES`).
+Per case: the pixel error of the two head joints made from the face (neck_nose, head_top) against the ground-truth
+2D, and MPJPE / MRPE (mm) against the ground-truth 3D, true camera, ``source="detected"``.
 
-Only BlazePose runs offline here, so the joints are BlazePose's in COCO's and OpenPose's names; a real COCO or
-OpenPose network places its face joints a little differently.
+Only BlazePose runs offline here, so the joints are BlazePose's in COCO's names; a real COCO network places its face
+joints a little differently.
 
     python scripts/stand_in_error.py [--model universal_turn]
 """
@@ -32,9 +32,10 @@ from lifter.skeleton import JOINT_NAMES  # noqa: E402
 CASES: dict[str, dict[str, tuple[str, ...]]] = {
     "coco17": {"all given": (), "r_ear": ("r_ear",), "l_ear": ("l_ear",), "both ears": ("l_ear", "r_ear"),
                "nose": ("nose",), "nose and r_ear": ("nose", "r_ear")},
-    "openpose25": {"all given": (), "neck": ("neck",), "mid_hip": ("mid_hip",), "neck and mid_hip": ("neck", "mid_hip"),
-                   "r_ear": ("r_ear",)},
 }
+"""COCO-17 only: OpenPose's Neck and MidHip are made here from BlazePose's shoulders and hips as exactly the
+midpoints their stand-ins are (``eval_cascade.blazepose_as``), so removing them would measure nothing; its face
+joints are COCO's."""
 HEAD = [JOINT_NAMES.index("neck_nose"), JOINT_NAMES.index("head_top")]
 
 

@@ -1424,8 +1424,16 @@ def test_a_frame_typed_on_a_still_sample_is_answered(app: PoseLifterApp) -> None
     """User trial (Chromium): on a demo still, the disabled frame slider's box took "100" and nothing happened, with no
     word. The tab's value is answered once: a still has no frames, and what does show frames."""
     with open_tab(app) as (tab, v):
-        assert v.select_demo("standing") is True and v.gui.play.frame.disabled
+        v.gui.play.play.value = True  # the demo motion, a sequence: a frame typed there ...
+        assert wait_for(lambda: v.playing, timeout=5)
+        v.gui.play.play.value = True
+        assert wait_for(lambda: not v.playing, timeout=5)
+        _send_value(tab, v.gui.play.frame, 20)
+        assert wait_for(lambda: v.state.sample.key == "motion/20", timeout=10), v.state.sample.key
         n = len(v.messages)
+        assert v.select_demo("standing") is True and v.gui.play.frame.disabled
+        v._do(lambda: None)  # ... is not answered as if typed on the still (the review's case)
+        assert not any("still sample" in m for m in v.messages[n:]), v.messages[n:]
         _send_value(tab, v.gui.play.frame, 100)
         assert wait_for(lambda: any("this is a still sample" in m for m in v.messages[n:]), timeout=10), v.messages
         assert v.state.sample.key == "demo/standing"
@@ -1462,6 +1470,13 @@ def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
         _send_value(tab, v.gui.joints.uv, (100.0, 100.0))
         assert wait_for(lambda: any("typed while the sequence plays" in m for m in v.messages[n:]),
                         timeout=TYPING_SETTLE_S + 5), v.messages[n:]
+        _send_value(tab, v.gui.joints.uv, (120.0, 100.0))  # a second burst, later: said again, once
+        time.sleep(TYPING_SETTLE_S + 0.3)
+        _send_value(tab, v.gui.joints.uv, (140.0, 100.0))
+        assert wait_for(lambda: sum("typed while the sequence plays" in m for m in v.messages[n:]) == 2, timeout=5)
         v.gui.play.play.value = True  # pause
         assert wait_for(lambda: not v.playing, timeout=5)
-        time.sleep(0.2)
+        kp = v.state.keypoints.copy()
+        time.sleep(TYPING_SETTLE_S + 0.3)  # nothing typed during playback is applied after it
+        np.testing.assert_array_equal(v.state.keypoints, kp)
+        assert not np.any(np.all(np.isclose(kp, (140.0, 100.0)), axis=-1))

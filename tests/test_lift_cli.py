@@ -200,6 +200,22 @@ def test_an_assumed_focal_stays_assumed_when_a_result_is_read_back(tmp_path, wei
     # assumed again, with this --fov
     assert again["focal"][0] == pytest.approx(default_focal((1280, 720), fov_deg=50.0), abs=0.01)
     assert "was assumed when it was written (focal_source 'default-fov'), not known" in err
+    code, err = run([str(tmp_path / "o" / "k.json"), "--out", str(tmp_path / "o3"), "--weights", str(weights),
+                     "--focal", "1000"], capsys)  # a focal given: used, and no word of assuming one
+    assert code == 0 and "assumed when it was written" not in err, err
+    assert json.loads((tmp_path / "o3" / "k.json").read_text())["focal_source"] == "user"
+    # a sequence result likewise (the review: only single frames were)
+    seq = tmp_path / "seq.json"
+    seq.write_text(json.dumps({"fps": 25, "image_size": [1280, 720], "frames": [{"people": [
+        _openpose_person(kp17 + [2.0 * i, 0.0])]} for i in range(6)]}))
+    assert run([str(seq), "--out", str(tmp_path / "s1"), "--weights", str(weights)], capsys)[0] == 0
+    written = json.loads((tmp_path / "s1" / "seq.json").read_text())
+    assert written["focal_source"] == "default-fov" and written["metric_depth"] is False
+    code, err = run([str(tmp_path / "s1" / "seq.json"), "--out", str(tmp_path / "s2"), "--weights", str(weights)],
+                    capsys)
+    assert code == 0 and "was assumed when it was written" in err, err
+    again = json.loads((tmp_path / "s2" / "seq.json").read_text())
+    assert again["focal_source"] == "default-fov" and again["metric_depth"] is False
 
 
 def _jpeg_bytes(size=(64, 48)) -> bytes:
@@ -870,7 +886,11 @@ def test_mmpose_keypoint_scores_are_read_as_confidences(tmp_path, weights, kp17,
                       "17 keypoints but 5 'keypoint_scores'"),
                      ({"keypoints": np.column_stack([coco, scores]).tolist(), "keypoint_scores": scores},
                       "both a third value in each 'keypoints' row and 'keypoint_scores'"),
-                     ({"keypoints": coco.tolist(), "keypoint_scores": "high"}, "'keypoint_scores' must be a list")):
+                     ({"keypoints": coco.tolist(), "keypoint_scores": "high"}, "'keypoint_scores' must be a list"),
+                     ({"keypoints": coco.ravel().tolist(), "keypoint_scores": scores[:16]},
+                      "34 numbers in a flat 'keypoints' list but 16 'keypoint_scores'"),
+                     ({"keypoints": np.column_stack([coco, scores]).ravel().tolist(), "keypoint_scores": scores},
+                      r"both a confidence in its flat \[x, y, c, ...\] 'keypoints' and 'keypoint_scores'")):
         p.write_text(json.dumps({**bad, "format": "coco17"}))
         with pytest.raises(PoseLifterError, match=msg):
             parse_keypoint_json(p)
@@ -915,8 +935,9 @@ def test_a_hidden_ear_nose_or_openpose_mid_joint_is_stood_in_for(tmp_path, weigh
     with pytest.raises(PoseLifterError, match=r"joint\(s\) missing .* \['r_wrist'\]"):
         parse_keypoint_json(tmp_path / "c.json")
     # a sequence says it once, with the frames
-    frames = [{"people": [_openpose_person(kp17 + [2.0 * i, 0.0], missing=("l_ear",) if i in (4, 9) else ())]}
-              for i in range(12)]
+    frames = [{"people": [_openpose_person(kp17 + [2.0 * i, 0.0], missing=("l_ear",) if i in (4, 9) else ()),
+                          _openpose_person(0.5 * kp17 + [2.0 * i, 0.0], missing=("l_ear",) if i == 4 else ())]}
+              for i in range(12)]  # (frame 4: two people stood in for; counted once)
     seq = tmp_path / "seq.json"
     seq.write_text(json.dumps({"fps": 25, **cam, "frames": frames}))
     code, err = run([str(seq), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
@@ -960,6 +981,12 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     kf = parse_keypoint_json(p)
     assert kf.format == "coco17" and len(kf.people) == 1 and kf.people_scores[0] is not None
     np.testing.assert_allclose(kf.keypoints, coco)
+    # its top-level fields beside the instances are read (the review: they were dropped, and the camera asked for)
+    p.write_text(json.dumps({"meta_info": {}, "image_size": [1280, 720], "focal": 1000.0, "format": "coco17",
+                             "instance_info": [inst]}))
+    kf = parse_keypoint_json(p)
+    assert kf.image_size == (1280, 720) and kf.focal is not None and float(np.ravel(kf.focal)[0]) == 1000.0
+    assert kf.format == "coco17" and len(kf.people) == 1
     p.write_text(json.dumps({"meta_info": {}, "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
     with pytest.raises(PoseLifterError, match=r"MMPose predictions file of 2 frames.*\"fps\": FPS"):
         parse_keypoint_json(p)
@@ -969,7 +996,7 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
         load_image(npy)
 
 
-def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys):
+def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys, monkeypatch):
     """User trial: clip.mp4 and then clip.avi lifted into one folder: the second run replaced clip.json silently.
     Replacing the result of another input is said; lifting the same input again is not."""
     (tmp_path / "a").mkdir()
@@ -982,3 +1009,9 @@ def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, cap
     code, err = run([str(b), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and f"note: replaces {out / 'k.json'}, the result of another input ({a}) written before" in err
     assert json.loads((out / "k.json").read_text())["input"] == str(b)
+    # a relative input written from another folder: the same file name tells nothing (the review's false note)
+    monkeypatch.chdir(tmp_path / "a")
+    assert run(["k.json", "--out", str(out), "--weights", str(weights)], capsys)[0] == 0
+    monkeypatch.chdir(tmp_path)
+    code, err = run([str(a), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 0 and "replaces" not in err, err

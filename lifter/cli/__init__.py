@@ -25,9 +25,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace:
-    """The arguments, with ``lift``'s inputs read wherever they stand (``lift a.json --out DIR b.json``: argparse
-    takes a positional list once, so inputs after an option were "unrecognized"); anything else left over is an
-    error from the sub-command's own parser, with its usage."""
+    """The arguments, with ``lift``'s inputs also read after its options (``lift a.json --out DIR b.json``: argparse
+    takes a positional list once, so inputs after an option were "unrecognized"; an option taking several values,
+    ``--focal F [F]``, still takes a number after it); anything else left over is an error from the sub-command's
+    own parser, with its usage."""
     args, extra = parser.parse_known_args(argv)
     if not extra:
         return args

@@ -94,13 +94,18 @@ from ._help import HelpFormatter
 # ------------------------------------------------------------------------------------------------
 
 
-def _is_result_file(path: Path) -> bool:
-    """Whether a .json file is a ``poselifter lift`` result (its ``model`` and ``units`` fields)."""
+def _head(path: Path) -> bytes:
+    """The first 4 KB of a file (empty when it cannot be read): a result's identifying fields come first."""
     try:
         with open(path, "rb") as f:
-            head = f.read(4096)
+            return f.read(4096)
     except OSError:
-        return False
+        return b""
+
+
+def _is_result_file(path: Path) -> bool:
+    """Whether a .json file is a ``poselifter lift`` result (its ``model`` and ``units`` fields)."""
+    head = _head(path)
     return head.lstrip().startswith(b"{") and b'"model"' in head and b'"units"' in head
 
 
@@ -409,22 +414,19 @@ def run_lift(args: argparse.Namespace) -> int:
 
 
 def _earlier_input(target: Path, path: Path) -> str | None:
-    """The ``input`` an existing result file ``target`` was written for, when that is not ``path`` (a result of
-    another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None. Reads only
-    the file's start (``input`` is its first field)."""
-    try:
-        with open(target, "rb") as fh:
-            head = fh.read(4096).decode("utf-8", "replace")
-    except OSError:
-        return None
-    m = re.match(r'\s*\{\s*"input":\s*("(?:[^"\\]|\\.)*")', head)
+    """The ``input`` an existing result file ``target`` was written for, when that is surely not ``path`` (a result
+    of another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None. Reads only
+    the file's start (``input`` is its first field). A relative ``input`` was relative to a working folder that may
+    not be this one: only another file name tells then."""
+    m = re.match(r'\s*\{\s*"input":\s*("(?:[^"\\]|\\.)*")', _head(target).decode("utf-8", "replace"))
     if m is None:
         return None
     try:
-        earlier = json.loads(m.group(1))
+        earlier = Path(json.loads(m.group(1)))
     except ValueError:
         return None
-    return None if Path(earlier).resolve() == path.resolve() else str(earlier)
+    same = earlier.resolve() == path.resolve() if earlier.is_absolute() else earlier.name == path.name
+    return None if same else str(earlier)
 
 
 def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
