@@ -232,3 +232,19 @@ def test_a_video_lifted_again_keeps_the_upload_s_track_ids(server, tmp_path: Pat
     assert again is not seq.record
     assert [[p.track_id for p in fr.people] for fr in again.frames] == \
         [[p.track_id for p in fr.people] for fr in seq.record.frames]
+
+
+def test_a_focal_chosen_for_one_upload_is_not_kept_for_the_next(server) -> None:
+    """The review of the calibration match (a focal chosen on one Human3.6M camera is kept across its subjects): two
+    uploaded sequences of one image size and an assumed focal are not one camera. The focal chosen for the first is
+    replaced by the second's, and said."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(6)]
+    doc = {"fps": 10, "image_size": [W, H], "format": "h36m17", "frames": frames}
+    assert v.load_upload("first.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assumed = v.state.focal_px
+    assert v.set_focal(3000.0) is True and v.state.focal_px == 3000.0
+    assert v.load_upload("second.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assert v.state.focal_px == pytest.approx(assumed)
+    assert any("(it was 3000 px: a new input)" in m for m in v.messages[-3:]), v.messages[-3:]
