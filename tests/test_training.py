@@ -500,10 +500,16 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert main(["train", "--config", str(out), "--print-config", "--epochs", "3"]) == 0
     again = TrainConfig.from_dict(__import__("json").loads(capsys.readouterr().out))
     assert again == replace(cfg, schedule=replace(cfg.schedule, epochs=3.0))
-    assert main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root"]) == 0
+    assert main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root",
+                 "--json", str(tmp_path / "ev.json")]) == 0
     captured = capsys.readouterr()
     text = captured.out
     assert "MPJPE" in text and "analytic" in text and "Discussion 1" in text and "source='clean'" in text
+    rows = __import__("json").loads((tmp_path / "ev.json").read_text())  # each row says how it was measured
+    assert [r["root"] for r in rows] == ["learned", "analytic"] and all(
+        r["protocol"] == 1 and r["stride"] == 200 and r["inputs"] == "gt" and r["source"] == "clean"
+        and r["test_subjects"] == [9, 11] and r["flip_test"] == "each model's own" and r["units"].startswith("mm")
+        for r in rows), rows
     assert "lifting (" not in captured.err  # stderr is not a terminal here: no progress bar in logs (user trial)
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only

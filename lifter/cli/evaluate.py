@@ -167,6 +167,10 @@ def _run(args: argparse.Namespace) -> int:
         samples, dropped = with_sh_detections(samples, data=data)
         note = f"; real SH detections, {dropped} samples without a detection dropped"
     source = args.source or ("clean" if args.inputs == "gt" else "detected")
+    how = {"protocol": args.protocol, "test_subjects": sorted({int(x) for x in samples.subject.tolist()}),
+           "stride": args.stride, "inputs": args.inputs, "source": source,
+           "flip_test": "each model's own" if args.flip_test is None else bool(args.flip_test),
+           "units": "mm; pck150 and auc as fractions"}  # (in every row of --json: each says how it was measured)
     print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
           f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note}); "
           f"source={source!r}")
@@ -178,7 +182,8 @@ def _run(args: argparse.Namespace) -> int:
                  for label, lifter in lifters}
         print(format_focal_table(sweep, principal_shift=shift))
         if args.json:
-            write_json_atomic(args.json, {k: [r.to_dict() for r in v] for k, v in sweep.items()})
+            write_json_atomic(args.json, {k: [{**r.to_dict(), **how, "principal_shift_px": list(shift)} for r in v]
+                                          for k, v in sweep.items()})
         return 0
     rows = []
     for label, lifter in lifters:
@@ -188,7 +193,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.per_action:
         print(format_per_action(rows))
     if args.json:
-        write_json_atomic(args.json, [r.to_dict() for r in rows])
+        write_json_atomic(args.json, [{**r.to_dict(), **how} for r in rows])
     if args.pck_plot:
         from ..plots import plot_pck_curves  # matplotlib only when a figure is asked for (~0.5 s to import)
 
