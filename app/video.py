@@ -189,7 +189,8 @@ class VideoSequence:
                 q = kp[k:k + c] if undistorted else np.stack([p.keypoints_2d for p in fr.people])
                 lifted_by_index[fr.index] = (q, root[k:k + c], rel[k:k + c])
                 if getattr(res, "warnings", ()) and hasattr(net, "output_notes"):
-                    collect_output_notes(output_notes, fr.index, net.output_notes(kp[k:k + c], pp, root[k:k + c]))
+                    collect_output_notes(output_notes, fr.index, net.output_notes(
+                        kp[k:k + c], pp, root[k:k + c], source=src))
                 k += c
         lifted = []
         for fr in rec.frames:  # (a frame with nobody keeps its place)

@@ -90,10 +90,19 @@ def available_models() -> list[str]:
     return assets.model_names()
 
 
+FAR_ROOT_DEPTH_MM: Final[float] = 8000.0
+"""Roots lifted farther than this (mm) by a reference-camera lifter from detected 2D get a note: the training
+subjects' roots reach 7.6 m (1-99 %: 3.3-6.9 m), and the detected-2D networks place farther people too near
+(``scripts/far_people.py``, ``docs/results/far_people.txt``). The reference camera makes the networks read the
+2D as seen from the true distance, whatever the focal length and image size, so the distance itself is what is
+outside their training."""
+
+
 class OutputNote(str):
     """A note on a lift's output (an entry of :attr:`LiftResult.warnings`): the text, and its ``kind``,
-    ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on) or ``"behind-camera"``
-    (a root at Z <= 0), by which the video records count the frames that had it."""
+    ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on), ``"far"`` (a detected
+    person farther than the networks learned) or ``"behind-camera"`` (a root at Z <= 0), by which the video records
+    count the frames that had it."""
 
     kind: str
 
@@ -310,11 +319,13 @@ class Lifter:
         separate clean-2D network, else this one (with its :attr:`ensemble`)."""
         return self.clean if source == "clean" and self.clean is not None else self
 
-    def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike) -> list[OutputNote]:
+    def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike, *,
+                     source: Source | None = None) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
-        and for a pixel-space network 2D poses outside :attr:`trained_pixel_range`. For callers that show one pose
-        of a batch (the app)."""
+        for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
+        a reference-camera network) roots farther than :data:`FAR_ROOT_DEPTH_MM`. For callers that show one pose of a
+        batch (the app)."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -332,6 +343,14 @@ class Lifter:
                              f"{where_in_batch(outside)}: its depth is an extrapolation (it can place people behind "
                              "the camera): use the default model, which is exact at any image size, or scale the "
                              "image and its intrinsics down", kind="pixel-range"))
+        if source == "detected" and self.input_space == "camera" and root.size:
+            far = root[..., 2] > FAR_ROOT_DEPTH_MM
+            if np.any(far):
+                notes.append(OutputNote(
+                    f"{int(far.sum())} of {far.size} root(s) lifted beyond {FAR_ROOT_DEPTH_MM / 1000:.1f} m"
+                    f"{where_in_batch(far)}: farther than the training subjects ever stood (their roots reach 7.6 m), "
+                    "and the detected-2D networks place such people too near (exact 2D: -11 % at 9 m, -21 % at 12 m, "
+                    "-38 % at 25 m; told source=\"clean\", -2 to -6 %; scripts/far_people.py)", kind="far"))
         behind = root[..., 2] <= 0
         if np.any(behind):
             notes.append(OutputNote(
@@ -604,7 +623,7 @@ class Lifter:
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
         root = root.reshape(lead + (3,))
         absolute = rel + root[..., None, :]
-        notes = self.output_notes(kp, pp, root)
+        notes = self.output_notes(kp, pp, root, source=source)
         if warn:
             for message in notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)

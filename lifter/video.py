@@ -557,8 +557,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
-            collect_output_notes(output_notes, i,
-                                 lifter.network_for(ks.source).output_notes(kp17[k:k + c], pp, root[k:k + c]))
+            collect_output_notes(output_notes, i, lifter.network_for(ks.source).output_notes(
+                kp17[k:k + c], pp, root[k:k + c], source=ks.source))
         k += c
     warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)

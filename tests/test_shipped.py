@@ -278,3 +278,28 @@ def test_the_default_holds_on_a_camera_turned_away_from_human36m_s(h36m):
         old = evaluate_lifter(before, turned_camera_samples(s, pan_deg=0.0, tilt_deg=15.0), progress=False,
                               source=source)[0]
         assert old.mpjpe > 2 * ref.mpjpe and old.mrpe > 4 * ref.mrpe, (source, old)
+
+
+def test_a_person_farther_than_the_training_poses_is_noted_for_detected_2d():
+    """A user trial: people in the background were placed far too near (exact 2D at 12 m: -21 %) with no word. A
+    detected-2D lift beyond FAR_ROOT_DEPTH_MM now says so; the same person near, or told "clean", gets no note."""
+    from lifter.api import FAR_ROOT_DEPTH_MM
+
+    lifter = Lifter.from_pretrained()
+    s = demo_sample("walking")
+    f, c = s.focal, s.principal_point
+    near = lifter.lift(s.keypoints_2d, focal=f, principal_point=c)  # (warn=True: no warning for it)
+    assert not any(getattr(w, "kind", "") == "far" for w in near.warnings)
+    pose = np.asarray(s.pose_3d, np.float64)
+    kp = project(pose - pose[:1] + np.array([0.0, 0.0, 14000.0]), focal=f, principal_point=c)  # 14 m away
+    with pytest.warns(PoseLifterWarning, match="root.s. lifted beyond 8.0 m"):
+        far = lifter.lift(kp, focal=f, principal_point=c)
+    assert float(far.root[2]) > FAR_ROOT_DEPTH_MM and any(w.kind == "far" for w in far.warnings)
+    # the distance, not the image's scale, is what the networks read: the same photo at a quarter size is as far
+    with pytest.warns(PoseLifterWarning, match="lifted beyond 8.0 m"):
+        quarter = lifter.lift(kp * 0.25, focal=np.asarray(f) * 0.25, principal_point=np.asarray(c) * 0.25)
+    assert float(quarter.root[2]) == pytest.approx(float(far.root[2]), rel=1e-4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        clean = lifter.lift(kp, focal=f, principal_point=c, source="clean")
+    assert not clean.warnings and float(clean.root[2]) > float(far.root[2])  # (placed farther, nearer the truth)
