@@ -28,6 +28,7 @@ import numpy as np
 
 from lifter import PoseLifterError
 from lifter._text import sentence
+from lifter.keypoints import H36M17
 from lifter.video import (
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
@@ -293,7 +294,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                   {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
-                      source=rec.source, detector=rec.detector, warnings=tuple(notes))
+                      source=rec.source, detector=rec.detector, warnings=tuple(notes),
+                      source_format=rec.source_format or H36M17)
     label = f"{nm} ({len(rec.frames)} frames at {rec.fps:g} fps, {len(tracks)} track{'s' if len(tracks) != 1 else ''})"
     return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs, uploaded_with=lifter)
 

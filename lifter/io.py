@@ -169,6 +169,11 @@ class KeypointFile:
     joint has the lowest of its stand-ins'), None where the file gave none."""
 
 
+MMPOSE_SEQUENCE_FORM: Final[str] = (
+    '{"frames": [its per-frame objects, each with "instances"], "fps": FPS, "format": "coco17"} '
+    "(README, keypoint JSON)")
+"""How a message asks for MMPose's per-frame predictions as a keypoint sequence."""
+
 REASSUMED_NOTE: Final[str] = (
     "the file's focal length ({focal} px) was assumed when it was written (focal_source 'default-fov'), not known: it "
     "is assumed again from the image size (give --focal if you know it)")
@@ -469,8 +474,7 @@ def _mmpose_predictions(d: dict[str, Any], p: Path) -> list[Any]:
     if isinstance(info, list) and info and all(isinstance(f, dict) and "instances" in f for f in info):
         if len(info) > 1:
             raise PoseLifterError(f"{p}: an MMPose predictions file of {len(info)} frames ('instance_info'): a "
-                                  "keypoint sequence needs its frame rate; give it as {\"frames\": [{\"people\": "
-                                  "INSTANCES}, ...], \"fps\": FPS, \"format\": \"coco17\"} (README, 'keypoint JSON')")
+                                  f"keypoint sequence needs its frame rate; give it as {MMPOSE_SEQUENCE_FORM}")
         people = info[0]["instances"]
     elif isinstance(info, list) and all(isinstance(q, dict) for q in info):  # (an image demo's instances directly)
         people = info
@@ -490,6 +494,16 @@ def _people_of(d: Any, p: Path, fmt: str | None
     given = fmt
     meta: dict[str, Any] = {}
     ids: list[str | int | None] = []
+    if isinstance(d, list) and d and all(isinstance(q, dict) and "instances" in q for q in d):
+        if len(d) > 1:  # (MMPoseInferencer's predictions of a video: one object per frame)
+            raise PoseLifterError(f"{p}: MMPose predictions of {len(d)} frames ('instances' per frame): a keypoint "
+                                  f"sequence needs its frame rate; give them as {MMPOSE_SEQUENCE_FORM}")
+        d = d[0]
+    if isinstance(d, dict) and "instances" in d and "people" not in d and "keypoints" not in d:
+        if not isinstance(d["instances"], list):
+            raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(d['instances'])}")
+        d = {**{k: v for k, v in d.items() if k not in ("instances", "frame_id")}, "people": d["instances"]}
+        fmt = fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
     if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
         # MMPose's demo --save-predictions file: its one frame's instances, as people, beside its other fields
         d = {**{k: v for k, v in d.items() if k not in ("instance_info", "meta_info")},

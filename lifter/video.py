@@ -207,6 +207,9 @@ class SequenceRecord:
     source: str = "detected"
     distortion: tuple[float, ...] | None = None
     """The lens distortion the 2D was given with (a keypoint sequence's ``distortion``), or None."""
+    source_format: str | None = None
+    """The keypoint format the 2D came in before conversion to H36M (a sequence's ``format``, the detector's), or
+    None when no frame had anyone."""
 
     def tracks(self) -> dict[int, list[tuple[int, PersonState]]]:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
@@ -226,7 +229,8 @@ class SequenceRecord:
             "metric_depth": self.focal_source != "default-fov",
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
-            "detector": self.detector, "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
+            "source_format": self.source_format, "detector": self.detector,
+            "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
             "seconds_per_frame": None if self.seconds_per_frame is None else round(self.seconds_per_frame, 4),
             "tracks": tracks, "bad_frames": self.bad_frames, "warnings": self.warnings,
             "frames": [f.to_json() for f in self.frames],
@@ -358,6 +362,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
         warnings: list[str] = []
         output_notes: dict[str, tuple[int, int, str]] = {}  # kind -> (first frame, frames, message)
+        source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
         if not (math.isfinite(fps) and 0 < fps <= 1000):
             warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
             fps = 30.0
@@ -435,6 +440,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 states: list[PersonState] = []
             else:
                 kp = np.stack([q.keypoints_2d for q in people])
+                source_format = source_format or people[0].raw.keypoint_format
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
                 collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
@@ -491,7 +497,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                           principal_point=(float(pp[0]), float(pp[1])),
                           smoothing=float(smoothing), frames=frames, num_frames_in_file=declared or None,
                           bad_frames=bad, warnings=warnings, detector=estimator.name,
-                          seconds_per_frame=t_total / max(n_done, 1))
+                          seconds_per_frame=t_total / max(n_done, 1), source_format=source_format)
 
 
 def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
@@ -569,7 +575,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
-                          distortion=distortion_tuple(ks.distortion))
+                          distortion=distortion_tuple(ks.distortion), source_format=ks.format)
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",

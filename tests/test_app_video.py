@@ -247,4 +247,12 @@ def test_a_focal_chosen_for_one_upload_is_not_kept_for_the_next(server) -> None:
     assert v.set_focal(3000.0) is True and v.state.focal_px == 3000.0
     assert v.load_upload("second.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     assert v.state.focal_px == pytest.approx(assumed)
+    assert v.state.sample.upload is not None and v.state.sample.upload.source_format == "h36m17"
+    # the sequence's own format is shown (a trial: an OpenPose sequence was labelled h36m17)
+    from lifter import convert
+
+    sh = dict(doc, format="sh16", frames=[{"people": [{"keypoints": convert(p, src="h36m17", dst="sh16").tolist()}
+                                                      for p in people]} for people in _script(6)])
+    assert v.load_upload("third.json", json.dumps(sh).encode()) is True, v.messages[-3:]
+    assert v.state.sample.upload is not None and v.state.sample.upload.source_format == "sh16"
     assert any("(it was 3000 px: a new input)" in m for m in v.messages[-3:]), v.messages[-3:]

@@ -519,7 +519,7 @@ def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tm
     assert code == 0, err
     assert "1 person(s) left out of 1 frame(s) (13) for missing joints ['l_wrist']" in err
     d = json.loads((tmp_path / "o" / "seq.json").read_text())
-    assert d["frames"][13]["people"] == []
+    assert d["frames"][13]["people"] == [] and d["source_format"] == "openpose25"
     people = [q for i, f in enumerate(d["frames"]) if i != 13 for q in f["people"]]
     assert len(people) == 19 and {q["person_id"] for q in people} == {"A"}
     for fr in frames:
@@ -990,6 +990,19 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     p.write_text(json.dumps({"meta_info": {}, "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
     with pytest.raises(PoseLifterError, match=r"MMPose predictions file of 2 frames.*\"fps\": FPS"):
         parse_keypoint_json(p)
+    # MMPoseInferencer's predictions of a video (a list of {frame_id, instances}): one frame is read, several are
+    # refused with the sequence layout, which then reads them (a trial: "no person in the keypoint file")
+    video = [{"frame_id": i, "instances": [inst]} for i in range(3)]
+    p.write_text(json.dumps(video[:1]))
+    assert parse_keypoint_json(p).format == "coco17"
+    p.write_text(json.dumps(video))
+    with pytest.raises(PoseLifterError, match=r"MMPose predictions of 3 frames .*\"fps\": FPS"):
+        parse_keypoint_json(p)
+    from lifter.io import parse_keypoint_sequence
+
+    p.write_text(json.dumps({"frames": video, "fps": 25, "format": "coco17", "image_size": [1280, 720]}))
+    ks = parse_keypoint_sequence(p)
+    assert ks.format == "coco17" and [len(f) for f in ks.frames] == [1, 1, 1]
     npy = tmp_path / "kp.npy"
     np.save(npy, kp17)
     with pytest.raises(ImageError, match=r"lifted through the Python API \(lifter.Lifter.lift\)"):
