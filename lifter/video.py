@@ -179,6 +179,23 @@ OUTPUT_NOTE_LINE: Final[re.Pattern[str]] = re.compile(r"frame \d+: ")
 """How a record's line of :func:`output_note_lines` begins (and no other of its notes does)."""
 
 
+def track_animation(seen: list[tuple[int, PersonState]]) -> np.ndarray:
+    """One track's poses on the video's own frame clock, for formats with one pose per frame at a fixed rate
+    (BVH): ``(last frame + 1, 17, 3)`` mm (camera frame), frame ``i`` at ``i / fps``. ``seen``: the track's
+    ``(frame index, person)`` in frame order (:meth:`SequenceRecord.tracks`). Frames where the track is not seen
+    are filled: before its first frame its first pose is held, and a gap is interpolated linearly, joint by joint,
+    between the poses on either side (a user trial: the frames were dropped, so everything after a gap, or a
+    track that started late, played early)."""
+    if not seen:
+        raise PoseLifterError("track_animation: the track has no frames")
+    idx = np.array([i for i, _ in seen], np.float64)
+    poses = np.stack([np.asarray(p.absolute, np.float64) for _, p in seen])
+    t = np.arange(int(idx[-1]) + 1, dtype=np.float64)
+    flat = poses.reshape(len(poses), -1)
+    out = np.stack([np.interp(t, idx, flat[:, k]) for k in range(flat.shape[1])], axis=-1)  # (held before the first)
+    return out.reshape(len(t), *poses.shape[1:])
+
+
 def output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
     """The record's lines for :func:`collect_output_notes`: the first frame's note, and how many frames had it."""
     return [f"frame {first}: {message}" + (f" ({n} frames like it)" if n > 1 else "")
@@ -579,6 +596,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
+           "track_animation",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
            "track_lifted"]

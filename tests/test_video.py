@@ -403,9 +403,11 @@ def test_cli_video_and_sequence(tmp_path, lifter, capsys):
 
     for name in ("clip", "seq"):
         assert {p.name for p in out.glob(f"{name}_track*.bvh")} == {f"{name}_track1.bvh", f"{name}_track2.bvh"}
-    bvh = read_bvh_frames(out / "clip_track1.bvh")
-    want = np.array([f["people"][0]["absolute"] for f in d["frames"] if f["people"]])
-    np.testing.assert_allclose(bvh, want, atol=0.2)
+    bvh = read_bvh_frames(out / "clip_track1.bvh")  # on the video's clock: frame 2 (nobody) filled in between
+    seen = [i for i, f in enumerate(d["frames"]) if f["people"]]
+    assert len(bvh) == 15 and 2 not in seen
+    np.testing.assert_allclose(bvh[seen], np.array([d["frames"][i]["people"][0]["absolute"] for i in seen]), atol=0.2)
+    np.testing.assert_allclose(bvh[2], 0.5 * (bvh[1] + bvh[3]), atol=0.2)
     times, joints = read_glb_animation(out / "clip.glb")
     assert len(times) == 15 and set(joints) == {1, 2} and np.isnan(joints[1][2]).all()
     np.testing.assert_allclose(joints[2][0], d["frames"][0]["people"][1]["absolute"], atol=0.2)
@@ -589,3 +591,21 @@ def test_sequence_tracker_step_checks_its_shapes():
     assert [p.track_id for p in trk.step(4, 0.16, kp, root, rel, 1145.0)] == [1, 2]  # (back within the timeout)
     with pytest.raises(PoseLifterError, match="2 different ones"):
         trk.step(2, 0.08, kp, root, rel, np.array([[1145.0, 1145.0], [1000.0, 1000.0]]))
+
+
+def test_track_animation_keeps_the_video_clock():
+    """A user trial: a track's BVH dropped the frames where it was unseen, so after a gap, or for a track that
+    started late, the animation ran early. The track's poses are put on the video's frames: held before its first
+    frame, interpolated across gaps."""
+    from lifter.video import PersonState, track_animation
+
+    def person(z: float) -> PersonState:
+        root = np.array([0.0, 0.0, z])
+        return PersonState(track_id=1, keypoints_2d=np.zeros((17, 2)), root=root, relative=np.zeros((17, 3)),
+                           root_raw=root, relative_raw=np.zeros((17, 3)), canonical_depth=z)
+
+    anim = track_animation([(3, person(1000.0)), (4, person(2000.0)), (8, person(6000.0))])
+    assert anim.shape == (9, 17, 3)
+    np.testing.assert_allclose(anim[:, 0, 2], [1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000, 6000])
+    with pytest.raises(PoseLifterError, match="no frames"):
+        track_animation([])

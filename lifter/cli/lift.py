@@ -86,6 +86,7 @@ from ..video import (
     lift_keypoint_sequence,
     lift_video,
     limit_blas_threads,
+    track_animation,
 )
 from ._help import HelpFormatter
 
@@ -439,7 +440,7 @@ def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bo
         from ..export import write_bvh_animation
 
         for tid, seen in sorted(tracks.items()):
-            write_bvh_animation(np.stack([p.absolute for _, p in seen]), out / f"{name}_track{tid}.bvh", fps=seq.fps)
+            write_bvh_animation(track_animation(seen), out / f"{name}_track{tid}.bvh", fps=seq.fps)
         if not tracks:
             say(f"{seq.input}: note: nobody in any frame; no BVH written")
     if glb:
