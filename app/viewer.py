@@ -576,6 +576,10 @@ class SessionView:
             typed = self._typed_at.get("frame")
             if (typed is not None and typed != self._still_frame_typed and self.gui.play.frame.disabled
                     and not key.startswith("motion/")):  # (a disabled slider's box still sends what is typed in it)
+                since = self._since_typed("frame")
+                if since < TYPING_SETTLE_S:  # (each keystroke arrives: "1", "10", "100"; answer the value left)
+                    self._settle_later(TYPING_SETTLE_S - since + 0.05)
+                    return
                 self._still_frame_typed = typed
                 self.show_message(f"frame {wanted}: this is a still sample, with no frames to go to (play switches "
                                   "to the demo motion; a Human3.6M picker, or the source, shows Human3.6M's frames)")
