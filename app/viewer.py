@@ -101,6 +101,14 @@ range ("6" on the way to "6000"), so a slow typist gets this long (user trial: a
 the minimum with the cursor in front, and "6", "000" became "000100")."""
 
 
+def _same_calibration(a: Any, b: Any) -> bool:
+    """Whether two :class:`lifter.Camera` see alike: the same image size, focal and principal point (to 0.5 px) and
+    lens."""
+    return ((a.width, a.height) == (b.width, b.height) and abs(a.alpha - b.alpha) <= 0.5
+            and bool(np.allclose(a.principal_point, b.principal_point, atol=0.5))
+            and bool(np.allclose((*a.k, *a.p), (*b.k, *b.p))))
+
+
 def _sequence_of(key: str) -> str:
     """What a status message is about, from a sample key: the sequence for a frame of one (``h36m/S9/Posing 1/
     54138969``, ``video/3/clip.mp4``, ``motion``), else the sample itself (a demo sample, an uploaded photo)."""
@@ -627,12 +635,10 @@ class SessionView:
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         a, b = sample.camera, old.sample.camera
+        # (one Human3.6M camera's calibration is the same for every subject: a chosen focal is kept across subjects;
+        # a user trial saw it reset)
         same_camera = a is b or (sample.key.split("/")[0] == old.sample.key.split("/")[0] and (
-            a.name == b.name or sample.key.startswith("h36m/") and (a.width, a.height) == (b.width, b.height)
-            and abs(a.alpha - b.alpha) <= 0.5
-            and np.allclose(a.principal_point, b.principal_point, atol=0.5)
-            and np.allclose((*a.k, *a.p), (*b.k, *b.p))))  # (one camera id's calibration is the
-        # same for every Human3.6M subject: a chosen focal is kept across subjects; a user trial saw it reset)
+            a.name == b.name or sample.key.startswith("h36m/") and _same_calibration(a, b)))
         kept = same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video")
         if kept:
             st = st.evolve(focal_px=old.focal_px)

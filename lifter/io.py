@@ -466,24 +466,34 @@ def _scored(q: dict[str, Any], p: Path) -> Any:
     return [None if r is None else [*r, c] for r, c in zip(rows, scores)]
 
 
-def _mmpose_predictions(d: dict[str, Any], p: Path) -> list[Any]:
-    """The instances of an MMPose demo ``--save-predictions`` file (``{"meta_info": ..., "instance_info": [{"frame_id":
-    1, "instances": [{"keypoints": ..., "keypoint_scores": ...}, ...]}]}``) of one frame, as a list of people (COCO-17
-    unless the file says ``format``). Several frames are a video's: refused, with how to give them as a sequence."""
-    info = d["instance_info"]
-    if isinstance(info, list) and info and all(isinstance(f, dict) and "instances" in f for f in info):
-        if len(info) > 1:
-            raise PoseLifterError(f"{p}: an MMPose predictions file of {len(info)} frames ('instance_info'): a "
-                                  f"keypoint sequence needs its frame rate; give it as {MMPOSE_SEQUENCE_FORM}")
-        people = info[0]["instances"]
-    elif isinstance(info, list) and all(isinstance(q, dict) for q in info):  # (an image demo's instances directly)
-        people = info
+def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
+    """MMPose's prediction files as one frame of people: the demo's ``--save-predictions`` file (``{"meta_info":
+    ..., "instance_info": [{"frame_id": 1, "instances": [...]}]}``, or its instances directly), MMPoseInferencer's
+    predictions (``[{"frame_id": 0, "instances": [...]}, ...]``) and one such frame of a sequence, as
+    ``{"people": instances, ...the file's other fields}``, COCO-17 unless a format is given. Several frames are a
+    video's: refused, with the sequence layout to give them in. Anything else comes back as it is."""
+    if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
+        info, label, rest = d["instance_info"], "an MMPose predictions file", ("instance_info", "meta_info")
+        if isinstance(info, list) and all(isinstance(q, dict) and "instances" not in q for q in info):
+            info = [{"instances": info}]  # (an image demo's instances directly)
+    elif isinstance(d, list) and d and all(isinstance(q, dict) and "instances" in q for q in d):
+        info, label, rest, d = d, "MMPose predictions", ("instances", "frame_id"), d[0]
+    elif isinstance(d, dict) and "instances" in d and "people" not in d and "keypoints" not in d:
+        info, label, rest = [d], "MMPose predictions", ("instances", "frame_id")
     else:
+        return d, fmt
+    if not (isinstance(info, list) and info and all(isinstance(q, dict) and "instances" in q for q in info)):
         raise PoseLifterError(f"{p}: 'instance_info' (an MMPose predictions file) must be a list of instances or of "
                               f"frames with 'instances', got {_short(info)}")
+    if len(info) > 1:
+        where = "'instance_info'" if label.endswith("file") else "'instances' per frame"
+        raise PoseLifterError(f"{p}: {label} of {len(info)} frames ({where}): a keypoint sequence needs its frame "
+                              f"rate; give it as {MMPOSE_SEQUENCE_FORM}")
+    people = info[0]["instances"]
     if not isinstance(people, list):
         raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(people)}")
-    return people
+    d = {**{k: v for k, v in d.items() if k not in rest}, "people": people}
+    return d, fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
 
 
 def _people_of(d: Any, p: Path, fmt: str | None
@@ -494,21 +504,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
     given = fmt
     meta: dict[str, Any] = {}
     ids: list[str | int | None] = []
-    if isinstance(d, list) and d and all(isinstance(q, dict) and "instances" in q for q in d):
-        if len(d) > 1:  # (MMPoseInferencer's predictions of a video: one object per frame)
-            raise PoseLifterError(f"{p}: MMPose predictions of {len(d)} frames ('instances' per frame): a keypoint "
-                                  f"sequence needs its frame rate; give them as {MMPOSE_SEQUENCE_FORM}")
-        d = d[0]
-    if isinstance(d, dict) and "instances" in d and "people" not in d and "keypoints" not in d:
-        if not isinstance(d["instances"], list):
-            raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(d['instances'])}")
-        d = {**{k: v for k, v in d.items() if k not in ("instances", "frame_id")}, "people": d["instances"]}
-        fmt = fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
-    if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
-        # MMPose's demo --save-predictions file: its one frame's instances, as people, beside its other fields
-        d = {**{k: v for k, v in d.items() if k not in ("instance_info", "meta_info")},
-             "people": _mmpose_predictions(d, p)}
-        fmt = fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
+    d, fmt = _mmpose_frame(d, p, fmt)
     if isinstance(d, dict) and "people" in d:  # OpenPose output, or a list of {"keypoints": ...}
         if not isinstance(d["people"], list):
             raise PoseLifterError(f"{p}: 'people' must be a list of {{\"pose_keypoints_2d\": [...]}} or "

@@ -43,20 +43,25 @@ def _px(v: Any) -> str:
 
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
-            fov_deg: float, where: str, file_distortion: np.ndarray | None = None, unread: Sequence[str] = ()
-            ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
+            fov_deg: float, where: str, file_distortion: np.ndarray | None = None, unread: Sequence[str] = (),
+            assumed_focal: str | None = None) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     """The focal length, its source, the principal point and notes for one input, from what the user gave, the
     file's camera fields and the image size. A missing field raises a :class:`PoseLifterError` naming the ways
     to give it, followed by ``unread`` (a keypoint file's notes on fields it has but that are not read, e.g. a
-    ``"focal_length"``: :attr:`lifter.io.KeypointFile.unread`), which likely explain it."""
+    ``"focal_length"``: :attr:`lifter.io.KeypointFile.unread`), which likely explain it. ``assumed_focal``: the
+    focal a result file says was assumed when it was written (:attr:`lifter.io.KeypointFile.assumed_focal`, not
+    passed as ``file_focal``); without a focal from the user, the first note says it is assumed again."""
     try:
-        return _resolve_camera(user_focal=user_focal, user_pp=user_pp, file_focal=file_focal, file_pp=file_pp,
-                               image_size=image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg,
-                               where=where, file_distortion=file_distortion)
+        f, src, pp, notes = _resolve_camera(
+            user_focal=user_focal, user_pp=user_pp, file_focal=file_focal, file_pp=file_pp, image_size=image_size,
+            exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=where, file_distortion=file_distortion)
     except PoseLifterError as exc:
         if not unread:
             raise
         raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(sentence(n) for n in unread)) from None
+    if assumed_focal is not None and user_focal is None:
+        notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal))
+    return f, src, pp, notes
 
 
 def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
@@ -264,9 +269,8 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
-        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread)
-    if kf.assumed_focal is not None and focal is None:
-        cam_notes.insert(0, REASSUMED_NOTE.format(focal=kf.assumed_focal))
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread,
+        assumed_focal=kf.assumed_focal)
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
                          distortion=kf.distortion)

@@ -34,7 +34,7 @@ from ._checks import PoseLifterError, as_pair
 from .api import collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, check_max_side, image_from_array, people_h36m
-from .io import REASSUMED_NOTE, distortion_tuple, parse_keypoint_sequence
+from .io import distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
@@ -545,9 +545,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
-        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread)
-    if ks.assumed_focal is not None and focal is None:
-        warnings.append(REASSUMED_NOTE.format(focal=ks.assumed_focal))
+        sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread,
+        assumed_focal=ks.assumed_focal)
     warnings.extend(notes)
     frames = ks.frames
     limit = int(math.floor(max_seconds * ks.fps + 1e-9))
