@@ -50,7 +50,7 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, parse_keypoint_json
+from lifter.io import REASSUMED_NOTE, LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
@@ -329,6 +329,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     else:
         g = guess_focal(size, exif=photo.exif if use_photo else None, fov_deg=fov_deg)  # type: ignore[union-attr]
         focal, src, detail = (g.focal, g.focal), g.source, g.detail
+        if kf.assumed_focal is not None:  # (a result written with an assumed focal: assumed again, as lift says)
+            notes.append(REASSUMED_NOTE.format(focal=kf.assumed_focal) + " (set it if you know it)")
         notes.append(g.detail)
     pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
         else (size[0] / 2.0, size[1] / 2.0)

@@ -176,7 +176,7 @@ MMPOSE_SEQUENCE_FORM: Final[str] = (
 
 REASSUMED_NOTE: Final[str] = (
     "the file's focal length ({focal} px) was assumed when it was written (focal_source 'default-fov'), not known: it "
-    "is assumed again from the image size (give --focal if you know it)")
+    "is assumed again from the image size")
 """The note when a result written with an assumed focal is read back without a focal given (``{focal}``: px)."""
 
 STAND_IN_NOTE: Final[str] = ("missing joint(s) stood in for: {what} (lifter.keypoints.STAND_INS); the head's and "

@@ -60,7 +60,7 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
             raise
         raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(sentence(n) for n in unread)) from None
     if assumed_focal is not None and user_focal is None:
-        notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal))
+        notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal) + " (give --focal if you know it)")
     return f, src, pp, notes
 
 

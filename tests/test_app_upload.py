@@ -720,3 +720,18 @@ def test_an_upload_refused_for_a_missing_field_repeats_the_unread_ones() -> None
     with pytest.raises(up.UploadError, match=r"has no \"image_size\".*upload the photo first\. Also in the file: "
                                              r"'focal_length' is not read: did you mean 'focal'\? 'pp' is not read"):
         up.keypoint_sample("k.json", json.dumps(doc).encode(), key="upload/t/k.json")
+
+
+def test_a_result_with_an_assumed_focal_uploaded_again_says_it_is_assumed_again(view: SessionView) -> None:
+    """As poselifter lift does: a result written with an assumed focal (focal_source "default-fov") is not a known
+    focal when uploaded again; it is assumed again from the image size, and the upload's notes say so."""
+    from lifter import demo_sample
+
+    kp = np.asarray(demo_sample("walking").keypoints_2d)
+    doc = {"people": [{"keypoints_2d": kp.tolist()}], "format": "h36m17", "image_size": [800, 600],
+           "focal": [555.0, 555.0], "focal_source": "default-fov"}
+    assert view.load_upload("result.json", json.dumps(doc).encode()) is True, view.messages[-1]
+    info = view.state.sample.upload
+    assert info is not None and info.focal_source == "default-fov" and view.state.focal_px != pytest.approx(555.0)
+    assert any(w.startswith("the file's focal length ([555.0, 555.0] px) was assumed when it was written")
+               for w in info.warnings), info.warnings
