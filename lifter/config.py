@@ -131,9 +131,23 @@ class AugmentConfig:
                             "off, at most 45), after the pan and tilt of --rotate-deg if any: the picture turns in "
                             "its plane, as a hand-held photo's often does (needs --lens pinhole)", default=0.0)
 
+    distance_prob: float = _help("move this share of the samples along their root's viewing ray, their root depth "
+                                 "times a factor log-uniform in [--distance-min, --distance-max] (0: off): the 3D "
+                                 "keeps its shape, the 2D is re-projected and a detection keeps its error relative to "
+                                 "the person's 2D size, so people nearer and farther than the training subjects' 3.3-6.9 "
+                                 "m are seen (needs --lens pinhole)", default=0.0)
+    distance_min: float = _help("smallest factor of --distance-prob (0.4 to 1)", default=0.5)
+    distance_max: float = _help("largest factor of --distance-prob (1 to 10)", default=5.0)
+
     def __post_init__(self) -> None:
         _booleans(self)
         _prob("flip_prob", self.flip_prob)
+        _prob("distance_prob", self.distance_prob)
+        _check(isinstance(self.distance_min, (int, float)) and 0.4 <= self.distance_min <= 1.0,
+               f"distance_min must be in [0.4, 1] (a factor of the root depth; nearer would put joints at or behind "
+               f"the camera), got {self.distance_min!r}")
+        _check(isinstance(self.distance_max, (int, float)) and 1.0 <= self.distance_max <= 10.0,
+               f"distance_max must be in [1, 10] (a factor of the root depth), got {self.distance_max!r}")
         for name in ("rotate_deg", "roll_deg"):
             value = getattr(self, name)
             _check(isinstance(value, (int, float)) and 0.0 <= value <= 45.0,
@@ -145,6 +159,11 @@ class AugmentConfig:
     def turns_camera(self) -> bool:
         """Whether the samples' cameras are turned (``rotate_deg`` or ``roll_deg`` above 0)."""
         return self.rotate_deg > 0 or self.roll_deg > 0
+
+    @property
+    def moves_people(self) -> bool:
+        """Whether some samples are moved along their root's viewing ray (``distance_prob`` above 0)."""
+        return self.distance_prob > 0
 
 
 @dataclass(frozen=True)
@@ -214,11 +233,13 @@ class TrainConfig:
     def __post_init__(self) -> None:
         turns = [(name, f"--{name.replace('_', '-')}") for name in ("rotate_deg", "roll_deg")
                  if getattr(self.augment, name) != 0]
+        if self.augment.moves_people:
+            turns.append(("distance_prob (moving people along their viewing ray)", "--distance-prob"))
         if self.model.view != "camera":
             turns.append((f"view={self.model.view!r} (to look at the root)", "--view"))
-        for what, flag in turns:  # each moves the 2D by a homography, which holds for pinhole 2D only
+        for what, flag in turns:  # each moves the 2D as a pinhole camera sees it, which holds for pinhole 2D only
             _check(self.data.lens == "pinhole",
-                   f"{what} turns the camera and moves the 2D as a pinhole camera would see it; this run's 2D is "
+                   f"{what} moves the 2D as a pinhole camera would see it; this run's 2D is "
                    f"lens={self.data.lens!r} (with lens distortion): add --lens pinhole, or drop {flag}")
 
     def to_dict(self) -> dict[str, Any]:

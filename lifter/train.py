@@ -4,8 +4,9 @@ Recipe: :class:`lifter.config.TrainConfig`. Per step:
 
 * a batch of training samples (:func:`make_batch`): each gets its exact GT 2D (source "clean"), its real
   detection, or its GT 2D plus error-model noise at a random level (source "detected"); then the
-  horizontal flip (about the principal point: :func:`lifter.skeleton.mirror` of 2D and 3D) and, for the
-  pixel input space, zoom;
+  horizontal flip (about the principal point: :func:`lifter.skeleton.mirror` of 2D and 3D), optionally a move
+  along the root's viewing ray (:func:`move_batch`) and a camera turn (:func:`rotate_batch`) and, for the pixel
+  input space, zoom;
 * the codec (:class:`lifter.codec.PoseCodec`) encodes inputs and targets; the network predicts
   standardized outputs; the loss (:func:`lifter.loss.poselifter_loss`) is in mm;
 * AdamW with linear warm-up then cosine decay, driven by ``max(step / steps, elapsed / max_minutes)`` so a
@@ -52,6 +53,7 @@ from .detections import match_scale
 from .loss import poselifter_loss
 from .model import PoseLifterNet, forward_folded
 from .noise import ErrorModel
+from .normalization import pose_scale
 from .skeleton import mirror
 
 if TYPE_CHECKING:
@@ -168,14 +170,31 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
     return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
 
+def move_batch(kp: torch.Tensor, gt: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor,
+               depth: torch.Tensor, factor: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The samples moved along their root's viewing ray to ``factor`` ``(B,)`` times their root depth, as the same
+    pinhole camera sees them: the 3D root (the true 2D root ``gt[:, 0]`` back-projected to ``depth`` ``(B,)`` mm)
+    times ``factor``, the root-relative 3D ``rel`` ``(B, 17, 3)`` mm kept, the true 2D ``gt`` ``(B, 17, 2)`` px
+    re-projected (its root's 2D does not move), and the 2D ``kp`` ``(B, 17, 2)`` px the network is shown (a detection,
+    or ``gt`` itself) re-projected with its error from the truth scaled by the truth's change of 2D size (a detector's
+    error follows the person's size in the image, as the error model's scale rule says). ``pp``, ``f``: ``(B, 2)`` px.
+    Returns the moved ``kp``, ``gt`` and root depth ``(B,)`` mm."""
+    root = backproject_generic(gt[:, 0], depth, f, pp) * factor[:, None]
+    points = root[:, None] + rel
+    moved = pp[:, None] + f[:, None] * points[..., :2] / points[..., 2:]
+    ratio = pose_scale(moved) / pose_scale(gt)
+    return moved + (kp - gt) * ratio[:, None, None], moved, depth * factor
+
+
 def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generator, *,
                noise: ErrorModel | None = None) -> Batch:
     """One training batch (:data:`Batch`) of the samples ``idx`` (module docstring for the order).
 
     Sources: clean with ``cfg.data.clean_prob``; else the real detection with ``real_prob`` where there is
     one; else GT 2D with ``noise`` at a level uniform in ``[noise_level_min, noise_level_max]`` (GT 2D
-    without noise when ``noise`` is None). The camera turn and roll (``augment.rotate_deg``, ``roll_deg``) follow
-    the flip; noise is drawn after flip, turn and zoom, so it follows the shown size."""
+    without noise when ``noise`` is None). The move along the viewing ray (``augment.distance_prob``) follows the
+    flip, the camera turn and roll (``augment.rotate_deg``, ``roll_deg``) follow the move; noise is drawn after flip,
+    move, turn and zoom, so it follows the shown size."""
     d = cfg.data
     kp, pp, f = T["kp"][idx], T["pp"][idx], T["focal"][idx]
     rel, depth = T["rel"][idx], T["depth"][idx]
@@ -192,8 +211,14 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     if cfg.augment.flip_prob > 0:
         flipped = torch.rand(bs, generator=gen, device=dev) < cfg.augment.flip_prob
         kp, rel = flip_batch(kp, pp, rel, flipped)
-        if cfg.augment.turns_camera:  # (the true root's 2D, mirrored with the rest)
+        if cfg.augment.turns_camera or cfg.augment.moves_people:  # (the true 2D, mirrored with the rest)
             gt = torch.where(flipped[:, None, None], PoseCodec.mirror_input(gt, pp), gt)
+    if cfg.augment.moves_people:  # (pinhole: the config refuses distance_prob with distorted 2D)
+        a = cfg.augment
+        lo, hi = math.log(a.distance_min), math.log(a.distance_max)
+        factor = torch.exp(lo + (hi - lo) * torch.rand(bs, generator=gen, device=dev))
+        moved = torch.rand(bs, generator=gen, device=dev) < a.distance_prob
+        kp, gt, depth = move_batch(kp, gt, pp, f, rel, depth, torch.where(moved, factor, torch.ones_like(factor)))
     if cfg.augment.turns_camera:
         root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg and roll_deg with distorted 2D)
         kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen,

@@ -759,6 +759,55 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(rotate_deg=5.0))
 
 
+def test_moving_people_along_their_viewing_ray_keeps_samples_physical():
+    """move_batch: the moved 3D is the old root scaled along its ray with the shape kept, the true 2D its pinhole
+    projection (the root's 2D unmoved), and a detection keeps its error relative to the 2D size; make_batch with a
+    flip, a move and a turn keeps every sample physically consistent and moves about distance_prob of them within
+    the factor range; runs without it draw as before; the config refuses it with distorted 2D."""
+    from lifter.camera import project
+    from lifter.config import AugmentConfig, DataConfig, TrainConfig
+    from lifter.normalization import pose_scale
+    from lifter.train import make_batch, move_batch
+
+    n = 64
+    root, rel, f, pp, kp = _scene(n, seed=3, x=1200, y=700, z=(3000, 7000), focal=(1145.0, 1143.0), pp=(512.0, 515.0))
+    factor = torch.linspace(0.5, 5.0, n, dtype=torch.float64)
+    err = torch.randn(n, 17, 2, generator=torch.Generator().manual_seed(4), dtype=torch.float64) * 8
+    det2, gt2, depth2 = move_batch(kp + err, kp, pp, f, rel, root[:, 2], factor)
+    moved = root[:, None] * factor[:, None, None] + rel
+    np.testing.assert_allclose(depth2.numpy(), moved[:, 0, 2].numpy(), rtol=1e-12)
+    np.testing.assert_allclose(gt2.numpy(), project(moved.numpy(), focal=f.numpy(), principal_point=pp.numpy()), atol=1e-9)
+    np.testing.assert_allclose(gt2[:, 0].numpy(), kp[:, 0].numpy(), atol=1e-9)  # the root's 2D stays
+    ratio = pose_scale(gt2) / pose_scale(kp)
+    assert float(ratio[0]) > 1.5 and float(ratio[-1]) < 0.3  # nearer is larger, farther smaller
+    np.testing.assert_allclose((det2 - gt2).numpy(), (err * ratio[:, None, None]).numpy(), atol=1e-9)
+    # factor 1 changes nothing
+    same = move_batch(kp + err, kp, pp, f, rel, root[:, 2], torch.ones(n, dtype=torch.float64))
+    np.testing.assert_allclose(same[0].numpy(), (kp + err).numpy(), atol=1e-9)
+    # through make_batch, flipped, moved and turned (float32)
+    T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                      augment=AugmentConfig(flip_prob=0.5, rotate_deg=10.0, distance_prob=0.5, distance_min=0.5,
+                                            distance_max=4.0))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
+    _assert_physically_consistent(b)
+    cfg_still = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5))
+    b_still = make_batch(T, torch.arange(n), cfg_still, torch.Generator().manual_seed(2))
+    dist_ratio = (b["depth"] / T["depth"]).numpy()  # a turn keeps the distance from the centre, not the depth
+    near_one = np.abs(np.log(dist_ratio)) < np.log(1 / np.cos(np.deg2rad(10 * 2 ** 0.5))) + 1e-3
+    assert 16 <= int((~near_one).sum()) <= 48  # about half moved
+    assert dist_ratio.min() > 0.5 * np.cos(np.deg2rad(15)) - 1e-3 and dist_ratio.max() < 4.0 / np.cos(np.deg2rad(15))
+    # without distance_prob the batch draws exactly as before it existed
+    b_off = make_batch(T, torch.arange(n), TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                                                       augment=AugmentConfig(flip_prob=0.5, distance_max=3.0)),
+                       torch.Generator().manual_seed(2))
+    assert torch.equal(b_off["kp"], b_still["kp"])
+    with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --distance-prob"):
+        TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(distance_prob=0.3))
+    with pytest.raises(PoseLifterError, match="distance_min must be in"):
+        AugmentConfig(distance_min=0.1)
+
+
 def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     """rotate_batch with max_roll_deg: the roll is drawn after pan and tilt (so runs without it draw as before),
     a roll alone turns every 2D point about the principal point by the same angle (the picture turned in its plane)
