@@ -91,11 +91,13 @@ def available_models() -> list[str]:
 
 
 FAR_ROOT_DEPTH_MM: Final[float] = 8000.0
-"""Roots lifted farther than this (mm) by a reference-camera lifter from detected 2D get a note: the training
-subjects' roots reach 7.6 m (1-99 %: 3.3-6.9 m), and the detected-2D networks place farther people too near
-(``scripts/far_people.py``, ``docs/results/far_people.txt``). The reference camera makes the networks read the
-2D as seen from the true distance, whatever the focal length and image size, so the distance itself is what is
-outside their training."""
+"""Roots lifted farther than this (mm) from detected 2D by a reference-camera network trained where the training
+subjects stood get a note: their roots reach 7.6 m (1-99 %: 3.3-6.9 m), and such detected-2D networks place farther
+people too near (``universal_turn``: -11 % at 9 m, -38 % at 25 m on exact 2D; ``scripts/far_people.py``,
+``docs/results/far_people.txt``). The reference camera makes the networks read the 2D as seen from the true distance,
+whatever the focal length and image size, so the distance itself is what is outside their training. A network trained
+with people moved along their viewing rays (``--distance-prob``, up to ``--distance-max`` times their depth) saw them
+that much farther: :attr:`Lifter.far_root_depth_mm`."""
 
 
 class OutputNote(str):
@@ -143,8 +145,8 @@ class LiftResult:
         ``Z_true = Z * f_true / f_used`` (paper Eq. 5-6), exactly. ``"camera"`` (the default model): the 2D
         through the focal length (reference camera), so a different focal length changes the pose and the
         canonical depth as well; ``Z * f_true / f_used`` is then only a rough correction (scripts/wrong_focal.py,
-        exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 3.3 % through the clean network,
-        14 % through the detected ones, for the default; single poses further).
+        exact H36M 2D, a focal used x0.5-x2 the true one: the median pose within 2.6 % through the clean network,
+        2.5 % through the detected ones, for the default; single poses further).
     warnings: what looks wrong in the output (roots behind the camera; a pixel-space model given 2D poses larger
         or smaller than those it was trained on), as :meth:`Lifter.lift` warned them (``warn=True``) or would have;
         empty when nothing does.
@@ -307,6 +309,21 @@ class Lifter:
         return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)
 
     @property
+    def far_root_depth_mm(self) -> float:
+        """Roots lifted farther than this (mm) from detected 2D get a note (:meth:`output_notes`):
+        :data:`FAR_ROOT_DEPTH_MM`, times the largest factor its training moved people along their viewing rays by
+        (training config ``augment.distance_max`` where ``distance_prob`` > 0, else 1), for the least-trained of
+        the networks that lift detected 2D (this one and its :attr:`ensemble`). The default: 40 m."""
+
+        def factor(train_config: dict[str, Any] | None) -> float:
+            augment = (train_config or {}).get("augment")
+            if not isinstance(augment, dict) or float(augment.get("distance_prob", 0.0)) <= 0:
+                return 1.0
+            return max(1.0, float(augment.get("distance_max", 1.0)))
+
+        return FAR_ROOT_DEPTH_MM * min(factor(m.train_config) for m in (self, *self.ensemble))
+
+    @property
     def lens(self) -> Lens:
         """The 2D this network learned (training config ``data.lens``; :data:`lifter.data.Lens`): ``"pinhole"``,
         undistorted 2D (the default lifter), or ``"h36m"``, Human3.6M's own 2D with its cameras' lens distortion
@@ -344,13 +361,17 @@ class Lifter:
                              "the camera): use the default model, which is exact at any image size, or scale the "
                              "image and its intrinsics down", kind="pixel-range"))
         if source == "detected" and self.input_space == "camera" and root.size:
-            far = root[..., 2] > FAR_ROOT_DEPTH_MM
+            limit = self.far_root_depth_mm
+            far = root[..., 2] > limit
             if np.any(far):
-                notes.append(OutputNote(
-                    f"{int(far.sum())} of {far.size} root(s) lifted beyond {FAR_ROOT_DEPTH_MM / 1000:.1f} m"
-                    f"{where_in_batch(far)}: farther than the training subjects ever stood (their roots reach 7.6 m), "
-                    "and the detected-2D networks place such people too near (exact 2D: -11 % at 9 m, -21 % at 12 m, "
-                    "-38 % at 25 m; told source=\"clean\", -2 to -6 %; scripts/far_people.py)", kind="far"))
+                why = ("farther than the training subjects ever stood (their roots reach 7.6 m), and this model's "
+                       "detected-2D networks, trained where they stood, place such people too near (universal_turn "
+                       "on exact 2D: -11 % at 9 m, -21 % at 12 m, -38 % at 25 m; scripts/far_people.py): the default, "
+                       "trained with people moved up to 5 x farther, does not" if limit <= FAR_ROOT_DEPTH_MM else
+                       f"farther than this model's training moved people (up to {limit / FAR_ROOT_DEPTH_MM:g} x the "
+                       "training subjects' 7.6 m): its depth there is an extrapolation")
+                notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
+                                        f"{where_in_batch(far)}: {why}", kind="far"))
         behind = root[..., 2] <= 0
         if np.any(behind):
             notes.append(OutputNote(

@@ -39,7 +39,7 @@ def main() -> int:
 
     torch.set_num_threads(1)
     data = H36M(args.h36m or default_h36m_dir())
-    lifter = Lifter.from_pretrained() if args.model == "default" else Lifter.load(args.model)
+    lifter = Lifter.from_pretrained(args.model)
     train = data.load_protocol(1, "train", stride=50)
     z_train = train.pose_3d[:, 0, 2].astype(np.float64)
     print(f"training subjects' root depth Z, every 50th frame: median {np.median(z_train):.0f} mm, 1-99 % "

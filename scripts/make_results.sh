@@ -51,7 +51,7 @@ python benchmarks/bench_invariance.py --models universal,sh_mix --json "$OUT/ben
   | tee "$OUT/bench_invariance.txt"
 python scripts/eval_cascade.py --model universal --compare sh_mix blazepose gt | tee "$OUT/cascade_universal.txt"
 # The default since the camera-turn stop, universal_turn, beside universal ("Any camera pose" in the README).
-ev clean_turn_s5 --stride 5                                    # the must-reach clean line (source="clean")
+ev clean_turn_s5 universal_turn --stride 5 --source clean      # universal_turn's clean line
 # (the must-reach SH line, docs/results/sh_turn_s5.txt, keeps its own command and history at its top)
 ev table3_default universal_turn universal --inputs sh --stride 50   # Table 3's and the shipped table's SH rows
 ev focal_sweep_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --stride 50
@@ -72,3 +72,20 @@ python scripts/turned_cameras.py universal_turn universal --turns 0:0:0,0:0:5,0:
   --source clean | tee "$OUT/gpu_roll/roll_shipped_s50.txt"
 python scripts/turned_cameras.py universal_turn --turns 0:0,0:-30,0:30,0:40,30:0,45:0,30:30 --source clean \
   | tee "$OUT/turned_cameras_wide.txt"
+# The default since 2026-11-27, universal_far (people moved along their viewing rays in training), beside universal_turn
+ev clean_far_s5 --stride 5                                      # the must-reach clean line (source="clean")
+ev sh_far_s5 --inputs sh --stride 5                             # the must-reach SH line
+ev table3_far universal_far universal_turn --inputs sh --stride 50
+ev focal_sweep_far universal_far --focal-scales 0.5,0.7,1,1.4,2 --stride 50
+ev focal_sweep_shifted_pp_far universal_far --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
+python benchmarks/bench_invariance.py --models universal_far,universal_turn --json "$OUT/bench_invariance_far.json" \
+  | tee "$OUT/bench_invariance_far.txt"
+python scripts/eval_cascade.py --model universal_far --compare universal_turn | tee "$OUT/photos_far.txt"
+python scripts/far_people.py --model universal_turn | tee "$OUT/far_people.txt"
+python scripts/far_people.py --model universal_far | tee "$OUT/far_people_far.txt"
+python benchmarks/bench_multi_person.py --models universal_far --multi windows | tee "$OUT/bench_multi_person_far.txt"
+python scripts/turned_cameras.py universal_turn universal_far | tee "$OUT/turned_cameras_far_detected.txt"
+python scripts/turned_cameras.py universal_turn universal_far --source clean | tee "$OUT/turned_cameras_far_clean.txt"
+python scripts/root_smoothness.py universal_turn universal_far | tee "$OUT/root_smoothness_far_detected.txt"
+python scripts/root_smoothness.py universal_turn universal_far --source clean | tee "$OUT/root_smoothness_far_clean.txt"
+python scripts/root_bias.py --model universal_far | tee "$OUT/root_bias_far.txt"
