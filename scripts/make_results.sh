@@ -89,3 +89,4 @@ python scripts/turned_cameras.py universal_turn universal_far --source clean | t
 python scripts/root_smoothness.py universal_turn universal_far | tee "$OUT/root_smoothness_far_detected.txt"
 python scripts/root_smoothness.py universal_turn universal_far --source clean | tee "$OUT/root_smoothness_far_clean.txt"
 python scripts/root_bias.py --model universal_far | tee "$OUT/root_bias_far.txt"
+python scripts/far_photos.py | tee "$OUT/far_photos.txt"                  # needs the detect extra
