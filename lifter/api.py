@@ -92,12 +92,15 @@ def available_models() -> list[str]:
 
 FAR_ROOT_DEPTH_MM: Final[float] = 8000.0
 """Roots lifted farther than this (mm) from detected 2D by a reference-camera network trained where the training
-subjects stood get a note: their roots reach 7.6 m (1-99 %: 3.3-6.9 m), and such detected-2D networks place farther
-people too near (``universal_turn``: -11 % at 9 m, -38 % at 25 m on exact 2D; ``scripts/far_people.py``,
-``docs/results/far_people.txt``). The reference camera makes the networks read the 2D as seen from the true distance,
-whatever the focal length and image size, so the distance itself is what is outside their training. A network trained
-with people moved along their viewing rays (``--distance-prob``, up to ``--distance-max`` times their depth) saw them
-that much farther: :attr:`Lifter.far_root_depth_mm`."""
+subjects stood get a note: their roots reach 7.6 m (:data:`TRAINING_ROOT_MAX_MM`; 1-99 %: 3.3-6.9 m), and such
+detected-2D networks place farther people too near (``universal_turn``: -11 % at 9 m, -38 % at 25 m on exact 2D;
+``scripts/far_people.py``, ``docs/results/far_people.txt``). The reference camera makes the networks read the 2D as
+seen from the true distance, whatever the focal length and image size, so the distance itself is what is outside
+their training. A network trained with people moved along their viewing rays (``--distance-prob``, up to
+``--distance-max`` times their depth) saw them that much farther: :attr:`Lifter.far_root_depth_mm`."""
+
+TRAINING_ROOT_MAX_MM: Final[float] = 7600.0
+"""The farthest root depth (mm, rounded up) of Human3.6M's training subjects (Protocol 1; 7556 mm)."""
 
 
 class OutputNote(str):
@@ -309,11 +312,11 @@ class Lifter:
         return (H36M_POSE_PX[0] * lo, H36M_POSE_PX[1] * hi, H36M_POSE_PX[2] * hi)
 
     @property
-    def far_root_depth_mm(self) -> float:
-        """Roots lifted farther than this (mm) from detected 2D get a note (:meth:`output_notes`):
-        :data:`FAR_ROOT_DEPTH_MM`, times the largest factor its training moved people along their viewing rays by
-        (training config ``augment.distance_max`` where ``distance_prob`` > 0, else 1), for the least-trained of
-        the networks that lift detected 2D (this one and its :attr:`ensemble`). The default: 40 m."""
+    def distance_factor(self) -> float:
+        """How much farther than the training subjects stood its training moved people along their viewing rays:
+        the training config's ``augment.distance_max`` where ``distance_prob`` > 0, else 1, for the least-moved of
+        the networks that lift detected 2D (this one and its :attr:`ensemble`; a network without a training config:
+        1). The default: 5."""
 
         def factor(train_config: dict[str, Any] | None) -> float:
             augment = (train_config or {}).get("augment")
@@ -321,7 +324,16 @@ class Lifter:
                 return 1.0
             return max(1.0, float(augment.get("distance_max", 1.0)))
 
-        return FAR_ROOT_DEPTH_MM * min(factor(m.train_config) for m in (self, *self.ensemble))
+        return min(factor(m.train_config) for m in (self, *self.ensemble))
+
+    @property
+    def far_root_depth_mm(self) -> float:
+        """Roots lifted farther than this (mm) from detected 2D get a note (:meth:`output_notes`):
+        :data:`FAR_ROOT_DEPTH_MM` for networks trained where the training subjects stood, else the farthest a
+        training root was moved to, :data:`TRAINING_ROOT_MAX_MM` times :attr:`distance_factor` (the default: 38 m;
+        measured to 50 m, where it is still within 2.3 %: ``scripts/far_people.py``)."""
+        k = self.distance_factor
+        return FAR_ROOT_DEPTH_MM if k <= 1.0 else TRAINING_ROOT_MAX_MM * k
 
     @property
     def lens(self) -> Lens:
@@ -341,7 +353,7 @@ class Lifter:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
-        a reference-camera network) roots farther than :data:`FAR_ROOT_DEPTH_MM`. For callers that show one pose of a
+        a reference-camera network) roots farther than :attr:`far_root_depth_mm`. For callers that show one pose of a
         batch (the app)."""
         from .normalization import location_and_scale
 
@@ -366,10 +378,11 @@ class Lifter:
             if np.any(far):
                 why = ("farther than the training subjects ever stood (their roots reach 7.6 m), and this model's "
                        "detected-2D networks, trained where they stood, place such people too near (universal_turn "
-                       "on exact 2D: -11 % at 9 m, -21 % at 12 m, -38 % at 25 m; scripts/far_people.py): the default, "
-                       "trained with people moved up to 5 x farther, does not" if limit <= FAR_ROOT_DEPTH_MM else
-                       f"farther than this model's training moved people (up to {limit / FAR_ROOT_DEPTH_MM:g} x the "
-                       "training subjects' 7.6 m): its depth there is an extrapolation")
+                       "on exact 2D: -11 % at 9 m, -21 % at 12 m, -38 % at 25 m; scripts/far_people.py): the default "
+                       "model, trained with people moved farther (--distance-prob), does not"
+                       if self.distance_factor <= 1.0 else
+                       f"farther than this model's training moved people (the training subjects' 7.6 m times "
+                       f"{self.distance_factor:g}): its depth there is an extrapolation")
                 notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
                                         f"{where_in_batch(far)}: {why}", kind="far"))
         behind = root[..., 2] <= 0

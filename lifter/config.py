@@ -136,7 +136,8 @@ class AugmentConfig:
                                  "keeps its shape, the 2D is re-projected and a detection keeps its error relative to "
                                  "the person's 2D size, so people nearer and farther than the training subjects' 3.3-6.9 "
                                  "m are seen (needs --lens pinhole)", default=0.0)
-    distance_min: float = _help("smallest factor of --distance-prob (0.4 to 1)", default=0.5)
+    distance_min: float = _help("smallest factor of --distance-prob (0.4 to 1; a move that would put a joint more "
+                                "than 80 deg less the camera turn off the optical axis is not made)", default=0.5)
     distance_max: float = _help("largest factor of --distance-prob (1 to 10)", default=5.0)
 
     def __post_init__(self) -> None:
@@ -144,8 +145,7 @@ class AugmentConfig:
         _prob("flip_prob", self.flip_prob)
         _prob("distance_prob", self.distance_prob)
         _check(isinstance(self.distance_min, (int, float)) and 0.4 <= self.distance_min <= 1.0,
-               f"distance_min must be in [0.4, 1] (a factor of the root depth; nearer would put joints at or behind "
-               f"the camera), got {self.distance_min!r}")
+               f"distance_min must be in [0.4, 1] (a factor of the root depth), got {self.distance_min!r}")
         _check(isinstance(self.distance_max, (int, float)) and 1.0 <= self.distance_max <= 10.0,
                f"distance_max must be in [1, 10] (a factor of the root depth), got {self.distance_max!r}")
         for name in ("rotate_deg", "roll_deg"):

@@ -170,17 +170,31 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
     return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
 
+MAX_OFF_AXIS_DEG = 80.0
+"""A move (:func:`move_batch`) that would put a joint more than this many degrees off the optical axis, less the
+largest camera turn to come, is not made: the turn could then put that joint at or behind the camera."""
+
+
 def move_batch(kp: torch.Tensor, gt: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor,
-               depth: torch.Tensor, factor: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+               depth: torch.Tensor, factor: torch.Tensor, *, max_off_axis_deg: float = MAX_OFF_AXIS_DEG
+               ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """The samples moved along their root's viewing ray to ``factor`` ``(B,)`` times their root depth, as the same
     pinhole camera sees them: the 3D root (the true 2D root ``gt[:, 0]`` back-projected to ``depth`` ``(B,)`` mm)
     times ``factor``, the root-relative 3D ``rel`` ``(B, 17, 3)`` mm kept, the true 2D ``gt`` ``(B, 17, 2)`` px
     re-projected (its root's 2D does not move), and the 2D ``kp`` ``(B, 17, 2)`` px the network is shown (a detection,
     or ``gt`` itself) re-projected with its error from the truth scaled by the truth's change of 2D size (a detector's
     error follows the person's size in the image, as the error model's scale rule says). ``pp``, ``f``: ``(B, 2)`` px.
-    Returns the moved ``kp``, ``gt`` and root depth ``(B,)`` mm."""
-    root = backproject_generic(gt[:, 0], depth, f, pp) * factor[:, None]
-    points = root[:, None] + rel
+    A sample whose moved joints would lie more than ``max_off_axis_deg`` off the optical axis (a person moved very
+    near) stays where it is (factor 1). Returns the moved ``kp``, ``gt`` and root depth ``(B,)`` mm."""
+    root = backproject_generic(gt[:, 0], depth, f, pp)
+
+    def place(s: torch.Tensor) -> torch.Tensor:  # (B, 17, 3) mm: the joints with the root moved to s times its depth
+        return root[:, None] * s[:, None, None] + rel
+
+    points = place(factor)
+    cos_off_axis = (points[..., 2] / points.norm(dim=-1)).amin(dim=-1)
+    factor = torch.where(cos_off_axis > math.cos(math.radians(max_off_axis_deg)), factor, torch.ones_like(factor))
+    points = place(factor)
     moved = pp[:, None] + f[:, None] * points[..., :2] / points[..., 2:]
     ratio = pose_scale(moved) / pose_scale(gt)
     return moved + (kp - gt) * ratio[:, None, None], moved, depth * factor
@@ -218,7 +232,9 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
         lo, hi = math.log(a.distance_min), math.log(a.distance_max)
         factor = torch.exp(lo + (hi - lo) * torch.rand(bs, generator=gen, device=dev))
         moved = torch.rand(bs, generator=gen, device=dev) < a.distance_prob
-        kp, gt, depth = move_batch(kp, gt, pp, f, rel, depth, torch.where(moved, factor, torch.ones_like(factor)))
+        turn = math.hypot(a.rotate_deg, a.rotate_deg)  # the most a pan and a tilt turn a ray (a roll keeps it)
+        kp, gt, depth = move_batch(kp, gt, pp, f, rel, depth, torch.where(moved, factor, torch.ones_like(factor)),
+                                   max_off_axis_deg=MAX_OFF_AXIS_DEG - turn)
     if cfg.augment.turns_camera:
         root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg and roll_deg with distorted 2D)
         kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen,

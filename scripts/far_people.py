@@ -9,7 +9,7 @@ far) per depth, and the training subjects' root depths for comparison. (The defa
 focal length, as seen by a 1000-px reference camera from the true distance: the distance, not the image size or
 focal, is what its training covers.)
 
-    python scripts/far_people.py [--stride 100] [--depths 4000,5500,7000,9000,12000,16000,25000]
+    python scripts/far_people.py [--stride 100] [--depths 4000,...,50000] [--model universal_turn]
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument("--stride", type=int, default=100)
-    ap.add_argument("--depths", default="4000,5500,7000,9000,12000,16000,25000", help="root depths Z, mm")
+    ap.add_argument("--depths", default="4000,5500,7000,9000,12000,16000,25000,38000,50000", help="root depths Z, mm")
     ap.add_argument("--model", default="default")
     args = ap.parse_args()
     import torch

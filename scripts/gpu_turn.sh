@@ -44,7 +44,7 @@
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
 # training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a, b, c, d, e or f), LRF
 # the fine-tunes' lr (3e-4), TH CPU threads per process (3; 2 with SET=d), H36M data folder (.gpu/h36m5), OUT folder
-# for what comes back: each run's .pt (4, 2, 5, 3 per roll in ROLLS, 5 or 5), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
+# for what comes back: each run's .pt (SET a: 4, b: 2, c: 5, d: 3 per roll in ROLLS, e: 5, f: 5), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
 # a training failed.
 #   M=6 OUT=/tmp/out bash scripts/gpu_turn.sh
 set -u

@@ -56,9 +56,10 @@ ev clean_turn_s5 universal_turn --stride 5 --source clean      # universal_turn'
 ev table3_default universal_turn universal --inputs sh --stride 50   # Table 3's and the shipped table's SH rows
 ev focal_sweep_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --stride 50
 ev focal_sweep_shifted_pp_turn universal_turn --focal-scales 0.5,0.7,1,1.4,2 --pp-shift 100,-80 --stride 50
-python scripts/pixel_convention.py | tee "$OUT/pixel_convention.txt"
-python scripts/wrong_focal.py | tee "$OUT/wrong_focal.txt"
-python scripts/stand_in_error.py | tee "$OUT/stand_in_error.txt"
+python scripts/pixel_convention.py --model universal_turn | tee "$OUT/pixel_convention_turn.txt"
+python scripts/wrong_focal.py --models universal_turn,gt | tee "$OUT/wrong_focal_turn.txt"
+python scripts/stand_in_error.py --model universal_turn | tee "$OUT/stand_in_error_turn.txt"
+python scripts/root_bias.py --model universal_turn | tee "$OUT/root_bias_turn.txt"
 python benchmarks/bench_invariance.py --models universal_turn,universal --json "$OUT/bench_invariance_turn.json" \
   | tee "$OUT/bench_invariance_turn.txt"
 python scripts/eval_cascade.py --model universal_turn --compare universal | tee "$OUT/photos_turn.txt"
@@ -66,7 +67,7 @@ python scripts/turned_cameras.py universal universal_turn | tee "$OUT/turned_cam
 python scripts/turned_cameras.py universal universal_turn --source clean | tee "$OUT/turned_cameras_clean.txt"
 python scripts/root_smoothness.py universal universal_turn | tee "$OUT/root_smoothness_detected.txt"
 python scripts/root_smoothness.py universal universal_turn --source clean | tee "$OUT/root_smoothness_clean.txt"
-# Camera roll and turns beyond the trained +-20 deg, on the shipped default ("Camera roll" and the known limits in
+# Camera roll and turns beyond the trained +-20 deg, on universal_turn (the default when they were measured) ("Camera roll" and the known limits in
 # the README; the roll-trained networks' table is docs/results/gpu_roll/README.md's command, on checkpoints not shipped).
 python scripts/turned_cameras.py universal_turn universal --turns 0:0:0,0:0:5,0:0:-10,0:0:10,0:0:-20,0:0:20 \
   --source clean | tee "$OUT/gpu_roll/roll_shipped_s50.txt"
@@ -89,4 +90,7 @@ python scripts/turned_cameras.py universal_turn universal_far --source clean | t
 python scripts/root_smoothness.py universal_turn universal_far | tee "$OUT/root_smoothness_far_detected.txt"
 python scripts/root_smoothness.py universal_turn universal_far --source clean | tee "$OUT/root_smoothness_far_clean.txt"
 python scripts/root_bias.py --model universal_far | tee "$OUT/root_bias_far.txt"
+python scripts/pixel_convention.py | tee "$OUT/pixel_convention.txt"           # the default's
+python scripts/wrong_focal.py | tee "$OUT/wrong_focal.txt"
+python scripts/stand_in_error.py | tee "$OUT/stand_in_error.txt"
 python scripts/far_photos.py | tee "$OUT/far_photos.txt"                  # needs the detect extra

@@ -124,3 +124,32 @@ def test_shipped_ensemble_members_are_checksummed(monkeypatch):
     monkeypatch.setattr(resources, "model_entry", lambda name: {**entry, "ensemble_sha256": []})
     with pytest.raises(PoseLifterError, match="differ in length"):
         Lifter.from_pretrained()
+
+
+def test_the_far_note_follows_the_least_moved_network_of_an_ensemble():
+    """far_root_depth_mm: 8 m for networks trained where the training subjects stood (no training config, or
+    distance_prob 0 whatever distance_max says), 7.6 m x distance_max for networks trained with people moved along
+    their rays, and for an ensemble the least-moved member's; the note that a lift past it gets says which."""
+    from lifter.api import FAR_ROOT_DEPTH_MM, TRAINING_ROOT_MAX_MM
+
+    def with_config(seed: int, augment: dict | None) -> Lifter:
+        m = _member(seed)
+        return Lifter(m.net, m.codec, name=m.name, train_config=None if augment is None else {"augment": augment})
+
+    none, off = with_config(0, None), with_config(1, {"distance_prob": 0.0, "distance_max": 5.0})
+    moved5, moved3 = with_config(2, {"distance_prob": 0.25, "distance_max": 5.0}), with_config(3, {"distance_prob": 0.5,
+                                                                                                   "distance_max": 3.0})
+    assert none.far_root_depth_mm == off.far_root_depth_mm == FAR_ROOT_DEPTH_MM
+    assert moved5.far_root_depth_mm == pytest.approx(5 * TRAINING_ROOT_MAX_MM)
+    assert moved3.far_root_depth_mm == pytest.approx(3 * TRAINING_ROOT_MAX_MM)
+    both = Lifter(moved5.net, moved5.codec, name="both", train_config=moved5.train_config, ensemble=[moved3])
+    assert both.far_root_depth_mm == pytest.approx(3 * TRAINING_ROOT_MAX_MM)
+    mixed = Lifter(moved5.net, moved5.codec, name="mixed", train_config=moved5.train_config, ensemble=[none])
+    assert mixed.far_root_depth_mm == FAR_ROOT_DEPTH_MM
+    kp = np.zeros((1, 17, 2))
+    root = np.array([[0.0, 0.0, 30000.0]])  # 30 m: past 8 m and 22.8 m, not past 38 m
+    notes = {lf.name: [n for n in lf.output_notes(kp, np.zeros((1, 2)), root, source="detected") if n.kind == "far"]
+             for lf in (none, moved5, moved3, mixed)}
+    assert not notes["m2"] and len(notes["m3"]) == 1 and "7.6 m times 3" in notes["m3"][0]
+    assert "trained where they stood" in notes["m0"][0] and "trained where they stood" in notes["mixed"][0]
+    assert not moved3.output_notes(kp, np.zeros((1, 2)), root, source="clean")  # told clean: no far note

@@ -3,6 +3,7 @@ fine-tuning, the CLI and its config round trip, and DistributedDataParallel unde
 
 from __future__ import annotations
 
+import math
 import os
 import socket
 import subprocess
@@ -802,6 +803,44 @@ def test_moving_people_along_their_viewing_ray_keeps_samples_physical():
                                                        augment=AugmentConfig(flip_prob=0.5, distance_max=3.0)),
                        torch.Generator().manual_seed(2))
     assert torch.equal(b_off["kp"], b_still["kp"])
+    # flipped and moved without a turn, from real detections: still physical where the 2D is the truth's, and a
+    # detection's error scaled with the person's 2D size
+    err32 = err.float()
+    T_real = dict(T, real=(kp + err).float(), has_real=torch.ones(n, dtype=torch.bool))
+    cfg_real = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=0.0, real_prob=1.0),
+                           augment=AugmentConfig(flip_prob=0.5, distance_prob=1.0, distance_min=0.5, distance_max=4.0))
+    b_real = make_batch(T_real, torch.arange(n), cfg_real, torch.Generator().manual_seed(6))
+    cfg_true = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=cfg_real.augment)
+    b_true = make_batch(T, torch.arange(n), cfg_true, torch.Generator().manual_seed(6))
+    _assert_physically_consistent(b_true)
+    assert not torch.allclose(b_true["depth"], T["depth"])
+    size = pose_scale(b_true["kp"]) / pose_scale(T["kp"])
+    e = (b_real["kp"] - b_true["kp"]).norm(dim=-1).sort(dim=-1).values  # (a flip mirrors the error, swaps joints)
+    np.testing.assert_allclose(e.numpy(), (err32.norm(dim=-1) * size[:, None]).sort(dim=-1).values.numpy(), atol=1e-3)
+    assert float(size.min()) < 0.5 and float(size.max()) > 1.5
+    # a person moved very near and then turned far: such moves are not made, so no joint reaches the camera
+    near_root, near_rel, nf, npp, near_kp = _scene(n, seed=8, x=600, y=400, z=(5000, 6000), focal=(1000.0, 1000.0),
+                                                   pp=(500.0, 500.0))
+    T_near = {"kp": near_kp.float(), "pp": npp.float(), "focal": nf.float(), "rel": near_rel.float(),
+              "depth": near_root[:, 2].float()}
+    cfg_near = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                           augment=AugmentConfig(flip_prob=0.0, rotate_deg=30.0, distance_prob=1.0, distance_min=0.4,
+                                                 distance_max=1.0))
+    for seed in range(5):
+        bn = make_batch(T_near, torch.arange(n), cfg_near, torch.Generator().manual_seed(seed))
+        root_b = torch.cat([(bn["kp"][:, 0] - bn["pp"]) / bn["focal"], torch.ones(n, 1)], -1) * bn["depth"][:, None]
+        assert float((root_b[:, None] + bn["rel"])[..., 2].min()) > 0
+    from lifter.train import MAX_OFF_AXIS_DEG
+
+    limit = MAX_OFF_AXIS_DEG - math.hypot(30.0, 30.0)
+    _, _, d_near = move_batch(near_kp, near_kp, npp, nf, near_rel, near_root[:, 2], torch.full((n,), 0.2,
+                                                                                              dtype=torch.float64),
+                              max_off_axis_deg=limit)
+    made = torch.isclose(d_near, 0.2 * near_root[:, 2])
+    assert 0 < int(made.sum()) < n and torch.equal(d_near[~made], near_root[~made, 2])  # some made, the rest kept
+    moved_points = near_root[made][:, None] * 0.2 + near_rel[made]
+    off_axis = torch.rad2deg(torch.arccos(moved_points[..., 2] / moved_points.norm(dim=-1)))
+    assert float(off_axis.max()) <= limit
     with pytest.raises(PoseLifterError, match="lens='h36m' .* add --lens pinhole, or drop --distance-prob"):
         TrainConfig(data=DataConfig(lens="h36m"), augment=AugmentConfig(distance_prob=0.3))
     with pytest.raises(PoseLifterError, match="distance_min must be in"):
