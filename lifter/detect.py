@@ -727,7 +727,7 @@ def _crossed(a: Detection, b: Detection, diag: float) -> bool:
     return bool(np.any(crossed < straight - FLIP_CROSSED * diag))
 
 
-def _iou(a: np.ndarray, b: np.ndarray) -> float:
+def box_iou(a: np.ndarray, b: np.ndarray) -> float:
     """Intersection over union of two ``(x, y, w, h)`` boxes."""
     iw = max(0.0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
     ih = max(0.0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
@@ -907,7 +907,7 @@ class BlazePoseEstimator:
         # symmetric in the two searches, so the mirrored image pairs and combines the same people
         dist = {(i, j): float(np.median(np.linalg.norm(d.keypoints - e.keypoints, axis=-1)))
                 for i, d in enumerate(found) for j, e in enumerate(mirrored)
-                if _iou(d.bbox_xywh, e.bbox_xywh) >= FLIP_SAME_IOU}
+                if box_iou(d.bbox_xywh, e.bbox_xywh) >= FLIP_SAME_IOU}
         partner: dict[int, int] = {}
         for i, j in sorted(dist, key=dist.__getitem__):
             if i not in partner and j not in partner.values():

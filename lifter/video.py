@@ -9,8 +9,9 @@
   the rest is still lifted: a file OpenCV cannot open or decode (:class:`VideoError`), a zero-length video
   (:class:`VideoError`), a frame that cannot be decoded or whose size differs from the first frame (reported
   in ``bad_frames`` and skipped), a frame with nobody in it (an empty ``people`` list, counted in the
-  warnings), more people than ``max_people`` (the largest are kept) and a video longer than ``max_seconds``
-  (only its first ``max_seconds`` are lifted, with a warning).
+  warnings), more people than ``max_people`` (those continuing a tracked person are kept, then the largest:
+  :func:`keep_tracked`) and a video longer than ``max_seconds`` (only its first ``max_seconds`` are lifted, with a
+  warning).
 * :func:`lift_keypoint_sequence` does the same for a keypoint JSON with ``frames`` (see :mod:`lifter.io`).
 
 The camera is resolved once per video (from the first frame's size, :func:`lifter.pipeline.resolve_camera`).
@@ -33,7 +34,7 @@ import numpy as np
 from ._checks import PoseLifterError, as_pair
 from .api import collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
-from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, check_max_side, image_from_array, people_h36m
+from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, box_iou, check_max_side, image_from_array, people_h36m
 from .io import distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
@@ -254,6 +255,24 @@ class SequenceRecord:
         }
 
 
+TRACKED_IOU: Final[float] = 0.3
+"""A person found in a frame continues a tracked person when their boxes overlap by at least this (IoU)."""
+
+
+def keep_tracked(people: list[Any], boxes: list[np.ndarray], *, max_people: int) -> list[Any]:
+    """The ``max_people`` of a frame's ``people`` (largest first, each with ``raw.bbox_xywh`` px) to lift when it has
+    more: first those continuing a person tracked in recent frames (``boxes``, ``(x, y, w, h)`` px; overlap at least
+    :data:`TRACKED_IOU`, the best overlap first), then the largest of the rest. So ``--max-people 1`` follows one
+    person through a video instead of switching to whoever looks largest in a frame."""
+    def overlap(q: Any) -> float:
+        return max((box_iou(np.asarray(q.raw.bbox_xywh, float), np.asarray(b, float)) for b in boxes), default=0.0)
+
+    scored = [(overlap(q), i) for i, q in enumerate(people)]
+    order = sorted(range(len(people)), key=lambda i: (scored[i][0] < TRACKED_IOU,
+                                                      -scored[i][0] if scored[i][0] >= TRACKED_IOU else 0.0, i))
+    return [people[i] for i in order[:max_people]]
+
+
 def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]]]:
     """``track_id -> [(frame index, person), ...]`` of ``frames``, in frame order."""
     out: dict[int, list[tuple[int, PersonState]]] = {}
@@ -450,7 +469,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 continue
             if len(people) > max_people:
                 crowded.append(index)
-                people = people[:max_people]
+                people = keep_tracked(people, [box for _, box in recent.values()], max_people=max_people)
             t_s = index / fps
             if not people:
                 nobody.append(index)
@@ -500,7 +519,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:
         warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
-                        f"the {max_people} largest were lifted (--max-people)")
+                        f"{max_people} were lifted (--max-people): those already tracked, else the largest")
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam

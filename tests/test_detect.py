@@ -440,7 +440,7 @@ def test_flip_test_rules_are_symmetric_in_the_two_searches():
     threshold, the pairing and the visibility choice treat the image's and the mirror image's detections alike.
     Many cases lie near the threshold: each mirror-image detection is stretched, so that its median distance to
     the image's detection can lie between 10 % of one box diagonal and 10 % of the other's."""
-    from lifter.detect import FLIP_AGREE, FLIP_SAME_IOU, BlazePoseEstimator, _iou
+    from lifter.detect import FLIP_AGREE, FLIP_SAME_IOU, BlazePoseEstimator, box_iou
 
     W = 600
     swap = mirror_permutation("blazepose33")
@@ -460,7 +460,7 @@ def test_flip_test_rules_are_symmetric_in_the_two_searches():
             b[:, 1] = 200 + (a[:, 1] - 200) * r.uniform(1.2, 1.6)  # taller: a larger box (inside the image)
             b[:, 0] += r.uniform(-10, 10)
             da, db = _det(a, r.choice([0.5, 0.9])), _det(b, r.choice([0.5, 0.9]))
-            assert _iou(da.bbox_xywh, db.bbox_xywh) >= FLIP_SAME_IOU  # the same person for the flip test
+            assert box_iou(da.bbox_xywh, db.bbox_xywh) >= FLIP_SAME_IOU  # the same person for the flip test
             dist = float(np.median(np.linalg.norm(a - b, axis=-1)))
             diags = sorted(float(np.hypot(*d.bbox_xywh[2:])) for d in (da, db))
             near += FLIP_AGREE * diags[0] <= dist < FLIP_AGREE * diags[1]

@@ -4,6 +4,7 @@ and keypoint sequences. The detector is a scripted stub (no mediapipe); the clip
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -226,6 +227,39 @@ def test_video_max_people_and_duration_bound(tmp_path, lifter):
     assert len(rec.frames) == 20 and all(len(f.people) == 1 for f in rec.frames)
     assert any("only its first 2 s (20 frames)" in w for w in rec.warnings)
     assert any("more than 1 people in 20 frames" in w for w in rec.warnings)
+
+
+def test_video_max_people_follows_one_person(tmp_path, lifter):
+    """A user trial: --max-people 1 on a two-person video switched between the people, whoever looked largest in a
+    frame. Two people of nearly the same size, each the larger in every other frame: the one lifted in the first
+    frame (the larger there) is followed through the clip, as one track."""
+    rng = np.random.default_rng(3)
+    a, b = _person(rng, 80), _person(rng, 240)
+    area = lambda k: float(np.ptp(k[:, 0]) * np.ptp(k[:, 1]))  # noqa: E731  (the box a detector ranks people by)
+    b = (b - b.mean(0)) * math.sqrt(area(a) / area(b)) + b.mean(0)  # the same box area
+    script = []
+    for i in range(20):
+        big, small = (1.02, 0.98) if i % 2 == 0 else (0.98, 1.02)
+        pa = (a - a.mean(0)) * big + a.mean(0) + [i, 0]
+        pb = (b - b.mean(0)) * small + b.mean(0) - [i, 0]
+        script.append([pa, pb] if i % 2 == 0 else [pb, pa])  # largest first, as a detector gives them
+    clip = _write_clip(tmp_path / "two.avi", 20, fps=10.0)
+    rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(script), focal=F, max_people=1)
+    xs = [float(fr.people[0].keypoints_2d[:, 0].mean()) for fr in rec.frames]
+    assert all(abs(x - (80 + i)) < 15 for i, x in enumerate(xs)), xs  # always the left person
+    assert len({fr.people[0].track_id for fr in rec.frames}) == 1
+    assert any("1 were lifted (--max-people): those already tracked, else the largest" in w for w in rec.warnings)
+    # without a track to follow (the first frame), the largest is kept
+    from lifter.video import keep_tracked
+
+    class _P:
+        def __init__(self, box):
+            self.raw = type("R", (), {"bbox_xywh": np.asarray(box, float)})()
+
+    big, left, right = _P([0, 0, 100, 200]), _P([300, 0, 90, 180]), _P([600, 0, 80, 160])
+    assert keep_tracked([big, left, right], [], max_people=1) == [big]
+    assert keep_tracked([big, left, right], [[305, 5, 90, 180]], max_people=2) == [left, big]
+    assert keep_tracked([big, left, right], [[900, 0, 50, 50]], max_people=2) == [big, left]  # no overlap: largest
 
 
 class _FakeCapture:

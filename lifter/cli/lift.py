@@ -233,7 +233,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="2D estimator for images and videos: 'blazepose' (MediaPipe, the 'detect' extra), or one "
                    "registered with lifter.detect.register_estimator")
     p.add_argument("--max-people", type=int, default=DEFAULT_MAX_PEOPLE,
-                   help="people lifted per image or frame at most (the largest; a crowd bound)")
+                   help="people lifted per image or frame at most (the largest; in a video those already tracked "
+                   "first, so 1 follows one person; a crowd bound)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth)")
