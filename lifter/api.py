@@ -379,7 +379,8 @@ class Lifter:
                 why = ("farther than the training subjects ever stood (their roots reach 7.6 m), and this model's "
                        "detected-2D networks, trained where they stood, place such people too near (universal_turn "
                        "on exact 2D: -11 % at 9 m, -21 % at 12 m, -38 % at 25 m; scripts/far_people.py): the default "
-                       "model, trained with people moved farther (--distance-prob), does not"
+                       "model (Lifter.from_pretrained()), trained with people moved farther, places them at their "
+                       "distance"
                        if self.distance_factor <= 1.0 else
                        f"farther than this model's training moved people (the training subjects' 7.6 m times "
                        f"{self.distance_factor:g}): its depth there is an extrapolation")

@@ -136,9 +136,9 @@ class AugmentConfig:
                                  "keeps its shape, the 2D is re-projected and a detection keeps its error relative to "
                                  "the person's 2D size, so people nearer and farther than the training subjects' 3.3-6.9 "
                                  "m are seen (needs --lens pinhole)", default=0.0)
-    distance_min: float = _help("smallest factor of --distance-prob (0.4 to 1; a move that would put a joint more "
-                                "than 80 deg less the camera turn off the optical axis is not made)", default=0.5)
-    distance_max: float = _help("largest factor of --distance-prob (1 to 10)", default=5.0)
+    distance_min: float = _help("smallest root-depth factor of --distance-prob (0.4 to 1; a move that would bring a "
+                                "joint within 10 deg of the image plane, plus the camera turn, is not made)", default=0.5)
+    distance_max: float = _help("largest root-depth factor of --distance-prob (1 to 10)", default=5.0)
 
     def __post_init__(self) -> None:
         _booleans(self)

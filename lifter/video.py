@@ -259,18 +259,31 @@ TRACKED_IOU: Final[float] = 0.3
 """A person found in a frame continues a tracked person when their boxes overlap by at least this (IoU)."""
 
 
-def keep_tracked(people: list[Any], boxes: list[np.ndarray], *, max_people: int) -> list[Any]:
-    """The ``max_people`` of a frame's ``people`` (largest first, each with ``raw.bbox_xywh`` px) to lift when it has
-    more: first those continuing a person tracked in recent frames (``boxes``, ``(x, y, w, h)`` px; overlap at least
+def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_people: int,
+                 ids: list[Any] | None = None, tracked_ids: list[Any] | None = None) -> list[int]:
+    """Which of a frame's people (their ``boxes``, ``(x, y, w, h)`` px, largest first) to lift when it has more than
+    ``max_people``: their indices, first those continuing a person tracked in recent frames (the same ``ids`` entry
+    as one of ``tracked_ids``, when the file names its people; else a box overlapping one of ``tracked`` by at least
     :data:`TRACKED_IOU`, the best overlap first), then the largest of the rest. So ``--max-people 1`` follows one
-    person through a video instead of switching to whoever looks largest in a frame."""
-    def overlap(q: Any) -> float:
-        return max((box_iou(np.asarray(q.raw.bbox_xywh, float), np.asarray(b, float)) for b in boxes), default=0.0)
+    person through a video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
+    known = {i for i, pid in enumerate(ids or []) if pid is not None and pid in (tracked_ids or [])}
 
-    scored = [(overlap(q), i) for i, q in enumerate(people)]
-    order = sorted(range(len(people)), key=lambda i: (scored[i][0] < TRACKED_IOU,
-                                                      -scored[i][0] if scored[i][0] >= TRACKED_IOU else 0.0, i))
-    return [people[i] for i in order[:max_people]]
+    def overlap(i: int) -> float:
+        return max((box_iou(np.asarray(boxes[i], float), np.asarray(b, float)) for b in tracked), default=0.0)
+
+    def rank(i: int) -> tuple[int, float, int]:
+        if i in known:
+            return (0, 0.0, i)
+        o = overlap(i)
+        return (1, -o, i) if o >= TRACKED_IOU else (2, 0.0, i)
+
+    return sorted(range(len(boxes)), key=rank)[:max_people]
+
+
+def _crowd_note(max_people: int, crowded: list[int]) -> str:
+    people = "person" if max_people == 1 else "people"
+    return (f"more than {max_people} {people} in {len(crowded)} frames ({_frames_summary(crowded)}); {max_people} "
+            f"{'was' if max_people == 1 else 'were'} lifted (--max-people): those already tracked, else the largest")
 
 
 def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]]]:
@@ -469,7 +482,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 continue
             if len(people) > max_people:
                 crowded.append(index)
-                people = keep_tracked(people, [box for _, box in recent.values()], max_people=max_people)
+                keep = keep_tracked([q.raw.bbox_xywh for q in people], [box for _, box in recent.values()],
+                                    max_people=max_people)
+                people = [people[i] for i in keep]
             t_s = index / fps
             if not people:
                 nobody.append(index)
@@ -518,8 +533,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if nobody:
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:
-        warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
-                        f"{max_people} were lifted (--max-people): those already tracked, else the largest")
+        warnings.append(_crowd_note(max_people, crowded))
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam
@@ -575,10 +589,23 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         frames = frames[:limit]
     crowded = [i for i, fr in enumerate(frames) if len(fr) > max_people]
     if crowded:
-        warnings.append(f"more than {max_people} people in {len(crowded)} frames ({_frames_summary(crowded)}); "
-                        f"the {max_people} largest were lifted (--max-people)")
-    frames = [fr[:max_people] for fr in frames]
-    ids = None if ks.people_ids is None else [fr[:max_people] for fr in ks.people_ids[:len(frames)]]
+        warnings.append(_crowd_note(max_people, crowded))
+    ids = None if ks.people_ids is None else list(ks.people_ids[:len(frames)])
+    kept_frames: list[list[np.ndarray]] = []
+    kept_ids: list[list[Any]] | None = None if ids is None else []
+    tracked: list[np.ndarray] = []  # the boxes of the people kept in the last frame that had someone
+    tracked_ids: list[Any] = []
+    for i, fr in enumerate(frames):
+        boxes = [np.array([*np.nanmin(k, 0), *(np.nanmax(k, 0) - np.nanmin(k, 0))]) for k in fr]
+        keep = (keep_tracked(boxes, tracked, max_people=max_people, ids=None if ids is None else list(ids[i]),
+                             tracked_ids=tracked_ids) if len(fr) > max_people else list(range(len(fr))))
+        kept_frames.append([fr[j] for j in keep])
+        if kept_ids is not None and ids is not None:
+            kept_ids.append([ids[i][j] for j in keep])
+        if keep:
+            tracked = [boxes[j] for j in keep]
+            tracked_ids = [] if ids is None else [ids[i][j] for j in keep]
+    frames, ids = kept_frames, kept_ids
     counts = [len(fr) for fr in frames]
     nobody = [i for i, c in enumerate(counts) if c == 0]
     if nobody:

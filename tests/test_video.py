@@ -226,7 +226,7 @@ def test_video_max_people_and_duration_bound(tmp_path, lifter):
                      max_seconds=2.0)
     assert len(rec.frames) == 20 and all(len(f.people) == 1 for f in rec.frames)
     assert any("only its first 2 s (20 frames)" in w for w in rec.warnings)
-    assert any("more than 1 people in 20 frames" in w for w in rec.warnings)
+    assert any("more than 1 person in 20 frames" in w for w in rec.warnings)
 
 
 def test_video_max_people_follows_one_person(tmp_path, lifter):
@@ -248,18 +248,41 @@ def test_video_max_people_follows_one_person(tmp_path, lifter):
     xs = [float(fr.people[0].keypoints_2d[:, 0].mean()) for fr in rec.frames]
     assert all(abs(x - (80 + i)) < 15 for i, x in enumerate(xs)), xs  # always the left person
     assert len({fr.people[0].track_id for fr in rec.frames}) == 1
-    assert any("1 were lifted (--max-people): those already tracked, else the largest" in w for w in rec.warnings)
-    # without a track to follow (the first frame), the largest is kept
+    assert any(w.startswith("more than 1 person in 20 frames (") and w.endswith(
+        "1 was lifted (--max-people): those already tracked, else the largest") for w in rec.warnings), rec.warnings
+    # without a track to follow (the first frame), the largest is kept; a file's own person ids come first
     from lifter.video import keep_tracked
 
-    class _P:
-        def __init__(self, box):
-            self.raw = type("R", (), {"bbox_xywh": np.asarray(box, float)})()
+    big, left, right = [0, 0, 100, 200], [300, 0, 90, 180], [600, 0, 80, 160]
+    boxes = [np.asarray(b, float) for b in (big, left, right)]
+    assert keep_tracked(boxes, [], max_people=1) == [0]
+    assert keep_tracked(boxes, [np.array([305, 5, 90, 180])], max_people=2) == [1, 0]
+    assert keep_tracked(boxes, [np.array([900, 0, 50, 50])], max_people=2) == [0, 1]  # no overlap: largest
+    assert keep_tracked(boxes, [np.array([305, 5, 90, 180])], max_people=1, ids=["a", "b", "c"],
+                        tracked_ids=["c"]) == [2]  # the same id wins over an overlapping box
 
-    big, left, right = _P([0, 0, 100, 200]), _P([300, 0, 90, 180]), _P([600, 0, 80, 160])
-    assert keep_tracked([big, left, right], [], max_people=1) == [big]
-    assert keep_tracked([big, left, right], [[305, 5, 90, 180]], max_people=2) == [left, big]
-    assert keep_tracked([big, left, right], [[900, 0, 50, 50]], max_people=2) == [big, left]  # no overlap: largest
+
+def test_keypoint_sequence_max_people_follows_one_person(tmp_path, lifter):
+    """A user trial: --max-people 1 on a keypoint sequence kept whoever was largest in each frame, so the lift switched
+    between two people whose depths swapped. It now follows the person of the first frame: by the file's person ids
+    when it has them, else by their boxes."""
+    rng = np.random.default_rng(5)
+    a, b = _person(rng, 80), _person(rng, 240)
+    frames, frames_ids = [], []
+    for i in range(30):
+        sa, sb = (1.3, 0.8) if (i // 5) % 2 == 0 else (0.8, 1.3)  # each the larger for 5 frames in turn
+        pa = (a - a.mean(0)) * sa + a.mean(0)
+        pb = (b - b.mean(0)) * sb + b.mean(0)
+        people = [pa, pb] if sa > sb else [pb, pa]
+        frames.append([{"keypoints": k.tolist()} for k in people])
+        frames_ids.append([{"keypoints": k.tolist(), "person_id": "A" if k is pa else "B"} for k in people])
+    for name, fr in (("boxes", frames), ("ids", frames_ids)):
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": fr}))
+        rec = lift_keypoint_sequence(path, lifter=lifter, max_people=1)
+        xs = [float(f.people[0].keypoints_2d[:, 0].mean()) for f in rec.frames]
+        assert all(abs(x - 80) < 20 for x in xs), (name, xs)  # always the left person
+        assert len({f.people[0].track_id for f in rec.frames}) == 1, name
 
 
 class _FakeCapture:
