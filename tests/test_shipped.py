@@ -310,6 +310,14 @@ def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted()
     with pytest.warns(PoseLifterWarning, match=r"root.s. lifted beyond 38.0 m.*training moved people .*7.6 m times 5"):
         very_far = lifter.lift(at(60000.0), focal=f, principal_point=c)
     assert float(very_far.root[2]) > 5 * TRAINING_ROOT_MAX_MM and any(w.kind == "far" for w in very_far.warnings)
+    # in a record of several people (a photo, a keypoint file) the note names the person in the output's list
+    from lifter.pipeline import lift_people
+
+    notes: list[str] = []
+    f2 = np.broadcast_to(np.asarray(f, np.float64), (2,))
+    lift_people(lifter, np.stack([at(4000.0), at(60000.0)]), f2, np.asarray(c, np.float64), flip_test=None,
+                source="detected", notes=notes)
+    assert [getattr(n, "kind", "") for n in notes] == ["far"] and "(person 2 of the output's people)" in notes[0]
     with pytest.warns(PoseLifterWarning, match="beyond 8.0 m.*trained where they stood, place such people too near"):
         old = before.lift(kp, focal=f, principal_point=c)
     assert float(old.root[2]) < 0.85 * 14000.0 and any(w.kind == "far" for w in old.warnings)
