@@ -26,6 +26,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from eval_cascade import demo_cameras, demo_intrinsics  # noqa: E402
 
 from lifter.api import Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
@@ -70,9 +72,7 @@ def main() -> int:
     demo = h36m_dir / "demo"
     ann = np.load(demo / "annotations.npz")
     data = H36M(h36m_dir)
-    cams = [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
-    focal = np.array([c.focal for c in cams], np.float64)
-    pp = np.array([c.principal_point for c in cams], np.float64)
+    focal, pp, _ = demo_intrinsics(demo_cameras(data, ann))  # (no lens: see the module docstring)
     gt3d = ann["p3d_cam"].astype(np.float64)
     gt2d = ann["p2d_gt"].astype(np.float64)
     lifters = [Lifter.from_pretrained(m) for m in args.models.split(",")]
