@@ -117,6 +117,21 @@ class OutputNote(str):
         return note
 
 
+_BATCH_INDEX = re.compile(r"\(pose at index \((\d+),\), (\d+) such pose\(s\)\)")
+
+
+def people_named(notes: Any, *, whose: str) -> list[OutputNote]:
+    """:attr:`LiftResult.warnings` of a batch of people (one image's, file's or frame's), with the batch index the
+    lifter names (``pose at index (1,)``) said as the person in a list (``person 2 of <whose>``, 1-based, the order
+    the record lists them in, as the joint-score notes count); each note keeps its :attr:`OutputNote.kind`."""
+
+    def name(m: re.Match[str]) -> str:
+        more = int(m.group(2)) - 1
+        return f"(person {int(m.group(1)) + 1} of {whose}" + (f", and {more} more)" if more else ")")
+
+    return [OutputNote(_BATCH_INDEX.sub(name, n), kind=getattr(n, "kind", "")) for n in notes]
+
+
 def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
     """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``: one entry per kind of note
     (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind the camera; any

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -23,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from ._checks import PoseLifterError, as_pair, input_warnings, zero_placeholders
 from ._text import sentence
-from .api import MIN_FOCAL_PX
+from .api import MIN_FOCAL_PX, people_named
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -228,22 +227,6 @@ def joint_doubt_notes(scores: np.ndarray) -> list[str]:
             "and so their 3D, may be off (an occluded or blurred limb?)"]
 
 
-_BATCH_INDEX = re.compile(r"\(pose at index \((\d+),\), (\d+) such pose\(s\)\)")
-
-
-def _people_named(notes: Sequence[str]) -> list[str]:
-    """:attr:`LiftResult.warnings` of a batch of one image's or file's people, with the batch index the lifter
-    names (``pose at index (1,)``) said as the person in the record's ``people`` list (``person 2``, 1-based, the
-    order of the output, as the joint-score notes count); each note keeps its :attr:`~lifter.api.OutputNote.kind`."""
-    from .api import OutputNote
-
-    def name(m: re.Match[str]) -> str:
-        more = int(m.group(2)) - 1
-        return f"(person {int(m.group(1)) + 1} of the output's people" + (f", and {more} more)" if more else ")")
-
-    return [OutputNote(_BATCH_INDEX.sub(name, n), kind=getattr(n, "kind", "")) for n in notes]
-
-
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None, notes: list[str] | None = None,
                 distortion: ArrayLike | None = None) -> tuple[PersonResult, ...]:
@@ -254,7 +237,7 @@ def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *,
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False,
                       distortion=distortion)
     if notes is not None:
-        notes.extend(_people_named(getattr(res, "warnings", ())))
+        notes.extend(people_named(getattr(res, "warnings", ()), whose="the output's people"))
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],

@@ -32,7 +32,7 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair
-from .api import collect_output_notes
+from .api import collect_output_notes, people_named
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
 from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, box_iou, check_max_side, image_from_array, people_h36m
 from .io import distortion_tuple, parse_keypoint_sequence
@@ -494,7 +494,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 source_format = source_format or people[0].raw.keypoint_format
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
-                collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
+                collect_output_notes(output_notes, index, people_named(getattr(res, "warnings", ()),
+                                                                       whose="the frame's people"))
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -625,8 +626,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
-            collect_output_notes(output_notes, i, lifter.network_for(ks.source).output_notes(
-                kp17[k:k + c], pp, root[k:k + c], source=ks.source))
+            collect_output_notes(output_notes, i, people_named(lifter.network_for(ks.source).output_notes(
+                kp17[k:k + c], pp, root[k:k + c], source=ks.source), whose="the frame's people"))
         k += c
     warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)

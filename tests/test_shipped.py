@@ -280,7 +280,7 @@ def test_the_default_holds_on_a_camera_turned_away_from_human36m_s(h36m):
         assert old.mpjpe > 2 * ref.mpjpe and old.mrpe > 4 * ref.mrpe, (source, old)
 
 
-def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted():
+def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted(tmp_path):
     """A user trial: people in the background were placed far too near (exact 2D at 12 m: -21 %) with no word. The
     default's networks were trained with people moved along their rays up to 5 x farther: a person at 14 m is lifted
     within 5 % of it, from detected and clean 2D alike, with no note, and the same at a quarter image size (the distance
@@ -318,6 +318,16 @@ def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted()
     lift_people(lifter, np.stack([at(4000.0), at(60000.0)]), f2, np.asarray(c, np.float64), flip_test=None,
                 source="detected", notes=notes)
     assert [getattr(n, "kind", "") for n in notes] == ["far"] and "(person 2 of the output's people)" in notes[0]
+    # and in a keypoint sequence, the person of the frame, as the frame's output lists them
+    from lifter.video import lift_keypoint_sequence
+
+    frames = [[{"keypoints": at(4000.0).tolist()}, {"keypoints": at(60000.0 + 100 * i).tolist()}] for i in range(6)]
+    seq = tmp_path / "far_seq.json"
+    seq.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": float(np.mean(f)),
+                               "principal_point": np.asarray(c, float).tolist(), "frames": frames}))
+    rec = lift_keypoint_sequence(seq, lifter=lifter)
+    far_notes = [w for w in rec.warnings if "beyond 38.0 m" in w]
+    assert len(far_notes) == 1 and "(person 2 of the frame's people)" in far_notes[0], rec.warnings
     with pytest.warns(PoseLifterWarning, match="beyond 8.0 m.*trained where they stood, place such people too near"):
         old = before.lift(kp, focal=f, principal_point=c)
     assert float(old.root[2]) < 0.85 * 14000.0 and any(w.kind == "far" for w in old.warnings)
