@@ -23,13 +23,19 @@ class PoseLifterWarning(UserWarning):
     message names the problem. Turn into errors with ``warnings.simplefilter("error", PoseLifterWarning)``."""
 
 
-def where_in_batch(mask: Any) -> str:
+def where_in_batch(mask: Any, *, whose: str | None = None) -> str:
     """`` (pose at index (i, j), n such pose(s))`` for the first True entry of a mask over a batch's leading shape;
-    empty for a single pose (a 0-d mask, or a batch of one like a file's single pose)."""
+    empty for a single pose (a 0-d mask, or a batch of one like a file's single pose). ``whose``: the batch is a
+    list of people (one image's, file's or frame's, as its record lists them): `` (person i+1 of <whose>, and n-1
+    more)``, 1-based, as the joint-score notes count."""
     mask = np.asarray(mask)
     if mask.size <= 1:
         return ""
-    return f" (pose at index {tuple(int(i) for i in np.argwhere(mask)[0])}, {int(mask.sum())} such pose(s))"
+    first = tuple(int(i) for i in np.argwhere(mask)[0])
+    if whose is not None and mask.ndim == 1:
+        more = int(mask.sum()) - 1
+        return f" (person {first[0] + 1} of {whose}" + (f", and {more} more)" if more else ")")
+    return f" (pose at index {first}, {int(mask.sum())} such pose(s))"
 
 
 def _untorch(x: Any) -> Any:

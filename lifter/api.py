@@ -103,6 +103,11 @@ TRAINING_ROOT_MAX_MM: Final[float] = 7600.0
 """The farthest root depth (mm, rounded up) of Human3.6M's training subjects (Protocol 1; 7556 mm)."""
 
 
+def _far_limit_mm(distance_factor: float) -> float:
+    """:attr:`Lifter.far_root_depth_mm` for networks whose training moved people ``distance_factor`` times farther."""
+    return FAR_ROOT_DEPTH_MM if distance_factor <= 1.0 else TRAINING_ROOT_MAX_MM * distance_factor
+
+
 class OutputNote(str):
     """A note on a lift's output (an entry of :attr:`LiftResult.warnings`): the text, and its ``kind``,
     ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on), ``"far"`` (a detected
@@ -115,21 +120,6 @@ class OutputNote(str):
         note = super().__new__(cls, text)
         note.kind = kind
         return note
-
-
-_BATCH_INDEX = re.compile(r"\(pose at index \((\d+),\), (\d+) such pose\(s\)\)")
-
-
-def people_named(notes: Any, *, whose: str) -> list[OutputNote]:
-    """:attr:`LiftResult.warnings` of a batch of people (one image's, file's or frame's), with the batch index the
-    lifter names (``pose at index (1,)``) said as the person in a list (``person 2 of <whose>``, 1-based, the order
-    the record lists them in, as the joint-score notes count); each note keeps its :attr:`OutputNote.kind`."""
-
-    def name(m: re.Match[str]) -> str:
-        more = int(m.group(2)) - 1
-        return f"(person {int(m.group(1)) + 1} of {whose}" + (f", and {more} more)" if more else ")")
-
-    return [OutputNote(_BATCH_INDEX.sub(name, n), kind=getattr(n, "kind", "")) for n in notes]
 
 
 def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
@@ -347,8 +337,7 @@ class Lifter:
         :data:`FAR_ROOT_DEPTH_MM` for networks trained where the training subjects stood, else the farthest a
         training root was moved to, :data:`TRAINING_ROOT_MAX_MM` times :attr:`distance_factor` (the default: 38 m;
         measured to 50 m, where it is still within 2.3 %: ``scripts/far_people.py``)."""
-        k = self.distance_factor
-        return FAR_ROOT_DEPTH_MM if k <= 1.0 else TRAINING_ROOT_MAX_MM * k
+        return _far_limit_mm(self.distance_factor)
 
     @property
     def lens(self) -> Lens:
@@ -364,12 +353,12 @@ class Lifter:
         return self.clean if source == "clean" and self.clean is not None else self
 
     def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike, *,
-                     source: Source | None = None) -> list[OutputNote]:
+                     source: Source | None = None, whose: str | None = None) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
         a reference-camera network) roots farther than :attr:`far_root_depth_mm`. For callers that show one pose of a
-        batch (the app)."""
+        batch (the app), or that name the people of a batch (``whose``: :func:`lifter._checks.where_in_batch`)."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -384,11 +373,12 @@ class Lifter:
                 notes.append(OutputNote(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
                              f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
                              f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
-                             f"{where_in_batch(outside)}: its depth is an extrapolation (it can place people behind "
-                             "the camera): use the default model, which is exact at any image size, or scale the "
+                             f"{where_in_batch(outside, whose=whose)}: its depth is an extrapolation (it can place "
+                             "people behind the camera): use the default model, which is exact at any image size, or scale the "
                              "image and its intrinsics down", kind="pixel-range"))
         if source == "detected" and self.input_space == "camera" and root.size:
-            limit = self.far_root_depth_mm
+            k = self.distance_factor
+            limit = _far_limit_mm(k)
             far = root[..., 2] > limit
             if np.any(far):
                 why = ("farther than the training subjects ever stood (their roots reach 7.6 m), and this model's "
@@ -396,16 +386,17 @@ class Lifter:
                        "on exact 2D: -11 % at 9 m, -21 % at 12 m, -38 % at 25 m; scripts/far_people.py): the default "
                        "model (Lifter.from_pretrained()), trained with people moved farther, places them at their "
                        "distance"
-                       if self.distance_factor <= 1.0 else
+                       if k <= 1.0 else
                        f"farther than this model's training moved people (the training subjects' 7.6 m times "
-                       f"{self.distance_factor:g}): its depth there is an extrapolation")
+                       f"{k:g}): its depth there is an extrapolation")
                 notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
-                                        f"{where_in_batch(far)}: {why}", kind="far"))
+                                        f"{where_in_batch(far, whose=whose)}: {why}", kind="far"))
         behind = root[..., 2] <= 0
         if np.any(behind):
             notes.append(OutputNote(
                 f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
-                f"{where_in_batch(behind)}: the 2D is outside what it was trained on; the result is not a valid pose"
+                f"{where_in_batch(behind, whose=whose)}: the 2D is outside what it was trained on; the result is not a "
+                "valid pose"
                 + ("" if self.config.input_space == "camera" else " (a pixel-space model: use the default model)"),
                 kind="behind-camera"))
         return notes

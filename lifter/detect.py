@@ -425,8 +425,8 @@ class Detection:
 
 
 def bbox_of(points: np.ndarray) -> np.ndarray:
-    """``(x, y, w, h)`` px of the box around ``(J, 2)`` points."""
-    lo, hi = points.min(0), points.max(0)
+    """``(x, y, w, h)`` px of the box around ``(J, 2)`` points (missing, NaN joints left out)."""
+    lo, hi = np.nanmin(points, 0), np.nanmax(points, 0)
     return np.array([lo[0], lo[1], hi[0] - lo[0], hi[1] - lo[1]], np.float64)
 
 

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from ._checks import PoseLifterError, as_pair, input_warnings, zero_placeholders
 from ._text import sentence
-from .api import MIN_FOCAL_PX, people_named
+from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -237,7 +237,8 @@ def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *,
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False,
                       distortion=distortion)
     if notes is not None:
-        notes.extend(people_named(getattr(res, "warnings", ()), whose="the output's people"))
+        notes.extend(lifter.output_notes(res.keypoints_2d, res.principal_point, res.root, source=source,
+                                         whose="the output's people") if getattr(res, "warnings", ()) else ())
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],

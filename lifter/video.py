@@ -32,9 +32,17 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import PoseLifterError, as_pair
-from .api import collect_output_notes, people_named
+from .api import collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
-from .detect import DEFAULT_MAX_SIDE_PX, PoseEstimator2D, box_iou, check_max_side, image_from_array, people_h36m
+from .detect import (
+    DEFAULT_MAX_SIDE_PX,
+    PoseEstimator2D,
+    bbox_of,
+    box_iou,
+    check_max_side,
+    image_from_array,
+    people_h36m,
+)
 from .io import distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
@@ -494,8 +502,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 source_format = source_format or people[0].raw.keypoint_format
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
                                   warn=False)  # (the record's notes say it, once)
-                collect_output_notes(output_notes, index, people_named(getattr(res, "warnings", ()),
-                                                                       whose="the frame's people"))
+                if getattr(res, "warnings", ()):
+                    collect_output_notes(output_notes, index, lifter.output_notes(
+                        res.keypoints_2d, res.principal_point, res.root, source="detected", whose="the frame's people"))
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -597,7 +606,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     tracked: list[np.ndarray] = []  # the boxes of the people kept in the last frame that had someone
     tracked_ids: list[Any] = []
     for i, fr in enumerate(frames):
-        boxes = [np.array([*np.nanmin(k, 0), *(np.nanmax(k, 0) - np.nanmin(k, 0))]) for k in fr]
+        boxes = [bbox_of(k) for k in fr]
         keep = (keep_tracked(boxes, tracked, max_people=max_people, ids=None if ids is None else list(ids[i]),
                              tracked_ids=tracked_ids) if len(fr) > max_people else list(range(len(fr))))
         kept_frames.append([fr[j] for j in keep])
@@ -626,8 +635,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
         if c and getattr(res, "warnings", ()):
-            collect_output_notes(output_notes, i, people_named(lifter.network_for(ks.source).output_notes(
-                kp17[k:k + c], pp, root[k:k + c], source=ks.source), whose="the frame's people"))
+            collect_output_notes(output_notes, i, lifter.network_for(ks.source).output_notes(
+                kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
         k += c
     warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
