@@ -636,6 +636,11 @@ def _send_value(tab: FakeTab, handle, value) -> None:
     tab.send(_messages.GuiUpdateMessage(handle._impl.uuid, {"value": value}))
 
 
+def _scene_root_mm(view: SessionView) -> float:
+    """The camera-frame root depth the 3D scene shows (mm; the scene is in metres)."""
+    return float(np.asarray(view.scene.camera.root.position)[2]) * 1000
+
+
 def _focal_in_readout(view: SessionView) -> float:
     import re
 
@@ -806,6 +811,8 @@ def test_a_joint_position_typed_key_by_key_is_applied_once_settled(app: PoseLift
 def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
     """Bursts of values with no spacing, to two tabs at once: the state, the scene and the readout end on the last
     value of every control, in each tab (viser runs the callbacks on a thread pool, in any order)."""
+    import time
+
     n0 = len(app.views)
     tabs, views = [], []
     try:
@@ -825,14 +832,16 @@ def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
             for k, v in enumerate(views):
                 f_last = 1000 + 10 * 39 + 3 * k + rep
                 m_last = models[(rep + k) % len(models)]
+                # the state is set before the scene is drawn from it (one pass), so the scene is waited for too
                 ok = wait_for(lambda v=v, f=f_last, k=k, m=m_last: v.state.focal_px == f and v.state.noise_level == 0.95
-                              and v.state.seed == 39 + k and v.state.model == m and _focal_in_readout(v) == f, timeout=30)
+                              and v.state.seed == 39 + k and v.state.model == m and _focal_in_readout(v) == f
+                              and _scene_root_mm(v) == pytest.approx(v.frame.root[2], rel=1e-5), timeout=30)
                 assert ok, (v.state.focal_px, v.state.noise_level, v.state.seed, v.state.model,
-                            v.gui.readout.readout.content[:60])
+                            v.gui.readout.readout.content[:60], _scene_root_mm(v), v.frame.root[2])
                 assert v.gui.lift.focal.value == f_last and v.state.model == models[(rep + k) % len(models)]
                 assert v.frame.alpha == pytest.approx(f_last) and v.frame.cloud is not None
-                z_scene = float(np.asarray(v.scene.camera.root.position)[2]) * 1000
-                assert z_scene == pytest.approx(v.frame.root[2], rel=1e-5)
+                time.sleep(0.3)  # nothing later moves the scene off the last value
+                assert _scene_root_mm(v) == pytest.approx(v.frame.root[2], rel=1e-5)
         # the sample pickers too: a burst over the demo samples, then over the demo motion's frames
         names = list(app.demo.names)
         for k, (tab, v) in enumerate(zip(tabs, views)):
