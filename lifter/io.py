@@ -127,7 +127,7 @@ class LiftRecord:
             "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
             "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
             "focal": r(self.focal), "focal_source": self.focal_source,
-            "metric_depth": self.focal_source != "default-fov", "principal_point": r(self.principal_point),
+            "metric_depth": depth_is_metric(self.focal_source), "principal_point": r(self.principal_point),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
@@ -167,6 +167,18 @@ class KeypointFile:
     people_scores: tuple[np.ndarray | None, ...] = ()
     """For each of ``people``: its ``(J,)`` confidences (the rows' third values or ``keypoint_scores``; a stood-in
     joint has the lowest of its stand-ins'), None where the file gave none."""
+
+
+ASSUMED_FOCAL_SOURCE: Final[str] = "default-fov"
+"""The ``focal_source`` of a focal length assumed from the image size (the default field of view): a depth lifted
+with it is not metric (:func:`depth_is_metric`); every other source (given, EXIF, a keypoint file) is taken as
+the camera's own."""
+
+
+def depth_is_metric(focal_source: str) -> bool:
+    """Whether a result's absolute depths (mm) rest on a focal length of the camera itself (``focal_source`` other
+    than :data:`ASSUMED_FOCAL_SOURCE`), as every written record's ``metric_depth`` says; False: on an assumed one."""
+    return focal_source != ASSUMED_FOCAL_SOURCE
 
 
 MMPOSE_SEQUENCE_FORM: Final[str] = (
@@ -713,7 +725,7 @@ def _written_assumed(focal: np.ndarray | None, meta: dict[str, Any], image_size:
     """A result this package wrote with an assumed focal (``focal_source`` ``"default-fov"``) and read back: its
     focal is not taken as known (None: assumed again from ``image_size``), and the written one (as text, px) is
     returned for the note that says so (:func:`lifter.pipeline.resolve_camera`'s callers). Otherwise unchanged."""
-    if focal is None or meta.get("focal_source") != "default-fov" or image_size is None:
+    if focal is None or meta.get("focal_source") != ASSUMED_FOCAL_SOURCE or image_size is None:
         return focal, None
     return None, _short(meta.get("focal"))
 
@@ -783,6 +795,9 @@ class KeypointSequence:
     """The notes (also in ``warnings``) on fields that were not read (:attr:`KeypointFile.unread`)."""
     assumed_focal: str | None = None
     """As :attr:`KeypointFile.assumed_focal`."""
+    people_scores: list[list[np.ndarray | None]] | None = None
+    """Per frame, for each of its people: their ``(J,)`` confidences as :attr:`KeypointFile.people_scores` reads them,
+    None where they have none; None when no frame has any."""
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -822,6 +837,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     notes: list[str] = []
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
+    scores: list[list[np.ndarray | None]] = []
     dropped: list[tuple[int, tuple[str, list[str]]]] = []  # (frame, (who, joints))
     stood_in: dict[str, list[int]] = {}  # "r_ear from l_ear" -> frames
     misplaced: dict[str, int] = {}  # camera field -> first frame that has it inside a frame or person
@@ -832,6 +848,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         if fr == [] or fr is None or (isinstance(fr, dict) and fr.get("people") == []):
             frames.append([])
             ids.append([])
+            scores.append([])
             continue
         people, f_fmt, _, layout_format = _people_of(fr, where, fmt)
         found = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [],
@@ -848,6 +865,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             raise PoseLifterError(f"{where}: format {f_fmt!r} differs from the sequence's {fmt!r}")
         frames.append(arrays)
         ids.append([pid for _, pid in identity])
+        scores.append(list(found.scores))
         dropped += [(i, g) for g in gone]
     fmt = fmt or H36M17
     if stood_in:
@@ -875,7 +893,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None,
-                            unread=tuple(unread), assumed_focal=assumed)
+                            unread=tuple(unread), assumed_focal=assumed,
+                            people_scores=scores if any(c is not None for fr in scores for c in fr) else None)
 
 
 def _read_umask() -> int:

@@ -40,10 +40,11 @@ from .detect import (
     bbox_of,
     box_iou,
     check_max_side,
+    h36m_joint_scores,
     image_from_array,
     people_h36m,
 )
-from .io import distortion_tuple, parse_keypoint_sequence
+from .io import depth_is_metric, distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
@@ -252,7 +253,7 @@ class SequenceRecord:
             "fps": round(self.fps, 4), "num_frames": len(self.frames), "num_frames_in_file": self.num_frames_in_file,
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
-            "metric_depth": self.focal_source != "default-fov",
+            "metric_depth": depth_is_metric(self.focal_source),
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
             "source_format": self.source_format, "detector": self.detector,
@@ -572,6 +573,14 @@ def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarr
     return out
 
 
+def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.ndarray | None:
+    """One frame's confidences ``(n, 17)`` of the H36M joints (:func:`lifter.detect.h36m_joint_scores`, from each
+    person's ``(J,)`` in ``keypoint_format``), or None unless every person of the frame has them."""
+    if not people or any(c is None for c in people):
+        return None
+    return h36m_joint_scores(np.stack([np.asarray(c, np.float64) for c in people]), keypoint_format)
+
+
 def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None = None,
                            principal_point: Any | None = None, default_format: str | None = None,
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
@@ -601,8 +610,10 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if crowded:
         warnings.append(_crowd_note(max_people, crowded))
     ids = None if ks.people_ids is None else list(ks.people_ids[:len(frames)])
+    given_scores = None if ks.people_scores is None else list(ks.people_scores[:len(frames)])
     kept_frames: list[list[np.ndarray]] = []
     kept_ids: list[list[Any]] | None = None if ids is None else []
+    kept_scores: list[list[np.ndarray | None]] = []
     tracked: list[np.ndarray] = []  # the boxes of the people kept in the last frame that had someone
     tracked_ids: list[Any] = []
     for i, fr in enumerate(frames):
@@ -610,6 +621,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         keep = (keep_tracked(boxes, tracked, max_people=max_people, ids=None if ids is None else list(ids[i]),
                              tracked_ids=tracked_ids) if len(fr) > max_people else list(range(len(fr))))
         kept_frames.append([fr[j] for j in keep])
+        kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
         if kept_ids is not None and ids is not None:
             kept_ids.append([ids[i][j] for j in keep])
         if keep:
@@ -633,7 +645,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     output_notes: dict[str, tuple[int, int, str]] = {}
     lifted, k = [], 0
     for i, c in enumerate(counts):
-        lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c], None))
+        lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c],
+                       _frame_scores(kept_scores[i], ks.format)))
         if c and getattr(res, "warnings", ()):
             collect_output_notes(output_notes, i, lifter.network_for(ks.source).output_notes(
                 kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
@@ -643,6 +656,9 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for fr, frame_ids in zip(out, ids or []):  # (the tracker keeps each frame's order: largest first)
         for st, pid in zip(fr.people, frame_ids):
             st.person_id = pid
+    given = [sc for *_, sc in lifted if sc is not None]
+    if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
+        warnings.extend(track_doubt_notes(out))
     return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,

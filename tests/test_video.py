@@ -403,6 +403,57 @@ def test_keypoint_sequence(tmp_path, lifter):
     np.testing.assert_allclose(first.root, single.root, atol=1e-3)
 
 
+def test_keypoint_sequence_keeps_each_frames_confidences(tmp_path, lifter):
+    """A sequence's confidences are kept per frame and per person, as a keypoint file's are (they were dropped): COCO
+    scores become the H36M joints' (the lowest its rule reads), a wrist unsure from frame 3 on gets one note for its
+    track, and a frame without scores keeps none; unnormalised scores (> 1) are kept without the note."""
+    from lifter.skeleton import JOINT_NAMES
+
+    rng = np.random.default_rng(7)
+    a, b = _person(rng, 80), _person(rng, 240)
+    h36m_of_coco = {0: 9, 5: 11, 6: 14, 7: 12, 8: 15, 9: 13, 10: 16, 11: 4, 12: 1, 13: 5, 14: 2, 15: 6, 16: 3}
+    frames, lw = [], 9  # COCO's left wrist
+    for i in range(8):
+        people = []
+        for k, person in enumerate((a, b)):
+            xy = np.zeros((17, 2))
+            for c, h in h36m_of_coco.items():
+                xy[c] = person[h] + i
+            xy[1:5] = person[9] + np.array([[4, -4], [-4, -4], [8, -2], [-8, -2]]) + i  # eyes, ears beside the nose
+            conf = np.full(17, 0.9 - 0.1 * k)
+            if k == 0 and i >= 3:
+                conf[lw] = 0.1
+            rows = np.column_stack([xy, conf]).tolist()
+            people.append({"keypoints": rows} if i != 6 else {"keypoints": xy.tolist()})
+        frames.append({"people": people})
+    path = tmp_path / "conf.json"
+    path.write_text(json.dumps({"format": "coco17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
+    rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
+    wrist = JOINT_NAMES.index("l_wrist")
+    by_x = {fr.index: sorted(fr.people, key=lambda q: float(q.keypoints_2d[:, 0].mean())) for fr in rec.frames}
+    for i, (left, right) in by_x.items():
+        if i == 6:
+            assert left.scores is None and right.scores is None
+            continue
+        assert left.scores is not None and right.scores is not None
+        assert left.scores[wrist] == pytest.approx(0.1 if i >= 3 else 0.9)
+        assert right.scores.min() == pytest.approx(0.8) and right.scores.max() == pytest.approx(0.8)
+    said = [w for w in rec.warnings if "unsure" in w]
+    tid = by_x[0][0].track_id
+    assert said == [f"track {tid}: the detector is unsure (score below 0.3) of l_wrist in 4 of 7 frames (first 3): "
+                    "their 2D, and so their 3D, may be off in those frames (an occluded or blurred limb?)"], said
+    assert rec.to_json()["frames"][3]["people"][0]["scores"] is not None
+    # another scale (a detector's raw scores): kept, no threshold read
+    raw = json.loads(path.read_text())
+    for fr in raw["frames"]:
+        for q in fr["people"]:
+            q["keypoints"] = [r[:2] + [r[2] * 10] if len(r) == 3 else r for r in q["keypoints"]]
+    path.write_text(json.dumps(raw))
+    rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
+    assert not [w for w in rec.warnings if "unsure" in w]
+    assert rec.frames[0].people[0].scores is not None and float(rec.frames[0].people[0].scores.max()) > 1
+
+
 @pytest.mark.parametrize(("body", "match"), [
     ({"frames": [], "fps": 30}, "zero-length sequence"),
     ({"frames": [[[0, 0]] * 17]}, "'fps' is missing: a keypoint sequence needs its frame rate"),
