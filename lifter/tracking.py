@@ -5,7 +5,8 @@ Each frame's people (2D keypoints, px) are matched to the live tracks by an opti
 centres divided by the track's box diagonal (so the gate scales with the person's size in the image), plus
 the box-size mismatch ``|log(diag / track diag)|``. A pair costing more than ``gate`` is not matched: the
 person starts a new track. A track that is not seen for more than ``max_missed`` frames ends; its id is never
-reused.
+reused. Where the input names its people (a keypoint sequence's ``person_id``), the names decide: a person is
+matched to the live track of the same name, whatever the cost, and never to a track of another name.
 """
 
 from __future__ import annotations
@@ -22,6 +23,10 @@ DEFAULT_GATE: Final[float] = 0.75
 """Largest matching cost: a centre shift of 0.75 box diagonals between two sightings (less with a size change)."""
 
 
+_NEVER: Final[float] = 1e9
+"""The matching cost of a person and a track the input names differently (never below any gate)."""
+
+
 @dataclass
 class Track:
     """A tracked person: ``track_id``, the last box centre ``(2,)`` and diagonal (px), the frame it was
@@ -34,6 +39,8 @@ class Track:
     first_frame: int
     hits: int = 1
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    person_id: str | int | None = None
+    """The input's own name for this person (a keypoint sequence's ``person_id``), None where it has none."""
 
 
 def box_centre_diag(keypoints: np.ndarray) -> tuple[np.ndarray, float]:
@@ -56,13 +63,19 @@ class Tracker:
         self.ended: list[Track] = []
         self._next = 1
 
-    def update(self, frame: int, keypoints: list[np.ndarray] | np.ndarray) -> list[int]:
+    def update(self, frame: int, keypoints: list[np.ndarray] | np.ndarray,
+               person_ids: list[str | int | None] | None = None) -> list[int]:
         """Track ids for the people ``keypoints`` (each ``(J, 2)`` px) of frame number ``frame`` (increasing),
         in the same order. First ends the tracks unseen for more than ``max_missed`` frames before this one, so a
-        person who comes back after a longer gap gets a new id even if no frame in between was passed here."""
+        person who comes back after a longer gap gets a new id even if no frame in between was passed here.
+        ``person_ids``: the input's own name for each person (None: unnamed), which decides over the boxes
+        (module docstring)."""
         for tid in [t for t, tr in self.tracks.items() if frame - tr.last_frame > self.max_missed]:
             self.ended.append(self.tracks.pop(tid))
         boxes = [box_centre_diag(k) for k in keypoints]
+        names: list[str | int | None] = list(person_ids) if person_ids is not None else [None] * len(boxes)
+        if len(names) != len(boxes):
+            raise PoseLifterError(f"Tracker.update: {len(names)} person ids for {len(boxes)} people")
         live = list(self.tracks.values())
         ids: list[int] = [0] * len(boxes)
         if boxes and live:
@@ -71,6 +84,9 @@ class Tracker:
             cost = np.empty((len(boxes), len(live)))
             for i, (c, d) in enumerate(boxes):
                 for j, tr in enumerate(live):
+                    if names[i] is not None and tr.person_id is not None:  # named on both sides: the names decide
+                        cost[i, j] = -1.0 if names[i] == tr.person_id else _NEVER
+                        continue
                     gap = frame - tr.last_frame
                     pred = tr.centre + tr.velocity * gap
                     cost[i, j] = float(np.linalg.norm(c - pred)) / tr.diag + abs(math.log(d / tr.diag))
@@ -82,10 +98,12 @@ class Tracker:
                     gap = max(frame - tr.last_frame, 1)
                     tr.velocity = 0.5 * tr.velocity + 0.5 * (c - tr.centre) / gap
                     tr.centre, tr.diag, tr.last_frame, tr.hits = c, d, frame, tr.hits + 1
+                    if tr.person_id is None:
+                        tr.person_id = names[i]
                     ids[i] = tr.track_id
         for i, (c, d) in enumerate(boxes):
             if ids[i] == 0:
-                tr = Track(self._next, c, d, frame, frame)
+                tr = Track(self._next, c, d, frame, frame, person_id=names[i])
                 self._next += 1
                 self.tracks[tr.track_id] = tr
                 ids[i] = tr.track_id

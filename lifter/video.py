@@ -115,6 +115,10 @@ class PersonState:
                 {} if self.person_id is None else {"person_id": self.person_id})
 
 
+TRACK_TIMEOUT_S: Final[float] = 1.0
+"""A track unseen this long (s) ends; a person coming back gets a new id (:class:`SequenceTracker`)."""
+
+
 class SequenceTracker:
     """Track ids and causal smoothing for the lifted people of consecutive frames (module docstring).
 
@@ -122,7 +126,7 @@ class SequenceTracker:
     timeout ``max_missed_s`` (a track unseen that long ends; a person coming back gets a new id).
     """
 
-    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = 1.0) -> None:
+    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = TRACK_TIMEOUT_S) -> None:
         if not (math.isfinite(fps) and fps > 0):
             raise PoseLifterError(f"fps must be > 0, got {fps}")
         PoseSmoother(smoothing)  # validates the strength
@@ -132,12 +136,14 @@ class SequenceTracker:
         self._focal_geo: float | None = None
 
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
-             focal: np.ndarray, scores: np.ndarray | None = None) -> list[PersonState]:
+             focal: np.ndarray, scores: np.ndarray | None = None,
+             person_ids: list[str | int | None] | None = None) -> list[PersonState]:
         """The people of frame number ``frame`` at ``t`` s: ``keypoints_2d (n, 17, 2)`` px, ``root (n, 3)`` and
         ``relative (n, 17, 3)`` mm (camera frame, OpenCV), the frame's ``focal`` px (scalar or ``(2,)``; a
         LiftResult's per-pose ``(n, 2)`` of one frame too); ``scores (n, 17)`` or None. ``n = 0`` (empty arrays
         or lists) is a frame with nobody. A single person's arrays without the leading ``n`` axis are refused with
-        the shapes expected."""
+        the shapes expected. ``person_ids``: the input's own name for each person (a keypoint sequence's
+        ``person_id``, None: unnamed), which the tracker follows over the boxes (:class:`lifter.tracking.Tracker`)."""
         kp = np.asarray(keypoints_2d, np.float64)
         nobody = kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0
         if not nobody:
@@ -157,7 +163,7 @@ class SequenceTracker:
                 raise PoseLifterError(f"SequenceTracker.step: focal: one focal length for the frame (scalar or (2,) "
                                       f"px), got {len(f)} different ones")
             focal = f[0]
-        ids = self.tracker.update(frame, [] if nobody else list(kp))
+        ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks:
                 del self._smoothers[tid]  # ended tracks
@@ -273,12 +279,18 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     """Which of a frame's people (their ``boxes``, ``(x, y, w, h)`` px, largest first) to lift when it has more than
     ``max_people``: their indices, first those continuing a person tracked in recent frames (the same ``ids`` entry
     as one of ``tracked_ids``, when the file names its people; else a box overlapping one of ``tracked`` by at least
-    :data:`TRACKED_IOU`, the best overlap first), then the largest of the rest. So ``--max-people 1`` follows one
-    person through a video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
+    :data:`TRACKED_IOU`, the best overlap first, not counting a tracked person the file names otherwise;
+    ``tracked_ids`` are the names of ``tracked``, in the same order, None where unnamed), then the largest of the
+    rest. So ``--max-people 1`` follows one person through a video or a keypoint sequence instead of switching to
+    whoever looks largest in a frame."""
     known = {i for i, pid in enumerate(ids or []) if pid is not None and pid in (tracked_ids or [])}
+    names = list(ids) if ids is not None else [None] * len(boxes)
+    tracked_names = list(tracked_ids) if tracked_ids is not None and len(tracked_ids) == len(tracked) else (
+        [None] * len(tracked))
 
-    def overlap(i: int) -> float:
-        return max((box_iou(np.asarray(boxes[i], float), np.asarray(b, float)) for b in tracked), default=0.0)
+    def overlap(i: int) -> float:  # (not with a tracked person the file names otherwise)
+        return max((box_iou(np.asarray(boxes[i], float), np.asarray(b, float)) for b, n in zip(tracked, tracked_names)
+                    if n is None or names[i] is None or n == names[i]), default=0.0)
 
     def rank(i: int) -> tuple[int, float, int]:
         if i in known:
@@ -287,6 +299,39 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
         return (1, -o, i) if o >= TRACKED_IOU else (2, 0.0, i)
 
     return sorted(range(len(boxes)), key=rank)[:max_people]
+
+
+@dataclass
+class _Followed:
+    """The people a keypoint sequence's ``max_people`` cut follows: each with the frame it was last kept in, its box
+    ``(x, y, w, h)`` px and the file's name for it. Those kept again are refreshed; someone else joins only while
+    there is room, so a person missing from a frame or two (a joint left out) is not replaced by whoever was alone
+    there; a person unseen for ``horizon`` frames (a track's timeout) is let go."""
+
+    max_people: int
+    horizon: int
+    people: list[tuple[int, np.ndarray, Any]] = field(default_factory=list)
+
+    def keep(self, frame: int, boxes: list[np.ndarray], names: list[Any]) -> list[int]:
+        """Which of the frame's people (largest first) to lift (:func:`keep_tracked` when there are too many)."""
+        self.people = [q for q in self.people if frame - q[0] <= self.horizon]
+        if len(boxes) > self.max_people:
+            keep = keep_tracked(boxes, [b for _, b, _ in self.people], max_people=self.max_people, ids=names,
+                                tracked_ids=[n for *_, n in self.people])
+        else:
+            keep = list(range(len(boxes)))
+        taken: set[int] = set()
+        for j in keep:
+            same = [k for k, (_, b, n) in enumerate(self.people) if k not in taken and (
+                n == names[j] if n is not None and names[j] is not None else box_iou(b, boxes[j]) >= TRACKED_IOU)]
+            if same:
+                k = max(same, key=lambda k: box_iou(self.people[k][1], boxes[j]))
+                self.people[k] = (frame, boxes[j], names[j])
+                taken.add(k)
+            elif len(self.people) < self.max_people:
+                self.people.append((frame, boxes[j], names[j]))
+                taken.add(len(self.people) - 1)
+        return keep
 
 
 def _crowd_note(max_people: int, crowded: list[int]) -> str:
@@ -562,13 +607,21 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
 
 
 def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
-                 fps: float, focal: np.ndarray, smoothing: float = 1.0) -> list[FrameResult]:
+                 fps: float, focal: np.ndarray, smoothing: float = 1.0,
+                 person_ids: list[list[str | int | None]] | None = None) -> list[FrameResult]:
     """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
-    relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place)."""
+    relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place).
+    ``person_ids``: per frame, the input's own name for each of its people (None: unnamed), followed by the tracker;
+    they are also kept as each person's ``person_id``."""
+    if person_ids is not None and len(person_ids) != len(lifted):
+        raise PoseLifterError(f"track_lifted: person_ids for {len(person_ids)} frames, {len(lifted)} frames lifted")
     seq = SequenceTracker(fps=fps, smoothing=smoothing)
     out = []
-    for index, t, kp, root, rel, sc in lifted:
-        states = seq.step(index, t, kp, root, rel, focal, scores=sc) if len(kp) else []
+    for k, (index, t, kp, root, rel, sc) in enumerate(lifted):
+        names = None if person_ids is None else list(person_ids[k])
+        states = seq.step(index, t, kp, root, rel, focal, scores=sc, person_ids=names) if len(kp) else []
+        for st, pid in zip(states, names or []):  # (the tracker keeps each frame's order)
+            st.person_id = pid
         out.append(FrameResult(index=index, time_s=t, people=states))
     return out
 
@@ -614,19 +667,15 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kept_frames: list[list[np.ndarray]] = []
     kept_ids: list[list[Any]] | None = None if ids is None else []
     kept_scores: list[list[np.ndarray | None]] = []
-    tracked: list[np.ndarray] = []  # the boxes of the people kept in the last frame that had someone
-    tracked_ids: list[Any] = []
+    followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)))
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
-        keep = (keep_tracked(boxes, tracked, max_people=max_people, ids=None if ids is None else list(ids[i]),
-                             tracked_ids=tracked_ids) if len(fr) > max_people else list(range(len(fr))))
+        names = [None] * len(fr) if ids is None else list(ids[i])
+        keep = followed.keep(i, boxes, names)
         kept_frames.append([fr[j] for j in keep])
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
-        if kept_ids is not None and ids is not None:
-            kept_ids.append([ids[i][j] for j in keep])
-        if keep:
-            tracked = [boxes[j] for j in keep]
-            tracked_ids = [] if ids is None else [ids[i][j] for j in keep]
+        if kept_ids is not None:
+            kept_ids.append([names[j] for j in keep])
     frames, ids = kept_frames, kept_ids
     counts = [len(fr) for fr in frames]
     nobody = [i for i, c in enumerate(counts) if c == 0]
@@ -652,10 +701,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                 kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
         k += c
     warnings.extend(output_note_lines(output_notes))
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing)
-    for fr, frame_ids in zip(out, ids or []):  # (the tracker keeps each frame's order: largest first)
-        for st, pid in zip(fr.people, frame_ids):
-            st.person_id = pid
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))

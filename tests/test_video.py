@@ -285,6 +285,52 @@ def test_keypoint_sequence_max_people_follows_one_person(tmp_path, lifter):
         assert len({f.people[0].track_id for f in rec.frames}) == 1, name
 
 
+def test_keypoint_sequence_max_people_keeps_following_through_a_missing_frame(tmp_path, lifter):
+    """A user trial: with --max-people 1, a followed person left out of one frame (a joint at confidence 0) was
+    replaced by the other person for good, under the same track id, though the file named them 'A' and 'B'. The
+    cut now keeps following A after the gap, and the tracker follows the file's names (B is never A's track)."""
+    rng = np.random.default_rng(3)
+    a, b = _person(rng, 70), _person(rng, 250)
+    wrist = 13  # H36M l_wrist
+    for named in (True, False):
+        frames = []
+        for i in range(20):
+            people = []
+            for name, k in (("A", a + [i, 0]), ("B", b - [i, 0])):
+                conf = np.ones(17)
+                if name == "A" and i == 7:
+                    conf[wrist] = 0.0
+                q = {"keypoints": np.column_stack([k, conf]).tolist()}
+                people.append(q | ({"person_id": name} if named else {}))
+            frames.append({"people": people})
+        path = tmp_path / f"gap_{named}.json"
+        path.write_text(json.dumps({"format": "h36m17", "fps": 2, "focal": F, "image_size": [W, H], "frames": frames}))
+        rec = lift_keypoint_sequence(path, lifter=lifter, max_people=1, smoothing=0.0)
+        xs = [float(fr.people[0].keypoints_2d[:, 0].mean()) for fr in rec.frames]
+        assert all((x > 160) == (i == 7) for i, x in enumerate(xs)), (named, [round(x) for x in xs])
+        a_tracks = {fr.people[0].track_id for fr in rec.frames if fr.index != 7}
+        assert len(a_tracks) == 1, (named, a_tracks)
+        if named:
+            assert rec.frames[7].people[0].track_id not in a_tracks
+            assert {fr.people[0].person_id for fr in rec.frames} == {"A", "B"}
+            assert rec.frames[7].people[0].person_id == "B"
+
+
+def test_tracker_follows_the_inputs_names():
+    """Named people: the same name is the same track whatever the jump, another name never is, however close."""
+    from lifter.tracking import Tracker
+
+    box = np.array([[0.0, 0.0], [40.0, 100.0]])
+    t = Tracker()
+    first = t.update(0, [box, box + [400, 0]], ["A", "B"])
+    assert t.update(1, [box + [400, 0]], ["A"]) == [first[0]]  # far, but named A
+    c = t.update(2, [box + [401, 0]], ["C"])  # where A was, but named C
+    assert c[0] not in first
+    assert t.update(3, [box + [401, 0]], [None]) == c  # unnamed: by the boxes (the nearest track, C's)
+    with pytest.raises(PoseLifterError, match="2 person ids for 1 people"):
+        t.update(4, [box], ["A", "B"])
+
+
 class _FakeCapture:
     """A cv2.VideoCapture stand-in: frames of a given size list (None = a frame that fails to decode)."""
 
