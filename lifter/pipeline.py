@@ -173,23 +173,51 @@ def upside_down_notes(kp17: np.ndarray) -> list[str]:
     the head below both ankles by more than half the pose's height; a joint at (0, 0) gives no reading) in the image:
     the 2D then likely has its y axis pointing up, where this package expects image y to grow downward (OpenCV);
     a handstand looks the same, hence a note, not an error."""
-    from .skeleton import JOINT_NAMES
-
-    k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
-    if not len(k):
-        return []
-    h, ra, la = (JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
-    head, ankles = k[:, h], k[:, [ra, la]]
-    ext = k.max(1) - k.min(1)  # (x, y) extent of each pose
-    placeholder = zero_placeholders(k)[:, [h, ra, la]].any(1)  # a detector's (0, 0) for a missing joint: no reading
-    # an upright body upside down: taller than wide, the head below both ankles by half the height (a person lying
-    # down, head a little lower than the feet, is neither)
-    down = (ext[:, 1] > ext[:, 0]) & (head[:, 1] - ankles[:, :, 1].max(1) > 0.5 * ext[:, 1]) & ~placeholder
-    if float(down.mean()) <= 0.5:
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    down = upside_down_people(k)
+    if not len(k) or float(down.mean()) <= 0.5:
         return []
     return [f"the head is below both ankles in {int(down.sum())} of {len(k)} pose(s): this package takes image y "
             "growing downward (OpenCV, +y down); if your keypoints' y grows upward, give y' = image height - y "
             "(an upside-down person, e.g. a handstand, is lifted as given)"]
+
+
+def upside_down_people(kp17: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the poses ``(n, 17, 2)`` px (H36M order, image y down) are upright bodies upside down
+    in the image: taller than wide, the head below both ankles by more than half the pose's height (a person lying
+    down, head a little lower than the feet, is not; a joint at (0, 0), a detector's placeholder, gives no reading)."""
+    from .skeleton import JOINT_NAMES
+
+    k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
+    if not len(k):
+        return np.zeros(0, bool)
+    h, ra, la = (JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
+    head, ankles = k[:, h], k[:, [ra, la]]
+    ext = k.max(1) - k.min(1)  # (x, y) extent of each pose
+    placeholder = zero_placeholders(k)[:, [h, ra, la]].any(1)
+    return (ext[:, 1] > ext[:, 0]) & (head[:, 1] - ankles[:, :, 1].max(1) > 0.5 * ext[:, 1]) & ~placeholder
+
+
+def detected_upside_down_notes(kp17: np.ndarray) -> list[str]:
+    """A note naming each detected person (``(n, 17, 2)`` px, the output's order) who is upside down in the image
+    (:func:`upside_down_people`): the detector's false people on walls and in clutter often are (a user trial: a
+    two-person photo gave a third, upside-down 'person' on the wall beside one of them, scored 0.86)."""
+    down = np.flatnonzero(upside_down_people(kp17))
+    if not len(down):
+        return []
+    n = len(np.asarray(kp17).reshape(-1, 17, 2))
+    who = ("the person found is" if n == 1 else
+           f"{_people_list([int(i) + 1 for i in down])} of the output's people {'is' if len(down) == 1 else 'are'}")
+    return [f"{who} upside down in the image (the head below both ankles): the detector finds such 'people' on walls "
+            "and in clutter; unless someone in the photo is upside down (a handstand), it is a false detection "
+            "(the others' lifts do not depend on it)"]
+
+
+def _people_list(numbers: list[int]) -> str:
+    """``person 3`` / ``people 2 and 3`` / ``people 1, 2 and 4``."""
+    if len(numbers) == 1:
+        return f"person {numbers[0]}"
+    return f"people {', '.join(map(str, numbers[:-1]))} and {numbers[-1]}"
 
 
 def detector_doubt_notes(visibility: list[float]) -> list[str]:
@@ -311,6 +339,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
     kp_people = np.stack([d.keypoints_2d for d in dets])
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
+    notes += detected_upside_down_notes(kp_people)
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
     scores = np.stack([d.scores for d in dets])
     notes += joint_doubt_notes(scores)

@@ -581,6 +581,39 @@ def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, wei
         load_image(p, max_side=10)
 
 
+def test_an_upside_down_detection_is_named(tmp_path, weights):
+    """A user trial: BlazePose found a third, upside-down 'person' on the wall beside one of two people (scored 0.86)
+    and it was lifted without a word. Each detected person upside down in the image is now named in a note (the
+    detector's output is not dropped: a handstand is a person); upright people get none, and a keypoint file's
+    upside-down 2D keeps its own y-axis note instead."""
+    from lifter.detect import load_image
+    from lifter.pipeline import detected_upside_down_notes, lift_image, upside_down_people
+
+    demo = np.load(Path(__file__).resolve().parents[1] / "assets" / "demo" / "samples.npz")
+    standing = demo["keypoints_2d"][list(demo["names"]).index("standing")]
+    p = tmp_path / "two.png"
+    Image.new("RGB", (1200, 1000), (50, 60, 70)).save(p)
+    upright = 0.8 * (standing - standing[0]) + np.array([300.0, 500.0])
+    other = upright + [500.0, 0.0]
+    flipped = upright * [1.0, -1.0] + [250.0, 1000.0]  # the same body mirrored top to bottom, beside the first
+    assert upside_down_people(np.stack([upright, other, flipped])).tolist() == [False, False, True]
+    lifter = Lifter.from_checkpoint(weights)
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([upright, other, flipped], visibility=0.9),
+                     focal=1000.0)
+    order = [int(np.argmin([np.abs(q.keypoints_2d - k).max() for k in (upright, other, flipped)])) for q in rec.people]
+    n = order.index(2) + 1
+    said = [w for w in rec.warnings if "upside down" in w]
+    assert said == [f"person {n} of the output's people is upside down in the image (the head below both ankles): the "
+                    "detector finds such 'people' on walls and in clutter; unless someone in the photo is upside down "
+                    "(a handstand), it is a false detection (the others' lifts do not depend on it)"], rec.warnings
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([upright, other], visibility=0.9),
+                     focal=1000.0)
+    assert not any("upside down" in w for w in rec.warnings), rec.warnings
+    assert detected_upside_down_notes(flipped[None])[0].startswith("the person found is upside down in the image")
+    assert detected_upside_down_notes(np.stack([flipped, flipped, upright]))[0].startswith(
+        "people 1 and 2 of the output's people are upside down")
+
+
 def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
     """Joints scored below UNSURE_JOINT_SCORE (on the demo photos 19-29 px off, median, against 5.5 for well-scored
     ones) are named in a note, per person; a person whose joints are all scored well gets none."""
