@@ -252,6 +252,11 @@ coordinates (a 3D pose in mm or px given as 2D), not confidences. Detector score
 torchvision's keypoint scores are unbounded, RTMPose's SimCC scores pass 1; COCO's visibility flags go to 2): they
 are read, with a note when above 2 (:data:`SCORE_NOTE_ABOVE`), and only a value <= 0 marks a missing joint."""
 
+COCO_VISIBILITY_FLAGS: Final[tuple[float, ...]] = (0.0, 1.0, 2.0)
+"""COCO's keypoint visibility flags (0 not labelled, 1 labelled but hidden, 2 visible). Third values that are all
+flags, with at least one 2, are read as flags (0: a missing joint), not as confidences: a ground-truth annotation or
+a results file in COCO's own form has no scores to keep."""
+
 SCORE_NOTE_ABOVE: Final[float] = 2.0
 """Third values above this get a note saying they are read as unnormalised scores."""
 
@@ -588,9 +593,10 @@ def _needs(fmt: str) -> str:
 
 
 def _who(k: int, pid: str | int | None, n: int) -> str:
-    """A person of a file with ``n`` people, for messages: their position in the file's list (1-based) and id."""
+    """A person of a file with ``n`` people, for messages: their place in the file's list, counted from 1 and as the
+    output's ``input_index`` (from 0), and their id."""
     return ("the person" if n == 1 and pid is None
-            else f"the person at position {k + 1} in the file" + ("" if pid is None else f" (id {pid!r})"))
+            else f"person {k + 1} in the file (input_index {k}" + ("" if pid is None else f", id {pid!r}") + ")")
 
 
 @dataclass
@@ -625,7 +631,12 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
             top = max([top, *conf[np.isfinite(conf)].tolist()])
         parsed.append((xy, missing, conf))
-    if top > SCORE_NOTE_ABOVE:
+    given = [c[np.isfinite(c)] for _, _, c in parsed if c is not None]
+    if given and all(np.isin(c, COCO_VISIBILITY_FLAGS).all() for c in given) and any((c == 2).any() for c in given):
+        notes.append("third values all 0, 1 or 2: read as COCO visibility flags (0: not labelled, a missing joint; "
+                     "1 or 2: placed), not as a detector's confidences, so the output has no scores")
+        parsed = [(xy, missing, None) for xy, missing, _ in parsed]
+    elif top > SCORE_NOTE_ABOVE:
         notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "
                      "a missing joint)")
     if not parsed:

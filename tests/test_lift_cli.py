@@ -454,7 +454,7 @@ def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weigh
     code, err = run([str(two), str(one), str(h), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and "lifted 1 of 3" in err, err
     assert "1 of 2 people left out: joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for " \
-           "the person at position 1 in the file (id 'A'): ['l_wrist']; the lifter needs every joint that the " \
+           "person 1 in the file (input_index 0, id 'A'): ['l_wrist']; the lifter needs every joint that the " \
            "openpose25 -> h36m17 rules use" in err
     got = json.loads((out / "two.json").read_text())
     assert got["num_people"] == 1 and got["people"][0]["person_id"] == "B" and got["people"][0]["input_index"] == 1
@@ -839,10 +839,19 @@ def test_keypoint_file_slips_are_refused_or_noted(tmp_path, weights, kp17, capsy
     (tmp_path / "a2.json").write_text(json.dumps({"keypoints": rel.tolist(), **cam}))
     code, err = run([str(tmp_path / "a2.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
     assert code == 1 and "is this a 3D pose" in err
-    flags = np.concatenate([kp17, np.full((17, 1), 2.0)], 1)  # COCO visibility flag 2: read, no note
+    flags = np.concatenate([kp17, np.full((17, 1), 2.0)], 1)  # COCO visibility flags: read as flags, not scores
+    flags[5, 2] = 1.0  # (labelled, hidden: placed all the same)
     (tmp_path / "b.json").write_text(json.dumps({"keypoints": flags.tolist(), **cam}))
     code, err = run([str(tmp_path / "b.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
     assert code == 0 and "unnormalised" not in err
+    assert "third values all 0, 1 or 2: read as COCO visibility flags" in err  # (a user trial: scores of 2.0 came out)
+    got = json.loads((tmp_path / "o" / "b.json").read_text())
+    assert got["scores"] is None and got["people"][0]["scores"] is None
+    ones = np.concatenate([kp17, np.ones((17, 1))], 1)  # no 2 among them: confidences
+    (tmp_path / "b1.json").write_text(json.dumps({"keypoints": ones.tolist(), **cam}))
+    code, err = run([str(tmp_path / "b1.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "visibility flags" not in err
+    assert json.loads((tmp_path / "o" / "b1.json").read_text())["scores"] == [1.0] * 17
     scores = np.concatenate([kp17, np.linspace(0.5, 2.6, 17)[:, None]], 1)  # Detectron2-like scores above 1: read
     (tmp_path / "b2.json").write_text(json.dumps({"keypoints": scores.tolist(), **cam}))
     code, err = run([str(tmp_path / "b2.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
