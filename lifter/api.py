@@ -627,8 +627,8 @@ class Lifter:
         if f.size and float(f.min()) < MIN_FOCAL_PX:
             raise PoseLifterError(
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
-                "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None; on the "
-                "command line, no --focal) to assume a default field of view")
+                "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to assume "
+                "a default field of view")
         if distortion is not None:
             if focal_source != "given":
                 raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "

@@ -148,6 +148,8 @@ def test_lift_out_is_an_existing_file(tmp_path, weights, kp_file, capsys):
     [
         (["--focal", "1e30"], "--focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1e+30, 1e+30]"),
         (["--focal", "1000", "0"], "--focal must be a number or [fx, fy] in px, each in (0, 1e+06), got [1000.0, 0.0]"),
+        # (once, before any input: it was refused per input, with a message naming focal=None)
+        (["--focal", "4.2"], "--focal 4.2 px is too small (< 10 px): give the focal length in pixels, not mm"),
         (["--focal", "1", "2", "3"], "--focal takes FX or FX FY, got 3 values"),
         (["--principal-point", "nan", "3"], "--principal-point must be [cx, cy] in px, each finite"),
         (["--principal-point", "5e7", "3"], "--principal-point must be [cx, cy] in px"),

@@ -66,6 +66,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import PoseLifterError, as_pair
+from ..api import MIN_FOCAL_PX
 from ..camera import DEFAULT_DIAGONAL_FOV_DEG, MAX_FOV_DEG, MIN_FOV_DEG
 from ..detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -259,6 +260,11 @@ def check_lift_options(args: argparse.Namespace) -> None:
         if len(args.focal) not in (1, 2):
             raise PoseLifterError(f"--focal takes FX or FX FY, got {len(args.focal)} values")
         _camera_field(list(args.focal), name="--focal", where=None)
+        if min(args.focal) < MIN_FOCAL_PX:  # (refused for every input alike: said once, before any is read)
+            raise PoseLifterError(
+                f"--focal {min(args.focal):g} px is too small (< {MIN_FOCAL_PX:g} px): give the focal length in "
+                "pixels, not mm (f_px = f_mm * image width px / sensor width mm, or --sensor-width with a photo's "
+                "EXIF), or leave --focal out to use the photo's EXIF or the --fov field of view")
     if args.principal_point is not None:
         _camera_field(list(args.principal_point), name="--principal-point", where=None)
     if not (math.isfinite(args.fov) and MIN_FOV_DEG <= args.fov <= MAX_FOV_DEG):
