@@ -103,6 +103,17 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
     return img
 
 
+def response_px(points: np.ndarray, *, root: np.ndarray, view: str, centre: tuple[float, float],
+                scale: float) -> np.ndarray:
+    """Where :func:`response_image` draws ``points`` ``(..., 3)`` mm (camera frame, OpenCV: +y down) in one of its
+    views: ``(..., 2)`` px (x right, y down), the root at ``centre``, ``scale`` px per mm. **side**: depth Z to the
+    right, the camera's +Y down the image as in the camera, so a person stands upright; **top**: seen from above,
+    depth Z to the right, X down (not mirrored)."""
+    p, r = np.asarray(points, np.float64), np.asarray(root, np.float64)
+    ax = {"side": 1, "top": 0}[view]
+    return np.stack([centre[0] + (p[..., 2] - r[2]) * scale, centre[1] + (p[..., ax] - r[ax]) * scale], -1)
+
+
 def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | None = None,
                    cloud: np.ndarray | None = None, size: tuple[int, int] = (360, 150)) -> np.ndarray:
     """Two small views of the lifted pose (mm, camera frame), drawn with OpenCV: **side** (depth Z to the right,
@@ -121,8 +132,7 @@ def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | Non
         cx, cy = x0 + half / 2.0, H / 2.0 + 6
 
         def to_px(p: np.ndarray, ax: int = ax, cx: float = cx, cy: float = cy) -> np.ndarray:
-            sign = -1.0 if ax == 1 else 1.0  # side: image up is -Y
-            return np.stack([cx + (p[..., 2] - r[2]) * sc, cy + sign * (p[..., ax] - r[ax]) * sc], -1)
+            return response_px(p, root=r, view="side" if ax == 1 else "top", centre=(cx, cy), scale=sc)
 
         if cloud is not None and len(cloud):
             pts = to_px(np.asarray(cloud, np.float64))

@@ -897,6 +897,27 @@ def test_session_transitions_without_a_view(app: PoseLifterApp) -> None:
     assert up_state.input_kind == "gt" and "no 2D detection" in note and up_state.focal_px == demo.camera.alpha
 
 
+def test_response_views_stand_upright(app: PoseLifterApp) -> None:
+    """A user trial: the readout's side view drew every person upside down (image up was +Y, the camera's down).
+    Side: the head above the ankles, depth to the right; top: seen from above, +X down, not mirrored; the drawn
+    image agrees (the head's bone colour lies in the upper half of the side view)."""
+    from poselifter_app.drawing import JOINT_RGB, response_image, response_px
+
+    from lifter.skeleton import JOINT_NAMES
+
+    pose = app.demo.get("standing").pose_3d
+    head, ankle, wrist_r, wrist_l = (JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "r_wrist", "l_wrist"))
+    side = response_px(pose, root=pose[0], view="side", centre=(90.0, 75.0), scale=0.05)
+    assert side[head, 1] < 75.0 < side[ankle, 1]  # upright
+    np.testing.assert_allclose(side[:, 0] - 90.0, (pose[:, 2] - pose[0, 2]) * 0.05)  # depth to the right
+    top = response_px(pose, root=pose[0], view="top", centre=(90.0, 75.0), scale=0.05)
+    assert (top[wrist_l, 1] > top[wrist_r, 1]) == (pose[wrist_l, 0] > pose[wrist_r, 0])  # +X down
+    img = response_image(pose, root=pose[0], size=(360, 150))
+    side_img = img[:, :180].astype(int)
+    ys = np.nonzero(np.all(np.abs(side_img - np.asarray(JOINT_RGB[head], int)) <= 8, axis=-1))[0]
+    assert len(ys) and float(ys.mean()) < 150 / 2, ys
+
+
 def test_per_joint_clouds_and_spread_readout(view: SessionView) -> None:
     from poselifter_app.drawing import JOINT_RGB
 
