@@ -129,13 +129,11 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
     main.set_width(400)
     panel = gui.add_panel()
     with panel.add_tab("Readout", viser.Icon.GAUGE):
-        readout = ReadoutGui(
-            panel=panel,
-            readout=gui.add_markdown(""),
-            status=gui.add_markdown(""),
-            response=gui.add_image(np.full((120, 360, 3), 255, np.uint8), label=None, format="jpeg", jpeg_quality=80),
-            spread=gui.add_markdown(""),
-        )
+        # the side / top views first: long notes and people lines below them never push them out of sight while
+        # dragging (a user trial: after a two-person upload only their top border showed)
+        response = gui.add_image(np.full((120, 360, 3), 255, np.uint8), label=None, format="jpeg", jpeg_quality=80)
+        readout = ReadoutGui(panel=panel, readout=gui.add_markdown(""), status=gui.add_markdown(""), response=response,
+                             spread=gui.add_markdown(""))
         gui.add_markdown(LEGEND)
         # The slider's value bubble covers the field above it while dragging; the number box beside each slider
         # shows the value already (viser's client renders HTML as given: this style applies to the page).

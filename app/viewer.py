@@ -448,6 +448,10 @@ class SessionView:
         # (refused values are errors; clamped ones notes, which stay a while: a user trial saw "focal length 9000 px
         # is outside ...; clamped" vanish within a second, when the settle timer's pass cleared it as an error)
         notes: list[tuple[str, bool]] = [(r.message, r.refused) for r in rejected]
+        # a focal clamped: the note goes once another focal is in use (a user trial: "99999 px ... clamped to 6000"
+        # stayed beside a focal of 1144.5 typed since, through a model change)
+        clamped_to = {r.message: float(r.value) for r in rejected  # type: ignore[arg-type]
+                      if r.control == "focal_px" and not r.refused and isinstance(r.value, (int, float))}
         if reset:
             st = ss.reset_joints(st)
         refused_drag = False
@@ -466,7 +470,7 @@ class SessionView:
                 self._last_plane = None
                 self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
             for text, error in notes:
-                self.show_message(text, error=error)
+                self.show_message(text, error=error, focal=clamped_to.get(text))
             return
         try:
             self._apply(st)
@@ -475,7 +479,7 @@ class SessionView:
             self._show_controls(old)
             self._draw_2d(old.keypoints)
         for text, error in notes:
-            self.show_message(text, error=error)
+            self.show_message(text, error=error, focal=clamped_to.get(text))
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a

@@ -257,6 +257,12 @@ def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None
     assert view.gui.sample.input.value == view.state.input_kind
     view.gui.lift.focal.value = 1e9
     assert "clamped" in view.messages[-1] and view.state.focal_px == 6000.0 and np.isfinite(view.frame.root).all()
+    assert "clamped to 6000" in view.gui.readout.status.content
+    view.gui.lift.focal.value = 1144.5  # (a user trial: the clamp note stayed beside the focal typed since)
+    assert view.state.focal_px == 1144.5 and view.gui.readout.status.content == ""
+    view.gui.lift.focal.value = 1e9
+    view.set_model(next(m for m in app.pool.names if m != view.state.model))
+    assert "clamped to 6000" in view.gui.readout.status.content  # (still about the focal in use)
     view.gui.lift.focal.value = float("nan")
     assert "not a finite" in view.messages[-1]
     view.gui.lift.focal.value = -5.0
