@@ -448,7 +448,7 @@ def glb_bytes(record: Any) -> bytes:
 
 
 __all__ = ["CAMERA_HEIGHT_MM", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",
-           "UploadInfo", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
+           "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
            "keypoint_sample", "missing_detector_message", "oversize_message", "photo_sample", "result_record",
            "safe_name", "upload_camera"]
 
@@ -477,6 +477,10 @@ def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, m
             return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est), new_photo
         except PoseLifterError as exc:
             raise UploadFailed(str(exc), photo=new_photo) from None
+
+
+class UploadRefused(PoseLifterError):
+    """An upload that arrived but cannot be used (the app says so in a notification that stays)."""
 
 
 class UploadFailed(PoseLifterError):

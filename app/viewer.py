@@ -29,7 +29,7 @@ import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 import viser
@@ -89,6 +89,10 @@ otherwise clear it before anyone reads it (user trial). An error is cleared by t
 TYPED_WHILE_PLAYING: str = ("a joint position typed while the sequence plays is not applied: each frame brings its "
                             "own 2D; pause (play) to move a joint")
 """Said (once) when the (u, v) boxes are typed into during playback."""
+
+UPLOAD_REFUSED_TITLE: Final[str] = "Upload refused: the file arrived, but it cannot be used"
+"""The title of the notification of a refused upload, which stays until closed: the browser has just said "File
+uploaded successfully" about the transfer itself (a user trial read both as success)."""
 
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
@@ -201,6 +205,8 @@ class SessionView:
         self.target = target
         self.lock = threading.RLock()
         self.messages: list[str] = []
+        self.notices: list[tuple[str, str, bool]] = []
+        """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._message_count = 0
         self._status_lock = threading.Lock()
         """Held while a message is recorded and shown, and while the status line is checked and cleared: an upload's
@@ -284,7 +290,8 @@ class SessionView:
         client_id = target.client_id if isinstance(target, viser.ClientHandle) else None
         limit_uploads(target.gui, self.gui.files.upload, max_bytes=app.max_upload_bytes, client_id=client_id,
                       refuse=lambda name, size: self.show_message(
-                          up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True))
+                          up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True,
+                          title=UPLOAD_REFUSED_TITLE, sticky=True))
         report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
 
     # ------------------------------------------------------------------------------------------
@@ -298,6 +305,9 @@ class SessionView:
         n = self._message_count
         try:
             func(*args, **kwargs)
+        except up.UploadRefused as exc:  # (beside the browser's own "File uploaded successfully": it arrived)
+            self.show_message(str(exc), error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
+            return False
         except PoseLifterError as exc:
             self.show_message(str(exc), error=True)
             return False
@@ -311,15 +321,19 @@ class SessionView:
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
-                     focal: float | None = None) -> None:
+                     focal: float | None = None, title: str | None = None, sticky: bool = False) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`_sequence_of`) it is about, when that is not the one shown now (a pass that shows another
         one clears the message). ``focal``: the focal length (px) the message says was set; a pass that finds
-        another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed since)."""
+        another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed since).
+        ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
+        stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``."""
+        title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
             self._status_focal = focal
             self.messages.append(text)
             self.messages = self.messages[-20:]
+            self.notices = [*self.notices[-19:], (title, text, sticky)]
             self._message_count += 1
             self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
             self._last_was_error = error
@@ -331,8 +345,8 @@ class SessionView:
                 log.exception("could not show message %r", text)
         try:
             if isinstance(self.target, viser.ClientHandle):
-                self.target.add_notification(title="Input problem" if error else "poselifter", body=text,
-                                             auto_close_seconds=6.0, color="red" if error else "blue")
+                self.target.add_notification(title=title, body=text, auto_close_seconds=None if sticky else 6.0,
+                                             color="red" if error else "blue")
         except Exception:  # noqa: BLE001
             log.exception("could not show message %r", text)
 
@@ -1137,6 +1151,14 @@ class SessionView:
         (:mod:`app.upload`), a video or a keypoint sequence JSON with ``frames`` (:mod:`app.video`: lifted,
         tracked and smoothed, then played like a sequence). On any problem a message is shown and the tab's state
         is left as it was."""
+        try:
+            self._load_upload(name, content)
+        except up.UploadRefused:
+            raise
+        except PoseLifterError as exc:
+            raise up.UploadRefused(str(exc)) from None
+
+    def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")
         if vid.is_video_upload(name) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
             self._load_video(name, content)

@@ -252,9 +252,14 @@ def test_corrupt_and_not_an_image_uploads(view: SessionView, app: PoseLifterApp)
                                    "focal": 0}).encode(), "focal"),
         "deep.json": (b"[" * 100000 + b"]" * 100000, "nested too deeply"),
     }
+    from poselifter_app.viewer import UPLOAD_REFUSED_TITLE
+
     for name, (content, expect) in cases.items():
         assert view.load_upload(name, content) is False, name
         assert expect in view.messages[-1], (name, view.messages[-1])
+        # (a user trial read the browser's own "File uploaded successfully" beside a notification that went: this
+        # one says the file arrived but is refused, and stays)
+        assert view.notices[-1] == (UPLOAD_REFUSED_TITLE, view.messages[-1], True), view.notices[-1]
         assert view.messages[-1].startswith(name), view.messages[-1]
         assert "internal error" not in view.messages[-1]
         _assert_unchanged(view, snap)
@@ -283,6 +288,7 @@ def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
         assert wait_for(lambda: "huge2.jpg" in (v.messages[-1] if v.messages else ""))
         time.sleep(0.5)  # (the parts sent after the start message arrive and are ignored)
         assert "more than the 20 MiB" in v.messages[-1] and not states
+        assert v.notices[-1][0].startswith("Upload refused") and v.notices[-1][2]
         _assert_unchanged(v, snap)
         # a client that announces 1 KiB and then sends more is stopped by the bytes received: viser never holds
         # more than the limit and one part of it
