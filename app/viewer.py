@@ -206,6 +206,7 @@ class SessionView:
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self.notices: list[tuple[str, str, bool]] = []
+        self._sticky_note: Any = None
         """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._message_count = 0
         self._status_lock = threading.Lock()
@@ -345,8 +346,13 @@ class SessionView:
                 log.exception("could not show message %r", text)
         try:
             if isinstance(self.target, viser.ClientHandle):
-                self.target.add_notification(title=title, body=text, auto_close_seconds=None if sticky else 6.0,
-                                             color="red" if error else "blue")
+                note = self.target.add_notification(title=title, body=text,
+                                                    auto_close_seconds=None if sticky else 6.0,
+                                                    color="red" if error else "blue")
+                if sticky:  # (one refused upload's note at a time: they do not pile up)
+                    if self._sticky_note is not None:
+                        self._sticky_note.remove()
+                    self._sticky_note = note
         except Exception:  # noqa: BLE001
             log.exception("could not show message %r", text)
 

@@ -46,6 +46,7 @@ from .camera import (
 from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
 from .data import LENSES, Lens
+from .io import depth_is_metric
 from .model import (
     MirrorCoupledLinear,
     ModelConfig,
@@ -670,7 +671,7 @@ class Lifter:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
-                          metric_depth=focal_source == "given", source=source, input_space=self.input_space,
+                          metric_depth=depth_is_metric(focal_source), source=source, input_space=self.input_space,
                           warnings=tuple(notes), input_warnings=in_notes)
 
     def _lift_flat(self, kp: np.ndarray, pp: np.ndarray, f: np.ndarray, alpha: np.ndarray, source: Source,

@@ -176,9 +176,10 @@ the camera's own."""
 
 
 def depth_is_metric(focal_source: str) -> bool:
-    """Whether a result's absolute depths (mm) rest on a focal length of the camera itself (``focal_source`` other
-    than :data:`ASSUMED_FOCAL_SOURCE`), as every written record's ``metric_depth`` says; False: on an assumed one."""
-    return focal_source != ASSUMED_FOCAL_SOURCE
+    """Whether a result's absolute depths (mm) rest on a focal length of the camera itself, as every written
+    record's and :class:`lifter.LiftResult`'s ``metric_depth`` says: any ``focal_source`` but an assumed one
+    (:data:`ASSUMED_FOCAL_SOURCE`, or ``"reference"``, :meth:`lifter.Lifter.lift`'s virtual 1000-px camera)."""
+    return focal_source not in (ASSUMED_FOCAL_SOURCE, "reference")
 
 
 MMPOSE_SEQUENCE_FORM: Final[str] = (
@@ -249,8 +250,21 @@ COCO18_HINT: Final[str] = (
 Z_LIKE_THIRD_VALUE: Final[float] = 50.0
 """Keypoint rows whose third values have a median size above this, or go below minus this, are refused: those are
 coordinates (a 3D pose in mm or px given as 2D), not confidences. Detector scores may exceed 1 (Detectron2's and
-torchvision's keypoint scores are unbounded, RTMPose's SimCC scores pass 1; COCO's visibility flags go to 2): they
-are read, with a note when above 2 (:data:`SCORE_NOTE_ABOVE`), and only a value <= 0 marks a missing joint."""
+torchvision's keypoint scores are unbounded, RTMPose's SimCC scores pass 1): they are read, with a note when above 2
+(:data:`SCORE_NOTE_ABOVE`), and only a value <= 0 marks a missing joint; COCO's visibility flags (all 0, 1 or 2) are
+read as flags (:data:`COCO_VISIBILITY_FLAGS`)."""
+
+def _visibility_flags(scores: Sequence[np.ndarray | None]) -> bool:
+    """Whether a file's third values (every person's, every frame's) are COCO visibility flags
+    (:data:`COCO_VISIBILITY_FLAGS`): all 0, 1 or 2, with a 2 among them. Decided once per file, not per frame."""
+    given = [np.asarray(c)[np.isfinite(c)] for c in scores if c is not None]
+    return bool(given) and all(np.isin(c, COCO_VISIBILITY_FLAGS).all() for c in given) and any(
+        (c == 2).any() for c in given)
+
+
+FLAGS_NOTE: Final[str] = ("third values all 0, 1 or 2: read as COCO visibility flags (0: not labelled, a missing "
+                          "joint; 1 or 2: placed), not as a detector's confidences, so the output has no scores")
+"""The note when a file's third values are read as visibility flags (:func:`_visibility_flags`)."""
 
 COCO_VISIBILITY_FLAGS: Final[tuple[float, ...]] = (0.0, 1.0, 2.0)
 """COCO's keypoint visibility flags (0 not labelled, 1 labelled but hidden, 2 visible). Third values that are all
@@ -631,12 +645,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
             top = max([top, *conf[np.isfinite(conf)].tolist()])
         parsed.append((xy, missing, conf))
-    given = [c[np.isfinite(c)] for _, _, c in parsed if c is not None]
-    if given and all(np.isin(c, COCO_VISIBILITY_FLAGS).all() for c in given) and any((c == 2).any() for c in given):
-        notes.append("third values all 0, 1 or 2: read as COCO visibility flags (0: not labelled, a missing joint; "
-                     "1 or 2: placed), not as a detector's confidences, so the output has no scores")
-        parsed = [(xy, missing, None) for xy, missing, _ in parsed]
-    elif top > SCORE_NOTE_ABOVE:
+    if top > SCORE_NOTE_ABOVE:
         notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "
                      "a missing joint)")
     if not parsed:
@@ -752,6 +761,10 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
     found = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
+    people_scores: tuple[np.ndarray | None, ...] = tuple(found.scores)
+    if _visibility_flags(people_scores):
+        notes.append(FLAGS_NOTE)
+        people_scores = tuple(None for _ in people_scores)
     arrays, fmt, identity, dropped = found.arrays, found.format, found.identity, found.dropped
     if dropped and not arrays:
         raise PoseLifterError(f"{p}: {_missing_message(fmt, dropped, nobody_left=True)}")
@@ -777,7 +790,7 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
                         warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),
-                        unread=tuple(unread), people_scores=tuple(found.scores), assumed_focal=assumed)
+                        unread=tuple(unread), people_scores=people_scores, assumed_focal=assumed)
 
 
 MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
@@ -879,6 +892,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         scores.append(list(found.scores))
         dropped += [(i, g) for g in gone]
     fmt = fmt or H36M17
+    if _visibility_flags([c for fr in scores for c in fr]):
+        notes.append(FLAGS_NOTE)
+        scores = [[None for _ in fr] for fr in scores]
     if stood_in:
         notes.append(STAND_IN_NOTE.format(what="; ".join(
             f"{phrase} in {len(at)} frame(s) (first {at[0]})" for phrase, at in stood_in.items())))

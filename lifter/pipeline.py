@@ -87,6 +87,11 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
                             "calibrated with the file's focal)" if file_distortion is not None else ""))
     elif file_focal is not None:
         focal, src = file_focal, "keypoint-file"
+        if float(np.min(file_focal)) < MIN_FOCAL_PX:  # (else the lifter's message would name focal=, not the file)
+            raise PoseLifterError(
+                f"{where}: the file's 'focal' {_px(file_focal)} is below {MIN_FOCAL_PX:g} px: it must be in pixels, "
+                "not mm (f_px = f_mm * image width px / sensor width mm); correct it, pass --focal, or remove it to "
+                "assume a field of view from 'image_size'")
     else:
         assert image_size is not None  # (checked above, with every missing field named)
         if file_distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)

@@ -78,22 +78,21 @@ class Tracker:
             raise PoseLifterError(f"Tracker.update: {len(names)} person ids for {len(boxes)} people")
         live = list(self.tracks.values())
         ids: list[int] = [0] * len(boxes)
-        if boxes and live:
+
+        def box_cost(i: int, tr: Track) -> float:
+            c, d = boxes[i]
+            pred = tr.centre + tr.velocity * (frame - tr.last_frame)
+            return float(np.linalg.norm(c - pred)) / tr.diag + abs(math.log(d / tr.diag))
+
+        def assign(people: list[int], tracks: list[Track], cost: np.ndarray, gate: float) -> None:
             from scipy.optimize import linear_sum_assignment
 
-            cost = np.empty((len(boxes), len(live)))
-            for i, (c, d) in enumerate(boxes):
-                for j, tr in enumerate(live):
-                    if names[i] is not None and tr.person_id is not None:  # named on both sides: the names decide
-                        cost[i, j] = -1.0 if names[i] == tr.person_id else _NEVER
-                        continue
-                    gap = frame - tr.last_frame
-                    pred = tr.centre + tr.velocity * gap
-                    cost[i, j] = float(np.linalg.norm(c - pred)) / tr.diag + abs(math.log(d / tr.diag))
+            if not people or not tracks:
+                return
             rows, cols = linear_sum_assignment(cost)
-            for i, j in zip(rows, cols):
-                if cost[i, j] <= self.gate:
-                    tr = live[j]
+            for r, k in zip(rows, cols):
+                if cost[r, k] <= gate:
+                    i, tr = people[r], tracks[k]
                     c, d = boxes[i]
                     gap = max(frame - tr.last_frame, 1)
                     tr.velocity = 0.5 * tr.velocity + 0.5 * (c - tr.centre) / gap
@@ -101,6 +100,19 @@ class Tracker:
                     if tr.person_id is None:
                         tr.person_id = names[i]
                     ids[i] = tr.track_id
+
+        # first the names: each named person to a live track of that name (the nearest box among several), whatever
+        # the jump; then everyone left by the boxes, within the gate, never to a track of another name
+        for name in dict.fromkeys(n for n in names if n is not None):
+            people = [i for i, n in enumerate(names) if n == name]
+            tracks = [tr for tr in live if tr.person_id == name]
+            assign(people, tracks, np.array([[box_cost(i, tr) for tr in tracks] for i in people]), math.inf)
+        taken = set(ids)
+        people = [i for i in range(len(boxes)) if ids[i] == 0]
+        tracks = [tr for tr in live if tr.track_id not in taken]
+        cost = np.array([[_NEVER if names[i] is not None and tr.person_id is not None and names[i] != tr.person_id
+                          else box_cost(i, tr) for tr in tracks] for i in people]).reshape(len(people), len(tracks))
+        assign(people, tracks, cost, self.gate)
         for i, (c, d) in enumerate(boxes):
             if ids[i] == 0:
                 tr = Track(self._next, c, d, frame, frame, person_id=names[i])

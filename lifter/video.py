@@ -301,6 +301,22 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     return sorted(range(len(boxes)), key=rank)[:max_people]
 
 
+def tracking_names(ids: list[list[Any]]) -> list[list[Any]]:
+    """Per frame, the names the tracker follows among a sequence's person ids ``ids`` (per frame, per person; None:
+    unnamed): an id seen in one frame only is left out (None), as are ids repeated within a frame. An annotation's
+    own ``id``, new in every frame (COCO, PoseTrack), then leaves the people to their boxes instead of making each
+    sighting a new person (a review found that); a ``person_id`` or ``track_id`` that recurs decides."""
+    frames_of: dict[Any, int] = {}
+    for frame in ids:
+        for pid in set(p for p in frame if p is not None):
+            frames_of[pid] = frames_of.get(pid, 0) + 1
+    out = []
+    for frame in ids:
+        twice = {p for p in frame if p is not None and frame.count(p) > 1}
+        out.append([p if p is not None and frames_of[p] > 1 and p not in twice else None for p in frame])
+    return out
+
+
 @dataclass
 class _Followed:
     """The people a keypoint sequence's ``max_people`` cut follows: each with the frame it was last kept in, its box
@@ -326,7 +342,7 @@ class _Followed:
                 n == names[j] if n is not None and names[j] is not None else box_iou(b, boxes[j]) >= TRACKED_IOU)]
             if same:
                 k = max(same, key=lambda k: box_iou(self.people[k][1], boxes[j]))
-                self.people[k] = (frame, boxes[j], names[j])
+                self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
                 taken.add(k)
             elif len(self.people) < self.max_people:
                 self.people.append((frame, boxes[j], names[j]))
@@ -668,14 +684,15 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kept_ids: list[list[Any]] | None = None if ids is None else []
     kept_scores: list[list[np.ndarray | None]] = []
     followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)))
+    names_by_frame = None if ids is None else tracking_names(ids)
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
-        names = [None] * len(fr) if ids is None else list(ids[i])
+        names = [None] * len(fr) if names_by_frame is None else list(names_by_frame[i])
         keep = followed.keep(i, boxes, names)
         kept_frames.append([fr[j] for j in keep])
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
-        if kept_ids is not None:
-            kept_ids.append([names[j] for j in keep])
+        if kept_ids is not None and ids is not None:
+            kept_ids.append([ids[i][j] for j in keep])
     frames, ids = kept_frames, kept_ids
     counts = [len(fr) for fr in frames]
     nobody = [i for i, c in enumerate(counts) if c == 0]
@@ -701,7 +718,11 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                 kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
         k += c
     warnings.extend(output_note_lines(output_notes))
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing,
+                       person_ids=None if ids is None else tracking_names(ids))
+    for fr, frame_ids in zip(out, ids or []):  # the file's own ids, also those too rare to track by
+        for st, pid in zip(fr.people, frame_ids):
+            st.person_id = pid
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
@@ -713,7 +734,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
-           "track_animation",
+           "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
            "track_lifted"]

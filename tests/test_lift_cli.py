@@ -614,6 +614,19 @@ def test_an_upside_down_detection_is_named(tmp_path, weights):
         "people 1 and 2 of the output's people are upside down")
 
 
+def test_a_files_focal_in_mm_is_refused_naming_the_file(tmp_path, weights, kp17, capsys):
+    """(a review) A keypoint file's 'focal' of 4.2 was refused with the library's message, naming focal=None."""
+    from lifter.io import depth_is_metric
+
+    (tmp_path / "mm.json").write_text(json.dumps({"keypoints": kp17.tolist(), "format": "h36m17", "focal": 4.2,
+                                                  "principal_point": [640, 360], "image_size": [1280, 720]}))
+    code, err = run([str(tmp_path / "mm.json"), "--weights", str(weights), "--out", str(tmp_path / "o")], capsys)
+    assert code == 1 and "mm.json: the file's 'focal' 4.2 x 4.2 px is below 10 px: it must be in pixels" in err, err
+    assert "focal=None" not in err
+    assert [depth_is_metric(s) for s in ("given", "user", "keypoint-file", "exif-35mm", "default-fov", "reference")] \
+        == [True, True, True, True, False, False]
+
+
 def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
     """Joints scored below UNSURE_JOINT_SCORE (on the demo photos 19-29 px off, median, against 5.5 for well-scored
     ones) are named in a note, per person; a person whose joints are all scored well gets none."""

@@ -329,6 +329,36 @@ def test_tracker_follows_the_inputs_names():
     assert t.update(3, [box + [401, 0]], [None]) == c  # unnamed: by the boxes (the nearest track, C's)
     with pytest.raises(PoseLifterError, match="2 person ids for 1 people"):
         t.update(4, [box], ["A", "B"])
+    # (a review) a named person keeps their track when an unnamed one takes their place; names first, then boxes
+    t = Tracker()
+    a, u = t.update(0, [box, box + [60, 0]], ["A", None])
+    assert t.update(1, [box + [60, 0], box], ["A", None]) == [a, u]
+    assert {tr.person_id for tr in t.tracks.values()} == {"A", None}
+    # the same name twice in a frame: the boxes decide between them, not the list order
+    t = Tracker()
+    first = t.update(0, [box, box + [300, 0]], ["X", "X"])
+    assert t.update(1, [box + [301, 0], box + [1, 0]], ["X", "X"]) == first[::-1]
+
+
+def test_tracking_names_leave_out_ids_that_do_not_recur(tmp_path):
+    """An annotation's own id (new in every frame, COCO / PoseTrack) must not make every sighting a new person (a
+    review found each frame's people on new tracks): only ids seen in more than one frame, once per frame, decide."""
+    from lifter.video import tracking_names
+
+    assert tracking_names([[1, 2], [3, 4]]) == [[None, None], [None, None]]
+    assert tracking_names([["a", "b"], ["b", "a"], ["c"]]) == [["a", "b"], ["b", "a"], [None]]
+    assert tracking_names([["a", "a"], ["a", None]]) == [[None, None], ["a", None]]
+    rng = np.random.default_rng(4)
+    a, b = _person(rng, 80), _person(rng, 240)
+    frames = [[{"keypoints": (a + i).tolist(), "id": 2 * i}, {"keypoints": (b - i).tolist(), "id": 2 * i + 1}]
+              for i in range(10)]
+    path = tmp_path / "ann.json"
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
+    for max_people in (3, 1):
+        rec = lift_keypoint_sequence(path, lifter=tiny_lifter(), max_people=max_people, smoothing=0.0)
+        tracks = {q.track_id for fr in rec.frames for q in fr.people}
+        assert len(tracks) == min(2, max_people), (max_people, tracks)
+        assert rec.frames[3].people[0].person_id in (6, 7)  # (the file's ids are still kept)
 
 
 class _FakeCapture:
@@ -498,6 +528,20 @@ def test_keypoint_sequence_keeps_each_frames_confidences(tmp_path, lifter):
     rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
     assert not [w for w in rec.warnings if "unsure" in w]
     assert rec.frames[0].people[0].scores is not None and float(rec.frames[0].people[0].scores.max()) > 1
+
+
+def test_visibility_flags_are_decided_once_per_sequence(tmp_path, lifter):
+    """(a review) COCO flags were read per frame: a frame of 1s only kept them as scores of 1.0, and with a 'format'
+    no note was given. Decided over the whole sequence, with the note."""
+    rng = np.random.default_rng(9)
+    a = _person(rng, 160)
+    frames = [{"keypoints": np.column_stack([a + i, np.full(17, 2.0 if i % 2 == 0 else 1.0)]).tolist()}
+              for i in range(6)]
+    path = tmp_path / "flags.json"
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
+    rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
+    assert all(fr.people[0].scores is None for fr in rec.frames)
+    assert sum("read as COCO visibility flags" in w for w in rec.warnings) == 1, rec.warnings
 
 
 @pytest.mark.parametrize(("body", "match"), [
