@@ -207,6 +207,8 @@ class SessionView:
         self.messages: list[str] = []
         self.notices: list[tuple[str, str, bool]] = []
         self._sticky_note: Any = None
+        self._upload_left: SessionState | None = None
+        """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
         """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._message_count = 0
         self._status_lock = threading.Lock()
@@ -658,6 +660,15 @@ class SessionView:
         toggles kept). Raises, changing nothing, when it cannot be lifted."""
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
+        if old.sample.key.startswith("upload/") and old.sample.key != sample.key:
+            # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
+            self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
+        left = self._upload_left
+        restored = left is not None and left.sample.key == sample.key
+        if restored and left is not None:
+            st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
+                           others_dragged=left.others_dragged, input_kind=left.input_kind)
+            self._upload_left = None
         a, b = sample.camera, old.sample.camera
         # (one Human3.6M camera's calibration is the same for every subject: a chosen focal is kept across subjects;
         # a user trial saw it reset)
@@ -682,6 +693,8 @@ class SessionView:
             self._still_frame_typed = self._typed_at.get("frame")
         # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
+        if restored:
+            self.show_message(f"{sample.label}: the joints you corrected are back")
         if note and seq_key not in self._fallback_said:
             self._fallback_said.add(seq_key)
             self.show_message(note)
@@ -709,6 +722,7 @@ class SessionView:
         pick = self.gui.joints.person
         if list(pick.options) != people:
             pick.options = people
+            pick.value = people[st.person]  # (new options reset the value, as if the tab had picked person 1)
         pick.disabled = len(people) == 1
         self._set_control("person", st.person)
         lo, hi = focal_min(sample), focal_max(sample)

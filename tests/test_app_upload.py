@@ -637,6 +637,17 @@ def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     assert list(v.gui.joints.person.options) == ["person 1 (id 7)", "person 2 (id kid)"]
     v.gui.joints.person.value = "person 2 (id kid)"
     assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id kid)"
+    # joints corrected on an upload come back with it (a user trial lost them going to a demo sample and back)
+    kp_before = v.state.keypoints.copy()
+    assert v.move_joint(16, kp_before[16] + [12.0, -7.0]) is True
+    moved = v.state.keypoints.copy()
+    assert v.set_source("demo") is True and not v.state.sample.key.startswith("upload/")
+    assert v.set_source("upload") is True and v.state.sample.key.startswith("upload/")
+    np.testing.assert_allclose(v.state.keypoints, moved)
+    assert v.state.person == 1 and v.state.dragged == {16} and "corrected are back" in v.messages[-1]
+    assert v.set_source("demo") is True and v.set_source("upload") is True  # (once: back to the file's own 2D)
+    np.testing.assert_allclose(v.state.keypoints, moved)  # (left again with the correction: kept again)
+    assert v.reset_joints() is True
     # the download keeps who is who, as poselifter lift writes it (user trial: the app's dropped both fields)
     name, payload = v.download_payload("json")
     people = json.loads(payload)["people"]
