@@ -447,7 +447,7 @@ def glb_bytes(record: Any) -> bytes:
     return bytes(skeleton_scene(pose).export(file_type="glb"))
 
 
-__all__ = ["CAMERA_HEIGHT_MM", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",
+__all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",
            "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
            "keypoint_sample", "missing_detector_message", "oversize_message", "photo_sample", "result_record",
            "safe_name", "upload_camera"]
@@ -469,7 +469,7 @@ def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, m
     try:
         est = estimator()
     except MissingDependencyError as exc:
-        raise UploadFailed(missing_detector_message(name, exc), photo=new_photo) from None
+        raise DetectorMissing(missing_detector_message(name, exc), photo=new_photo) from None
     except PoseLifterError as exc:
         raise UploadFailed(str(exc), photo=new_photo) from None
     with detect_lock:
@@ -489,6 +489,11 @@ class UploadFailed(PoseLifterError):
     def __init__(self, message: str, *, photo: Photo) -> None:
         super().__init__(message)
         self.photo = photo
+
+
+class DetectorMissing(UploadFailed):
+    """A photo that cannot be lifted because this install has no 2D detector: not the file's fault (not an
+    :class:`UploadRefused`)."""
 
 
 def upload_message(sample: Sample) -> str:

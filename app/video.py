@@ -28,6 +28,7 @@ import numpy as np
 
 from lifter import PoseLifterError
 from lifter._text import sentence
+from lifter.detect import people_scores
 from lifter.keypoints import H36M17
 from lifter.video import (
     OUTPUT_NOTE_LINE,
@@ -197,8 +198,7 @@ class VideoSequence:
         lifted = []
         for fr in rec.frames:  # (a frame with nobody keeps its place)
             q, r, rl = lifted_by_index.get(fr.index, (np.zeros((0, 17, 2)), np.zeros((0, 3)), np.zeros((0, 17, 3))))
-            have = [p.scores for p in fr.people if p.scores is not None]
-            scores = np.stack(have) if fr.people and len(have) == len(fr.people) else None
+            scores = people_scores([p.scores for p in fr.people])
             lifted.append((fr.index, fr.time_s, q, r, rl, scores))
         ids = [[p.person_id for p in fr.people] for fr in rec.frames]
         named = any(pid is not None for frame in ids for pid in frame)

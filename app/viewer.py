@@ -1173,7 +1173,7 @@ class SessionView:
         is left as it was."""
         try:
             self._load_upload(name, content)
-        except up.UploadRefused:
+        except (up.UploadRefused, up.DetectorMissing):  # (no detector: this install's problem, not the file's)
             raise
         except PoseLifterError as exc:
             raise up.UploadRefused(str(exc)) from None

@@ -1057,6 +1057,14 @@ class DetectedPose:
     warnings: tuple[str, ...] = ()
 
 
+def people_scores(rows: list[np.ndarray | None] | tuple[np.ndarray | None, ...]) -> np.ndarray | None:
+    """The scores ``(n, J)`` of a frame's (or a file's) ``n`` people, each ``(J,)`` or None, stacked; None when
+    there are no people or any of them has none (an output's scores are all or none)."""
+    if not len(rows) or any(r is None for r in rows):
+        return None
+    return np.stack([np.asarray(r, np.float64) for r in rows])
+
+
 def h36m_joint_scores(scores: np.ndarray, keypoint_format: str) -> np.ndarray:
     """A detector's scores ``(..., K)`` (0-1, in its ``keypoint_format``) as scores ``(..., 17)`` of the H36M joints
     :func:`lifter.convert` makes from them: each the lowest score of the joints its rule reads."""

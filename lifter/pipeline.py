@@ -32,6 +32,7 @@ from .detect import (
     guess_focal,
     h36m_joint_scores,
     load_image,
+    people_scores,
 )
 from .io import REASSUMED_NOTE, LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
 from .keypoints import convert, placeholder_notes
@@ -292,10 +293,9 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     raw = np.stack(people)
     kp17 = convert(raw, src=kf.format, warn=False)
     notes += placeholder_notes(raw, src=kf.format)  # (in the record, not a Python warning)
-    given = kf.people_scores[:len(people)]
+    conf = people_scores(kf.people_scores[:len(people)])
     scores = None
-    if given and all(c is not None for c in given):  # the file's confidences, as the H36M joints' (the lowest read)
-        conf = np.stack([np.asarray(c, np.float64) for c in given])
+    if conf is not None:  # the file's confidences, as the H36M joints' (the lowest read)
         scores = h36m_joint_scores(conf, kf.format)
         if float(np.nanmax(conf)) <= 1.0:  # (scores above 1 are another scale: no threshold to read them by)
             notes += joint_doubt_notes(scores)

@@ -43,6 +43,7 @@ from .detect import (
     h36m_joint_scores,
     image_from_array,
     people_h36m,
+    people_scores,
 )
 from .io import depth_is_metric, distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
@@ -645,9 +646,8 @@ def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarr
 def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.ndarray | None:
     """One frame's confidences ``(n, 17)`` of the H36M joints (:func:`lifter.detect.h36m_joint_scores`, from each
     person's ``(J,)`` in ``keypoint_format``), or None unless every person of the frame has them."""
-    if not people or any(c is None for c in people):
-        return None
-    return h36m_joint_scores(np.stack([np.asarray(c, np.float64) for c in people]), keypoint_format)
+    given = people_scores(people)
+    return None if given is None else h36m_joint_scores(given, keypoint_format)
 
 
 def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None = None,

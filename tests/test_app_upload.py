@@ -314,6 +314,7 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
         assert v.load_upload("walking.jpg", photo) is False
         msg = v.messages[-1]
         assert 'pip install -e ".[detect]"' in msg and "keypoint JSON" in msg and "still works" in msg
+        assert v.notices[-1][0] == "Input problem"  # (the install's problem, not "the file ... cannot be used")
         _assert_unchanged(v, snap)
         # the keypoint JSON path still works, drawn on that photo (same size, no image_size in the file)
         s = a.demo.get("walking")
