@@ -372,11 +372,15 @@ class SessionView:
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
-        for name, handle in (("focal_px", g.lift.focal), ("noise_level", g.noise.level),
-                             ("cloud_samples", g.noise.cloud), ("frame", g.play.frame)):  # before the sync callback
-            handle.on_update(functools.partial(self._note_typed, name))
-        for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame, *g.value_handles()]:
-            h.on_update(sync)
+        typed = {id(h): name for name, h in (("focal_px", g.lift.focal), ("noise_level", g.noise.level),
+                                             ("cloud_samples", g.noise.cloud), ("frame", g.play.frame))}
+        for h in {id(h): h for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame,
+                                     *g.value_handles()]}.values():
+            if id(h) in typed:  # the key's time first, in the same callback: viser runs callbacks on a thread
+                # pool, so a separate one could run after the pass (a loaded run clamped a half-typed "6" at once)
+                h.on_update(functools.partial(self._typed_then_sync, typed[id(h)]))
+            else:
+                h.on_update(sync)
         g.lift.gt.on_update(self._on(self._request_redraw))
         g.play.trail.on_update(self._on(self._request_redraw))
         g.lift.focal_reset.on_click(self._on(self.reset_focal))
@@ -395,6 +399,10 @@ class SessionView:
     def _note_typed(self, name: str, event: Any) -> None:
         if getattr(event, "client", None) is not None:  # from a browser tab, not a value set here
             self._typed_at[name] = time.time()
+
+    def _typed_then_sync(self, name: str, event: Any) -> None:
+        self._note_typed(name, event)
+        self._do(self._runner.request)
 
     def _later(self, delay: float, func: Callable[..., Any], *args: Any) -> None:
         """Run ``func(*args)`` through :meth:`_do` after ``delay`` s, on a daemon timer thread."""
