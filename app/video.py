@@ -39,7 +39,6 @@ from lifter.video import (
     lift_video,
     output_note_lines,
     track_lifted,
-    tracking_names,
 )
 
 from .core import lens_free_2d, undoes_lens
@@ -201,15 +200,13 @@ class VideoSequence:
             scores = people_scores([p.scores for p in fr.people])
             lifted.append((fr.index, fr.time_s, q, r, rl, scores))
         ids = [[p.person_id for p in fr.people] for fr in rec.frames]
-        named = any(pid is not None for frame in ids for pid in frame)
-        frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing,
-                              person_ids=tracking_names(ids) if named else None)
+        frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing, person_ids=ids)
         for new, old in zip(frames, rec.frames):  # (the tracker keeps each frame's order)
             for st, was in zip(new.people, old.people):
-                # (the tracker reads the 2D and the file's names as the upload did, so it groups as the upload did;
+                # (the tracker reads the 2D and the file's ids as the upload did, so it groups as the upload did;
                 # but its numbers differ once the upload's one-frame detections were left out: keep the upload's,
                 # which its notes and picker name)
-                st.person_id, st.track_id = was.person_id, was.track_id
+                st.track_id = was.track_id
         note = (f"lifted again in the app: model {name!r} at focal length {math.sqrt(f[0] * f[1]):.1f} px (the upload's: "
                 f"{rec.model!r} at {math.sqrt(rec.focal[0] * rec.focal[1]):.1f} px)")
         if undistorted:

@@ -206,10 +206,10 @@ class SessionView:
         self.lock = threading.RLock()
         self.messages: list[str] = []
         self.notices: list[tuple[str, str, bool]] = []
+        """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._sticky_note: Any = None
         self._upload_left: SessionState | None = None
         """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
-        """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._message_count = 0
         self._status_lock = threading.Lock()
         """Held while a message is recorded and shown, and while the status line is checked and cleared: an upload's
@@ -477,11 +477,11 @@ class SessionView:
             redraw, self._redraw_request = self._redraw_request, False
         # (refused values are errors; clamped ones notes, which stay a while: a user trial saw "focal length 9000 px
         # is outside ...; clamped" vanish within a second, when the settle timer's pass cleared it as an error)
-        notes: list[tuple[str, bool]] = [(r.message, r.refused) for r in rejected]
-        # a focal clamped: the note goes once another focal is in use (a user trial: "99999 px ... clamped to 6000"
-        # stayed beside a focal of 1144.5 typed since, through a model change)
-        clamped_to = {r.message: float(r.value) for r in rejected  # type: ignore[arg-type]
-                      if r.control == "focal_px" and not r.refused and isinstance(r.value, (int, float))}
+        # (text, error, the focal a clamp set: that note goes once another focal is in use; a user trial saw
+        # "99999 px ... clamped to 6000" stay beside a focal of 1144.5 typed since, through a model change)
+        notes: list[tuple[str, bool, float | None]] = [
+            (r.message, r.refused, float(r.value) if r.control == "focal_px" and not r.refused  # type: ignore[arg-type]
+             and isinstance(r.value, (int, float)) else None) for r in rejected]
         if reset:
             st = ss.reset_joints(st)
         refused_drag = False
@@ -489,7 +489,7 @@ class SessionView:
             try:
                 st = ss.with_joint(st, j, uv)
             except PoseLifterError as exc:
-                notes.append((str(exc), True))
+                notes.append((str(exc), True, None))
                 refused_drag = True
         for r in rejected:
             self._set_control(r.control, r.value)
@@ -499,17 +499,17 @@ class SessionView:
             if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
                 self._last_plane = None
                 self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
-            for text, error in notes:
-                self.show_message(text, error=error, focal=clamped_to.get(text))
+            for text, error, focal in notes:
+                self.show_message(text, error=error, focal=focal)
             return
         try:
             self._apply(st)
         except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
-            notes.append((str(exc), True))
+            notes.append((str(exc), True, None))
             self._show_controls(old)
             self._draw_2d(old.keypoints)
-        for text, error in notes:
-            self.show_message(text, error=error, focal=clamped_to.get(text))
+        for text, error, focal in notes:
+            self.show_message(text, error=error, focal=focal)
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
@@ -671,9 +671,8 @@ class SessionView:
         if old.sample.key.startswith("upload/") and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
-        left = self._upload_left
-        restored = left is not None and left.sample.key == sample.key
-        if restored and left is not None:
+        left = self._upload_left if self._upload_left is not None and self._upload_left.sample.key == sample.key else None
+        if left is not None:
             st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
                            others_dragged=left.others_dragged, input_kind=left.input_kind)
             self._upload_left = None
@@ -701,7 +700,7 @@ class SessionView:
             self._still_frame_typed = self._typed_at.get("frame")
         # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
-        if restored:
+        if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
         if note and seq_key not in self._fallback_said:
             self._fallback_said.add(seq_key)

@@ -547,6 +547,7 @@ class Lifter:
         distortion: ArrayLike | None = None,
         flip_test: bool | None = None,
         warn: bool = True,
+        whose: str | None = None,
     ) -> LiftResult:
         """Lift 2D keypoints ``(..., 17, 2)`` px (H36M joint order, :data:`lifter.JOINT_NAMES`) to absolute 3D.
 
@@ -572,14 +573,16 @@ class Lifter:
         warn: warn (:class:`lifter.PoseLifterWarning`) of input that is taken but looks wrong
             (:func:`lifter._checks.input_warnings`); False for callers that report it themselves (the records'
             notes, the app's readout). A keyword rather than ``warnings.catch_warnings``, which is not thread-safe.
+        whose: the batch is a list of people (``(n, 17, 2)``: one image's, file's or frame's, as a record lists
+            them); :attr:`LiftResult.warnings` then name them "person 2 of <whose>" (:meth:`output_notes`).
         """
         target = self.network_for(source)
         return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
-                                    source=source, distortion=distortion, flip_test=flip_test, warn=warn)
+                                    source=source, distortion=distortion, flip_test=flip_test, warn=warn, whose=whose)
 
     def _lift_checked(self, keypoints: ArrayLike, *, focal: ArrayLike | None, principal_point: ArrayLike | None,
                       image_size: ArrayLike | None, source: Source, distortion: ArrayLike | None,
-                      flip_test: bool | None, warn: bool) -> LiftResult:
+                      flip_test: bool | None, warn: bool, whose: str | None = None) -> LiftResult:
         """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
@@ -665,7 +668,7 @@ class Lifter:
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
         root = root.reshape(lead + (3,))
         absolute = rel + root[..., None, :]
-        notes = self.output_notes(kp, pp, root, source=source)
+        notes = self.output_notes(kp, pp, root, source=source, whose=whose)
         if warn:
             for message in notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)

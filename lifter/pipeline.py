@@ -269,10 +269,9 @@ def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *,
     them as notes (:func:`plausibility_notes`; what looks wrong in the output, :attr:`LiftResult.warnings`, is
     appended to ``notes``). ``distortion``: the lens that saw the 2D (:meth:`lifter.Lifter.lift`), or None."""
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False,
-                      distortion=distortion)
+                      distortion=distortion, whose="the output's people")
     if notes is not None:
-        notes.extend(lifter.output_notes(res.keypoints_2d, res.principal_point, res.root, source=source,
-                                         whose="the output's people") if getattr(res, "warnings", ()) else ())
+        notes.extend(getattr(res, "warnings", ()))
     cd = np.asarray(res.canonical_depth).reshape(-1)
     return tuple(PersonResult(keypoints_2d=kp17[i], absolute=np.asarray(res.absolute)[i],
                               relative=np.asarray(res.relative)[i], root=np.asarray(res.root)[i],

@@ -564,10 +564,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 kp = np.stack([q.keypoints_2d for q in people])
                 source_format = source_format or people[0].raw.keypoint_format
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
-                                  warn=False)  # (the record's notes say it, once)
-                if getattr(res, "warnings", ()):
-                    collect_output_notes(output_notes, index, lifter.output_notes(
-                        res.keypoints_2d, res.principal_point, res.root, source="detected", whose="the frame's people"))
+                                  warn=False, whose="the frame's people")  # (the record's notes say it, once)
+                collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -628,17 +626,19 @@ def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarr
                  person_ids: list[list[str | int | None]] | None = None) -> list[FrameResult]:
     """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
     relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place).
-    ``person_ids``: per frame, the input's own name for each of its people (None: unnamed), followed by the tracker;
-    they are also kept as each person's ``person_id``."""
+    ``person_ids``: per frame, the input's own id for each of its people (None: none), kept as each person's
+    ``person_id``; those that recur from frame to frame are followed by the tracker (:func:`tracking_names`)."""
     if person_ids is not None and len(person_ids) != len(lifted):
         raise PoseLifterError(f"track_lifted: person_ids for {len(person_ids)} frames, {len(lifted)} frames lifted")
+    names_by_frame = None if person_ids is None else tracking_names([list(fr) for fr in person_ids])
     seq = SequenceTracker(fps=fps, smoothing=smoothing)
     out = []
     for k, (index, t, kp, root, rel, sc) in enumerate(lifted):
-        names = None if person_ids is None else list(person_ids[k])
+        names = None if names_by_frame is None else names_by_frame[k]
         states = seq.step(index, t, kp, root, rel, focal, scores=sc, person_ids=names) if len(kp) else []
-        for st, pid in zip(states, names or []):  # (the tracker keeps each frame's order)
-            st.person_id = pid
+        if person_ids is not None:
+            for st, pid in zip(states, person_ids[k]):  # (the tracker keeps each frame's order)
+                st.person_id = pid
         out.append(FrameResult(index=index, time_s=t, people=states))
     return out
 
@@ -718,11 +718,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                 kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
         k += c
     warnings.extend(output_note_lines(output_notes))
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing,
-                       person_ids=None if ids is None else tracking_names(ids))
-    for fr, frame_ids in zip(out, ids or []):  # the file's own ids, also those too rare to track by
-        for st, pid in zip(fr.people, frame_ids):
-            st.person_id = pid
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
