@@ -254,14 +254,6 @@ torchvision's keypoint scores are unbounded, RTMPose's SimCC scores pass 1): the
 (:data:`SCORE_NOTE_ABOVE`), and only a value <= 0 marks a missing joint; COCO's visibility flags (all 0, 1 or 2) are
 read as flags (:data:`COCO_VISIBILITY_FLAGS`)."""
 
-def _visibility_flags(scores: Sequence[np.ndarray | None]) -> bool:
-    """Whether a file's third values (every person's, every frame's) are COCO visibility flags
-    (:data:`COCO_VISIBILITY_FLAGS`): all 0, 1 or 2, with a 2 among them. Decided once per file, not per frame."""
-    given = [np.asarray(c)[np.isfinite(c)] for c in scores if c is not None]
-    return bool(given) and all(np.isin(c, COCO_VISIBILITY_FLAGS).all() for c in given) and any(
-        (c == 2).any() for c in given)
-
-
 FLAGS_NOTE: Final[str] = ("third values all 0, 1 or 2: read as COCO visibility flags (0: not labelled, a missing "
                           "joint; 1 or 2: placed), not as a detector's confidences, so the output has no scores")
 """The note when a file's third values are read as visibility flags (:func:`_visibility_flags`)."""
@@ -270,6 +262,15 @@ COCO_VISIBILITY_FLAGS: Final[tuple[float, ...]] = (0.0, 1.0, 2.0)
 """COCO's keypoint visibility flags (0 not labelled, 1 labelled but hidden, 2 visible). Third values that are all
 flags, with at least one 2, are read as flags (0: a missing joint), not as confidences: a ground-truth annotation or
 a results file in COCO's own form has no scores to keep."""
+
+
+def _visibility_flags(scores: Sequence[np.ndarray | None]) -> bool:
+    """Whether a file's third values (every person's, every frame's) are COCO visibility flags
+    (:data:`COCO_VISIBILITY_FLAGS`): all 0, 1 or 2, with a 2 among them. Decided once per file, not per frame."""
+    given = [np.asarray(c)[np.isfinite(c)] for c in scores if c is not None]
+    return bool(given) and all(np.isin(c, COCO_VISIBILITY_FLAGS).all() for c in given) and any(
+        (c == 2).any() for c in given)
+
 
 SCORE_NOTE_ABOVE: Final[float] = 2.0
 """Third values above this get a note saying they are read as unnormalised scores."""
