@@ -130,6 +130,9 @@ class AugmentConfig:
     roll_deg: float = _help("roll the camera about its optical axis by an angle uniform in +-this many degrees (0: "
                             "off, at most 45), after the pan and tilt of --rotate-deg if any: the picture turns in "
                             "its plane, as a hand-held photo's often does (needs --lens pinhole)", default=0.0)
+    turn_prob: float = _help("share of the samples whose camera --rotate-deg and --roll-deg turn (1: every sample; "
+                             "below 1 the rest keep the training cameras' own pose, so a network sees turned cameras "
+                             "and still the training cameras' pose as the most likely one)", default=1.0)
 
     distance_prob: float = _help("move this share of the samples along their root's viewing ray, their root depth "
                                  "times a factor log-uniform in [--distance-min, --distance-max] (0: off): the 3D "
@@ -144,6 +147,7 @@ class AugmentConfig:
         _booleans(self)
         _prob("flip_prob", self.flip_prob)
         _prob("distance_prob", self.distance_prob)
+        _prob("turn_prob", self.turn_prob)
         _check(isinstance(self.distance_min, (int, float)) and 0.4 <= self.distance_min <= 1.0,
                f"distance_min must be in [0.4, 1] (a factor of the root depth), got {self.distance_min!r}")
         _check(isinstance(self.distance_max, (int, float)) and 1.0 <= self.distance_max <= 10.0,

@@ -151,21 +151,27 @@ def flip_batch(kp: torch.Tensor, pp: torch.Tensor, rel: torch.Tensor, mask: torc
 
 
 def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch.Tensor, depth: torch.Tensor,
-                 root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator, max_roll_deg: float = 0.0
-                 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+                 root_2d: torch.Tensor, *, max_deg: float, gen: torch.Generator, max_roll_deg: float = 0.0,
+                 prob: float = 1.0) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``),
     and with ``max_roll_deg`` a roll about its optical axis (uniform in ``+-max_roll_deg``; drawn after the pan and
     tilt, so runs without it draw as before), would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections
     included) moved by the homography ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
     ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
-    back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px."""
+    back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px. With ``prob`` below 1 only that share of the samples is
+    turned (drawn after the angles, so runs with every sample turned draw as before); the rest stay as they are."""
     bs, dev = len(kp), kp.device
 
     def uniform(deg: float) -> torch.Tensor:  # (B,) radians, uniform in +-deg
         return torch.deg2rad(torch.tensor(deg, device=dev)) * (2 * torch.rand(bs, generator=gen, device=dev) - 1)
 
     pan, tilt = uniform(max_deg), uniform(max_deg)
-    r = camera_turn(pan, tilt, uniform(max_roll_deg) if max_roll_deg > 0 else None).to(kp.dtype)
+    roll = uniform(max_roll_deg) if max_roll_deg > 0 else None
+    if prob < 1.0:
+        turned = (torch.rand(bs, generator=gen, device=dev) < prob).to(pan.dtype)
+        pan, tilt = pan * turned, tilt * turned
+        roll = None if roll is None else roll * turned
+    r = camera_turn(pan, tilt, roll).to(kp.dtype)
     root = backproject_generic(root_2d, depth, f, pp)
     return turn_pixels(kp, r, f, pp), rel @ r.transpose(1, 2), (root[:, None] @ r.transpose(1, 2))[:, 0, 2]
 
@@ -238,7 +244,7 @@ def make_batch(T: Batch, idx: torch.Tensor, cfg: TrainConfig, gen: torch.Generat
     if cfg.augment.turns_camera:
         root_2d = gt[:, 0]  # (pinhole: the config refuses rotate_deg and roll_deg with distorted 2D)
         kp, rel, depth = rotate_batch(kp, pp, f, rel, depth, root_2d, max_deg=cfg.augment.rotate_deg, gen=gen,
-                                      max_roll_deg=cfg.augment.roll_deg)
+                                      max_roll_deg=cfg.augment.roll_deg, prob=cfg.augment.turn_prob)
     if cfg.augment.zoom:
         a = cfg.augment
         s = torch.exp2((a.zoom_sigma * torch.randn(bs, generator=gen, device=dev)).clamp(-a.zoom_clip, a.zoom_clip))

@@ -888,3 +888,35 @@ def test_a_camera_roll_turns_the_picture_about_the_principal_point():
     assert TrainConfig(model=ModelConfig(view="look_at"), data=DataConfig(lens="pinhole")).model.view == "look_at"
     with pytest.raises(PoseLifterError, match=r"roll_deg must be in \[0, 45\] degrees"):
         AugmentConfig(roll_deg=60.0)
+
+
+def test_turn_prob_turns_only_that_share_of_the_samples():
+    """rotate_batch(prob=): about that share of the samples is turned and the rest are returned as they were; the
+    share is drawn after the angles, so prob=1 draws exactly as before it existed; make_batch passes
+    ``augment.turn_prob`` and keeps the samples physical; the config refuses a share outside [0, 1]."""
+    from lifter.config import AugmentConfig, DataConfig, TrainConfig
+    from lifter.train import make_batch, rotate_batch
+
+    n = 400
+    root, rel, f, pp, kp = _scene(n, seed=9, x=1200, y=700, z=(3000, 7000), focal=(1145.0, 1143.0), pp=(512.0, 515.0))
+    args = (kp, pp, f, rel, root[:, 2], kp[:, 0])
+    every = rotate_batch(*args, max_deg=20.0, gen=torch.Generator().manual_seed(3))
+    again = rotate_batch(*args, max_deg=20.0, gen=torch.Generator().manual_seed(3), prob=1.0)
+    assert all(torch.equal(a, b) for a, b in zip(every, again))
+    kp2, rel2, depth2 = rotate_batch(*args, max_deg=20.0, max_roll_deg=10.0, gen=torch.Generator().manual_seed(3),
+                                     prob=0.3)
+    still = (kp2 - kp).abs().amax(dim=(1, 2)) < 1e-9
+    assert 0.2 * n < int((~still).sum()) < 0.4 * n  # about 30 % turned
+    assert torch.equal(depth2[still], root[still, 2]) and torch.allclose(rel2[still], rel[still], atol=1e-12)
+    assert float((kp2[~still] - kp[~still]).norm(dim=-1).mean()) > 10  # the turned ones moved in the image
+    none = rotate_batch(*args, max_deg=20.0, gen=torch.Generator().manual_seed(3), prob=0.0)
+    assert torch.allclose(none[0], kp, atol=1e-9) and torch.allclose(none[2], root[:, 2], rtol=1e-12)
+    T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                      augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0, turn_prob=0.5))
+    b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
+    _assert_physically_consistent(b)
+    kept = torch.isclose(b["depth"], T["depth"], rtol=1e-6)
+    assert 0.35 * n < int(kept.sum()) < 0.65 * n
+    with pytest.raises(PoseLifterError, match=r"turn_prob must be a probability in \[0, 1\]"):
+        AugmentConfig(turn_prob=1.5)
