@@ -77,7 +77,7 @@ from .scene import (
 from .scene import head_on as scene_head_on
 from .scene import overview as scene_overview
 from .video import VideoSequence
-from .viser_hooks import limit_uploads, report_rejected_values
+from .viser_hooks import limit_uploads, note_typed_values, report_rejected_values
 
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
@@ -296,6 +296,7 @@ class SessionView:
                           up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True,
                           title=UPLOAD_REFUSED_TITLE, sticky=True))
         report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
+        note_typed_values(target.gui, self._typed_controls(), self._note_key, client_id=client_id)
 
     # ------------------------------------------------------------------------------------------
     # The one error wrapper, messages
@@ -372,8 +373,7 @@ class SessionView:
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
-        typed = {id(h): name for name, h in (("focal_px", g.lift.focal), ("noise_level", g.noise.level),
-                                             ("cloud_samples", g.noise.cloud), ("frame", g.play.frame))}
+        typed = {id(h): name for name, h in self._typed_controls().items()}
         for h in {id(h): h for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame,
                                      *g.value_handles()]}.values():
             if id(h) in typed:  # the key's time first, in the same callback: viser runs callbacks on a thread
@@ -396,9 +396,20 @@ class SessionView:
         g.files.download_json.on_click(self._on(self.download, "json"))
         g.files.download_glb.on_click(self._on(self.download, "glb"))
 
+    def _typed_controls(self) -> dict[str, Any]:
+        """The controls whose typed values wait for more keys (:data:`TYPING_SETTLE_S`), by state name."""
+        g = self.gui
+        return {"focal_px": g.lift.focal, "noise_level": g.noise.level, "cloud_samples": g.noise.cloud,
+                "frame": g.play.frame}
+
+    def _note_key(self, name: str) -> None:
+        self._typed_at[name] = time.time()
+
     def _note_typed(self, name: str, event: Any) -> None:
+        # (viser_hooks.note_typed_values notes the key before the value reaches the control; this callback, after
+        # it, keeps the time right where that hook could not be installed)
         if getattr(event, "client", None) is not None:  # from a browser tab, not a value set here
-            self._typed_at[name] = time.time()
+            self._note_key(name)
 
     def _typed_then_sync(self, name: str, event: Any) -> None:
         self._note_typed(name, event)

@@ -6,6 +6,9 @@ place. Each hook is best effort: when viser's internals change it does nothing (
 * :func:`report_rejected_values`: a GUI value that viser cannot cast to the control's type (e.g. text for a
   slider) is reported to the user and the control shows the value in use again (viser alone only logs an
   asyncio traceback);
+* :func:`note_typed_values`: the time a browser tab sends a value for a control is recorded before viser puts that
+  value in the control (viser runs the control's callbacks later, on a thread pool: a sync pass running meanwhile
+  would read the new value with the previous key's time);
 * :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly).
 """
 
@@ -123,6 +126,32 @@ def report_rejected_values(gui: viser.GuiApi, report: Callable[[str], None]) -> 
 
     checked._poselifter_checked = True  # type: ignore[attr-defined]
     handlers[i] = checked
+    return True
+
+
+def note_typed_values(gui: viser.GuiApi, controls: dict[str, Any], note: Callable[[str], None], *,
+                      client_id: int | None = None) -> bool:
+    """Call ``note(name)`` for each value a browser tab sends to one of ``controls`` (name -> GUI handle), before
+    viser's own handler puts the value in the control. ``client_id``: only that client's messages (None: any).
+    Returns False when the hook could not be installed."""
+    try:
+        from viser import _messages
+
+        handlers: dict[Any, list[Any]] = gui._websock_interface._incoming_handlers
+        names = {h._impl.uuid: name for name, h in controls.items()}
+    except AttributeError as exc:
+        log.warning("typed-value times not hooked (viser internals changed: %s)", exc)
+        return False
+
+    def on_update(cid: int, msg: Any) -> None:
+        try:
+            name = names.get(msg.uuid)
+            if name is not None and "value" in msg.updates and (client_id is None or cid == client_id):
+                note(name)
+        except Exception:  # noqa: BLE001 - never break viser's message loop
+            log.exception("typed-value time not noted")
+
+    handlers.setdefault(_messages.GuiUpdateMessage, []).insert(0, on_update)
     return True
 
 

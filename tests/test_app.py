@@ -1407,6 +1407,42 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
         assert v.state.focal_px == lo
 
 
+def test_a_pass_that_reads_a_typed_value_before_its_callback_runs_knows_it_is_being_typed(
+        app: PoseLifterApp) -> None:
+    """Under a load of three test runs, a half-typed "6" was clamped at once now and then: viser puts a tab's value
+    in the control on its event loop and runs the control's callbacks later on a thread pool, so a pass running in
+    between read the "6" with the previous key's time (seconds old) and clamped it. The key's time is now noted
+    before the value reaches the control (viser_hooks.note_typed_values). Here the thread pool is held busy, so the
+    callbacks cannot run, and a pass is asked for directly once the box holds the "6"."""
+    import threading
+    import time
+
+    from poselifter_app.core import focal_min
+    from poselifter_app.viewer import TYPING_GROW_S, TYPING_SETTLE_S
+
+    with open_tab(app) as (tab, v):
+        box = v.gui.lift.focal
+        before = v.state.focal_px
+        v._typed_at["focal_px"] = time.time() - 60  # the last key long ago
+        pool = box._impl.gui_api._thread_executor
+        release = threading.Event()
+        busy = [pool.submit(release.wait, 30) for _ in range(pool._max_workers)]
+        try:
+            _send_value(tab, box, 6.0)
+            assert wait_for(lambda: box.value == 6.0, timeout=10)
+            v._runner.request()  # a pass (a playback frame's, a settle timer's) before the callbacks ran
+            assert box.value == 6.0 and v.state.focal_px == before, (box.value, v.state.focal_px)
+        finally:
+            release.set()
+            for f in busy:
+                f.result(timeout=10)
+        time.sleep(TYPING_SETTLE_S + 0.2)
+        assert box.value == 6.0 and v.state.focal_px == before  # still waiting for more digits
+        lo = focal_min(v.state.sample)  # no more keys: clamped to the minimum, and said
+        assert wait_for(lambda: v.state.focal_px == lo and box.value == lo
+                        and any("is outside" in m for m in v.messages), timeout=TYPING_GROW_S + 5)
+
+
 def test_a_typed_focal_is_replaced_by_a_new_cameras_at_once(app: PoseLifterApp) -> None:
     """Review: after the playback fix, a focal typed in a tab and then another camera chosen within the typing
     window kept the typed value for good (box and lift at 2000 px while the message said the camera's 800)."""
