@@ -168,9 +168,16 @@ def test_four_tabs_focal_keys_as_fast_as_possible() -> None:
         _settle(views)
         for k, (page, view) in enumerate(tabs):
             slider = _focal_slider(page)
-            shown = float(slider.get_attribute("aria-valuenow") or "nan")
             ro = _readout(page)
-            assert _wait(lambda ro=ro: FOCAL_TEXT.match(ro.inner_text().strip()) is not None, 30)
+
+            def agree(ro: Any = ro, slider: Any = slider) -> bool:  # (a loaded machine's browser can lag the quiet
+                # period: a full-suite run beside another read the readout at 1017 px with the slider at 1019)
+                m = FOCAL_TEXT.match(ro.inner_text().strip())
+                return m is not None and abs(float(m.group(1)) - float(slider.get_attribute("aria-valuenow")
+                                                                      or "nan")) <= 0.05
+
+            _wait(agree, 30)
+            shown = float(slider.get_attribute("aria-valuenow") or "nan")
             m = FOCAL_TEXT.match(ro.inner_text().strip())
             assert m is not None
             focal_readout = float(m.group(1))
