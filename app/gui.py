@@ -191,7 +191,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             trail=gui.add_checkbox("root trajectory", True, hint="draw the lifted root's path in camera space"),
             info=gui.add_markdown(""),
         )
-        inp = gui.add_dropdown("2D input", ["gt", "detected"], initial_value="gt",
+        inp = gui.add_dropdown("2D input", ["ground truth", "SH detection"], initial_value="ground truth",
                                hint="ground-truth 2D, or the Stacked-Hourglass detection (Human3.6M frames that have one)")
         image = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
         sample = SampleGui(source=source, demo=demo, input=cast(viser.GuiDropdownHandle[str], inp), image=image, subject=subject, sequence=sequence,

@@ -43,6 +43,21 @@ def input_options(sample: Sample) -> list[str]:
     return opts
 
 
+def input_label(sample: Sample, kind: str) -> str:
+    """What the 2D-input dropdown shows for ``kind`` (``"gt"`` / ``"detected"``) on ``sample``: "ground truth", and
+    "SH detection" on Human3.6M frames or "detected / uploaded 2D" elsewhere (a photo's detection, an upload's own
+    2D). Another ``kind`` is shown as it is."""
+    if kind == "gt":
+        return "ground truth"
+    if kind == "detected":
+        return "SH detection" if sample.key.startswith("h36m/") else "detected / uploaded 2D"
+    return kind
+
+
+INPUT_OF_LABEL: dict[str, str] = {"ground truth": "gt", "SH detection": "detected", "detected / uploaded 2D": "detected"}
+"""The 2D input (``"gt"`` / ``"detected"``) of each label :func:`input_label` gives."""
+
+
 def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple[SessionState, str | None]:
     """The state showing ``sample``: drags reset, focal to its camera's; model, noise, seed, cloud size and the
     analytic toggle kept. 2D input: ``input_pref`` when the sample has it, else the other one (with a note when

@@ -536,7 +536,8 @@ class SessionView:
 
     def _control_values(self) -> ss.ControlValues:
         g = self.gui
-        return ss.ControlValues(model=g.lift.model.value, input_kind=g.sample.input.value,
+        return ss.ControlValues(model=g.lift.model.value,
+                                input_kind=ss.INPUT_OF_LABEL.get(g.sample.input.value, g.sample.input.value),
                                 focal_px=g.lift.focal.value, noise_level=g.noise.level.value, seed=g.noise.seed.value,
                                 cloud_samples=g.noise.cloud.value, analytic=g.lift.analytic.value,
                                 person=g.joints.person.value)
@@ -550,6 +551,8 @@ class SessionView:
             value = float(round(value, 1))  # (the box's precision)
         if name == "person":
             value = ss.person_label(int(value), self.state.sample.person_tag(int(value)))
+        if name == "input_kind":
+            value = ss.input_label(self.state.sample, value)
         self._put(handle, value)
 
     def _show_controls(self, st: SessionState) -> None:
@@ -732,10 +735,11 @@ class SessionView:
         g, p = self.gui.sample, self.gui.play
         sample = st.sample
         src = sample.key.split("/")[0]
-        opts = ss.input_options(sample)
+        opts = [ss.input_label(sample, kind) for kind in ss.input_options(sample)]
         if list(g.input.options) != opts:
             g.input.options = opts
-        self._put(g.input, st.input_kind)
+            g.input.value = ss.input_label(sample, st.input_kind)  # (new options can reset it to the first one)
+        self._put(g.input, ss.input_label(sample, st.input_kind))
         people = [ss.person_label(k, sample.person_tag(k)) for k in range(sample.num_people)]
         pick = self.gui.joints.person
         if list(pick.options) != people:
@@ -982,6 +986,8 @@ class SessionView:
         handle = {"model": self.gui.lift.model, "input_kind": self.gui.sample.input, "focal_px": self.gui.lift.focal,
                   "noise_level": self.gui.noise.level, "seed": self.gui.noise.seed,
                   "cloud_samples": self.gui.noise.cloud, "analytic": self.gui.lift.analytic}[name]
+        if name == "input_kind":  # ("gt" / "detected": the dropdown shows their labels)
+            value = ss.input_label(self.state.sample, value) if isinstance(value, str) else value
         try:
             typed = type(handle.value)(value)
         except (TypeError, ValueError, OverflowError):

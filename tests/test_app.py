@@ -249,12 +249,14 @@ def test_sample_and_model_dropdowns(view: SessionView, app: PoseLifterApp) -> No
 
 
 def test_bad_inputs_show_messages(view: SessionView, app: PoseLifterApp) -> None:
+    from poselifter_app import session as ss
+
     good = view.frame
     assert view.select_demo("no-such-sample") is False and "unknown demo sample" in view.messages[-1]
     assert view.set_model("no-such-model") is False and "unknown model" in view.messages[-1]
     assert view.gui.lift.model.value == view.state.model  # the picker shows the model in use again
     assert view.set_input_kind("bogus") is False and "unknown 2D input" in view.messages[-1]
-    assert view.gui.sample.input.value == view.state.input_kind
+    assert view.gui.sample.input.value == "ground truth" == ss.input_label(view.state.sample, view.state.input_kind)
     view.gui.lift.focal.value = 1e9
     assert "clamped" in view.messages[-1] and view.state.focal_px == 6000.0 and np.isfinite(view.frame.root).all()
     assert "clamped to 6000" in view.gui.readout.status.content
@@ -350,7 +352,7 @@ def test_h36m_browsing() -> None:
         s = v.state.sample
         assert s.image is not None and s.image.shape[:2] == (s.camera.height, s.camera.width)
         assert s.detected_2d is not None
-        v.gui.sample.input.value = "detected"
+        v.gui.sample.input.value = "SH detection"
         assert v.state.input_kind == "detected" and "MPJPE" in v.gui.readout.readout.content
         v.gui.play.frame.value = choice[3] + 1  # no photo: plain canvas of the camera's size
         assert v.state.sample.image is None and v.frame is not None
@@ -450,10 +452,10 @@ def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp
     from lifter import PoseLifterError
 
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
-    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected / uploaded 2D"
     kp = view.state.keypoints.copy()
-    view.gui.sample.input.value = "gt"
-    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected"
+    view.gui.sample.input.value = "ground truth"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected / uploaded 2D"
     assert "no ground-truth 2D" in view.messages[-1]
     np.testing.assert_array_equal(view.state.keypoints, kp)
     with pytest.raises(PoseLifterError, match="no ground-truth 2D"):
@@ -547,16 +549,16 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v = h36m_app.headless_view()
     seq = "Directions 1"
     assert v.select_h36m(subject=1, sequence=seq, camera="54138969", frame=5) is True  # training: every 5th frame
-    v.gui.sample.input.value = "detected"
+    v.gui.sample.input.value = "SH detection"
     assert v.state.input_kind == "detected"
     np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 6  # no detection: ground truth, with a message
-    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "gt" and "no 2D detection" in v.messages[-1]
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth" and "no 2D detection" in v.messages[-1]
     np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 7
     assert v.state.input_kind == "gt"
     v.gui.play.frame.value = 10  # a detection again: the user's choice is back
-    assert v.state.input_kind == "detected" and v.gui.sample.input.value == "detected"
+    assert v.state.input_kind == "detected" and v.gui.sample.input.value == "SH detection"
     np.testing.assert_allclose(v.state.keypoints, v.state.sample.detected_2d)
     for f in (11, 12, 15, 16):  # said once per sequence, not once per frame (playback flooded the tab with toasts)
         v.gui.play.frame.value = f
@@ -566,7 +568,7 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     assert _json_upload(v, h36m_app.demo.get("standing")) is True and v.state.input_kind == "detected"
     v.gui.sample.source.value = "Human3.6M"
     assert v.state.input_kind == "detected" and v.state.sample.key.endswith("/10")
-    v.gui.sample.input.value = "gt"
+    v.gui.sample.input.value = "ground truth"
     v.gui.play.frame.value = 15
     assert v.state.input_kind == "gt"
 
@@ -1033,8 +1035,8 @@ def test_rejected_and_crafted_gui_values_are_reported(app: PoseLifterApp) -> Non
         _send_value(tab, v.gui.lift.focal, 2 * f0)  # the tab still works
         assert wait_for(lambda: v.state.focal_px == 2 * f0)
         _send_value(tab, v.gui.sample.input, "detected")  # not offered for demo samples
-        assert wait_for(lambda: v.gui.sample.input.value == "gt" and any("no 2D detection" in m for m in v.messages))
-        assert list(v.gui.sample.input.options) == ["gt"]
+        assert wait_for(lambda: v.gui.sample.input.value == "ground truth" and any("no 2D detection" in m for m in v.messages))
+        assert list(v.gui.sample.input.options) == ["ground truth"]
     finally:
         tab.close()
 
