@@ -150,6 +150,33 @@ def test_format_taken_from_the_joint_count_is_said(tmp_path, weights, kp17, caps
     assert any("16 joints without 'format': assumed 'sh16'" in w for w in got["warnings"]), got["warnings"]
 
 
+def test_coco_keypoints_without_format_are_refused_not_lifted_as_h36m(tmp_path, weights, capsys):
+    """User trial: a COCO-17 file without 'format' was lifted in H36M order with exit 0 (root 2.0 m where the same
+    file told coco17 gives 4.9 m; only the note every unnamed 17-joint file gets). Its first five points (nose, eyes,
+    ears) lie together, where H36M's (pelvis, hips, right knee and foot) span the legs: refused, naming the fix;
+    --format h36m17 or coco17 decides; a real H36M pose without 'format' is still read as H36M."""
+    rng = np.random.default_rng(3)
+    h36m = [project(p, focal=1000.0, principal_point=(640.0, 360.0)) for p in random_pose_cam(rng, 40)]
+    coco = [coco_from_h36m(k) for k in h36m]
+    for c in coco:  # the ears beside the eyes, as a face's are (coco_from_h36m puts them at the head's top)
+        c[3:5] = c[0] + np.array([[10.0, -2.0], [-10.0, -2.0]])
+    (tmp_path / "coco.json").write_text(json.dumps({"people": [{"keypoints": coco[0].tolist()},
+                                                               {"keypoints": coco[1].tolist()}], "focal": 1000}))
+    common = ["--out", str(tmp_path / "o"), "--principal-point", "640", "360", "--weights", str(weights)]
+    code, err = run([str(tmp_path / "coco.json"), *common], capsys)
+    assert code == 1 and "17 joints without 'format', and each person's first five lie within 12 %" in err, err
+    assert "give \"format\": \"coco17\" in the file, or --format coco17" in err and "Traceback" not in err
+    code, err = run([str(tmp_path / "coco.json"), *common, "--format", "coco17"], capsys)
+    assert code == 0, err
+    assert json.loads((tmp_path / "o" / "coco.json").read_text())["source_format"] == "coco17"
+    code, err = run([str(tmp_path / "coco.json"), *common, "--format", "h36m17"], capsys)
+    assert code == 0, err  # (the user's word wins)
+    for k, kp in enumerate(h36m):  # H36M poses of every kind are not taken for faces
+        (tmp_path / f"h{k}.json").write_text(json.dumps({"keypoints": kp.tolist(), "focal": 1000}))
+    code, err = run([str(tmp_path / f"h{k}.json") for k in range(len(h36m))] + common, capsys)
+    assert code == 0, err
+
+
 def test_a_focal_given_over_the_file_s_own_is_said(tmp_path, weights, kp17, capsys):
     """--focal / --principal-point win over the file's camera fields, and the output's warnings say so."""
     doc = {"keypoints": kp17.tolist(), "format": "h36m17", "focal": 800, "principal_point": [640, 360]}
