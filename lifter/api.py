@@ -33,6 +33,8 @@ from ._checks import (
     as_pair,
     as_points,
     input_warnings,
+    principal_point_notes,
+    upside_down_notes,
     where_in_batch,
 )
 from .camera import (
@@ -593,6 +595,7 @@ class Lifter:
         wh = None if image_size is None else as_pair(image_size, name="image_size", positive=True)
         if wh is not None and wh.ndim > 1:  # one per pose: checked here, before the defaults it gives
             wh = _broadcast(wh, lead, name="image_size")
+        pp_given = principal_point is not None
         if principal_point is None:
             if wh is None:
                 raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the "
@@ -641,7 +644,13 @@ class Lifter:
                 kp = undistort_pixels(kp, focal=f, principal_point=pp, distortion=distortion)
             else:  # (taken as it is, but checked all the same)
                 check_distortion(distortion, lead=lead)
-        in_notes = tuple(input_warnings(kp, f if focal_source == "given" else None))
+        in_list = input_warnings(kp, f if focal_source == "given" else None)
+        if pp_given and wh is not None and wh.ndim == 1:  # (the records' own note, for API calls)
+            flat = pp.reshape(-1, 2)
+            if len(flat) and np.all(flat == flat[0]):
+                in_list += principal_point_notes(flat[0], (int(wh[0]), int(wh[1])))
+        in_list += upside_down_notes(kp)
+        in_notes = tuple(in_list)
         if warn:
             for message in in_notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)

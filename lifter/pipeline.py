@@ -20,7 +20,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, as_pair, input_warnings, zero_placeholders
+from ._checks import (
+    PoseLifterError,
+    as_pair,
+    input_warnings,
+    principal_point_notes,
+    upside_down_notes,
+    upside_down_people,
+)
 from ._text import sentence
 from .api import MIN_FOCAL_PX
 from .camera import DEFAULT_DIAGONAL_FOV_DEG
@@ -119,30 +126,6 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
-PRINCIPAL_POINT_EDGE: float = 0.05
-"""A principal point within this share of the image's width / height of its edge, or outside it, gets a note."""
-
-
-def principal_point_notes(pp: Any, image_size: tuple[int, int] | None) -> list[str]:
-    """A note when the principal point ``pp`` ``(cx, cy)`` px lies outside the ``image_size`` image or within
-    :data:`PRINCIPAL_POINT_EDGE` of its edge (None: not checked): a camera's principal point lies near the image
-    centre, and only a crop moves it far; the image size given as the principal point is a common slip. Every
-    root then lies off to the side by as much (mm, at its depth)."""
-    if image_size is None:
-        return []
-    W, H = image_size
-    c = np.asarray(pp, np.float64).reshape(-1)
-    e = PRINCIPAL_POINT_EDGE
-    if e * W <= c[0] <= (1 - e) * W and e * H <= c[1] <= (1 - e) * H:
-        return []
-    slip = " (it equals the image size: was that given as the principal point?)" if np.allclose(c, (W, H)) else ""
-    where = "at the edge of" if 0 <= c[0] <= W and 0 <= c[1] <= H else "outside"
-    return [f"the principal point ({c[0]:g}, {c[1]:g}) px lies {where} the {W} x {H} px image{slip}; unless the "
-            f"image is a crop, a camera's lies near the centre ({W / 2:g}, {H / 2:g}), and a wrong one moves every "
-            "root sideways (by its error in px x depth / focal). Give the calibrated one, or leave it out to use the "
-            "centre"]
-
-
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
 """The ``focal_source`` values of a focal length that was given (the others are assumed: EXIF, field of view)."""
 
@@ -172,36 +155,6 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
                          "by the frame, or half-invented): their 3D is uncertain" if detected else
                          f"{n} lie mostly outside the {W} x {H} px image: are the keypoints in this image's pixels?")
     return notes
-
-
-def upside_down_notes(kp17: np.ndarray) -> list[str]:
-    """A note when most of the poses ``(n, 17, 2)`` px (H36M order) are upright bodies upside down (taller than wide,
-    the head below both ankles by more than half the pose's height; a joint at (0, 0) gives no reading) in the image:
-    the 2D then likely has its y axis pointing up, where this package expects image y to grow downward (OpenCV);
-    a handstand looks the same, hence a note, not an error."""
-    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
-    down = upside_down_people(k)
-    if not len(k) or float(down.mean()) <= 0.5:
-        return []
-    return [f"the head is below both ankles in {int(down.sum())} of {len(k)} pose(s): this package takes image y "
-            "growing downward (OpenCV, +y down); if your keypoints' y grows upward, give y' = image height - y "
-            "(an upside-down person, e.g. a handstand, is lifted as given)"]
-
-
-def upside_down_people(kp17: np.ndarray) -> np.ndarray:
-    """``(n,)`` bool: which of the poses ``(n, 17, 2)`` px (H36M order, image y down) are upright bodies upside down
-    in the image: taller than wide, the head below both ankles by more than half the pose's height (a person lying
-    down, head a little lower than the feet, is not; a joint at (0, 0), a detector's placeholder, gives no reading)."""
-    from .skeleton import JOINT_NAMES
-
-    k = np.asarray(kp17, np.float64).reshape(-1, len(JOINT_NAMES), 2)
-    if not len(k):
-        return np.zeros(0, bool)
-    h, ra, la = (JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
-    head, ankles = k[:, h], k[:, [ra, la]]
-    ext = k.max(1) - k.min(1)  # (x, y) extent of each pose
-    placeholder = zero_placeholders(k)[:, [h, ra, la]].any(1)
-    return (ext[:, 1] > ext[:, 0]) & (head[:, 1] - ankles[:, :, 1].max(1) > 0.5 * ext[:, 1]) & ~placeholder
 
 
 def detected_upside_down_notes(kp17: np.ndarray) -> list[str]:

@@ -679,6 +679,34 @@ def test_input_warnings_are_kept_in_the_result_and_its_dict():
     assert lf.lift(kp, focal=1000.0, principal_point=(500.0, 500.0)).input_warnings == ()
 
 
+def test_lift_warns_of_a_principal_point_at_the_image_size_and_of_y_up_keypoints():
+    """A user trial: poselifter lift says when the principal point lies at the image's edge (the image size given
+    as the principal point) and when every head is below the ankles (y up), but Lifter.lift said nothing (root
+    3.3 m off, MPJPE 604 mm). lift now warns of both, with the records' messages; a centred principal point, an
+    upright person and a principal point per pose from several images are not flagged."""
+    from lifter._checks import _HEAD_TOP, _L_ANKLE, _R_ANKLE
+    from lifter.skeleton import JOINT_NAMES
+
+    assert (_HEAD_TOP, _R_ANKLE, _L_ANKLE) == tuple(JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
+    lf = tiny_lifter()
+    kp = demo_sample("walking").keypoints_2d
+    kp = kp - kp.mean(0) + [500.0, 501.0]
+    with pytest.warns(PoseLifterWarning, match=r"the principal point \(1000, 1002\) px lies at the edge of the 1000 x "
+                                               r"1002 px image \(it equals the image size"):
+        res = lf.lift(kp, focal=1145.0, principal_point=(1000, 1002), image_size=(1000, 1002))
+    assert any("equals the image size" in w for w in res.input_warnings)
+    flipped = kp * [1.0, -1.0] + [0.0, 1002.0]  # y up
+    with pytest.warns(PoseLifterWarning, match=r"the head is below both ankles in 2 of 2 pose\(s\): this package takes "
+                                               r"image y growing downward"):
+        lf.lift(np.stack([flipped, flipped]), focal=1145.0, principal_point=(500, 501))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(kp, focal=1145.0, principal_point=(500, 501), image_size=(1000, 1002))
+        lf.lift(kp, focal=1145.0, image_size=(1000, 1002))  # (the centre, by default)
+        lf.lift(np.stack([kp, kp]), focal=1145.0, principal_point=[(500, 501), (990, 990)], image_size=(1000, 1002))
+        lf.lift(np.stack([kp, flipped, kp]), focal=1145.0, principal_point=(500, 501))  # (most are upright)
+
+
 def test_another_detectors_joint_count_names_the_conversion():
     """(33, 2) BlazePose landmarks given to lift: the shape error names lifter.convert with the format."""
     lf = tiny_lifter()
