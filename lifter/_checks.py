@@ -159,6 +159,17 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                                  "leave it out to assume a field of view)" if focal_given else
                                  "the focal length was assumed, not given: are the keypoints in this image's pixels? "
                                  "(or give the true focal length in pixels)"))
+    if focal is not None:
+        fxy = np.asarray(focal, np.float64)
+        if fxy.ndim and fxy.shape[-1] == 2:
+            aspect = fxy[..., 0] / fxy[..., 1]
+            odd = (aspect > MAX_FOCAL_ASPECT) | (aspect < 1.0 / MAX_FOCAL_ASPECT)
+            if np.any(odd):
+                i = np.unravel_index(int(np.argmax(np.abs(np.log(aspect)))), aspect.shape) if aspect.ndim else ()
+                fx, fy = (float(v) for v in fxy[i])
+                notes.append(f"focal (fx, fy) = ({fx:g}, {fy:g}) px: fx / fy = {fx / fy:.3g}, where a camera's "
+                             "pixels are square to within a few % (fx close to fy); a (2,) focal always means "
+                             "(fx, fy): for one focal length per pose give shape (n, 1) or (n, 2)")
     placeholder = zero_placeholders(k)
     far = np.asarray(placeholder.any(-1))
     if np.any(far):
@@ -167,6 +178,11 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                      "detector's placeholder for a missing joint? It is lifted as a real position; fill it in "
                      "(from a neighbouring frame, or its left/right partner) or leave the pose out")
     return notes
+
+
+MAX_FOCAL_ASPECT: float = 1.25
+"""A focal length whose fx / fy lies outside [1 / this, this] is noted (:func:`input_warnings`): real pixels are
+square to within a few per cent."""
 
 
 def _joint_labels(mask: np.ndarray, names: Sequence[str] | None = None) -> list[str] | list[int]:

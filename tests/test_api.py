@@ -252,7 +252,7 @@ def test_keypoints_not_in_pixels(small_lifter, keypoints):
 
 
 def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
-    per_pose = np.stack([np.full(6, 1000.0), np.linspace(900, 1500, 6)], -1)  # (6, 2)
+    per_pose = np.stack([np.full(6, 1000.0), np.linspace(900, 1200, 6)], -1)  # (6, 2)
     res = small_lifter.lift(keypoints, focal=per_pose, principal_point=(512.0, 515.0))
     np.testing.assert_allclose(res.focal, per_pose)
     one = small_lifter.lift(keypoints[3], focal=per_pose[3], principal_point=(512.0, 515.0))
@@ -705,6 +705,25 @@ def test_lift_warns_of_a_principal_point_at_the_image_size_and_of_y_up_keypoints
         lf.lift(kp, focal=1145.0, image_size=(1000, 1002))  # (the centre, by default)
         lf.lift(np.stack([kp, kp]), focal=1145.0, principal_point=[(500, 501), (990, 990)], image_size=(1000, 1002))
         lf.lift(np.stack([kp, flipped, kp]), focal=1145.0, principal_point=(500, 501))  # (most are upright)
+
+
+def test_a_focal_with_far_from_square_pixels_is_said():
+    """A user trial: two focal lengths for two poses, np.array([1145, 2290]), were read as (fx, fy) (documented)
+    and lifted with a 1:2 pixel aspect, without a word. fx / fy outside [0.8, 1.25] is now said, naming the (n, 1)
+    shape; square and nearly square pixels, and one focal per pose, are not flagged."""
+    lf = tiny_lifter()
+    kp = np.stack([demo_sample("walking").keypoints_2d] * 2)
+    with pytest.warns(PoseLifterWarning, match=r"focal \(fx, fy\) = \(1145, 2290\) px: fx / fy = 0\.5, .* for one "
+                                               r"focal length per pose give shape \(n, 1\)"):
+        res = lf.lift(kp, focal=np.array([1145.0, 2290.0]), principal_point=(500, 500))
+    assert any("fx / fy = 0.5" in w for w in res.input_warnings)
+    with pytest.warns(PoseLifterWarning, match=r"fx / fy = 1\.3"):
+        lf.lift(kp, focal=np.array([[1000.0, 1000.0], [1300.0, 1000.0]]), principal_point=(500, 500))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(kp, focal=np.array([[1145.0], [2290.0]]), principal_point=(500, 500))
+        lf.lift(kp, focal=(1145.0, 1143.0), principal_point=(500, 500))
+        lf.lift(kp, focal=1145.0, principal_point=(500, 500))
 
 
 def test_another_detectors_joint_count_names_the_conversion():
