@@ -65,7 +65,8 @@ def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple
     note = None
     opts = input_options(sample)
     kind = input_pref if input_pref in opts else opts[0]
-    if input_pref == "detected" and kind != "detected" and state.sample.has_gt_2d:
+    if input_pref == "detected" and kind != "detected" and state.sample.has_gt_2d and sample.key.startswith("h36m/"):
+        # (a Human3.6M frame without one; a demo sample never has one, and its dropdown says so)
         note = (f"no 2D detection for {sample.label}; using ground-truth 2D where a frame has none (the "
                 "detection is used again where there is one; the training subjects' detections cover every 5th "
                 "frame; said once per sequence)")
