@@ -52,7 +52,7 @@ from lifter.detect import (
 )
 from lifter.io import REASSUMED_NOTE, LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
-from lifter.pipeline import lift_image, lift_people, plausibility_notes
+from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import lens_free_2d, undoes_lens
@@ -295,6 +295,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     others = tuple(_check_2d(convert(p, src=kf.format, warn=False), f"{nm}, person {i + 2}")
                    for i, p in enumerate(people))
     notes += placeholder_notes(np.stack([kf.keypoints, *people]), src=kf.format)
+    notes += keypoint_file_scores(kf, 1 + len(others))[1]  # (the unsure joints, named as poselifter lift names them)
     tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)

@@ -232,6 +232,18 @@ def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *,
                  for i in range(len(kp17)))
 
 
+def keypoint_file_scores(kf: Any, count: int) -> tuple[np.ndarray | None, list[str]]:
+    """The confidences of the first ``count`` people of a keypoint file (:class:`lifter.io.KeypointFile`, largest
+    first) as the H36M joints' ``(count, 17)`` (each the lowest of the joints its rule reads; None unless every one
+    of them has scores), and the note naming their unsure joints (:func:`joint_doubt_notes`) when the scores lie
+    between 0 and 1 (scores above 1 are another scale, with no threshold to read them by)."""
+    conf = people_scores(kf.people_scores[:count])
+    if conf is None:
+        return None, []
+    scores = h36m_joint_scores(conf, kf.format)
+    return scores, (joint_doubt_notes(scores) if float(np.nanmax(conf)) <= 1.0 else [])
+
+
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
                        flip_test: bool | None = None, max_people: int | None = None) -> LiftRecord:
@@ -245,12 +257,8 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     raw = np.stack(people)
     kp17 = convert(raw, src=kf.format, warn=False)
     notes += placeholder_notes(raw, src=kf.format)  # (in the record, not a Python warning)
-    conf = people_scores(kf.people_scores[:len(people)])
-    scores = None
-    if conf is not None:  # the file's confidences, as the H36M joints' (the lowest read)
-        scores = h36m_joint_scores(conf, kf.format)
-        if float(np.nanmax(conf)) <= 1.0:  # (scores above 1 are another scale: no threshold to read them by)
-            notes += joint_doubt_notes(scores)
+    scores, doubt = keypoint_file_scores(kf, len(people))
+    notes += doubt
     f, src, pp, cam_notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),

@@ -615,6 +615,30 @@ def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLi
         server.stop()
 
 
+def test_an_uploaded_files_unsure_joints_are_named_as_poselifter_lift_names_them(app: PoseLifterApp) -> None:
+    """A user trial: a two-person COCO file whose first person's l_wrist scored 0.2 got "the detector is unsure of
+    some joints ... person 1: l_wrist (0.20)" from poselifter lift, and nothing in the app. The upload's notes (and
+    so the readout) now name them, from the same function; scores all above 0.3, or above 1 (another scale), do not."""
+    s = app.demo.get(app.demo.names[1])
+    coco = _coco_from_h36m(s.keypoints_2d)
+    small = 0.5 * coco + 40.0
+    low = np.full(17, 0.9)
+    low[9] = 0.2  # COCO-17's l_wrist
+    doc = {"people": [{"keypoints": small.tolist(), "keypoint_scores": np.full(17, 0.9).tolist()},
+                      {"keypoints": coco.tolist(), "keypoint_scores": low.tolist()}], "format": "coco17",
+           "image_size": [800, 600], "focal": 1145}
+    sample = up.keypoint_sample("unsure.json", json.dumps(doc).encode(), key="upload/t/unsure.json")
+    said = [w for w in sample.upload.warnings if "the detector is unsure of some joints" in w]
+    assert len(said) == 1 and "person 1: l_wrist (0.20)" in said[0], sample.upload.warnings
+    v = app.headless_view()
+    assert v.load_upload("unsure.json", json.dumps(doc).encode()) is True
+    assert "l_wrist (0.20)" in v.gui.readout.readout.content + " ".join(v.messages)
+    for scores in (np.full(17, 0.9), np.full(17, 20.0)):
+        doc["people"][1]["keypoint_scores"] = scores.tolist()
+        quiet = up.keypoint_sample("sure.json", json.dumps(doc).encode(), key="upload/t/sure.json")
+        assert not any("unsure of some joints" in w for w in quiet.upload.warnings)
+
+
 def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     """A keypoint file with several people: all of them in the sample (largest first), at most MAX_PEOPLE."""
     from lifter.keypoints import convert
