@@ -102,7 +102,13 @@ frame of a playing sequence) rewrites the box."""
 TYPING_GROW_S: float = 3.0
 """As :data:`TYPING_SETTLE_S`, for a positive value below the box's minimum: more digits can still bring it into
 range ("6" on the way to "6000"), so a slow typist gets this long (user trial: after 1 s the box was rewritten to
-the minimum with the cursor in front, and "6", "000" became "000100")."""
+the minimum with the cursor in front, and "6", "000" became "000100"). After it the lift uses the minimum (said),
+but the box keeps what was typed until :data:`TYPING_IDLE_S`: a write into a box being typed mangles the next keys
+(a user trial's "1", a 3.3 s pause, "500" became 150000) or is overtaken by them (a pause of 2.8 s while playing left
+the box at 100 beside a lift at 1500)."""
+TYPING_IDLE_S: float = 10.0
+"""A positive focal below the minimum, lifted at the minimum since :data:`TYPING_GROW_S`, is written back into its
+box once the tab has sent nothing for this long."""
 
 
 def _same_calibration(a: Any, b: Any) -> bool:
@@ -238,6 +244,8 @@ class SessionView:
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
+        self._held: set[tuple[str, Any]] = set()
+        """(control, typed value) of the clamps whose box keeps the keys (:data:`TYPING_IDLE_S`), once said."""
         self._typed_at: dict[str, float] = {}
         """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
         self._typed_uv: tuple[int, int, int, int, np.ndarray] | None = None
@@ -482,6 +490,14 @@ class SessionView:
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
             rejected = [r for r in rejected if r not in typing]
             self._settle_later(max(self._settle_s(r, values) - self._since_typed(r.control) for r in typing) + 0.05)
+        # a value that more digits could still bring into range: clamped in the lift, but the box keeps the keys
+        # until TYPING_IDLE_S (said once per value typed)
+        held = [r for r in rejected if self._grows(r, values) and self._since_typed(r.control) < TYPING_IDLE_S]
+        if held:
+            self._settle_later(max(TYPING_IDLE_S - self._since_typed(r.control) for r in held) + 0.05)
+        held_now = {(r.control, getattr(values, r.control)) for r in held}
+        said_before = {r for r in held if (r.control, getattr(values, r.control)) in self._held}
+        self._held = held_now
         with self._flags:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False
@@ -491,8 +507,9 @@ class SessionView:
         # (text, error, the focal a clamp set: that note goes once another focal is in use; a user trial saw
         # "99999 px ... clamped to 6000" stay beside a focal of 1144.5 typed since, through a model change)
         notes: list[tuple[str, bool, float | None]] = [
-            (r.message, r.refused, float(r.value) if r.control == "focal_px" and not r.refused  # type: ignore[arg-type]
-             and isinstance(r.value, (int, float)) else None) for r in rejected]
+            (r.message + ("; the box keeps what you typed for now" if r in held else ""), r.refused,
+             float(r.value) if r.control == "focal_px" and not r.refused  # type: ignore[arg-type]
+             and isinstance(r.value, (int, float)) else None) for r in rejected if r not in said_before]
         if reset:
             st = ss.reset_joints(st)
         refused_drag = False
@@ -503,7 +520,8 @@ class SessionView:
                 notes.append((str(exc), True, None))
                 refused_drag = True
         for r in rejected:
-            self._set_control(r.control, r.value)
+            if r not in held:
+                self._set_control(r.control, r.value)
         if st.input_kind != old.input_kind and st.sample.has_gt_2d:
             self._input_pref = st.input_kind
         if ss.same_lift(st, old) and not redraw and not reset:
@@ -525,14 +543,18 @@ class SessionView:
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
         positive focal length below the minimum, else :data:`TYPING_SETTLE_S`)."""
-        if r.control == "focal_px":
-            try:
-                typed = float(values.focal_px)
-            except (TypeError, ValueError):
-                return TYPING_SETTLE_S
-            if 0 < typed < focal_min(self.state.sample):
-                return TYPING_GROW_S
-        return TYPING_SETTLE_S
+        return TYPING_GROW_S if self._grows(r, values) else TYPING_SETTLE_S
+
+    def _grows(self, r: ss.Rejection, values: ss.ControlValues) -> bool:
+        """Whether ``r`` is a clamp of a positive focal length below the minimum, typed into its box: more digits
+        can still bring it into range."""
+        if r.refused or r.control != "focal_px":
+            return False
+        try:
+            typed = float(values.focal_px)
+        except (TypeError, ValueError):
+            return False
+        return 0 < typed < focal_min(self.state.sample)
 
     def _control_values(self) -> ss.ControlValues:
         g = self.gui

@@ -1368,7 +1368,7 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
     import time
 
     from poselifter_app.core import focal_min
-    from poselifter_app.viewer import TYPING_GROW_S, TYPING_SETTLE_S
+    from poselifter_app.viewer import TYPING_GROW_S, TYPING_IDLE_S, TYPING_SETTLE_S
 
     with open_tab(app) as (tab, v):
         v.gui.play.play.value = True  # a still demo sample plays the demo motion
@@ -1385,9 +1385,12 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
             lo_play = focal_min(v.state.sample)
             n_play = len(v.messages)
             _send_value(tab, v.gui.lift.focal, lo_play / 2)
-            assert wait_for(lambda: v.state.focal_px == lo_play and v.gui.lift.focal.value == lo_play
-                            and any("is outside" in m for m in v.messages[n_play:]), timeout=TYPING_GROW_S + 5), \
-                (v.state.focal_px, v.gui.lift.focal.value, v.messages[n_play:])
+            assert wait_for(lambda: v.state.focal_px == lo_play and any("is outside" in m and "the box keeps what you "
+                                                                        "typed" in m for m in v.messages[n_play:]),
+                            timeout=TYPING_GROW_S + 5), (v.state.focal_px, v.gui.lift.focal.value, v.messages[n_play:])
+            assert v.gui.lift.focal.value == lo_play / 2  # (the keys stay in the box a while: more may come)
+            assert sum("is outside" in m for m in v.messages[n_play:]) == 1  # said once, not on every frame
+            assert wait_for(lambda: v.gui.lift.focal.value == lo_play, timeout=TYPING_IDLE_S + 5)  # then put back
             assert v.playing
         finally:
             v.gui.play.play.value = True  # pause
@@ -1442,9 +1445,13 @@ def test_a_pass_that_reads_a_typed_value_before_its_callback_runs_knows_it_is_be
                 f.result(timeout=10)
         time.sleep(TYPING_SETTLE_S + 0.2)
         assert box.value == 6.0 and v.state.focal_px == before  # still waiting for more digits
-        lo = focal_min(v.state.sample)  # no more keys: clamped to the minimum, and said
-        assert wait_for(lambda: v.state.focal_px == lo and box.value == lo
-                        and any("is outside" in m for m in v.messages), timeout=TYPING_GROW_S + 5)
+        lo = focal_min(v.state.sample)  # no key for TYPING_GROW_S: lifted at the minimum, and said ...
+        assert wait_for(lambda: v.state.focal_px == lo and any("is outside" in m for m in v.messages),
+                        timeout=TYPING_GROW_S + 5)
+        assert box.value == 6.0  # ... but the box keeps the "6": a user trial's "1", a 3.3 s pause and "500" became
+        for typed in ("60", "600", "6000"):  # 150000 when the clamp wrote 100 under the cursor
+            _send_value(tab, box, float(typed))
+        assert wait_for(lambda: v.state.focal_px == 6000.0 and box.value == 6000.0, timeout=10)
 
 
 def test_a_typed_focal_is_replaced_by_a_new_cameras_at_once(app: PoseLifterApp) -> None:
