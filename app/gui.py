@@ -169,7 +169,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         )
         gui.add_markdown(f"<small>error model: {error_model_name}</small>")
     with tabs.add_tab("Sample", viser.Icon.PHOTO):
-        src_opts = [SOURCE_LABELS[s] for s in sources]
+        src_opts = [SOURCE_LABELS[s] for s in sources if s != "upload"]  # ("upload" joins after the first one)
         source = gui.add_dropdown("source", src_opts, initial_value=src_opts[0])
         demo = gui.add_dropdown("demo sample", demo_names, initial_value=demo_names[0])
         if h36m is not None:

@@ -125,6 +125,7 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
         small = coco.copy()
         small[:, :2] = 0.2 * coco[:, :2] + 10
         content = json.dumps([{"keypoints": small.ravel().tolist()}, {"keypoints": coco.ravel().tolist()}]).encode()
+        assert "upload" not in v.gui.sample.source.options  # (a user trial picked it with nothing uploaded)
         tab.upload(v.gui.files.upload, "two_people.json", content)
         # a COCO file carries no image size: refused with the reason, the tab keeps its sample
         assert wait_for(lambda: "image_size" in (v.messages[-1] if v.messages else ""))
