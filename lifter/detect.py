@@ -378,7 +378,9 @@ def image_from_array(rgb: Any, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> Loaded
         raise ImageError(f"image: expected an (H, W, 3) RGB array, got shape {tuple(a.shape)}")
     a = np.ascontiguousarray(a[..., :3])
     if a.dtype != np.uint8:
-        raise ImageError(f"image: expected dtype uint8, got {a.dtype}")
+        hint = (": for values in [0, 1] give (np.clip(image, 0, 1) * 255).round().astype(np.uint8)"
+                if a.dtype.kind == "f" else ": give 8-bit RGB, e.g. image.astype(np.uint8) for values in 0-255")
+        raise ImageError(f"image: expected dtype uint8, got {a.dtype}{hint}")
     H, W = a.shape[:2]
     notes: tuple[str, ...] = ()
     scale = 1.0

@@ -926,7 +926,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         scores = [[None for _ in fr] for fr in scores]
     if stood_in:
         notes.append(STAND_IN_NOTE.format(what="; ".join(
-            f"{phrase} in {len(at)} frame(s) (first {at[0]})" for phrase, at in stood_in.items())))
+            f"{phrase} in {len(at)} frame(s) (first at frame {at[0]})" for phrase, at in stood_in.items())))
     if dropped:
         at = sorted({i for i, _ in dropped})
         joints = sorted({j for _, (_, bad) in dropped for j in bad})

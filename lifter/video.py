@@ -386,7 +386,7 @@ def track_doubt_notes(frames: list[FrameResult], *, max_joints: int = 4) -> list
         if not joints:
             continue
         first = [rows[int(np.argmax(low[:, j]))][0] for j in joints]
-        named = [f"{JOINT_NAMES[j]} in {int(counts[j])} of {len(rows)} frames (first {fi})"
+        named = [f"{JOINT_NAMES[j]} in {int(counts[j])} of {len(rows)} frames (first at frame {fi})"
                  for j, fi in zip(joints[:max_joints], first[:max_joints])]
         more = f" and {len(joints) - max_joints} more joint(s)" if len(joints) > max_joints else ""
         notes.append(f"track {tid}: the detector is unsure (score below {UNSURE_JOINT_SCORE:g}) of "

@@ -192,8 +192,9 @@ def test_video_names_the_joints_the_detector_was_unsure_of_once_per_track(tmp_pa
     (tid,) = [q.track_id for q in rec.frames[0].people if q.keypoints_2d[:, 0].mean() > W / 2]
     # frames 5-9, but nobody in frame 7: 4 of the 19 frames the track was seen in; the other's elbow at 0.3 is not
     # named
-    assert unsure == [f"track {tid}: the detector is unsure (score below 0.3) of r_wrist in 4 of 19 frames (first 5): "
-                      "their 2D, and so their 3D, may be off in those frames (an occluded or blurred limb?)"]
+    assert unsure == [f"track {tid}: the detector is unsure (score below 0.3) of r_wrist in 4 of 19 frames "
+                      "(first at frame 5): their 2D, and so their 3D, may be off in those frames (an occluded or "
+                      "blurred limb?)"]
     calm = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(20)), focal=F)
     assert not [w for w in calm.warnings if "unsure" in w]
 
@@ -213,9 +214,9 @@ def test_track_doubt_notes_ranks_joints_and_caps_the_list():
         frames.append(FrameResult(index=10 + i, time_s=i / 25, people=[person(s)]))
     frames.append(FrameResult(index=16, time_s=0.3, people=[person(None)]))  # (no scores: not counted)
     (note,) = track_doubt_notes(frames, max_joints=3)
-    assert note.startswith("track 3: the detector is unsure (score below 0.3) of r_hip in 6 of 6 frames (first 10), "
-                           "r_ankle in 3 of 6 frames (first 10), r_knee in 2 of 6 frames (first 10) and 2 more "
-                           "joint(s)")
+    assert note.startswith("track 3: the detector is unsure (score below 0.3) of r_hip in 6 of 6 frames "
+                           "(first at frame 10), r_ankle in 3 of 6 frames (first at frame 10), r_knee in 2 of 6 frames "
+                           "(first at frame 10) and 2 more joint(s)")
     with pytest.raises(PoseLifterError, match="max_joints must be >= 1"):
         track_doubt_notes(frames, max_joints=0)
 
@@ -516,8 +517,9 @@ def test_keypoint_sequence_keeps_each_frames_confidences(tmp_path, lifter):
         assert right.scores.min() == pytest.approx(0.8) and right.scores.max() == pytest.approx(0.8)
     said = [w for w in rec.warnings if "unsure" in w]
     tid = by_x[0][0].track_id
-    assert said == [f"track {tid}: the detector is unsure (score below 0.3) of l_wrist in 4 of 7 frames (first 3): "
-                    "their 2D, and so their 3D, may be off in those frames (an occluded or blurred limb?)"], said
+    assert said == [f"track {tid}: the detector is unsure (score below 0.3) of l_wrist in 4 of 7 frames "
+                    "(first at frame 3): their 2D, and so their 3D, may be off in those frames (an occluded or "
+                    "blurred limb?)"], said
     assert rec.to_json()["frames"][3]["people"][0]["scores"] is not None
     # another scale (a detector's raw scores): kept, no threshold read
     raw = json.loads(path.read_text())

@@ -169,8 +169,9 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
         else:
             unique[f.resolve()] = f
     if twice:
-        notes.append(f"{len(twice)} input(s) given more than once, lifted once: " + ", ".join(twice[:5])
-                     + (" ..." if len(twice) > 5 else ""))
+        names = list(dict.fromkeys(twice))  # (each once: "x.json, x.json" read as a stutter in a user trial)
+        notes.append(f"{len(names)} input(s) given more than once ({len(twice)} repeat(s)), each lifted once: "
+                     + ", ".join(names[:5]) + (" ..." if len(names) > 5 else ""))
     return list(unique.values()), problems, notes
 
 
