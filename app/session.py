@@ -45,16 +45,23 @@ def input_options(sample: Sample) -> list[str]:
 
 def input_label(sample: Sample, kind: str) -> str:
     """What the 2D-input dropdown shows for ``kind`` (``"gt"`` / ``"detected"``) on ``sample``: "ground truth", and
-    "SH detection" on Human3.6M frames or "detected / uploaded 2D" elsewhere (a photo's detection, an upload's own
-    2D). Another ``kind`` is shown as it is."""
+    for ``"detected"`` "SH detection" on Human3.6M frames, "uploaded 2D" for an uploaded keypoint file, "detected
+    2D" for a photo's or video's detection ("detected / uploaded 2D" where the sample does not say). Another
+    ``kind`` is shown as it is."""
     if kind == "gt":
         return "ground truth"
-    if kind == "detected":
-        return "SH detection" if sample.key.startswith("h36m/") else "detected / uploaded 2D"
-    return kind
+    if kind != "detected":
+        return kind
+    if sample.key.startswith("h36m/"):
+        return "SH detection"
+    up = getattr(sample, "upload", None)
+    what = getattr(up, "kind", None)
+    return {"keypoints": "uploaded 2D", "image": "detected 2D", "video": "detected 2D"}.get(str(what),
+                                                                                            "detected / uploaded 2D")
 
 
-INPUT_OF_LABEL: dict[str, str] = {"ground truth": "gt", "SH detection": "detected", "detected / uploaded 2D": "detected"}
+INPUT_OF_LABEL: dict[str, str] = {"ground truth": "gt", "SH detection": "detected", "uploaded 2D": "detected",
+                                  "detected 2D": "detected", "detected / uploaded 2D": "detected"}
 """The 2D input (``"gt"`` / ``"detected"``) of each label :func:`input_label` gives."""
 
 

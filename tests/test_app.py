@@ -452,10 +452,10 @@ def test_gt_input_is_refused_for_an_upload(view: SessionView, app: PoseLifterApp
     from lifter import PoseLifterError
 
     assert _json_upload(view, app.demo.get(app.demo.names[1])) is True
-    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected / uploaded 2D"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "uploaded 2D"
     kp = view.state.keypoints.copy()
     view.gui.sample.input.value = "ground truth"
-    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "detected / uploaded 2D"
+    assert view.state.input_kind == "detected" and view.gui.sample.input.value == "uploaded 2D"
     assert "no ground-truth 2D" in view.messages[-1]
     np.testing.assert_array_equal(view.state.keypoints, kp)
     with pytest.raises(PoseLifterError, match="no ground-truth 2D"):

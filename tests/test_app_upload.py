@@ -497,6 +497,7 @@ def test_photo_upload_with_blazepose(app: PoseLifterApp) -> None:
         assert np.median(err) < 25.0, err  # BlazePose finds the mannequin's joints
         info = st.sample.upload
         assert info.kind == "image" and info.detector == "blazepose" and info.num_people == 1
+        assert list(v.gui.sample.input.options) == ["detected 2D"] and v.gui.sample.input.value == "detected 2D"
         assert info.focal_source == "default-fov" and "blazepose found 1 person" in v.messages[-1]
         assert st.sample.detected_2d is not None and np.all(v.frame.lifted[:, 2] > 0)
         # drag to correct a joint, then download
