@@ -493,11 +493,10 @@ class SessionView:
         # a value that more digits could still bring into range: clamped in the lift, but the box keeps the keys
         # until TYPING_IDLE_S (said once per value typed)
         held = [r for r in rejected if self._grows(r, values) and self._since_typed(r.control) < TYPING_IDLE_S]
-        if held:
-            self._settle_later(max(TYPING_IDLE_S - self._since_typed(r.control) for r in held) + 0.05)
-        held_now = {(r.control, getattr(values, r.control)) for r in held}
         said_before = {r for r in held if (r.control, getattr(values, r.control)) in self._held}
-        self._held = held_now
+        if len(said_before) < len(held):  # (one timer per value held: a playing sequence runs a pass every frame)
+            self._settle_later(max(TYPING_IDLE_S - self._since_typed(r.control) for r in held) + 0.05)
+        self._held = {(r.control, getattr(values, r.control)) for r in held}
         with self._flags:
             drags, self._drags = self._drags, {}
             reset, self._reset_request = self._reset_request, False

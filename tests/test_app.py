@@ -1389,6 +1389,10 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
                                                                         "typed" in m for m in v.messages[n_play:]),
                             timeout=TYPING_GROW_S + 5), (v.state.focal_px, v.gui.lift.focal.value, v.messages[n_play:])
             assert v.gui.lift.focal.value == lo_play / 2  # (the keys stay in the box a while: more may come)
+            time.sleep(1.0)  # frames pass meanwhile: one timer waits to put the box back, not one per frame
+            import threading
+
+            assert sum(isinstance(t, threading.Timer) for t in threading.enumerate()) <= 5
             assert sum("is outside" in m for m in v.messages[n_play:]) == 1  # said once, not on every frame
             assert wait_for(lambda: v.gui.lift.focal.value == lo_play, timeout=TYPING_IDLE_S + 5)  # then put back
             assert v.playing
