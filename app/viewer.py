@@ -563,11 +563,15 @@ class SessionView:
                                 cloud_samples=g.noise.cloud.value, analytic=g.lift.analytic.value,
                                 person=g.joints.person.value)
 
-    def _set_control(self, name: str, value: Any) -> None:
+    def _value_handle(self, name: str) -> Any:
+        """The GUI control of a :class:`ss.ControlValues` field."""
         g = self.gui
-        handle = {"model": g.lift.model, "input_kind": g.sample.input, "focal_px": g.lift.focal,
-                  "noise_level": g.noise.level, "seed": g.noise.seed, "cloud_samples": g.noise.cloud,
-                  "analytic": g.lift.analytic, "person": g.joints.person}[name]
+        return {"model": g.lift.model, "input_kind": g.sample.input, "focal_px": g.lift.focal,
+                "noise_level": g.noise.level, "seed": g.noise.seed, "cloud_samples": g.noise.cloud,
+                "analytic": g.lift.analytic, "person": g.joints.person}[name]
+
+    def _set_control(self, name: str, value: Any) -> None:
+        handle = self._value_handle(name)
         if name == "focal_px":
             value = float(round(value, 1))  # (the box's precision)
         if name == "person":
@@ -1004,9 +1008,7 @@ class SessionView:
         """Put ``value`` in its control as the browser would (values viser cannot hold are refused here) and sync;
         raises with the message when the value was refused."""
         n = self._message_count
-        handle = {"model": self.gui.lift.model, "input_kind": self.gui.sample.input, "focal_px": self.gui.lift.focal,
-                  "noise_level": self.gui.noise.level, "seed": self.gui.noise.seed,
-                  "cloud_samples": self.gui.noise.cloud, "analytic": self.gui.lift.analytic}[name]
+        handle = self._value_handle(name)
         if name == "input_kind":  # ("gt" / "detected": the dropdown shows their labels)
             value = ss.input_label(self.state.sample, value) if isinstance(value, str) else value
         try:
