@@ -244,6 +244,8 @@ class SessionView:
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
+        self._due: dict[str, list[float]] = {}
+        """Kind -> time.time() at which each timer of that kind still waiting fires (:meth:`_later_once`)."""
         self._held: set[tuple[str, Any]] = set()
         """(control, typed value) of the clamps whose box keeps the keys (:data:`TYPING_IDLE_S`), once said."""
         self._typed_at: dict[str, float] = {}
@@ -429,9 +431,24 @@ class SessionView:
         timer.daemon = True
         timer.start()
 
+    def _later_once(self, kind: str, delay: float, func: Callable[..., Any], *args: Any) -> None:
+        """:meth:`_later`, unless a timer of the same ``kind`` already waiting fires no later: that one does instead,
+        and what it runs asks again for what still waits. A playing sequence runs a pass every frame, and each
+        would otherwise start a timer of its own (a test counted 51 after 1 s)."""
+        now = time.time()
+        due = now + delay
+        with self._flags:
+            waiting = [t for t in self._due.get(kind, ()) if t > now]
+            self._due[kind] = waiting
+            if any(t <= due + 0.04 for t in waiting):  # (the passes of one typed value ask for the same time)
+                return
+            waiting.append(due)
+        self._later(delay, func, *args)
+
     def _settle_later(self, delay: float) -> None:
-        """A sync pass after ``delay`` s: a clamped value still in its box is applied then (:data:`TYPING_SETTLE_S`)."""
-        self._later(delay, self._runner.request)
+        """A sync pass after ``delay`` s: a clamped value still in its box is applied then (:data:`TYPING_SETTLE_S`);
+        one timer at a time (:meth:`_later_once`)."""
+        self._later_once("settle", delay, self._runner.request)
 
     def _since_typed(self, name: str) -> float:
         """Seconds since the tab last sent a value for control ``name`` (inf: never)."""
@@ -855,7 +872,7 @@ class SessionView:
         if self.gui.lift.auto_frame.value and not self._close_up:
             since = self._since_typed("focal_px")
             if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,
-                self._later(TYPING_SETTLE_S - since + 0.05, self._auto_frame)  # not to each half-typed value
+                self._auto_frame_later(TYPING_SETTLE_S - since + 0.05)  # not to each half-typed value
             else:
                 self._keep_in_view()
 
@@ -917,6 +934,18 @@ class SessionView:
         if self.gui.lift.auto_frame.value and self.frame is not None:
             with self.lock:
                 self._keep_in_view()
+
+    def _auto_frame_later(self, delay: float) -> None:
+        """:meth:`_auto_frame` once the focal length's box has had no key for :data:`TYPING_SETTLE_S` (one timer at a
+        time, :meth:`_later_once`; one that fires while keys still come waits again)."""
+        self._later_once("auto_frame", delay, self._auto_frame_settled)
+
+    def _auto_frame_settled(self) -> None:
+        since = self._since_typed("focal_px")
+        if since < TYPING_SETTLE_S:
+            self._auto_frame_later(TYPING_SETTLE_S - since + 0.05)
+        else:
+            self._auto_frame()
 
     @control
     def head_on_view(self) -> None:

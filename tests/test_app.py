@@ -1365,6 +1365,7 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
     1 s, so "6000" became "000100"; at the minimum, -500 was neither applied nor answered. Now the frames leave a
     box being typed alone, a value below the minimum waits TYPING_GROW_S for more digits, and a clamp to the value
     in use is said and put back in the box."""
+    import threading
     import time
 
     from poselifter_app.core import focal_min
@@ -1385,13 +1386,14 @@ def test_focal_typed_during_playback_and_slowly(app: PoseLifterApp) -> None:
             lo_play = focal_min(v.state.sample)
             n_play = len(v.messages)
             _send_value(tab, v.gui.lift.focal, lo_play / 2)
+            time.sleep(1.0)  # frames pass while it may still grow: one settle timer at a time, not one per frame
+            timers = [t for t in threading.enumerate() if isinstance(t, threading.Timer)]
+            assert len(timers) <= 3, [t.interval for t in timers]
             assert wait_for(lambda: v.state.focal_px == lo_play and any("is outside" in m and "the box keeps what you "
                                                                         "typed" in m for m in v.messages[n_play:]),
                             timeout=TYPING_GROW_S + 5), (v.state.focal_px, v.gui.lift.focal.value, v.messages[n_play:])
             assert v.gui.lift.focal.value == lo_play / 2  # (the keys stay in the box a while: more may come)
             time.sleep(1.0)  # frames pass meanwhile: one timer waits to put the box back, not one per frame
-            import threading
-
             assert sum(isinstance(t, threading.Timer) for t in threading.enumerate()) <= 5
             assert sum("is outside" in m for m in v.messages[n_play:]) == 1  # said once, not on every frame
             assert wait_for(lambda: v.gui.lift.focal.value == lo_play, timeout=TYPING_IDLE_S + 5)  # then put back
