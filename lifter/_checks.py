@@ -23,12 +23,17 @@ class PoseLifterWarning(UserWarning):
     message names the problem. Turn into errors with ``warnings.simplefilter("error", PoseLifterWarning)``."""
 
 
-def where_in_batch(mask: Any, *, whose: str | None = None) -> str:
+def where_in_batch(mask: Any, *, whose: str | None = None, names: Sequence[str] | None = None) -> str:
     """`` (pose at index (i, j), n such pose(s))`` for the first True entry of a mask over a batch's leading shape;
     empty for a single pose (a 0-d mask, or a batch of one like a file's single pose). ``whose``: the batch is a
     list of people (one image's, file's or frame's, as its record lists them): `` (person i+1 of <whose>, and n-1
-    more)``, 1-based, as the joint-score notes count."""
+    more)``, 1-based, as the joint-score notes count. ``names``: the people's own labels, one per entry of a 1-D
+    mask (a video frame's ``"track 3"``): `` (<name>, and n-1 more)``, for a batch of one too."""
     mask = np.asarray(mask)
+    if names is not None and mask.ndim == 1 and len(names) == mask.size and mask.any():
+        first_name = names[int(np.argmax(mask))]
+        more = int(mask.sum()) - 1
+        return f" ({first_name}" + (f", and {more} more)" if more else ")")
     if mask.size <= 1:
         return ""
     first = tuple(int(i) for i in np.argwhere(mask)[0])

@@ -356,12 +356,14 @@ class Lifter:
         return self.clean if source == "clean" and self.clean is not None else self
 
     def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike, *,
-                     source: Source | None = None, whose: str | None = None) -> list[OutputNote]:
+                     source: Source | None = None, whose: str | None = None,
+                     names: Sequence[str] | None = None) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
         a reference-camera network) roots farther than :attr:`far_root_depth_mm`. For callers that show one pose of a
-        batch (the app), or that name the people of a batch (``whose``: :func:`lifter._checks.where_in_batch`)."""
+        batch (the app), or that name the people of a batch (``whose``, or each one's label ``names`` such as a video's
+        ``"track 3"``: :func:`lifter._checks.where_in_batch`)."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -376,7 +378,7 @@ class Lifter:
                 notes.append(OutputNote(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
                              f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
                              f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
-                             f"{where_in_batch(outside, whose=whose)}: its depth is an extrapolation (it can place "
+                             f"{where_in_batch(outside, whose=whose, names=names)}: its depth is an extrapolation (it can place "
                              "people behind the camera): use the default model, which is exact at any image size, or scale the "
                              "image and its intrinsics down", kind="pixel-range"))
         if source == "detected" and self.input_space == "camera" and root.size:
@@ -393,12 +395,12 @@ class Lifter:
                        f"farther than this model's training moved people (the training subjects' 7.6 m times "
                        f"{k:g}): its depth there is an extrapolation")
                 notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
-                                        f"{where_in_batch(far, whose=whose)}: {why}", kind="far"))
+                                        f"{where_in_batch(far, whose=whose, names=names)}: {why}", kind="far"))
         behind = root[..., 2] <= 0
         if np.any(behind):
             notes.append(OutputNote(
                 f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
-                f"{where_in_batch(behind, whose=whose)}: the 2D is outside what it was trained on; the result is not a "
+                f"{where_in_batch(behind, whose=whose, names=names)}: the 2D is outside what it was trained on; the result is not a "
                 "valid pose"
                 + ("" if self.config.input_space == "camera" else " (a pixel-space model: use the default model)"),
                 kind="behind-camera"))

@@ -213,6 +213,23 @@ def track_animation(seen: list[tuple[int, PersonState]]) -> np.ndarray:
     return out.reshape(len(t), *poses.shape[1:])
 
 
+def tracked_output_notes(net: Any, frames: list[FrameResult], principal_point: Any, *, source: str,
+                         only: set[int] | None = None) -> dict[str, tuple[int, int, str]]:
+    """What looks wrong in tracked frames' lifts (``net.output_notes``, :meth:`lifter.Lifter.output_notes`, on each
+    person's unsmoothed root), collected per kind (:func:`collect_output_notes`), each note naming the person by
+    the track id the record gives them (``"track 3"``: a frame position would not find them in the record).
+    ``only``: the frame indices to look at (those whose lift had notes); None: every frame."""
+    acc: dict[str, tuple[int, int, str]] = {}
+    for fr in frames:
+        if not fr.people or (only is not None and fr.index not in only):
+            continue
+        kp = np.stack([q.keypoints_2d for q in fr.people])
+        root = np.stack([q.root_raw for q in fr.people])
+        collect_output_notes(acc, fr.index, net.output_notes(kp, principal_point, root, source=source,
+                                                             names=[f"track {q.track_id}" for q in fr.people]))
+    return acc
+
+
 def output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
     """The record's lines for :func:`collect_output_notes`: the first frame's note, and how many frames had it."""
     return [f"frame {first}: {message}" + (f" ({n} frames like it)" if n > 1 else "")
@@ -481,7 +498,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
         warnings: list[str] = []
-        output_notes: dict[str, tuple[int, int, str]] = {}  # kind -> (first frame, frames, message)
+        noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
         source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
         if not (math.isfinite(fps) and 0 < fps <= 1000):
             warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
@@ -564,8 +581,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 kp = np.stack([q.keypoints_2d for q in people])
                 source_format = source_format or people[0].raw.keypoint_format
                 res = lifter.lift(kp, focal=cam[0], principal_point=cam[2], flip_test=flip_test, source="detected",
-                                  warn=False, whose="the frame's people")  # (the record's notes say it, once)
-                collect_output_notes(output_notes, index, getattr(res, "warnings", ()))
+                                  warn=False)  # (the record's notes say it, once)
+                if getattr(res, "warnings", ()):
+                    noted.add(index)
                 states = seq.step(index, t_s, kp, np.asarray(res.root).reshape(-1, 3),
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
@@ -612,7 +630,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
     warnings.extend(track_doubt_notes(frames))
-    warnings.extend(output_note_lines(output_notes))
+    if noted:
+        warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
+                                                               source="detected", only=noted)))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -707,18 +727,15 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
                       distortion=ks.distortion)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
-    # what looks wrong in the output, per frame (the batch's own notes would count people of all frames at once)
-    output_notes: dict[str, tuple[int, int, str]] = {}
     lifted, k = [], 0
     for i, c in enumerate(counts):
         lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c],
                        _frame_scores(kept_scores[i], ks.format)))
-        if c and getattr(res, "warnings", ()):
-            collect_output_notes(output_notes, i, lifter.network_for(ks.source).output_notes(
-                kp17[k:k + c], pp, root[k:k + c], source=ks.source, whose="the frame's people"))
         k += c
-    warnings.extend(output_note_lines(output_notes))
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
+    if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
+        warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
+                                                               source=ks.source)))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
@@ -733,4 +750,4 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "Fra
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
-           "track_lifted"]
+           "track_lifted", "tracked_output_notes"]

@@ -327,7 +327,31 @@ def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted(t
                                "principal_point": np.asarray(c, float).tolist(), "frames": frames}))
     rec = lift_keypoint_sequence(seq, lifter=lifter)
     far_notes = [w for w in rec.warnings if "beyond 38.0 m" in w]
-    assert len(far_notes) == 1 and "(person 2 of the frame's people)" in far_notes[0], rec.warnings
+    far_id = rec.frames[0].people[1].track_id
+    assert far_id == 2 and rec.frames[0].people[1].root_raw[2] > 38000.0
+    assert len(far_notes) == 1 and f"frame 0: 1 of 2 root(s) lifted beyond 38.0 m (track {far_id})" in far_notes[0]
+    assert "(6 frames like it)" in far_notes[0], rec.warnings
+    # and in a video, by its track id, not by its place in the frame's list (the near person, who came into view
+    # later, is listed first as the larger one; a position would not find the far one in the record)
+    cv2 = pytest.importorskip("cv2")
+    from conftest import ScriptedEstimator
+
+    from lifter.video import lift_video
+
+    W, H = s.image_size
+    clip = tmp_path / "far.avi"
+    vw = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (W, H))
+    for _ in range(10):
+        vw.write(np.zeros((H, W, 3), np.uint8))
+    vw.release()
+    script = [[at(60000.0)] + ([at(4000.0)] if i >= 2 else []) for i in range(10)]
+    vid = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(script), focal=float(np.mean(f)),
+                     principal_point=np.asarray(c, float))
+    late = vid.frames[5].people
+    assert [q.track_id for q in late] == [2, 1] and late[1].root_raw[2] > 38000.0  # far: listed second, track 1
+    far_notes = [w for w in vid.warnings if "beyond 38.0 m" in w]
+    assert len(far_notes) == 1 and "frame 0: 1 of 1 root(s) lifted beyond 38.0 m (track 1)" in far_notes[0]
+    assert "(10 frames like it)" in far_notes[0], vid.warnings
     with pytest.warns(PoseLifterWarning, match="beyond 8.0 m.*trained where they stood, place such people too near"):
         old = before.lift(kp, focal=f, principal_point=c)
     assert float(old.root[2]) < 0.85 * 14000.0 and any(w.kind == "far" for w in old.warnings)
