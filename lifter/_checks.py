@@ -217,6 +217,29 @@ def zero_placeholders(keypoints: np.ndarray) -> np.ndarray:
     return zero & far[..., None]
 
 
+MIN_PLAUSIBLE_VIEW_DEG: float = 1.0
+"""A focal length that gives the image a diagonal field of view narrower than this gets a note
+(:func:`narrow_view_notes`): a 2000 mm lens on a full-frame camera still sees 1.2 deg."""
+
+
+def narrow_view_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str]:
+    """A note when the focal length ``focal`` (px, scalar or ``(fx, fy)``) gives the ``image_size`` image a diagonal
+    field of view narrower than :data:`MIN_PLAUSIBLE_VIEW_DEG` (None: not checked): a focal length in other pixels
+    or units, or a typo (a user trial's 100000 px on a 1000 px image placed a person at 438 m with only a note about
+    the distance). The depth is proportional to the focal length."""
+    if image_size is None:
+        return []
+    f = np.asarray(focal, np.float64).reshape(-1)
+    alpha = float(np.sqrt(f[0] * f[-1]))
+    W, H = image_size
+    fov = math.degrees(2.0 * math.atan(math.hypot(W, H) / (2.0 * alpha)))
+    if not fov < MIN_PLAUSIBLE_VIEW_DEG:
+        return []
+    return [f"the focal length {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.2g} deg "
+            f"(diagonal), narrower than a 2000 mm telephoto lens's on a full-frame camera (1.2 deg): is it in this "
+            "image's pixels (f_px = f_mm * image width px / sensor width mm)? Every depth is proportional to it"]
+
+
 PRINCIPAL_POINT_EDGE: float = 0.05
 """A principal point within this share of the image's width / height of its edge, or outside it, gets a note."""
 
@@ -268,6 +291,63 @@ def upside_down_people(kp17: np.ndarray) -> np.ndarray:
         x = k[down, :, 0]
         down[down] = (y_ext[down] > x.max(1) - x.min(1)) & ~zero_placeholders(k[down])[:, [h, ra, la]].any(1)
     return down
+
+
+COCO_FACE_SPREAD: float = 0.12
+"""A 17-joint pose whose first five points lie within this share of its 2D size (box diagonal) of each other has
+COCO-17's face first (nose, eyes, ears), not H36M's pelvis, hips, right knee and foot (:func:`face_first_people`).
+Measured: BlazePose's nose, eyes and ears on the 84 Human3.6M photos span at most 0.077; H36M's first five, on every
+10th frame of every Human3.6M subject and camera (200k poses), at least 0.214."""
+
+
+def face_first_people(kp17: np.ndarray, missing: np.ndarray | None = None) -> np.ndarray:
+    """``(n,)`` bool: which of the 17-joint poses ``(n, 17, 2)`` px start with five points as close together as a
+    face's (:data:`COCO_FACE_SPREAD`): COCO-17 order given where H36M order was meant. ``missing`` ``(n, 17)``: the
+    joints that are not there (None: the non-finite ones and (0, 0) placeholders, :func:`zero_placeholders`);
+    False where too few joints are there to tell (fewer than 4 of the first five, or than 10 of all)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    if missing is None:  # (first over every joint, cheap: lift runs this on every batch; then where it can matter)
+        x, y = k[..., 0], k[..., 1]  # (a reduction over the joints of (n, 17, 2) as a whole is 15 x slower)
+        zero = (x == 0) & (y == 0)
+        if zero.any():  # (a hidden ear at (0, 0) leaves four face points: left out here, NaN, which fmax skips)
+            x, y = np.where(zero, np.nan, x), np.where(zero, np.nan, y)
+        hx, hy = x[:, :5], y[:, :5]
+        hi, lo = np.fmax.reduce, np.fmin.reduce
+        with np.errstate(invalid="ignore", over="ignore"):
+            maybe = (np.square(hi(hx, 1) - lo(hx, 1)) + np.square(hi(hy, 1) - lo(hy, 1))
+                     < COCO_FACE_SPREAD**2 * (np.square(hi(x, 1) - lo(x, 1)) + np.square(hi(y, 1) - lo(y, 1))))
+        if not maybe.any():
+            return maybe
+        out = np.zeros(len(k), bool)
+        sub = k[maybe]
+        out[maybe] = face_first_people(sub, ~np.isfinite(sub).all(-1) | zero_placeholders(sub))
+        return out
+    ok = ~np.asarray(missing, bool).reshape(-1, 17)
+    enough = (ok[:, :5].sum(1) >= 4) & (ok.sum(1) >= 10)
+
+    def diagonal(pts: np.ndarray, there: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore", over="ignore"):
+            lo = np.where(there[..., None], pts, np.inf).min(1)
+            hi = np.where(there[..., None], pts, -np.inf).max(1)
+            return np.hypot(*np.moveaxis(hi - lo, -1, 0))
+
+    size, spread = diagonal(k, ok), diagonal(k[:, :5], ok[:, :5])
+    with np.errstate(invalid="ignore"):
+        return enough & np.isfinite(size) & (size > 0) & (spread < COCO_FACE_SPREAD * size)
+
+
+def face_first_notes(kp17: np.ndarray) -> list[str]:
+    """A note when most of the poses ``(n, 17, 2)`` px given as H36M order start with a face
+    (:func:`face_first_people`): COCO-17 keypoints passed to :meth:`lifter.Lifter.lift` without converting them
+    (lifted as if the nose were the pelvis: a user trial's root came out at 39 % of its depth)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    face = face_first_people(k)
+    if not len(k) or float(face.mean()) <= 0.5:
+        return []
+    return [f"the first five joints of {int(face.sum())} of {len(k)} pose(s) lie within {COCO_FACE_SPREAD * 100:.0f} % "
+            "of their 2D size of each other, as COCO-17's nose, eyes and ears do (H36M's first five, the pelvis, "
+            "hips, right knee and right foot, span the legs): lift takes H36M-17 order; convert COCO-17 keypoints "
+            "first, lifter.convert(keypoints, src=\"coco17\") (the depth and pose of unconverted ones are wrong)"]
 
 
 _HEAD_TOP, _R_ANKLE, _L_ANKLE = 10, 3, 6

@@ -32,7 +32,9 @@ from ._checks import (
     PoseLifterWarning,
     as_pair,
     as_points,
+    face_first_notes,
     input_warnings,
+    narrow_view_notes,
     principal_point_notes,
     upside_down_notes,
     where_in_batch,
@@ -651,7 +653,12 @@ class Lifter:
             flat = pp.reshape(-1, 2)
             if len(flat) and np.all(flat == flat[0]):
                 in_list += principal_point_notes(flat[0], (int(wh[0]), int(wh[1])))
+        if focal_source == "given" and wh is not None and wh.ndim == 1:
+            flat_focal = f.reshape(-1, 2)
+            if len(flat_focal) and np.all(flat_focal == flat_focal[0]):
+                in_list += narrow_view_notes(flat_focal[0], (int(wh[0]), int(wh[1])))
         in_list += upside_down_notes(kp)
+        in_list += face_first_notes(kp)
         in_notes = tuple(in_list)
         if warn:
             for message in in_notes:

@@ -41,7 +41,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from ._checks import PoseLifterError
+from ._checks import COCO_FACE_SPREAD, PoseLifterError, face_first_people
 from .camera import MAX_DISTORTION_COEFFICIENT, check_distortion
 from .keypoints import H36M17, get_format, keypoint_formats, stand_in_missing
 from .skeleton import JOINT_NAMES
@@ -123,7 +123,8 @@ class LiftRecord:
             "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
                       "focal": "px", "principal_point": "px"},
-            "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the upright full-resolution image",
+            "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the "
+                     + ("upright full-resolution image" if self.kind == "image" else "image the keypoints belong to"),
             "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
             "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
             "focal": r(self.focal), "focal_source": self.focal_source,
@@ -631,25 +632,10 @@ class _People:
     """The people with missing joints stood in for (:func:`lifter.keypoints.stand_in_missing`): ``(who, phrases)``."""
 
 
-COCO_FACE_SPREAD: Final = 0.12
-"""A 17-joint pose without 'format' whose first five points lie within this share of its 2D size (box diagonal) of
-each other has COCO-17's face first (nose, eyes, ears), not H36M's pelvis, hips, right knee and foot. Measured:
-BlazePose's nose, eyes and ears on the 84 Human3.6M photos span at most 0.077; H36M's first five, on every 10th
-frame of every Human3.6M subject and camera (200k poses), at least 0.214."""
-
-
 def _face_first(xy: np.ndarray, missing: np.ndarray) -> bool:
     """Whether the 17-joint pose ``xy`` ``(17, 2)`` px (``missing`` ``(17,)``) starts with five points as close together
-    as a face's (:data:`COCO_FACE_SPREAD`); False when too few of them are there to tell."""
-    ok = ~missing
-    if ok[:5].sum() < 4 or ok.sum() < 10:
-        return False
-    with np.errstate(over="ignore", invalid="ignore"):
-        pts = xy[ok]
-        size = float(np.linalg.norm(pts.max(0) - pts.min(0)))
-        head = xy[:5][ok[:5]]
-        spread = float(np.linalg.norm(head.max(0) - head.min(0)))
-    return math.isfinite(size) and size > 0 and spread < COCO_FACE_SPREAD * size
+    as a face's (:func:`lifter._checks.face_first_people`, :data:`COCO_FACE_SPREAD`)."""
+    return bool(face_first_people(xy, missing)[0])
 
 
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
@@ -930,9 +916,12 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if dropped:
         at = sorted({i for i, _ in dropped})
         joints = sorted({j for _, (_, bad) in dropped for j in bad})
+        first_frame, (first_who, _) = dropped[0]
+        first_who = first_who.replace(" in the file", f" of frame {first_frame}").replace(
+            "the person", f"the person of frame {first_frame}")
         msg = (f"{len(dropped)} person(s) left out of {len(at)} frame(s) ({', '.join(map(str, at[:10]))}"
                f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0 or null, or null / "
-               f"non-finite coordinates); {_needs(fmt)}")
+               f"non-finite coordinates; first {first_who}); {_needs(fmt)}")
         if not any(frames):
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")

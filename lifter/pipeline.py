@@ -24,6 +24,7 @@ from ._checks import (
     PoseLifterError,
     as_pair,
     input_warnings,
+    narrow_view_notes,
     principal_point_notes,
     upside_down_notes,
     upside_down_people,
@@ -123,6 +124,8 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         assert image_size is not None  # (checked above)
         pp = np.asarray(image_size, np.float64) / 2.0
     notes += principal_point_notes(pp, image_size)
+    if src in FOCAL_GIVEN_SOURCES:
+        notes += narrow_view_notes(focal, image_size)
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
@@ -252,6 +255,8 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     notes = list(kf.warnings)
     people = kf.people or (kf.keypoints,)
     if max_people is not None and len(people) > max_people:
+        each = f"{len(people)} people in the file; each is lifted"  # (the reader's note, no longer true)
+        notes = [n for n in notes if not n.startswith(each)]
         notes.append(f"{len(people)} people in the file; the {max_people} largest are lifted (max_people)")
         people = people[:max_people]
     raw = np.stack(people)

@@ -707,6 +707,70 @@ def test_lift_warns_of_a_principal_point_at_the_image_size_and_of_y_up_keypoints
         lf.lift(np.stack([kp, flipped, kp]), focal=1145.0, principal_point=(500, 501))  # (most are upright)
 
 
+def test_lift_warns_of_coco17_keypoints_given_in_place_of_h36m17():
+    """A user trial: COCO-17 keypoints passed to Lifter.lift unconverted were lifted as H36M order (the nose taken for
+    the pelvis) without a word, the root at 39 % of its depth, where a keypoint file without 'format' is refused.
+    lift now warns when most poses start with five points as close together as a face's, naming lifter.convert;
+    the same poses converted, and H36M poses of every kind, are not flagged."""
+    from lifter import convert
+    from lifter._checks import face_first_people
+    from lifter.keypoints import COCO17_JOINT_NAMES
+    from lifter.skeleton import JOINT_NAMES
+
+    lf = tiny_lifter()
+    rng = np.random.default_rng(3)
+    h36m = np.stack([project(p, focal=1000.0, principal_point=(640.0, 360.0)) for p in random_pose_cam(rng, 40)])
+    at = {n: h36m[:, JOINT_NAMES.index(n)] for n in JOINT_NAMES}
+    nose = at["neck_nose"]
+    u = np.linalg.norm(np.ptp(h36m, axis=1), axis=-1)[:, None] / 100.0  # (1 % of each pose's 2D size, px)
+    face = {"nose": nose, "l_eye": nose + [1.5, -2] * u, "r_eye": nose + [-1.5, -2] * u, "l_ear": nose + [4, -1] * u,
+            "r_ear": nose + [-4, -1] * u}  # (BlazePose's face on the 84 photos: within 7.7 %)
+    coco = np.stack([face[n] if n in face else at[n] for n in COCO17_JOINT_NAMES], axis=1)
+    assert face_first_people(coco).all() and not face_first_people(h36m).any()
+    with pytest.warns(PoseLifterWarning, match=r"the first five joints of 40 of 40 pose\(s\) lie within 12 % .* "
+                                               r"convert COCO-17 keypoints first, lifter.convert\(keypoints, "
+                                               r"src=\"coco17\"\)"):
+        res = lf.lift(coco, focal=1000.0, principal_point=(640, 360))
+    assert any("COCO-17's nose, eyes and ears" in w for w in res.input_warnings)
+    one = coco[0].copy()
+    one[4] = 0.0  # a detector's placeholder for a hidden ear: the other four still tell
+    with pytest.warns(PoseLifterWarning) as said:  # (and the placeholder's own note)
+        lf.lift(one, focal=1000.0, principal_point=(640, 360))
+    assert any("COCO-17's nose, eyes and ears" in str(w.message) for w in said), [str(w.message) for w in said]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(convert(coco, src="coco17"), focal=1000.0, principal_point=(640, 360))
+        lf.lift(h36m, focal=1000.0, principal_point=(640, 360))
+        lf.lift(np.concatenate([h36m[:3], coco[:2]]), focal=1000.0, principal_point=(640, 360))  # (most are H36M)
+
+
+def test_a_focal_length_too_long_for_any_lens_is_said():
+    """A user trial: --focal 100000 on a 1000 px photo (0.8 deg of view) placed the person at 438 m, and the only
+    note was about the distance. A focal length that gives the image less than 1 deg of view (diagonal) is now said
+    by lift (with image_size) and by the records (poselifter lift), naming the px conversion; a long telephoto's
+    is not."""
+    from lifter.camera import focal_from_fov
+    from lifter.pipeline import resolve_camera
+
+    lf = tiny_lifter()
+    kp = demo_sample("walking").keypoints_2d
+    with pytest.warns(PoseLifterWarning, match=r"the focal length 100000 px gives this 1000 x 1002 px image a field of "
+                                               r"view of 0\.81 deg \(diagonal\).* Every depth is proportional to it"):
+        res = lf.lift(kp, focal=100000.0, image_size=(1000, 1002))
+    assert any("field of view of 0.81 deg" in w for w in res.input_warnings)
+    tele = float(focal_from_fov((1000, 1002), fov_deg=1.2))  # (a 2000 mm lens on full frame)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(kp, focal=tele, image_size=(1000, 1002))
+        lf.lift(kp, focal=100000.0, principal_point=(500, 501))  # (no image size: no view to measure)
+    kw = dict(user_pp=None, file_focal=None, file_pp=None, image_size=(1000, 1002), exif=None, sensor_width_mm=None,
+              fov_deg=55.0, where="x.json")
+    *_, notes = resolve_camera(user_focal=np.array([1e5, 1e5]), **kw)
+    assert any("field of view of 0.81 deg" in n for n in notes), notes
+    *_, notes = resolve_camera(user_focal=np.array([tele, tele]), **kw)
+    assert not any("field of view of" in n for n in notes), notes
+
+
 def test_a_focal_with_far_from_square_pixels_is_said():
     """A user trial: two focal lengths for two poses, np.array([1145, 2290]), were read as (fx, fy) (documented)
     and lifted with a 1:2 pixel aspect, without a word. fx / fy outside [0.8, 1.25] is now said, naming the (n, 1)
