@@ -343,8 +343,8 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     except ImageError:
         raise
     except UnidentifiedImageError:
-        hint = (": keypoint arrays (.npy, .npz, .csv) are lifted through the Python API (lifter.Lifter.lift) or "
-                "written as a keypoint JSON file (README, 'keypoint JSON')"
+        hint = (": if it holds keypoints, write them as a keypoint JSON file (README, 'keypoint JSON') or lift the "
+                "arrays through the Python API (lifter.Lifter.lift)"
                 if p.suffix.lower() in (".npy", ".npz", ".csv", ".txt", ".pkl", ".h5") else "")
         raise ImageError(f"{p}: not an image (or a format this tool cannot read){hint}") from None
     except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:

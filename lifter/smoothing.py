@@ -73,13 +73,26 @@ class OneEuroFilter:
         return self._x.copy()
 
 
+MAX_STRENGTH: Final[float] = 10.0
+"""The strongest smoothing taken: the cutoffs are divided by the strength, and at 10 the root's is 0.03 Hz at rest
+(a lag of seconds); beyond, the pose barely moves (a user trial: 1e9 froze every frame at the first, and 100
+doubled the root error)."""
+
+
+def check_strength(strength: float, *, name: str = "smoothing strength") -> None:
+    """Refuse a smoothing strength outside [0, :data:`MAX_STRENGTH`] (or not a number), naming ``name``."""
+    if not (math.isfinite(strength) and 0 <= strength <= MAX_STRENGTH):
+        raise PoseLifterError(f"{name} must be from 0 to {MAX_STRENGTH:g} (0 = off, 1 = default, 2 = twice "
+                              f"as smooth; the filter's cutoffs are divided by it, so above {MAX_STRENGTH:g} the pose "
+                              f"barely moves), got {strength:g}")
+
+
 class PoseSmoother:
     """Causal smoothing of one person's lifted root ``(3,)`` mm and root-relative pose ``(J, 3)`` mm
-    (module docstring). ``strength`` >= 0: 0 = off; the cutoffs are divided by it."""
+    (module docstring). ``strength`` from 0 to :data:`MAX_STRENGTH`: 0 = off; the cutoffs are divided by it."""
 
     def __init__(self, strength: float = 1.0) -> None:
-        if not (math.isfinite(strength) and strength >= 0):
-            raise PoseLifterError(f"smoothing strength must be >= 0 (0 = off, 1 = default), got {strength}")
+        check_strength(strength)
         self.strength = float(strength)
         s = max(self.strength, 1e-9)
         self._root = OneEuroFilter(min_cutoff=ROOT_MIN_CUTOFF_HZ / s, beta=ROOT_BETA / s)
@@ -114,4 +127,4 @@ def smooth_sequence(root: np.ndarray, relative: np.ndarray, times: np.ndarray, *
     return out_r, out_rel
 
 
-__all__ = ["OneEuroFilter", "PoseSmoother", "smooth_sequence"]
+__all__ = ["MAX_STRENGTH", "OneEuroFilter", "PoseSmoother", "check_strength", "smooth_sequence"]

@@ -5,8 +5,9 @@ Each frame's people (2D keypoints, px) are matched to the live tracks by an opti
 centres divided by the track's box diagonal (so the gate scales with the person's size in the image), plus
 the box-size mismatch ``|log(diag / track diag)|``. A pair costing more than ``gate`` is not matched: the
 person starts a new track. A track that is not seen for more than ``max_missed`` frames ends; its id is never
-reused. Where the input names its people (a keypoint sequence's ``person_id``), the names decide: a person is
-matched to the live track of the same name, whatever the cost, and never to a track of another name.
+reused by anyone else. Where the input names its people (a keypoint sequence's ``person_id``), the names decide: a
+person is matched to the live track of the same name, whatever the cost, and never to a track of another name; a
+name that comes back after its track ended takes that track up again (same id), however long the gap.
 """
 
 from __future__ import annotations
@@ -76,6 +77,13 @@ class Tracker:
         names: list[str | int | None] = list(person_ids) if person_ids is not None else [None] * len(boxes)
         if len(names) != len(boxes):
             raise PoseLifterError(f"Tracker.update: {len(names)} person ids for {len(boxes)} people")
+        live_names = {tr.person_id for tr in self.tracks.values()}
+        for name in dict.fromkeys(n for n in names if n is not None and n not in live_names):
+            gone = [k for k, tr in enumerate(self.ended) if tr.person_id == name]
+            if gone:  # a name back after its track ended: that track again (the boxes then match it at any jump)
+                tr = self.ended.pop(gone[-1])
+                tr.velocity = np.zeros(2)
+                self.tracks[tr.track_id] = tr
         live = list(self.tracks.values())
         ids: list[int] = [0] * len(boxes)
 

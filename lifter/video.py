@@ -267,8 +267,8 @@ class SequenceRecord:
         return _tracks(self.frames)
 
     def to_json(self) -> dict[str, Any]:
-        tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen)}
-                  for tid, seen in sorted(self.tracks().items())]
+        tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
+                   "person_id": _track_person_id(seen)} for tid, seen in sorted(self.tracks().items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "root": "mm", "canonical_depth": "mm", "focal": "px",
@@ -372,6 +372,13 @@ def _crowd_note(max_people: int, crowded: list[int]) -> str:
     people = "person" if max_people == 1 else "people"
     return (f"more than {max_people} {people} in {len(crowded)} frames ({_frames_summary(crowded)}); {max_people} "
             f"{'was' if max_people == 1 else 'were'} lifted (--max-people): those already tracked, else the largest")
+
+
+def _track_person_id(seen: list[tuple[int, PersonState]]) -> str | int | None:
+    """The input's own id of a track's person (a keypoint sequence's ``person_id``) when every sighting that has one
+    gives the same; None for a video, an unnamed person, or ids new in every frame (an annotation's own)."""
+    ids = {q.person_id for _, q in seen if q.person_id is not None}
+    return ids.pop() if len(ids) == 1 else None
 
 
 def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]]]:
@@ -524,6 +531,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         last_search = -(10**9)
         search_every = max(1, round(search_every_s * fps)) if search_every_s > 0 else 1
         can_track = callable(getattr(estimator, "detect_near", None))
+        followed = _Followed(max_people=max_people, horizon=max(1, round(fps * TRACK_TIMEOUT_S)))  # (--max-people)
         while index + 1 < limit:
             t0 = time.perf_counter()
             ok, bgr = cap.read()
@@ -570,9 +578,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 continue
             if len(people) > max_people:
                 crowded.append(index)
-                keep = keep_tracked([q.raw.bbox_xywh for q in people], [box for _, box in recent.values()],
-                                    max_people=max_people)
-                people = [people[i] for i in keep]
+            # (every frame, so that the people followed are those lifted, held through an absence up to the track
+            # timeout: a user trial's followed person, gone for 0.5 s, was replaced for good by the one seen alone)
+            people = [people[i] for i in followed.keep(index, [q.raw.bbox_xywh for q in people], [None] * len(people))]
             t_s = index / fps
             if not people:
                 nobody.append(index)
@@ -604,8 +612,13 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         why = "no frame could be decoded" if bad else "the video has no frames (zero-length)"
         raise VideoError(f"{p}: {why}")
     if declared > 0 and index + 1 < min(declared, limit):
-        warnings.append(f"decoding stopped after frame {index} of the {declared} the file declares; the rest "
-                        "could not be read")
+        short = min(declared, limit) - index - 1
+        upto = " (up to --max-seconds)" if limit < declared else ""
+        warnings.append(f"{index + 1} of the {min(declared, limit)} frames the file declares{upto} were decoded: "
+                        f"the {short} missing may lie at the end, or have been dropped where the file is damaged "
+                        "(OpenCV does not say where); then the frame numbers and times after that point run up to "
+                        f"{short} frame(s) early (re-encoding the file, e.g. ffmpeg -i IN -c:v libx264 OUT.mp4, says "
+                        "whether it is damaged)")
     if len(frames) >= MIN_FRAMES_FOR_TRACK_FILTER:
         seen = _tracks(frames)
         flashes = {tid for tid, at in seen.items() if len(at) < MIN_TRACK_FRAMES}

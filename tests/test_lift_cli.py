@@ -209,6 +209,14 @@ def test_a_result_file_can_be_lifted_again(tmp_path, weights, kp17, capsys):
     np.testing.assert_allclose(again["absolute"], first["absolute"], atol=0.2)
     np.testing.assert_allclose(again["people"][1]["absolute"], first["people"][1]["absolute"], atol=0.2)
     assert first["metric_depth"] is True and again["focal_source"] == "keypoint-file"
+    assert first["frame"].endswith("2D in px of the image the keypoints belong to")  # (no image was read)
+    assert any(w.startswith("2 people in the file; each is lifted") for w in first["warnings"])
+    # (a user trial) with --max-people 1, only the cut is said, not also that each is lifted
+    assert run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o3"), "--max-people", "1", "--weights",
+                str(weights)], capsys)[0] == 0
+    cut = json.loads((tmp_path / "o3" / "k.json").read_text())
+    assert len(cut["people"]) == 1 and "2 people in the file; the 1 largest are lifted (max_people)" in cut["warnings"]
+    assert not any("each is lifted" in w for w in cut["warnings"]), cut["warnings"]
 
 
 def test_an_assumed_focal_stays_assumed_when_a_result_is_read_back(tmp_path, weights, kp17, capsys):
@@ -546,6 +554,7 @@ def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tm
     code, err = run([str(seq), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0, err
     assert "1 person(s) left out of 1 frame(s) (13) for missing joints ['l_wrist']" in err
+    assert "first person 1 of frame 13 (input_index 0, id 'A'))" in err  # (a user trial: who was it?)
     d = json.loads((tmp_path / "o" / "seq.json").read_text())
     assert d["frames"][13]["people"] == [] and d["source_format"] == "openpose25"
     people = [q for i, f in enumerate(d["frames"]) if i != 13 for q in f["people"]]
@@ -1089,7 +1098,8 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     assert ks.format == "coco17" and [len(f) for f in ks.frames] == [1, 1, 1]
     npy = tmp_path / "kp.npy"
     np.save(npy, kp17)
-    with pytest.raises(ImageError, match=r"lifted through the Python API \(lifter.Lifter.lift\)"):
+    with pytest.raises(ImageError, match=r"if it holds keypoints, write them as a keypoint JSON file .* or lift the "
+                                         r"arrays through the Python API \(lifter.Lifter.lift\)"):
         load_image(npy)
 
 

@@ -79,6 +79,7 @@ from ..detect import (
 from ..io import LiftRecord, _camera_field, is_keypoint_sequence, write_json_atomic
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
+from ..smoothing import check_strength
 from ..video import (
     DEFAULT_MAX_PEOPLE,
     DEFAULT_MAX_SECONDS,
@@ -239,7 +240,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "first, so 1 follows one person; a crowd bound)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
-                        "(0 = off, 2 = twice as smooth)")
+                        "(0 = off, 2 = twice as smooth, at most 10)")
     p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
                    help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX,
@@ -277,8 +278,7 @@ def check_lift_options(args: argparse.Namespace) -> None:
     if args.max_people < 1:
         raise PoseLifterError(f"--max-people must be >= 1, got {args.max_people}")
     check_max_side(args.max_side, name="--max-side")
-    if not (math.isfinite(args.smoothing) and args.smoothing >= 0):
-        raise PoseLifterError(f"--smoothing must be a strength >= 0 (0 = off, 1 = default), got {args.smoothing:g}")
+    check_strength(args.smoothing, name="--smoothing")
     if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
     if args.out.exists() and not args.out.is_dir():
