@@ -336,7 +336,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
         else (size[0] / 2.0, size[1] / 2.0)
     # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
-    notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src)
+    notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src,
+                                source_format=kf.format)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
                       source=kf.source, num_people=1 + len(others), warnings=tuple(notes),
                       people_index=tuple(kf.people_index[:1 + len(others)]),

@@ -131,12 +131,15 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
     return arr
 
 
-def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_given: bool = True) -> list[str]:
+def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_given: bool = True,
+                   placeholders: bool = True) -> list[str]:
     """What looks wrong in 2D keypoints ``(..., 17, 2)`` px that the lifter takes anyway (finite, checked shape):
     a pose spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at ``focal`` (scalar or
     ``(..., 2)`` px; None: not checked), usually a focal length in mm; a joint at exactly (0, 0) far from the rest
     of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
     pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice.
+    placeholders: False when the (0, 0) joints were already said in the keypoints' own format
+    (:func:`lifter.keypoints.placeholder_notes`), whose advice fits a file better.
     :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
     from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
 
@@ -175,7 +178,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                 notes.append(f"focal (fx, fy) = ({fx:g}, {fy:g}) px: fx / fy = {fx / fy:.3g}, where a camera's "
                              "pixels are square to within a few % (fx close to fy); a (2,) focal always means "
                              "(fx, fy): for one focal length per pose give shape (n, 1) or (n, 2)")
-    placeholder = zero_placeholders(k)
+    placeholder = zero_placeholders(k) if placeholders else np.zeros(k.shape[:-1], bool)
     far = np.asarray(placeholder.any(-1))
     if np.any(far):
         notes.append(f"joint(s) {_joint_labels(placeholder)} at exactly (0, 0) px, far from the rest of the pose"

@@ -43,7 +43,7 @@ from .detect import (
     people_scores,
 )
 from .io import REASSUMED_NOTE, LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
-from .keypoints import convert, placeholder_notes
+from .keypoints import H36M17, convert, placeholder_notes
 
 
 def _px(v: Any) -> str:
@@ -134,18 +134,21 @@ FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
 
 
 def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[int, int] | None, *,
-                       focal_source: str = "user", detected: bool = False) -> list[str]:
+                       focal_source: str = "user", detected: bool = False, source_format: str = H36M17) -> list[str]:
     """Notes on 2D that the lifter takes but that look wrong, for the records (files, photos, videos): poses
     ``(n, 17, 2)`` px spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` at ``focal`` ``(2,)`` px or
     with a joint at (0, 0) (:func:`lifter._checks.input_warnings`, what :meth:`lifter.Lifter.lift` warns of),
     upright but upside down (keypoints only: :func:`upside_down_notes`), or lying mostly outside the ``image_size``
     (None: not checked). detected: the 2D is this package's detector's
-    (photos, videos), not the user's keypoints, which changes the advice."""
+    (photos, videos), not the user's keypoints, which changes the advice. source_format: the format the keypoints
+    came in; another than h36m17 has its (0, 0) joints said by :func:`lifter.keypoints.placeholder_notes` (once,
+    not again here: a user trial read two notes for one joint)."""
     notes: list[str] = []
     k = np.asarray(kp17, np.float64).reshape(-1, kp17.shape[-2], 2)
     if not len(k):
         return notes
-    notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES)
+    notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES,
+                            placeholders=source_format == H36M17)
     if not detected:  # (the package's own detector gives upright image coordinates)
         notes += upside_down_notes(k)
     if image_size is not None:
@@ -270,7 +273,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread,
         assumed_focal=kf.assumed_focal)
-    cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src)
+    cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src, source_format=kf.format)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
                          distortion=kf.distortion)
     if kf.people_index:  # who is who in the file (the output is largest first)

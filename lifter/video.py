@@ -736,7 +736,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     raw = np.stack([k for fr in frames for k in fr])  # every person of every frame, one batch
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))
-    warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src))
+    warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src, source_format=ks.format))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
                       distortion=ks.distortion)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)

@@ -542,6 +542,16 @@ def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weight
         rec = json.loads((tmp_path / "o" / f"{name}.json").read_text())
         assert any("joint(s) ['r_hip'] of format 'coco17' at exactly (0, 0) px" in w for w in rec["warnings"])
         assert f"{name}.json: note: joint(s) ['r_hip'] of format 'coco17'" in err
+    # (a user trial) a joint the conversion copies as it is (a wrist) is said once, in the file's format, not again
+    # as the H36M joint
+    coco = np.column_stack([np.linspace(500, 700, 17), np.linspace(200, 600, 17)])
+    coco[COCO17_JOINT_NAMES.index("r_wrist")] = 0.0
+    (tmp_path / "w.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17",
+                                                 "image_size": [1280, 720], "focal": 1000.0}))
+    code, err = run([str(tmp_path / "w.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    notes = json.loads((tmp_path / "o" / "w.json").read_text())["warnings"]
+    assert code == 0 and [w for w in notes if "at exactly (0, 0) px" in w] == [next(
+        w for w in notes if w.startswith("joint(s) ['r_wrist'] of format 'coco17' at exactly (0, 0) px"))], notes
 
 
 def test_a_keypoint_sequence_keeps_its_frames_and_ids_when_one_misses_a_joint(tmp_path, weights, kp17, capsys):
