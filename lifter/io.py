@@ -602,6 +602,16 @@ def _one_of(names: Sequence[str]) -> str:
     return " or ".join(quoted) if len(quoted) <= 2 else "one of " + ", ".join(quoted)
 
 
+def _no_format_with(num_joints: int) -> str:
+    """The end of the message for a pose of ``num_joints`` that no format has: the formats' joint counts, and for 18
+    OpenPose's COCO-18 layout (a user trial's file), which is not read."""
+    counts = ", ".join(f"{n} {get_format(n).num_joints}" for n in keypoint_formats())
+    return (f": no format has {num_joints} joints (the formats and their joint counts: {counts}); convert the "
+            "keypoints to one of them" + (" (18 joints is OpenPose's COCO-18 / BODY_18 layout, which is not read: "
+                                          "run OpenPose with BODY_25, openpose25, or write the 17 COCO joints in "
+                                          "COCO order, coco17)" if num_joints == 18 else ""))
+
+
 def _needs(fmt: str) -> str:
     """What a person must give, for the messages on missing joints."""
     return ("the lifter needs all 17 joints" if fmt == H36M17
@@ -698,7 +708,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                 f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}"
                 + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
                 + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format on the command line)"
-                   if same else ""))
+                   if same else _no_format_with(len(xy))))
         if missing.any():
             xy, missing, conf, said = stand_in_missing(xy, missing, src=fmt, scores=conf)
             bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)

@@ -771,6 +771,13 @@ def _kp_json(path: Path, kp17: np.ndarray, **extra) -> Path:
     ([{"keypoints": [1.0, 2.0, 1.0] * 16}], "(a list of COCO results implies 'coco17' when the file has no 'format'): "
      "give the file's format, 'sh16'"),
     ({"keypoints": [[1.0, 2.0]] * 16, "format": "coco17"}, "format 'coco17' has 17 joints, the file has 16: give"),
+    # (a user trial) a count no format has: the counts, and what 18 joints are
+    ({"keypoints": [[1.0, 2.0]] * 18, "format": "coco17"}, "format 'coco17' has 17 joints, the file has 18: no "
+     "format has 18 joints (the formats and their joint counts: "),  # (then any a test registered, by name)
+    ({"keypoints": [[1.0, 2.0]] * 18, "format": "coco17"}, "blazepose33 33, coco17 17, h36m17 17, openpose25 25, "
+     "sh16 16); convert the keypoints to one of them"),
+    ({"keypoints": [[1.0, 2.0]] * 18, "format": "coco17"}, "(18 joints is OpenPose's COCO-18 / BODY_18 layout, which "
+     "is not read: run OpenPose with BODY_25, openpose25, or write the 17 COCO joints in COCO order, coco17)"),
 ])
 def test_malformed_keypoint_files_get_clear_messages(tmp_path, weights, kp17, capsys, content, expected):
     bad = tmp_path / "bad.json"
