@@ -106,6 +106,9 @@ the minimum with the cursor in front, and "6", "000" became "000100"). After it 
 but the box keeps what was typed until :data:`TYPING_IDLE_S`: a write into a box being typed mangles the next keys
 (a user trial's "1", a 3.3 s pause, "500" became 150000) or is overtaken by them (a pause of 2.8 s while playing left
 the box at 100 beside a lift at 1500)."""
+SHRUNK_VIEW: float = 0.4
+"""After a focal change, auto reframing zooms back in when what it keeps in view (the camera, its frustum, the
+skeleton) spans less than this share of the view's half-width from its centre."""
 TYPING_IDLE_S: float = 10.0
 """A positive focal below the minimum, lifted at the minimum since :data:`TYPING_GROW_S`, is written back into its
 box once the tab has sent nothing for this long."""
@@ -874,7 +877,7 @@ class SessionView:
             if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,
                 self._auto_frame_later(TYPING_SETTLE_S - since + 0.05)  # not to each half-typed value
             else:
-                self._keep_in_view()
+                self._keep_in_view(zoom_in=focal_changed)
 
     def _update_trail(self, fr: Frame) -> None:
         st = self.state
@@ -921,19 +924,23 @@ class SessionView:
         except Exception:  # noqa: BLE001 - a viewpoint is cosmetic
             log.exception("could not frame the 3D view")
 
-    def _keep_in_view(self) -> None:
+    def _keep_in_view(self, *, zoom_in: bool = False) -> None:
         """Auto reframing: when the lifted skeleton (or the camera) leaves the view, fit them again, keeping the
-        viewing direction."""
+        viewing direction; ``zoom_in`` (after a focal change) also when they shrank within :data:`SHRUNK_VIEW` of
+        it (a user trial: the view stayed far out after the focal came back down from 6000 px)."""
         vp, fov, aspect = self.camera.get()
         pts = self.framing_points()
-        if not framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98):
+        inside = framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98)
+        shrunk = zoom_in and inside and float(np.abs(framing.screen_coords(pts, vp, fov_y=fov, aspect=aspect)[:, :2])
+                                              .max()) < SHRUNK_VIEW
+        if not inside or shrunk:
             up_ = vp.up if np.linalg.norm(vp.up) > 0 else np.array([0.0, 0.0, 1.0])
             self.camera.set(framing.fit(pts, direction=vp.look_at - vp.eye, up=up_, fov_y=fov, aspect=aspect))
 
     def _auto_frame(self) -> None:
         if self.gui.lift.auto_frame.value and self.frame is not None:
             with self.lock:
-                self._keep_in_view()
+                self._keep_in_view(zoom_in=True)
 
     def _auto_frame_later(self, delay: float) -> None:
         """:meth:`_auto_frame` once the focal length's box has had no key for :data:`TYPING_SETTLE_S` (one timer at a

@@ -757,7 +757,7 @@ def test_the_view_is_not_reframed_to_a_half_typed_focal(app: PoseLifterApp) -> N
     with open_tab(app) as (tab, v):  # (on leaving: the tab's session ended)
         checks: list[tuple[float, float]] = []  # (time, focal in use) of each keep-in-view check
         real = v._keep_in_view
-        v._keep_in_view = lambda: (checks.append((time.time(), v.state.focal_px)), real())  # type: ignore[method-assign]
+        v._keep_in_view = lambda **kw: (checks.append((time.time(), v.state.focal_px)), real(**kw))  # type: ignore
         for typed in ("1", "11", "114", "1144", "1144.5"):
             _send_value(tab, v.gui.lift.focal, float(typed))
             time.sleep(0.06)
@@ -981,6 +981,15 @@ def test_auto_reframing_keeps_the_skeleton_in_view(view: SessionView, app: PoseL
         ic = app.server.initial_camera
         vp = framing.Viewpoint(np.asarray(ic.position), np.asarray(ic.look_at), np.asarray(ic.up))
         assert framing.in_view(view.framing_points(), vp, fov_y=framing.DEFAULT_FOV_Y_RAD, aspect=1.0), f
+    # (a user trial) back down from 6000 px, the view zooms in again instead of staying far out
+    for f in (6000.0, 1000.0):
+        view.gui.lift.focal.value = f
+    ic = app.server.initial_camera
+    vp = framing.Viewpoint(np.asarray(ic.position), np.asarray(ic.look_at), np.asarray(ic.up))
+    s = framing.screen_coords(view.framing_points(), vp, fov_y=framing.DEFAULT_FOV_Y_RAD, aspect=1.0)
+    assert np.abs(s[:, :2]).max() > 0.5  # (0.21 before: everything in a fifth of the view)
+    view.gui.lift.focal.value = 900.0  # (a small change leaves the view where it is)
+    assert np.array_equal(np.asarray(app.server.initial_camera.position), np.asarray(ic.position))
     view.gui.lift.auto_frame.value = False
     before = np.asarray(app.server.initial_camera.position).copy()
     view.gui.lift.focal.value = 100.0
@@ -1204,14 +1213,20 @@ def test_player_keeps_real_time_without_a_view() -> None:
 
     p = Player(position=lambda: None if cur["seq"] is None else (cur["seq"], cur["i"]), speed=lambda: cur["speed"],
                show=show, on_stop=lambda: stopped.append(1))
+    # (bounds from the time measured, not the time asked for: a loaded machine, e.g. CI beside a browser, sleeps
+    # longer and runs the player's thread late; the player then skips frames to keep the sequence's time)
+    t0 = time.monotonic()
     p.start()
     time.sleep(1.0)
-    n1, i1 = len(shown), cur["i"]
-    assert 15 <= n1 <= 30 and 35 <= i1 <= 60, (n1, i1)  # ~25 redraws, ~50 frames of a 50-fps sequence
-    assert all(b - a in (1, 2, 3) for a, b in zip(shown, shown[1:]))
+    n1, i1, t1 = len(shown), cur["i"], time.monotonic()
+    late = 0.35  # s a redraw may come late on a loaded machine
+    assert 3 <= n1 <= 25 * (t1 - t0) + 3, (n1, t1 - t0)  # at most 25 redraws per second
+    assert 50 * (t1 - t0 - late) <= i1 <= 50 * (t1 - t0) + 3, (i1, t1 - t0)  # the 50-fps sequence's real time
+    assert all(b > a for a, b in zip(shown, shown[1:]))
     cur["speed"] = 2.0
     time.sleep(1.0)
-    assert 80 <= cur["i"] - i1 <= 120, cur["i"] - i1
+    di, t2 = cur["i"] - i1, time.monotonic()
+    assert 100 * (t2 - t1 - late) <= di <= 100 * (t2 - t1) + 5, (di, t2 - t1)  # twice as fast
     cur["i"] = 5000  # scrubbed
     time.sleep(0.3)
     assert 5000 < cur["i"] < 5100
