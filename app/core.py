@@ -469,7 +469,10 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     alpha = frame.alpha
     lines = [
         f"**Focal {focal_text(alpha)} px** ({_focal_origin(state)}: {focal_text(state.sample.camera.alpha)} px)",
-        f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm",
+        f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm" + (
+            # (a user trial: the readout differed from the download's root by up to 66 mm, unexplained)
+            " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "
+            "the drawn trajectory)" if state.sample.key.startswith("video/") else ""),
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px",
     ]
     lines += [f"**Caution** {note}" for note in frame.caution]

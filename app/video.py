@@ -28,17 +28,17 @@ import numpy as np
 
 from lifter import PoseLifterError
 from lifter._text import sentence
-from lifter.detect import people_scores
+from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
 from lifter.keypoints import H36M17
 from lifter.video import (
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
     SequenceRecord,
-    collect_output_notes,
     lift_keypoint_sequence,
     lift_video,
     output_note_lines,
     track_lifted,
+    tracked_output_notes,
 )
 
 from .core import lens_free_2d, undoes_lens
@@ -177,7 +177,7 @@ class VideoSequence:
         seen = [fr for fr in rec.frames if fr.people]
         undistorted = undoes_lens(camera=self.camera, lifter=lifter, source=src)
         lifted_by_index: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        output_notes: dict[str, tuple[int, int, str]] = {}
+        noted: set[int] = set()
         if seen:
             pp = np.asarray(rec.principal_point, np.float64)
             # every frame's people in one array: undistorted (if at all) and lifted in one call each
@@ -191,8 +191,7 @@ class VideoSequence:
                 q = kp[k:k + c] if undistorted else np.stack([p.keypoints_2d for p in fr.people])
                 lifted_by_index[fr.index] = (q, root[k:k + c], rel[k:k + c])
                 if getattr(res, "warnings", ()) and hasattr(net, "output_notes"):
-                    collect_output_notes(output_notes, fr.index, net.output_notes(
-                        kp[k:k + c], pp, root[k:k + c], source=src))
+                    noted.add(fr.index)  # (said once tracked, by track id: tracked_output_notes)
                 k += c
         lifted = []
         for fr in rec.frames:  # (a frame with nobody keeps its place)
@@ -212,7 +211,12 @@ class VideoSequence:
         if undistorted:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")
-        kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)]  # (the upload's lift's: replaced)
+        output_notes = tracked_output_notes(net, frames, np.asarray(rec.principal_point, np.float64), source=src,
+                                            only=noted) if noted else {}
+        # (the upload's lift's notes on its output are replaced; and at another focal, the upload's assumed one is
+        # no longer what was used: a user trial's download said both "assumed ... 555.0 px" and "at 572.2 px")
+        kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)
+                and (same_focal or not w.startswith(ASSUMED_FOCAL_NOTE))]
         out = replace(rec, model=name, focal=f, focal_source=rec.focal_source if same_focal else "app-slider",
                       frames=frames,
                       warnings=[*kept, *output_note_lines(output_notes), note],

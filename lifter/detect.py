@@ -217,6 +217,11 @@ class ExifCamera:
                    pixel_x=None if px is None else int(px), pixel_y=None if py is None else int(py))
 
 
+ASSUMED_FOCAL_NOTE: Final[str] = "no focal length given: assumed a "
+"""How :func:`guess_focal`'s note on a focal length assumed from the field of view begins (a record's reader can
+tell it from the other notes: the app drops it once its own focal is used)."""
+
+
 def guess_focal(image_size: tuple[int, int], *, exif: ExifCamera | None = None, sensor_width_mm: float | None = None,
                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> FocalGuess:
     """The focal length (px) for an upright image of ``image_size = (W, H)`` px with no focal given: from its
@@ -225,8 +230,7 @@ def guess_focal(image_size: tuple[int, int], *, exif: ExifCamera | None = None, 
     if exif is not None:
         return focal_from_exif(exif, image_size, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
     f = focal_from_fov(image_size, fov_deg=fov_deg)
-    return FocalGuess(f, "default-fov", f"no focal length given: assumed a {fov_deg:g} deg diagonal field of view "
-                                        f"-> {f:.1f} px")
+    return FocalGuess(f, "default-fov", f"{ASSUMED_FOCAL_NOTE}{fov_deg:g} deg diagonal field of view -> {f:.1f} px")
 
 
 def focal_from_exif(exif: ExifCamera, image_size: tuple[int, int], *, sensor_width_mm: float | None = None,
@@ -1140,7 +1144,8 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
     return chosen
 
 
-__all__ = ["BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX", "DetectedPose", "Detection",
+__all__ = ["ASSUMED_FOCAL_NOTE", "BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX",
+           "DetectedPose", "Detection",
            "MIN_MAX_SIDE_PX", "DOUBTFUL_SCORE", "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
            "ExifCamera", "FocalGuess", "ImageError",
            "LoadedImage", "MissingDependencyError", "NoPersonError",

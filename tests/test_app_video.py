@@ -74,6 +74,8 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     # every person is lifted into the same camera space: the near one ~4 m, the far one ~6 m
     assert 3000 < v.frame.root[2] < 5000 and 5000 < v.frame.others[0].root[2] < 7500
     assert "**People** 2" in v.gui.readout.readout.content and "video, scripted" in v.gui.readout.readout.content
+    assert "(this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track" in \
+        v.gui.readout.readout.content  # (a user trial: the numbers differed from the download's root, unexplained)
     assert "press play" in v.messages[-1]
     # each track's root trajectory, smoothed: two paths of 12 segments (the empty frame is left out)
     trail = v.scene.camera.trail
@@ -106,6 +108,9 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     # the upload's while the readout showed another
     assert np.sqrt(np.prod(rec["focal"])) == pytest.approx(800.0, abs=0.01) and rec["focal_source"] == "app-slider"
     assert any("lifted again in the app" in w and "800.0 px" in w for w in rec["warnings"]), rec["warnings"]
+    # (a user trial) the upload's assumed focal is no longer said beside the one used
+    assert any(w.startswith("no focal length given: assumed") for w in seq.record.warnings)
+    assert not any(w.startswith("no focal length given: assumed") for w in rec["warnings"]), rec["warnings"]
     first = next(p for p in rec["frames"][0]["people"] if p["track_id"] == 1)
     np.testing.assert_allclose(first["root"], moved[0][0], atol=0.06)  # (the file rounds to 0.1 mm)
     name, glb = v.download_payload("glb")
@@ -191,6 +196,11 @@ def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(serv
     relifted = seq.record_at(lf, (3 * F, 3 * F))
     assert stale not in relifted.warnings and stale in seq.record.warnings
     assert all(w in relifted.warnings for w in seq.record.warnings if w != stale)
+    # the new lift's own notes name the people by track id, as poselifter lift's do (not by place in a frame)
+    far = seq.record_at(lf, (20 * F, 20 * F))
+    notes = [w for w in far.warnings if "lifted beyond" in w]
+    assert len(notes) == 1 and notes[0].startswith("frame 0: 2 of 2 root(s) lifted beyond") and \
+        "(track 1, and 1 more)" in notes[0], far.warnings
 
 
 def test_a_video_note_goes_when_another_sample_is_shown(server, tmp_path: Path) -> None:
