@@ -610,7 +610,7 @@ class SessionView:
         t0 = time.perf_counter()
         frame = compute_frame(st, self.app.pool.get(st.model), self.app.error_model)
         t1 = time.perf_counter()
-        focal_changed = st.focal_px != self.state.focal_px or new_sample
+        focal_changed = st.focal_px != self.state.focal_px  # (not each new frame of a playing sequence: _push)
         self.state = st
         self.frame = frame
         self._push(frame, new_sample=new_sample, focal_changed=focal_changed)

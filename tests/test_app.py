@@ -990,6 +990,20 @@ def test_auto_reframing_keeps_the_skeleton_in_view(view: SessionView, app: PoseL
     assert np.abs(s[:, :2]).max() > 0.5  # (0.21 before: everything in a fifth of the view)
     view.gui.lift.focal.value = 900.0  # (a small change leaves the view where it is)
     assert np.array_equal(np.asarray(app.server.initial_camera.position), np.asarray(ic.position))
+    # a view zoomed out by hand stays so while a sequence plays: only a focal change zooms back in
+    view.toggle_play()  # (the demo motion: its own camera, framed when it starts)
+    try:
+        n = view.update_count
+        assert wait_for(lambda: view.update_count > n + 5, timeout=10)
+        vp, fov, aspect = view.camera.get()
+        view.camera.set(framing.Viewpoint(eye=vp.look_at + 3.0 * (vp.eye - vp.look_at), look_at=vp.look_at,
+                                          up=vp.up))
+        out = np.asarray(app.server.initial_camera.position).copy()
+        n = view.update_count
+        assert wait_for(lambda: view.update_count > n + 10, timeout=10)
+        np.testing.assert_allclose(np.asarray(app.server.initial_camera.position), out)
+    finally:
+        view.stop_playback()
     view.gui.lift.auto_frame.value = False
     before = np.asarray(app.server.initial_camera.position).copy()
     view.gui.lift.focal.value = 100.0
