@@ -62,6 +62,9 @@ class Tracker:
         self.gate, self.max_missed = float(gate), int(max_missed)
         self.tracks: dict[int, Track] = {}
         self.ended: list[Track] = []
+        self.resumed: set[int] = set()
+        """The ids of the ended tracks the last :meth:`update` took up again (a name back after the timeout): what
+        follows a track over time (a smoother) starts afresh for them."""
         self._next = 1
 
     def update(self, frame: int, keypoints: list[np.ndarray] | np.ndarray,
@@ -78,12 +81,14 @@ class Tracker:
         if len(names) != len(boxes):
             raise PoseLifterError(f"Tracker.update: {len(names)} person ids for {len(boxes)} people")
         live_names = {tr.person_id for tr in self.tracks.values()}
+        self.resumed = set()
         for name in dict.fromkeys(n for n in names if n is not None and n not in live_names):
             gone = [k for k, tr in enumerate(self.ended) if tr.person_id == name]
             if gone:  # a name back after its track ended: that track again (the boxes then match it at any jump)
                 tr = self.ended.pop(gone[-1])
                 tr.velocity = np.zeros(2)
                 self.tracks[tr.track_id] = tr
+                self.resumed.add(tr.track_id)
         live = list(self.tracks.values())
         ids: list[int] = [0] * len(boxes)
 

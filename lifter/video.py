@@ -166,8 +166,8 @@ class SequenceTracker:
             focal = f[0]
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         for tid in list(self._smoothers):
-            if tid not in self.tracker.tracks:
-                del self._smoothers[tid]  # ended tracks
+            if tid not in self.tracker.tracks or tid in self.tracker.resumed:
+                del self._smoothers[tid]  # ended tracks, and those a name took up again after the timeout
         out = []
         for i, tid in enumerate(ids):
             sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))

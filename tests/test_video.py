@@ -389,6 +389,13 @@ def test_a_name_back_after_its_track_ended_takes_it_up_again(tmp_path):
     # the smoothing starts again after the long gap (a One-Euro filter across 1.3 s would drag the old root in)
     back = d["frames"][28]["people"][1]
     assert back["person_id"] == "bob" and back["root"] == back["root_unsmoothed"]
+    # also when nobody else is there in between (no frame ends the track before the name comes back)
+    alone = [{"people": [{"keypoints": (bob - i).tolist(), "person_id": "bob"}]} if not 5 <= i < 20 else {"people": []}
+             for i in range(25)]
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": alone}))
+    d = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=1.0).to_json()
+    back = d["frames"][20]["people"][0]
+    assert back["track_id"] == 1 and back["root"] == back["root_unsmoothed"], back
 
 
 def test_tracking_names_leave_out_ids_that_do_not_recur(tmp_path):
