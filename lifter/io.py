@@ -618,11 +618,12 @@ def _needs(fmt: str) -> str:
             else f"the lifter needs every joint that the {fmt} -> h36m17 rules use")
 
 
-def _who(k: int, pid: str | int | None, n: int) -> str:
-    """A person of a file with ``n`` people, for messages: their place in the file's list, counted from 1 and as the
-    output's ``input_index`` (from 0), and their id."""
-    return ("the person" if n == 1 and pid is None
-            else f"person {k + 1} in the file (input_index {k}" + ("" if pid is None else f", id {pid!r}") + ")")
+def _who(k: int, pid: str | int | None, n: int, *, frame: int | None = None) -> str:
+    """A person of a file with ``n`` people (of a sequence's frame number ``frame``), for messages: their place in
+    the file's (frame's) list, counted from 1 and as the output's ``input_index`` (from 0), and their id."""
+    of = "in the file" if frame is None else f"of frame {frame}"
+    return ("the person" + ("" if frame is None else f" {of}") if n == 1 and pid is None
+            else f"person {k + 1} {of} (input_index {k}" + ("" if pid is None else f", id {pid!r}") + ")")
 
 
 @dataclass
@@ -649,11 +650,12 @@ def _face_first(xy: np.ndarray, missing: np.ndarray) -> bool:
 
 
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
-                   *, layout_format: bool = False) -> _People:
+                   *, layout_format: bool = False, frame: int | None = None) -> _People:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format,
     with a missing face or mid-body joint stood in for where the format allows (:data:`lifter.keypoints.STAND_INS`);
     the people still missing a joint the lifter needs (confidence 0 or null, or null / non-finite coordinates) are
-    left out. layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages."""
+    left out. layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages.
+    frame: the sequence's frame these people are of (None: a single-frame file), for the messages (:func:`_who`)."""
     parsed = []
     top = -math.inf
     for _, q, _ in people:
@@ -713,10 +715,10 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             xy, missing, conf, said = stand_in_missing(xy, missing, src=fmt, scores=conf)
             bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
             if bad:
-                dropped.append((_who(pos, pid, len(people)), bad))
+                dropped.append((_who(pos, pid, len(people), frame=frame), bad))
                 continue
             if said:
-                stood_in.append((_who(pos, pid, len(people)), said))
+                stood_in.append((_who(pos, pid, len(people), frame=frame), said))
             xy = np.where(missing[:, None], 0.0, xy)
         out.append(xy)
         kept.append((pos, pid))
@@ -901,7 +903,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             continue
         people, f_fmt, _, layout_format = _people_of(fr, where, fmt)
         found = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [],
-                               layout_format=layout_format)
+                               layout_format=layout_format, frame=i)
         arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
         for _, said in found.stood_in:
             for phrase in said:
@@ -926,9 +928,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if dropped:
         at = sorted({i for i, _ in dropped})
         joints = sorted({j for _, (_, bad) in dropped for j in bad})
-        first_frame, (first_who, _) = dropped[0]
-        first_who = first_who.replace(" in the file", f" of frame {first_frame}").replace(
-            "the person", f"the person of frame {first_frame}")
+        first_who = dropped[0][1][0]
         msg = (f"{len(dropped)} person(s) left out of {len(at)} frame(s) ({', '.join(map(str, at[:10]))}"
                f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0 or null, or null / "
                f"non-finite coordinates; first {first_who}); {_needs(fmt)}")
