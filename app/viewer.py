@@ -514,7 +514,7 @@ class SessionView:
         # until TYPING_IDLE_S (said once per value typed)
         held = [r for r in rejected if self._grows(r, values) and self._since_typed(r.control) < TYPING_IDLE_S]
         said_before = {r for r in held if (r.control, getattr(values, r.control)) in self._held}
-        if len(said_before) < len(held):  # (one timer per value held: a playing sequence runs a pass every frame)
+        if held:  # (one timer at a time however many passes ask: _later_once)
             self._settle_later(max(TYPING_IDLE_S - self._since_typed(r.control) for r in held) + 0.05)
         self._held = {(r.control, getattr(values, r.control)) for r in held}
         with self._flags:

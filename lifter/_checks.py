@@ -267,6 +267,12 @@ def principal_point_notes(pp: Any, image_size: tuple[int, int] | None) -> list[s
             "centre"]
 
 
+def _most(flags: np.ndarray) -> bool:
+    """Whether more than half of a batch's poses are flagged (False for an empty batch): the batch-wide notes
+    (:func:`upside_down_notes`, :func:`face_first_notes`) speak of the input as a whole, not of an odd pose."""
+    return bool(len(flags)) and float(flags.mean()) > 0.5
+
+
 def upside_down_notes(kp17: np.ndarray) -> list[str]:
     """A note when most of the poses ``(n, 17, 2)`` px (H36M order) are upright bodies upside down (taller than wide,
     the head below both ankles by more than half the pose's height; a joint at (0, 0) gives no reading) in the image:
@@ -274,7 +280,7 @@ def upside_down_notes(kp17: np.ndarray) -> list[str]:
     a handstand looks the same, hence a note, not an error."""
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
     down = upside_down_people(k)
-    if not len(k) or float(down.mean()) <= 0.5:
+    if not _most(down):
         return []
     return [f"the head is below both ankles in {int(down.sum())} of {len(k)} pose(s): this package takes image y "
             "growing downward (OpenCV, +y down); if your keypoints' y grows upward, give y' = image height - y "
@@ -345,7 +351,7 @@ def face_first_notes(kp17: np.ndarray) -> list[str]:
     (lifted as if the nose were the pelvis: a user trial's root came out at 39 % of its depth)."""
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
     face = face_first_people(k)
-    if not len(k) or float(face.mean()) <= 0.5:
+    if not _most(face):
         return []
     return [f"the first five joints of {int(face.sum())} of {len(k)} pose(s) lie within {COCO_FACE_SPREAD * 100:.0f} % "
             "of their 2D size of each other, as COCO-17's nose, eyes and ears do (H36M's first five, the pelvis, "
