@@ -236,12 +236,14 @@ def cloud_spread(cloud: np.ndarray) -> Spread:
 @dataclass(frozen=True)
 class PersonLift:
     """Another person of the image: ``person`` (index in the sample, 0 = largest), current 2D ``(17, 2)`` px,
-    lifted pose ``(17, 3)`` mm and root ``(3,)`` mm, camera frame."""
+    lifted pose ``(17, 3)`` mm and root ``(3,)`` mm, camera frame; ``name`` as the person picker names them
+    (:meth:`Sample.person_name`: ``"person 2 (id 7)"``)."""
 
     person: int
     keypoints_2d: np.ndarray
     lifted: np.ndarray
     root: np.ndarray
+    name: str
 
 
 @dataclass(frozen=True)
@@ -332,7 +334,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                       source=source, warn=False)
     used = lifter.network_for(source)  # (what lift routed to)
     others = tuple(PersonLift(person=k, keypoints_2d=np.asarray(state.others[k]), lifted=res.absolute[n_main + i],
-                              root=res.root[n_main + i]) for i, k in enumerate(ids))
+                              root=res.root[n_main + i], name=state.sample.person_name(k)) for i, k in enumerate(ids))
     res_abs, res_rel = res.absolute[:n_main], res.relative[:n_main]
     if not (np.all(np.isfinite(res.absolute)) and np.all(np.isfinite(res.root))):
         raise PoseLifterError("the lift is not finite (extreme 2D coordinates or focal length); input ignored")
@@ -505,10 +507,11 @@ def people_line(frame: Frame, state: SessionState) -> str:
     root and the distance between roots (mm, camera frame)."""
     n = state.sample.num_people
     me = np.asarray(frame.root, np.float64)
-    parts = [f"**People** {n} in one camera space · **person {state.person + 1}** selected (drag its joints; the "
-             "person picker selects another)"]
+    me_name = state.sample.person_name(state.person)
+    parts = [f"**People** {n} in one camera space · **{me_name}** selected (drag its joints; the person picker "
+             "selects another)"]
     for o in frame.others:
         X, Y, Z = o.root
-        parts.append(f"person {o.person + 1}: root X {X:.0f} · Y {Y:.0f} · Z {Z:.0f} mm, "
-                     f"{float(np.linalg.norm(np.asarray(o.root) - me)):.0f} mm from person {state.person + 1}")
+        parts.append(f"{o.name}: root X {X:.0f} · Y {Y:.0f} · Z {Z:.0f} mm, "
+                     f"{float(np.linalg.norm(np.asarray(o.root) - me)):.0f} mm from {me_name}")
     return "  \n".join(parts)

@@ -62,6 +62,16 @@ class Sample:
         """:attr:`person_tags` ``[k]``, or ``""``."""
         return self.person_tags[k] if 0 <= k < len(self.person_tags) else ""
 
+    def person_name(self, k: int) -> str:
+        """How the picker, the readout and the 3D labels name person ``k``: :func:`person_label` with its tag."""
+        return person_label(k, self.person_tag(k))
+
+
+def person_label(k: int, tag: str = "") -> str:
+    """The name of person index ``k`` (0 = largest): ``"person 1"``, ..., with the input's own name for them when
+    it has one (``tag``: ``"id 7"`` from a keypoint file, ``"track 3"`` in a video): ``"person 2 (id 7)"``."""
+    return f"person {int(k) + 1}" + (f" ({tag})" if tag else "")
+
 
 def _read_rgb(path: Path) -> np.ndarray | None:
     img = cv2.imread(str(path), cv2.IMREAD_COLOR)

@@ -238,7 +238,7 @@ def draw_others(nodes: PoseNodes, fr: Frame) -> None:
         if k < len(fr.others):
             o = fr.others[k]
             h.position = tuple(o.lifted[10] * m + np.array([0.0, -0.12, 0.0]))
-            h.text = f"person {o.person + 1} · Z {o.root[2] / 1000:.2f} m"
+            h.text = f"{o.name} · Z {o.root[2] / 1000:.2f} m"
             h.visible = True
         else:
             h.visible = False

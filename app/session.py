@@ -185,13 +185,6 @@ def reset_joints(state: SessionState) -> SessionState:
     return state.evolve(keypoints=state.base_keypoints().copy(), dragged=set())
 
 
-def person_label(k: int, tag: str = "") -> str:
-    """The person picker's label of person index ``k`` (0 = largest): ``"person 1"``, ..., with the input's own
-    name for them when it has one (``tag``: ``"id 7"`` from a keypoint file, ``"track 3"`` in a video):
-    ``"person 2 (id 7)"``."""
-    return f"person {int(k) + 1}" + (f" ({tag})" if tag else "")
-
-
 _PERSON_LABEL = re.compile(r"person (\d+)(?: \([^()]{0,60}\))?")
 
 

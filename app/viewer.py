@@ -595,7 +595,7 @@ class SessionView:
         if name == "focal_px":
             value = float(round(value, 1))  # (the box's precision)
         if name == "person":
-            value = ss.person_label(int(value), self.state.sample.person_tag(int(value)))
+            value = self.state.sample.person_name(int(value))
         if name == "input_kind":
             value = ss.input_label(self.state.sample, value)
         self._put(handle, value)
@@ -785,7 +785,7 @@ class SessionView:
             g.input.options = opts
             g.input.value = ss.input_label(sample, st.input_kind)  # (new options can reset it to the first one)
         self._put(g.input, ss.input_label(sample, st.input_kind))
-        people = [ss.person_label(k, sample.person_tag(k)) for k in range(sample.num_people)]
+        people = [sample.person_name(k) for k in range(sample.num_people)]
         pick = self.gui.joints.person
         if list(pick.options) != people:
             pick.options = people

@@ -16,7 +16,7 @@ viser = pytest.importorskip("viser")
 from conftest import require_shipped_models  # noqa: E402
 from poselifter_app.core import FOCAL_MIN_PX, focal_text  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
-from poselifter_app.samples import DemoCatalog, default_h36m_root  # noqa: E402
+from poselifter_app.samples import DemoCatalog, default_h36m_root, person_label  # noqa: E402
 from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
 from poselifter_app.testing import FakeTab, local_server, open_tab, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
@@ -1299,8 +1299,8 @@ def test_person_selection_is_a_pure_transition(app: PoseLifterApp) -> None:
                      ("someone", "unknown person"), (1.5, "integer")):
         with pytest.raises(PoseLifterError, match=msg):
             ss.with_person(back, ss.person_index(bad))
-    assert ss.person_index("person 2") == 1 and ss.person_label(1) == "person 2"
-    assert ss.person_label(1, "id 7") == "person 2 (id 7)" and ss.person_index("person 2 (id 7)") == 1
+    assert ss.person_index("person 2") == 1 and person_label(1) == "person 2"
+    assert person_label(1, "id 7") == "person 2 (id 7)" and ss.person_index("person 2 (id 7)") == 1
     with pytest.raises(PoseLifterError, match="unknown person"):
         ss.person_index("person 2 (id 7) extra")
     vals = ss.ControlValues(model=st.model, input_kind="detected", focal_px=st.focal_px, noise_level=0.0, seed=0,

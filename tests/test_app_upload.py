@@ -664,6 +664,12 @@ def test_keypoint_file_with_several_people(app: PoseLifterApp) -> None:
     assert list(v.gui.joints.person.options) == ["person 1 (id 7)", "person 2 (id kid)"]
     v.gui.joints.person.value = "person 2 (id kid)"
     assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id kid)"
+    # the readout and the 3D label name them as the picker does (a user trial: "person 2" where the file said "kid")
+    readout = v.gui.readout.readout.content
+    assert "**person 2 (id kid)** selected" in readout and "person 1 (id 7): root X" in readout
+    assert "mm from person 2 (id kid)" in readout
+    assert v.frame.others[0].name == "person 1 (id 7)"
+    assert v.scene.pose.others_labels[0].text.startswith("person 1 (id 7) · Z ")
     # joints corrected on an upload come back with it (a user trial lost them going to a demo sample and back)
     kp_before = v.state.keypoints.copy()
     assert v.move_joint(16, kp_before[16] + [12.0, -7.0]) is True
