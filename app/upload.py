@@ -38,7 +38,7 @@ import numpy as np
 from lifter import Camera, PoseLifterError
 from lifter._text import sentence
 from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
-from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -52,7 +52,7 @@ from lifter.detect import (
 )
 from lifter.io import REASSUMED_NOTE, LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
-from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes
+from lifter.pipeline import keypoint_file_scores, lens_notes, lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import lens_free_2d, undoes_lens
@@ -338,12 +338,25 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
     notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src,
                                 source_format=kf.format)
+    lens = kf.distortion
+    if lens is not None and kf.distortion_model == "opencv":  # (the app's cameras have Human3.6M's lens model)
+        try:
+            kp, *rest = undistort_pixels_opencv(np.stack([kp, *others]), focal=focal, principal_point=pp,
+                                                dist_coeffs=lens)
+        except PoseLifterError as exc:
+            raise UploadError(f"{nm}: {exc}") from None
+        others, lens = tuple(rest), None
+        notes.append("the file's OpenCV lens (\"distortion_model\": \"opencv\") is undone as the file is read: "
+                     "the 2D shown, dragged and downloaded is the undistorted (pinhole) 2D at the file's focal "
+                     "length, and no 'distortion' is recorded")
+    else:
+        notes += lens_notes(lens, kf.distortion_model)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
                       source=kf.source, num_people=1 + len(others), warnings=tuple(notes),
                       people_index=tuple(kf.people_index[:1 + len(others)]),
                       people_ids=tuple(kf.people_ids[:1 + len(others)]))
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
-    cam = upload_camera(focal, pp, size, nm, kf.distortion)  # (the lift undistorts with it: core.compute_frame)
+    cam = upload_camera(focal, pp, size, nm, lens)  # (the lift undistorts with it: core.compute_frame)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
                   image=image, has_gt_2d=False, upload=info, others_2d=others,
                   person_tags=tags if any(tags) else ())

@@ -277,6 +277,11 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             else:
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
                 jpegs = None
+                if rec.distortion is not None and rec.distortion_model != "h36m":
+                    raise UploadError(f"{nm}: the app does not play a keypoint sequence with an OpenCV lens "
+                                      "(\"distortion_model\": \"opencv\"): lift it with poselifter lift, or "
+                                      "undistort its 2D first (cv2.undistortPoints with P=K) and upload that without "
+                                      "the lens")
                 if rec.image_size is None:  # (lifted with its principal point; the canvas needs a size)
                     cx, cy = rec.principal_point
                     size = (max(1, round(2 * float(cx))), max(1, round(2 * float(cy))))

@@ -42,10 +42,15 @@ from ._checks import (
 from .camera import (
     CANONICAL_FOCAL,
     DEFAULT_DIAGONAL_FOV_DEG,
+    DistortionModel,
     check_distortion,
+    check_distortion_model,
+    check_opencv_distortion,
     focal_alpha,
     focal_from_fov,
+    tangential_notes,
     undistort_pixels,
+    undistort_pixels_opencv,
 )
 from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .codec import SOURCES, Encoded, PoseCodec, Source
@@ -551,6 +556,7 @@ class Lifter:
         image_size: ArrayLike | None = None,
         source: Source = "detected",
         distortion: ArrayLike | None = None,
+        distortion_model: DistortionModel = "h36m",
         flip_test: bool | None = None,
         warn: bool = True,
         whose: str | None = None,
@@ -572,6 +578,13 @@ class Lifter:
             distortion it undistorts the keypoints first (:func:`lifter.camera.undistort_pixels`) and lifts those
             (:attr:`LiftResult.keypoints_2d`); the paper's models learned H36M's distorted 2D
             (:attr:`lens` ``"h36m"``) and are given the keypoints as they are. Needs the camera's focal length.
+            Tangential terms above :data:`lifter.camera.MAX_PLAUSIBLE_TANGENTIAL` are warned of (OpenCV's
+            coefficients in Human3.6M's order put OpenCV's k3 there).
+        distortion_model: the form of ``distortion``: ``"h36m"`` (default), Human3.6M's ``(k1, k2, k3, p1, p2)``
+            above, or ``"opencv"``, OpenCV's ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])`` exactly as
+            ``cv2.calibrateCamera`` gives them (4, 5 or 8 values, or one row per pose), undone by OpenCV's own
+            model (:func:`lifter.camera.undistort_pixels_opencv`); ``focal`` and ``principal_point`` are then
+            ``K[0, 0], K[1, 1]`` and ``K[0, 2], K[1, 2]`` of the same calibration.
         flip_test: also lift the mirrored input and average: the result is then exactly mirror-equivariant.
             None: the model's default (:attr:`flip_test`). Ignored by networks that are mirror-equivariant by
             construction (``symmetry="mirror"``, like the default's second detected network): for them it would
@@ -584,16 +597,19 @@ class Lifter:
         """
         target = self.network_for(source)
         return target._lift_checked(keypoints, focal=focal, principal_point=principal_point, image_size=image_size,
-                                    source=source, distortion=distortion, flip_test=flip_test, warn=warn, whose=whose)
+                                    source=source, distortion=distortion, distortion_model=distortion_model,
+                                    flip_test=flip_test, warn=warn, whose=whose)
 
     def _lift_checked(self, keypoints: ArrayLike, *, focal: ArrayLike | None, principal_point: ArrayLike | None,
                       image_size: ArrayLike | None, source: Source, distortion: ArrayLike | None,
-                      flip_test: bool | None, warn: bool, whose: str | None = None) -> LiftResult:
+                      flip_test: bool | None, warn: bool, whose: str | None = None,
+                      distortion_model: DistortionModel = "h36m") -> LiftResult:
         """:meth:`lift` on this network (the input checks, then the networks); its warnings name lift's caller."""
         if source not in SOURCES:
             raise PoseLifterError(f"source must be one of {list(SOURCES)}, got {source!r}")
         if flip_test is not None and not isinstance(flip_test, (bool, np.bool_)):
             raise PoseLifterError(f"flip_test must be True, False or None (the model's default), got {flip_test!r}")
+        lens_model = check_distortion_model(distortion_model)
         kp = as_points(keypoints, name="keypoints", dim=2, num_joints=NUM_JOINTS)
         lead = kp.shape[:-2]
         wh = None if image_size is None else as_pair(image_size, name="image_size", positive=True)
@@ -640,15 +656,27 @@ class Lifter:
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
                 "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to assume "
                 "a default field of view")
+        lens_notes: list[str] = []
         if distortion is not None:
             if focal_source != "given":
                 raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "
                                       "(px) too, or leave distortion out")
-            if self.lens == "pinhole":  # (undistort_pixels checks the coefficients)
-                kp = undistort_pixels(kp, focal=f, principal_point=pp, distortion=distortion)
-            else:  # (taken as it is, but checked all the same)
-                check_distortion(distortion, lead=lead)
+            if lens_model == "opencv":
+                if self.lens == "pinhole":  # (checks the coefficients)
+                    kp = undistort_pixels_opencv(kp, focal=f, principal_point=pp, dist_coeffs=distortion)
+                else:  # (taken as it is, but checked all the same)
+                    check_opencv_distortion(distortion, lead=lead)
+            else:
+                lens_notes = tangential_notes(check_distortion(distortion, lead=lead))
+                if self.lens == "pinhole":
+                    try:
+                        kp = undistort_pixels(kp, focal=f, principal_point=pp, distortion=distortion)
+                    except PoseLifterError as exc:
+                        if not lens_notes:
+                            raise
+                        raise PoseLifterError(f"{exc}. Also: {lens_notes[0]}") from None
         in_list = input_warnings(kp, f if focal_source == "given" else None)
+        in_list += lens_notes
         if pp_given and wh is not None and wh.ndim == 1:  # (the records' own note, for API calls)
             flat = pp.reshape(-1, 2)
             if len(flat) and np.all(flat == flat[0]):

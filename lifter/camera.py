@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final, overload
+from typing import Any, Final, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -239,8 +239,8 @@ def undistort(xy_distorted: np.ndarray, k: ArrayLike, p: ArrayLike, *,
         raise PoseLifterError(f"undistort: {int(bad.sum())} point(s) have no inverse through this lens (residual "
                               f"{worst:.3g} in normalized units): the lens distortion is too strong, or the points too "
                               "far from the image centre (a wrong focal length?), for the lens model to undo; "
-                              "undistort the 2D yourself (for an OpenCV calibration: cv2.undistortPoints with P=K) "
-                              "and lift it without distortion")
+                              "an OpenCV calibration's distCoeffs go with distortion_model=\"opencv\"; or "
+                              "undistort the 2D yourself and lift it without distortion")
     return np.where(missing, np.nan, x)
 
 
@@ -303,6 +303,147 @@ def undistort_pixels(keypoints: np.ndarray, *, focal: ArrayLike, principal_point
     f = _last2(focal, name="focal", positive=True, scalar=True)
     c = _last2(principal_point, name="principal_point")
     return undistort((uv - c) / f, d[..., None, :3], d[..., None, 3:]) * f + c
+
+
+DistortionModel = Literal["h36m", "opencv"]
+"""The form of a lens-distortion vector: ``"h36m"``, Human3.6M's Brown-Conrady form ``(k1, k2, k3, p1, p2)``
+(:func:`distort`), or ``"opencv"``, OpenCV's ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])`` (4, 5 or 8
+values, as ``cv2.calibrateCamera`` returns them; its tangential terms differ from Human3.6M's)."""
+
+DISTORTION_MODELS: Final[tuple[str, ...]] = ("h36m", "opencv")
+
+OPENCV_DISTORTION_COUNTS: Final[tuple[int, ...]] = (4, 5, 8)
+"""How many ``distCoeffs`` an ``"opencv"`` lens may have: (k1, k2, p1, p2), with k3, and the rational model's
+k4, k5, k6. (OpenCV's thin-prism and tilted-sensor terms, 12 and 14 values, are not taken.)"""
+
+MAX_PLAUSIBLE_TANGENTIAL: Final[float] = 0.05
+"""A Human3.6M-form lens whose tangential terms p1, p2 exceed this in magnitude is noted: real lenses' are about
+0.001 (Human3.6M's are below 0.002; a phone's or webcam's calibration rarely above 0.01), while OpenCV's
+``distCoeffs`` given in Human3.6M's order put OpenCV's k3, often 0.1-1, in p2."""
+
+_OPENCV_FORM: Final[str] = ("(k1, k2, p1, p2), (k1, k2, p1, p2, k3) or (k1, k2, p1, p2, k3, k4, k5, k6): OpenCV's "
+                            "distCoeffs, 4, 5 or 8 numbers, or one row per pose (..., n)")
+
+
+def check_distortion_model(model: object) -> DistortionModel:
+    """``model`` checked to be one of :data:`DISTORTION_MODELS`; raises :class:`PoseLifterError` naming them."""
+    if model not in DISTORTION_MODELS:
+        raise PoseLifterError(f"distortion_model must be \"h36m\" (Human3.6M's (k1, k2, k3, p1, p2), the default) or "
+                              f"\"opencv\" (OpenCV's distCoeffs (k1, k2, p1, p2[, k3[, k4, k5, k6]])), got "
+                              f"{str(model)[:40]!r}")
+    return model  # type: ignore[return-value]
+
+
+def check_opencv_distortion(dist_coeffs: ArrayLike, *, lead: tuple[int, ...] = ()) -> np.ndarray:
+    """OpenCV ``distCoeffs`` checked and broadcast to ``lead + (n,)``: n in :data:`OPENCV_DISTORTION_COUNTS`, finite,
+    below :data:`MAX_DISTORTION_COEFFICIENT` in magnitude. Raises :class:`PoseLifterError` naming what is wrong."""
+    try:
+        d = np.asarray(dist_coeffs, np.float64)
+    except (TypeError, ValueError):
+        raise PoseLifterError(f"distortion (opencv) must be numbers {_OPENCV_FORM}, got "
+                              f"{str(dist_coeffs)[:80]}") from None
+    if d.ndim == 2 and d.shape[0] == 1 and not lead:
+        d = d[0]  # (cv2.calibrateCamera returns distCoeffs as a (1, n) row)
+    if d.ndim == 0 or d.shape[-1] not in OPENCV_DISTORTION_COUNTS:
+        raise PoseLifterError(f"distortion (opencv) must be {_OPENCV_FORM}; got shape {d.shape} ({d.size} value(s))"
+                              + ("; OpenCV's thin-prism and tilted-sensor terms (12 or 14 values) are not taken: "
+                                 "undistort the 2D yourself (cv2.undistortPoints with P=K) and lift it without "
+                                 "distortion" if d.ndim and d.shape[-1] in (12, 14) else ""))
+    try:
+        d = np.broadcast_to(d, lead + d.shape[-1:])
+    except ValueError:
+        raise PoseLifterError(f"distortion (opencv): shape {d.shape} does not match the keypoints' poses {lead}: "
+                              f"give one (n,) for all, or one row per pose {lead + d.shape[-1:]}") from None
+    bad = ~np.all(np.isfinite(d) & (np.abs(d) < MAX_DISTORTION_COEFFICIENT), axis=-1)
+    if np.any(bad):
+        row = d[tuple(np.argwhere(bad)[0])] if bad.ndim else d
+        raise PoseLifterError(f"distortion (opencv){where_in_batch(bad)}: coefficients must be finite and below "
+                              f"{MAX_DISTORTION_COEFFICIENT:g} in magnitude, got {row.tolist()}")
+    return d
+
+
+def _opencv_undistort(uv: np.ndarray, K: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """OpenCV's own iterative undistortion of pixels ``(N, 2)`` to the pinhole pixels of camera matrix ``K``, run to
+    convergence (OpenCV 4's ``undistortPointsIter``, or 5's ``undistortPoints`` with its criteria)."""
+    import cv2  # (a dependency; imported here so that importing lifter does not load it)
+
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
+    src = np.ascontiguousarray(uv, np.float64).reshape(-1, 1, 2)
+    solve = getattr(cv2, "undistortPointsIter", None)  # (OpenCV 4; 5 took the criteria into undistortPoints)
+    if solve is not None:
+        out = solve(src, K, d, None, K, crit)
+    else:
+        out = cv2.undistortPoints(src, K, d, R=None, P=K, criteria=crit)
+    return np.asarray(out, np.float64).reshape(-1, 2)
+
+
+def _opencv_distort(uv: np.ndarray, K: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """OpenCV's projection (``cv2.projectPoints``) of pinhole pixels ``(N, 2)`` of camera matrix ``K`` through lens
+    ``d``: the inverse of :func:`_opencv_undistort`."""
+    import cv2
+
+    xy = (np.asarray(uv, np.float64) - K[:2, 2]) / K[[0, 1], [0, 1]]
+    rays = np.concatenate([xy, np.ones((len(xy), 1))], axis=1)
+    out, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), K, d)
+    return np.asarray(out, np.float64).reshape(-1, 2)
+
+
+def undistort_pixels_opencv(keypoints: ArrayLike, *, focal: ArrayLike, principal_point: ArrayLike,
+                            dist_coeffs: ArrayLike) -> np.ndarray:
+    """Pixels ``(..., J, 2)`` of a camera calibrated by OpenCV (camera matrix ``K`` of ``focal`` ``(fx, fy)`` and
+    ``principal_point`` ``(cx, cy)``, px, and ``distCoeffs`` ``dist_coeffs``, :func:`check_opencv_distortion`) mapped
+    to the pixels a pinhole camera with the same ``K`` would see, by OpenCV's own model and solver
+    (``cv2.undistortPoints`` with ``P=K``), run to convergence: for ``cv2.projectPoints(X, 0, 0, K, dist_coeffs)``
+    this gives the pinhole projection of ``X``. ``focal``, ``principal_point`` and the coefficients broadcast over
+    the leading dimensions (one lens, or one per pose). Joints with a non-finite coordinate (missing) come out NaN.
+    Raises :class:`PoseLifterError` naming the residual where OpenCV's solver does not find a point's inverse to
+    1e-6 px (a lens too strong that far from the centre, or a wrong focal length)."""
+    uv = np.asarray(keypoints, np.float64)
+    if uv.ndim < 2 or uv.shape[-1] != 2:
+        raise PoseLifterError(f"keypoints: expected shape (..., J, 2), got {uv.shape}")
+    lead = uv.shape[:-2]
+    d = check_opencv_distortion(dist_coeffs, lead=lead)
+    f = np.broadcast_to(as_pair(focal, name="focal", positive=True, scalar=True), lead + (2,))
+    c = np.broadcast_to(as_pair(principal_point, name="principal_point"), lead + (2,))
+    lens = np.concatenate([f, c, d], axis=-1).reshape(-1, 4 + d.shape[-1])
+    flat = uv.reshape(-1, uv.shape[-2], 2)
+    out = np.full_like(flat, np.nan)
+    ok = np.all(np.isfinite(flat), axis=-1)
+    rows, which = np.unique(lens, axis=0, return_inverse=True)
+    worst = 0.0
+    for i, row in enumerate(rows):  # (one OpenCV call per distinct camera: usually one)
+        K = np.array([[row[0], 0.0, row[2]], [0.0, row[1], row[3]], [0.0, 0.0, 1.0]])
+        sel = (which.reshape(-1) == i)[:, None] & ok
+        if not np.any(sel):
+            continue
+        pts = flat[sel]
+        und = _opencv_undistort(pts, K, row[4:])
+        back = _opencv_distort(und, K, row[4:])
+        res = np.max(np.abs(np.nan_to_num(back - pts, nan=np.inf)), axis=-1)
+        worst = max(worst, float(np.max(res)))
+        out[sel] = und
+    if worst > 1e-6:
+        raise PoseLifterError(f"undistort (opencv): some points have no inverse through this lens (residual "
+                              f"{worst:.3g} px): the lens distortion is too strong, or the points too far from the "
+                              "image centre (a wrong focal length or principal point?), for OpenCV's solver; check "
+                              "the calibration, or undistort the 2D yourself and lift it without distortion")
+    return out.reshape(uv.shape)
+
+
+def tangential_notes(distortion: ArrayLike) -> list[str]:
+    """A note when a Human3.6M-form lens ``(..., 5)`` (:func:`check_distortion`) has a tangential term above
+    :data:`MAX_PLAUSIBLE_TANGENTIAL` in magnitude: most likely OpenCV's ``distCoeffs`` given in Human3.6M's order.
+    Empty otherwise."""
+    d = np.asarray(distortion, np.float64).reshape(-1, 5)
+    big = np.max(np.abs(d[:, 3:]), axis=-1) > MAX_PLAUSIBLE_TANGENTIAL
+    if not np.any(big):
+        return []
+    row = d[int(np.argmax(big))]
+    return [f"the lens's tangential terms p1, p2 = {row[3]:.3g}, {row[4]:.3g} are larger than a real lens's (below "
+            f"{MAX_PLAUSIBLE_TANGENTIAL:g}; Human3.6M's about 0.001): 'distortion' is read in Human3.6M's order "
+            "(k1, k2, k3, p1, p2). If these are OpenCV's distCoeffs (k1, k2, p1, p2, k3), say so: "
+            "distortion_model=\"opencv\" (a keypoint file: \"distortion_model\": \"opencv\"; the CLI: "
+            "--distortion-model opencv)"]
 
 
 def project(

@@ -2,8 +2,8 @@
 result record (:class:`LiftRecord`) that ``poselifter lift`` and the app's download write as JSON.
 
 Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
-"focal": F or [FX, FY], "principal_point": [CX, CY], "distortion": [K1, K2, K3, P1, P2], "source": "detected" |
-"clean"}`` (only ``keypoints`` is
+"focal": F or [FX, FY], "principal_point": [CX, CY], "distortion": [K1, K2, K3, P1, P2], "distortion_model":
+"h36m" | "opencv", "source": "detected" | "clean"}`` (only ``keypoints`` is
 required; rows may have a third value, a confidence, where 0 marks a missing joint, as does ``null`` for a
 coordinate, a confidence or a whole row; third values that look like coordinates are refused,
 :data:`Z_LIKE_THIRD_VALUE`; a flat ``[x0, y0, c0, x1, ...]`` list works too), a bare list of
@@ -17,7 +17,9 @@ blazepose33). ``source`` says what the 2D is: ``"detected"`` (a detector's outpu
 (:data:`MAX_IMAGE_SIDE_PX`), ``focal`` in (0, 1e6) px, ``principal_point`` finite and below 1e6 px in
 magnitude; ``distortion`` five finite numbers below 10 in magnitude, the lens that saw the 2D in Human3.6M's
 Brown-Conrady form (:func:`lifter.camera.distort`; needs the camera's focal length, in the file or given with it;
-without it the 2D is taken as undistorted); anything
+without it the 2D is taken as undistorted), or with ``"distortion_model": "opencv"`` (ROS's ``"plumb_bob"`` and
+``"rational_polynomial"`` say the same) OpenCV's ``distCoeffs`` as calibrated, 4, 5 or 8 numbers
+``[k1, k2, p1, p2, k3, ...]`` (:func:`lifter.camera.undistort_pixels_opencv`); anything
 else fails with a message naming the field. MMPose's / RTMPose's ``keypoint_scores`` beside ``[x, y]`` rows are
 read as the rows' confidences. A missing face or mid-body joint of a detector format is stood in for, with a note
 (:data:`lifter.keypoints.STAND_INS`: a hidden ear, the nose, OpenPose's Neck and MidHip). A person still missing a
@@ -42,7 +44,14 @@ from typing import Any, Final
 import numpy as np
 
 from ._checks import COCO_FACE_SPREAD, PoseLifterError, face_first_people
-from .camera import MAX_DISTORTION_COEFFICIENT, check_distortion
+from .camera import (
+    DISTORTION_MODELS,
+    MAX_DISTORTION_COEFFICIENT,
+    OPENCV_DISTORTION_COUNTS,
+    DistortionModel,
+    check_distortion,
+    check_opencv_distortion,
+)
 from .keypoints import H36M17, get_format, keypoint_formats, stand_in_missing
 from .skeleton import JOINT_NAMES
 
@@ -115,6 +124,8 @@ class LiftRecord:
     distortion: tuple[float, ...] | None = None
     """The lens distortion the 2D was given with ``(k1, k2, k3, p1, p2)`` (a keypoint file's ``distortion``), or
     None; ``keypoints_2d`` stays as given (distorted)."""
+    distortion_model: DistortionModel = "h36m"
+    """The form of :attr:`distortion`: ``"h36m"`` or ``"opencv"`` (:data:`lifter.camera.DistortionModel`)."""
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
@@ -130,7 +141,8 @@ class LiftRecord:
             "focal": r(self.focal), "focal_source": self.focal_source,
             "metric_depth": depth_is_metric(self.focal_source), "principal_point": r(self.principal_point),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
-            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
+            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
+                                                   "distortion_model": self.distortion_model}),
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
             "num_people": self.num_people,
             "scores": None if self.scores is None else r(self.scores, 3), "warnings": list(self.warnings),
@@ -152,7 +164,10 @@ class KeypointFile:
     warnings: tuple[str, ...] = ()
     source: str = "detected"
     distortion: np.ndarray | None = None
-    """``(5,)`` ``(k1, k2, k3, p1, p2)``: the lens that saw the 2D (module docstring), or None (undistorted)."""
+    """``(5,)`` ``(k1, k2, k3, p1, p2)``: the lens that saw the 2D (module docstring), or None (undistorted); with
+    :attr:`distortion_model` ``"opencv"``, OpenCV's ``distCoeffs`` ``(n,)``."""
+    distortion_model: DistortionModel = "h36m"
+    """The form of :attr:`distortion` (the file's ``distortion_model``): ``"h36m"`` or ``"opencv"``."""
     people: tuple[np.ndarray, ...] = ()
     """Everyone in the file, ``(J, 2)`` px each, largest (box area) first; ``keypoints`` is ``people[0]``."""
     people_index: tuple[int, ...] = ()
@@ -365,7 +380,8 @@ def _person_id(q: Any) -> str | int | None:
     return None
 
 
-CAMERA_FIELDS: Final[tuple[str, ...]] = ("focal", "principal_point", "image_size", "distortion", "source")
+CAMERA_FIELDS: Final[tuple[str, ...]] = ("focal", "principal_point", "image_size", "distortion", "distortion_model",
+                                         "source")
 """The fields that describe a file's camera and 2D; read only at a file's (or sequence's) top level."""
 
 
@@ -383,7 +399,8 @@ _FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
     "image_width": "image_size", "image_height": "image_size", "keypoint_format": "format", "fmt": "format",
     "framerate": "fps", "frame_rate": "fps", "focal_px": "focal", "focal_length_px": "focal", "f_px": "focal",
     "focal_pixels": "focal", "image_shape": "image_size", "img_shape": "image_size", "imsize": "image_size",
-    "keypoint": "keypoints", "kpts": "keypoints", "joints": "keypoints", "landmarks": "keypoints"}
+    "keypoint": "keypoints", "kpts": "keypoints", "joints": "keypoints", "landmarks": "keypoints",
+    "lens_model": "distortion_model", "camera_model": "distortion_model", "distortion_type": "distortion_model"}
 """Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
 
 _FIELD_LETTERS: Final[dict[str, str]] = {
@@ -448,9 +465,8 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
             hint = (" Human3.6M's cameras name the lens k (k1, k2, k3) and p (p1, p2); give them together as "
                     "'distortion': [k1, k2, k3, p1, p2]")
         elif ours == "distortion" and (key.lower() in _FIELD_NAMES_ELSEWHERE or key in _FIELD_LETTERS):
-            hint = (" It takes Human3.6M's order (k1, k2, k3, p1, p2); OpenCV's coefficients (k1, k2, p1, p2, k3) "
-                    "have other tangential terms: undistort the 2D with cv2.undistortPoints first and leave the "
-                    "lens out")
+            hint = (" It takes Human3.6M's order (k1, k2, k3, p1, p2); for OpenCV's distCoeffs (k1, k2, p1, p2[, k3"
+                    "[, k4, k5, k6]]) as calibrated, add \"distortion_model\": \"opencv\" beside them")
         elif key.lower() in ("camera", "cam", "calibration") and isinstance(meta[key], dict):
             hint = (" Camera fields go at the file's top level: 'focal', 'principal_point', 'image_size', "
                     "'distortion'")
@@ -753,8 +769,37 @@ def _distortion_field(raw: Any, *, where: str) -> np.ndarray:
         raise PoseLifterError(f"{where}: distortion must be {form}, got {[float(v) for v in raw]}") from None
 
 
+_ROS_DISTORTION_MODELS: Final[dict[str, str]] = {"plumb_bob": "opencv", "rational_polynomial": "opencv"}
+"""ROS ``camera_info``'s names for OpenCV's lens models (5 and 8 coefficients), read as ``"opencv"``."""
+
+
+def _distortion_model_field(raw: Any, *, where: str) -> DistortionModel:
+    """A keypoint file's ``distortion_model``: ``"h36m"`` (the default) or ``"opencv"`` (or ROS's names for it)."""
+    model = _ROS_DISTORTION_MODELS.get(raw, raw) if isinstance(raw, str) else raw
+    if model not in DISTORTION_MODELS:
+        raise PoseLifterError(f"{where}: distortion_model must be \"h36m\" (Human3.6M's [k1, k2, k3, p1, p2], the "
+                              "default) or \"opencv\" (OpenCV's distCoeffs [k1, k2, p1, p2, k3, ...] as calibrated; "
+                              f"ROS's \"plumb_bob\" and \"rational_polynomial\" are read as it), got {_short(raw)}")
+    return model  # type: ignore[return-value]
+
+
+def _opencv_distortion_field(raw: Any, *, where: str) -> np.ndarray:
+    """A keypoint file's ``distortion`` with ``"distortion_model": "opencv"``: OpenCV's ``distCoeffs``, 4, 5 or 8
+    finite numbers below :data:`lifter.camera.MAX_DISTORTION_COEFFICIENT` in magnitude."""
+    counts = ", ".join(map(str, OPENCV_DISTORTION_COUNTS))
+    form = (f"OpenCV's distCoeffs [k1, k2, p1, p2, k3, ...] ({counts} numbers below {MAX_DISTORTION_COEFFICIENT:g} "
+            "in magnitude) with \"distortion_model\": \"opencv\"")
+    if not (isinstance(raw, (list, tuple)) and all(_is_number(v) for v in raw)):
+        raise PoseLifterError(f"{where}: distortion must be {form}, got {_short(raw)}")
+    try:
+        return check_opencv_distortion(raw)
+    except PoseLifterError as exc:
+        raise PoseLifterError(f"{where}: distortion must be {form}: {exc}") from None
+
+
 def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None, np.ndarray | None,
-                                                          np.ndarray | None, str, np.ndarray | None]:
+                                                          np.ndarray | None, str, np.ndarray | None,
+                                                          DistortionModel]:
     image_size = _image_size_field(meta.get("image_size"), where=str(p))
     focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
     pp = None if meta.get("principal_point") is None else \
@@ -763,8 +808,11 @@ def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None,
     if source not in ("detected", "clean"):
         raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "
                               f"(exact 2D: ground truth or hand-placed), got {source!r}")
-    dist = None if meta.get("distortion") is None else _distortion_field(meta["distortion"], where=str(p))
-    return image_size, focal, pp, source, dist
+    model: DistortionModel = "h36m" if meta.get("distortion_model") is None else \
+        _distortion_model_field(meta["distortion_model"], where=str(p))
+    read = _opencv_distortion_field if model == "opencv" else _distortion_field
+    dist = None if meta.get("distortion") is None else read(meta["distortion"], where=str(p))
+    return image_size, focal, pp, source, dist, model
 
 
 def _written_assumed(focal: np.ndarray | None, meta: dict[str, Any], image_size: tuple[int, int] | None
@@ -812,10 +860,11 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
                       "'source' go at the file's top level, beside the people")
     unread += unread_field_notes(meta)
     notes += unread
-    image_size, focal, pp, source, dist = _camera_meta(meta, p)
+    image_size, focal, pp, source, dist, model = _camera_meta(meta, p)
     focal, assumed = _written_assumed(focal, meta, image_size)
     return KeypointFile(keypoints=arrays[0], format=fmt, image_size=image_size, focal=focal, principal_point=pp,
-                        warnings=tuple(notes), source=source, distortion=dist, people=tuple(arrays),
+                        warnings=tuple(notes), source=source, distortion=dist, distortion_model=model,
+                        people=tuple(arrays),
                         people_index=tuple(k for k, _ in identity), people_ids=tuple(i for _, i in identity),
                         unread=tuple(unread), people_scores=people_scores, assumed_focal=assumed)
 
@@ -838,7 +887,10 @@ class KeypointSequence:
     warnings: tuple[str, ...] = ()
     source: str = "detected"
     distortion: np.ndarray | None = None
-    """``(5,)``: the lens that saw the 2D (module docstring), or None (undistorted)."""
+    """``(5,)``: the lens that saw the 2D (module docstring), or None (undistorted); OpenCV's ``(n,)`` with
+    :attr:`distortion_model` ``"opencv"``."""
+    distortion_model: DistortionModel = "h36m"
+    """As :attr:`KeypointFile.distortion_model`."""
     people_ids: list[list[str | int | None]] | None = None
     """Per frame, for each of its people: their ``person_id`` (or ``id``, ``track_id``) field, None where they
     have none; None when no frame has one."""
@@ -943,10 +995,11 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                       "'frames'")
     unread += unread_field_notes(d)
     notes += unread
-    image_size, focal, pp, source, dist = _camera_meta(d, p)
+    image_size, focal, pp, source, dist, model = _camera_meta(d, p)
     focal, assumed = _written_assumed(focal, d, image_size)
     return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
+                            distortion_model=model,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None,
                             unread=tuple(unread), assumed_focal=assumed,
                             people_scores=scores if any(c is not None for fr in scores for c in fr) else None)

@@ -31,7 +31,14 @@ from ._checks import (
 )
 from ._text import sentence
 from .api import MIN_FOCAL_PX
-from .camera import DEFAULT_DIAGONAL_FOV_DEG
+from .camera import (
+    DEFAULT_DIAGONAL_FOV_DEG,
+    DistortionModel,
+    check_distortion,
+    check_distortion_model,
+    check_opencv_distortion,
+    tangential_notes,
+)
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
     LoadedImage,
@@ -129,6 +136,12 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
+def lens_notes(distortion: np.ndarray | None, model: DistortionModel) -> list[str]:
+    """The records' note on a Human3.6M-form lens whose tangential terms look like OpenCV's k3
+    (:func:`lifter.camera.tangential_notes`); none for other lenses or none."""
+    return [] if distortion is None or model != "h36m" else tangential_notes(distortion)
+
+
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
 """The ``focal_source`` values of a focal length that was given (the others are assumed: EXIF, field of view)."""
 
@@ -222,13 +235,15 @@ def joint_doubt_notes(scores: np.ndarray) -> list[str]:
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
                 scores: np.ndarray | None = None, notes: list[str] | None = None,
-                distortion: ArrayLike | None = None) -> tuple[PersonResult, ...]:
+                distortion: ArrayLike | None = None, distortion_model: DistortionModel = "h36m"
+                ) -> tuple[PersonResult, ...]:
     """Lift ``(n, 17, 2)`` people (px) in one batch at focal ``f`` / principal point ``pp`` (px); one
     :class:`PersonResult` each (mm, camera frame), in the same order. No Python warnings: the records carry
     them as notes (:func:`plausibility_notes`; what looks wrong in the output, :attr:`LiftResult.warnings`, is
-    appended to ``notes``). ``distortion``: the lens that saw the 2D (:meth:`lifter.Lifter.lift`), or None."""
+    appended to ``notes``). ``distortion``: the lens that saw the 2D (:meth:`lifter.Lifter.lift`), or None, in the
+    form ``distortion_model``."""
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=source, warn=False,
-                      distortion=distortion, whose="the output's people")
+                      distortion=distortion, distortion_model=distortion_model, whose="the output's people")
     if notes is not None:
         notes.extend(getattr(res, "warnings", ()))
     cd = np.asarray(res.canonical_depth).reshape(-1)
@@ -274,8 +289,9 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread,
         assumed_focal=kf.assumed_focal)
     cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src, source_format=kf.format)
+    cam_notes += lens_notes(kf.distortion, kf.distortion_model)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
-                         distortion=kf.distortion)
+                         distortion=kf.distortion, distortion_model=kf.distortion_model)
     if kf.people_index:  # who is who in the file (the output is largest first)
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
                        for q, k, i in zip(lifted, kf.people_index, kf.people_ids))
@@ -285,16 +301,25 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=kf.image_size, model=lifter.name, source_format=kf.format,
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
-                      people=lifted, distortion=distortion_tuple(kf.distortion), scores=top.scores)
+                      people=lifted, distortion=distortion_tuple(kf.distortion),
+                      distortion_model=kf.distortion_model, scores=top.scores)
 
 
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,
                principal_point: Any | None = None, sensor_width_mm: float | None = None,
                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_side: int = DEFAULT_MAX_SIDE_PX,
-               flip_test: bool | None = None, max_people: int | None = None) -> LiftRecord:
+               flip_test: bool | None = None, max_people: int | None = None, distortion: ArrayLike | None = None,
+               distortion_model: DistortionModel = "h36m") -> LiftRecord:
     """Detect everyone in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift them all into one
     camera space, largest first (at most ``max_people``); the top-level fields are the largest person's
-    (module docstring)."""
+    (module docstring). ``distortion``: the camera's lens in the form ``distortion_model``
+    (:meth:`lifter.Lifter.lift`), calibrated with ``focal`` and ``principal_point``, which it needs; the record keeps
+    the 2D as detected (distorted)."""
+    if distortion is not None and focal is None:
+        raise PoseLifterError("distortion needs the focal length it was calibrated with (lens coefficients act on "
+                              "(x - c) / f): give focal= (--focal) and principal_point= (--principal-point) of the "
+                              "same calibration, or leave the distortion out")
+    distortion_model = check_distortion_model(distortion_model)
     if isinstance(image, np.ndarray):
         raise PoseLifterError(
             f"lift_image: got a numpy array {image.shape}; pass a file path, or wrap an RGB array with "
@@ -316,7 +341,12 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
     scores = np.stack([d.scores for d in dets])
     notes += joint_doubt_notes(scores)
-    lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected", scores=scores, notes=notes)
+    dist = None
+    if distortion is not None:
+        dist = check_opencv_distortion(distortion) if distortion_model == "opencv" else check_distortion(distortion)
+        notes += lens_notes(dist, distortion_model)
+    lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected", scores=scores, notes=notes,
+                         distortion=dist, distortion_model=distortion_model)
     top, det = lifted[0], dets[0]
     warn = list(det.warnings)
     if len(dets) > 1:
@@ -326,4 +356,5 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=img.size, model=lifter.name, scores=det.scores, source_format=det.raw.keypoint_format,
-                      num_people=det.num_people, detector=estimator.name, warnings=tuple(warn + notes), people=lifted)
+                      num_people=det.num_people, detector=estimator.name, warnings=tuple(warn + notes), people=lifted,
+                      distortion=distortion_tuple(dist), distortion_model=distortion_model)

@@ -33,7 +33,7 @@ import numpy as np
 
 from ._checks import PoseLifterError, as_pair
 from .api import collect_output_notes
-from .camera import DEFAULT_DIAGONAL_FOV_DEG, canonical_depth_from_depth
+from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
     PoseEstimator2D,
@@ -258,6 +258,8 @@ class SequenceRecord:
     source: str = "detected"
     distortion: tuple[float, ...] | None = None
     """The lens distortion the 2D was given with (a keypoint sequence's ``distortion``), or None."""
+    distortion_model: DistortionModel = "h36m"
+    """The form of :attr:`distortion`: ``"h36m"`` or ``"opencv"`` (:data:`lifter.camera.DistortionModel`)."""
     source_format: str | None = None
     """The keypoint format the 2D came in before conversion to H36M (a sequence's ``format``, the detector's), or
     None when no frame had anyone."""
@@ -279,7 +281,8 @@ class SequenceRecord:
             "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
             "metric_depth": depth_is_metric(self.focal_source),
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
-            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion]}),
+            **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
+                                                   "distortion_model": self.distortion_model}),
             "source_format": self.source_format, "detector": self.detector,
             "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
             "seconds_per_frame": None if self.seconds_per_frame is None else round(self.seconds_per_frame, 4),
@@ -690,7 +693,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
-    from .pipeline import plausibility_notes, resolve_camera
+    from .pipeline import lens_notes, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
@@ -737,8 +740,9 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))
     warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src, source_format=ks.format))
+    warnings.extend(lens_notes(ks.distortion, ks.distortion_model))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
-                      distortion=ks.distortion)
+                      distortion=ks.distortion, distortion_model=ks.distortion_model)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
     lifted, k = [], 0
     for i, c in enumerate(counts):
@@ -756,7 +760,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
-                          distortion=distortion_tuple(ks.distortion), source_format=ks.format)
+                          distortion=distortion_tuple(ks.distortion), distortion_model=ks.distortion_model,
+                          source_format=ks.format)
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",

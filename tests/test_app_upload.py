@@ -751,6 +751,40 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
         up.keypoint_sample("nofocal.json", json.dumps(nofocal).encode(), key="upload/t/nofocal.json")
 
 
+def test_a_keypoint_upload_with_an_opencv_lens_is_undistorted_as_it_is_read() -> None:
+    """A keypoint file with OpenCV's distCoeffs ("distortion_model": "opencv"): the app's cameras have Human3.6M's
+    lens model, so the 2D is undistorted as the file is read (at the file's focal), with a note; the sample's
+    camera has no lens and the lift is the pinhole 2D's."""
+    import cv2
+    from conftest import random_pose_cam, tiny_lifter
+
+    from lifter import project
+
+    f, c, d = 600.0, (512.0, 384.0), [-0.28, 0.09, 0.0012, -0.0008, 0.05]
+    X = random_pose_cam(np.random.default_rng(5), 1)[0]
+    K = np.array([[f, 0, c[0]], [0, f, c[1]], [0, 0, 1.0]])
+    seen = cv2.projectPoints(X, np.zeros(3), np.zeros(3), K, np.asarray(d))[0].reshape(-1, 2)
+    pinhole = project(X, focal=f, principal_point=c)
+    assert np.abs(seen - pinhole).max() > 2.0
+    doc = {"keypoints": seen.tolist(), "focal": f, "principal_point": list(c), "image_size": [1024, 768],
+           "distortion": d, "distortion_model": "opencv", "source": "clean"}
+    sample = up.keypoint_sample("cv.json", json.dumps(doc).encode(), key="upload/t/cv.json")
+    np.testing.assert_allclose(sample.keypoints_2d, pinhole, atol=1e-6)
+    assert sample.camera.distortion is None
+    assert any("OpenCV lens" in w and "undistorted (pinhole) 2D" in w for w in sample.upload.warnings)
+    lf = tiny_lifter()
+    lf.train_config = {"data": {"lens": "pinhole"}}
+    rec = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(f, f))
+    want = lf.lift(pinhole, focal=f, principal_point=c, source="clean")
+    np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
+    assert "distortion" not in rec.to_json()
+    # Human3.6M-order numbers that look like OpenCV's get the library's note
+    doc.pop("distortion_model")
+    doc["distortion"], doc["keypoints"] = [0.05, -0.1, 0.001, 0.001, 0.3], pinhole.tolist()
+    wrong = up.keypoint_sample("h.json", json.dumps(doc).encode(), key="upload/t/h.json")
+    assert any("tangential terms p1, p2 = 0.001, 0.3" in w for w in wrong.upload.warnings)
+
+
 def test_upload_notes_read_as_sentences_and_name_the_files_field() -> None:
     """A user trial: the app's note on a 17-joint file without "format" named a CLI flag (--format) the app does
     not have, and a note ending in "?" got a second full stop ("did you mean 'distortion'?.")."""

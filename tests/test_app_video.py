@@ -168,6 +168,12 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     seq = v.sequence()
     assert seq is not None and seq.record.image_size == (W + 20, H - 40)
     assert any("assumed" in w and "twice the principal point" in w for w in seq.info.warnings), seq.info.warnings
+    # an OpenCV lens (the app's cameras have Human3.6M's lens model): refused with the ways out, the sample kept
+    key = v.state.sample.key
+    lensed = dict(doc, distortion=[-0.1, 0.01, 0.001, 0.0, 0.0], distortion_model="opencv")
+    assert v.load_upload("lens.json", json.dumps(lensed).encode()) is False
+    assert "does not play a keypoint sequence with an OpenCV lens" in v.messages[-1]
+    assert "poselifter lift" in v.messages[-1] and v.state.sample.key == key
 
 
 def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(server) -> None:

@@ -33,7 +33,9 @@ Camera. ``--focal`` / ``--principal-point`` apply to every input. Otherwise, per
 file's own ``focal`` / ``principal_point``; for photos the EXIF focal length (focal in mm with the
 sensor size from the focal-plane resolution or ``--sensor-width``, else the 35-mm equivalent); else
 a diagonal field of view of ``--fov`` degrees (default 65, :data:`lifter.detect.DEFAULT_DIAGONAL_FOV_DEG`).
-The principal point defaults to the image centre. See :func:`lifter.detect.focal_from_exif`.
+The principal point defaults to the image centre. See :func:`lifter.detect.focal_from_exif`. A photo's lens:
+``--distortion`` with ``--distortion-model`` (``h36m``: K1 K2 K3 P1 P2; ``opencv``: OpenCV's distCoeffs as
+calibrated), which needs ``--focal`` of the same calibration; the detected 2D is undistorted before it is lifted.
 
 Keypoint JSON files: an object ``{"keypoints": [[x, y], ...], "format": "coco17", "image_size": [W, H],
 "focal": F or [FX, FY], "principal_point": [CX, CY]}`` (only ``keypoints`` is required; rows may have
@@ -67,7 +69,14 @@ import numpy as np
 
 from .._checks import PoseLifterError, as_pair
 from ..api import MIN_FOCAL_PX
-from ..camera import DEFAULT_DIAGONAL_FOV_DEG, MAX_FOV_DEG, MIN_FOV_DEG
+from ..camera import (
+    DEFAULT_DIAGONAL_FOV_DEG,
+    DISTORTION_MODELS,
+    MAX_FOV_DEG,
+    MIN_FOV_DEG,
+    check_distortion,
+    check_opencv_distortion,
+)
 from ..detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -222,6 +231,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="principal point in px (default: the image centre)")
     p.add_argument("--fov", type=float, default=DEFAULT_DIAGONAL_FOV_DEG,
                    help="diagonal field of view (deg) assumed when no focal length is known")
+    p.add_argument("--distortion", type=float, nargs="+", metavar="D", default=None,
+                   help="photos: the camera's lens distortion, in the form --distortion-model says, calibrated with "
+                        "--focal and --principal-point (which it needs); the 2D is undistorted before it is lifted. "
+                        "Keypoint files give theirs in the file ('distortion', 'distortion_model')")
+    p.add_argument("--distortion-model", choices=DISTORTION_MODELS, default="h36m",
+                   help="the form of --distortion: 'h36m', Human3.6M's K1 K2 K3 P1 P2, or 'opencv', OpenCV's "
+                        "distCoeffs K1 K2 P1 P2 [K3 [K4 K5 K6]] as cv2.calibrateCamera gives them")
     p.add_argument("--sensor-width", type=float, default=None, metavar="MM",
                    help="camera sensor width (long side) in mm, for EXIF focal lengths in mm")
     p.add_argument("--glb", action="store_true", help="also write <name>.glb (skeleton meshes of everyone, metres, "
@@ -283,6 +299,14 @@ def check_lift_options(args: argparse.Namespace) -> None:
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
+    if args.distortion is not None:
+        if args.focal is None:
+            raise PoseLifterError("--distortion needs the focal length it was calibrated with: give --focal FX [FY] "
+                                  "and --principal-point CX CY of the same calibration")
+        if args.distortion_model == "opencv":
+            check_opencv_distortion(args.distortion)
+        else:
+            check_distortion(args.distortion)
     from ..detect import available_estimators
 
     if args.detector not in available_estimators():
@@ -349,6 +373,12 @@ def run_lift(args: argparse.Namespace) -> int:
             for path, name in bar:
                 try:
                     sfx = path.suffix.lower()
+                    if args.distortion is not None and (sfx == ".json" or sfx in VIDEO_SUFFIXES):
+                        raise PoseLifterError(
+                            f"{path}: --distortion is for photos; " + (
+                                "a keypoint file gives its lens in the file: 'distortion' (and 'distortion_model')"
+                                if sfx == ".json" else "a video's frames are not undistorted: lift it without "
+                                "--distortion, or undistort the video first (e.g. OpenCV's cv2.undistort per frame)"))
                     seq: SequenceRecord | None = None
                     rec: LiftRecord | None = None
                     if sfx == ".json" and is_keypoint_sequence(path):
@@ -374,7 +404,8 @@ def run_lift(args: argparse.Namespace) -> int:
                         rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path),
                                          focal=focal, principal_point=pp, sensor_width_mm=args.sensor_width,
                                          fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
-                                         max_people=args.max_people)
+                                         max_people=args.max_people, distortion=args.distortion,
+                                         distortion_model=args.distortion_model)
                     earlier = _earlier_input(args.out / f"{name}.json", path)
                     if earlier is not None:
                         say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
