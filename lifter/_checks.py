@@ -118,6 +118,9 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
         arr = np.stack([arr, arr])
     elif scalar and arr.shape[-1] == 1:
         arr = np.concatenate([arr, arr], axis=-1)
+    if arr.shape[-2:] == (3, 3) and np.allclose(arr[..., 2, :], [0.0, 0.0, 1.0]):
+        raise PoseLifterError(f"{name}: got a 3 x 3 camera matrix K; pass its entries: focal=(K[0, 0], K[1, 1]) and "
+                              "principal_point=(K[0, 2], K[1, 2]), px")
     if arr.ndim == 0 or arr.shape[-1] != 2:
         pair = "(width, height)" if "size" in name else "(x, y)"
         expected = "a scalar or shape (..., 2)" if scalar else f"a pair {pair} or shape (..., 2)"

@@ -7,12 +7,15 @@ Format ``"poselifter-checkpoint"``, version 2::
      "codec": {"target_mean": Tensor (49,), "target_std": Tensor (49,)},
      "state_dict": {name: Tensor},            # the network (lifter.model.PoseLifterNet)
      "train_config": dict or None,            # lifter.config.TrainConfig.to_dict(): reruns with --config
-     "meta": dict}                            # provenance and metrics; primitives only
+     "meta": dict,                            # provenance and metrics; primitives only
+     "tensors_sha256": str}                   # the tensors' checksum (tensor_checksum); files written before
+                                              # 2026-11-27, the shipped ones among them, have none
 
 Version 1 files (network and target statistics in one state dict, the paper's pixel-space model) are
 migrated on load. Weights may be stored in float16 to halve the file size; they are cast to float32 on
 load. Loading checks, in this order and before the network is allocated: the file's sha256 when one is
-expected (shipped weights), the format and version, the model config's values and bounds
+expected (shipped weights), the format and version, the tensors' own checksum when the file has one (a byte
+changed after it was written: torch's zip reader does not check its CRCs), the model config's values and bounds
 (:class:`~lifter.model.ModelConfig`), and every tensor's name and shape against the config; then that
 all values are finite. Each failure raises :class:`~lifter._checks.CheckpointError` naming the problem.
 """
@@ -59,6 +62,18 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
+def tensor_checksum(state_dict: dict[str, Any], codec: dict[str, Any]) -> str:
+    """Hex sha256 of a checkpoint's tensors as stored (network ``state_dict`` and ``codec`` statistics): each one's
+    name, dtype, shape and bytes, in name order. Written with every checkpoint and checked on load."""
+    h = hashlib.sha256()
+    for part, tensors in (("state_dict", state_dict), ("codec", codec)):
+        for k in sorted(tensors):
+            t = torch.as_tensor(tensors[k]).detach().cpu().contiguous()
+            h.update(f"{part}/{k}:{t.dtype}:{tuple(t.shape)}:".encode())
+            h.update(t.reshape(-1).view(torch.uint8).numpy().tobytes())
+    return h.hexdigest()
+
+
 def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: PoseCodec, *,
                     train_config: dict[str, Any] | None = None, meta: dict[str, Any] | None = None,
                     half: bool = False) -> Path:
@@ -66,8 +81,10 @@ def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: Pos
     parents created). ``half=True`` stores the network's floating tensors as float16."""
     state = {k: (v.detach().to(torch.float16) if half and v.is_floating_point() else v.detach()).cpu().clone()
              for k, v in net.state_dict().items()}
+    codec_state = codec.state_dict()
     payload = {"format": FORMAT, "version": VERSION, "model_config": net.config.to_dict(),
-               "codec": codec.state_dict(), "state_dict": state, "train_config": train_config, "meta": meta or {}}
+               "codec": codec_state, "state_dict": state, "train_config": train_config, "meta": meta or {},
+               "tensors_sha256": tensor_checksum(state, codec_state)}
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -141,11 +158,29 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"{where} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
     version = payload.get("version")
+    if isinstance(version, int) and not isinstance(version, bool) and version > VERSION:
+        raise CheckpointError(f"{where}: checkpoint version {version} is newer than this poselifter reads (1 and "
+                              f"{VERSION}); upgrade poselifter")
+    if version not in (1, VERSION) or isinstance(version, bool):
+        raise CheckpointError(f"{where}: checkpoint version {str(version)[:20]!r} is not one poselifter writes (1 or "
+                              f"{VERSION}): the file is damaged or was not written by poselifter; write it again "
+                              "with poselifter train or Lifter.save")
+    stored = payload.get("tensors_sha256")
+    state, codec_state = payload.get("state_dict"), payload.get("codec")
+    if stored is not None and not isinstance(stored, str):
+        raise CheckpointError(f"{where}: tensors_sha256 must be a hex string, got {type(stored).__name__}; the file is "
+                              "damaged")
+    if stored is not None and isinstance(state, dict) and isinstance(codec_state, dict):  # (else named below)
+        try:
+            got = tensor_checksum(state, codec_state)
+        except (TypeError, ValueError, RuntimeError) as exc:
+            raise CheckpointError(f"{where}: its tensors cannot be read ({exc}); the file is damaged") from None
+        if got != stored:
+            raise CheckpointError(f"weights file {where} is damaged: its tensors no longer match the checksum "
+                                  f"written with them (sha256 {got[:12]}..., written {stored[:12]}...), so it was "
+                                  "changed after poselifter wrote it; restore it from a copy or train it again")
     if version == 1:
         payload = _migrate_v1(payload, where)
-    elif version != VERSION:
-        raise CheckpointError(f"{where}: unsupported checkpoint version {version!r} (this poselifter reads 1 and "
-                              f"{VERSION}); upgrade poselifter")
     try:
         config = ModelConfig.from_dict(payload.get("model_config"))  # type: ignore[arg-type]
     except (PoseLifterError, TypeError) as exc:

@@ -380,13 +380,53 @@ def test_quantized_lifter_matches_float32(small_lifter, keypoints):
     assert np.allclose(a.canonical_depth, b.canonical_depth, rtol=0.05)
 
 
-def _edited_checkpoint(tmp_path, lifter, name: str, edit) -> Path:
-    """A checkpoint of ``lifter`` whose payload dict was changed in place by ``edit``."""
+def _edited_checkpoint(tmp_path, lifter, name: str, edit, *, checksum: bool = True) -> Path:
+    """A checkpoint of ``lifter`` whose payload dict was changed in place by ``edit``, its tensors' checksum
+    written again for the new tensors (a file written that way, not damaged after), unless ``checksum=False``."""
+    from lifter.checkpoint import tensor_checksum
+
     path = save_checkpoint(tmp_path / "base.pt", lifter.net, lifter.codec)
     payload = torch.load(path, map_location="cpu", weights_only=True)
     edit(payload)
+    if checksum and isinstance(payload.get("state_dict"), dict) and isinstance(payload.get("codec"), dict):
+        payload["tensors_sha256"] = tensor_checksum(payload["state_dict"], payload["codec"])
     torch.save(payload, tmp_path / name)
     return tmp_path / name
+
+
+def test_a_camera_matrix_given_as_focal_or_principal_point_names_its_entries(camera_lifter, keypoints):
+    """A user trial passed OpenCV's K as focal=K and was told to give one focal per pose, shape (3, 3, 1)."""
+    K = np.array([[1145.0, 0, 512], [0, 1144.0, 515], [0, 0, 1]])
+    for kw in ({"focal": K, "principal_point": (512, 515)}, {"focal": 1145.0, "principal_point": K}):
+        with pytest.raises(PoseLifterError, match=r"3 x 3 camera matrix K; pass its entries: focal=\(K\[0, 0\], "):
+            camera_lifter.lift(keypoints, **kw)
+
+
+def test_a_byte_changed_in_a_written_checkpoint_is_refused(tmp_path, camera_lifter):
+    """A user trial flipped one exponent byte of a tensor in a copied checkpoint: it loaded, and the root moved
+    17 %, where the README says a corrupt file raises. Each file now carries its tensors' checksum."""
+    import zipfile
+
+    path = save_checkpoint(tmp_path / "ok.pt", camera_lifter.net, camera_lifter.codec)
+    Lifter.from_checkpoint(path)  # (the file as written loads)
+    with zipfile.ZipFile(path) as z:
+        names = [n for n in z.namelist() if "/data/" in n]
+        big = max(names, key=lambda n: z.getinfo(n).file_size)
+        info = z.getinfo(big)
+    raw = bytearray(path.read_bytes())
+    h = info.header_offset  # the local header's own name and extra-field lengths (torch pads its data to 64 bytes)
+    start = h + 30 + int.from_bytes(raw[h + 26:h + 28], "little") + int.from_bytes(raw[h + 28:h + 30], "little")
+    raw[start + 3] ^= 0x01  # (a float32's exponent byte; torch stores tensors uncompressed)
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(CheckpointError, match=r"is damaged: its tensors no longer match the checksum written with"):
+        Lifter.from_checkpoint(bad)
+    edited = _edited_checkpoint(tmp_path, camera_lifter, "edited.pt",
+                                lambda p: p["state_dict"]["head.bias"].add_(1.0), checksum=False)
+    with pytest.raises(CheckpointError, match="changed after poselifter wrote it"):
+        load_checkpoint(edited)
+    old = _edited_checkpoint(tmp_path, camera_lifter, "old.pt", lambda p: p.pop("tensors_sha256"), checksum=False)
+    load_checkpoint(old)  # (files written before the checksum, the shipped ones among them, still load)
 
 
 @pytest.mark.parametrize(
@@ -421,7 +461,10 @@ def test_checkpoint_rejects_unknown_config_values(tmp_path, small_lifter, field,
         (lambda p: p["state_dict"].pop("head.bias"), r"do not match its model config \(missing \['head.bias'\]"),
         (lambda p: p.pop("codec"), "bad codec statistics"),
         (lambda p: p["state_dict"]["head.bias"].fill_(float("nan")), "tensor 'head.bias' contains NaN/inf"),
-        (lambda p: p.__setitem__("version", 7), "unsupported checkpoint version 7"),
+        (lambda p: p.__setitem__("version", 7), "checkpoint version 7 is newer than this poselifter reads .*upgrade"),
+        (lambda p: p.__setitem__("version", 0), "version '0' is not one poselifter writes .* damaged"),
+        (lambda p: p.pop("version"), "version 'None' is not one poselifter writes"),
+        (lambda p: p.__setitem__("version", "abc"), "version 'abc' is not one poselifter writes"),
     ],
 )
 def test_checkpoint_rejects_malformed_payload(tmp_path, camera_lifter, edit, match):
