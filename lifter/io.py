@@ -344,6 +344,39 @@ def _camera_field(raw: Any, *, name: str, where: str | None) -> np.ndarray:
     return arr
 
 
+CAMERA_MATRIX_FIELDS: Final[tuple[str, ...]] = ("K", "camera_matrix", "intrinsic_matrix", "intrinsics", "intrinsic")
+"""Names of an OpenCV camera matrix that a keypoint file's top level may give instead of ``focal`` and
+``principal_point``: ``[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]``, its nine numbers in a row, or ROS's
+``{"rows": 3, "cols": 3, "data": [...]}``."""
+
+
+def _camera_matrix(raw: Any) -> np.ndarray | None:
+    """The ``(3, 3)`` camera matrix in ``raw`` (:data:`CAMERA_MATRIX_FIELDS`' layouts): numbers, no skew, last row
+    ``[0, 0, 1]``; None when it is not one."""
+    if isinstance(raw, dict):
+        raw = raw.get("data")
+    if not isinstance(raw, list):
+        return None
+    flat = [v for row in raw for v in row] if all(isinstance(r, list) for r in raw) else raw
+    if len(flat) != 9 or not all(_is_number(v) for v in flat):
+        return None
+    K = np.asarray(flat, np.float64).reshape(3, 3)
+    if not (np.all(np.isfinite(K)) and K[0, 1] == 0 and K[1, 0] == 0 and np.array_equal(K[2], [0.0, 0.0, 1.0])):
+        return None
+    return K
+
+
+def _camera_matrix_field(meta: dict[str, Any], *, where: str) -> tuple[str, np.ndarray, np.ndarray] | None:
+    """``(its name, focal (fx, fy), principal point (cx, cy))`` from a keypoint file's camera matrix, or None
+    when it has none. Checked as ``focal`` and ``principal_point`` are."""
+    for key in CAMERA_MATRIX_FIELDS:
+        K = _camera_matrix(meta.get(key))
+        if K is not None:
+            return (key, _camera_field([K[0, 0], K[1, 1]], name=f"{key}'s focal", where=where),
+                    _camera_field([K[0, 2], K[1, 2]], name=f"{key}'s principal point", where=where))
+    return None
+
+
 def _load_json(p: Path) -> Any:
     try:
         size = p.stat().st_size
@@ -455,6 +488,8 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
     for key in meta:
         if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS or key in _OTHER_FIELDS:
             continue
+        if key in CAMERA_MATRIX_FIELDS and _camera_matrix(meta[key]) is not None:
+            continue  # (read: _camera_meta)
         ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(
             iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None) or _one_typo(key)
         if ours is None or all(n in meta for n in ours.split(" and ")):
@@ -804,6 +839,14 @@ def _camera_meta(meta: dict[str, Any], p: Path) -> tuple[tuple[int, int] | None,
     focal = None if meta.get("focal") is None else _camera_field(meta["focal"], name="focal", where=str(p))
     pp = None if meta.get("principal_point") is None else \
         _camera_field(meta["principal_point"], name="principal_point", where=str(p))
+    matrix = _camera_matrix_field(meta, where=str(p))
+    if matrix is not None:
+        key, f_k, pp_k = matrix
+        for name, ours, theirs in (("focal", focal, f_k), ("principal_point", pp, pp_k)):
+            if ours is not None and not np.allclose(ours, theirs):
+                raise PoseLifterError(f"{p}: {name!r} {ours.tolist()} and the camera matrix {key!r} "
+                                      f"({theirs.tolist()}) disagree; give one of them")
+        focal, pp = f_k, pp_k
     source = meta.get("source", "detected")
     if source not in ("detected", "clean"):
         raise PoseLifterError(f"{p}: 'source' must be \"detected\" (2D from a detector, the default) or \"clean\" "

@@ -439,12 +439,41 @@ def test_an_error_about_a_missing_field_repeats_the_unread_fields(tmp_path):
     with pytest.raises(PoseLifterError, match=r"Also in the file: 'camera' is not read: .*Camera fields go at the "
                                               r"file's top level"):
         lift_keypoint_file(path, lifter=lf)
-    path = _write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 10, "K": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]})
+    path = _write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 10, "K": [[1145, 0, 512], [0, 1145, 515]]})
     with pytest.raises(PoseLifterError, match=r"Also in the file: 'K' is not read: did you mean 'focal' and "
                                               r"'principal_point'\?"):
-        lift_keypoint_sequence(path, lifter=lf)
+        lift_keypoint_sequence(path, lifter=lf)  # (two rows: not a camera matrix)
     ok = _write(tmp_path / "ok.json", {"keypoints": kp, "image_size": [1000, 1000]})
     assert lift_keypoint_file(ok, lifter=lf).root[2] > 0  # (no unread fields: lifted as before)
+
+
+def test_a_keypoint_files_camera_matrix_is_read(tmp_path, rng):
+    """A user trial's file gave OpenCV's "K" (and "dist_coeffs"): it was lifted at an assumed focal with exit code
+    0, the calibrated camera silently an uncalibrated one. A 3 x 3 camera matrix (nested, flat or ROS's
+    {"data": [...]}) under "K", "camera_matrix", "intrinsics", ... now gives the focal and principal point."""
+    from lifter.pipeline import lift_keypoint_file
+    from lifter.video import lift_keypoint_sequence
+
+    X = random_pose_cam(rng, 1)
+    f, c = (1145.0, 1144.0), (512.0, 515.0)
+    kp = cam.project(X, focal=f, principal_point=c)[0].tolist()
+    K = [[f[0], 0, c[0]], [0, f[1], c[1]], [0, 0, 1]]
+    lf = pinhole_lifter()
+    want = lf.lift(np.asarray(kp), focal=f, principal_point=c)
+    for key, value in (("K", K), ("camera_matrix", {"rows": 3, "cols": 3, "data": sum(K, [])}),
+                       ("intrinsics", sum(K, []))):
+        rec = lift_keypoint_file(_write(tmp_path / f"{key}.json", {"keypoints": kp, key: value}), lifter=lf)
+        np.testing.assert_allclose(rec.root, want.root, rtol=1e-9)
+        assert rec.focal == f and rec.principal_point == c and rec.focal_source == "keypoint-file"
+        assert not any("is not read" in w for w in rec.warnings), rec.warnings
+    seq = lift_keypoint_sequence(_write(tmp_path / "seq.json", {"frames": [kp, kp], "fps": 10, "K": K}), lifter=lf,
+                                 smoothing=0.0)
+    assert seq.focal == f and seq.principal_point == c
+    with pytest.raises(PoseLifterError, match=r"'focal' \[1000.0, 1000.0\] and the camera matrix 'K' "
+                                              r"\(\[1145.0, 1144.0\]\) disagree"):
+        lift_keypoint_file(_write(tmp_path / "both.json", {"keypoints": kp, "K": K, "focal": 1000}), lifter=lf)
+    same = lift_keypoint_file(_write(tmp_path / "same.json", {"keypoints": kp, "K": K, "focal": list(f)}), lifter=lf)
+    np.testing.assert_allclose(same.root, want.root, rtol=1e-9)
 
 
 def test_unread_field_notes_name_the_right_field_and_spare_other_formats():
