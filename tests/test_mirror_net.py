@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from lifter import Lifter, ModelConfig, PoseCodec, PoseLifterNet
 from lifter.api import NUMPY_MAX_BATCH
 from lifter.camera import project
-from lifter.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from lifter.checkpoint import CheckpointError, load_checkpoint, save_checkpoint, tensor_checksum
 from lifter.model import MirrorCoupledLinear, forward_numpy, output_mirror
 from lifter.normalization import feature_mirror, pose_features
 from lifter.skeleton import mirror
@@ -232,6 +232,7 @@ def test_mirror_checkpoint_with_a_foreign_feature_map_is_refused(tmp_path):
     path = save_checkpoint(tmp_path / "m.pt", lifter.net, lifter.codec)
     payload = torch.load(path, weights_only=True)
     payload["state_dict"]["in_perm"] = torch.flip(payload["state_dict"]["in_perm"], [0])
+    payload["tensors_sha256"] = tensor_checksum(payload["state_dict"], payload["codec"])  # (written so, not damaged)
     torch.save(payload, path)
     with pytest.raises(CheckpointError, match="in_perm"):
         load_checkpoint(path)

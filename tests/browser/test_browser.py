@@ -328,8 +328,9 @@ def test_several_people_in_an_uploaded_sequence() -> None:
         assert _wait(lambda: view.state.sample.num_people == 2 and len(view.frame.others) == 1, 30)
         assert _wait(lambda: "**2D input** uploaded exact 2D" in view.gui.readout.readout.content, 30), \
             view.gui.readout.readout.content  # the file says "clean"
-        assert _wait(lambda: page.get_by_text("person 2: root").count() > 0, 30)  # the readout, in the page
-        view.gui.joints.person.value = "person 2"
+        # the readout, in the page, names each person as the picker does: with the sequence's track
+        assert _wait(lambda: page.get_by_text("person 2 (track 2): root").count() > 0, 30)
+        view.gui.joints.person.value = "person 2 (track 2)"
         assert _wait(lambda: view.state.person == 1, 30)
         page.get_by_role("tab", name="Sample").click()
         page.get_by_role("button", name="play").click()
