@@ -212,7 +212,7 @@ class VideoSequence:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")
         output_notes = tracked_output_notes(net, frames, np.asarray(rec.principal_point, np.float64), source=src,
-                                            only=noted) if noted else {}
+                                            only=noted, focal=np.asarray(f, np.float64)) if noted else {}
         # (the upload's lift's notes on its output are replaced; and at another focal, the upload's assumed one is
         # no longer what was used: a user trial's download said both "assumed ... 555.0 px" and "at 572.2 px")
         kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)

@@ -43,6 +43,7 @@ from .camera import (
     CANONICAL_FOCAL,
     DEFAULT_DIAGONAL_FOV_DEG,
     DistortionModel,
+    _misfit,
     check_distortion,
     check_distortion_model,
     check_opencv_distortion,
@@ -342,6 +343,15 @@ class Lifter:
         return min(factor(m.train_config) for m in (self, *self.ensemble))
 
     @property
+    def misfit_limit(self) -> float | None:
+        """Detected 2D whose lift misses it by more than this share of its size gets a note (:meth:`output_notes`,
+        :func:`lifter.camera.reprojection_misfit`): a limit measured for this network's lifts
+        (``meta["misfit_limit"]``; the default's: :data:`lifter.camera.MAX_DETECTED_MISFIT`), None (no such note)
+        for a network nobody measured: an untrained or unusual one may not fit even good 2D."""
+        v = self.meta.get("misfit_limit")
+        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 else None
+
+    @property
     def far_root_depth_mm(self) -> float:
         """Roots lifted farther than this (mm) from detected 2D get a note (:meth:`output_notes`):
         :data:`FAR_ROOT_DEPTH_MM` for networks trained where the training subjects stood, else the farthest a
@@ -364,13 +374,16 @@ class Lifter:
 
     def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike, *,
                      source: Source | None = None, whose: str | None = None,
-                     names: Sequence[str] | None = None) -> list[OutputNote]:
+                     names: Sequence[str] | None = None, relative: ArrayLike | None = None,
+                     focal: ArrayLike | None = None) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
         a reference-camera network) roots farther than :attr:`far_root_depth_mm`. For callers that show one pose of a
         batch (the app), or that name the people of a batch (``whose``, or each one's label ``names`` such as a video's
-        ``"track 3"``: :func:`lifter._checks.where_in_batch`)."""
+        ``"track 3"``: :func:`lifter._checks.where_in_batch`). With the relative poses ``(..., 17, 3)`` mm and the
+        ``focal`` length px, detected 2D that its lift does not fit (:data:`lifter.camera.MAX_DETECTED_MISFIT`:
+        most likely a detector's confident mistake) is noted too."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -403,6 +416,21 @@ class Lifter:
                        f"{k:g}): its depth there is an extrapolation")
                 notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
                                         f"{where_in_batch(far, whose=whose, names=names)}: {why}", kind="far"))
+        limit = self.misfit_limit
+        if source == "detected" and limit is not None and relative is not None and focal is not None and root.size:
+            absolute = np.asarray(relative, np.float64) + root[..., None, :]
+            f2 = np.asarray(focal, np.float64)  # (checked by lift; the app passes its own checked pair)
+            misfit = _misfit(np.asarray(keypoints, np.float64), absolute, (f2 if f2.ndim else f2[None])[..., None, :])
+            off = misfit > limit  # (NaN, a joint behind the camera, has its own note below)
+            if np.any(off):
+                worst = float(np.nanmax(np.where(off, misfit, np.nan)))
+                notes.append(OutputNote(
+                    f"{int(off.sum())} of {off.size} lifted pose(s) do not fit their 2D"
+                    f"{where_in_batch(off, whose=whose, names=names)}: projected back, the joints lie up to "
+                    f"{worst:.0%} of the 2D pose's size from it (median joint), where a detector's usual errors leave "
+                    f"under {limit:.0%}: the 2D is probably wrong in places (a confident detector "
+                    "mistake: joints bunched together or on the wrong limb), and so is the lift; check the 2D",
+                    kind="misfit"))
         behind = root[..., 2] <= 0
         if np.any(behind):
             notes.append(OutputNote(
@@ -482,6 +510,8 @@ class Lifter:
                    for f, h in zip(files, sums)]
         if "trained_zoom" in entry:  # (shipped pixel models older than training configs in checkpoints)
             ck = dataclasses.replace(ck, meta={**ck.meta, "trained_zoom": entry["trained_zoom"]})
+        if "misfit_limit" in entry:  # (measured on the shipped networks after they were written)
+            ck = dataclasses.replace(ck, meta={**ck.meta, "misfit_limit": entry["misfit_limit"]})
         return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean, ensemble=members)
 
     load = from_pretrained
@@ -714,7 +744,7 @@ class Lifter:
         rel = rel.reshape(lead + (NUM_JOINTS, 3))
         root = root.reshape(lead + (3,))
         absolute = rel + root[..., None, :]
-        notes = self.output_notes(kp, pp, root, source=source, whose=whose)
+        notes = self.output_notes(kp, pp, root, source=source, whose=whose, relative=rel, focal=f)
         if warn:
             for message in notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)

@@ -70,7 +70,9 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
         res = lifter.lift(samples.keypoints_2d[sl], focal=samples.focal[sl],
                           principal_point=samples.principal_point[sl], flip_test=flip_test, source=source,
                           distortion=None if dist is None else dist[sl], warn=False)
-        collect_output_notes(notes, s, (*res.input_warnings, *res.warnings))
+        # (not the notes on single detections that the lift does not fit: an evaluation scores them all)
+        collect_output_notes(notes, s, (*res.input_warnings,
+                                        *(w for w in res.warnings if getattr(w, "kind", "") != "misfit")))
         rel.append(res.relative)
         root.append(res.root)
         if analytic:  # from the 2D the networks lifted (undistorted for a pinhole lifter)

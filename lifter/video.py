@@ -214,7 +214,7 @@ def track_animation(seen: list[tuple[int, PersonState]]) -> np.ndarray:
 
 
 def tracked_output_notes(net: Any, frames: list[FrameResult], principal_point: Any, *, source: str,
-                         only: set[int] | None = None) -> dict[str, tuple[int, int, str]]:
+                         only: set[int] | None = None, focal: Any = None) -> dict[str, tuple[int, int, str]]:
     """What looks wrong in tracked frames' lifts (``net.output_notes``, :meth:`lifter.Lifter.output_notes`, on each
     person's unsmoothed root), collected per kind (:func:`collect_output_notes`), each note naming the person by
     the track id the record gives them (``"track 3"``: a frame position would not find them in the record).
@@ -226,7 +226,9 @@ def tracked_output_notes(net: Any, frames: list[FrameResult], principal_point: A
         kp = np.stack([q.keypoints_2d for q in fr.people])
         root = np.stack([q.root_raw for q in fr.people])
         collect_output_notes(acc, fr.index, net.output_notes(kp, principal_point, root, source=source,
-                                                             names=[f"track {q.track_id}" for q in fr.people]))
+                                                             names=[f"track {q.track_id}" for q in fr.people],
+                                                             relative=np.stack([q.relative_raw for q in fr.people]),
+                                                             focal=focal))
     return acc
 
 
@@ -648,7 +650,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     warnings.extend(track_doubt_notes(frames))
     if noted:
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
-                                                               source="detected", only=noted)))
+                                                               source="detected", only=noted, focal=f)))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
@@ -752,7 +754,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
-                                                               source=ks.source)))
+                                                               source=ks.source, focal=f)))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))

@@ -841,3 +841,37 @@ def test_another_detectors_joint_count_names_the_conversion():
         lf.lift(np.full((33, 2), 100.0), focal=1000.0, principal_point=(500.0, 500.0))
     with pytest.raises(PoseLifterError, match=r'src="openpose25"'):
         lf.lift(np.full((2, 25, 2), 100.0), focal=1000.0, principal_point=(500.0, 500.0))
+
+
+def test_reprojection_misfit_pins_its_convention(rng):
+    """0 for a pose's own projection, whatever its root along the ray or the image's offset; the median joint's
+    miss as a share of the 2D pose's RMS radius; NaN behind the camera."""
+    from lifter.camera import reprojection_misfit
+    from lifter.normalization import location_and_scale
+
+    X = random_pose_cam(rng, 5)
+    kp = project(X, focal=1145.0, principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(reprojection_misfit(kp, X, focal=1145.0, principal_point=(512.0, 515.0)), 0, atol=1e-9)
+    np.testing.assert_allclose(reprojection_misfit(kp + [300.0, -40.0], X, focal=1145.0, principal_point=(512, 515)),
+                               0, atol=1e-9)  # (centred: an image offset is not a misfit)
+    moved = kp.copy()
+    moved[:, :9] += [7.0, 0.0]  # 9 of 17 joints 7 px off: after centring the median joint misses by about 7 px
+    m = reprojection_misfit(moved, X, focal=1145.0, principal_point=(512.0, 515.0))
+    _, scale = location_and_scale(moved)
+    np.testing.assert_allclose(m * scale, 7.0 * 8 / 17, rtol=1e-6)
+    behind = X.copy()
+    behind[1, 3, 2] = -10.0
+    assert np.isnan(reprojection_misfit(kp, behind, focal=1145.0, principal_point=(512.0, 515.0))[1])
+
+
+def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
+    """An untrained network does not fit even good 2D: the note needs a limit measured for the network
+    (meta ``misfit_limit``, the default's registry entry); then detected 2D past it is noted, clean 2D never."""
+    plain = tiny_lifter(64)
+    assert plain.misfit_limit is None
+    assert not [w for w in plain.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False).warnings
+                if w.kind == "misfit"]
+    measured = Lifter(plain.net, plain.codec, meta={"misfit_limit": 0.15})
+    res = measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False)
+    assert [w.kind for w in res.warnings] == ["misfit"] and "6 of 6 lifted pose(s) do not fit their 2D" in res.warnings[0]
+    assert not measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings

@@ -248,6 +248,7 @@ def test_shipped_default_single_pose_matches_module(kp):
         _assert_lift_matches_module(alone, kp[:16])
         _assert_lift_matches_module(alone, kp[3])
     # the default's flip-test averaging and its ensemble: one pose (numpy rows) equals the same pose in a batch
-    one = lifter.lift(kp[3], focal=1145.0, principal_point=PP, flip_test=True)
-    batch = lifter.lift(kp[3:6], focal=1145.0, principal_point=PP, flip_test=True)
+    # (random bodies: the default notes that its lifts do not fit them, which is not what this test is about)
+    one = lifter.lift(kp[3], focal=1145.0, principal_point=PP, flip_test=True, warn=False)
+    batch = lifter.lift(kp[3:6], focal=1145.0, principal_point=PP, flip_test=True, warn=False)
     np.testing.assert_allclose(one.absolute, batch.absolute[0], rtol=1e-5, atol=1e-2)

@@ -355,3 +355,32 @@ def test_far_people_are_placed_at_their_distance_and_beyond_the_training_noted(t
     with pytest.warns(PoseLifterWarning, match="beyond 8.0 m.*trained where they stood, place such people too near"):
         old = before.lift(kp, focal=f, principal_point=c)
     assert float(old.root[2]) < 0.85 * 14000.0 and any(w.kind == "far" for w in old.warnings)
+
+
+def test_the_default_notes_detected_2d_its_lift_does_not_fit():
+    """A user trial's portrait photo: BlazePose bunched the person's joints with high scores, and the lift (MPJPE
+    552 mm) came with no note. The default notes detected 2D whose lift, projected back, misses it by more than its
+    measured limit (registry ``misfit_limit``, scripts/misfit.py); good 2D and clean 2D get no such note."""
+    import warnings
+
+    from lifter import PoseLifterWarning
+    from lifter.camera import MAX_DETECTED_MISFIT, reprojection_misfit
+
+    lf = _default()
+    assert lf.network_for("detected").misfit_limit == MAX_DETECTED_MISFIT
+    kp, f, pp = _DEMO.keypoints_2d, _DEMO.focal, _DEMO.principal_point
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        good = lf.lift(kp, focal=f, principal_point=pp)  # (a clean render told "detected": fits)
+    assert float(reprojection_misfit(good.keypoints_2d, good.absolute, focal=f, principal_point=pp)) < 0.05
+    # a detector's confident mistake: the head and nose put on the right ankle and knee (misfit about 0.23; legs
+    # merely bunched read as a crouch, which the lift fits)
+    bad = kp.copy()
+    bad[[10, 9]] = kp[[3, 2]]
+    with pytest.warns(PoseLifterWarning, match=r"1 of 1 lifted pose\(s\) do not fit their 2D: projected back, the "
+                                               r"joints lie up to \d+% of the 2D pose's size"):
+        res = lf.lift(bad, focal=f, principal_point=pp)
+    assert [w.kind for w in res.warnings] == ["misfit"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(bad, focal=f, principal_point=pp, source="clean")  # (exact 2D, however odd: no such note)
