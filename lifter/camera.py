@@ -256,15 +256,21 @@ def check_distortion(distortion: ArrayLike, *, lead: tuple[int, ...] = ()) -> np
         raise PoseLifterError(f"distortion must be numbers {form}, got {str(distortion)[:80]}") from None
     if d.ndim == 0 or d.shape[-1] != 5:
         raise PoseLifterError(f"distortion must be {form}; got shape {d.shape} ({d.size} value(s))")
+    return _lens_rows(d, lead, label="distortion", one="(5,)")
+
+
+def _lens_rows(d: np.ndarray, lead: tuple[int, ...], *, label: str, one: str) -> np.ndarray:
+    """Lens coefficients ``d`` ``(..., n)`` broadcast to ``lead + (n,)``, each finite and below
+    :data:`MAX_DISTORTION_COEFFICIENT` in magnitude; errors name ``label`` and ``one`` (the one-lens shape)."""
     try:
-        d = np.broadcast_to(d, lead + (5,))
+        d = np.broadcast_to(d, lead + d.shape[-1:])
     except ValueError:
-        raise PoseLifterError(f"distortion: shape {d.shape} does not match the keypoints' poses {lead}: give one "
-                              f"(5,) for all, or one row per pose {lead + (5,)}") from None
+        raise PoseLifterError(f"{label}: shape {d.shape} does not match the keypoints' poses {lead}: give one "
+                              f"{one} for all, or one row per pose {lead + d.shape[-1:]}") from None
     bad = ~np.all(np.isfinite(d) & (np.abs(d) < MAX_DISTORTION_COEFFICIENT), axis=-1)
     if np.any(bad):
         row = d[tuple(np.argwhere(bad)[0])] if bad.ndim else d
-        raise PoseLifterError(f"distortion{where_in_batch(bad)}: coefficients must be finite and below "
+        raise PoseLifterError(f"{label}{where_in_batch(bad)}: coefficients must be finite and below "
                               f"{MAX_DISTORTION_COEFFICIENT:g} in magnitude, got {row.tolist()}")
     return d
 
@@ -349,17 +355,7 @@ def check_opencv_distortion(dist_coeffs: ArrayLike, *, lead: tuple[int, ...] = (
                               + ("; OpenCV's thin-prism and tilted-sensor terms (12 or 14 values) are not taken: "
                                  "undistort the 2D yourself (cv2.undistortPoints with P=K) and lift it without "
                                  "distortion" if d.ndim and d.shape[-1] in (12, 14) else ""))
-    try:
-        d = np.broadcast_to(d, lead + d.shape[-1:])
-    except ValueError:
-        raise PoseLifterError(f"distortion (opencv): shape {d.shape} does not match the keypoints' poses {lead}: "
-                              f"give one (n,) for all, or one row per pose {lead + d.shape[-1:]}") from None
-    bad = ~np.all(np.isfinite(d) & (np.abs(d) < MAX_DISTORTION_COEFFICIENT), axis=-1)
-    if np.any(bad):
-        row = d[tuple(np.argwhere(bad)[0])] if bad.ndim else d
-        raise PoseLifterError(f"distortion (opencv){where_in_batch(bad)}: coefficients must be finite and below "
-                              f"{MAX_DISTORTION_COEFFICIENT:g} in magnitude, got {row.tolist()}")
-    return d
+    return _lens_rows(d, lead, label="distortion (opencv)", one=f"({d.shape[-1]},)")
 
 
 def _opencv_undistort(uv: np.ndarray, K: np.ndarray, d: np.ndarray) -> np.ndarray:
