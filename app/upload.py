@@ -38,7 +38,7 @@ import numpy as np
 from lifter import Camera, PoseLifterError
 from lifter._text import sentence
 from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
-from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, undistort_pixels_opencv
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, lens_notes, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -52,7 +52,7 @@ from lifter.detect import (
 )
 from lifter.io import REASSUMED_NOTE, LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
-from lifter.pipeline import keypoint_file_scores, lens_notes, lift_image, lift_people, plausibility_notes
+from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import lens_free_2d, undoes_lens

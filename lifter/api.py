@@ -44,12 +44,11 @@ from .camera import (
     DEFAULT_DIAGONAL_FOV_DEG,
     DistortionModel,
     _misfit,
-    check_distortion,
     check_distortion_model,
-    check_opencv_distortion,
+    check_lens,
     focal_alpha,
     focal_from_fov,
-    tangential_notes,
+    lens_notes,
     undistort_pixels,
     undistort_pixels_opencv,
 )
@@ -686,27 +685,23 @@ class Lifter:
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
                 "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to assume "
                 "a default field of view")
-        lens_notes: list[str] = []
+        said: list[str] = []  # (what looks wrong in the lens: lens_notes)
         if distortion is not None:
             if focal_source != "given":
                 raise PoseLifterError("distortion needs the focal length of the camera it belongs to: pass focal= "
                                       "(px) too, or leave distortion out")
-            if lens_model == "opencv":
-                if self.lens == "pinhole":  # (checks the coefficients)
-                    kp = undistort_pixels_opencv(kp, focal=f, principal_point=pp, dist_coeffs=distortion)
-                else:  # (taken as it is, but checked all the same)
-                    check_opencv_distortion(distortion, lead=lead)
-            else:
-                lens_notes = tangential_notes(check_distortion(distortion, lead=lead))
-                if self.lens == "pinhole":
-                    try:
-                        kp = undistort_pixels(kp, focal=f, principal_point=pp, distortion=distortion)
-                    except PoseLifterError as exc:
-                        if not lens_notes:
-                            raise
-                        raise PoseLifterError(f"{exc}. Also: {lens_notes[0]}") from None
+            d = check_lens(distortion, lens_model, lead=lead)  # (also for a network given the 2D as it is)
+            said = lens_notes(d, lens_model)
+            if self.lens == "pinhole":
+                try:
+                    kp = (undistort_pixels_opencv(kp, focal=f, principal_point=pp, dist_coeffs=d)
+                          if lens_model == "opencv" else undistort_pixels(kp, focal=f, principal_point=pp, distortion=d))
+                except PoseLifterError as exc:
+                    if not said:
+                        raise
+                    raise PoseLifterError(f"{exc}. Also: {said[0]}") from None
         in_list = input_warnings(kp, f if focal_source == "given" else None)
-        in_list += lens_notes
+        in_list += said
         if pp_given and wh is not None and wh.ndim == 1:  # (the records' own note, for API calls)
             flat = pp.reshape(-1, 2)
             if len(flat) and np.all(flat == flat[0]):

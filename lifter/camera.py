@@ -340,6 +340,14 @@ def check_distortion_model(model: object) -> DistortionModel:
     return model  # type: ignore[return-value]
 
 
+def check_lens(distortion: ArrayLike, model: DistortionModel, *, lead: tuple[int, ...] = ()) -> np.ndarray:
+    """Lens coefficients in the form ``model`` checked and broadcast over ``lead``: :func:`check_distortion` for
+    ``"h36m"``, :func:`check_opencv_distortion` for ``"opencv"`` (the one place that tells the forms apart)."""
+    if check_distortion_model(model) == "opencv":
+        return check_opencv_distortion(distortion, lead=lead)
+    return check_distortion(distortion, lead=lead)
+
+
 def check_opencv_distortion(dist_coeffs: ArrayLike, *, lead: tuple[int, ...] = ()) -> np.ndarray:
     """OpenCV ``distCoeffs`` checked and broadcast to ``lead + (n,)``: n in :data:`OPENCV_DISTORTION_COUNTS`, finite,
     below :data:`MAX_DISTORTION_COEFFICIENT` in magnitude. Raises :class:`PoseLifterError` naming what is wrong."""
@@ -424,6 +432,12 @@ def undistort_pixels_opencv(keypoints: ArrayLike, *, focal: ArrayLike, principal
                               "image centre (a wrong focal length or principal point?), for OpenCV's solver; check "
                               "the calibration, or undistort the 2D yourself and lift it without distortion")
     return out.reshape(uv.shape)
+
+
+def lens_notes(distortion: ArrayLike | None, model: DistortionModel) -> list[str]:
+    """What looks wrong in a lens given in the form ``model``: a Human3.6M-form lens whose tangential terms look
+    like OpenCV's k3 (:func:`tangential_notes`); none for OpenCV's form, or no lens."""
+    return [] if distortion is None or model != "h36m" else tangential_notes(distortion)
 
 
 def tangential_notes(distortion: ArrayLike) -> list[str]:

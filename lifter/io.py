@@ -45,11 +45,11 @@ import numpy as np
 
 from ._checks import COCO_FACE_SPREAD, PoseLifterError, face_first_people
 from .camera import (
-    DISTORTION_MODELS,
     MAX_DISTORTION_COEFFICIENT,
     OPENCV_DISTORTION_COUNTS,
     DistortionModel,
     check_distortion,
+    check_distortion_model,
     check_opencv_distortion,
 )
 from .keypoints import H36M17, get_format, keypoint_formats, stand_in_missing
@@ -810,12 +810,11 @@ _ROS_DISTORTION_MODELS: Final[dict[str, str]] = {"plumb_bob": "opencv", "rationa
 
 def _distortion_model_field(raw: Any, *, where: str) -> DistortionModel:
     """A keypoint file's ``distortion_model``: ``"h36m"`` (the default) or ``"opencv"`` (or ROS's names for it)."""
-    model = _ROS_DISTORTION_MODELS.get(raw, raw) if isinstance(raw, str) else raw
-    if model not in DISTORTION_MODELS:
-        raise PoseLifterError(f"{where}: distortion_model must be \"h36m\" (Human3.6M's [k1, k2, k3, p1, p2], the "
-                              "default) or \"opencv\" (OpenCV's distCoeffs [k1, k2, p1, p2, k3, ...] as calibrated; "
-                              f"ROS's \"plumb_bob\" and \"rational_polynomial\" are read as it), got {_short(raw)}")
-    return model  # type: ignore[return-value]
+    try:
+        return check_distortion_model(_ROS_DISTORTION_MODELS.get(raw, raw) if isinstance(raw, str) else raw)
+    except PoseLifterError as exc:
+        raise PoseLifterError(f"{where}: {exc} (ROS's \"plumb_bob\" and \"rational_polynomial\" are read as "
+                              "\"opencv\")") from None
 
 
 def _opencv_distortion_field(raw: Any, *, where: str) -> np.ndarray:

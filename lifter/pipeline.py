@@ -34,10 +34,9 @@ from .api import MIN_FOCAL_PX
 from .camera import (
     DEFAULT_DIAGONAL_FOV_DEG,
     DistortionModel,
-    check_distortion,
     check_distortion_model,
-    check_opencv_distortion,
-    tangential_notes,
+    check_lens,
+    lens_notes,
 )
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -134,12 +133,6 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
     if src in FOCAL_GIVEN_SOURCES:
         notes += narrow_view_notes(focal, image_size)
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
-
-
-def lens_notes(distortion: np.ndarray | None, model: DistortionModel) -> list[str]:
-    """The records' note on a Human3.6M-form lens whose tangential terms look like OpenCV's k3
-    (:func:`lifter.camera.tangential_notes`); none for other lenses or none."""
-    return [] if distortion is None or model != "h36m" else tangential_notes(distortion)
 
 
 FOCAL_GIVEN_SOURCES: tuple[str, ...] = ("user", "keypoint-file")
@@ -343,7 +336,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     notes += joint_doubt_notes(scores)
     dist = None
     if distortion is not None:
-        dist = check_opencv_distortion(distortion) if distortion_model == "opencv" else check_distortion(distortion)
+        dist = check_lens(distortion, distortion_model)
         notes += lens_notes(dist, distortion_model)
     lifted = lift_people(lifter, kp_people, f, pp, flip_test=flip_test, source="detected", scores=scores, notes=notes,
                          distortion=dist, distortion_model=distortion_model)

@@ -695,7 +695,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
-    from .pipeline import lens_notes, plausibility_notes, resolve_camera
+    from .camera import lens_notes
+    from .pipeline import plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)

@@ -74,8 +74,7 @@ from ..camera import (
     DISTORTION_MODELS,
     MAX_FOV_DEG,
     MIN_FOV_DEG,
-    check_distortion,
-    check_opencv_distortion,
+    check_lens,
 )
 from ..detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -303,10 +302,7 @@ def check_lift_options(args: argparse.Namespace) -> None:
         if args.focal is None:
             raise PoseLifterError("--distortion needs the focal length it was calibrated with: give --focal FX [FY] "
                                   "and --principal-point CX CY of the same calibration")
-        if args.distortion_model == "opencv":
-            check_opencv_distortion(args.distortion)
-        else:
-            check_distortion(args.distortion)
+        check_lens(args.distortion, args.distortion_model)
     from ..detect import available_estimators
 
     if args.detector not in available_estimators():
