@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final, Literal, overload
+from typing import Any, Final, Literal, get_args, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -316,7 +316,7 @@ DistortionModel = Literal["h36m", "opencv"]
 (:func:`distort`), or ``"opencv"``, OpenCV's ``distCoeffs`` ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])`` (4, 5 or 8
 values, as ``cv2.calibrateCamera`` returns them; its tangential terms differ from Human3.6M's)."""
 
-DISTORTION_MODELS: Final[tuple[str, ...]] = ("h36m", "opencv")
+DISTORTION_MODELS: Final[tuple[str, ...]] = get_args(DistortionModel)
 
 OPENCV_DISTORTION_COUNTS: Final[tuple[int, ...]] = (4, 5, 8)
 """How many ``distCoeffs`` an ``"opencv"`` lens may have: (k1, k2, p1, p2), with k3, and the rational model's
@@ -342,7 +342,8 @@ def check_distortion_model(model: object) -> DistortionModel:
 
 def check_lens(distortion: ArrayLike, model: DistortionModel, *, lead: tuple[int, ...] = ()) -> np.ndarray:
     """Lens coefficients in the form ``model`` checked and broadcast over ``lead``: :func:`check_distortion` for
-    ``"h36m"``, :func:`check_opencv_distortion` for ``"opencv"`` (the one place that tells the forms apart)."""
+    ``"h36m"``, :func:`check_opencv_distortion` for ``"opencv"`` (what Lifter.lift, photos and the CLI check a lens
+    with; a keypoint file's reader words its errors for the file, :mod:`lifter.io`)."""
     if check_distortion_model(model) == "opencv":
         return check_opencv_distortion(distortion, lead=lead)
     return check_distortion(distortion, lead=lead)

@@ -33,10 +33,7 @@ from lifter import Lifter  # noqa: E402
 from lifter.camera import reprojection_misfit  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detections import load_sh_detections  # noqa: E402
-
-
-def _mpjpe(rel: np.ndarray, true_cam: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(rel - (true_cam - true_cam[..., :1, :]), axis=-1).mean(-1)
+from lifter.metrics import mpjpe  # noqa: E402
 
 
 def main() -> int:
@@ -53,7 +50,7 @@ def main() -> int:
     det, ok = load_sh_detections(s, data=data, lens="pinhole")
     res = lf.lift(det[ok], focal=s.focal[ok], principal_point=s.principal_point[ok], warn=False)
     m = reprojection_misfit(res.keypoints_2d, res.absolute, focal=res.focal, principal_point=res.principal_point)
-    e = _mpjpe(res.relative, s.pose_3d[ok])
+    e = mpjpe(res.relative, s.pose_3d[ok])
     above = m > limit
     print(f"1. SH detections, S9+S11, stride {args.stride}: {len(m)} samples; misfit median / 99th / 99.9th "
           f"percentile / max {np.median(m):.3f} / {np.percentile(m, 99):.3f} / {np.percentile(m, 99.9):.3f} / "
@@ -77,7 +74,7 @@ def main() -> int:
             continue
         r = lf.lift(kp, focal=f[i], principal_point=c[i], distortion=dist[i], warn=False)
         mi = float(reprojection_misfit(r.keypoints_2d, r.absolute, focal=r.focal, principal_point=r.principal_point))
-        rows.append((mi, float(_mpjpe(r.relative, ann["p3d_cam"][i])), Path(str(name)).stem))
+        rows.append((mi, float(mpjpe(r.relative, ann["p3d_cam"][i])), Path(str(name)).stem))
     ms = np.array([r[0] for r in rows])
     print(f"2. {len(rows)} of {len(ann['image'])} demo photos through BlazePose: misfit median {np.median(ms):.3f}, "
           f"90th percentile {np.percentile(ms, 90):.3f}, max {ms.max():.3f}; above {limit}: {int((ms > limit).sum())}; "
@@ -98,7 +95,7 @@ def main() -> int:
         err2d = np.linalg.norm(d.keypoints_2d - (ann["p2d_gt"][i] * k + [x0, y0]), axis=-1)
         print(f"3. {Path(str(ann['image'][i])).stem} x{k} padded to {layout} {shape[1]} x {shape[0]}: 2D error median "
               f"{np.median(err2d):.0f} px (mean score {np.mean(d.scores):.2f}), misfit {mi:.3f}, MPJPE "
-              f"{float(_mpjpe(r.relative, ann['p3d_cam'][i])):.0f} mm; noted: "
+              f"{float(mpjpe(r.relative, ann['p3d_cam'][i])):.0f} mm; noted: "
               f"{any(getattr(w, 'kind', '') == 'misfit' for w in r.warnings)}")
     return 0
 
