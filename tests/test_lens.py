@@ -84,13 +84,18 @@ def test_undistort_refuses_a_lens_it_cannot_invert():
 @settings(max_examples=60, deadline=None)
 @given(k1=st.floats(-0.5, 0.5), k2=st.floats(-0.3, 0.3), k3=st.floats(-0.1, 0.1), p1=st.floats(-0.01, 0.01),
        p2=st.floats(-0.01, 0.01), seed=st.integers(0, 10_000), reach=st.floats(0.05, 0.8))
+@example(k1=0.0703125, k2=-0.259765625, k3=0.0703125, p1=0.0, p2=0.0078125, seed=0, reach=0.5)
+@example(k1=0.0703125, k2=-0.259765625, k3=0.0703125, p1=0.0, p2=0.0078125, seed=188, reach=0.5)
 def test_undistort_inverts_any_lens_up_to_its_fold(k1, k2, k3, p1, p2, seed, reach):
     """Points anywhere inside the radius where the radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops rising (to
     `reach` of it, at most r = 3: 72 deg off the axis) come back exactly. The fixed-point iteration used before
     stopped short beyond r ~ 1.2 with Human3.6M's own lens, and where the pincushion pushes x_d past the fold."""
     k, p = (k1, k2, k3), (p1, p2)
     r = np.linspace(0.0, 3.0, 3001)
-    rising = np.diff(r * (1 + k1 * r**2 + k2 * r**4 + k3 * r**6)) > 0
+    # the fold: where the radial map's slope 1 + 3 k1 r^2 + 5 k2 r^4 + 7 k3 r^6 falls below 0.1 (CI found a lens whose
+    # radial slope only dips to 0.04 near r = 1.35: its tangential terms (p2 = 0.0078) fold it there, and a point at
+    # r = 1.29 has two preimages, so "comes back exactly" has no single answer)
+    rising = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6 > 0.1
     r_fold = r[np.argmin(rising)] if not rising.all() else 3.0
     rng = np.random.default_rng(seed)
     radius, angle = rng.uniform(0.0, reach * r_fold, 64), rng.uniform(0.0, 2 * np.pi, 64)
