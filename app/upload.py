@@ -75,6 +75,11 @@ focal slider's)."""
 MAX_PEOPLE: Final[int] = 6
 """People looked for in an uploaded photo / kept from a keypoint file (the largest first)."""
 DEFAULT_DETECTOR: Final[str] = "blazepose"
+OPENCV_LENS_UNDONE_NOTE: Final[str] = (
+    "the file's OpenCV lens (\"distortion_model\": \"opencv\") is undone as the file is read: the 2D {what} is the "
+    "undistorted (pinhole) 2D at the file's focal length, and no 'distortion' is recorded")
+"""The note of a keypoint file or sequence whose OpenCV lens the app undid as it read it (its cameras hold Human3.6M's
+lens form; ``what``: which 2D the user sees so)."""
 
 
 class UploadError(PoseLifterError):
@@ -130,6 +135,7 @@ class Photo:
 MAX_NAME_CHARS: Final[int] = 60
 """Uploaded file names are shortened to this many characters in messages and download names (the readout
 does not wrap a long unbroken name)."""
+
 
 
 def safe_name(name: str) -> str:
@@ -346,9 +352,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         except PoseLifterError as exc:
             raise UploadError(f"{nm}: {exc}") from None
         others, lens = tuple(rest), None
-        notes.append("the file's OpenCV lens (\"distortion_model\": \"opencv\") is undone as the file is read: "
-                     "the 2D shown, dragged and downloaded is the undistorted (pinhole) 2D at the file's focal "
-                     "length, and no 'distortion' is recorded")
+        notes.append(OPENCV_LENS_UNDONE_NOTE.format(what="shown, dragged and downloaded"))
     else:
         notes += lens_notes(lens, kf.distortion_model)
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,

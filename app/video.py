@@ -28,6 +28,7 @@ import numpy as np
 
 from lifter import PoseLifterError
 from lifter._text import sentence
+from lifter.camera import undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
 from lifter.keypoints import H36M17
 from lifter.video import (
@@ -46,6 +47,7 @@ from .samples import Sample
 from .upload import (
     MAX_CANVAS_SIDE,
     MAX_PEOPLE,
+    OPENCV_LENS_UNDONE_NOTE,
     UploadError,
     UploadInfo,
     check_upload,
@@ -277,11 +279,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             else:
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
                 jpegs = None
-                if rec.distortion is not None and rec.distortion_model != "h36m":
-                    raise UploadError(f"{nm}: the app does not play a keypoint sequence with an OpenCV lens "
-                                      "(\"distortion_model\": \"opencv\"): lift it with poselifter lift, or "
-                                      "undistort its 2D first (cv2.undistortPoints with P=K) and upload that without "
-                                      "the lens")
+                if rec.distortion is not None and rec.distortion_model == "opencv":
+                    rec = _without_opencv_lens(rec)  # (the app's cameras have Human3.6M's lens model)
                 if rec.image_size is None:  # (lifted with its principal point; the canvas needs a size)
                     cx, cy = rec.principal_point
                     size = (max(1, round(2 * float(cx))), max(1, round(2 * float(cy))))
@@ -309,6 +308,24 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                       source_format=rec.source_format or H36M17)
     label = f"{nm} ({len(rec.frames)} frames at {rec.fps:g} fps, {len(tracks)} track{'s' if len(tracks) != 1 else ''})"
     return VideoSequence(key=key, label=label, record=rec, info=info, jpegs=jpegs, uploaded_with=lifter)
+
+
+def _without_opencv_lens(rec: SequenceRecord) -> SequenceRecord:
+    """A keypoint sequence lifted through an OpenCV lens (``"distortion_model": "opencv"``) as the app plays it: every
+    person's 2D undistorted at the file's focal length and principal point (px; OpenCV's own model,
+    :func:`lifter.camera.undistort_pixels_opencv`), no lens recorded, and a note saying so. The lift is unchanged: it
+    already undid that lens, so lifting the undistorted 2D again without one gives the same poses. Raises
+    :class:`lifter.PoseLifterError` where OpenCV cannot undo the lens (its message names the residual)."""
+    seen = [p for fr in rec.frames for p in fr.people]
+    if seen and rec.distortion is not None:
+        flat = undistort_pixels_opencv(np.stack([p.keypoints_2d for p in seen]), focal=rec.focal,
+                                       principal_point=rec.principal_point, dist_coeffs=rec.distortion)
+        it = iter(flat)
+        frames = [replace(fr, people=[replace(p, keypoints_2d=next(it)) for p in fr.people]) for fr in rec.frames]
+    else:
+        frames = list(rec.frames)
+    note = OPENCV_LENS_UNDONE_NOTE.format(what="shown and downloaded")
+    return replace(rec, frames=frames, distortion=None, distortion_model="h36m", warnings=[*rec.warnings, note])
 
 
 def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:

@@ -168,12 +168,35 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     seq = v.sequence()
     assert seq is not None and seq.record.image_size == (W + 20, H - 40)
     assert any("assumed" in w and "twice the principal point" in w for w in seq.info.warnings), seq.info.warnings
-    # an OpenCV lens (the app's cameras have Human3.6M's lens model): refused with the ways out, the sample kept
-    key = v.state.sample.key
-    lensed = dict(doc, distortion=[-0.1, 0.01, 0.001, 0.0, 0.0], distortion_model="opencv")
-    assert v.load_upload("lens.json", json.dumps(lensed).encode()) is False
-    assert "does not play a keypoint sequence with an OpenCV lens" in v.messages[-1]
-    assert "poselifter lift" in v.messages[-1] and v.state.sample.key == key
+    # an OpenCV lens (the app's cameras have Human3.6M's lens model; it was refused): undone as the file is read,
+    # so the app shows and re-lifts the pinhole 2D, and the lift is the pinhole 2D's
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    plain = v.sequence()
+    assert plain is not None
+    dist = np.array([-0.3, 0.05, 0.001, -0.002, 0.003])
+    K = np.array([[F, 0.0, W / 2], [0.0, F, H / 2], [0.0, 0.0, 1.0]])
+
+    def through_lens(uv: list[float]) -> list[list[float]]:
+        rays = np.c_[(np.asarray(uv) - [W / 2, H / 2]) / F, np.ones(len(uv))]
+        return cv2.projectPoints(rays, np.zeros(3), np.zeros(3), K, dist)[0].reshape(-1, 2).tolist()
+
+    lensed = dict(doc, distortion=dist.tolist(), distortion_model="opencv",
+                  frames=[{"people": [{"keypoints": through_lens(q["keypoints"])} for q in fr["people"]]}
+                          for fr in frames])
+    assert v.load_upload("lens.json", json.dumps(lensed).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None and seq.record.distortion is None and seq.camera.distortion is None
+    assert any("OpenCV lens" in w and "undone as the file is read" in w for w in seq.info.warnings)
+    moved = 0.0
+    for fr, ref, given in zip(seq.record.frames, plain.record.frames, lensed["frames"]):
+        for q, r, g in zip(fr.people, ref.people, given["people"]):
+            np.testing.assert_allclose(q.keypoints_2d, r.keypoints_2d, atol=1e-5)  # the pinhole 2D again
+            np.testing.assert_allclose(q.root, r.root, atol=1e-3)
+            moved = max(moved, float(np.abs(np.asarray(g["keypoints"]) - r.keypoints_2d).max()))
+    assert moved > 3.0  # (the lens moved the 2D by px: undoing it matters)
+    again = seq.record_at(app.pool.get(v.state.model), (2 * F, 2 * F))  # re-lifted at another focal: lens-free
+    ref = plain.record_at(app.pool.get(v.state.model), (2 * F, 2 * F))
+    np.testing.assert_allclose(again.frames[3].people[0].root, ref.frames[3].people[0].root, atol=1e-3)
 
 
 def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(server) -> None:
