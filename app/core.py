@@ -88,6 +88,10 @@ class SessionState:
     person: int = 0
     others: dict[int, np.ndarray] = field(default_factory=dict)
     others_dragged: dict[int, frozenset[int]] = field(default_factory=dict)
+    input_drags: dict[str, tuple[np.ndarray, frozenset[int]]] = field(default_factory=dict)
+    """The selected person's dragged 2D ``(17, 2)`` px and dragged joints under each other 2D input of this sample
+    (``"gt"`` / ``"detected"``), given back when that input is chosen again (a browser trial lost a researcher's
+    corrected joints on a switch to ground truth and back)."""
 
     def __post_init__(self) -> None:
         n = self.sample.num_people
@@ -127,6 +131,7 @@ class SessionState:
         kw["dragged"] = set(self.dragged)
         kw["others"] = dict(self.others)  # (their arrays are never changed in place)
         kw["others_dragged"] = dict(self.others_dragged)
+        kw["input_drags"] = dict(self.input_drags)  # (their arrays are never changed in place)
         kw.update(changes)
         return SessionState(**kw)
 
@@ -274,6 +279,10 @@ class Frame:
     caution: tuple[str, ...] = ()
     """What looks wrong in the lifted pose (:meth:`lifter.Lifter.output_notes` of the network that lifted it): a
     root behind the camera, a pixel-space model given a 2D pose larger or smaller than those it was trained on."""
+    reads_rays: bool = False
+    """Whether the network that lifted it reads the 2D through the intrinsics (``ModelConfig.input_space ==
+    "camera"``, the default's): its Z/f then shifts a little with the focal length (another lens is another view),
+    where a pixel-space model's (the paper's) stays exactly constant."""
 
     @property
     def alpha(self) -> float:
@@ -355,7 +364,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others, caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
+                 others=others, reads_rays=getattr(getattr(used, "config", None), "input_space", None) == "camera",
+                 caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                                             relative=res.relative[0], focal=f),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
                                                             input_space=lifter.input_space)))
@@ -476,7 +486,9 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
             # (a user trial: the readout differed from the download's root by up to 66 mm, unexplained)
             " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "
             "the drawn trajectory)" if state.sample.key.startswith("video/") else ""),
-        f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px",
+        f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px "
+        + ("(this model reads the rays: Z/f shifts a little with f)" if frame.reads_rays else
+           "(this pixel-space model: the same at any f)"),
     ]
     lines += [f"**Caution** {note}" for note in frame.caution]
     lines.append(input_line(state))

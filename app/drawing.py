@@ -118,18 +118,22 @@ def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | Non
                    cloud: np.ndarray | None = None, size: tuple[int, int] = (360, 150)) -> np.ndarray:
     """Two small views of the lifted pose (mm, camera frame), drawn with OpenCV: **side** (depth Z to the right,
     height -Y up) and **top** (depth Z to the right, X down), each a 2.4 m window centred on the root, with the
-    distance to the camera. The 3D response in sight while the 3D view looks head-on at the image plane."""
+    distance to the camera. The 3D response in sight while the 3D view looks head-on at the image plane. Each view
+    is drawn on its own (nothing crosses into the other), and a ground truth whose root lies outside a window is
+    marked at its edge, in the direction of that root, with its depth offset ("GT +3.1 m"; a browser trial lost it
+    at a focal far from the camera's)."""
     W, H = size
-    img = np.full((H, W, 3), 250, np.uint8)
     half = W // 2
+    img = np.full((H, W, 3), 250, np.uint8)
     win = 2400.0
     sc = (min(half, H) - 16) / win
     P = np.asarray(lifted, np.float64)
     r = np.asarray(root, np.float64)
     for v, (title, ax) in enumerate((("side", 1), ("top", 0))):
         x0 = v * half
-        cv2.rectangle(img, (x0 + 1, 1), (x0 + half - 2, H - 2), (200, 200, 200), 1)
-        cx, cy = x0 + half / 2.0, H / 2.0 + 6
+        panel = np.full((H, half, 3), 250, np.uint8)
+        cv2.rectangle(panel, (1, 1), (half - 2, H - 2), (200, 200, 200), 1)
+        cx, cy = half / 2.0, H / 2.0 + 6
 
         def to_px(p: np.ndarray, ax: int = ax, cx: float = cx, cy: float = cy) -> np.ndarray:
             return response_px(p, root=r, view="side" if ax == 1 else "top", centre=(cx, cy), scale=sc)
@@ -139,16 +143,42 @@ def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | Non
             cols = np.broadcast_to(JOINT_RGB, pts.shape[:-1] + (3,)).reshape(-1, 3)
             uv = pts.reshape(-1, 2)
             ok = np.all(np.isfinite(uv), axis=1)
-            ok[ok] = (uv[ok, 0] >= x0) & (uv[ok, 0] < x0 + half) & (uv[ok, 1] >= 0) & (uv[ok, 1] < H)
+            ok[ok] = (uv[ok, 0] >= 0) & (uv[ok, 0] < half) & (uv[ok, 1] >= 0) & (uv[ok, 1] < H)
             iu = uv[ok].astype(np.int64)
-            img[iu[:, 1], iu[:, 0]] = cols[ok]
+            panel[iu[:, 1], iu[:, 0]] = cols[ok]
         for pose, col in ((gt, COLORS["gt"]), (P, None)):
             if pose is None:
                 continue
             q = np.round(to_px(np.asarray(pose, np.float64)) * 16).astype(np.int64)
             for a, b in EDGES:
                 c = col if col is not None else tuple(int(x) for x in JOINT_RGB[b])
-                cv2.line(img, tuple(q[a]), tuple(q[b]), c, 2 if col is None else 1, cv2.LINE_AA, shift=4)
-        cv2.putText(img, f"{title}  camera {r[2] / 1000:.1f} m <-", (x0 + 5, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.36,
+                cv2.line(panel, tuple(q[a]), tuple(q[b]), c, 2 if col is None else 1, cv2.LINE_AA, shift=4)
+        if gt is not None:
+            _mark_off_window(panel, to_px(np.asarray(gt, np.float64)[0]), depth_mm=float(gt[0][2] - r[2]),
+                             centre=(cx, cy))
+        cv2.putText(panel, f"{title}  camera {r[2] / 1000:.1f} m <-", (5, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.36,
                     (60, 60, 60), 1, cv2.LINE_AA)
+        img[:, x0:x0 + half] = panel
     return img
+
+
+def _mark_off_window(panel: np.ndarray, at: np.ndarray, *, depth_mm: float, centre: tuple[float, float]) -> None:
+    """Where ``at`` (px) lies outside ``panel``: a ground-truth dot on the panel's edge along the line from
+    ``centre`` to it, and its depth offset in m beside it."""
+    H, Wp = panel.shape[:2]
+    lo, hi = np.array([8.0, 22.0]), np.array([Wp - 8.0, H - 8.0])
+    a = np.asarray(at, np.float64)
+    if not np.all(np.isfinite(a)) or (np.all(a >= lo) and np.all(a <= hi)):
+        return
+    c = np.asarray(centre, np.float64)
+    d = a - c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.min(np.where(d > 0, (hi - c) / d, np.where(d < 0, (lo - c) / d, np.inf)))
+    e = c + d * min(1.0, float(t))
+    col = COLORS["gt"]
+    cv2.circle(panel, (round(e[0]), round(e[1])), 4, col, -1, cv2.LINE_AA)
+    text = f"GT {depth_mm / 1000:+.1f} m"
+    (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.34, 1)
+    x = int(np.clip(e[0] - tw - 7 if e[0] > Wp / 2 else e[0] + 7, 3, Wp - tw - 3))
+    y = int(np.clip(e[1] + th / 2, th + 18, H - 4))
+    cv2.putText(panel, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, 0.34, col, 1, cv2.LINE_AA)

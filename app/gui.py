@@ -148,9 +148,11 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                    + (f"; the app opened on {model}" if model else "")),
             focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
                                  marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
-                                 hint="f in px (sqrt(fx fy) for non-square pixels): the root's depth Z grows in "
-                                      "proportion to f while its X and Y stay put, so the person recedes straight "
-                                      "along the camera's axis and keeps its place in the image"),
+                                 hint="f in px (sqrt(fx fy) for non-square pixels): the person slides along "
+                                      "the viewing rays (the root's in yellow), farther as f grows, and keeps its "
+                                      "place in the image. A paper model (gt) gives Z = f * Z/f exactly, X and Y "
+                                      "unchanged; the default also reads the rays' directions, so its Z/f and pose "
+                                      "shift a little (another lens is another view)"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
             auto_frame=gui.add_checkbox("keep skeleton in view", True,
                                         hint="reframe the 3D view when the lifted skeleton leaves it"),

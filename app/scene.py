@@ -2,8 +2,9 @@
 
 * ``/floor``: the floor grid (z = 0; hidden for uploads, whose camera height is a guess);
 * ``/cam``: the sample's camera, posed by its extrinsics (``X_world = R^T (X_cam - t)``). Everything below it is
-  in the **OpenCV camera frame** (+x right, +y down, +z forward), metres: the frustum and the image plane at depth
-  :data:`IMAGE_PLANE_DEPTH_M` (its field of view follows the focal slider), the draggable 2D joints on that plane,
+  in the **OpenCV camera frame** (+x right, +y down, +z forward), metres: the frustum and the image plane at the
+  depth where its longer side is :data:`IMAGE_PLANE_SIDE_M` (:func:`image_plane_depth`: it moves with the focal
+  slider, as far as the lifted person does, so it never grows in front of them), the draggable 2D joints on that plane,
   the lifted skeleton at its absolute position, the per-joint uncertainty clouds, the ground truth, the
   analytic-root skeleton, the root's viewing ray and the lifted root's trajectory during playback.
 """
@@ -24,8 +25,8 @@ from . import framing
 from .core import Frame, SessionState
 from .drawing import COLORS, JOINT_RGB, canvas
 
-IMAGE_PLANE_DEPTH_M: float = 1.0
-"""Depth (m, camera frame) at which the image plane and the draggable 2D joints are drawn."""
+IMAGE_PLANE_SIDE_M: float = 1.0
+"""The image plane's longer side (m) in the 3D view, at any focal length (:func:`image_plane_depth`)."""
 JOINT_RADIUS_M: float = 0.012
 """Radius (m) of the draggable 2D joint spheres on the image plane in the overview."""
 HEAD_ON_JOINT_RADIUS: float = 0.02
@@ -52,13 +53,23 @@ def _bone_colors() -> np.ndarray:
     return np.repeat(c[:, None, :], 2, axis=1)
 
 
-def _dashed(P: np.ndarray, n: int = 4) -> np.ndarray:
-    """Bones of ``P`` cut into ``n`` dashes each, ``(16 n, 2, 3)`` (every other piece of ``2 n``)."""
-    seg = edges_points(P)
-    t = np.linspace(0.0, 1.0, 2 * n + 1)
-    a, b = seg[:, 0], seg[:, 1]
-    pts = a[:, None] + (b - a)[:, None] * t[None, :, None]  # (16, 2n+1, 3)
-    return np.stack([pts[:, 0:-1:2], pts[:, 1::2]], axis=2).reshape(-1, 2, 3)
+ANALYTIC_DASH_M: float = 0.05
+"""Length (m) of a dash of the analytic-root skeleton, and of the gap after it (each bone holds a whole number of
+dash-gap pairs, at least one): a browser trial saw the earlier 4 dashes per bone, 4.5 cm thick, merge into a solid
+skeleton."""
+ANALYTIC_THICKNESS_M: float = 0.012
+
+
+def _dashed(P: np.ndarray, dash: float = ANALYTIC_DASH_M) -> np.ndarray:
+    """Bones of ``P`` (m) cut into dashes ``(n, 2, 3)``: each bone into ``k = max(1, round(length / (2 dash)))``
+    equal dash-gap pairs, the dashes kept."""
+    out = []
+    for a, b in edges_points(P):
+        k = max(1, round(float(np.linalg.norm(b - a)) / (2.0 * dash)))
+        t = np.linspace(0.0, 1.0, 2 * k + 1)
+        pts = a[None] + (b - a)[None] * t[:, None]
+        out.append(np.stack([pts[0:-1:2], pts[1::2]], axis=1))
+    return np.concatenate(out)
 
 
 @dataclass
@@ -132,8 +143,8 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
         cloud=scene.add_point_cloud("/cam/cloud", np.zeros((1, 3)), (0, 0, 0), point_size=0.018,
                                     point_shape="circle", visible=False),
         gt=scene.add_line_segments("/cam/gt", np.zeros((16, 2, 3)), GT_RGB, thickness=0.012),
-        analytic=scene.add_line_segments("/cam/analytic", np.zeros((64, 2, 3)), ANALYTIC_RGB, thickness=0.045,
-                                         visible=False),
+        analytic=scene.add_line_segments("/cam/analytic", np.zeros((16, 2, 3)), ANALYTIC_RGB,
+                                         thickness=ANALYTIC_THICKNESS_M, visible=False),
         analytic_root=scene.add_icosphere("/cam/analytic_root", radius=0.06, color=ANALYTIC_RGB, visible=False),
         others_bones2d=scene.add_line_segments("/cam/others/bones2d", np.zeros((16, 2, 3)), OTHER_RGB,
                                                thickness=0.003, visible=False),
@@ -146,11 +157,24 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
     return Scene(camera=cam, pose=pose)
 
 
+def image_plane_depth(state: SessionState) -> float:
+    """Depth (m, camera frame) of the image plane (and of the draggable 2D joints on it) at the state's focal
+    length: where the image's longer side spans :data:`IMAGE_PLANE_SIDE_M`, ``max(W / fx, H / fy) * d = 1 m``.
+    It grows in proportion to the focal, as the lifted root's depth does (Z / f is nearly constant), so the scene
+    keeps its proportions as the slider moves: at a fixed depth (1 m, a browser trial) the plane was 2 m wide at
+    500 px for a 1000-px image and 10 m at 100 px, and hid the person lifted behind it. A whole body in the
+    frame is at least about 1.7 plane depths away (its height spans at most the image's longer side)."""
+    W, H = state.image_size
+    f = np.asarray(state.focal, np.float64)
+    return IMAGE_PLANE_SIDE_M / max(W / f[0], H / f[1])
+
+
 def image_plane(state: SessionState, uv: np.ndarray) -> np.ndarray:
-    """Pixels ``(..., 2)`` -> points on the image plane ``(..., 3)`` m, camera frame, at the state's focal."""
+    """Pixels ``(..., 2)`` -> points on the image plane ``(..., 3)`` m, camera frame, at the state's focal
+    (:func:`image_plane_depth`)."""
     f = np.asarray(state.focal)
     c = np.asarray(state.sample.camera.principal_point)
-    d = IMAGE_PLANE_DEPTH_M
+    d = image_plane_depth(state)
     xy = (np.asarray(uv, np.float64) - c) / f * d
     return np.concatenate([xy, np.full(xy.shape[:-1] + (1,), d)], axis=-1)
 
@@ -180,8 +204,9 @@ def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool, ne
     W, H = state.image_size
     f = state.focal
     nodes.image.position = tuple(image_plane(state, np.array([W / 2.0, H / 2.0])) + np.array([0, 0, 0.002]))
-    nodes.image.render_width = W / f[0] * IMAGE_PLANE_DEPTH_M
-    nodes.image.render_height = H / f[1] * IMAGE_PLANE_DEPTH_M
+    d = image_plane_depth(state)
+    nodes.image.render_width = W / f[0] * d
+    nodes.image.render_height = H / f[1] * d
 
 
 def draw_2d(nodes: PoseNodes, state: SessionState, kp: np.ndarray, last: np.ndarray | None) -> np.ndarray:
@@ -316,7 +341,7 @@ def head_on(state: SessionState, *, fov_y: float, aspect: float) -> tuple[framin
     centre = image_plane(state, (lo + hi) / 2.0)
     w, h = np.abs(image_plane(state, hi) - image_plane(state, lo))[:2]
     R, C = camera_world(state)
-    half = max(h, w / aspect, 1e-3 * IMAGE_PLANE_DEPTH_M) / 2.0
+    half = max(h, w / aspect, 1e-3 * image_plane_depth(state)) / 2.0
     radius = float(np.clip(HEAD_ON_JOINT_RADIUS * max(w, h), 1e-3, JOINT_RADIUS_M))
     return framing.head_on(centre_cam=centre, half_extent=half, R=R, C=C, fov_y=fov_y), radius
 

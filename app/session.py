@@ -65,6 +65,13 @@ INPUT_OF_LABEL: dict[str, str] = {"ground truth": "gt", "SH detection": "detecte
 """The 2D input (``"gt"`` / ``"detected"``) of each label :func:`input_label` gives."""
 
 
+def no_detection_note(sample: Sample) -> str:
+    """Said (once per sequence) when the SH detection was chosen and a Human3.6M frame has none."""
+    return (f"no 2D detection for {sample.label}; using ground-truth 2D where a frame has none (the detection is "
+            "used again where there is one; the training subjects' detections cover every 5th frame; said once per "
+            "sequence)")
+
+
 def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple[SessionState, str | None]:
     """The state showing ``sample``: drags reset, focal to its camera's; model, noise, seed, cloud size and the
     analytic toggle kept. 2D input: ``input_pref`` when the sample has it, else the other one (with a note when
@@ -74,22 +81,27 @@ def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple
     kind = input_pref if input_pref in opts else opts[0]
     if input_pref == "detected" and kind != "detected" and state.sample.has_gt_2d and sample.key.startswith("h36m/"):
         # (a Human3.6M frame without one; a demo sample never has one, and its dropdown says so)
-        note = (f"no 2D detection for {sample.label}; using ground-truth 2D where a frame has none (the "
-                "detection is used again where there is one; the training subjects' detections cover every 5th "
-                "frame; said once per sequence)")
+        note = no_detection_note(sample)
     new = SessionState(sample=sample, model=state.model, input_kind=kind, noise_level=state.noise_level,
                        seed=state.seed, cloud_samples=state.cloud_samples, analytic=state.analytic)
     return new, note
 
 
 def with_input(state: SessionState, kind: str) -> SessionState:
-    """2D input ``"gt"`` or ``"detected"`` (drags reset). Raises when the sample does not have that 2D."""
+    """2D input ``"gt"`` or ``"detected"``: its own 2D, with the joints dragged on it before on this sample
+    (:attr:`SessionState.input_drags`; the current input's drags are kept there in turn). Raises when the sample
+    does not have that 2D."""
     if kind not in INPUT_KINDS:
         raise PoseLifterError(f"unknown 2D input {kind!r}; expected one of {list(INPUT_KINDS)}")
     if kind == state.input_kind:
         return state
-    new = state.evolve(input_kind=kind, dragged=set())
-    new.keypoints = new.base_keypoints().copy()  # raises: no detection / no ground truth
+    kept = dict(state.input_drags)
+    if state.dragged:
+        kept[state.input_kind] = (np.array(state.keypoints, np.float64, copy=True), frozenset(state.dragged))
+    back = kept.pop(kind, None)
+    new = state.evolve(input_kind=kind, dragged=set() if back is None else set(back[1]), input_drags=kept)
+    base = new.base_keypoints()  # raises: no detection / no ground truth
+    new.keypoints = base.copy() if back is None else back[0].copy()
     return new
 
 
@@ -178,6 +190,22 @@ def with_keypoints(state: SessionState, keypoints: object) -> SessionState:
     for j in range(NUM_JOINTS):
         check_joint(kp[j], size=state.image_size)
     return state.evolve(keypoints=kp.copy())
+
+
+def input_drag_notes(old: SessionState, new: SessionState) -> list[str]:
+    """What a switch of 2D input from ``old`` to ``new`` (one sample) did with dragged joints: kept for the input
+    left, given back on the input chosen."""
+    def joints(n: int) -> str:
+        return f"{n} dragged joint{'s' if n != 1 else ''}"
+
+    out = []
+    if old.dragged:
+        out.append(f"{joints(len(old.dragged))} on the {input_label(old.sample, old.input_kind)} kept for when you "
+                   "switch back")
+    if new.dragged:
+        out.append(f"{joints(len(new.dragged))} on the {input_label(new.sample, new.input_kind)} given back "
+                   "(reset dragged joints undoes them)")
+    return out
 
 
 def reset_joints(state: SessionState) -> SessionState:

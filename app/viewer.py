@@ -59,7 +59,6 @@ from .noise import ErrorModelLike, default_error_model, model_name
 from .playback import DemoMotion, H36MSequence, Player, SequenceSource
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
 from .scene import (
-    IMAGE_PLANE_DEPTH_M,
     JOINT_RADIUS_M,
     Scene,
     ViewerCamera,
@@ -72,6 +71,7 @@ from .scene import (
     draw_tracks,
     draw_trail,
     framing_points,
+    image_plane_depth,
     set_joint_radius,
 )
 from .scene import head_on as scene_head_on
@@ -543,6 +543,8 @@ class SessionView:
                 self._set_control(r.control, r.value)
         if st.input_kind != old.input_kind and st.sample.has_gt_2d:
             self._input_pref = st.input_kind
+            if st.sample.key == old.sample.key:  # (where the dragged joints went, and came back from)
+                notes += [(text, False, None) for text in ss.input_drag_notes(old, st)]
         if ss.same_lift(st, old) and not redraw and not reset:
             if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
                 self._last_plane = None
@@ -762,8 +764,12 @@ class SessionView:
         if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
         if note and seq_key not in self._fallback_said:
-            self._fallback_said.add(seq_key)
-            self.show_message(note)
+            if self._since_typed("frame") < TYPING_SETTLE_S:  # said for the frame the typing ends on (a browser
+                # trial typed 101 and read "no 2D detection for ... frame 1", the first key's frame)
+                self._later_once("fallback", TYPING_SETTLE_S + 0.05, self._say_no_detection)
+            else:
+                self._fallback_said.add(seq_key)
+                self.show_message(note)
         if not kept and chosen:
             uploaded = sample.key.split("/")[0] in ("upload", "video")  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
@@ -774,6 +780,22 @@ class SessionView:
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)
             self._view_key = view_key
             self._reframe()
+
+    def _say_no_detection(self) -> None:
+        """:func:`poselifter_app.session.no_detection_note`, held while the frame box was typed, said now if the
+        frame shown still has no detection of its own (once per sequence)."""
+        with self.lock:
+            if self._since_typed("frame") < TYPING_SETTLE_S:
+                self._later_once("fallback", TYPING_SETTLE_S - self._since_typed("frame") + 0.05,
+                                 self._say_no_detection)
+                return
+            st = self.state
+            key = st.sample.key
+            seq_key = key.rsplit("/", 1)[0]
+            if (key.startswith("h36m/") and self._input_pref == "detected" and st.input_kind != "detected"
+                    and seq_key not in self._fallback_said):
+                self._fallback_said.add(seq_key)
+                self.show_message(ss.no_detection_note(st.sample))
 
     def _show_sample_controls(self, st: SessionState) -> None:
         """Pickers, 2D-input options, focal range and frame slider for ``st`` (the source dropdown last)."""
@@ -1172,7 +1194,7 @@ class SessionView:
         ``end_position`` through the sample camera."""
         R, C = camera_world(self.state)
         end_c = R @ (np.asarray(event.end_position, np.float64) - C)
-        d = IMAGE_PLANE_DEPTH_M
+        d = image_plane_depth(self.state)
         p = None
         client = getattr(event, "client", None)
         if client is not None:

@@ -17,7 +17,15 @@ from conftest import require_shipped_models  # noqa: E402
 from poselifter_app.core import FOCAL_MIN_PX, focal_text  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root, person_label  # noqa: E402
-from poselifter_app.scene import HEAD_ON_JOINT_RADIUS, IMAGE_PLANE_DEPTH_M, JOINT_RADIUS_M, image_plane  # noqa: E402
+from poselifter_app.scene import (  # noqa: E402
+    ANALYTIC_THICKNESS_M,
+    HEAD_ON_JOINT_RADIUS,
+    IMAGE_PLANE_SIDE_M,
+    JOINT_RADIUS_M,
+    frustum_corners,
+    image_plane,
+    image_plane_depth,
+)
 from poselifter_app.testing import FakeTab, local_server, open_tab, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
 from poselifter_app.viser_hooks import drag_callback  # noqa: E402
@@ -99,7 +107,12 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     the viewing ray of its pixel."""
     f0 = view.state.sample.camera.alpha
     before = view.frame
-    width_before = np.ptp(np.asarray(view.scene.camera.frustum.points)[:, :, 0])
+
+    def view_width() -> float:  # the frustum's width over its depth: 2 tan(half the horizontal field of view)
+        pts = np.asarray(view.scene.camera.frustum.points)
+        return float(np.ptp(pts[:, :, 0]) / pts[:, :, 2].max())
+
+    width_before = view_width()
     view.gui.lift.focal.value = 2.0 * f0
     after = view.frame
     assert view.state.focal_px == pytest.approx(2 * f0)
@@ -108,10 +121,35 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     uv, c, f = after.current_2d[0], np.asarray(after.principal_point), np.asarray(after.focal)
     np.testing.assert_allclose(after.root[:2] / after.root[2], (uv - c) / f, atol=1e-9)
     np.testing.assert_allclose(np.asarray(view.scene.camera.ray.points)[0, 1], 1.25 * after.root / 1000, rtol=1e-3)
-    assert np.ptp(np.asarray(view.scene.camera.frustum.points)[:, :, 0]) == pytest.approx(width_before / 2, rel=1e-6)  # FOV follows
+    assert view_width() == pytest.approx(width_before / 2, rel=1e-6)  # the field of view follows
     assert "Z/f" in view.gui.readout.readout.content
+    # (a browser trial: the slider's hint promised Z in proportion to f, which only a pixel-space model gives)
+    assert "this model reads the rays: Z/f shifts a little with f" in view.gui.readout.readout.content
+    assert "exactly" in view.gui.lift.focal.hint and "stay put" not in view.gui.lift.focal.hint
     view.gui.lift.focal_reset.value = True  # button click
     assert view.state.focal_px == pytest.approx(f0)
+
+
+def test_the_image_plane_stays_in_front_of_the_person_at_any_focal(view: SessionView) -> None:
+    """A browser trial: the image plane was drawn 1 m from the camera at every focal length, 2 m wide at 500 px for
+    a 1000-px image and 10 m wide at 100 px, and hid the person lifted behind it. It now moves with the focal as the
+    person does: its longer side stays 1 m, its corners on the rays of the image's corners, and the person stays
+    well behind it from 100 to 6000 px."""
+    f0 = view.state.sample.camera.alpha
+    W, H = view.state.image_size
+    for f in (100.0, 250.0, 500.0, f0, 2000.0, 6000.0):
+        view.gui.lift.focal.value = f
+        assert view.state.focal_px == pytest.approx(f)
+        d = image_plane_depth(view.state)
+        corners = frustum_corners(view.state)
+        assert np.ptp(corners[:, :2], axis=0).max() == pytest.approx(IMAGE_PLANE_SIDE_M)
+        np.testing.assert_allclose(corners[:, 2], d)
+        c = np.asarray(view.state.sample.camera.principal_point)
+        np.testing.assert_allclose(corners[:, :2] / d * f + c, [[0, 0], [W, 0], [W, H], [0, H]], atol=1e-9)
+        assert float(np.asarray(view.scene.camera.image.position)[2]) == pytest.approx(d + 0.002)
+        assert view.scene.camera.image.render_width == pytest.approx(W / f * d)
+        assert view.frame.lifted[:, 2].min() / 1000.0 > 1.5 * d  # the whole body behind the plane
+    view.gui.lift.focal_reset.value = True
 
 
 def test_focal_ambiguity_is_exact_for_a_pixel_space_model(view: SessionView, app: PoseLifterApp) -> None:
@@ -129,6 +167,7 @@ def test_focal_ambiguity_is_exact_for_a_pixel_space_model(view: SessionView, app
     assert after.root[2] == pytest.approx(2 * before.root[2], rel=1e-6)
     np.testing.assert_allclose(after.root[:2], before.root[:2], atol=1e-6)  # X = (u - c) Z / f: unchanged
     np.testing.assert_allclose(after.lifted - after.root, before.lifted - before.root, atol=1e-6)  # same shape
+    assert "this pixel-space model: the same at any f" in view.gui.readout.readout.content
 
 
 def test_noise_slider_cloud_seed_and_resample(view: SessionView) -> None:
@@ -162,7 +201,7 @@ def test_joint_drag_callback_relifts(view: SessionView) -> None:
     assert j in view.state.dragged
     assert not np.allclose(view.frame.lifted, before)
     plane = np.asarray(view.scene.pose.joints2d[j].position)
-    assert plane[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)  # the sphere stays on the image plane
+    assert plane[2] == pytest.approx(image_plane_depth(view.state))  # the sphere stays on the image plane
 
     class _Cam:  # a viewer looking along the camera's optical axis from behind it
         position = None
@@ -218,7 +257,18 @@ def test_analytic_toggle_and_gt_checkbox(view: SessionView) -> None:
     view.gui.lift.analytic.value = True
     assert view.frame.analytic is not None and view.scene.pose.analytic.visible
     # dashed (4 dashes a bone, not hidden under the lifted bones) and its root marked
-    assert np.asarray(view.scene.pose.analytic.points).shape == (16 * 4, 2, 3) and view.scene.pose.analytic_root.visible
+    dashes = np.asarray(view.scene.pose.analytic.points)
+    assert view.scene.pose.analytic_root.visible
+    # about 5 cm dashes and gaps, a whole number per bone: gaps at least twice as long as the line is thick, so they
+    # show at a few metres (a browser trial saw 4 dashes per bone, 4.5 cm thick, as one solid skeleton)
+    lengths = np.linalg.norm(dashes[:, 1] - dashes[:, 0], axis=-1)
+    assert len(dashes) > 16 and np.all(lengths > 0.025) and np.all(lengths < 0.1)
+    from lifter.skeleton import EDGES
+
+    a = view.frame.analytic / 1000
+    bones = sum(float(np.linalg.norm(a[i] - a[j])) for i, j in EDGES)
+    assert lengths.sum() == pytest.approx(bones / 2, rel=1e-5)  # half dashes, half gaps as long: gaps > 2 cm
+    assert lengths.min() > 2 * ANALYTIC_THICKNESS_M
     np.testing.assert_allclose(view.scene.pose.analytic_root.position, view.frame.analytic[0] / 1000, atol=1e-6)
     assert "**Analytic root** Z" in view.gui.readout.readout.content
     assert "analytic root error" in view.frame.metrics
@@ -499,13 +549,14 @@ def test_head_on_view(view: SessionView, app: PoseLifterApp) -> None:
     kp = view.state.keypoints
     eye, look, up = zoom()
     centre = (kp.min(0) + kp.max(0)) / 2
-    assert look[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)  # on the image plane
+    d = image_plane_depth(view.state)
+    assert look[2] == pytest.approx(d)  # on the image plane
     np.testing.assert_allclose(look[:2] / look[2] * f + c, centre, atol=1e-6)  # at the 2D joints' centre
-    assert eye[2] < IMAGE_PLANE_DEPTH_M  # camera side of the plane
+    assert eye[2] < d  # camera side of the plane
     np.testing.assert_allclose(eye[:2], look[:2], atol=1e-9)  # head-on
     np.testing.assert_allclose(up, R.T @ np.array([0.0, -1.0, 0.0]), atol=1e-9)  # image "up" is up
     d0 = look[2] - eye[2]
-    ext = (kp.max(0) - kp.min(0)) / f * IMAGE_PLANE_DEPTH_M  # bbox size on the plane (m)
+    ext = (kp.max(0) - kp.min(0)) / f * d  # bbox size on the plane (m)
     half_fov = np.arctan(0.5 * max(ext) / d0)  # the bbox fills most of a ~50 deg view
     assert np.radians(15) < half_fov < np.radians(25)
     # twice the joints' spread (about the centre): twice the distance
@@ -538,7 +589,7 @@ def test_head_on_view_moves_a_tabs_camera(app: PoseLifterApp) -> None:
         kp = v.state.keypoints
         np.testing.assert_allclose(look[:2] / look[2] * np.asarray(v.state.focal) + np.asarray(cam.principal_point),
                                    (kp.min(0) + kp.max(0)) / 2, atol=1e-6)
-        assert eye[2] < look[2] == pytest.approx(IMAGE_PLANE_DEPTH_M)
+        assert eye[2] < look[2] == pytest.approx(image_plane_depth(v.state))
         np.testing.assert_allclose(v.target.camera.up_direction, R.T @ np.array([0.0, -1.0, 0.0]), atol=1e-9)
     finally:
         tab.close()
@@ -571,6 +622,80 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v.gui.sample.input.value = "ground truth"
     v.gui.play.frame.value = 15
     assert v.state.input_kind == "gt"
+
+
+def test_dragged_joints_are_kept_per_2d_input(app: PoseLifterApp) -> None:
+    """A browser trial: joints dragged on the SH detection were dropped without a word when the 2D input went to
+    ground truth, and were gone on the way back. Each input keeps its own drags on the sample, and a note says so."""
+    from dataclasses import replace
+
+    from poselifter_app import session as ss
+    from poselifter_app.core import SessionState
+
+    demo = app.demo.get("standing")
+    sample = replace(demo, detected_2d=np.asarray(demo.keypoints_2d) + 3.0)  # (a demo sample has no detection)
+    st = ss.with_input(SessionState(sample=sample, model=app.default_model), "detected")
+    np.testing.assert_allclose(st.keypoints, sample.detected_2d)
+    det = ss.with_joint(ss.with_joint(st, 13, st.keypoints[13] + (40.0, -25.0)), 3, st.keypoints[3] + (5.0, 5.0))
+    gt = ss.with_input(det, "gt")
+    np.testing.assert_allclose(gt.keypoints, sample.keypoints_2d)  # ground truth's own 2D, undragged
+    assert not gt.dragged
+    assert ss.input_drag_notes(det, gt) == [f"2 dragged joints on the {ss.input_label(sample, 'detected')} kept for "
+                                            "when you switch back"]
+    gt2 = ss.with_joint(gt, 16, gt.keypoints[16] + (10.0, 0.0))
+    back = ss.with_input(gt2, "detected")
+    np.testing.assert_allclose(back.keypoints, det.keypoints)  # the drags given back, exactly
+    assert back.dragged == {13, 3}
+    notes = ss.input_drag_notes(gt2, back)
+    assert len(notes) == 2 and notes[0].startswith("1 dragged joint on the ground truth kept")
+    assert notes[1].startswith("2 dragged joints on the") and "given back" in notes[1]
+    again = ss.with_input(back, "gt")
+    np.testing.assert_allclose(again.keypoints, gt2.keypoints)
+    assert again.dragged == {16}
+    # reset dragged joints undoes the current input's drags only; the other input's stay kept
+    clean = ss.reset_joints(back)
+    np.testing.assert_allclose(clean.keypoints, sample.detected_2d)
+    assert not clean.dragged and ss.with_input(clean, "gt").dragged == {16}
+    # another sample starts afresh
+    fresh, _ = ss.for_sample(back, demo, input_pref="gt")
+    assert not fresh.input_drags and not fresh.dragged
+
+
+def test_dragged_joints_kept_per_2d_input_in_the_app(h36m_app: PoseLifterApp) -> None:
+    """As the browser trial did it: S9 Posing 1, SH detection, the left wrist moved; ground truth; SH again."""
+    v = h36m_app.headless_view()
+    assert v.select_h36m(subject=9, sequence="Posing 1", camera="55011271", frame=1140) is True
+    v.gui.sample.input.value = "SH detection"
+    before = v.frame.metrics["MPJPE"]
+    v.move_joint("l_wrist", v.state.keypoints[13] + (0.0, 40.0))
+    moved = v.state.keypoints.copy()
+    assert v.state.dragged == {13} and v.frame.metrics["MPJPE"] != before
+    v.gui.sample.input.value = "ground truth"
+    assert v.state.input_kind == "gt" and not v.state.dragged
+    assert "1 dragged joint on the SH detection kept for when you switch back" in v.messages[-1]
+    v.gui.sample.input.value = "SH detection"
+    assert v.state.dragged == {13} and "given back" in v.messages[-1]
+    np.testing.assert_allclose(v.state.keypoints, moved)
+
+
+def test_no_detection_note_names_the_frame_typed(h36m_app: PoseLifterApp) -> None:
+    """A browser trial typed 101 in the frame box and read "no 2D detection for ... frame 1": each key loads a frame,
+    and the note (said once per sequence) named the first key's. It is said once the typing settles, for the frame
+    then shown."""
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    v = h36m_app.headless_view()
+    assert v.select_h36m(subject=1, sequence="Posing 1", camera="54138969", frame=100) is True
+    v.gui.sample.input.value = "SH detection"
+    assert v.state.input_kind == "detected"
+    for value in (1, 10, 101):  # typed key by key (frames 1 and 101 have no detection: every 5th has)
+        v._note_key("frame")
+        v.gui.play.frame.value = value
+    assert v.state.sample.key.endswith("/101") and v.state.input_kind == "gt"
+    assert not any("no 2D detection" in m for m in v.messages)  # not yet: the box is being typed
+    assert wait_for(lambda: any("no 2D detection" in m for m in v.messages), timeout=TYPING_SETTLE_S + 3)
+    said = [m for m in v.messages if "no 2D detection" in m]
+    assert len(said) == 1 and "frame 101;" in said[0], said
 
 
 def test_photo_dropdown_follows_the_frame(h36m_app: PoseLifterApp) -> None:
@@ -926,6 +1051,29 @@ def test_response_views_stand_upright(app: PoseLifterApp) -> None:
     side_img = img[:, :180].astype(int)
     ys = np.nonzero(np.all(np.abs(side_img - np.asarray(JOINT_RGB[head], int)) <= 8, axis=-1))[0]
     assert len(ys) and float(ys.mean()) < 150 / 2, ys
+
+
+def test_response_views_mark_a_ground_truth_outside_their_window(app: PoseLifterApp) -> None:
+    """A browser trial at a focal far from the camera's: the lifted pose 3 m nearer than the ground truth, whose
+    skeleton left the 2.4 m windows (the side view showed none, and strokes from one view crossed into the other).
+    Each view is drawn on its own, and the ground truth's root is marked at the edge it lies beyond."""
+    from poselifter_app.drawing import COLORS, response_image
+
+    pose = app.demo.get("standing").pose_3d
+    near = pose - pose[0] + (0.0, 0.0, 1000.0)
+    far = pose - pose[0] + (0.0, 0.0, 4200.0)
+
+    def green(img: np.ndarray) -> np.ndarray:
+        return np.all(np.abs(img.astype(int) - np.asarray(COLORS["gt"], int)) <= 40, axis=-1)
+
+    img = response_image(near, root=near[0], gt=far, size=(360, 150))
+    assert not green(response_image(near, root=near[0], size=(360, 150))).any()
+    for x0 in (0, 180):  # both views: a green mark within 60 px of the right edge (depth is to the right)
+        cols = np.nonzero(green(img[:, x0:x0 + 180]))[1]
+        assert len(cols) and cols.min() > 180 - 60, (x0, cols.min() if len(cols) else None)
+    # the same ground truth inside the window: its skeleton, no mark
+    inside = response_image(near, root=near[0], gt=near + (0.0, 0.0, 300.0), size=(360, 150))
+    assert green(inside[:, :180]).sum() > 50
 
 
 def test_per_joint_clouds_and_spread_readout(view: SessionView) -> None:
