@@ -2,9 +2,9 @@
 
 * ``/floor``: the floor grid (z = 0; hidden for uploads, whose camera height is a guess);
 * ``/cam``: the sample's camera, posed by its extrinsics (``X_world = R^T (X_cam - t)``). Everything below it is
-  in the **OpenCV camera frame** (+x right, +y down, +z forward), metres: the frustum and the image plane at the
-  depth where its longer side is :data:`IMAGE_PLANE_SIDE_M` (:func:`image_plane_depth`: it moves with the focal
-  slider, as far as the lifted person does, so it never grows in front of them), the draggable 2D joints on that plane,
+  in the **OpenCV camera frame** (+x right, +y down, +z forward), metres: the frustum and the image plane at 1 m,
+  or nearer where it would be more than 1 m across (:func:`image_plane_depth`: short focals bring it nearer as they
+  bring the lifted person nearer, so it never grows in front of them), the draggable 2D joints on that plane,
   the lifted skeleton at its absolute position, the per-joint uncertainty clouds, the ground truth, the
   analytic-root skeleton, the root's viewing ray and the lifted root's trajectory during playback.
 """
@@ -25,8 +25,12 @@ from . import framing
 from .core import Frame, SessionState
 from .drawing import COLORS, JOINT_RGB, canvas
 
+IMAGE_PLANE_MAX_DEPTH_M: float = 1.0
+"""The image plane's depth (m) in the 3D view where it is at most :data:`IMAGE_PLANE_SIDE_M` across there
+(:func:`image_plane_depth`)."""
 IMAGE_PLANE_SIDE_M: float = 1.0
-"""The image plane's longer side (m) in the 3D view, at any focal length (:func:`image_plane_depth`)."""
+"""The image plane's longest side (m) in the 3D view: nearer than :data:`IMAGE_PLANE_MAX_DEPTH_M` at focal
+lengths that would make it larger (:func:`image_plane_depth`)."""
 JOINT_RADIUS_M: float = 0.012
 """Radius (m) of the draggable 2D joint spheres on the image plane in the overview."""
 HEAD_ON_JOINT_RADIUS: float = 0.02
@@ -159,14 +163,16 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
 
 def image_plane_depth(state: SessionState) -> float:
     """Depth (m, camera frame) of the image plane (and of the draggable 2D joints on it) at the state's focal
-    length: where the image's longer side spans :data:`IMAGE_PLANE_SIDE_M`, ``max(W / fx, H / fy) * d = 1 m``.
-    It grows in proportion to the focal, as the lifted root's depth does (Z / f is nearly constant), so the scene
-    keeps its proportions as the slider moves: at a fixed depth (1 m, a browser trial) the plane was 2 m wide at
-    500 px for a 1000-px image and 10 m at 100 px, and hid the person lifted behind it. A whole body in the
-    frame is at least about 1.7 plane depths away (its height spans at most the image's longer side)."""
+    length: :data:`IMAGE_PLANE_MAX_DEPTH_M`, or nearer where the image would be more than
+    :data:`IMAGE_PLANE_SIDE_M` across there: ``d = min(1, 1 / max(W / fx, H / fy))`` m. A browser trial: at 1 m
+    for every focal the plane was 2 m wide at 500 px for a 1000-px image and 10 m at 100 px, and hid the person
+    lifted behind it; at the depth where it is 1 m across for every focal, it stood 6 m away at 6000 px and hid
+    a person lifted 25 m away from views near the camera's axis. Short focals bring it nearer as they bring the
+    person nearer (Z / f is nearly constant), so a whole body in the frame stays at least about 1.7 plane depths
+    away (its height spans at most the image's longer side); long focals leave it small, near the camera."""
     W, H = state.image_size
     f = np.asarray(state.focal, np.float64)
-    return IMAGE_PLANE_SIDE_M / max(W / f[0], H / f[1])
+    return min(IMAGE_PLANE_MAX_DEPTH_M, IMAGE_PLANE_SIDE_M / max(W / f[0], H / f[1]))
 
 
 def image_plane(state: SessionState, uv: np.ndarray) -> np.ndarray:
