@@ -59,11 +59,12 @@ def draw_pose(img: np.ndarray, kp: np.ndarray, color: tuple[int, int, int], *, s
         cv2.line(img, tuple(ip[a]), tuple(ip[b]), col, max(1, thickness - (1 if right else 0)), cv2.LINE_AA, shift=4)
     for j in range(NUM_JOINTS):
         c = tuple(ip[j])
-        cv2.circle(img, c, (radius + 2) * 16, SIDE_COLORS[joint_side(j)], -1, cv2.LINE_AA, shift=4)
+        cv2.circle(img, c, (radius + min(2, max(1, radius // 2))) * 16, SIDE_COLORS[joint_side(j)], -1, cv2.LINE_AA,
+                   shift=4)
         fill = tuple(int(x) for x in JOINT_RGB[j]) if selected is not None else color
         cv2.circle(img, c, radius * 16, fill, -1, cv2.LINE_AA, shift=4)
         if selected == j:
-            cv2.circle(img, c, (radius + 6) * 16, (255, 220, 0), max(2, radius // 2), cv2.LINE_AA, shift=4)
+            cv2.circle(img, c, (radius + max(3, radius)) * 16, (255, 220, 0), max(1, radius // 2), cv2.LINE_AA, shift=4)
 
 
 def scaled_base(base: np.ndarray | None, *, size: tuple[int, int], max_width: int = 480) -> tuple[np.ndarray, float]:
@@ -77,6 +78,24 @@ def scaled_base(base: np.ndarray | None, *, size: tuple[int, int], max_width: in
     return src.copy(), s
 
 
+MARKS_FULL_HEIGHT_PX: float = 200.0
+"""A person at least this tall (px, in the drawn inset) gets full-size joint marks (:func:`mark_scale`)."""
+
+
+def mark_scale(keypoints: np.ndarray | None, *, scale: float) -> float:
+    """How large :func:`overlay` draws joint marks for a person whose 2D is ``keypoints`` ``(17, 2)`` px (full
+    resolution), drawn at ``scale``: 1 for a person at least :data:`MARKS_FULL_HEIGHT_PX` tall in the inset,
+    in proportion below that, down to 0.4; 1 without keypoints."""
+    if keypoints is None:
+        return 1.0
+    kp = np.asarray(keypoints, np.float64)
+    ok = np.all(np.isfinite(kp), axis=-1)
+    if ok.sum() < 2:
+        return 1.0
+    extent = float(np.ptp(kp[ok], axis=0).max()) * scale
+    return float(np.clip(extent / MARKS_FULL_HEIGHT_PX, 0.4, 1.0))
+
+
 def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, np.ndarray | None],
             max_width: int = 480, selected: int | None = None,
             prescaled: tuple[np.ndarray, float] | None = None,
@@ -87,9 +106,11 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
     ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize."""
     small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
     img = small.copy()
-    k = max(1.0, img.shape[1] / 240.0)  # marks grow with the inset (readable on 1000-px frames)
+    # marks grow with the inset (readable on 1000-px frames) and shrink for a small person (a browser trial: discs
+    # 16 px wide on a person 110 px tall hid the overlays beneath them)
+    k = max(1.0, img.shape[1] / 240.0) * mark_scale(poses.get("current"), scale=s)
     for person, kp in others:
-        draw_pose(img, kp, COLORS["other"], scale=s, thickness=round(k * 1.5), radius=round(k * 2))
+        draw_pose(img, kp, COLORS["other"], scale=s, thickness=round(k * 1.5), radius=max(1, round(k * 2)))
         top = np.asarray(kp, np.float64)[10] * s
         if np.all(np.isfinite(top)):
             cv2.putText(img, str(person + 1), (int(top[0]) + 4, int(top[1]) - 4), cv2.FONT_HERSHEY_SIMPLEX,
@@ -99,7 +120,7 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
         if kp is not None:
             cur = key == "current"
             draw_pose(img, kp, COLORS[key], scale=s, thickness=round(k * (2 if cur else 1.5)),
-                      radius=round(k * (3 if cur else 2)), selected=selected if cur else None)
+                      radius=max(1, round(k * (3 if cur else 2))), selected=selected if cur else None)
     return img
 
 

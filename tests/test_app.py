@@ -1758,3 +1758,26 @@ def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
         time.sleep(TYPING_SETTLE_S + 0.3)  # nothing typed during playback is applied after it
         np.testing.assert_array_equal(v.state.keypoints, kp)
         assert not np.any(np.all(np.isclose(kp, (140.0, 100.0)), axis=-1))
+
+
+def test_input_2d_marks_shrink_for_a_small_person() -> None:
+    """A browser trial: on a Human3.6M frame (the person about 110 px tall in the 480-px inset) the joint discs,
+    16 px wide, hid the ground-truth and detection overlays beneath them. Marks are full size for a person at least
+    200 px tall in the inset, in proportion below that, down to 0.4."""
+    from poselifter_app.drawing import MARKS_FULL_HEIGHT_PX, mark_scale, overlay
+
+    from lifter import demo_sample
+
+    kp = demo_sample("standing").keypoints_2d
+    assert mark_scale(None, scale=0.5) == 1.0
+    tall = (kp - kp.mean(0)) * (2 * MARKS_FULL_HEIGHT_PX / np.ptp(kp, 0).max()) + 500  # 400 px full size, 200 drawn
+    assert mark_scale(tall, scale=0.48) == pytest.approx(min(1.0, 0.48 * 400 / MARKS_FULL_HEIGHT_PX))
+    small = (kp - kp.mean(0)) * (230 / np.ptp(kp, 0).max()) + 500  # 230 px: 110 px in the inset
+    assert mark_scale(small, scale=0.48) == pytest.approx(230 * 0.48 / MARKS_FULL_HEIGHT_PX)
+    assert mark_scale(small * 0.01 + 500, scale=0.48) == 0.4
+
+    def ring_pixels(pose: np.ndarray) -> int:
+        img = overlay(None, size=(1000, 1000), poses={"current": pose}, selected=3)
+        return int(np.all(np.abs(img.astype(int) - (255, 220, 0)) <= 30, axis=-1).sum())
+
+    assert ring_pixels(small) < 0.6 * ring_pixels(tall)  # the selected joint's ring too
