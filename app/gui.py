@@ -147,7 +147,9 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                    hint="shipped weights (assets/models.json)"
                                    + (f"; the app opened on {model}" if model else "")),
             focal=gui.add_slider("focal length (px)", FOCAL_MIN_PX, FOCAL_MAX_PX, 1.0, 1000.0,
-                                 marks=((FOCAL_MIN_PX, "100"), (FOCAL_MAX_PX, "6k")),
+                                 # (1k and 2k: a browser trial's teacher found 500-2000 px a 50-px stretch
+                                 # of the track, without a landmark)
+                                 marks=((FOCAL_MIN_PX, "100"), (1000.0, "1k"), (2000.0, "2k"), (FOCAL_MAX_PX, "6k")),
                                  hint="f in px (sqrt(fx fy) for non-square pixels): the person slides along "
                                       "the viewing rays (the root's in yellow), farther as f grows, and keeps its "
                                       "place in the image. A paper model (gt) gives Z = f * Z/f exactly, X and Y "

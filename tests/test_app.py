@@ -127,6 +127,8 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     # (a browser trial: the slider's hint promised Z in proportion to f, which only a pixel-space model gives)
     assert "this model reads the rays: Z/f shifts a little with f" in view.gui.readout.readout.content
     assert "exactly" in view.gui.lift.focal.hint and "stay put" not in view.gui.lift.focal.hint
+    marks = {(float(m.value), m.label) for m in view.gui.lift.focal._marks or ()}  # (viser's private prop)
+    assert marks >= {(1000.0, "1k"), (2000.0, "2k")}, marks
     view.gui.lift.focal_reset.value = True  # button click
     assert view.state.focal_px == pytest.approx(f0)
 
