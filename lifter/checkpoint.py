@@ -138,7 +138,10 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         if path.is_dir():
             raise CheckpointError(f"weights file {where} is a directory, not a checkpoint file")
         if not path.is_file():
-            raise CheckpointError(f"weights file not found: {where}")
+            hint = ("; runs/ holds checkpoints that poselifter train writes, none of them shipped: the README's "
+                    "paper-table commands name runs that scripts/run_ablation.sh, run_table3.sh and run_focal.sh "
+                    "train (about 10 minutes each on 1 CPU thread)") if "runs" in path.parts else ""
+            raise CheckpointError(f"weights file not found: {where}{hint}")
         if path.stat().st_size > MAX_CHECKPOINT_BYTES:
             raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger "
                                   f"than {MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")

@@ -117,18 +117,28 @@ def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None =
 
 
 def format_table(rows: Sequence[EvalRow]) -> str:
+    """The results table: errors in mm, PCK150 and AUC in % (the JSON gives them as fractions)."""
     head = (f"{'model':<28} {'root':<9} {'MPJPE':>7} {'PA-MPJPE':>9} {'MRPE':>7} {'MRPE-X':>7} {'MRPE-Y':>7} "
             f"{'MRPE-Z':>7} {'PCK150':>7} {'AUC':>6}")
-    lines = [head, "-" * len(head)]
+    lines = ["errors in mm; PCK150 (joints within 150 mm) and AUC (over 0-150 mm) in %", head, "-" * len(head)]
     for r in rows:
         lines.append(f"{r.label:<28} {r.root:<9} {r.mpjpe:7.1f} {r.pa_mpjpe:9.1f} {r.mrpe:7.1f} {r.mrpe_x:7.1f} "
                      f"{r.mrpe_y:7.1f} {r.mrpe_z:7.1f} {100 * r.pck150:7.1f} {100 * r.auc:6.1f}")
     return "\n".join(lines)
 
 
+ACTION_COLUMNS: dict[str, str] = {
+    "Directions": "Direct", "Discussion": "Discus", "Eating": "Eating", "Greeting": "Greet", "Phoning": "Phone",
+    "Posing": "Posing", "Purchases": "Purch", "Sitting": "Sit", "SittingDown": "SitDn", "Smoking": "Smoke",
+    "Photo": "Photo", "Waiting": "Wait", "Walking": "Walk", "WalkDog": "WalkD", "WalkTogether": "WalkT"}
+"""Per-action column headings (at most 6 characters, each its own: cut to 6, Sitting and SittingDown read alike)."""
+
+
 def format_per_action(rows: Sequence[EvalRow], metric: str = "mpjpe") -> str:
-    short = [a[:6] for a in ACTIONS]
-    lines = [f"per-action {metric} (mm)", f"{'model':<28} " + " ".join(f"{s:>6}" for s in short) + "    Avg"]
+    short = [ACTION_COLUMNS[a] for a in ACTIONS]
+    lines = [f"per-action {metric} (mm; Avg: the mean over all samples, not over the actions; "
+             + ", ".join(f"{ACTION_COLUMNS[a]} = {a}" for a in ACTIONS if ACTION_COLUMNS[a] != a) + ")",
+             f"{'model':<28} " + " ".join(f"{s:>6}" for s in short) + "    Avg"]
     for r in rows:
         vals = " ".join(f"{r.per_action[a][metric]:6.1f}" if a in r.per_action else f"{'-':>6}" for a in ACTIONS)
         lines.append(f"{r.label + ('' if r.root == 'learned' else ' (an.)'):<28} {vals} {getattr(r, metric):6.1f}")
@@ -174,7 +184,15 @@ def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float
     rows = []
     for k in factors:
         vs = virtual_camera_samples(samples, focal_scale=k, principal_shift=principal_shift)
-        rows.append(evaluate_lifter(lifter, vs, label=f"x{k:g}", flip_test=flip_test, progress=False, source=source)[0])
+        with warnings.catch_warnings(record=True) as said:  # (each note then says which factor it is about)
+            warnings.simplefilter("always", PoseLifterWarning)
+            rows.append(evaluate_lifter(lifter, vs, label=f"x{k:g}", flip_test=flip_test, progress=False,
+                                        source=source)[0])
+        for w in said:
+            if issubclass(w.category, PoseLifterWarning):
+                warnings.warn(PoseLifterWarning(f"focal x{k:g}: {w.message}"), stacklevel=2)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return rows
 
 

@@ -34,7 +34,10 @@ def test_documented_checkpoint_loading_errors(tmp_path, monkeypatch):
     from lifter import CheckpointError, Lifter, PoseLifterError
 
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(CheckpointError, match="weights file not found: my.pt"):
+    with pytest.raises(CheckpointError, match=r"weights file not found: my.pt$"):
         Lifter.from_pretrained("my.pt")
+    # a paper-table command's run, not trained yet, names the script that trains it (a researcher's trial)
+    with pytest.raises(CheckpointError, match=r"runs/ablation_baseline.pt; runs/ holds .* scripts/run_ablation.sh"):
+        Lifter.from_pretrained("runs/ablation_baseline.pt")
     with pytest.raises(PoseLifterError, match=r"unknown model 'mine'.*pass its .pt path"):
         Lifter.from_pretrained("mine")

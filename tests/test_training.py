@@ -501,16 +501,30 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert main(["train", "--config", str(out), "--print-config", "--epochs", "3"]) == 0
     again = TrainConfig.from_dict(__import__("json").loads(capsys.readouterr().out))
     assert again == replace(cfg, schedule=replace(cfg.schedule, epochs=3.0))
+    cfg_flip = Lifter.load(str(out)).network_rows(None) == 2  # (the JSON says what the lift did)
     assert main(["evaluate", f"tiny={out}", "--stride", "200", "--max-frames-per-sequence", "3", "--analytic-root",
                  "--json", str(tmp_path / "ev.json")]) == 0
     captured = capsys.readouterr()
     text = captured.out
     assert "MPJPE" in text and "analytic" in text and "Discussion 1" in text and "source='clean'" in text
+    # a cut run says so, and how many sequences and cameras it read (a researcher's trial: it printed a full run's
+    # header, and "4 cameras" and the missing S9 sequence were fixed text)
+    assert "59 sequences of 60, 4 cameras" in text and "ONLY THE FIRST 3 FRAMES OF EACH SEQUENCE" in text
     rows = __import__("json").loads((tmp_path / "ev.json").read_text())  # each row says how it was measured
     assert [r["root"] for r in rows] == ["learned", "analytic"] and all(
         r["protocol"] == 1 and r["stride"] == 200 and r["inputs"] == "gt" and r["source"] == "clean"
-        and r["test_subjects"] == [9, 11] and r["flip_test"] == "each model's own" and r["units"].startswith("mm")
+        and r["test_subjects"] == [9, 11] and r["flip_test"] is cfg_flip and r["units"].startswith("mm")
+        and r["max_frames_per_sequence"] == 3 and r["sequences"] == 59 and r["missing_sequences"] == ["S9/Discussion 1"]
+        and len(r["cameras"]) == 4 and len(r["pck_curve_thresholds_mm"]) == len(r["pck_curve"])
         for r in rows), rows
+    assert main(["evaluate", f"tiny={out}", "--protocol", "2", "--stride", "400", "--max-frames-per-sequence", "2",
+                 "--no-flip-test", "--per-action", "--json", str(tmp_path / "ev2.json")]) == 0
+    captured = capsys.readouterr()
+    assert "tiny: trained on Protocol 1's subjects (S1, S5, S6, S7, S8), not Protocol 2's" in captured.err
+    assert "30 sequences, 4 cameras" in captured.out and "Discussion 1" not in captured.out  # (S9 is not tested)
+    heads = next(line for line in captured.out.splitlines() if line.startswith("model") and "Avg" in line).split()
+    assert len(heads) == len(set(heads)) == 17 and "SitDn" in heads  # (cut to 6, Sitting and SittingDown read alike)
+    assert all(r["flip_test"] is False for r in __import__("json").loads((tmp_path / "ev2.json").read_text()))
     assert "lifting (" not in captured.err  # stderr is not a terminal here: no progress bar in logs (user trial)
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only

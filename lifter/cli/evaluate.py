@@ -16,7 +16,7 @@ import torch
 
 from .._checks import PoseLifterError, PoseLifterWarning
 from ..api import Lifter, ensemble_parts
-from ..data import H36M
+from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..io import check_writable, write_json_atomic
@@ -135,6 +135,58 @@ def split_label(spec: str) -> tuple[str, str]:
     return label or ref, ref
 
 
+def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool | str:
+    """Whether ``lifter`` averaged each pose with its mirror image's lift for 2D told ``source`` (``flip_test``: the
+    command's ``--flip-test`` / ``--no-flip-test``, None for each network's own setting); for an ensemble whose
+    networks differ, a string naming each ("on (1024-wide), built in (mirror network)")."""
+    net = lifter.network_for(source)  # type: ignore[arg-type]
+    members = [net, *getattr(net, "ensemble", ())]
+
+    def one(m: Lifter) -> str:
+        if getattr(getattr(m, "config", None), "symmetry", "none") == "mirror":
+            return "built in"  # (one pass is the flip test's average)
+        return "on" if m.network_rows(flip_test) == 2 else "off"
+
+    said = [one(m) for m in members]
+    if len(set(said)) == 1 and said[0] != "built in":
+        return said[0] == "on"
+    return ", ".join(f"{w} ({m.name})" for w, m in zip(said, members))
+
+
+def _trained_protocol(lifter: Lifter) -> int | None:
+    """The protocol a network's checkpoint says it was trained on (its training config's ``data.protocol``; an
+    older checkpoint's ``meta["train_config"]["protocol"]``), or None."""
+    for cfg in (getattr(lifter, "train_config", None), getattr(lifter, "meta", {}).get("train_config")):
+        if isinstance(cfg, dict):
+            data = cfg.get("data")
+            p = data.get("protocol") if isinstance(data, dict) else cfg.get("protocol")
+            if p in PROTOCOLS:
+                return int(p)
+    return None
+
+
+def training_subject_notes(label: str, lifter: Lifter, protocol: int) -> list[str]:
+    """Where a model's training subjects (its stored training config's protocol) do not match ``protocol``'s:
+    trained on a subject this protocol tests on (seen data), or on fewer subjects than it trains on (not the
+    paper's setting for that protocol). Nothing for a model whose checkpoint does not say how it was trained."""
+    train_subjects, test_subjects = PROTOCOLS[protocol]
+    out = []
+    nets = [lifter, *getattr(lifter, "ensemble", ())]
+    clean = getattr(lifter, "clean", None)
+    nets += [] if clean is None else [clean]
+    trained = {p for p in (_trained_protocol(m) for m in nets) if p is not None}
+    for p in sorted(trained):
+        seen = sorted(set(PROTOCOLS[p][0]) & set(test_subjects))
+        if seen:
+            out.append(f"{label}: trained on Protocol {p}'s subjects, which include the test subject(s) "
+                       f"{', '.join(f'S{s}' for s in seen)}: these numbers are on seen people")
+        elif set(PROTOCOLS[p][0]) != set(train_subjects):
+            out.append(f"{label}: trained on Protocol {p}'s subjects ({', '.join(f'S{s}' for s in PROTOCOLS[p][0])}), "
+                       f"not Protocol {protocol}'s ({', '.join(f'S{s}' for s in train_subjects)}): the test "
+                       f"subjects are unseen, but this is not the paper's Protocol {protocol} setting")
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():  # the lifter's notes as the other commands print them, not Python's form
         warnings.showwarning = _note
@@ -167,13 +219,30 @@ def _run(args: argparse.Namespace) -> int:
         samples, dropped = with_sh_detections(samples, data=data)
         note = f"; real SH detections, {dropped} samples without a detection dropped"
     source = args.source or ("clean" if args.inputs == "gt" else "detected")
-    how = {"protocol": args.protocol, "test_subjects": sorted({int(x) for x in samples.subject.tolist()}),
-           "stride": args.stride, "inputs": args.inputs, "source": source,
-           "flip_test": "each model's own" if args.flip_test is None else bool(args.flip_test),
-           "units": "mm; pck150 and auc as fractions"}  # (in every row of --json: each says how it was measured)
-    print(f"Protocol {args.protocol}, test subjects {sorted(set(samples.subject.tolist()))}, stride {args.stride} "
-          f"({len(samples)} samples, 4 cameras; S9 'Discussion 1' has no 3D in the data and is missing{note}); "
-          f"source={source!r}")
+    if args.inputs == "sh" and source == "clean":
+        print("note: --source clean with --inputs sh tells the lifter that detector output is exact 2D (the clean "
+              "network lifts it): a what-if, not how the default is meant to be used", file=sys.stderr)
+    for label, lifter in lifters:
+        for line in training_subject_notes(label, lifter, args.protocol):
+            print(f"note: {line}", file=sys.stderr)
+    subjects = sorted({int(x) for x in samples.subject.tolist()})
+    cameras = sorted({int(x) for x in samples.camera.tolist()})
+    sequences = len({(int(a), int(b)) for a, b in zip(samples.subject.tolist(), samples.sequence.tolist())})
+    missing = [m for m in MISSING_TEST_SEQUENCES if int(m.split("/")[0][1:]) in subjects]
+    how = {"protocol": args.protocol, "test_subjects": subjects, "stride": args.stride,
+           "max_frames_per_sequence": args.max_frames_per_sequence, "cameras": [CAMERA_IDS[c] for c in cameras],
+           "sequences": sequences, "missing_sequences": missing, "inputs": args.inputs, "source": source,
+           "units": "mm; pck150 and auc as fractions",  # (in every row of --json: each says how it was measured)
+           "pck_curve_thresholds_mm": [float(t) for t in AUC_THRESHOLDS_MM]}
+    gone = "".join(f"; {m.split('/')[0]} '{m.split('/')[1]}' has no 3D in the data and is missing" for m in missing)
+    cut = (f"; ONLY THE FIRST {args.max_frames_per_sequence} FRAMES OF EACH SEQUENCE (--max-frames-per-sequence): not "
+           "a full evaluation" if args.max_frames_per_sequence is not None else "")
+    print(f"Protocol {args.protocol}, test subjects {subjects}, stride {args.stride} ({len(samples)} samples, "
+          f"{sequences} sequences{' of ' + str(sequences + len(missing)) if missing else ''}, {len(cameras)} "
+          f"camera{'s' if len(cameras) != 1 else ''}{gone}{note}{cut}); source={source!r}")
+    # what each row's lift did: the flip test as given, else each network's own (a mirror-equivariant network's
+    # single pass already is one)
+    flip_used = {label: flip_test_used(lifter, args.flip_test, source) for label, lifter in lifters}
     if args.focal_scales:
         factors = list(args.focal_scales)
         shift = tuple(args.pp_shift)
@@ -182,18 +251,21 @@ def _run(args: argparse.Namespace) -> int:
                  for label, lifter in lifters}
         print(format_focal_table(sweep, principal_shift=shift))
         if args.json:
-            write_json_atomic(args.json, {k: [{**r.to_dict(), **how, "principal_shift_px": list(shift)} for r in v]
+            write_json_atomic(args.json, {k: [{**r.to_dict(), **how, "flip_test": flip_used[k],
+                                               "principal_shift_px": list(shift)} for r in v]
                                           for k, v in sweep.items()})
         return 0
-    rows = []
+    rows, row_how = [], []
     for label, lifter in lifters:
-        rows.extend(evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
-                                    analytic_root=args.analytic_root, source=source))
+        got = evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
+                              analytic_root=args.analytic_root, source=source)
+        rows.extend(got)
+        row_how += [{**how, "flip_test": flip_used[label]}] * len(got)
     print(format_table(rows))
     if args.per_action:
         print(format_per_action(rows))
     if args.json:
-        write_json_atomic(args.json, [{**r.to_dict(), **how} for r in rows])
+        write_json_atomic(args.json, [{**r.to_dict(), **h} for r, h in zip(rows, row_how)])
     if args.pck_plot:
         from ..plots import plot_pck_curves  # matplotlib only when a figure is asked for (~0.5 s to import)
 
