@@ -262,3 +262,21 @@ def test_output_into_a_closed_pipe_is_not_a_traceback():
     p.stdout.close()  # (the reader is gone before the first write)
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 141 and "Traceback" not in err and "BrokenPipeError" not in err, err
+
+
+def test_h36m_help_names_the_folder_it_reads(capsys, monkeypatch):
+    """A researcher's trial read "default ../shared/data/h36m" as relative to the working folder; in a source
+    checkout it is beside the project. The help names the resolved folder, or $POSELIFTER_H36M's when set."""
+    from lifter.data import DEFAULT_H36M_DIR
+
+    monkeypatch.delenv("POSELIFTER_H36M", raising=False)
+    for command in ("evaluate", "train", "fit-noise"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        out = "".join(capsys.readouterr().out.split())  # (argparse wraps long paths anywhere)
+        want = "".join(f"(default: {DEFAULT_H36M_DIR.resolve()}, or $POSELIFTER_H36M when set)".split())
+        assert want in out, (command, out)
+    monkeypatch.setenv("POSELIFTER_H36M", "/somewhere/h36m")
+    with pytest.raises(SystemExit):
+        main(["evaluate", "--help"])
+    assert "(default:$POSELIFTER_H36M,/somewhere/h36m)" in "".join(capsys.readouterr().out.split())

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .._text import plain_text
 
-__all__ = ["HelpFormatter", "add_h36m_arguments", "plain_text", "positive_int"]
+__all__ = ["HelpFormatter", "add_h36m_arguments", "h36m_help", "plain_text", "positive_int"]
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -32,10 +32,22 @@ def positive_int(text: str) -> int:
     return value
 
 
+def h36m_help(what: str = "Human3.6M folder") -> str:
+    """``--h36m``'s help: the folder used without it, resolved (:func:`lifter.data.default_h36m_dir`; a trial read
+    "../shared/data/h36m" as relative to the working folder, which it is not in a source checkout)."""
+    import os
+
+    from ..data import DEFAULT_H36M_DIR
+
+    env = os.environ.get("POSELIFTER_H36M")
+    if env:
+        return f"{what} (default: $POSELIFTER_H36M, {Path(env).resolve()})"
+    return f"{what} (default: {DEFAULT_H36M_DIR.resolve()}, or $POSELIFTER_H36M when set)"
+
+
 def add_h36m_arguments(parser: argparse.ArgumentParser, *, stride: int) -> None:
     """``--h36m DIR`` (None: :func:`lifter.data.default_h36m_dir`) and ``--stride N`` (every N-th frame at 50 fps,
     >= 1), as the analysis scripts under ``scripts/`` take them."""
-    parser.add_argument("--h36m", type=Path, default=None,
-                        help="Human3.6M data folder (default: ../shared/data/h36m or $POSELIFTER_H36M)")
+    parser.add_argument("--h36m", type=Path, default=None, help=h36m_help("Human3.6M data folder"))
     parser.add_argument("--stride", type=positive_int, default=stride, help=f"frame stride at 50 fps "
                         f"(default {stride})")

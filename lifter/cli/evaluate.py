@@ -22,7 +22,7 @@ from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_
 from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
 from ..resources import model_names
-from ._help import HelpFormatter, positive_int
+from ._help import HelpFormatter, h36m_help, positive_int
 
 
 def _finite_floats(text: str) -> list[float]:
@@ -60,7 +60,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("weights", nargs="*", default=["default"],
                    help="checkpoint paths or shipped model names; LABEL=PATH to name a row; A.pt+B.pt: the "
                         "checkpoints' lifts of detected 2D averaged (an ensemble)")
-    p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
+    p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2),
                    help="test subjects: 1 = S9 and S11 (trained on S1, 5, 6, 7, 8), "
                    "2 = S11 (trained on S1, 5, 6, 7, 8, 9)")

@@ -30,7 +30,7 @@ from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
 from ..train import check_teacher, init_distributed, save_training_outputs, train, validation_sets
-from ._help import plain_text
+from ._help import h36m_help, plain_text
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
     p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
     p.add_argument("--print-config", action="store_true", help="print the resolved config as JSON and exit")
-    p.add_argument("--h36m", type=Path, default=None, help="Human3.6M folder (default ../shared/data/h36m)")
+    p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
     p.add_argument("--threads", type=int, default=None, help="torch threads per process (default: torch's)")
     p.add_argument("--fp32-weights", action="store_true", help="store float32 weights (default float16)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
