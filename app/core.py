@@ -6,6 +6,7 @@ frame (+x right, +y down, +z forward) of the sample's camera. The viewer convert
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from dataclasses import dataclass, field, fields
@@ -368,7 +369,44 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                                             relative=res.relative[0], focal=f),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
-                                                            input_space=lifter.input_space)))
+                                                            input_space=lifter.input_space),
+                                         *bone_caution(res_rel[0])))
+
+
+BONE_RATIO_LIMITS: Final[tuple[float, float]] = (0.4, 2.0)
+"""A lifted bone shorter or longer than these multiples of the reference body's (:func:`reference_bones_mm`) gets
+the readout's caution (:func:`bone_caution`)."""
+
+
+@functools.lru_cache(maxsize=1)
+def reference_bones_mm() -> np.ndarray:
+    """``(16,)`` bone lengths (mm, :data:`lifter.skeleton.EDGES` order) of the shipped demo body
+    (``lifter.demo_sample("standing")``, an authored adult's proportions)."""
+    from lifter import demo_sample
+    from lifter.skeleton import EDGES
+
+    p = demo_sample("standing").pose_3d
+    return np.array([np.linalg.norm(p[a] - p[b]) for a, b in EDGES])
+
+
+def bone_caution(relative: np.ndarray) -> list[str]:
+    """The readout's caution when a bone of the lifted pose ``(17, 3)`` mm is out of :data:`BONE_RATIO_LIMITS` of
+    the reference body's: no body has it, so the 2D (dragged joints, often) is one the lift cannot explain (a trial
+    dragged a wrist within the allowed range and got a 1258-mm forearm, the wrist at the camera, without a word)."""
+    from lifter.skeleton import EDGES, JOINT_NAMES
+
+    ref = reference_bones_mm()
+    lengths = np.array([np.linalg.norm(relative[a] - relative[b]) for a, b in EDGES])
+    ratio = lengths / ref
+    lo, hi = BONE_RATIO_LIMITS
+    bad = [i for i in np.argsort(-np.abs(np.log(np.maximum(ratio, 1e-9)))) if not lo <= ratio[i] <= hi]
+    if not bad:
+        return []
+    said = ", ".join(f"{JOINT_NAMES[EDGES[i][0]]}-{JOINT_NAMES[EDGES[i][1]]} {lengths[i]:.0f} mm (a body's: about "
+                     f"{ref[i]:.0f})" for i in bad[:2])
+    more = f" and {len(bad) - 2} more" if len(bad) > 2 else ""
+    return [f"the lifted pose has bones no body has: {said}{more}; the 2D (a dragged joint?) is not one a body makes, "
+            "so this lift is not a pose to trust"]
 
 
 def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
@@ -432,10 +470,16 @@ def input_name(state: SessionState) -> str:
 def input_line(state: SessionState) -> str:
     """The readout's line on the lifted 2D: its source, the dragged joints and, at a noise level > 0, that
     the lifted pose (and so the metrics) is one noisy draw."""
+    from lifter.skeleton import JOINT_NAMES
+
     parts = [f"**2D input** {input_name(state)}"]
     n = len(state.dragged)
-    if n:
-        parts.append(f"{n} joint{'s' if n != 1 else ''} dragged")
+    if n:  # (named: a trial's count alone did not say which joints were moved)
+        parts.append(f"dragged: {', '.join(JOINT_NAMES[j] for j in sorted(state.dragged))}")
+    others = {k: v for k, v in state.others_dragged.items() if v and k != state.person}
+    if others:  # (a trial: another person's moved joints went unmentioned)
+        parts.append("also dragged: " + "; ".join(f"{len(v)} joint{'s' if len(v) != 1 else ''} of "
+                                                  f"{state.sample.person_name(k)}" for k, v in sorted(others.items())))
     if state.noise_level > 0:
         parts.append(f"lifted: one noisy draw at level {state.noise_level:g} (seed {state.seed}); "
                      "the metrics refer to that draw")

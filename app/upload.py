@@ -428,7 +428,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
             warnings.append(f"2D joints corrected in the app{who}: " + ", ".join(JOINT_NAMES[j] for j in sorted(joints)))
     if focal_changed:
         src = "app-slider"
-        warnings.append(f"focal length set with the app's slider to {math.sqrt(focal[0] * focal[1]):.1f} px")
+        warnings.append(f"focal length set in the app (slider or box) to {math.sqrt(focal[0] * focal[1]):.1f} px")
     else:
         src = info.focal_source if info is not None else "calibrated-camera"
     top = lifted[0]

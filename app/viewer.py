@@ -89,6 +89,9 @@ otherwise clear it before anyone reads it (user trial). An error is cleared by t
 TYPED_WHILE_PLAYING: str = ("a joint position typed while the sequence plays is not applied: each frame brings its "
                             "own 2D; pause (play) to move a joint")
 """Said (once) when the (u, v) boxes are typed into during playback."""
+DRAGGED_WHILE_PLAYING: str = ("a joint dragged while the sequence plays is not moved: each frame brings its own 2D; "
+                               "pause (play) to move a joint")
+"""Said once per drag begun during playback (a trial's drag was dropped by the next frame, without a word)."""
 
 UPLOAD_REFUSED_TITLE: Final[str] = "Upload refused: the file arrived, but it cannot be used"
 """The title of the notification of a refused upload, which stays until closed: the browser has just said "File
@@ -267,6 +270,8 @@ class SessionView:
         self._close_up = False
         self._sample_gen = 0
         self._drag_gen: int | None = None
+        self._drags_by_mouse = False  # the queued drags came from a mouse drag (not a typed position or the API)
+        self._drag_refusal_said = False  # the current mouse drag's refusal was said (once per drag)
         self._last_upload: Sample | None = None
         self._last_h36m: str | None = None
         """Key of the last Human3.6M sample shown (coming back to Human3.6M goes back to that frame)."""
@@ -519,6 +524,7 @@ class SessionView:
         self._held = {(r.control, getattr(values, r.control)) for r in held}
         with self._flags:
             drags, self._drags = self._drags, {}
+            by_mouse, self._drags_by_mouse = self._drags_by_mouse, False
             reset, self._reset_request = self._reset_request, False
             redraw, self._redraw_request = self._redraw_request, False
         # (refused values are errors; clamped ones notes, which stay a while: a user trial saw "focal length 9000 px
@@ -536,7 +542,9 @@ class SessionView:
             try:
                 st = ss.with_joint(st, j, uv)
             except PoseLifterError as exc:
-                notes.append((str(exc), True, None))
+                if not (by_mouse and self._drag_refusal_said):  # (once per mouse drag)
+                    notes.append((str(exc), True, None))
+                self._drag_refusal_said = by_mouse
                 refused_drag = True
         for r in rejected:
             if r not in held:
@@ -763,6 +771,11 @@ class SessionView:
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
         if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
+        moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
+        if moved and not old.sample.key.startswith("upload/") and old.sample.key != sample.key:
+            # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
+            self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped: "
+                              "another sample shows its own 2D (download the result first to keep them)")
         if note and seq_key not in self._fallback_said:
             if self._since_typed("frame") < TYPING_SETTLE_S:  # said for the frame the typing ends on (a browser
                 # trial typed 101 and read "no 2D detection for ... frame 1", the first key's frame)
@@ -1115,9 +1128,10 @@ class SessionView:
             st = ss.with_keypoints(self.state, keypoints)
             self._apply(st)
 
-    def _queue_drag(self, joint: int, uv: Any) -> None:
+    def _queue_drag(self, joint: int, uv: Any, *, mouse: bool = False) -> None:
         with self._flags:
             self._drags[joint] = np.asarray(uv, dtype=np.float64).reshape(2) if _is_numeric_pair(uv) else uv
+            self._drags_by_mouse = mouse
         if self.selected != joint:
             self.selected = joint
             if self.gui.joints.joint.value != JOINT_NAMES[joint]:
@@ -1218,10 +1232,15 @@ class SessionView:
         with self.lock:
             if phase == "start":
                 self._drag_gen = self._sample_gen
+                self._drag_refusal_said = False  # (one refusal per drag, not one per pointer move: a trial's 10)
             elif self._drag_gen is not None and self._drag_gen != self._sample_gen:
                 return
+            if self.playing:  # each frame brings its own 2D: said once per drag, nothing moved
+                if phase == "start":
+                    self.show_message(DRAGGED_WHILE_PLAYING)
+                return
             uv = self.drag_to_pixel(event)
-        self._queue_drag(int(joint), uv)
+        self._queue_drag(int(joint), uv, mouse=True)
 
     # ------------------------------------------------------------------------------------------
     # Playback

@@ -32,14 +32,14 @@ from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
 from poselifter_app.viser_hooks import drag_callback  # noqa: E402
 
 
-def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None):
+def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None, phase: str = "update"):
     """A SceneNodeDragEvent whose pointer lies on the image plane at pixel ``uv``."""
     cam = view.state.sample.camera
     R = np.asarray(cam.R)
     C = cam.centre / 1000.0
     p_cam = image_plane(view.state, np.asarray(uv, float))
     p_world = R.T @ p_cam + C
-    return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.scene.pose.joints2d[joint], phase="update",
+    return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.scene.pose.joints2d[joint], phase=phase,
                                     instance_index=None, start_position=tuple(p_world), start_screen_pos=(0.5, 0.5),
                                     end_position=tuple(p_world), end_screen_pos=(0.5, 0.5), button="left", modifier=None)
 
@@ -525,7 +525,7 @@ def test_readout_names_the_lifted_2d(view: SessionView, app: PoseLifterApp) -> N
     assert "**2D input** ground truth" in md and "dragged" not in md and "noisy draw" not in md
     view.move_joint(16, view.state.keypoints[16] + 20.0)
     view.move_joint(13, view.state.keypoints[13] + 20.0)
-    assert "2 joints dragged" in view.gui.readout.readout.content
+    assert "dragged: l_wrist, r_wrist" in view.gui.readout.readout.content  # (named: a trial's count said which not)
     view.gui.noise.seed.value = 4
     view.gui.noise.level.value = 1.5
     md = view.gui.readout.readout.content
@@ -1762,6 +1762,42 @@ def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
         assert not np.any(np.all(np.isclose(kp, (140.0, 100.0)), axis=-1))
 
 
+def test_a_drag_refused_or_during_playback_is_said_once(app: PoseLifterApp) -> None:
+    """A browser trial: a joint dragged past the image raised one refusal (and one red notification) per pointer
+    move, 10 for one drag; a drag during playback was dropped by the next frame without a word. One message per
+    drag now, and the playback one says why."""
+    from poselifter_app.viewer import DRAGGED_WHILE_PLAYING
+
+    v = app.headless_view()
+    cb = drag_callback(v.scene.pose.joints2d[13])
+    kp = v.state.keypoints.copy()
+    n = len(v.messages)
+    cb(_drag_event(v, 13, kp[13] + (5.0, 0.0), phase="start"))
+    for x in range(6):  # out past the image, pointer move by pointer move
+        cb(_drag_event(v, 13, np.array([-3000.0 - 500 * x, 300.0])))
+    cb(_drag_event(v, 13, np.array([-6000.0, 300.0]), phase="end"))
+    said = [m for m in v.messages[n:] if "far outside" in m]
+    assert len(said) == 1, v.messages[n:]
+    np.testing.assert_allclose(v.state.keypoints[13], kp[13] + (5.0, 0.0))  # where the drag was last allowed
+    n = len(v.messages)
+    cb(_drag_event(v, 13, np.array([-9000.0, 300.0]), phase="start"))  # a new drag: said again
+    assert sum("far outside" in m for m in v.messages[n:]) == 1
+    v.reset_joints()
+    v.gui.play.play.value = True  # the demo motion plays
+    assert wait_for(lambda: v.playing, timeout=5)
+    try:
+        n = len(v.messages)
+        cb = drag_callback(v.scene.pose.joints2d[10])
+        start = v.state.keypoints[10] + (0.0, -30.0)
+        for phase in ("start", "update", "update", "end"):
+            cb(_drag_event(v, 10, start, phase=phase))
+        assert [m for m in v.messages[n:] if m == DRAGGED_WHILE_PLAYING] == [DRAGGED_WHILE_PLAYING], v.messages[n:]
+        assert not v.state.dragged
+    finally:
+        v.gui.play.play.value = True  # pause
+        assert wait_for(lambda: not v.playing, timeout=5)
+
+
 def test_input_2d_marks_shrink_for_a_small_person() -> None:
     """A browser trial: on a Human3.6M frame (the person about 110 px tall in the 480-px inset) the joint discs,
     16 px wide, hid the ground-truth and detection overlays beneath them. Marks are full size for a person at least
@@ -1783,3 +1819,40 @@ def test_input_2d_marks_shrink_for_a_small_person() -> None:
         return int(np.all(np.abs(img.astype(int) - (255, 220, 0)) <= 30, axis=-1).sum())
 
     assert ring_pixels(small) < 0.6 * ring_pixels(tall)  # the selected joint's ring too
+
+
+def test_drags_dropped_by_another_sample_are_said(app: PoseLifterApp) -> None:
+    """A browser trial: joints dragged on a demo sample (or a Human3.6M frame) were gone after another sample and
+    back, without a word (an upload's come back with it, and say so)."""
+    v = app.headless_view()
+    first, other = app.demo.names[0], app.demo.names[1]
+    assert v.select_demo(first) is True
+    v.move_joint("r_wrist", v.state.keypoints[16] + (30.0, 0.0))
+    assert v.state.dragged == {16}
+    assert v.select_demo(other) is True
+    assert "1 dragged joint on demo: " + first + " dropped" in v.messages[-1], v.messages[-3:]
+    n = len(v.messages)
+    assert v.select_demo(first) is True and not v.state.dragged
+    assert not any("dropped" in m for m in v.messages[n:])  # (nothing dragged on the way back)
+
+
+def test_a_lift_with_bones_no_body_has_is_cautioned(app: PoseLifterApp) -> None:
+    """A browser trial typed l_wrist u = -150 on the walking demo (inside the allowed range): the forearm came out
+    1258 mm long, the wrist at the camera, and the readout said nothing. Bones outside 0.4-2x the reference body's
+    are cautioned (how often that fires on Human3.6M's test frames, and how bad those lifts are:
+    ``python scripts/bone_caution.py``)."""
+    from poselifter_app.core import bone_caution, reference_bones_mm
+
+    v = app.headless_view()
+    assert v.select_demo("walking") is True
+    assert not any("bones no body has" in c for c in v.frame.caution)
+    assert not bone_caution(v.state.sample.pose_3d - v.state.sample.pose_3d[0])
+    v.move_joint("l_wrist", (-150.0, float(v.state.keypoints[13, 1])))
+    said = [c for c in v.frame.caution if "bones no body has" in c]
+    assert said and "**Caution** the lifted pose has bones no body has" in v.gui.readout.readout.content
+    from lifter.skeleton import EDGES
+
+    forearm = next(i for i, e in enumerate(EDGES) if set(e) == {12, 13})  # l_elbow-l_wrist
+    assert np.linalg.norm(v.frame.lifted[13] - v.frame.lifted[12]) > 2 * reference_bones_mm()[forearm]
+    v.reset_joints()
+    assert not any("bones no body has" in c for c in v.frame.caution)

@@ -586,6 +586,7 @@ def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLi
         np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)
         np.testing.assert_allclose(v.state.others[1][13], moved)
         assert v.state.others_dragged[1] == frozenset({13}) and not v.state.dragged
+        assert "also dragged: 1 joint of person 2" in v.gui.readout.readout.content  # (a trial: it went unmentioned)
         # a longer lens moves everyone away along their rays, all in the same camera space
         roots = np.stack([v.frame.root] + [o.root for o in v.frame.others])
         v.gui.lift.focal.value = round(1.5 * v.state.focal_px)
