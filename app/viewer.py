@@ -562,6 +562,8 @@ class SessionView:
             return
         try:
             self._apply(st)
+            if st.person != old.person and self._close_up:  # the head-on view follows to the person now draggable
+                self.head_on_view()  # (a trial's stayed on the one before, its spheres gone, the new ones off screen)
         except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
             notes.append((str(exc), True, None))
             self._show_controls(old)

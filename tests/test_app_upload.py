@@ -569,9 +569,17 @@ def test_photo_with_several_people_every_person_lifted_and_draggable(app: PoseLi
         assert nodes.others_bones2d.visible
         pick = v.gui.joints.person
         assert list(pick.options) == ["person 1", "person 2", "person 3"] and not pick.disabled
-        # select person 2 and drag one of its joints
+        # select person 2 (from the head-on view, which follows: a trial's stayed on person 1) and drag a joint
+        from poselifter_app.scene import camera_world, image_plane
+
+        assert v.head_on_view() is True
         pick.value = "person 2"
         assert wait_for(lambda: v.state.person == 1)
+        R, C = camera_world(v.state)
+        look = R @ (np.asarray(v.camera.get()[0].look_at) - C)
+        kp2 = v.state.keypoints
+        np.testing.assert_allclose(look, image_plane(v.state, (kp2.min(0) + kp2.max(0)) / 2), atol=1e-6)
+        assert v.overview() is True
         np.testing.assert_allclose(v.state.keypoints, other, atol=1e-6)
         np.testing.assert_allclose(v.state.others[0], s.keypoints_2d, atol=1e-6)
         moved = other[13] + np.array([25.0, -10.0])
