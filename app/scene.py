@@ -40,6 +40,7 @@ ANALYTIC_RGB = (255, 140, 0)
 RAY_RGB = (250, 210, 0)
 FRUSTUM_RGB = (30, 30, 30)
 OTHER_RGB = (0, 150, 150)
+DRAG_OFFSET_RGB = (120, 120, 120)
 MAX_PEOPLE_LABELS: int = 8
 """Labels drawn for at most this many other people (their skeletons are all drawn)."""
 MAX_TRAIL_GAP: int = 12
@@ -96,6 +97,9 @@ class PoseNodes:
 
     bones2d: viser.LineSegmentsHandle
     joints2d: list[viser.IcosphereHandle]
+    drag_offsets: viser.LineSegmentsHandle
+    """On the image plane, a grey tether from each dragged joint's own 2D to where it was dragged (a trial could not
+    tell the dragged spheres from the others)."""
     lifted_bones: viser.LineSegmentsHandle
     lifted_joints: viser.PointCloudHandle
     cloud: viser.PointCloudHandle
@@ -140,6 +144,8 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
     pose = PoseNodes(
         bones2d=scene.add_line_segments("/cam/bones2d", np.zeros((16, 2, 3)), _bone_colors(), thickness=0.004),
         joints2d=joints2d,
+        drag_offsets=scene.add_line_segments("/cam/drag_offsets", np.zeros((1, 2, 3)), DRAG_OFFSET_RGB,
+                                             thickness=0.004, visible=False),
         lifted_bones=scene.add_line_segments("/cam/lifted/bones", np.zeros((16, 2, 3)), _bone_colors(),
                                              thickness=0.03),
         lifted_joints=scene.add_point_cloud("/cam/lifted/joints", np.zeros((NUM_JOINTS, 3)), JOINT_RGB,
@@ -216,9 +222,15 @@ def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool, ne
 
 
 def draw_2d(nodes: PoseNodes, state: SessionState, kp: np.ndarray, last: np.ndarray | None) -> np.ndarray:
-    """The 2D joints and bones on the image plane; only spheres that moved are updated. Returns the plane points."""
+    """The 2D joints and bones on the image plane, and the dragged joints' tethers to their own 2D; only spheres
+    that moved are updated. Returns the plane points."""
     plane = image_plane(state, kp)
     nodes.bones2d.points = edges_points(plane)
+    moved = sorted(j for j in state.dragged if 0 <= j < len(kp))
+    if moved:
+        own = image_plane(state, state.base_keypoints()[moved])
+        nodes.drag_offsets.points = np.stack([own, plane[moved]], axis=1).astype(np.float32)
+    nodes.drag_offsets.visible = bool(moved)
     for j, h in enumerate(nodes.joints2d):
         if last is None or not np.array_equal(last[j], plane[j]):
             h.position = tuple(plane[j])

@@ -1856,3 +1856,20 @@ def test_a_lift_with_bones_no_body_has_is_cautioned(app: PoseLifterApp) -> None:
     assert np.linalg.norm(v.frame.lifted[13] - v.frame.lifted[12]) > 2 * reference_bones_mm()[forearm]
     v.reset_joints()
     assert not any("bones no body has" in c for c in v.frame.caution)
+
+
+def test_dragged_joints_are_tethered_to_their_own_2d(app: PoseLifterApp) -> None:
+    """A browser trial could not tell dragged spheres from the others: each dragged joint now has a grey tether on
+    the image plane from its own 2D to where it was dragged; none when nothing is dragged."""
+    v = app.headless_view()
+    assert v.select_demo("standing") is True
+    assert not v.scene.pose.drag_offsets.visible
+    own = v.state.keypoints.copy()
+    v.move_joint("r_wrist", own[16] + (40.0, -20.0))
+    v.move_joint("l_ankle", own[6] + (-15.0, 0.0))
+    segs = np.asarray(v.scene.pose.drag_offsets.points, np.float64)
+    assert v.scene.pose.drag_offsets.visible and segs.shape == (2, 2, 3)
+    np.testing.assert_allclose(segs[:, 0], image_plane(v.state, own[[6, 16]]), atol=1e-5)  # from the own 2D
+    np.testing.assert_allclose(segs[:, 1], image_plane(v.state, v.state.keypoints[[6, 16]]), atol=1e-5)  # to it
+    v.reset_joints()
+    assert not v.scene.pose.drag_offsets.visible
