@@ -71,6 +71,7 @@ from .scene import (
     draw_tracks,
     draw_trail,
     framing_points,
+    image_plane,
     image_plane_depth,
     set_joint_radius,
 )
@@ -909,7 +910,7 @@ class SessionView:
         ro.spread.content = spread_details(fr.spread) if fr.spread is not None else ""
         ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
                                            cloud=fr.cloud)
-        if self.gui.lift.auto_frame.value and not self._close_up:
+        if self.gui.lift.auto_frame.value:  # (the head-on view keeps to the joints: _keep_in_view)
             since = self._since_typed("focal_px")
             if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,
                 self._auto_frame_later(TYPING_SETTLE_S - since + 0.05)  # not to each half-typed value
@@ -966,6 +967,13 @@ class SessionView:
         viewing direction; ``zoom_in`` (after a focal change) also when they shrank within :data:`SHRUNK_VIEW` of
         it (a user trial: the view stayed far out after the focal came back down from 6000 px)."""
         vp, fov, aspect = self.camera.get()
+        if self._close_up:  # the head-on view keeps to the 2D joints on the image plane (a trial: a focal change
+            # zoomed out of it, to everything): looked at again after a focal change, or when the joints left it
+            R, C = camera_world(self.state)
+            joints = image_plane(self.state, np.asarray(self.state.keypoints, np.float64)) @ R + C
+            if zoom_in or not framing.in_view(joints, vp, fov_y=fov, aspect=aspect, margin=0.98):
+                self.head_on_view()
+            return
         pts = self.framing_points()
         inside = framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98)
         shrunk = zoom_in and inside and float(np.abs(framing.screen_coords(pts, vp, fov_y=fov, aspect=aspect)[:, :2])

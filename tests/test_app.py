@@ -1873,3 +1873,22 @@ def test_dragged_joints_are_tethered_to_their_own_2d(app: PoseLifterApp) -> None
     np.testing.assert_allclose(segs[:, 1], image_plane(v.state, v.state.keypoints[[6, 16]]), atol=1e-5)  # to it
     v.reset_joints()
     assert not v.scene.pose.drag_offsets.visible
+
+
+def test_the_head_on_view_stays_head_on_through_a_focal_change(app: PoseLifterApp) -> None:
+    """A browser trial: after a drag in the head-on image view, a focal change zoomed out to the whole scene (keep
+    skeleton in view), and the head-on view had to be asked for again. It now looks at the joints again."""
+    from poselifter_app.scene import camera_world
+
+    v = app.headless_view()
+    assert v.select_demo("standing") is True
+    assert v.head_on_view() is True
+    v.gui.lift.focal.value = 0.5 * v.state.sample.camera.alpha  # the image plane comes nearer: the joints move
+    R, C = camera_world(v.state)
+    vp = v.camera.get()[0]
+    look = R @ (np.asarray(vp.look_at) - C)
+    kp = v.state.keypoints
+    np.testing.assert_allclose(look, image_plane(v.state, (kp.min(0) + kp.max(0)) / 2), atol=1e-6)
+    eye = R @ (np.asarray(vp.eye) - C)
+    np.testing.assert_allclose(eye[:2], look[:2], atol=1e-9)  # still head-on
+    assert v.overview() is True
