@@ -365,7 +365,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others, reads_rays=getattr(getattr(used, "config", None), "input_space", None) == "camera",
+                 others=others, reads_rays=used.input_space == "camera",
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                                             relative=res.relative[0], focal=f),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,

@@ -137,7 +137,6 @@ MAX_NAME_CHARS: Final[int] = 60
 does not wrap a long unbroken name)."""
 
 
-
 def safe_name(name: str) -> str:
     """The file name part of an uploaded name, for messages and download names: at most
     :data:`MAX_NAME_CHARS` characters (a longer name keeps its start and its end, suffix included)."""

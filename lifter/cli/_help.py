@@ -37,12 +37,12 @@ def h36m_help(what: str = "Human3.6M folder") -> str:
     "../shared/data/h36m" as relative to the working folder, which it is not in a source checkout)."""
     import os
 
-    from ..data import DEFAULT_H36M_DIR
+    from ..data import default_h36m_dir
 
-    env = os.environ.get("POSELIFTER_H36M")
-    if env:
-        return f"{what} (default: $POSELIFTER_H36M, {Path(env).resolve()})"
-    return f"{what} (default: {DEFAULT_H36M_DIR.resolve()}, or $POSELIFTER_H36M when set)"
+    folder = default_h36m_dir().resolve()
+    if os.environ.get("POSELIFTER_H36M"):
+        return f"{what} (default: $POSELIFTER_H36M, {folder})"
+    return f"{what} (default: {folder}, or $POSELIFTER_H36M when set)"
 
 
 def add_h36m_arguments(parser: argparse.ArgumentParser, *, stride: int) -> None:

@@ -137,15 +137,14 @@ def split_label(spec: str) -> tuple[str, str]:
 
 def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool | str:
     """Whether ``lifter`` averaged each pose with its mirror image's lift for 2D told ``source`` (``flip_test``: the
-    command's ``--flip-test`` / ``--no-flip-test``, None for each network's own setting); for an ensemble whose
-    networks differ, a string naming each ("on (1024-wide), built in (mirror network)")."""
+    command's ``--flip-test`` / ``--no-flip-test``, None for each network's own setting); for networks that differ
+    (or a mirror-equivariant one, whose single pass is that average), a string naming each ("on (NAME), built in
+    (NAME)")."""
     net = lifter.network_for(source)  # type: ignore[arg-type]
-    members = [net, *getattr(net, "ensemble", ())]
+    members = [net, *net.ensemble]
 
     def one(m: Lifter) -> str:
-        if getattr(getattr(m, "config", None), "symmetry", "none") == "mirror":
-            return "built in"  # (one pass is the flip test's average)
-        return "on" if m.network_rows(flip_test) == 2 else "off"
+        return "built in" if m.config.symmetry == "mirror" else "on" if m.network_rows(flip_test) == 2 else "off"
 
     said = [one(m) for m in members]
     if len(set(said)) == 1 and said[0] != "built in":
@@ -156,7 +155,7 @@ def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool 
 def _trained_protocol(lifter: Lifter) -> int | None:
     """The protocol a network's checkpoint says it was trained on (its training config's ``data.protocol``; an
     older checkpoint's ``meta["train_config"]["protocol"]``), or None."""
-    for cfg in (getattr(lifter, "train_config", None), getattr(lifter, "meta", {}).get("train_config")):
+    for cfg in (lifter.train_config, lifter.meta.get("train_config")):
         if isinstance(cfg, dict):
             data = cfg.get("data")
             p = data.get("protocol") if isinstance(data, dict) else cfg.get("protocol")
@@ -171,10 +170,7 @@ def training_subject_notes(label: str, lifter: Lifter, protocol: int) -> list[st
     paper's setting for that protocol). Nothing for a model whose checkpoint does not say how it was trained."""
     train_subjects, test_subjects = PROTOCOLS[protocol]
     out = []
-    nets = [lifter, *getattr(lifter, "ensemble", ())]
-    clean = getattr(lifter, "clean", None)
-    nets += [] if clean is None else [clean]
-    trained = {p for p in (_trained_protocol(m) for m in nets) if p is not None}
+    trained = {p for p in (_trained_protocol(m) for m in lifter.networks().values()) if p is not None}
     for p in sorted(trained):
         seen = sorted(set(PROTOCOLS[p][0]) & set(test_subjects))
         if seen:
@@ -234,7 +230,7 @@ def _run(args: argparse.Namespace) -> int:
            "sequences": sequences, "missing_sequences": missing, "inputs": args.inputs, "source": source,
            "units": "mm; pck150 and auc as fractions",  # (in every row of --json: each says how it was measured)
            "pck_curve_thresholds_mm": [float(t) for t in AUC_THRESHOLDS_MM]}
-    gone = "".join(f"; {m.split('/')[0]} '{m.split('/')[1]}' has no 3D in the data and is missing" for m in missing)
+    gone = "".join(f"; {s} '{q}' has no 3D in the data and is missing" for s, q in (m.split("/", 1) for m in missing))
     cut = (f"; ONLY THE FIRST {args.max_frames_per_sequence} FRAMES OF EACH SEQUENCE (--max-frames-per-sequence): not "
            "a full evaluation" if args.max_frames_per_sequence is not None else "")
     print(f"Protocol {args.protocol}, test subjects {subjects}, stride {args.stride} ({len(samples)} samples, "
