@@ -16,7 +16,12 @@ the server-side time of each frame (sample, lift, scene, readout).
 Video (``--video clip.mp4``): the clip is uploaded on the same tab (the real BlazePose detector: lifted, tracked,
 smoothed) and played; the upload's time per frame and the playback are reported, not checked.
 
-Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--video clip.mp4] [--json out.json]``
+Models (``--compare NAME [NAME ...]``): the drag run is repeated on the same tab with each named model in turn, in
+rounds of 50 events that alternate between the models, so that the machine's speed of the moment is shared; the
+ratio of each model's p50 to the app's default's is reported (the absolute milliseconds follow the machine, the
+ratio follows the code). Playback is timed on the default only.
+
+Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--compare universal] [--video clip.mp4] [--json out.json]``
 Exit status 1 when the drag p95 exceeds the target or a noise-free playback shows fewer than 24 frames per second
 (unless ``--no-check``; the noise-1 playback, 65 poses lifted per frame, is reported only).
 """
@@ -42,6 +47,9 @@ def main() -> int:
     p.add_argument("--play-seconds", type=float, default=8.0)
     p.add_argument("--no-h36m", action="store_true", help="skip the Human3.6M playback run even if the data are present")
     p.add_argument("--no-check", action="store_true")
+    p.add_argument("--compare", nargs="*", default=[], metavar="MODEL",
+                   help="also time the drags with these models (the app's model menu), alternating with the default "
+                        "in rounds of 50 events; reports each one's p50 / p95 and p50 ratio to the default's")
     p.add_argument("--video", default=None, help="also upload this video on the tab (the real detector, the `detect` "
                    "extra) and play it: upload time per frame and playback are reported (not checked)")
     p.add_argument("--json", default=None, help="also write the result to this JSON file")
@@ -65,14 +73,26 @@ def main() -> int:
         view.gui.noise.cloud.value = args.cloud
         view.gui.noise.level.value = 1.0
         assert view.frame is not None and view.frame.cloud is not None and view.frame.cloud.shape[0] == args.cloud
+        default_model = view.state.model
+        models = [default_model, *[m for m in args.compare if m != default_model]]
+        unknown = [m for m in models if m not in view.gui.lift.model.options]
+        if unknown:
+            raise SystemExit(f"--compare: unknown model(s) {unknown}; the app offers {list(view.gui.lift.model.options)}")
         j = 13
         cb = drag_callback(view.scene.pose.joints2d[j])
         cam = view.state.sample.camera
         R = np.asarray(cam.R)
         C = -R.T @ np.asarray(cam.t) / 1000.0
         start = view.state.keypoints[j].copy()
-        times = []
-        for i in range(args.warmup + args.events):
+        by_model: dict[str, list[float]] = {m: [] for m in models}
+
+        def use(model: str) -> None:
+            if view.state.model != model:
+                view.gui.lift.model.value = model  # the model menu, as a click does
+                assert wait_for(lambda: view.state.model == model), f"the app did not switch to {model}"
+            assert view.state.noise_level == 1.0 and view.state.cloud_samples == args.cloud, "the switch changed the noise"
+
+        def drag(i: int) -> float:
             uv = start + 60.0 * np.array([np.cos(i / 7.0), np.sin(i / 5.0)])
             p_world = R.T @ image_plane(view.state, uv) + C
             ev = viser.SceneNodeDragEvent(client=view.target, client_id=view.target.client_id, target=view.scene.pose.joints2d[j],
@@ -84,8 +104,27 @@ def main() -> int:
             cb(ev)
             dt = time.perf_counter() - t0
             assert view.update_count == n + 1, "the drag did not update the skeleton"
-            if i >= args.warmup:
-                times.append(1e3 * dt)
+            return 1e3 * dt
+
+        for model in models:
+            use(model)
+            for i in range(args.warmup):
+                drag(i)
+        done = 0
+        while done < args.events:  # rounds of 50 events, alternating the models on the same machine moment
+            n_round = min(50, args.events - done)
+            for model in models:
+                use(model)
+                drag(done)  # (the first drag after a switch is not timed)
+                by_model[model] += [drag(args.warmup + done + i) for i in range(n_round)]
+            done += n_round
+        use(default_model)
+        drag(0)
+        compute_ms, scene_ms = view.timing.compute_ms, view.timing.scene_ms
+        times = by_model[default_model]
+        compared = {m: {"p50_ms": round(float(np.percentile(v, 50)), 2), "p95_ms": round(float(np.percentile(v, 95)), 2),
+                        "p50_ratio_to_default": round(float(np.percentile(v, 50) / np.percentile(times, 50)), 3)}
+                    for m, v in by_model.items() if m != default_model}
         t = np.array(times)
         play = {}
         from poselifter_app.samples import default_h36m_root
@@ -139,8 +178,8 @@ def main() -> int:
         res = {"events": len(t), "cloud": args.cloud, "threads": args.threads, "p50_ms": round(float(np.percentile(t, 50)), 2),
                "p95_ms": round(float(np.percentile(t, 95)), 2), "max_ms": round(float(t.max()), 2),
                "mean_ms": round(float(t.mean()), 2), "target_p95_ms": args.target_ms,
-               "last_compute_ms": round(view.timing.compute_ms, 2), "last_scene_ms": round(view.timing.scene_ms, 2),
-               "model": view.state.model, "cpu": platform.processor() or platform.machine(),
+               "last_compute_ms": round(compute_ms, 2), "last_scene_ms": round(scene_ms, 2),
+               "model": default_model, "compared": compared, "cpu": platform.processor() or platform.machine(),
                "playback_target_fps": 25.0, "playback": play}
         print(json.dumps(res))
         if args.json:
