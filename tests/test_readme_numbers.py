@@ -40,3 +40,18 @@ def test_readme_must_reach_table_quotes_the_registry_for_the_default():
     text = README.read_text()
     quoted = f"{gt['mpjpe']:.1f} / {gt['pa_mpjpe']:.1f} / {gt['mrpe']:.1f}"
     assert quoted in text, f"README does not quote the default's clean-2D numbers {quoted}"
+
+
+def test_readme_app_benchmark_quotes_docs_app_bench_for_the_default():
+    """The app section's drag numbers are docs/app_bench.json's, measured on the default model (a stale file,
+    measured on an earlier default, was quoted for two days)."""
+    import json
+
+    bench = json.loads((README.parent / "docs" / "app_bench.json").read_text())
+    assert bench["model"] == default_model_name(), (
+        f"docs/app_bench.json was measured on {bench['model']!r}, the default is {default_model_name()!r}: rerun "
+        "benchmarks/bench_app.py (the README's command) and update the README")
+    text = README.read_text()
+    quoted = f"**p50 {bench['p50_ms']:.1f} ms,\np95 {bench['p95_ms']:.1f} ms"
+    assert " ".join(quoted.split()) in " ".join(text.split()), (
+        f"README does not quote docs/app_bench.json's drag {quoted!r}")
