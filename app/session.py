@@ -246,6 +246,16 @@ def with_person(state: SessionState, person: object) -> SessionState:
                         others_dragged=dragged)
 
 
+def follow_person(state: SessionState, tag: str) -> tuple[SessionState, bool]:
+    """The state with the person the input names ``tag`` selected (a video's ``"track 3"``: the one a tab follows
+    from frame to frame), and True, when ``state``'s sample has them; else ``state`` unchanged and False (that
+    person is not in this frame)."""
+    tags = state.sample.person_tags
+    if not tag or tag not in tags:
+        return state, False
+    return with_person(state, tags.index(tag)), True
+
+
 def joint_index(joint: object) -> int:
     """A joint index from an index or a joint name; raises for anything else (e.g. a crafted dropdown value)."""
     if isinstance(joint, str):

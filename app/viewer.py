@@ -222,6 +222,12 @@ class SessionView:
         """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._sticky_note: Any = None
         self._upload_left: SessionState | None = None
+        self._followed: tuple[str, str] | None = None
+        """``(video key, person tag)`` of the person picked in a video (at first, its first frame's first person):
+        selected again in each frame that has them (:func:`ss.follow_person`; a trial's pick went back to the first
+        track on the next frame, and a track the detector missed in one frame gave the selection to another)."""
+        self._follow_gap_said: tuple[str, str] | None = None
+        """The followed person whose absence from the frame shown was said (once per gap)."""
         """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
         self._message_count = 0
         self._status_lock = threading.Lock()
@@ -511,6 +517,9 @@ class SessionView:
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
         if st.person != old.person:
             self._drop_typed_uv()
+            if st.sample.key.startswith("video/") and st.sample.person_tag(st.person):  # followed from frame to frame
+                self._followed = (_sequence_of(st.sample.key), st.sample.person_tag(st.person))
+                self._follow_gap_said = None
         typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < self._settle_s(r, values)]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
@@ -740,6 +749,15 @@ class SessionView:
         toggles kept). Raises, changing nothing, when it cannot be lifted."""
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
+        missing = None
+        if sample.key.startswith("video/") and (self._followed is None or self._followed[0] != _sequence_of(sample.key)):
+            self._followed = (_sequence_of(sample.key), sample.person_tag(st.person))  # (a new video: its first person)
+            self._follow_gap_said = None
+        if self._followed is not None and self._followed[0] == _sequence_of(sample.key):
+            st, found = ss.follow_person(st, self._followed[1])
+            if not found and self._follow_gap_said != self._followed:
+                missing = self._followed[1]
+            self._follow_gap_said = None if found else self._followed
         if old.sample.key.startswith("upload/") and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
@@ -774,6 +792,10 @@ class SessionView:
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
         if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
+        if missing is not None:
+            self.show_message(f"{missing} is not found in {sample.label}: showing "
+                              f"{st.sample.person_name(st.person)}; {missing} is selected again in the next frame that "
+                              "has them")
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
         if moved and not old.sample.key.startswith("upload/") and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)

@@ -424,6 +424,24 @@ def track_doubt_notes(frames: list[FrameResult], *, max_joints: int = 4) -> list
     return notes
 
 
+def track_gap_notes(frames: list[FrameResult]) -> list[str]:
+    """One note per track that is missing from some of the frames between its first and last sighting: those frames
+    have no pose for it (the detector missed the person there, or the file leaves them out), and a viewer that follows
+    the person sees someone else or nobody there (a browser trial's two-person clip: track 1 missed in frames 16 and
+    26, and the app's selection moved to track 2 without a word)."""
+    notes: list[str] = []
+    order = [fr.index for fr in frames]
+    for tid, seen in sorted(_tracks(frames).items()):
+        have = {i for i, _ in seen}
+        first, last = seen[0][0], seen[-1][0]
+        gaps = [i for i in order if first < i < last and i not in have]
+        if gaps:
+            notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
+                         f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
+                         "no pose for it (the person was not found there)")
+    return notes
+
+
 def _frames_summary(idx: list[int], n: int = 8) -> str:
     return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
 
@@ -647,6 +665,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
+    warnings.extend(track_gap_notes(frames))
     warnings.extend(track_doubt_notes(frames))
     if noted:
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
@@ -756,6 +775,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f)))
+    warnings.extend(track_gap_notes(out))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
@@ -771,4 +791,5 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "Fra
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
+           "track_gap_notes",
            "track_lifted", "tracked_output_notes"]

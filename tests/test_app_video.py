@@ -296,3 +296,46 @@ def test_a_focal_chosen_for_one_upload_is_not_kept_for_the_next(server) -> None:
     assert v.load_upload("third.json", json.dumps(sh).encode()) is True, v.messages[-3:]
     assert v.state.sample.upload is not None and v.state.sample.upload.source_format == "sh16"
     assert any("(it was 3000 px: a new input)" in m for m in v.messages[-3:]), v.messages[-3:]
+
+
+def test_the_person_picked_in_a_video_is_followed_from_frame_to_frame(server) -> None:
+    """A browser trial's two-person clip: the detector missed track 1 in two frames, and the selection went to
+    track 2 there without a word; a pick of track 2 went back to track 1 on the next frame. The tab now follows the
+    picked track (at first the first frame's first person), says when it is not in a frame, and picks it again
+    when it is back; the record says where each track is missing."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    people = _script(8)
+    people[3] = people[3][1:]  # track 1 (the nearer person) not found in frame 3
+    people[5] = people[5][:1]  # track 2 not found in frame 5
+    frames = [{"people": [{"keypoints": p.tolist()} for p in pp]} for pp in people]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("two.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    warnings = v.sequence().record.warnings
+    assert any(w.startswith("track 1: missing from 1 of the 8 frames") and w.split(": ")[2].startswith("3;")
+               for w in warnings), warnings
+    assert any(w.startswith("track 2: missing from 1 of the 8 frames") for w in warnings), warnings
+
+    def shown() -> str:
+        return v.state.sample.person_tag(v.state.person)
+
+    def go(frame: int) -> None:
+        v.gui.play.frame.value = frame
+        assert wait_for(lambda: v.state.sample.key.endswith(f"/{frame}")), v.state.sample.key
+
+    assert shown() == "track 1"
+    go(2)
+    assert shown() == "track 1"
+    go(3)  # track 1 missing: the other one, said
+    assert shown() == "track 2" and "track 1 is not found in two.json frame 3" in v.messages[-1], v.messages[-1]
+    go(4)
+    assert shown() == "track 1"
+    v.gui.joints.person.value = v.state.sample.person_name(1)  # pick track 2
+    assert wait_for(lambda: shown() == "track 2")
+    go(1)  # (was: back to track 1)
+    assert shown() == "track 2" and v.state.person == 1
+    assert 5000 < v.frame.root[2] < 7000  # the far person's lift is the one shown
+    go(5)
+    assert shown() == "track 1" and "track 2 is not found in two.json frame 5" in v.messages[-1]
+    go(6)
+    assert shown() == "track 2"

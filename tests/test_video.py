@@ -202,6 +202,26 @@ def test_video_names_the_joints_the_detector_was_unsure_of_once_per_track(tmp_pa
     assert not [w for w in calm.warnings if "unsure" in w]
 
 
+def test_track_gap_notes_name_the_frames_a_track_is_missing_from():
+    """Frames between a track's first and last sighting without it: named (those frames have no pose for it);
+    frames before its first or after its last sighting are not gaps, nor are frames the record does not hold."""
+    from lifter.video import FrameResult, PersonState, track_gap_notes
+
+    def person(tid: int) -> PersonState:
+        z = np.zeros((17, 3))
+        return PersonState(track_id=tid, keypoints_2d=np.zeros((17, 2)), root=np.zeros(3), relative=z,
+                           root_raw=np.zeros(3), relative_raw=z, canonical_depth=4000.0)
+
+    seen = {0: [1], 1: [1, 2], 2: [2], 4: [1, 2], 5: [1], 6: [2], 7: []}  # (frame 3 not in the record: a bad frame)
+    frames = [FrameResult(index=i, time_s=i / 25, people=[person(t) for t in ids]) for i, ids in seen.items()]
+    notes = track_gap_notes(frames)
+    assert notes == ["track 1: missing from 1 of the 5 frames between its first (frame 0) and last (frame 5): 2; "
+                     "those frames have no pose for it (the person was not found there)",
+                     "track 2: missing from 1 of the 5 frames between its first (frame 1) and last (frame 6): 5; "
+                     "those frames have no pose for it (the person was not found there)"]
+    assert track_gap_notes([f for f in frames if f.index != 5 and f.index != 1 and f.index != 2]) == []
+
+
 def test_track_doubt_notes_ranks_joints_and_caps_the_list():
     from lifter.video import FrameResult, PersonState, track_doubt_notes
 
