@@ -93,8 +93,8 @@ BOX_GROW: Final[float] = 0.15
 MIN_EXTRA_VISIBILITY: Final[float] = 0.5
 """A second, third, ... person must have at least this mean landmark visibility to count."""
 DOUBTFUL_SCORE: Final[float] = 0.5
-"""A person lifted from a photo whose mean landmark score is below this gets a note that the detector is unsure
-(:func:`lifter.pipeline.detector_doubt_notes`)."""
+"""A person lifted from a photo whose mean score over the 17 joints lifted is below this gets a note that the
+detector is unsure (:func:`lifter.pipeline.detector_doubt_notes`)."""
 
 UNSURE_JOINT_SCORE: Final[float] = 0.3
 """A joint of a person lifted from a photo whose H36M joint score (:func:`h36m_joint_scores`) is below this gets

@@ -192,10 +192,12 @@ def _people_list(numbers: list[int]) -> str:
 
 
 def detector_doubt_notes(visibility: list[float]) -> list[str]:
-    """A note naming each detected person (largest first) whose mean landmark score (the detector's own confidence,
-    0-1) is below :data:`lifter.detect.DOUBTFUL_SCORE`: BlazePose gives 0.79-0.97 on the 84 Human3.6M demo photos,
-    and about 0.4 to a person it half-invents (a tiny, blurred or cut-off image), with joints off the body or off
-    the image."""
+    """A note naming each detected person (largest first) whose mean score over the 17 joints lifted (the
+    detector's own confidence, 0-1, :attr:`lifter.detect.DetectedPose.scores`) is below
+    :data:`lifter.detect.DOUBTFUL_SCORE`. BlazePose gives 0.84-1.00 to the people of the 84 Human3.6M demo photos,
+    and below 0.3 to most of the "people" it invents on their empty walls; a user trial's empty-wall photo got 0.41,
+    unnoted while this read the mean of BlazePose's 33 landmarks, whose face points it scores higher
+    (``python scripts/empty_crops.py``)."""
     from .detect import DOUBTFUL_SCORE
 
     low = [(i, v) for i, v in enumerate(visibility) if v < DOUBTFUL_SCORE]
@@ -203,8 +205,9 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
         return []
     who = ", ".join(f"person {i + 1} ({v:.2f})" if len(visibility) > 1 else f"{v:.2f}" for i, v in low)
     return [f"the detector is unsure of {'the person found' if len(visibility) == 1 else 'some people'}: mean "
-            f"landmark score {who}, below {DOUBTFUL_SCORE:g} (BlazePose gives 0.8-1 to people it sees well): the "
-            "2D, and so the 3D, may be wrong; is the person large and sharp enough in the image?"]
+            f"joint score {who} over the 17 joints lifted, below {DOUBTFUL_SCORE:g} (BlazePose gives 0.84-1 to the "
+            "people of real photos): the 2D, and so the 3D, may be wrong, or there may be no person at all; is the "
+            "person large and sharp enough in the image?"]
 
 
 def joint_doubt_notes(scores: np.ndarray) -> list[str]:
@@ -331,7 +334,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     kp_people = np.stack([d.keypoints_2d for d in dets])
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detected_upside_down_notes(kp_people)
-    notes += detector_doubt_notes([float(np.mean(d.raw.scores)) for d in dets])
+    notes += detector_doubt_notes([float(np.mean(d.scores)) for d in dets])  # (the 17 joints lifted)
     scores = np.stack([d.scores for d in dets])
     notes += joint_doubt_notes(scores)
     dist = None
