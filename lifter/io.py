@@ -550,6 +550,19 @@ def _scored(q: dict[str, Any], p: Path) -> Any:
     return [None if r is None else [*r, c] for r, c in zip(rows, scores)]
 
 
+def _own_scored(q: dict[str, Any]) -> Any:
+    """A person of this package's own output (:meth:`LiftRecord.to_json`, a video record's frames): its
+    ``keypoints_2d`` with its detector ``scores`` as their third values, so that a lift of the output again keeps
+    them (and the notes on unsure joints; a user trial lost both). Every joint of such a person was lifted, so a
+    score rounded to 0 is read as the smallest positive one, not as a missing joint."""
+    rows, scores = q.get("keypoints_2d"), q.get("scores")
+    if not (isinstance(rows, list) and isinstance(scores, list) and len(rows) == len(scores)
+            and all(isinstance(r, list) and len(r) == 2 and all(_is_number(x) for x in r) for r in rows)
+            and all(_is_number(v) for v in scores)):
+        return rows  # (no scores, or not in the form written: read as given, _rows says what is wrong)
+    return [[*r, max(float(c), 1e-9)] for r, c in zip(rows, scores)]
+
+
 def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     """MMPose's prediction files as one frame of people: the demo's ``--save-predictions`` file (``{"meta_info":
     ..., "instance_info": [{"frame_id": 1, "instances": [...]}]}``, or its instances directly), MMPoseInferencer's
@@ -600,7 +613,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
                 people.append(q["pose_keypoints_2d"])
                 fmt = fmt or "openpose25"
             elif isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q:  # poselifter's own output
-                people.append(q["keypoints_2d"])
+                people.append(_own_scored(q))
                 fmt = fmt or H36M17
             elif isinstance(q, dict):
                 people.append(_scored(q, p))
@@ -628,7 +641,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
     elif isinstance(d, list):
         people = [d]
     elif isinstance(d, dict) and "keypoints_2d" in d:  # a person of poselifter's own output, on its own
-        people = [d["keypoints_2d"]]
+        people = [_own_scored(d)]
         ids = [_person_id(d)]
         meta = d
         fmt = d.get("format") or fmt or H36M17

@@ -219,6 +219,27 @@ def test_a_result_file_can_be_lifted_again(tmp_path, weights, kp17, capsys):
     assert not any("each is lifted" in w for w in cut["warnings"]), cut["warnings"]
 
 
+def test_a_result_file_lifted_again_keeps_its_scores(tmp_path, weights, kp17, capsys):
+    """A user trial: a result's detector scores (and so its notes on unsure joints) were lost when the result was
+    lifted again. They are read back with the 2D; a score written as 0 (rounded) is a low score, not a missing
+    joint (every joint of a result was lifted)."""
+    conf = np.full(17, 0.9)
+    conf[[13, 16]] = [0.12, 0.0004]  # l_wrist unsure; r_wrist written as 0.0
+    doc = {"people": [{"keypoints": np.column_stack([kp17, conf]).tolist()}], "format": "h36m17", "focal": 900,
+           "principal_point": [600, 300]}
+    (tmp_path / "k.json").write_text(json.dumps(doc))
+    assert run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)[0] == 0
+    first = json.loads((tmp_path / "o" / "k.json").read_text())
+    assert first["scores"][13] == 0.12 and first["scores"][16] == 0.0
+    assert run([str(tmp_path / "o" / "k.json"), "--out", str(tmp_path / "o2"), "--weights", str(weights)],
+               capsys)[0] == 0
+    again = json.loads((tmp_path / "o2" / "k.json").read_text())
+    assert again["scores"] == first["scores"] and again["people"][0]["scores"] == first["scores"]
+    unsure = [w for w in again["warnings"] if "unsure of some joints" in w]
+    assert unsure and "l_wrist (0.12)" in unsure[0] and "r_wrist (0.00)" in unsure[0], again["warnings"]
+    np.testing.assert_allclose(again["absolute"], first["absolute"], atol=0.2)  # (no joint read as missing)
+
+
 def test_an_assumed_focal_stays_assumed_when_a_result_is_read_back(tmp_path, weights, kp17, capsys):
     """User trial: a result written with an assumed focal (focal_source "default-fov"), read back, came out as
     focal_source "keypoint-file" with no note: a guess turned into a known focal. It is now assumed again, with a
