@@ -778,6 +778,34 @@ def test_the_person_doubt_reads_the_17_joints_lifted_not_the_face(tmp_path, weig
                for w in rec.warnings), rec.warnings
 
 
+def test_a_small_person_in_a_photo_is_noted(tmp_path, weights, kp17):
+    """A browser trial's 300-px photo lifted 73 mm off the same photo at 1000 px, without a word. A person shorter
+    than SMALL_PERSON_PX in the image the detector saw is noted (scripts/small_people.py: the demo photos lift at
+    114 mm with people 68 px tall, against 64 at 340 px); a photo downscaled for the detector says so."""
+    from lifter.detect import SMALL_PERSON_PX, load_image
+    from lifter.pipeline import lift_image
+
+    assert SMALL_PERSON_PX == 100.0
+    p = tmp_path / "photo.png"
+    Image.new("RGB", (1000, 1000), (50, 60, 70)).save(p)
+    lifter = Lifter.from_checkpoint(weights)
+    tall = float(np.ptp(kp17[:, 1]))
+    small = (80.0 / tall) * (kp17 - kp17[0]) + 500.0  # 80 px tall
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([small]), focal=1000.0)
+    assert any(w.startswith("the person found is small in the image: 80 px tall, below 100 px")
+               for w in rec.warnings), rec.warnings
+    big = (150.0 / tall) * (kp17 - kp17[0]) + 500.0
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([big]), focal=1000.0)
+    assert not any("small" in w for w in rec.warnings), rec.warnings
+    # 150 px tall in a 2000-px photo that the detector sees at 1000 px: 75 px for it
+    q = tmp_path / "big.png"
+    Image.new("RGB", (2000, 2000), (50, 60, 70)).save(q)
+    img = load_image(q, max_side=1000)
+    rec = lift_image(img, lifter=lifter, estimator=_StubEstimator([big * 0.5]), focal=2000.0)
+    assert any("small in the image as downscaled for the detector (--max-side): 75 px tall" in w
+               for w in rec.warnings), rec.warnings
+
+
 def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
     """Joints scored below UNSURE_JOINT_SCORE (on the demo photos 19-29 px off, median, against 5.5 for well-scored
     ones) are named in a note, per person; a person whose joints are all scored well gets none."""
