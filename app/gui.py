@@ -190,7 +190,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             subject = sequence = camera = photo = None
         play = PlayGui(
             frame=gui.add_slider("frame", 0, 1, 1, 0, hint="frame of the sequence (Human3.6M at 50 fps, demo motion "
-                                 "at 25 fps)"),
+                                 "at 25 fps, an uploaded video or keypoint sequence at its own rate; frames "
+                                 "with nobody are left out)"),
             play=gui.add_button("play", icon=viser.Icon.PLAYER_PLAY, hint="play / pause the sequence"),
             speed=gui.add_slider("speed", SPEED_MIN, SPEED_MAX, 0.05, 1.0, marks=((SPEED_MIN, "0.1×"), (1.0, "1×"),
                                                                                    (SPEED_MAX, "4×"))),

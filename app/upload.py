@@ -445,8 +445,14 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
 
 
 def download_stem(sample: Sample) -> str:
-    """A file-name stem for the result of ``sample``."""
-    raw = Path(sample.upload.name).stem if sample.upload is not None else sample.key
+    """A file-name stem for the result of ``sample``: an uploaded video's keeps its file type (``two_mp4``), so that
+    it is not named as a photo of the same name is (a trial's ``two.jpg`` and ``two.mp4`` both gave
+    ``two_lifted.json``)."""
+    from lifter.video import VIDEO_SUFFIXES
+
+    name = Path(sample.upload.name) if sample.upload is not None else None
+    raw = sample.key if name is None else (
+        f"{name.stem}_{name.suffix[1:]}" if name.suffix.lower() in VIDEO_SUFFIXES else name.stem)
     stem = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "pose"
     return stem[:80] + "_lifted"
 

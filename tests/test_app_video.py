@@ -102,7 +102,7 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     # downloads: the whole sequence as `poselifter lift clip.mp4 [--glb]` writes it
     name, data = v.download_payload("json")
     rec = json.loads(data)
-    assert name == "walk_lifted.json" and rec["fps"] == pytest.approx(25.0) and len(rec["frames"]) == n
+    assert name == "walk_avi_lifted.json" and rec["fps"] == pytest.approx(25.0) and len(rec["frames"]) == n
     assert sorted(t["track_id"] for t in rec["tracks"]) == sorted({p["track_id"] for f in rec["frames"] for p in
                                                                    f["people"]}) and len(rec["tracks"]) == 2
     # ... at the focal length the tab shows (800 px, set above), not the upload's: a user trial's download kept
