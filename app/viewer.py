@@ -874,6 +874,9 @@ class SessionView:
             p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
                 if src == "demo" else "<small>a still upload (upload a video or a keypoint sequence to play it)</small>"
         p.frame.disabled = seq is None
+        still_upload = seq is None and src != "demo"
+        if p.play.disabled != still_upload:  # (a trial pressed play on a photo after a video, and got an error)
+            p.play.disabled = still_upload
         if src == "h36m" and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
                 and g.camera is not None and g.photo is not None:
             _, subj, sequence, camera, frame = sample.key.split("/")

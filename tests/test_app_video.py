@@ -339,3 +339,20 @@ def test_the_person_picked_in_a_video_is_followed_from_frame_to_frame(server) ->
     assert shown() == "track 1" and "track 2 is not found in two.json frame 5" in v.messages[-1]
     go(6)
     assert shown() == "track 2"
+
+
+def test_play_is_off_for_a_still_upload_after_a_video(server) -> None:
+    """A browser trial uploaded a photo after a video: play stayed on, and pressing it gave an error. A still
+    upload turns play off; a video (and a demo still, whose play plays the demo motion) turns it on."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in pp]} for pp in _script(6)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assert not v.gui.play.play.disabled and not v.gui.play.frame.disabled
+    one = {"people": [{"keypoints": p.tolist()} for p in _script(1)[0]], "image_size": [W, H], "focal": F,
+           "format": "h36m17"}
+    assert v.load_upload("photo.json", json.dumps(one).encode()) is True, v.messages[-3:]
+    assert v.gui.play.play.disabled and v.gui.play.frame.disabled
+    v.select_demo("walking")
+    assert wait_for(lambda: not v.gui.play.play.disabled)
