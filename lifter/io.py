@@ -127,6 +127,12 @@ class LiftRecord:
     distortion_model: DistortionModel = "h36m"
     """The form of :attr:`distortion`: ``"h36m"`` or ``"opencv"`` (:data:`lifter.camera.DistortionModel`)."""
 
+    @property
+    def metric_depth(self) -> bool:
+        """Whether the absolute depths (mm) rest on the camera's own focal length (:func:`depth_is_metric` of
+        :attr:`focal_source`), as the written record's ``metric_depth`` says."""
+        return depth_is_metric(self.focal_source)
+
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         return {
@@ -139,7 +145,7 @@ class LiftRecord:
             "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
             "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
             "focal": r(self.focal), "focal_source": self.focal_source,
-            "metric_depth": depth_is_metric(self.focal_source), "principal_point": r(self.principal_point),
+            "metric_depth": self.metric_depth, "principal_point": r(self.principal_point),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
                                                    "distortion_model": self.distortion_model}),

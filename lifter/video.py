@@ -110,7 +110,8 @@ class PersonState:
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=1: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, 2), "absolute": r(self.absolute),
-                "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 1),
+                "relative": r(self.relative), "root": r(self.root),
+                "canonical_depth": round(float(self.canonical_depth), 1),
                 "root_unsmoothed": r(self.root_raw),
                 "scores": None if self.scores is None else r(self.scores, 3)} | (
                 {} if self.person_id is None else {"person_id": self.person_id})
@@ -270,18 +271,24 @@ class SequenceRecord:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
         return _tracks(self.frames)
 
+    @property
+    def metric_depth(self) -> bool:
+        """Whether the absolute depths (mm) rest on the camera's own focal length
+        (:func:`lifter.io.depth_is_metric` of :attr:`focal_source`), as the written record's ``metric_depth`` says."""
+        return depth_is_metric(self.focal_source)
+
     def to_json(self) -> dict[str, Any]:
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
                    "person_id": _track_person_id(seen)} for tid, seen in sorted(self.tracks().items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
-            "units": {"keypoints_2d": "px", "absolute": "mm", "root": "mm", "canonical_depth": "mm", "focal": "px",
-                      "principal_point": "px", "time_s": "s", "fps": "frames/s"},
+            "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
+                      "focal": "px", "principal_point": "px", "time_s": "s", "fps": "frames/s"},
             "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the full-resolution frame",
             "fps": round(self.fps, 4), "num_frames": len(self.frames), "num_frames_in_file": self.num_frames_in_file,
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
-            "metric_depth": depth_is_metric(self.focal_source),
+            "metric_depth": self.metric_depth,
             "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
                                                    "distortion_model": self.distortion_model}),

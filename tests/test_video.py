@@ -406,6 +406,12 @@ def test_a_name_back_after_its_track_ended_takes_it_up_again(tmp_path):
     assert ids == {("alice", 1), ("bob", 2)}, ids
     assert [(t["track_id"], t["person_id"], t["first_frame"], t["last_frame"], t["num_frames"]) for t in d["tracks"]] \
         == [(1, "alice", 0, 29, 30), (2, "bob", 0, 29, 13)]
+    # (a developer trial) each person's root-relative pose is written, as a photo's is, with its unit
+    q = d["frames"][3]["people"][0]
+    np.testing.assert_allclose(np.asarray(q["relative"]) + q["root"], q["absolute"], atol=0.11)
+    assert d["units"]["relative"] == "mm" and d["metric_depth"] is True
+    # bob's gaps (frames 8-11 and 15-27; the same name throughout, so the same track) are said
+    assert any(w.startswith("track 2: missing from 17 of the 30 frames") for w in d["warnings"]), d["warnings"]
     # the smoothing starts again after the long gap (a One-Euro filter across 1.3 s would drag the old root in)
     back = d["frames"][28]["people"][1]
     assert back["person_id"] == "bob" and back["root"] == back["root_unsmoothed"]
