@@ -87,6 +87,11 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         hint = ""
         if dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 3:
             hint = f"; if the third column is a detector confidence, pass {name}[..., :2]"
+        elif num_joints is not None and arr.ndim >= 2 and arr.shape[-2:] == (dim, num_joints):
+            hint = f"; transposed? pass {name}.swapaxes(-1, -2) (one row of {dim} coordinates per joint)"
+        elif dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 4:
+            hint = (f"; 4 columns (MediaPipe's x, y, z, visibility?): pass the pixel coordinates {name}[..., :2] "
+                    "(MediaPipe's x, y are fractions of the image: multiply by its width and height)")
         elif num_joints == 17 and arr.ndim >= 2 and arr.shape[-1] == dim and arr.shape[-2] in _OTHER_FORMATS:
             fmts = " or ".join(f'src="{f}"' for f in _OTHER_FORMATS[arr.shape[-2]])
             hint = (f"; {arr.shape[-2]} joints is another detector's layout: convert it to Human3.6M's 17 with "

@@ -251,7 +251,11 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
                      np.float64)
     else:
         bad = next((r for r in raw if not (_is_row(r) or _is_number(r))), None) if raw else None
-        raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}")
+        four = isinstance(bad, list) and len(bad) == 4 and all(_is_number(v) for v in bad)
+        hint = ("; rows of 4 values are MediaPipe's (x, y, z, visibility)? give [x, y, visibility] rows in px (drop z; "
+                "MediaPipe's x, y are fractions of the image: multiply by its width and height)") if four else ""
+        raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}"
+                              f"{hint}")
     conf = a[:, 2] if a.shape[1] == 3 else None
     if conf is not None:
         c = conf[np.isfinite(conf)]

@@ -501,9 +501,10 @@ def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
 def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = True) -> np.ndarray:
     """Convert keypoints ``(..., J_src, D)`` (D = 2 px or 3 mm) from format ``src`` to ``dst``.
 
-    Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules; ``h36m17 ->
-    dst`` applies the format's ``from_h36m`` (H36M joints, or the inverses of interpolated rules, so
-    ``src -> h36m17 -> src`` is the identity); other pairs go through h36m17. Raises
+    Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules. ``h36m17 -> dst`` exists
+    only for a format whose every joint H36M has or interpolates (``sh16``: its ``from_h36m``, so
+    ``sh16 -> h36m17 -> sh16`` is the identity); the detector formats (``coco17``, ``openpose25``, ``blazepose33``)
+    have face, hand and foot points H36M lacks, so converting into them raises. Other pairs go through h36m17. Raises
     :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension, and NaN/inf input
     (mark missing joints before converting; the lifter needs all 17). ``warn``: warn
     (:class:`lifter.PoseLifterWarning`) of a (0, 0) placeholder the rules would hide (:func:`placeholder_notes`);

@@ -172,3 +172,23 @@ def test_a_confidence_column_is_flagged_not_silently_converted_as_z():
         warnings.simplefilter("error", PoseLifterWarning)
         convert(rng.normal(0, 300, (17, 3)) + [0, 0, 4000], src="coco17")
         convert(xy, src="coco17")
+
+
+def test_shape_errors_name_a_transposed_array_and_mediapipe_rows(tmp_path):
+    """A developer trial: a (2, 17) array and MediaPipe's (x, y, z, visibility) rows got a bare shape error. The
+    message now names the likely cause and the fix."""
+    import json
+
+    from lifter import Lifter, PoseLifterError
+    from lifter.io import parse_keypoint_json
+
+    model = Lifter.from_pretrained()
+    kp = np.random.default_rng(0).uniform(300, 700, (17, 2))
+    with pytest.raises(PoseLifterError, match=r"got \(2, 17\); transposed\? pass keypoints.swapaxes\(-1, -2\)"):
+        model.lift(kp.T, focal=1000.0, principal_point=(500.0, 500.0))
+    with pytest.raises(PoseLifterError, match=r"got \(17, 4\); 4 columns \(MediaPipe's x, y, z, visibility\?\)"):
+        model.lift(np.column_stack([kp, kp]), focal=1000.0, principal_point=(500.0, 500.0))
+    p = tmp_path / "mp.json"
+    p.write_text(json.dumps({"keypoints": [[0.5, 0.4, -0.1, 0.99]] * 33, "format": "blazepose33"}))
+    with pytest.raises(PoseLifterError, match=r"rows of 4 values are MediaPipe's \(x, y, z, visibility\)\?"):
+        parse_keypoint_json(p)
