@@ -237,9 +237,12 @@ def draw_2d(nodes: PoseNodes, state: SessionState, kp: np.ndarray, last: np.ndar
     return plane
 
 
-def draw_pose(nodes: PoseNodes, cam: CameraNodes, fr: Frame, *, show_gt: bool) -> None:
+def draw_pose(nodes: PoseNodes, cam: CameraNodes, fr: Frame, *, show_gt: bool, name: str = "",
+              labels: bool = True) -> None:
     """The lifted skeleton, its per-joint clouds (each joint's draws in its own colour), ground truth, analytic
-    root (dashed, with its root marker) and the root ray."""
+    root (dashed, with its root marker) and the root ray. ``name``: the person's (:meth:`Sample.person_name`), put
+    on the root's label when the image has others, whose labels carry theirs (a trial could not tell whose the bare
+    "root Z" was). ``labels``: the other people's labels too (not in the head-on view, :func:`draw_others`)."""
     m = 1e-3
     nodes.lifted_bones.points = edges_points(fr.lifted * m)
     nodes.lifted_joints.points = (fr.lifted * m).astype(np.float32)
@@ -257,16 +260,18 @@ def draw_pose(nodes: PoseNodes, cam: CameraNodes, fr: Frame, *, show_gt: bool) -
         nodes.cloud.visible = True
     else:
         nodes.cloud.visible = False
-    draw_others(nodes, fr)
+    draw_others(nodes, fr, labels=labels)
     root = fr.root * m
     cam.ray.points = np.stack([np.stack([np.zeros(3), root * 1.25])]).astype(np.float32)
     cam.root.position = tuple(root)
-    cam.root_label.text = f"root Z {fr.root[2] / 1000:.2f} m"
+    who = f"{name} · " if name and fr.others else ""
+    cam.root_label.text = f"{who}root Z {fr.root[2] / 1000:.2f} m"
 
 
-def draw_others(nodes: PoseNodes, fr: Frame) -> None:
+def draw_others(nodes: PoseNodes, fr: Frame, *, labels: bool = True) -> None:
     """The other people of the image, lifted into the same camera space (teal), each labelled with its number
-    and root depth."""
+    and root depth unless ``labels`` is False (the head-on view: seen from beside the camera, a label at a farther
+    person's head floated over the nearer one's image, as the root's label would; a browser trial)."""
     m = 1e-3
     if not fr.others:
         nodes.others_bones.visible = nodes.others_joints.visible = False
@@ -278,7 +283,7 @@ def draw_others(nodes: PoseNodes, fr: Frame) -> None:
     nodes.others_joints.points = P.reshape(-1, 3).astype(np.float32)
     nodes.others_bones.visible = nodes.others_joints.visible = True
     for k, h in enumerate(nodes.others_labels):
-        if k < len(fr.others):
+        if labels and k < len(fr.others):
             o = fr.others[k]
             h.position = tuple(o.lifted[10] * m + np.array([0.0, -0.12, 0.0]))
             h.text = f"{o.name} · Z {o.root[2] / 1000:.2f} m"

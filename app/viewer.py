@@ -66,6 +66,7 @@ from .scene import (
     camera_world,
     draw_2d,
     draw_camera,
+    draw_others,
     draw_others_2d,
     draw_pose,
     draw_tracks,
@@ -928,7 +929,8 @@ class SessionView:
                 self._image_key = image_key
                 self._last_plane = None  # the plane moved: every joint sphere
             self._draw_2d(fr.current_2d, fr.noisy_2d)
-            draw_pose(self.scene.pose, self.scene.camera, fr, show_gt=bool(self.gui.lift.gt.value))
+            draw_pose(self.scene.pose, self.scene.camera, fr, show_gt=bool(self.gui.lift.gt.value),
+                      name=st.sample.person_name(st.person), labels=not self._close_up)
             self._update_trail(fr)
         ro = self.gui.readout
         ro.readout.content = readout_markdown(fr, st)
@@ -978,6 +980,8 @@ class SessionView:
             self._close_up = False
             set_joint_radius(self.scene.pose, JOINT_RADIUS_M)
             self.scene.camera.ray.visible = self.scene.camera.root_label.visible = True
+            if self.frame is not None:
+                draw_others(self.scene.pose, self.frame)  # (their labels back)
             _, fov, aspect = self.camera.get()
             self.camera.set(scene_overview(self.state, self.frame, fov_y=fov, aspect=aspect))
 
@@ -1036,6 +1040,8 @@ class SessionView:
             set_joint_radius(self.scene.pose, radius)
             self.scene.camera.ray.visible = False  # it would pass next to the eye and cover the joints
             self.scene.camera.root_label.visible = False  # (drawn on top of everything)
+            for h in self.scene.pose.others_labels:  # (as the root's: they float over the nearer person's image)
+                h.visible = False
             self.camera.set(vp)
 
     # ------------------------------------------------------------------------------------------

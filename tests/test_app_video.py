@@ -356,3 +356,27 @@ def test_play_is_off_for_a_still_upload_after_a_video(server) -> None:
     assert v.gui.play.play.disabled and v.gui.play.frame.disabled
     v.select_demo("walking")
     assert wait_for(lambda: not v.gui.play.play.disabled)
+
+
+def test_labels_name_whose_root_it_is_and_leave_the_head_on_view(server) -> None:
+    """A browser trial: with two people, the selected one's label read only "root Z 7.67 m", and in the head-on view
+    the other's label ("person 2 · Z 8.23 m") floated over the selected person's image. The root's label now names
+    its person when there are others; the head-on view hides the others' labels (as it hides the root's), and the
+    overview shows them again."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    one = {"people": [{"keypoints": p.tolist()} for p in _script(1)[0]], "image_size": [W, H], "focal": F,
+           "format": "h36m17"}
+    assert v.load_upload("two.json", json.dumps(one).encode()) is True, v.messages[-3:]
+    assert wait_for(lambda: v.scene.camera.root_label.text.startswith("person 1 · root Z"))
+    other = v.scene.pose.others_labels[0]
+    assert other.visible and other.text.startswith("person 2 · Z")
+    v.head_on_view()
+    assert not other.visible and not v.scene.camera.root_label.visible
+    v.gui.noise.level.value = 0.5  # a redraw in the head-on view keeps them hidden
+    assert wait_for(lambda: v.state.noise_level == 0.5)
+    assert not other.visible
+    v.overview()
+    assert other.visible and v.scene.camera.root_label.visible
+    v.select_demo("walking")  # one person: the bare label
+    assert wait_for(lambda: v.scene.camera.root_label.text.startswith("root Z"))
