@@ -136,6 +136,11 @@ class VideoSequence:
     def _canvas_for_bad(self) -> np.ndarray:
         return display_canvas(self.record.image_size or (1000, 1000), VIDEO_DISPLAY_MAX_SIDE)
 
+    def seen_after(self, tag: str, index: int) -> bool:
+        """Whether the person ``tag`` (``"track 3"``, :attr:`Sample.person_tags`) is in any frame after frame
+        ``index`` (0 .. :attr:`num_frames` - 1): False once their track has ended."""
+        return any(f"track {p.track_id}" == tag for fr in self.frames[int(index) + 1:] for p in fr.people)
+
     def index_of(self, key: str) -> int | None:
         """The frame index of a sample key of this sequence, else None."""
         head, _, tail = key.rpartition("/")

@@ -223,13 +223,14 @@ class SessionView:
         """The last 20 notifications a tab gets: ``(title, text, sticky)`` (:meth:`show_message`)."""
         self._sticky_note: Any = None
         self._upload_left: SessionState | None = None
+        """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
         self._followed: tuple[str, str] | None = None
         """``(video key, person tag)`` of the person picked in a video (at first, its first frame's first person):
-        selected again in each frame that has them (:func:`ss.follow_person`; a trial's pick went back to the first
-        track on the next frame, and a track the detector missed in one frame gave the selection to another)."""
-        self._follow_gap_said: tuple[str, str] | None = None
-        """The followed person whose absence from the frame shown was said (once per gap)."""
-        """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
+        selected again in each frame that has them (:meth:`_follow`; a trial's pick went back to the first track on
+        the next frame, and a track the detector missed in one frame gave the selection to another)."""
+        self._gaps_said: set[tuple[str, str]] = set()
+        """The followed people whose absence from a frame was said: once per video and person (not a notification
+        per gap during playback)."""
         self._message_count = 0
         self._status_lock = threading.Lock()
         """Held while a message is recorded and shown, and while the status line is checked and cleared: an upload's
@@ -516,11 +517,11 @@ class SessionView:
         old = self.state
         values = self._control_values()
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
+        picked = None
         if st.person != old.person:
             self._drop_typed_uv()
             if st.sample.key.startswith("video/") and st.sample.person_tag(st.person):  # followed from frame to frame
-                self._followed = (_sequence_of(st.sample.key), st.sample.person_tag(st.person))
-                self._follow_gap_said = None
+                picked = (_sequence_of(st.sample.key), st.sample.person_tag(st.person))  # (once it is shown)
         typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < self._settle_s(r, values)]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
@@ -573,6 +574,8 @@ class SessionView:
             return
         try:
             self._apply(st)
+            if picked is not None:
+                self._followed = picked
             if st.person != old.person and self._close_up:  # the head-on view follows to the person now draggable
                 self.head_on_view()  # (a trial's stayed on the one before, its spheres gone, the new ones off screen)
         except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
@@ -750,15 +753,7 @@ class SessionView:
         toggles kept). Raises, changing nothing, when it cannot be lifted."""
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
-        missing = None
-        if sample.key.startswith("video/") and (self._followed is None or self._followed[0] != _sequence_of(sample.key)):
-            self._followed = (_sequence_of(sample.key), sample.person_tag(st.person))  # (a new video: its first person)
-            self._follow_gap_said = None
-        if self._followed is not None and self._followed[0] == _sequence_of(sample.key):
-            st, found = ss.follow_person(st, self._followed[1])
-            if not found and self._follow_gap_said != self._followed:
-                missing = self._followed[1]
-            self._follow_gap_said = None if found else self._followed
+        st, followed, follow_note = self._follow(st, sample)
         if old.sample.key.startswith("upload/") and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
@@ -782,6 +777,7 @@ class SessionView:
         self._sample_gen += 1
         self._drop_typed_uv()
         self._apply(st, new_sample=True)
+        self._followed = followed  # (only once shown: a refused sample changes nothing)
         if sample.key.startswith("h36m/"):
             self._last_h36m = sample.key
         if sample.key.startswith("video/"):
@@ -793,10 +789,9 @@ class SessionView:
         seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
         if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
-        if missing is not None:
-            self.show_message(f"{missing} is not found in {sample.label}: showing "
-                              f"{st.sample.person_name(st.person)}; {missing} is selected again in the next frame that "
-                              "has them")
+        if follow_note is not None:
+            self._gaps_said.add(follow_note[0])
+            self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
         if moved and not old.sample.key.startswith("upload/") and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
@@ -819,6 +814,36 @@ class SessionView:
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)
             self._view_key = view_key
             self._reframe()
+
+    def _follow(self, st: SessionState, sample: Sample
+                ) -> tuple[SessionState, tuple[str, str] | None, tuple[tuple[str, str], str] | None]:
+        """The person a video frame shows: the followed one (:attr:`_followed`) when the frame has them, else the
+        frame's first (a new video: its first person, followed from then on). Returns the state, what to follow once
+        it is shown, and a note to say (with its :attr:`_gaps_said` key) when the followed person is not in this
+        frame: once per video and person while they come back later, and once when their track has ended (the
+        one shown is followed from then on)."""
+        if not sample.key.startswith("video/"):
+            return st, self._followed, None
+        seq = _sequence_of(sample.key)
+        if self._followed is None or self._followed[0] != seq:
+            return st, (seq, sample.person_tag(st.person)), None
+        tag = self._followed[1]
+        shown, found = ss.follow_person(st, tag)
+        if found:
+            return shown, self._followed, None
+        video, index = self._video, None
+        if video is not None:
+            index = video.index_of(sample.key)
+        name = st.sample.person_name(st.person)
+        if video is not None and index is not None and not video.seen_after(tag, index):
+            return st, (seq, st.sample.person_tag(st.person)), (
+                (seq, f"{tag} ended"), f"{tag} is not seen after this point of the video ({sample.label}): showing "
+                f"{name}, followed from now on")
+        if (seq, tag) in self._gaps_said:
+            return st, self._followed, None
+        return st, self._followed, ((seq, tag), f"{tag} is not found in {sample.label}: showing {name}; {tag} is "
+                                    "selected again in each frame that has them (said once; the download's warnings "
+                                    "list the frames it is missing from)")
 
     def _say_no_detection(self) -> None:
         """:func:`poselifter_app.session.no_detection_note`, held while the frame box was typed, said now if the

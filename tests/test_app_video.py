@@ -301,18 +301,20 @@ def test_a_focal_chosen_for_one_upload_is_not_kept_for_the_next(server) -> None:
 def test_the_person_picked_in_a_video_is_followed_from_frame_to_frame(server) -> None:
     """A browser trial's two-person clip: the detector missed track 1 in two frames, and the selection went to
     track 2 there without a word; a pick of track 2 went back to track 1 on the next frame. The tab now follows the
-    picked track (at first the first frame's first person), says when it is not in a frame, and picks it again
-    when it is back; the record says where each track is missing."""
+    picked track (at first the first frame's first person), says once per video when it is not in a frame, picks it
+    again when it is back, and says when its track has ended (following the one shown from then on); the record
+    says where each track is missing."""
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()
-    people = _script(8)
+    people = _script(9)
     people[3] = people[3][1:]  # track 1 (the nearer person) not found in frame 3
     people[5] = people[5][:1]  # track 2 not found in frame 5
+    people[8] = people[8][:1]  # ... nor in the last frame: its track has ended
     frames = [{"people": [{"keypoints": p.tolist()} for p in pp]} for pp in people]
     doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
     assert v.load_upload("two.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     warnings = v.sequence().record.warnings
-    assert any(w.startswith("track 1: missing from 1 of the 8 frames") and w.split(": ")[2].startswith("3;")
+    assert any(w.startswith("track 1: missing from 1 of the 9 frames") and w.split(": ")[2].startswith("3;")
                for w in warnings), warnings
     assert any(w.startswith("track 2: missing from 1 of the 8 frames") for w in warnings), warnings
 
@@ -330,6 +332,10 @@ def test_the_person_picked_in_a_video_is_followed_from_frame_to_frame(server) ->
     assert shown() == "track 2" and "track 1 is not found in two.json frame 3" in v.messages[-1], v.messages[-1]
     go(4)
     assert shown() == "track 1"
+    said = len(v.messages)
+    go(3)  # said once per video: not again (a notification per gap during playback would pile up)
+    assert shown() == "track 2" and not any("is not found" in m for m in v.messages[said:]), v.messages[said:]
+    go(4)
     v.gui.joints.person.value = v.state.sample.person_name(1)  # pick track 2
     assert wait_for(lambda: shown() == "track 2")
     go(1)  # (was: back to track 1)
@@ -339,6 +345,10 @@ def test_the_person_picked_in_a_video_is_followed_from_frame_to_frame(server) ->
     assert shown() == "track 1" and "track 2 is not found in two.json frame 5" in v.messages[-1]
     go(6)
     assert shown() == "track 2"
+    go(8)  # track 2 has ended: said, and the one shown is followed from now on
+    assert shown() == "track 1" and "track 2 is not seen after this point of the video" in v.messages[-1]
+    go(7)
+    assert shown() == "track 1"
 
 
 def test_play_is_off_for_a_still_upload_after_a_video(server) -> None:
