@@ -211,10 +211,11 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
 
 
 def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> list[str]:
-    """A note naming each detected person (largest first) whose height in the image the detector saw (px, their 2D
-    joints' box) is below :data:`lifter.detect.SMALL_PERSON_PX`: the detector's 2D, and the lift with it, gets
-    coarse there (a browser trial's 300-px photo lifted 73 mm off the same photo at 1000 px, without a word).
-    ``downscaled``: the photo was downscaled for the detector (``--max-side``), which is then named."""
+    """A note naming each detected person (largest first) whose size in the image the detector saw (px, the longer
+    side of their 2D joints' box: a standing person's height, and a lying person's length) is below
+    :data:`lifter.detect.SMALL_PERSON_PX`: the detector's 2D, and the lift with it, gets coarse there (a browser
+    trial's 300-px photo lifted 73 mm off the same photo at 1000 px, without a word). ``downscaled``: the photo was
+    downscaled for the detector (``--max-side``), which is then named."""
     from .detect import SMALL_PERSON_PX
 
     small = [(i, h) for i, h in enumerate(heights_px) if h < SMALL_PERSON_PX]
@@ -222,9 +223,10 @@ def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> 
         return []
     who = ", ".join(f"person {i + 1} ({h:.0f} px)" if len(heights_px) > 1 else f"{h:.0f} px" for i, h in small)
     seen = "in the image as downscaled for the detector (--max-side)" if downscaled else "in the image"
-    return [f"{'the person found is' if len(heights_px) == 1 else 'some people are'} small {seen}: {who} tall, "
-            f"below {SMALL_PERSON_PX:g} px, where the detector's 2D gets coarse and the 3D with it (the demo photos "
-            "downscaled: MPJPE 64 mm at 340 px tall, 70 at 102 px, 114 at 68 px); a larger photo of them helps"]
+    return [f"{'the person found is' if len(heights_px) == 1 else 'some people are'} small {seen}: {who} (the "
+            f"longer side of the joints' box), below {SMALL_PERSON_PX:g} px, where the detector's 2D gets coarse and "
+            "the 3D with it (the demo photos downscaled: MPJPE 64 mm with people 340 px tall, 70 at 102 px, 114 at 68 "
+            "px); a larger photo of them helps"]
 
 
 def joint_doubt_notes(scores: np.ndarray) -> list[str]:
@@ -352,8 +354,8 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detected_upside_down_notes(kp_people)
     notes += detector_doubt_notes([float(np.mean(d.scores)) for d in dets])  # (the 17 joints lifted)
-    notes += small_person_notes([float(np.ptp(d.keypoints_2d[:, 1])) * img.scale for d in dets],
-                                downscaled=img.scale < 1.0)
+    notes += small_person_notes([float(np.ptp(d.keypoints_2d, axis=0).max()) * img.scale for d in dets],
+                                downscaled=img.scale < 1.0)  # (the box's longer side: lying people too)
     scores = np.stack([d.scores for d in dets])
     notes += joint_doubt_notes(scores)
     dist = None

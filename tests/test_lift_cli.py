@@ -789,11 +789,11 @@ def test_a_small_person_in_a_photo_is_noted(tmp_path, weights, kp17):
     p = tmp_path / "photo.png"
     Image.new("RGB", (1000, 1000), (50, 60, 70)).save(p)
     lifter = Lifter.from_checkpoint(weights)
-    tall = float(np.ptp(kp17[:, 1]))
-    small = (80.0 / tall) * (kp17 - kp17[0]) + 500.0  # 80 px tall
+    tall = float(np.ptp(kp17, axis=0).max())  # (the longer side of the joints' box)
+    small = (80.0 / tall) * (kp17 - kp17[0]) + 500.0  # 80 px
     rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([small]), focal=1000.0)
-    assert any(w.startswith("the person found is small in the image: 80 px tall, below 100 px")
-               for w in rec.warnings), rec.warnings
+    assert any(w.startswith("the person found is small in the image: 80 px (the longer side of the joints' box), "
+                            "below 100 px") for w in rec.warnings), rec.warnings
     big = (150.0 / tall) * (kp17 - kp17[0]) + 500.0
     rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([big]), focal=1000.0)
     assert not any("small" in w for w in rec.warnings), rec.warnings
@@ -804,8 +804,14 @@ def test_a_small_person_in_a_photo_is_noted(tmp_path, weights, kp17):
     Image.new("RGB", (2000, 2000), (50, 60, 70)).save(q)
     img = load_image(q, max_side=1000)
     rec = lift_image(img, lifter=lifter, estimator=_StubEstimator([big * 0.5]), focal=2000.0)
-    assert any("small in the image as downscaled for the detector (--max-side): 75 px tall" in w
+    assert any("small in the image as downscaled for the detector (--max-side): 75 px (the longer side" in w
                for w in rec.warnings), rec.warnings
+    # the pose turned to lie along x, 140 px long and less than 100 px high: not small
+    flat = kp17 - kp17[0]
+    lying = (flat if np.ptp(flat[:, 0]) >= np.ptp(flat[:, 1]) else flat[:, ::-1]) * (140.0 / tall) + 500.0
+    assert np.ptp(lying[:, 0]) == pytest.approx(140.0) and np.ptp(lying[:, 1]) < 100.0
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([lying]), focal=1000.0)
+    assert not any("small in the image" in w for w in rec.warnings), rec.warnings
 
 
 def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
