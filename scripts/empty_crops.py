@@ -27,8 +27,8 @@ from lifter.data import default_h36m_dir
 from lifter.detect import DOUBTFUL_SCORE, BlazePoseEstimator, NoPersonError, detect_people, load_image
 from lifter.pipeline import lift_image
 
-WHOLE_PERSON_NOTES = {"score": "the detector is unsure of", "misfit": "do not fit their 2D",
-                      "upside down": "upside down", "outside": "outside the"}
+WHOLE_PERSON_NOTES = {"score": "mean joint score", "misfit": "do not fit their 2D",
+                      "upside down": "upside down", "outside": "placed most joints of"}
 
 
 def _photo_path(demo: Path, name: str) -> Path:
@@ -59,6 +59,7 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp(prefix="empty_crops_"))
     fakes: list[tuple[float, float, list[str]]] = []  # (mean of 33 landmarks, mean of 17 joints, whole-person notes)
     real17: list[float] = []
+    crops_with = 0
     try:
         with BlazePoseEstimator(max_people=3) as est:
             done = 0
@@ -81,9 +82,9 @@ def main() -> int:
                     rec = lift_image(path, lifter=lifter, estimator=est)
                 except NoPersonError:
                     continue
-                said = [k for k, text in WHOLE_PERSON_NOTES.items()
-                        if any(text in ww and "some joints" not in ww for ww in rec.warnings)]
+                said = [k for k, text in WHOLE_PERSON_NOTES.items() if any(text in ww for ww in rec.warnings)]
                 dets = detect_people(load_image(path), estimator=est)  # (as lift_image found them: the scores)
+                crops_with += 1
                 for d in dets:
                     fakes.append((float(np.mean(d.raw.scores)), float(np.mean(d.scores)), said))
             bar.close()
@@ -96,7 +97,7 @@ def main() -> int:
     noted = [f for f in fakes if f[2]]
     lines = [
         f"{args.crops} crops without the subject (seed {args.seed}), 800 x 800 px; the default model {lifter.name}",
-        f"BlazePose found a 'person' in {len(fakes)} crop(s)",
+        f"BlazePose found {len(fakes)} 'people' in {crops_with} of the crops",
         f"  mean score of the 17 joints lifted: below {DOUBTFUL_SCORE:g} in {int((s17 < DOUBTFUL_SCORE).sum())}, "
         f"quartiles {np.percentile(s17, 25):.2f} / {np.median(s17):.2f} / {np.percentile(s17, 75):.2f}"
         if len(fakes) else "  (none)",
@@ -106,6 +107,9 @@ def main() -> int:
         f"{int(((s33 < DOUBTFUL_SCORE) & (s17 >= DOUBTFUL_SCORE)).sum())}",
         f"  with a whole-person note (score, misfit, upside down, outside the image): {len(noted)} of {len(fakes)}",
         "  by note: " + ", ".join(f"{k} {sum(k in f[2] for f in fakes)}" for k in WHOLE_PERSON_NOTES),
+        "  without a whole-person note, mean score of the 17 joints: "
+        + (f"{min(f[1] for f in fakes if not f[2]):.2f}-{max(f[1] for f in fakes if not f[2]):.2f}"
+           if any(not f[2] for f in fakes) else "(none)"),
         f"the 84 demo photos' largest person, mean score of the 17 joints: min {min(real17):.2f}, median "
         f"{np.median(real17):.2f}, below {DOUBTFUL_SCORE:g} in {sum(v < DOUBTFUL_SCORE for v in real17)}",
     ]
