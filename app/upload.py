@@ -452,7 +452,7 @@ def download_stem(sample: Sample) -> str:
 
     name = Path(sample.upload.name) if sample.upload is not None else None
     raw = sample.key if name is None else (
-        f"{name.stem}_{name.suffix[1:]}" if name.suffix.lower() in VIDEO_SUFFIXES else name.stem)
+        f"{name.stem}_{name.suffix[1:].lower()}" if name.suffix.lower() in VIDEO_SUFFIXES else name.stem)
     stem = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "pose"
     return stem[:80] + "_lifted"
 

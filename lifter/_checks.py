@@ -78,6 +78,11 @@ _OTHER_FORMATS: dict[int, tuple[str, ...]] = {16: ("sh16",), 25: ("openpose25",)
 is also COCO's: the count cannot tell, so it gets none)."""
 
 
+MEDIAPIPE_XY_NOTE: str = "MediaPipe's x, y are fractions of the image: multiply by its width and height"
+"""Said with each hint that rows of 4 values may be MediaPipe's (x, y, z, visibility) (here and in
+:mod:`lifter.io`)."""
+
+
 def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
     """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error.
     Torch tensors are accepted (detached and copied to the CPU)."""
@@ -91,7 +96,7 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
             hint = f"; transposed? pass {name}.swapaxes(-1, -2) (one row of {dim} coordinates per joint)"
         elif dim == 2 and arr.ndim >= 2 and arr.shape[-1] == 4:
             hint = (f"; 4 columns (MediaPipe's x, y, z, visibility?): pass the pixel coordinates {name}[..., :2] "
-                    "(MediaPipe's x, y are fractions of the image: multiply by its width and height)")
+                    f"({MEDIAPIPE_XY_NOTE})")
         elif num_joints == 17 and arr.ndim >= 2 and arr.shape[-1] == dim and arr.shape[-2] in _OTHER_FORMATS:
             fmts = " or ".join(f'src="{f}"' for f in _OTHER_FORMATS[arr.shape[-2]])
             hint = (f"; {arr.shape[-2]} joints is another detector's layout: convert it to Human3.6M's 17 with "

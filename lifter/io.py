@@ -43,7 +43,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from ._checks import COCO_FACE_SPREAD, PoseLifterError, face_first_people
+from ._checks import COCO_FACE_SPREAD, MEDIAPIPE_XY_NOTE, PoseLifterError, face_first_people
 from .camera import (
     MAX_DISTORTION_COEFFICIENT,
     OPENCV_DISTORTION_COUNTS,
@@ -253,7 +253,7 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
         bad = next((r for r in raw if not (_is_row(r) or _is_number(r))), None) if raw else None
         four = isinstance(bad, list) and len(bad) == 4 and all(_is_number(v) for v in bad)
         hint = ("; rows of 4 values are MediaPipe's (x, y, z, visibility)? give [x, y, visibility] rows in px (drop z; "
-                "MediaPipe's x, y are fractions of the image: multiply by its width and height)") if four else ""
+                f"{MEDIAPIPE_XY_NOTE})") if four else ""
         raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}"
                               f"{hint}")
     conf = a[:, 2] if a.shape[1] == 3 else None

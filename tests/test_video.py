@@ -222,6 +222,27 @@ def test_track_gap_notes_name_the_frames_a_track_is_missing_from():
     assert track_gap_notes([f for f in frames if f.index != 5 and f.index != 1 and f.index != 2]) == []
 
 
+def test_a_sequence_result_lifted_again_keeps_its_scores(tmp_path):
+    """A developer trial: a video's result lifted again lost its detector scores and the unsure-joint note. A
+    sequence record's people carry them back, as a photo's do (tests/test_lift_cli.py)."""
+    from lifter.video import lift_keypoint_sequence
+
+    rng = np.random.default_rng(2)
+    pose = _person(rng, 200)
+    conf = np.full(17, 0.9)
+    conf[13] = 0.1  # l_wrist unsure
+    frames = [{"people": [{"keypoints": np.column_stack([pose + i, conf]).tolist()}]} for i in range(8)]
+    path = tmp_path / "seq.json"
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
+    first = lift_keypoint_sequence(path, lifter=tiny_lifter()).to_json()
+    (tmp_path / "out.json").write_text(json.dumps(first))
+    again = lift_keypoint_sequence(tmp_path / "out.json", lifter=tiny_lifter()).to_json()
+    assert again["frames"][3]["people"][0]["scores"] == first["frames"][3]["people"][0]["scores"]
+    assert first["frames"][3]["people"][0]["scores"][13] == 0.1
+    assert any("unsure (score below 0.3) of l_wrist in 8 of 8 frames" in w
+               for w in again["warnings"]), again["warnings"]
+
+
 def test_track_doubt_notes_ranks_joints_and_caps_the_list():
     from lifter.video import FrameResult, PersonState, track_doubt_notes
 

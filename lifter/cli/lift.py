@@ -352,7 +352,8 @@ def run_lift(args: argparse.Namespace) -> int:
             try:
                 from ..detect import get_estimator
 
-                # one more than lifted, so that a crowd is noticed and reported (the search costs the same)
+                # one more than lifted, so that a crowd is noticed and reported (so --max-people 1 still runs the
+                # window search: README, "Photos in")
                 kw = {"max_people": args.max_people + 1, "log": say} if args.detector == "blazepose" else {}
                 estimator = get_estimator(args.detector, **kw)
             except (MissingDependencyError, PoseLifterError) as exc:
