@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -22,10 +23,13 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from lifter import Lifter
-from lifter.data import default_h36m_dir
-from lifter.detect import DOUBTFUL_SCORE, BlazePoseEstimator, NoPersonError, detect_people, load_image
-from lifter.pipeline import lift_image
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _report import emit  # noqa: E402  (scripts/_report.py)
+
+from lifter import Lifter  # noqa: E402
+from lifter.data import default_h36m_dir  # noqa: E402
+from lifter.detect import DOUBTFUL_SCORE, BlazePoseEstimator, NoPersonError, detect_people, load_image  # noqa: E402
+from lifter.pipeline import lift_image  # noqa: E402
 
 WHOLE_PERSON_NOTES = {"score": "mean joint score", "misfit": "do not fit their 2D",
                       "upside down": "upside down", "outside": "placed most joints of"}
@@ -113,11 +117,7 @@ def main() -> int:
         f"the 84 demo photos' largest person, mean score of the 17 joints: min {min(real17):.2f}, median "
         f"{np.median(real17):.2f}, below {DOUBTFUL_SCORE:g} in {sum(v < DOUBTFUL_SCORE for v in real17)}",
     ]
-    text = "\n".join(lines)
-    print(text)
-    if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text + "\n")
+    emit("\n".join(lines), args.out)
     return 0
 
 

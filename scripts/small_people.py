@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -24,11 +25,14 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from lifter import Lifter
-from lifter.data import H36M, default_h36m_dir
-from lifter.detect import SMALL_PERSON_PX, BlazePoseEstimator, NoPersonError
-from lifter.metrics import mpjpe
-from lifter.pipeline import lift_image
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _report import emit  # noqa: E402  (scripts/_report.py)
+
+from lifter import Lifter  # noqa: E402
+from lifter.data import H36M, default_h36m_dir  # noqa: E402
+from lifter.detect import SMALL_PERSON_PX, BlazePoseEstimator, NoPersonError  # noqa: E402
+from lifter.metrics import mpjpe  # noqa: E402
+from lifter.pipeline import lift_image  # noqa: E402
 
 
 def main() -> int:
@@ -80,11 +84,7 @@ def main() -> int:
                              f"{np.mean(mp):.1f} | {np.mean(rp):.1f} | {noted} |")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    text = "\n".join(lines)
-    print(text)
-    if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text + "\n")
+    emit("\n".join(lines), args.out)
     return 0
 
 

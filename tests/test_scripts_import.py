@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SCRIPTS = sorted([*ROOT.glob("scripts/*.py"), *ROOT.glob("benchmarks/*.py")])
+SCRIPTS = sorted(p for p in [*ROOT.glob("scripts/*.py"), *ROOT.glob("benchmarks/*.py")]
+                 if not p.name.startswith("_"))  # (scripts/_report.py: a helper the scripts import)
 
 
 @pytest.mark.parametrize("path", SCRIPTS, ids=[f"{p.parent.name}/{p.name}" for p in SCRIPTS])
