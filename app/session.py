@@ -76,15 +76,19 @@ def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple
     """The state showing ``sample``: drags reset, focal to its camera's; model, noise, seed, cloud size and the
     analytic toggle kept. 2D input: ``input_pref`` when the sample has it, else the other one (with a note when
     a detection is missing); an upload (no ground-truth 2D) always uses its own 2D."""
-    note = None
     opts = input_options(sample)
     kind = input_pref if input_pref in opts else opts[0]
-    if input_pref == "detected" and kind != "detected" and state.sample.has_gt_2d and sample.key.startswith("h36m/"):
-        # (a Human3.6M frame without one; a demo sample never has one, and its dropdown says so)
-        note = no_detection_note(sample)
     new = SessionState(sample=sample, model=state.model, input_kind=kind, noise_level=state.noise_level,
                        seed=state.seed, cloud_samples=state.cloud_samples, analytic=state.analytic)
+    # (from a sample with ground-truth 2D: after an upload the preference for detections says nothing)
+    note = no_detection_note(sample) if state.sample.has_gt_2d and fell_back(new, input_pref=input_pref) else None
     return new, note
+
+
+def fell_back(state: SessionState, *, input_pref: str) -> bool:
+    """Whether ``state`` shows ground-truth 2D where detections were preferred because its Human3.6M frame has no
+    detection (a demo sample never has one, and its dropdown says so): :func:`no_detection_note`'s case."""
+    return input_pref == "detected" and state.input_kind != "detected" and state.sample.key.startswith("h36m/")
 
 
 def with_input(state: SessionState, kind: str) -> SessionState:

@@ -856,8 +856,7 @@ class SessionView:
             st = self.state
             key = st.sample.key
             seq_key = key.rsplit("/", 1)[0]
-            if (key.startswith("h36m/") and self._input_pref == "detected" and st.input_kind != "detected"
-                    and seq_key not in self._fallback_said):
+            if ss.fell_back(st, input_pref=self._input_pref) and seq_key not in self._fallback_said:
                 self._fallback_said.add(seq_key)
                 self.show_message(ss.no_detection_note(st.sample))
 
