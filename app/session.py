@@ -217,15 +217,20 @@ def reset_joints(state: SessionState) -> SessionState:
     return state.evolve(keypoints=state.base_keypoints().copy(), dragged=set())
 
 
-_PERSON_LABEL = re.compile(r"person (\d+)(?: \([^()]{0,60}\))?")
+_PERSON_LABEL = re.compile(r"person (\d+)(?: \(([^()]{0,60})\))?")
 
 
-def person_index(value: object) -> int:
-    """A person index from an index or a picker label ``"person k"`` (with or without its tag)."""
+def person_index(value: object, *, tags: tuple[str, ...] = ()) -> int:
+    """A person index from an index or a picker label ``"person k"`` (with or without its tag). A label whose tag
+    is among ``tags`` (the sample's :attr:`Sample.person_tags`: ``"track 3"``) names that person wherever they are
+    in this sample's order: a video's order changes from frame to frame, and a pick read on the next frame would
+    otherwise select whoever is k-th there."""
     if isinstance(value, str):
         m = _PERSON_LABEL.fullmatch(value.strip())
         if m is None or int(m.group(1)) < 1:
             raise PoseLifterError(f"unknown person {value[:40]!r}; expected 'person 1', 'person 2', ...")
+        if m.group(2) and m.group(2) in tags:
+            return tags.index(m.group(2))
         return int(m.group(1)) - 1
     return _integer(value, "person")
 
@@ -330,7 +335,7 @@ def apply_controls(state: SessionState, values: ControlValues, *,
     attempt("noise_level", lambda s: with_noise(s, values.noise_level), state.noise_level)
     attempt("seed", lambda s: with_seed(s, values.seed), state.seed)
     attempt("cloud_samples", lambda s: with_cloud_samples(s, values.cloud_samples), state.cloud_samples)
-    attempt("person", lambda s: with_person(s, person_index(values.person)), state.person)
+    attempt("person", lambda s: with_person(s, person_index(values.person, tags=s.sample.person_tags)), state.person)
     if bool(values.analytic) != st.analytic:
         st = st.evolve(analytic=bool(values.analytic))
     return st, out

@@ -1455,6 +1455,10 @@ def test_person_selection_is_a_pure_transition(app: PoseLifterApp) -> None:
             ss.with_person(back, ss.person_index(bad))
     assert ss.person_index("person 2") == 1 and person_label(1) == "person 2"
     assert person_label(1, "id 7") == "person 2 (id 7)" and ss.person_index("person 2 (id 7)") == 1
+    # (review) a tagged label names its person wherever they are in this sample's order: a video frame's order
+    # changes, and a pick read on the next frame must not select whoever is second there
+    assert ss.person_index("person 2 (track 2)", tags=("track 2", "track 3")) == 0
+    assert ss.person_index("person 2 (track 9)", tags=("track 2", "track 3")) == 1  # (not there: by position)
     with pytest.raises(PoseLifterError, match="unknown person"):
         ss.person_index("person 2 (id 7) extra")
     vals = ss.ControlValues(model=st.model, input_kind="detected", focal_px=st.focal_px, noise_level=0.0, seed=0,
