@@ -383,20 +383,19 @@ def reference_bones_mm() -> np.ndarray:
     """``(16,)`` bone lengths (mm, :data:`lifter.skeleton.EDGES` order) of the shipped demo body
     (``lifter.demo_sample("standing")``, an authored adult's proportions)."""
     from lifter import demo_sample
-    from lifter.skeleton import EDGES
+    from lifter.skeleton import bone_lengths
 
-    p = demo_sample("standing").pose_3d
-    return np.array([np.linalg.norm(p[a] - p[b]) for a, b in EDGES])
+    return bone_lengths(demo_sample("standing").pose_3d)
 
 
 def bone_caution(relative: np.ndarray) -> list[str]:
     """The readout's caution when a bone of the lifted pose ``(17, 3)`` mm is out of :data:`BONE_RATIO_LIMITS` of
     the reference body's: no body has it, so the 2D (dragged joints, often) is one the lift cannot explain (a trial
     dragged a wrist within the allowed range and got a 1258-mm forearm, the wrist at the camera, without a word)."""
-    from lifter.skeleton import EDGES, JOINT_NAMES
+    from lifter.skeleton import EDGES, JOINT_NAMES, bone_lengths
 
     ref = reference_bones_mm()
-    lengths = np.array([np.linalg.norm(relative[a] - relative[b]) for a, b in EDGES])
+    lengths = bone_lengths(relative)
     ratio = lengths / ref
     lo, hi = BONE_RATIO_LIMITS
     bad = [i for i in np.argsort(-np.abs(np.log(np.maximum(ratio, 1e-9)))) if not lo <= ratio[i] <= hi]

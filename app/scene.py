@@ -348,6 +348,12 @@ def framing_points(state: SessionState, frame: Frame | None) -> np.ndarray:
     return np.concatenate(pts) @ R + C  # R^T x + C, row-wise
 
 
+def head_on_points(state: SessionState) -> np.ndarray:
+    """World points (m) the head-on view keeps in view: the current 2D joints on the image plane."""
+    R, C = camera_world(state)
+    return image_plane(state, np.asarray(state.keypoints, np.float64)) @ R + C  # R^T x + C, row-wise
+
+
 def overview(state: SessionState, frame: Frame | None, *, fov_y: float, aspect: float) -> framing.Viewpoint:
     """The default view: camera, frustum and person fitted into the view from behind, above and beside the camera."""
     R, C = camera_world(state)

@@ -78,6 +78,11 @@ def is_sequence_json(content: bytes) -> bool:
     return isinstance(doc, dict) and "frames" in doc
 
 
+def track_tag(track_id: int) -> str:
+    """How a video frame's sample names a tracked person (:attr:`Sample.person_tags`): ``"track 3"``."""
+    return f"track {int(track_id)}"
+
+
 @dataclass
 class VideoSequence:
     """A lifted video or keypoint sequence the app can play (:class:`app.playback.SequenceSource`).
@@ -131,7 +136,7 @@ class VideoSequence:
         return Sample(key=f"{self.key}/{i}", label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
                       pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
                       upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]),
-                      person_tags=tuple(f"track {p.track_id}" for p in people))
+                      person_tags=tuple(track_tag(p.track_id) for p in people))
 
     def _canvas_for_bad(self) -> np.ndarray:
         return display_canvas(self.record.image_size or (1000, 1000), VIDEO_DISPLAY_MAX_SIDE)
@@ -139,7 +144,7 @@ class VideoSequence:
     def seen_after(self, tag: str, index: int) -> bool:
         """Whether the person ``tag`` (``"track 3"``, :attr:`Sample.person_tags`) is in any frame after frame
         ``index`` (0 .. :attr:`num_frames` - 1): False once their track has ended."""
-        return any(f"track {p.track_id}" == tag for fr in self.frames[int(index) + 1:] for p in fr.people)
+        return any(track_tag(p.track_id) == tag for fr in self.frames[int(index) + 1:] for p in fr.people)
 
     def index_of(self, key: str) -> int | None:
         """The frame index of a sample key of this sequence, else None."""

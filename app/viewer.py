@@ -72,7 +72,7 @@ from .scene import (
     draw_tracks,
     draw_trail,
     framing_points,
-    image_plane,
+    head_on_points,
     image_plane_depth,
     set_joint_radius,
 )
@@ -1022,8 +1022,7 @@ class SessionView:
         vp, fov, aspect = self.camera.get()
         if self._close_up:  # the head-on view keeps to the 2D joints on the image plane (a trial: a focal change
             # zoomed out of it, to everything): looked at again after a focal change, or when the joints left it
-            R, C = camera_world(self.state)
-            joints = image_plane(self.state, np.asarray(self.state.keypoints, np.float64)) @ R + C
+            joints = head_on_points(self.state)
             if zoom_in or not framing.in_view(joints, vp, fov_y=fov, aspect=aspect, margin=0.98):
                 self.head_on_view()
             return

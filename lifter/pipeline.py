@@ -204,11 +204,17 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
     low = [(i, v) for i, v in enumerate(visibility) if v < DOUBTFUL_SCORE]
     if not low:
         return []
-    who = ", ".join(f"person {i + 1} ({v:.2f})" if len(visibility) > 1 else f"{v:.2f}" for i, v in low)
+    who = _by_person(low, len(visibility), "{:.2f}")
     return [f"the detector is unsure of {'the person found' if len(visibility) == 1 else 'some people'}: mean "
             f"joint score {who} over the 17 joints lifted, below {DOUBTFUL_SCORE:g} (BlazePose gives 0.84-1 to the "
             "people of real photos): the 2D, and so the 3D, may be wrong, or there may be no person at all; is the "
             "person large and sharp enough in the image?"]
+
+
+def _by_person(found: list[tuple[int, float]], n: int, fmt: str) -> str:
+    """``(person index, value)`` pairs of an image with ``n`` people, the values formatted by ``fmt``:
+    ``"0.41"`` for a single person, ``"person 1 (0.41), person 3 (0.38)"`` among several."""
+    return ", ".join(f"person {i + 1} ({fmt.format(v)})" if n > 1 else fmt.format(v) for i, v in found)
 
 
 def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> list[str]:
@@ -222,7 +228,7 @@ def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> 
     small = [(i, h) for i, h in enumerate(heights_px) if h < SMALL_PERSON_PX]
     if not small:
         return []
-    who = ", ".join(f"person {i + 1} ({h:.0f} px)" if len(heights_px) > 1 else f"{h:.0f} px" for i, h in small)
+    who = _by_person(small, len(heights_px), "{:.0f} px")
     seen = "in the image as downscaled for the detector (--max-side)" if downscaled else "in the image"
     return [f"{'the person found is' if len(heights_px) == 1 else 'some people are'} small {seen}: {who} (the "
             f"longer side of the joints' box), below {SMALL_PERSON_PX:g} px, where the detector's 2D gets coarse and "

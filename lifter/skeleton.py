@@ -31,6 +31,8 @@ from __future__ import annotations
 
 from typing import Final
 
+import numpy as np
+
 from ._array import ArrayT
 from ._array import namespace as array_namespace
 
@@ -93,6 +95,16 @@ def mirror(points: ArrayT) -> ArrayT:
     swapped = points[..., list(FLIP_PERMUTATION), :]  # type: ignore[index]
     x = -swapped[..., :1]
     return xp.concat([x, swapped[..., 1:]], axis=-1)
+
+
+def bone_lengths(points: np.ndarray) -> np.ndarray:
+    """The lengths of the 16 bones (:data:`EDGES` order) of poses ``(..., 17, D)`` (D = 2 px or 3 mm), in the
+    points' unit: ``(..., 16)``."""
+    p = np.asarray(points, np.float64)
+    if p.ndim < 2 or p.shape[-2] != NUM_JOINTS or p.shape[-1] not in (2, 3):
+        raise ValueError(f"bone_lengths: expected shape (..., {NUM_JOINTS}, 2 or 3), got {tuple(p.shape)}")
+    parent, child = zip(*EDGES)
+    return np.linalg.norm(p[..., list(child), :] - p[..., list(parent), :], axis=-1)
 
 
 def joint_side(index: int) -> str:

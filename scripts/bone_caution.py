@@ -15,6 +15,7 @@ from lifter import Lifter
 from lifter.cli._help import add_h36m_arguments
 from lifter.data import H36M
 from lifter.detections import with_sh_detections
+from lifter.metrics import mpjpe
 
 
 def main() -> None:
@@ -30,7 +31,7 @@ def main() -> None:
                       source=source, warn=False)
         flagged = np.array([bool(bone_caution(r)) for r in res.relative])
         gt = s.pose_3d - s.pose_3d[:, :1]
-        err = np.linalg.norm(res.relative - gt, axis=-1).mean(-1)
+        err = mpjpe(res.relative, gt)
         print(f"{name}: {int(flagged.sum())} of {len(flagged)} lifts cautioned; MPJPE median "
               f"{np.median(err[flagged]):.1f} mm for those, {np.median(err):.1f} mm for all (Protocol 1, S9 + S11, "
               f"stride {args.stride})")

@@ -213,3 +213,19 @@ def test_camera_turn_convention_and_homography():
     np.testing.assert_allclose(got.numpy(), expected, atol=1e-9)
     # turning back by R^T undoes a turn (README, "Camera roll": a known roll undone before lifting)
     np.testing.assert_allclose(turn_pixels(turn_pixels(uv, r, f, c), np.swapaxes(r, -1, -2), f, c), uv, atol=1e-9)
+
+
+def test_bone_lengths_follow_edges_and_check_shapes():
+    """``lifter.skeleton.bone_lengths``: one length per EDGES bone, batched, in the points' unit; invariant to a
+    shift and to the mirror; a wrong shape is refused."""
+    from lifter.skeleton import bone_lengths, mirror
+
+    pose = random_pose_cam(np.random.default_rng(3), 4)  # (4, 17, 3) mm
+    lengths = bone_lengths(pose)
+    assert lengths.shape == (4, 16)
+    np.testing.assert_allclose(lengths[2], [np.linalg.norm(pose[2, c] - pose[2, p]) for p, c in EDGES])
+    np.testing.assert_allclose(bone_lengths(pose + 123.0), lengths)
+    np.testing.assert_allclose(np.sort(bone_lengths(mirror(pose)), -1), np.sort(lengths, -1))
+    assert bone_lengths(pose[..., :2]).shape == (4, 16)
+    with pytest.raises(ValueError, match=r"bone_lengths: expected shape \(\.\.\., 17, 2 or 3\)"):
+        bone_lengths(pose[:, :16])
