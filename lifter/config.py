@@ -177,7 +177,10 @@ class OptimConfig:
     batch_size: int = _help("global batch size (split across DDP processes)", default=512)
     lr: float = _help("AdamW learning rate", default=1e-3)
     weight_decay: float = _help("AdamW weight decay", default=1e-4)
-    depth_weight: float = _help("weight of the canonical-depth L1 term against the 48 pose L1 terms", default=1.0)
+    depth_weight: float = _help("weight of the canonical-depth L1 term against the pose terms", default=1.0)
+    pose_loss: Literal["l1", "joint"] = _help("pose term of the loss: 'l1' sums the 48 coordinates' absolute errors "
+                                              "(the paper's); 'joint' sums the 16 joints' Euclidean errors (what "
+                                              "MPJPE measures)", default="l1")
     ema_decay: float | None = _help("keep an exponential moving average of the weights (e.g. 0.999); validation "
                                     "and the saved network use it", default=None)
     precision: Literal["fp32", "bf16"] = _help("matmul precision of the residual blocks in training (bf16 "
@@ -193,6 +196,7 @@ class OptimConfig:
         _check(self.ema_decay is None or (isinstance(self.ema_decay, float) and 0.0 <= self.ema_decay < 1.0),
                f"ema_decay must be in [0, 1), got {self.ema_decay!r}")
         _check(self.precision in ("fp32", "bf16"), f"precision must be 'fp32' or 'bf16', got {self.precision!r}")
+        _check(self.pose_loss in ("l1", "joint"), f"pose_loss must be 'l1' or 'joint', got {self.pose_loss!r}")
         _prob("distill_weight", self.distill_weight)
 
 

@@ -406,12 +406,13 @@ def batch_loss(net: torch.nn.Module, codec: PoseCodec, batch: Batch, cfg: TrainC
         out = net(enc.features)
     pred = codec.destandardize(out.float())
     scale = codec.depth_loss_scale(enc)
-    loss = poselifter_loss(pred, target, depth_weight=cfg.optim.depth_weight, depth_scale=scale)
+    loss = poselifter_loss(pred, target, depth_weight=cfg.optim.depth_weight, depth_scale=scale,
+                           pose_loss=cfg.optim.pose_loss)
     if teacher is None:
         return loss
     w = cfg.optim.distill_weight
     taught = poselifter_loss(pred, teacher_targets(teacher, batch, clean_samples=cfg.data.clean_prob > 0),
-                             depth_weight=cfg.optim.depth_weight, depth_scale=scale)
+                             depth_weight=cfg.optim.depth_weight, depth_scale=scale, pose_loss=cfg.optim.pose_loss)
     return (1.0 - w) * loss + w * taught
 
 

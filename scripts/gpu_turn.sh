@@ -45,12 +45,18 @@
 #   tp50_<WB>, tp50_<WC>m  the two detected shapes, half the samples turned
 #   tp25_<WB>, tp25_<WC>m  a quarter turned
 #   seed1_<WB>             every sample turned, seed 1 (the shipped far25_<WB>'s recipe: the seed spread)
+# SET=h trains with the joints' Euclidean errors as the pose loss (--pose-loss joint: the metric, MPJPE, itself)
+# instead of the paper's L1 over the 48 coordinates; five runs at once, from scratch, the shipped default's recipes
+# (turned +-B degrees; detected: a quarter moved along their ray, clean: half):
+#   jl_<WB>, jl_<WC>m, jlclean_<WB>  the default's three network shapes with the joint loss
+#   jl_<WB>_s1                       the same as jl_<WB>, seed 1 (the seed spread; a third detected member)
+#   l1_<WB>                          the shipped far25_<WB>'s recipe unchanged (this run's control)
 # Every checkpoint comes back in OUT and is evaluated where the full Human3.6M folder is.
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (never committed). Settings (environment): M minutes per
-# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a to g), LRF
+# training (6), BS batch (2048), LR (1e-3), EP epochs (300), WB / WC widths, A / B degrees, SET (a to h), LRF
 # the fine-tunes' lr (3e-4), TH CPU threads per process (3; 2 with SET=d), H36M data folder (.gpu/h36m5), OUT folder
-# for what comes back: each run's .pt (SET a: 4, b: 2, c: 5, d: 3 per roll in ROLLS, e: 5, f: 5, g: 5), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
+# for what comes back: each run's .pt (SET a: 4, b: 2, c: 5, d: 3 per roll in ROLLS, e: 5, f: 5, g: 5, h: 5), results.tgz (logs, curves, env, dmon), logs.txt. Exits 1 when
 # a training failed.
 #   M=6 OUT=/tmp/out bash scripts/gpu_turn.sh
 set -u
@@ -60,7 +66,16 @@ TH=${TH:-$([ "${SET:-a}" = d ] && echo 2 || echo 3)}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 RECIPE+=(--eval-every 1000)
-if [ "${SET:-a}" = g ]; then  # a share of the samples turned
+if [ "${SET:-a}" = h ]; then  # the joint (Euclidean) pose loss
+  NAMES=("jl_$WB" "jl_${WC}m" "jlclean_$WB" "jl_${WB}_s1" "l1_$WB")
+  FAR=(--rotate-deg "$B" --distance-prob 0.25)
+  train_run "${NAMES[0]}" 29581 --width "$WB" "${FAR[@]}" --pose-loss joint &
+  train_run "${NAMES[1]}" 29582 --width "$WC" --symmetry mirror "${FAR[@]}" --pose-loss joint &
+  train_run "${NAMES[2]}" 29583 --width "$WB" --rotate-deg "$B" --distance-prob 0.5 --clean-prob 1.0 --real-prob 0 \
+    --no-real-rescale --pose-loss joint &
+  train_run "${NAMES[3]}" 29584 --width "$WB" "${FAR[@]}" --pose-loss joint --seed 1 &
+  train_run "${NAMES[4]}" 29585 --width "$WB" "${FAR[@]}" &
+elif [ "${SET:-a}" = g ]; then  # a share of the samples turned
   NAMES=("tp50_$WB" "tp50_${WC}m" "tp25_$WB" "tp25_${WC}m" "seed1_$WB")
   FAR=(--rotate-deg "$B" --distance-prob 0.25)
   train_run "${NAMES[0]}" 29571 --width "$WB" "${FAR[@]}" --turn-prob 0.5 &
