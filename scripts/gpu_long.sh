@@ -15,7 +15,9 @@
 #
 # Data: python scripts/compact_h36m.py --out .gpu/h36m5 (every 5th frame of every subject; never committed).
 # Settings (environment): M minutes per training (6), BS batch (2048), LR (1e-3), EP epochs (300), WA / WB / WC
-# widths, TH CPU threads per process (5), EV=0 to skip the evaluations, EVS evaluation stride (5), EVT seconds
+# widths, RUNS which of the three to train ("paper detected mirror"), EXTRA more training arguments for each (e.g. the
+# shipped default's "--rotate-deg 20 --distance-prob 0.25"), PAIR a checkpoint averaged with paper<WA> in one more
+# evaluation (SH detections; e.g. assets/weights/universal_far_member2.pt), TH CPU threads per process (5), EV=0 to skip the evaluations, EVS evaluation stride (5), EVT seconds
 # allowed each evaluation (170), H36M data
 # folder (.gpu/h36m5), OUT folder for what comes back: results.tgz (logs, curves, env, dmon, evaluation
 # tables), detected<WB>.pt, mirror<WC>.pt, logs.txt. Exits 1 when a training or an evaluation failed.
@@ -23,13 +25,17 @@
 set -u
 OUT=${OUT:?set OUT to the folder for the results}
 M=${M:-6}; BS=${BS:-2048}; LR=${LR:-1e-3}; EP=${EP:-300}; WA=${WA:-4096}; WB=${WB:-1024}; WC=${WC:-512}
+RUNS=${RUNS:-paper detected mirror}; read -r -a XA <<< "${EXTRA:-}"; PAIR=${PAIR:-}; ETH=$([ -n "$PAIR" ] && echo 5 || echo 8)
 TH=${TH:-5}; EV=${EV:-1}; EVS=${EVS:-5}; EVT=${EVT:-170}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
-NAMES=("paper$WA" "detected$WB" "mirror$WC")
-train_run "paper$WA" 29511 --width "$WA" --dropout 0.5 --eval-every 500 &
-train_run "detected$WB" 29512 --width "$WB" --eval-every 1000 &
-train_run "mirror$WC" 29513 --width "$WC" --symmetry mirror --eval-every 1000 &
+NAMES=()
+case " $RUNS " in *" paper "*) NAMES+=("paper$WA"); train_run "paper$WA" 29511 --width "$WA" --dropout 0.5 \
+  --eval-every 500 "${XA[@]}" & ;; esac
+case " $RUNS " in *" detected "*) NAMES+=("detected$WB"); train_run "detected$WB" 29512 --width "$WB" \
+  --eval-every 1000 "${XA[@]}" & ;; esac
+case " $RUNS " in *" mirror "*) NAMES+=("mirror$WC"); train_run "mirror$WC" 29513 --width "$WC" --symmetry mirror \
+  --eval-every 1000 "${XA[@]}" & ;; esac
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
 failed() { FAILED+=("$1"); echo "FAILED: $1" >&2; grep -m 3 -E "error: |Error: " "$1" >&2; }
@@ -40,14 +46,15 @@ for n in "${NAMES[@]}"; do
   else failed "$R/$n.log"; fi
 done
 if [ "$EV" = 1 ] && [ -f "$R/paper$WA.pt" ]; then
-  ev() { # inputs source
-    local f="$R/paper${WA}_$1_s$EVS"
-    timeout "$EVT" python3 -m lifter evaluate "paper$WA=$R/paper$WA.pt" --h36m "$D" --inputs "$1" --stride "$EVS" --source "$2" \
-      --flip-test --threads 8 --json "$f.json" > "$f.txt" 2>&1
+  ev() { # inputs source [name spec]
+    local f="$R/${3:-paper$WA}_$1_s$EVS"
+    timeout "$EVT" python3 -m lifter evaluate "${3:-paper$WA}=${4:-$R/paper$WA.pt}" --h36m "$D" --inputs "$1" \
+      --stride "$EVS" --source "$2" --flip-test --threads "$ETH" --json "$f.json" > "$f.txt" 2>&1
     echo "exit $?" >> "$f.txt"
   }
   ev gt clean &
   ev sh detected &
+  [ -n "$PAIR" ] && ev sh detected "paper${WA}_pair" "$R/paper$WA.pt+$PAIR" &
   for p in $(jobs -p); do wait "$p"; done
   for f in "$R"/*_s"$EVS".txt; do
     grep -v "^lifting (" "$f"
