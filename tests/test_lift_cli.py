@@ -139,6 +139,21 @@ def test_cli_matches_api(tmp_path, weights, kp17, capsys):
     assert got["focal"] == [900.0, 950.0] and got["focal_source"] == "user"
 
 
+def test_threads_sets_the_lifts_torch_threads_and_bad_counts_are_refused(tmp_path, weights, kp17, capsys,
+                                                                         monkeypatch):
+    import torch
+
+    monkeypatch.setattr(torch, "set_num_threads", lambda n: seen.append(n))
+    seen: list[int] = []
+    (tmp_path / "k.json").write_text(json.dumps(kp17.tolist()))
+    code, err = run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o"), "--threads", "1", "--focal", "900",
+                     "--principal-point", "600", "300", "--weights", str(weights)], capsys)
+    assert code == 0 and seen == [1], err
+    with pytest.raises(SystemExit):
+        main(["lift", str(tmp_path / "k.json"), "--out", str(tmp_path / "o2"), "--threads", "0"])
+    assert "--threads" in capsys.readouterr().err and not (tmp_path / "o2").exists()
+
+
 def test_format_taken_from_the_joint_count_is_said(tmp_path, weights, kp17, capsys):
     """A keypoint file without 'format' is read by its joint count, and the output's warnings say so."""
     (tmp_path / "k16.json").write_text(json.dumps(kp17[:16].tolist()))

@@ -98,7 +98,7 @@ from ..video import (
     limit_blas_threads,
     track_animation,
 )
-from ._help import HelpFormatter
+from ._help import HelpFormatter, positive_int
 
 # ------------------------------------------------------------------------------------------------
 # Batch
@@ -265,6 +265,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--flip-test", action=argparse.BooleanOptionalAction, default=None,
                    help="average each pose with its mirror image's lift (default: the model's own setting; on for the "
                         "shipped default)")
+    p.add_argument("--threads", type=positive_int, default=None,
+                   help="torch threads for the lift (default: torch's, one per core); the 2D detector's are its own")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_lift)
     return p
@@ -328,6 +330,10 @@ def run_lift(args: argparse.Namespace) -> int:
     if not files:
         print("poselifter lift: no inputs to process", file=sys.stderr)
         return 1
+    if args.threads is not None:
+        import torch
+
+        torch.set_num_threads(args.threads)
     lifter = Lifter.load(args.weights)  # bad weights fail before any input
     lifter_for = {"keypoints": lifter, "image": lifter}
     try:
