@@ -908,6 +908,8 @@ class SessionView:
             seqs = self.app.h36m.sequences(int(subj[1:]))
             if list(g.sequence.options) != seqs:
                 g.sequence.options = seqs
+                g.sequence.value = sequence  # (new options reset it to the first one, stamped as if the tab had picked
+                # it: a trial's photo pick then opened that sequence's frame 0)
             self._put(g.subject, subj)
             self._put(g.sequence, sequence)
             self._put(g.camera, camera)

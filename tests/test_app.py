@@ -723,6 +723,24 @@ def test_photo_dropdown_follows_the_frame(h36m_app: PoseLifterApp) -> None:
     assert v.gui.sample.sequence.value == q2 and q2 in v.gui.sample.sequence.options and v.gui.sample.subject.value == f"S{s2}"
 
 
+def test_a_photo_of_another_subject_opens_its_own_sequence(h36m_app: PoseLifterApp) -> None:
+    """A trial: from S9 'Walking', the photo 'S7 Greeting ...' showed S7 'Directions' frame 0. S7 has no 'Walking',
+    so the new subject's sequence list reset the sequence picker to its first entry, stamped newer than the photo
+    pick, and the next pass took that for the user's choice."""
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    photos = h.photo_frames()
+    s2, q2, c2, f2 = next(p for p in photos if p[0] == 7 and p[1] != h.sequences(7)[0])
+    own = next(q for q in h.sequences(9) if q not in h.sequences(7))  # e.g. 'Walking' (S7: 'Walking 1', 'Walking 2')
+    assert v.select_h36m(subject=9, sequence=own, camera=c2, frame=0) is True
+    v.gui.sample.photo.value = f"S{s2} {q2} {c2} {f2}"
+    want = f"h36m/S{s2}/{q2}/{c2}/{f2}"
+    assert v.state.sample.key == want and v.state.sample.image is not None
+    assert v.gui.sample.sequence.value == q2 and v.gui.sample.subject.value == f"S{s2}"
+    v.gui.noise.level.value = 0.5  # another pass keeps it
+    assert v.state.sample.key == want and v.gui.play.frame.value == f2
+
+
 def test_h36m_pickers_are_live_and_switch_the_source(h36m_app: PoseLifterApp) -> None:
     """The Human3.6M pickers are never greyed out: using one shows Human3.6M (from a demo sample too)."""
     v = h36m_app.headless_view()
