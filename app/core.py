@@ -282,7 +282,7 @@ class Frame:
     root behind the camera, a pixel-space model given a 2D pose larger or smaller than those it was trained on."""
     reads_rays: bool = False
     """Whether the network that lifted it reads the 2D through the intrinsics (``ModelConfig.input_space ==
-    "camera"``, the default's): its Z/f then shifts a little with the focal length (another lens is another view),
+    "camera"``, the default's): its Z/f then shifts with the focal length (another lens is another view),
     where a pixel-space model's (the paper's) stays exactly constant."""
 
     @property
@@ -370,6 +370,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                                             relative=res.relative[0], focal=f),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
                                                             input_space=lifter.input_space),
+                                         *short_focal_caution(focal=f, camera_focal=cam.alpha,
+                                                              input_space=lifter.input_space),
                                          *bone_caution(res_rel[0])))
 
 
@@ -427,6 +429,32 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
     return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view:.0f}° of view (a whole person rarely "
             f"spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the camera's "
             f"own focal length is {camera_focal:.0f} px"]
+
+
+SHORT_FOCAL_FACTOR: Final[float] = 0.5
+"""A focal length below this multiple of the camera's own gets :func:`short_focal_caution` (ray-reading models)."""
+
+SHORT_FOCAL_MEASURED: Final[str] = (
+    "the default on Human3.6M's test frames: PA-MPJPE 41 / 71 / 124 mm at ×0.5 / ×0.25 / ×0.1 of the true focal, "
+    "29 at it, and Z/f +3 / +9 / +27 %")
+"""What a too-short focal does to the default (``python scripts/wrong_focal.py``, docs/results/wrong_focal.txt)."""
+
+
+def short_focal_caution(*, focal: Any, camera_focal: float,
+                        input_space: Literal["pixel", "camera"] = "camera") -> list[str]:
+    """The readout's caution when the focal length in use ``focal`` (px) is below :data:`SHORT_FOCAL_FACTOR` of the
+    camera's own ``camera_focal`` (px) and the model reads the 2D through it (``input_space="camera"``): the lift then
+    bends and its Z/f leaves ``Z ∝ f`` well before the pose spans an implausible view (a teacher's box at 150 px,
+    ×0.13 of the camera's focal: Z/f 22 % off, PA-MPJPE 60 -> 84 mm, and the readout said "a little"). A pixel-space
+    model lifts the same pose at every focal length, so it gets none."""
+    from lifter.camera import focal_alpha
+
+    ratio = float(focal_alpha(focal)) / float(camera_focal)
+    if input_space != "camera" or ratio >= SHORT_FOCAL_FACTOR:
+        return []
+    return [f"at {float(focal_alpha(focal)):.0f} px, ×{ratio:.2g} of the camera's own focal length "
+            f"({float(camera_focal):.0f} px), this model's lift bends and its Z/f no longer follows Z ∝ f "
+            f"({SHORT_FOCAL_MEASURED})"]
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:
@@ -530,7 +558,8 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
             " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "
             "the drawn trajectory)" if state.sample.key.startswith("video/") else ""),
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px "
-        + ("(this model reads the rays: Z/f shifts a little with f)" if frame.reads_rays else
+        + ("(this model reads the rays: Z/f shifts with f, for the default within 3 % from ×0.5 to ×6 of the "
+           "camera's focal, more below)" if frame.reads_rays else
            "(this pixel-space model: the same at any f)"),
     ]
     lines += [f"**Caution** {note}" for note in frame.caution]
