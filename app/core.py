@@ -545,6 +545,19 @@ def spread_details(spread: Spread) -> str:
             f"{CLOUD_CAVEAT}</small>")
 
 
+def training_subject_note(key: str) -> str:
+    """For a Human3.6M sample key (``h36m/S1/...``) of a subject the shipped models were trained on (Protocol 1):
+    that its errors are on data they learned (a researcher trial read 7 mm on S1 with nothing saying so); else ``""``."""
+    from lifter.data import PROTOCOLS
+
+    parts = key.split("/")
+    train, test = PROTOCOLS[1]
+    if len(parts) < 2 or parts[0] != "h36m" or parts[1] not in {f"S{s}" for s in train}:
+        return ""
+    return (f" — {parts[1]} is one of the models' training subjects (Protocol 1): these are errors on data they "
+            f"learned; the test subjects are {' and '.join(f'S{s}' for s in test)}")
+
+
 def readout_markdown(frame: Frame, state: SessionState) -> str:
     """The readout panel (numbers without thousands separators): ``Focal N px`` (the focal length this frame
     was lifted with, and the camera's; :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, which 2D was
@@ -576,7 +589,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     if frame.metrics:
         m = frame.metrics
         lines.append(f"**MPJPE** {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
-                     f"**root error** {m['root error']:.0f} mm")
+                     f"**root error** {m['root error']:.0f} mm" + training_subject_note(state.sample.key))
     else:
         lines.append("_no 3D ground truth for this sample_")
     if frame.analytic is not None:

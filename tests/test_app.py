@@ -742,6 +742,28 @@ def test_a_photo_of_another_subject_opens_its_own_sequence(h36m_app: PoseLifterA
     assert v.state.sample.key == want and v.gui.play.frame.value == f2
 
 
+def test_a_training_subjects_errors_say_so(h36m_app: PoseLifterApp) -> None:
+    """A researcher trial read "MPJPE 7.7 mm" on S1 with nothing saying the models learned S1 (Protocol 1)."""
+    from poselifter_app.core import training_subject_note
+
+    assert training_subject_note("h36m/S9/Walking/54138969/0") == "" and training_subject_note("demo/walking") == ""
+    assert "S5 is one of the models' training subjects" in training_subject_note("h36m/S5/Eating/54138969/0")
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    train = [s for s in h.subjects if s in (1, 5, 6, 7, 8)]
+    if not train:
+        pytest.skip("no training subject in this Human3.6M folder")
+    s = train[0]
+    q = h.sequences(s)[0]
+    assert v.select_h36m(subject=s, sequence=q, camera="54138969", frame=0) is True
+    md = v.gui.readout.readout.content
+    assert "**root error**" in md and f"S{s} is one of the models' training subjects (Protocol 1)" in md, md
+    assert "the test subjects are S9 and S11" in md
+    test = next(t for t in h.subjects if t in (9, 11))
+    assert v.select_h36m(subject=test, sequence=h.sequences(test)[0], camera="54138969", frame=0) is True
+    assert "training subjects" not in v.gui.readout.readout.content
+
+
 def test_h36m_pickers_are_live_and_switch_the_source(h36m_app: PoseLifterApp) -> None:
     """The Human3.6M pickers are never greyed out: using one shows Human3.6M (from a demo sample too)."""
     v = h36m_app.headless_view()
