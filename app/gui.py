@@ -150,11 +150,10 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                  # (1k and 2k: a browser trial's teacher found 500-2000 px a 50-px stretch
                                  # of the track, without a landmark)
                                  marks=((FOCAL_MIN_PX, "100"), (1000.0, "1k"), (2000.0, "2k"), (FOCAL_MAX_PX, "6k")),
-                                 hint="f in px (sqrt(fx fy) for non-square pixels): the person slides along "
-                                      "the viewing rays (the root's in yellow), farther as f grows, and keeps its "
-                                      "place in the image. A paper model (gt) gives Z = f * Z/f exactly, X and Y "
-                                      "unchanged; the default also reads the rays' directions, so its Z/f and pose "
-                                      "shift a little (another lens is another view)"),
+                                 # (short: its tooltip stays up while the box is typed in, over the readout)
+                                 hint="f in px (sqrt(fx fy)): the person slides along its viewing rays (the root's in "
+                                      "yellow), farther as f grows. A paper model (gt) keeps Z = f * Z/f exactly; the "
+                                      "default reads the rays too, so its Z/f shifts (readout)"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
             auto_frame=gui.add_checkbox("keep skeleton in view", True,
                                         hint="reframe the 3D view when the lifted skeleton leaves it"),
