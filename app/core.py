@@ -280,6 +280,9 @@ class Frame:
     caution: tuple[str, ...] = ()
     """What looks wrong in the lifted pose (:meth:`lifter.Lifter.output_notes` of the network that lifted it): a
     root behind the camera, a pixel-space model given a 2D pose larger or smaller than those it was trained on."""
+    trained_subjects: tuple[int, ...] = ()
+    """The Human3.6M subjects the network that lifted it was trained on (its checkpoint's protocol; ``()`` where the
+    checkpoint does not say): their frames' errors are on data it learned (:func:`training_subject_note`)."""
     reads_rays: bool = False
     """Whether the network that lifted it reads the 2D through the intrinsics (``ModelConfig.input_space ==
     "camera"``, the default's): its Z/f then shifts with the focal length (another lens is another view),
@@ -365,13 +368,14 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
     return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
                  focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
-                 others=others, reads_rays=used.input_space == "camera",
+                 others=others, reads_rays=used.input_space == "camera", trained_subjects=trained_subjects(used),
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                                             relative=res.relative[0], focal=f),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
-                                                            input_space=lifter.input_space),
+                                                            input_space=used.input_space),
                                          *short_focal_caution(focal=f, camera_focal=cam.alpha,
-                                                              input_space=lifter.input_space),
+                                                              input_space=used.input_space,
+                                                              camera_focal_known=camera_focal_known(state)),
                                          *bone_caution(res_rel[0])))
 
 
@@ -440,19 +444,30 @@ SHORT_FOCAL_MEASURED: Final[str] = (
 """What a too-short focal does to the default (``python scripts/wrong_focal.py``, docs/results/wrong_focal.txt)."""
 
 
-def short_focal_caution(*, focal: Any, camera_focal: float,
-                        input_space: Literal["pixel", "camera"] = "camera") -> list[str]:
+def camera_focal_known(state: SessionState) -> bool:
+    """Whether the sample camera's focal length is the camera's own (Human3.6M, demo, EXIF, a keypoint file, typed at
+    upload), not assumed from the image size (:data:`lifter.io.ASSUMED_FOCAL_SOURCE`)."""
+    from lifter.io import ASSUMED_FOCAL_SOURCE
+
+    up = state.sample.upload
+    return up is None or up.focal_source != ASSUMED_FOCAL_SOURCE
+
+
+def short_focal_caution(*, focal: Any, camera_focal: float, input_space: Literal["pixel", "camera"] = "camera",
+                        camera_focal_known: bool = True) -> list[str]:
     """The readout's caution when the focal length in use ``focal`` (px) is below :data:`SHORT_FOCAL_FACTOR` of the
     camera's own ``camera_focal`` (px) and the model reads the 2D through it (``input_space="camera"``): the lift then
     bends and its Z/f leaves ``Z ∝ f`` well before the pose spans an implausible view (a teacher's box at 150 px,
-    ×0.13 of the camera's focal: Z/f 22 % off, PA-MPJPE 60 -> 84 mm, and the readout said "a little"). A pixel-space
-    model lifts the same pose at every focal length, so it gets none."""
+    ×0.13 of the camera's focal, seen on one frame in a browser trial: Z/f 22 % off, PA-MPJPE 60 -> 84 mm, and the
+    readout said "a little"). A pixel-space model lifts the same pose at every focal length, so it gets none; nor
+    does a camera whose focal was only assumed from the image size (``camera_focal_known=False``: the measured
+    numbers are against the true focal, which a typed one may then be)."""
     from lifter.camera import focal_alpha
 
     ratio = float(focal_alpha(focal)) / float(camera_focal)
-    if input_space != "camera" or ratio >= SHORT_FOCAL_FACTOR:
+    if input_space != "camera" or ratio >= SHORT_FOCAL_FACTOR or not camera_focal_known:
         return []
-    return [f"at {float(focal_alpha(focal)):.0f} px, ×{ratio:.2g} of the camera's own focal length "
+    return [f"at {float(focal_alpha(focal)):.0f} px, ×{ratio:.3g} of the camera's own focal length "
             f"({float(camera_focal):.0f} px), this model's lift bends and its Z/f no longer follows Z ∝ f "
             f"({SHORT_FOCAL_MEASURED})"]
 
@@ -545,17 +560,25 @@ def spread_details(spread: Spread) -> str:
             f"{CLOUD_CAVEAT}</small>")
 
 
-def training_subject_note(key: str) -> str:
-    """For a Human3.6M sample key (``h36m/S1/...``) of a subject the shipped models were trained on (Protocol 1):
-    that its errors are on data they learned (a researcher trial read 7 mm on S1 with nothing saying so); else ``""``."""
+def trained_subjects(net: Any) -> tuple[int, ...]:
+    """The Human3.6M training subjects of ``net`` (a :class:`lifter.Lifter`), from its checkpoint's training protocol
+    (:data:`lifter.data.PROTOCOLS`); ``()`` where the checkpoint has no training config."""
     from lifter.data import PROTOCOLS
 
+    cfg = getattr(net, "train_config", None)
+    if not cfg:
+        return ()
+    return PROTOCOLS.get(int((cfg.get("data") or {}).get("protocol", 1)), ((), ()))[0]
+
+
+def training_subject_note(key: str, trained: tuple[int, ...]) -> str:
+    """For a Human3.6M sample key (``h36m/S1/...``) of one of the subjects ``trained`` (the lifting network's,
+    :func:`trained_subjects`): that its errors are on data the model learned (a researcher trial read 7 mm on S1 with
+    nothing saying so); else ``""``."""
     parts = key.split("/")
-    train, test = PROTOCOLS[1]
-    if len(parts) < 2 or parts[0] != "h36m" or parts[1] not in {f"S{s}" for s in train}:
+    if len(parts) < 2 or parts[0] != "h36m" or parts[1] not in {f"S{s}" for s in trained}:
         return ""
-    return (f" — {parts[1]} is one of the models' training subjects (Protocol 1): these are errors on data they "
-            f"learned; the test subjects are {' and '.join(f'S{s}' for s in test)}")
+    return f" — {parts[1]} is one of this model's training subjects: these are errors on data it learned"
 
 
 def readout_markdown(frame: Frame, state: SessionState) -> str:
@@ -589,7 +612,8 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     if frame.metrics:
         m = frame.metrics
         lines.append(f"**MPJPE** {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
-                     f"**root error** {m['root error']:.0f} mm" + training_subject_note(state.sample.key))
+                     f"**root error** {m['root error']:.0f} mm" + training_subject_note(state.sample.key,
+                                                                                       frame.trained_subjects))
     else:
         lines.append("_no 3D ground truth for this sample_")
     if frame.analytic is not None:

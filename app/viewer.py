@@ -1122,7 +1122,7 @@ class SessionView:
     @control
     def set_focal(self, value: float) -> None:
         """Focal length ``alpha`` (px): the root slides along its viewing ray (``Z ∝ f`` exactly for a pixel-space
-        model; the default reads the rays too, so its Z/f moves a little)."""
+        model; the default reads the rays too, so its Z/f moves with it)."""
         self._set_value("focal_px", value)
 
     @control

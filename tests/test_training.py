@@ -76,8 +76,8 @@ def test_loss_units_and_weighting():
 
 
 def test_joint_loss_sums_the_joints_euclidean_errors():
-    """pose_loss="joint": each joint's error counts by its length (16 x the sample's MPJPE), not by the sum of its
-    three coordinates' absolute errors; the depth term is the same as the L1 loss's."""
+    """pose_loss="joint": each joint's error counts by its length (16 x the mean over joints 1..16), not by the sum of
+    its three coordinates' absolute errors; the depth term is the same as the L1 loss's."""
     pred = torch.zeros(2, 49)
     target = torch.zeros(2, 49)
     target[:, :48] = torch.tensor([3.0, 4.0, 0.0]).repeat(16)  # a 5 mm error on each joint: 7 mm in L1
@@ -97,7 +97,12 @@ def test_joint_loss_is_the_mpjpe_and_its_gradient_stays_finite():
     target = torch.randn(5, 49, generator=g, dtype=torch.float64) * 30
     from lifter.metrics import mpjpe
 
-    rel = lambda v: torch.cat([torch.zeros(5, 1, 3, dtype=v.dtype), v[:, :48].reshape(5, 16, 3)], dim=1)  # noqa: E731
+    # the codec's own reading of the outputs (the layout the targets are encoded in), not the loss's reshape
+    codec = PoseCodec(ModelConfig(input_space="camera", depth_target="size", conditioning="none"))
+    s = synthetic_samples(5)
+    kp, pp, f = (torch.tensor(a, dtype=torch.float64) for a in (s.keypoints_2d, s.principal_point, s.focal))
+    enc = codec.encode(kp, principal_point=pp, focal=f)
+    rel = lambda v: codec.split(v, enc)[0]  # noqa: E731
     per_pose = torch.as_tensor(mpjpe(rel(pred).numpy(), rel(target).numpy()))  # over 17 joints, root exact
     assert poselifter_loss(pred, target, pose_loss="joint", depth_weight=0.0).item() == pytest.approx(
         float((per_pose * 17).mean()), rel=1e-9)
@@ -235,7 +240,8 @@ def test_weight_average_is_an_exponential_moving_average():
 
 
 @pytest.mark.parametrize("precision,symmetry,pose_loss", [("fp32", "none", "l1"), ("bf16", "none", "l1"),
-                                                           ("bf16", "mirror", "l1"), ("fp32", "none", "joint")])
+                                                           ("bf16", "mirror", "l1"), ("fp32", "none", "joint"),
+                                                           ("bf16", "mirror", "joint")])
 def test_tiny_training_learns(precision, symmetry, pose_loss):
     """A small network on synthetic poses beats the mean pose, in float32 and with bf16 blocks, and so does the
     mirror-equivariant network, which stays exactly equivariant after training (its output mirror follows the
