@@ -3,7 +3,8 @@
 ``L = sum_{j=1..16, c in xyz} |P_jc - P*_jc|  +  w_depth * |Z - Z*| * F0 / alpha``, averaged over the batch.
 
 With ``pose_loss="joint"`` the pose term is instead the sum of the 16 joints' Euclidean errors in mm,
-``sum_j ||P_j - P*_j||`` (16 times the sample's MPJPE, the metric itself) rather than the sum of their 48
+``sum_j ||P_j - P*_j||`` over joints 1..16 (16 times their mean error, which is 17 times the sample's MPJPE over
+17 joints with the root exact: the metric itself) rather than the sum of their 48
 coordinates' absolute errors (which is between 1 and sqrt(3) times it).
 
 Units: the pose term is the plain sum of 48 absolute errors in **mm** (root-relative pose, camera

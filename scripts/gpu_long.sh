@@ -26,16 +26,25 @@ set -u
 OUT=${OUT:?set OUT to the folder for the results}
 M=${M:-6}; BS=${BS:-2048}; LR=${LR:-1e-3}; EP=${EP:-300}; WA=${WA:-4096}; WB=${WB:-1024}; WC=${WC:-512}
 RUNS=${RUNS:-paper detected mirror}; read -r -a XA <<< "${EXTRA:-}"; PAIR=${PAIR:-}; ETH=$([ -n "$PAIR" ] && echo 5 || echo 8)
+# (EXTRA is split on blanks, without quoting; checked before any device minute is spent:)
+for r in $RUNS; do
+  case $r in paper|detected|mirror) ;; *) echo "$(basename "$0"): RUNS has '$r'; use words of: paper detected mirror" >&2
+    exit 2 ;; esac
+done
+[ -n "${RUNS// /}" ] || { echo "$(basename "$0"): RUNS is empty; use words of: paper detected mirror" >&2; exit 2; }
+if [ -n "$PAIR" ] && { [ ! -f "$PAIR" ] || [[ " $RUNS " != *" paper "* ]]; }; then
+  echo "$(basename "$0"): PAIR=$PAIR needs that file and 'paper' in RUNS" >&2; exit 2
+fi
 TH=${TH:-5}; EV=${EV:-1}; EVS=${EVS:-5}; EVT=${EVT:-170}; D=${H36M:-.gpu/h36m5}
 # shellcheck source=scripts/gpu_detected.sh
 . scripts/gpu_detected.sh  # the data check, gpu_setup.sh, RECIPE, train_run
 NAMES=()
 case " $RUNS " in *" paper "*) NAMES+=("paper$WA"); train_run "paper$WA" 29511 --width "$WA" --dropout 0.5 \
-  --eval-every 500 "${XA[@]}" & ;; esac
+  --eval-every 500 ${XA[@]+"${XA[@]}"} & ;; esac
 case " $RUNS " in *" detected "*) NAMES+=("detected$WB"); train_run "detected$WB" 29512 --width "$WB" \
-  --eval-every 1000 "${XA[@]}" & ;; esac
+  --eval-every 1000 ${XA[@]+"${XA[@]}"} & ;; esac
 case " $RUNS " in *" mirror "*) NAMES+=("mirror$WC"); train_run "mirror$WC" 29513 --width "$WC" --symmetry mirror \
-  --eval-every 1000 "${XA[@]}" & ;; esac
+  --eval-every 1000 ${XA[@]+"${XA[@]}"} & ;; esac
 for p in $(jobs -p); do [ "$p" != "$DMON" ] && wait "$p"; done
 [ -n "$DMON" ] && kill "$DMON" 2> /dev/null
 failed() { FAILED+=("$1"); echo "FAILED: $1" >&2; grep -m 3 -E "error: |Error: " "$1" >&2; }
