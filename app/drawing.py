@@ -96,16 +96,63 @@ def mark_scale(keypoints: np.ndarray | None, *, scale: float) -> float:
     return float(np.clip(extent / MARKS_FULL_HEIGHT_PX, 0.4, 1.0))
 
 
+INSET_ZOOM_BELOW: float = 0.4
+""":func:`overlay` with ``zoom`` shows only the region around the people when the box around all their joints is
+narrower and lower than this share of the image's width and height (a researcher trial: a person about 100 px tall
+in the inset left the ground truth and the detection too small to compare)."""
+
+
+def inset_crop(size: tuple[int, int], poses: Sequence[np.ndarray]) -> tuple[int, int, int, int] | None:
+    """The region ``(x0, y0, x1, y1)`` px (full resolution, inside the image of ``size = (W, H)``, of the image's
+    aspect ratio) that :func:`overlay` zooms onto: 1.5 times the box around every finite joint of ``poses`` (each
+    ``(17, 2)`` px), at least an eighth of the image wide; None when that box already fills
+    :data:`INSET_ZOOM_BELOW` of the image in width or height, or fewer than two joints are finite."""
+    W, H = size
+    pts = [np.asarray(p, np.float64).reshape(-1, 2) for p in poses]
+    xy = np.concatenate(pts) if pts else np.zeros((0, 2))
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    if len(xy) < 2:
+        return None
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    ext = hi - lo
+    if ext[0] >= INSET_ZOOM_BELOW * W or ext[1] >= INSET_ZOOM_BELOW * H:
+        return None
+    half_w = min(max(0.75 * ext[0], 0.75 * ext[1] * W / H, W / 16.0), W / 2.0)
+    half_h = half_w * H / W
+    c = (lo + hi) / 2.0
+    x0 = float(np.clip(c[0] - half_w, 0.0, W - 2 * half_w))
+    y0 = float(np.clip(c[1] - half_h, 0.0, H - 2 * half_h))
+    return int(round(x0)), int(round(y0)), int(round(x0 + 2 * half_w)), int(round(y0 + 2 * half_h))
+
+
 def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, np.ndarray | None],
             max_width: int = 480, selected: int | None = None,
             prescaled: tuple[np.ndarray, float] | None = None,
-            others: Sequence[tuple[int, np.ndarray]] = ()) -> np.ndarray:
+            others: Sequence[tuple[int, np.ndarray]] = (), zoom: bool = False) -> np.ndarray:
     """The image (or a canvas of ``size = (W, H)``) downscaled to at most ``max_width`` px wide, with the
     given poses (keys of :data:`COLORS`, ``(17, 2)`` px in full-resolution pixels) drawn on it, and the other
     people ``others`` (``(person index, (17, 2) px)``, numbered from 1 at their head). RGB uint8.
-    ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize."""
-    small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
-    img = small.copy()
+    ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize. ``zoom``: where the people
+    are small in the image, show only the region around them (:func:`inset_crop`), at the same inset size, marked
+    with its magnification ("zoom x2.5")."""
+    crop = inset_crop(size, [p for p in (*poses.values(), *(kp for _, kp in others)) if p is not None]) \
+        if zoom else None
+    offset = np.zeros(2)
+    if crop is None:
+        small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
+        img = small.copy()
+    else:
+        W, H = size
+        x0, y0, x1, y1 = crop
+        src = canvas(W, H) if base is None else base
+        out_w = max(1, int(round(W * min(1.0, max_width / float(W)))))
+        out_h = max(1, int(round(out_w * (y1 - y0) / float(x1 - x0))))
+        s = out_w / float(x1 - x0)
+        img = cv2.resize(src[y0:y1, x0:x1], (out_w, out_h),
+                         interpolation=cv2.INTER_AREA if s < 1.0 else cv2.INTER_LINEAR)
+        offset = np.array([x0, y0], np.float64)
+        poses = {k: None if v is None else np.asarray(v, np.float64) - offset for k, v in poses.items()}
+        others = [(k, np.asarray(kp, np.float64) - offset) for k, kp in others]
     # marks grow with the inset (readable on 1000-px frames) and shrink for a small person (a browser trial: discs
     # 16 px wide on a person 110 px tall hid the overlays beneath them)
     k = max(1.0, img.shape[1] / 240.0) * mark_scale(poses.get("current"), scale=s)
@@ -121,6 +168,12 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
             cur = key == "current"
             draw_pose(img, kp, COLORS[key], scale=s, thickness=round(k * (2 if cur else 1.5)),
                       radius=max(1, round(k * (3 if cur else 2))), selected=selected if cur else None)
+    if crop is not None:
+        text = f"zoom x{size[0] / float(crop[2] - crop[0]):.1f}"
+        org = (6, 16 + round(4 * (k - 1)))
+        cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45 * k, (255, 255, 255), max(3, round(3 * k)),
+                    cv2.LINE_AA)
+        cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45 * k, (40, 40, 40), max(1, round(k)), cv2.LINE_AA)
     return img
 
 

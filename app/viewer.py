@@ -940,7 +940,7 @@ class SessionView:
             self._base_key = base_key
         others = [(k, st.others[k]) for k in sorted(st.others)]
         self.gui.sample.image.image = overlay(s.image, size=st.image_size, poses=poses, selected=self.selected,
-                                              prescaled=self._base, others=others)
+                                              prescaled=self._base, others=others, zoom=True)
         self._last_plane = draw_2d(self.scene.pose, st, kp, self._last_plane)
         draw_others_2d(self.scene.pose, st, [o for _, o in others])
 

@@ -1897,6 +1897,43 @@ def test_input_2d_marks_shrink_for_a_small_person() -> None:
     assert ring_pixels(small) < 0.6 * ring_pixels(tall)  # the selected joint's ring too
 
 
+def test_the_inset_zooms_onto_small_people_and_keeps_its_size() -> None:
+    """A researcher trial: a person about 100 px tall in the inset left the ground truth and the detection too small
+    to compare. With ``zoom`` the inset shows the region around the people (the image's aspect, inside the image,
+    every joint in it) at the same size, marked with its magnification; a person who fills the image is not zoomed."""
+    from poselifter_app.drawing import INSET_ZOOM_BELOW, inset_crop, overlay
+
+    from lifter import demo_sample
+
+    kp = demo_sample("standing").keypoints_2d
+    size = (2000, 1500)
+    small = (kp - kp.mean(0)) * (300 / np.ptp(kp, 0).max()) + (1700, 1300)  # 300 px, near a corner
+    det = small + 12.0
+    crop = inset_crop(size, [small, det])
+    assert crop is not None
+    x0, y0, x1, y1 = crop
+    assert 0 <= x0 < x1 <= 2000 and 0 <= y0 < y1 <= 1500 and (x1 - x0) / (y1 - y0) == pytest.approx(2000 / 1500, rel=0.01)
+    for p in (small, det):
+        assert np.all((p >= (x0, y0)) & (p <= (x1, y1)))
+    assert (x1 - x0) == pytest.approx(1.5 * np.ptp(np.concatenate([small, det])[:, 1]) * 2000 / 1500, rel=0.02)
+    big = (kp - kp.mean(0)) * (INSET_ZOOM_BELOW * 1500 / np.ptp(kp, 0).max()) + (1000, 750)
+    assert inset_crop(size, [big]) is None and inset_crop(size, []) is None
+    assert inset_crop(size, [np.full((17, 2), np.nan)]) is None
+
+    plain = overlay(None, size=size, poses={"current": small, "detected": det}, selected=3)
+    zoomed = overlay(None, size=size, poses={"current": small, "detected": det}, selected=3, zoom=True)
+    assert zoomed.shape[1] == plain.shape[1] == 480 and abs(zoomed.shape[0] - plain.shape[0]) <= 1
+
+    def drawn(img: np.ndarray, rgb: tuple[int, int, int]) -> int:
+        return int(np.all(np.abs(img.astype(int) - rgb) <= 30, axis=-1).sum())
+
+    from poselifter_app.drawing import COLORS
+
+    assert drawn(zoomed, COLORS["detected"]) > 4 * drawn(plain, COLORS["detected"]) > 0  # the detection, larger
+    assert np.array_equal(overlay(None, size=size, poses={"current": big}, zoom=True),
+                          overlay(None, size=size, poses={"current": big}))  # a large person: no zoom
+
+
 def test_drags_dropped_by_another_sample_are_said(app: PoseLifterApp) -> None:
     """A browser trial: joints dragged on a demo sample (or a Human3.6M frame) were gone after another sample and
     back, without a word (an upload's come back with it, and say so)."""
