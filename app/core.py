@@ -446,11 +446,11 @@ SHORT_FOCAL_MEASURED: Final[str] = (
 
 def camera_focal_known(state: SessionState) -> bool:
     """Whether the sample camera's focal length is the camera's own (Human3.6M, demo, EXIF, a keypoint file, typed at
-    upload), not assumed from the image size (:data:`lifter.io.ASSUMED_FOCAL_SOURCE`)."""
-    from lifter.io import ASSUMED_FOCAL_SOURCE
+    upload), not assumed from the image size: :func:`lifter.io.depth_is_metric` of an upload's focal source."""
+    from lifter.io import depth_is_metric
 
     up = state.sample.upload
-    return up is None or up.focal_source != ASSUMED_FOCAL_SOURCE
+    return up is None or depth_is_metric(up.focal_source)
 
 
 def short_focal_caution(*, focal: Any, camera_focal: float, input_space: Literal["pixel", "camera"] = "camera",
@@ -464,10 +464,11 @@ def short_focal_caution(*, focal: Any, camera_focal: float, input_space: Literal
     numbers are against the true focal, which a typed one may then be)."""
     from lifter.camera import focal_alpha
 
-    ratio = float(focal_alpha(focal)) / float(camera_focal)
+    alpha = float(focal_alpha(focal))
+    ratio = alpha / float(camera_focal)
     if input_space != "camera" or ratio >= SHORT_FOCAL_FACTOR or not camera_focal_known:
         return []
-    return [f"at {float(focal_alpha(focal)):.0f} px, ×{ratio:.3g} of the camera's own focal length "
+    return [f"at {alpha:.0f} px, ×{ratio:.3g} of the camera's own focal length "
             f"({float(camera_focal):.0f} px), this model's lift bends and its Z/f no longer follows Z ∝ f "
             f"({SHORT_FOCAL_MEASURED})"]
 
