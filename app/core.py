@@ -19,6 +19,7 @@ from lifter.api import MIN_FOCAL_PX
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 
+from .keys import parse_h36m, source_of
 from .noise import ErrorModelLike
 from .samples import Sample
 
@@ -576,10 +577,10 @@ def training_subject_note(key: str, trained: tuple[int, ...]) -> str:
     """For a Human3.6M sample key (``h36m/S1/...``) of one of the subjects ``trained`` (the lifting network's,
     :func:`trained_subjects`): that its errors are on data the model learned (a researcher trial read 7 mm on S1 with
     nothing saying so); else ``""``."""
-    parts = key.split("/")
-    if len(parts) < 2 or parts[0] != "h36m" or parts[1] not in {f"S{s}" for s in trained}:
+    frame = parse_h36m(key)
+    if frame is None or frame.subject not in trained:
         return ""
-    return f" — {parts[1]} is one of this model's training subjects: these are errors on data it learned"
+    return f" — {frame.subject_name} is one of this model's training subjects: these are errors on data it learned"
 
 
 def readout_markdown(frame: Frame, state: SessionState) -> str:
@@ -593,7 +594,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm" + (
             # (a user trial: the readout differed from the download's root by up to 66 mm, unexplained)
             " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "
-            "the drawn trajectory)" if state.sample.key.startswith("video/") else ""),
+            "the drawn trajectory)" if source_of(state.sample.key) == "video" else ""),
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px "
         + ("(this model reads the rays: Z/f shifts with f, for the default within 3 % from ×0.5 to ×6 of the "
            "camera's focal, more below)" if frame.reads_rays else

@@ -27,6 +27,7 @@ import numpy as np
 from lifter import Camera
 from lifter.skeleton import FLIP_PERMUTATION
 
+from .keys import h36m_key, motion_key, sequence_of
 from .samples import DemoCatalog, H36MCatalog, Sample
 
 log = logging.getLogger("poselifter.app")
@@ -61,7 +62,7 @@ class H36MSequence:
     num_frames: int = field(init=False)
 
     def __post_init__(self) -> None:
-        self.key = f"h36m/S{self.subject}/{self.sequence}/{self.camera}"
+        self.key = sequence_of(h36m_key(self.subject, self.sequence, self.camera, 0))
         self.label = f"S{self.subject} {self.sequence} cam {self.camera}"
         self.num_frames = self.catalog.num_frames(self.subject, self.sequence)
 
@@ -130,7 +131,7 @@ class DemoMotion:
         i = int(index) % self.num_frames
         p3 = self.camera.world_to_camera(self.world_pose(i))
         kp = self.camera.project(p3)
-        s = Sample(key=f"motion/{i}", label=f"demo motion frame {i}", keypoints_2d=kp, pose_3d=p3, detected_2d=None,
+        s = Sample(key=motion_key(i), label=f"demo motion frame {i}", keypoints_2d=kp, pose_3d=p3, detected_2d=None,
                    camera=self.camera, image=None)
         return SequenceFrame((s,))
 

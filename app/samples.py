@@ -21,6 +21,8 @@ from lifter import Camera, DemoSample, PoseLifterError, demo_sample, demo_sample
 from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
 from lifter.keypoints import convert
 
+from .keys import demo_key, h36m_key
+
 
 @dataclass(frozen=True)
 class Sample:
@@ -115,7 +117,7 @@ class DemoCatalog:
                      principal_point=(float(d.principal_point[0]), float(d.principal_point[1])),
                      width=w, height=h, R=d.R, t=d.t, name=f"demo/{name}")
         img = cv2.imdecode(np.frombuffer(d.image, np.uint8), cv2.IMREAD_COLOR)
-        return Sample(key=f"demo/{name}", label=f"demo: {name}", keypoints_2d=d.keypoints_2d, pose_3d=d.pose_3d,
+        return Sample(key=demo_key(name), label=f"demo: {name}", keypoints_2d=d.keypoints_2d, pose_3d=d.pose_3d,
                       detected_2d=None, camera=cam, image=None if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
 
 
@@ -184,7 +186,7 @@ class H36MCatalog:
         kp = cam.project(p3)
         photo = self._photos.get((subject, sequence, camera_id, frame))
         image = _read_rgb(self.root / "demo" / photo) if photo else None
-        return Sample(key=f"h36m/{key}/{camera_id}/{frame}", label=f"S{subject} {sequence} cam {camera_id} frame {frame}",
+        return Sample(key=h36m_key(subject, sequence, camera_id, frame), label=f"S{subject} {sequence} cam {camera_id} frame {frame}",
                       keypoints_2d=kp, pose_3d=p3, detected_2d=det, camera=cam, image=image)
 
 

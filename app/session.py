@@ -29,6 +29,7 @@ from .core import (
     focal_max,
     focal_min,
 )
+from .keys import demo_key, frame_of, h36m_key, motion_key, parse_h36m, sequence_of, source_of, with_frame
 from .samples import Sample
 
 INPUT_KINDS: tuple[str, ...] = ("gt", "detected")
@@ -52,7 +53,7 @@ def input_label(sample: Sample, kind: str) -> str:
         return "ground truth"
     if kind != "detected":
         return kind
-    if sample.key.startswith("h36m/"):
+    if source_of(sample.key) == "h36m":
         return "SH detection"
     up = getattr(sample, "upload", None)
     what = getattr(up, "kind", None)
@@ -88,7 +89,7 @@ def for_sample(state: SessionState, sample: Sample, *, input_pref: str) -> tuple
 def fell_back(state: SessionState, *, input_pref: str) -> bool:
     """Whether ``state`` shows ground-truth 2D where detections were preferred because its Human3.6M frame has no
     detection (a demo sample never has one, and its dropdown says so): :func:`no_detection_note`'s case."""
-    return input_pref == "detected" and state.input_kind != "detected" and state.sample.key.startswith("h36m/")
+    return input_pref == "detected" and state.input_kind != "detected" and source_of(state.sample.key) == "h36m"
 
 
 def with_input(state: SessionState, kind: str) -> SessionState:
@@ -399,18 +400,19 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
     src = max(cands, key=lambda c: c[0])[1]
     fr = p.frame
     if src == "demo":
-        return f"demo/{p.demo.value}"
+        return demo_key(str(p.demo.value))
     if src == "motion":
-        i = int(fr.value) if shown.startswith("motion/") or fr.t > p.source.t else 0
-        return f"motion/{i % max(motion_frames, 1)}"
+        i = int(fr.value) if source_of(shown) == "motion" or fr.t > p.source.t else 0
+        return motion_key(i % max(motion_frames, 1))
     if src == "upload":
         if last_upload is None:
             raise PoseLifterError("nothing uploaded yet: use the 'upload photo, video or keypoint JSON' button (File "
                                   "tab)")
-        if last_upload.startswith("video/") and upload_frames:
-            base, _, last = last_upload.rpartition("/")
-            i = int(fr.value) if shown.startswith(base + "/") or fr.t > p.source.t else int(last)
-            return f"{base}/{min(max(i, 0), upload_frames - 1)}"
+        last = frame_of(last_upload) if source_of(last_upload) == "video" else None
+        if last is not None and upload_frames:
+            base = sequence_of(last_upload)
+            i = int(fr.value) if sequence_of(shown) == base or fr.t > p.source.t else last
+            return with_frame(base, min(max(i, 0), upload_frames - 1))
         return last_upload
     assert h36m is not None and p.subject is not None and p.sequence is not None and p.camera is not None
     if p.photo is not None and p.photo.value != "(none)" and p.photo.t >= max(
@@ -418,7 +420,9 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         try:
             s, rest = str(p.photo.value).split(" ", 1)
             seq, cam, f = rest.rsplit(" ", 2)
-            return f"h36m/{s}/{seq}/{cam}/{int(f)}"
+            if s[:1] != "S" or not s[1:].isdigit():
+                raise ValueError(s)
+            return h36m_key(int(s[1:]), seq, cam, int(f))
         except ValueError:
             raise PoseLifterError(f"unknown frame with photo {str(p.photo.value)[:60]!r}") from None
     if p.subject.value not in [f"S{s}" for s in h36m.subjects]:
@@ -426,14 +430,13 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
     subject = int(p.subject.value[1:])
     seqs = h36m.sequences(subject)
     sequence = p.sequence.value if p.sequence.value in seqs else seqs[0]
-    last = shown if shown.startswith("h36m/") else last_h36m
-    parts = last.split("/") if last else []
-    same_seq = bool(parts) and parts[1] == f"S{subject}" and parts[2] == sequence
-    if same_seq and shown.startswith("h36m/"):
+    was = parse_h36m(shown) or (parse_h36m(last_h36m) if last_h36m else None)
+    same_seq = was is not None and was.subject == subject and was.sequence == sequence
+    if same_seq and source_of(shown) == "h36m":
         frame = int(fr.value)
-    elif same_seq:  # back to Human3.6M: its last frame, unless the slider was moved since
-        frame = int(fr.value) if fr.t > p.source.t else int(parts[4])
+    elif was is not None and same_seq:  # back to Human3.6M: its last frame, unless the slider was moved since
+        frame = int(fr.value) if fr.t > p.source.t else was.frame
     else:  # another sequence: its start, unless the slider was moved since it was picked
         frame = int(fr.value) if fr.t > max(p.subject.t, p.sequence.t) else 0
     frame = min(max(frame, 0), h36m.num_frames(subject, sequence) - 1)
-    return f"h36m/S{subject}/{sequence}/{p.camera.value}/{frame}"
+    return h36m_key(subject, sequence, str(p.camera.value), frame)

@@ -43,6 +43,7 @@ from lifter.video import (
 )
 
 from .core import lens_free_2d, undoes_lens
+from .keys import frame_of, sequence_of, with_frame
 from .samples import Sample
 from .upload import (
     MAX_CANVAS_SIDE,
@@ -133,7 +134,7 @@ class VideoSequence:
             image = self._canvas_for_bad() if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
         else:
             image = self._canvas
-        return Sample(key=f"{self.key}/{i}", label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
+        return Sample(key=with_frame(self.key, i), label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
                       pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
                       upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]),
                       person_tags=tuple(track_tag(p.track_id) for p in people))
@@ -148,8 +149,8 @@ class VideoSequence:
 
     def index_of(self, key: str) -> int | None:
         """The frame index of a sample key of this sequence, else None."""
-        head, _, tail = key.rpartition("/")
-        return int(tail) if head == self.key and tail.isdigit() and int(tail) < self.num_frames else None
+        at = frame_of(key)
+        return at if at is not None and sequence_of(key) == self.key and at < self.num_frames else None
 
     def is_upload_pair(self, lifter: Any, focal: tuple[float, float]) -> bool:
         """Whether ``lifter`` at ``focal`` is what the upload was lifted with: the same lifter object (its name when

@@ -55,6 +55,18 @@ from .core import (
 )
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
+from .keys import (
+    SEQUENCE_SOURCES,
+    UPLOADED_SOURCES,
+    demo_key,
+    demo_name,
+    frame_of,
+    parse_h36m,
+    sequence_of,
+    source_of,
+    upload_key,
+    video_key,
+)
 from .noise import ErrorModelLike, default_error_model, model_name
 from .playback import DemoMotion, H36MSequence, Player, SequenceSource
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
@@ -125,12 +137,6 @@ def _same_calibration(a: Any, b: Any) -> bool:
     return ((a.width, a.height) == (b.width, b.height) and abs(a.alpha - b.alpha) <= 0.5
             and bool(np.allclose(a.principal_point, b.principal_point, atol=0.5))
             and bool(np.allclose((*a.k, *a.p), (*b.k, *b.p))))
-
-
-def _sequence_of(key: str) -> str:
-    """What a status message is about, from a sample key: the sequence for a frame of one (``h36m/S9/Posing 1/
-    54138969``, ``video/3/clip.mp4``, ``motion``), else the sample itself (a demo sample, an uploaded photo)."""
-    return key.rsplit("/", 1)[0] if key.startswith(("h36m/", "video/", "motion/")) else key
 
 
 class LatestWins:
@@ -241,7 +247,7 @@ class SessionView:
         self._status_focal: float | None = None
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_about: str | None = None
-        """:func:`_sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
+        """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
         another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
         under a Human3.6M frame)."""
         self.frame: Frame | None = None
@@ -354,7 +360,7 @@ class SessionView:
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
                      focal: float | None = None, title: str | None = None, sticky: bool = False) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
-        or sample (:func:`_sequence_of`) it is about, when that is not the one shown now (a pass that shows another
+        or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass that shows another
         one clears the message). ``focal``: the focal length (px) the message says was set; a pass that finds
         another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed since).
         ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
@@ -369,7 +375,7 @@ class SessionView:
             self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
             self._last_was_error = error
             self._status_about = about if about is not None else (
-                _sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
+                sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
             try:
                 self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
             except Exception:  # noqa: BLE001
@@ -490,7 +496,7 @@ class SessionView:
                 self._pass_t0 = math.inf
             with self._status_lock:
                 if self._message_count == n and self.gui.readout.status.content and (
-                        (self._status_about is not None and _sequence_of(self.state.sample.key) != self._status_about)
+                        (self._status_about is not None and sequence_of(self.state.sample.key) != self._status_about)
                         or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)):
                     self.gui.readout.status.content = ""  # (about a sample no longer shown, or a focal since changed)
 
@@ -520,8 +526,8 @@ class SessionView:
         picked = None
         if st.person != old.person:
             self._drop_typed_uv()
-            if st.sample.key.startswith("video/") and st.sample.person_tag(st.person):  # followed from frame to frame
-                picked = (_sequence_of(st.sample.key), st.sample.person_tag(st.person))  # (once it is shown)
+            if source_of(st.sample.key) == "video" and st.sample.person_tag(st.person):  # followed from frame to frame
+                picked = (sequence_of(st.sample.key), st.sample.person_tag(st.person))  # (once it is shown)
         typing = [r for r in rejected if not r.refused and self._since_typed(r.control) < self._settle_s(r, values)]
         if typing:  # out of range while being typed: not yet (the value in use stays; the box is left alone)
             st = st.evolve(**{r.control: getattr(old, r.control) for r in typing})
@@ -693,16 +699,16 @@ class SessionView:
             wanted = int(self.gui.play.frame.value)
         except (TypeError, ValueError):
             return
-        if key.startswith("h36m/") and self.app.h36m is not None:
-            _, subj, seq, _, f = key.split("/")
-            last = self.app.h36m.num_frames(int(subj[1:]), seq) - 1
-        elif key.startswith("video/") and video is not None and video.index_of(key) is not None:
-            f, last = key.rsplit("/", 1)[1], video.num_frames - 1
+        h36m_frame = parse_h36m(key)
+        if h36m_frame is not None and self.app.h36m is not None:
+            f, last = h36m_frame.frame, self.app.h36m.num_frames(h36m_frame.subject, h36m_frame.sequence) - 1
+        elif video is not None and (at := video.index_of(key)) is not None:
+            f, last = at, video.num_frames - 1
         else:
             self._frame_note = None
             typed = self._typed_at.get("frame")
             if (typed is not None and typed != self._still_frame_typed and self.gui.play.frame.disabled
-                    and not key.startswith("motion/")):  # (a disabled slider's box still sends what is typed in it)
+                    and source_of(key) != "motion"):  # (a disabled slider's box still sends what is typed in it)
                 since = self._since_typed("frame")
                 if since < TYPING_SETTLE_S:  # (each keystroke arrives: "1", "10", "100"; answer the value left)
                     self._settle_later(TYPING_SETTLE_S - since + 0.05)
@@ -711,12 +717,12 @@ class SessionView:
                 self.show_message(f"frame {wanted}: this is a still sample, with no frames to go to (play switches "
                                   "to the demo motion; a Human3.6M picker, or the source, shows Human3.6M's frames)")
             return
-        about = _sequence_of(key)
-        if int(f) == last and wanted > last:
+        about = sequence_of(key)
+        if f == last and wanted > last:
             self._frame_note = (wanted, last, about)
-        elif int(f) == 0 and wanted < 0:
+        elif f == 0 and wanted < 0:
             self._frame_note = (wanted, 0, about)
-        elif not (self._frame_note is not None and int(f) == wanted == self._frame_note[1]
+        elif not (self._frame_note is not None and f == wanted == self._frame_note[1]
                   and self._frame_note[2] == about):
             self._frame_note = None  # another frame or sequence asked for since (the slider set to the end keeps it)
         if self._frame_note is None:
@@ -735,18 +741,17 @@ class SessionView:
     def sequence(self) -> SequenceSource | None:
         """The sequence the shown sample belongs to (Human3.6M or the demo motion), else None."""
         key = self.state.sample.key
-        if key.startswith("motion/"):
+        if source_of(key) == "motion":
             return self.app.motion
-        if key.startswith("video/") and self._video is not None and self._video.index_of(key) is not None:
+        if self._video is not None and self._video.index_of(key) is not None:
             return self._video
-        if key.startswith("h36m/") and self.app.h36m is not None:
-            _, subj, seq, cam, _ = key.split("/")
-            return self.app.h36m_sequence(int(subj[1:]), seq, cam)
+        h36m_frame = parse_h36m(key)
+        if h36m_frame is not None and self.app.h36m is not None:
+            return self.app.h36m_sequence(h36m_frame.subject, h36m_frame.sequence, h36m_frame.camera)
         return None
 
     def _frame_index(self) -> int | None:
-        key = self.state.sample.key
-        return int(key.rsplit("/", 1)[1]) if key.startswith(("motion/", "h36m/", "video/")) else None
+        return frame_of(self.state.sample.key)
 
     def _show_sample(self, sample: Sample, *, reframe: bool) -> None:
         """Show ``sample`` now (drags reset; focal to its camera's unless the camera is the same one; model, noise,
@@ -754,7 +759,7 @@ class SessionView:
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         st, followed, follow_note = self._follow(st, sample)
-        if old.sample.key.startswith("upload/") and old.sample.key != sample.key:
+        if source_of(old.sample.key) == "upload" and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
         left = self._upload_left if self._upload_left is not None and self._upload_left.sample.key == sample.key else None
@@ -765,9 +770,10 @@ class SessionView:
         a, b = sample.camera, old.sample.camera
         # (one Human3.6M camera's calibration is the same for every subject: a chosen focal is kept across subjects;
         # a user trial saw it reset)
-        same_camera = a is b or (sample.key.split("/")[0] == old.sample.key.split("/")[0] and (
-            a.name == b.name or sample.key.startswith("h36m/") and _same_calibration(a, b)))
-        kept = same_camera and sample.key.split("/")[0] in ("h36m", "motion", "video")
+        src = source_of(sample.key)
+        same_camera = a is b or (src == source_of(old.sample.key) and (
+            a.name == b.name or src == "h36m" and _same_calibration(a, b)))
+        kept = same_camera and src in SEQUENCE_SOURCES
         if kept:
             st = st.evolve(focal_px=old.focal_px)
         else:  # the new camera's focal replaces one being typed: the box shows it now (and the pass reads it back)
@@ -778,22 +784,22 @@ class SessionView:
         self._drop_typed_uv()
         self._apply(st, new_sample=True)
         self._followed = followed  # (only once shown: a refused sample changes nothing)
-        if sample.key.startswith("h36m/"):
+        if source_of(sample.key) == "h36m":
             self._last_h36m = sample.key
-        if sample.key.startswith("video/"):
+        if source_of(sample.key) == "video":
             self._last_upload = sample  # (coming back to the upload returns to this frame)
         self._show_sample_controls(st)
         if self.gui.play.frame.disabled:  # a still: only a frame typed from now on is answered (not one typed before)
             self._still_frame_typed = self._typed_at.get("frame")
         # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
-        seq_key = sample.key.rsplit("/", 1)[0] if sample.key.startswith(("h36m/", "motion/", "video/")) else sample.key
+        seq_key = sequence_of(sample.key)
         if left is not None:
             self.show_message(f"{sample.label}: the joints you corrected are back")
         if follow_note is not None:
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
-        if moved and not old.sample.key.startswith("upload/") and old.sample.key != sample.key:
+        if moved and source_of(old.sample.key) != "upload" and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
             self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped: "
                               "another sample shows its own 2D (download the result first to keep them)")
@@ -805,12 +811,12 @@ class SessionView:
                 self._fallback_said.add(seq_key)
                 self.show_message(note)
         if not kept and chosen:
-            uploaded = sample.key.split("/")[0] in ("upload", "video")  # (a photo, keypoint file or video)
+            uploaded = src in UPLOADED_SOURCES  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
                               f"{focal_text(st.focal_px)} px (it was {focal_text(old.focal_px)} px: "
                               f"{'a new input' if uploaded else 'another camera'})", focal=st.focal_px)
         cam = sample.camera
-        view_key = (sample.key.split("/")[0], np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
+        view_key = (src, np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)
             self._view_key = view_key
             self._reframe()
@@ -822,9 +828,9 @@ class SessionView:
         it is shown, and a note to say (with its :attr:`_gaps_said` key) when the followed person is not in this
         frame: once per video and person while they come back later, and once when their track has ended (the
         one shown is followed from then on)."""
-        if not sample.key.startswith("video/"):
+        if source_of(sample.key) != "video":
             return st, self._followed, None
-        seq = _sequence_of(sample.key)
+        seq = sequence_of(sample.key)
         if self._followed is None or self._followed[0] != seq:
             return st, (seq, sample.person_tag(st.person)), None
         tag = self._followed[1]
@@ -855,7 +861,7 @@ class SessionView:
                 return
             st = self.state
             key = st.sample.key
-            seq_key = key.rsplit("/", 1)[0]
+            seq_key = sequence_of(key)
             if ss.fell_back(st, input_pref=self._input_pref) and seq_key not in self._fallback_said:
                 self._fallback_said.add(seq_key)
                 self.show_message(ss.no_detection_note(st.sample))
@@ -864,7 +870,7 @@ class SessionView:
         """Pickers, 2D-input options, focal range and frame slider for ``st`` (the source dropdown last)."""
         g, p = self.gui.sample, self.gui.play
         sample = st.sample
-        src = sample.key.split("/")[0]
+        src = source_of(sample.key)
         opts = [ss.input_label(sample, kind) for kind in ss.input_options(sample)]
         if list(g.input.options) != opts:
             g.input.options = opts
@@ -887,7 +893,7 @@ class SessionView:
         if self._since_typed("focal_px") >= TYPING_GROW_S + 1.0:
             self._set_control("focal_px", st.focal_px)
         if src == "demo":
-            self._put(g.demo, sample.key.split("/", 1)[1])
+            self._put(g.demo, demo_name(sample.key))
         seq = self.sequence()
         idx = self._frame_index()
         if seq is not None and idx is not None:
@@ -902,9 +908,11 @@ class SessionView:
         still_upload = seq is None and src != "demo"
         if p.play.disabled != still_upload:  # (a trial pressed play on a photo after a video, and got an error)
             p.play.disabled = still_upload
-        if src == "h36m" and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
+        h36m_frame = parse_h36m(sample.key)
+        if h36m_frame is not None and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
                 and g.camera is not None and g.photo is not None:
-            _, subj, sequence, camera, frame = sample.key.split("/")
+            subj, sequence, camera, frame = (h36m_frame.subject_name, h36m_frame.sequence, h36m_frame.camera,
+                                             h36m_frame.frame)
             seqs = self.app.h36m.sequences(int(subj[1:]))
             if list(g.sequence.options) != seqs:
                 g.sequence.options = seqs
@@ -1080,7 +1088,7 @@ class SessionView:
         label = SOURCE_LABELS[source]
         if source == "upload" and label not in self.gui.sample.source.options:
             raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
-        self._set_and_check(self.gui.sample.source, label, lambda: self.state.sample.key.split("/")[0] == source)
+        self._set_and_check(self.gui.sample.source, label, lambda: source_of(self.state.sample.key) == source)
 
     @control
     def select_demo(self, name: str) -> None:
@@ -1090,7 +1098,7 @@ class SessionView:
             self.gui.sample.demo.value = name
             self.gui.sample.source.value = SOURCE_LABELS["demo"]
         self._runner.request()
-        if self.state.sample.key != f"demo/{name}":
+        if self.state.sample.key != demo_key(name):
             raise PoseLifterError(self.messages[-1] if self.messages else f"could not show demo sample {name!r}")
 
     @control
@@ -1375,7 +1383,7 @@ class SessionView:
             return
         try:
             sample, self._photo = up.upload_sample(
-                name, content, key=f"upload/{self.app.next_upload_id()}/{up.safe_name(name)}", photo=self._photo,
+                name, content, key=upload_key(self.app.next_upload_id(), up.safe_name(name)), photo=self._photo,
                 max_bytes=self.app.max_upload_bytes, estimator=self.app.estimator,
                 lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock)
         except up.UploadFailed as exc:
@@ -1413,7 +1421,7 @@ class SessionView:
                 note.body = text
 
         try:
-            seq = vid.video_sequence(name, content, key=f"video/{self.app.next_upload_id()}/{nm}",
+            seq = vid.video_sequence(name, content, key=video_key(self.app.next_upload_id(), nm),
                                      lifter=self.app.pool.get(self.state.model), estimator=self.app.estimator,
                                      max_bytes=self.app.max_upload_bytes, detect_lock=self.app.detect_lock,
                                      progress=progress)
@@ -1530,15 +1538,14 @@ class PoseLifterApp:
     def sample(self, key: str) -> Sample:
         """The demo, demo-motion or Human3.6M sample of ``key`` (see :func:`poselifter_app.session.requested_key`);
         raises :class:`PoseLifterError` for keys that name nothing."""
-        src, _, rest = key.partition("/")
-        if src == "demo":
-            return self.demo.get(rest)
-        if src == "motion" and rest.isdigit():
-            return self.motion.frame(int(rest)).people[0]
-        if src == "h36m" and self.h36m is not None:
-            parts = rest.split("/")
-            if len(parts) == 4 and parts[0][:1] == "S" and parts[0][1:].isdigit() and parts[3].lstrip("-").isdigit():
-                return self.h36m.get(int(parts[0][1:]), parts[1], parts[2], int(parts[3]))
+        name = demo_name(key)
+        if name is not None:
+            return self.demo.get(name)
+        if source_of(key) == "motion" and (i := frame_of(key)) is not None:
+            return self.motion.frame(i).people[0]
+        h36m_frame = parse_h36m(key)
+        if h36m_frame is not None and self.h36m is not None:
+            return self.h36m.get(h36m_frame.subject, h36m_frame.sequence, h36m_frame.camera, h36m_frame.frame)
         raise PoseLifterError(f"no sample {key[:80]!r}")
 
     def h36m_sequence(self, subject: int, sequence: str, camera: str) -> H36MSequence:
