@@ -111,8 +111,12 @@ class UploadInfo:
     people_index: tuple[int, ...] = ()
     """A keypoint file with several people: each shown person's position in the file (largest first), and"""
     people_ids: tuple[str | int | None, ...] = ()
-    """their own ids (``person_id``, ``id`` or ``track_id``; None where none): the download keeps both, as
+    """their own ids (``person_id``, ``track_id`` or ``id``; None where none): the download keeps both, as
     ``poselifter lift`` writes them."""
+    people_scores: tuple[np.ndarray | None, ...] = ()
+    """Each shown person's ``(17,)`` confidences of the H36M joints (largest first; None where they have none), or
+    ``()``: only :attr:`scores`, the largest person's. The download keeps them, as ``poselifter lift`` writes them
+    (a review's download of a keypoint file with scores had none)."""
 
 
 @dataclass(frozen=True)
@@ -263,7 +267,9 @@ def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estim
     info = UploadInfo(name=photo.name, kind="image", focal_source=rec.focal_source, focal_detail=detail,
                       scores=None if rec.scores is None else np.asarray(rec.scores, np.float64),
                       source_format=rec.source_format, num_people=rec.num_people, detector=rec.detector,
-                      warnings=tuple(rec.warnings))
+                      warnings=tuple(rec.warnings),
+                      people_scores=tuple(None if q.scores is None else np.asarray(q.scores, np.float64)
+                                          for q in rec.people[:1 + len(others)]))
     cam = upload_camera(rec.focal, rec.principal_point, photo.size, photo.name)
     return Sample(key=key, label=f"upload: {photo.name}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(),
                   camera=cam, image=photo.display, has_gt_2d=False, upload=info, others_2d=others)
@@ -300,7 +306,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     others = tuple(_check_2d(convert(p, src=kf.format, warn=False), f"{nm}, person {i + 2}")
                    for i, p in enumerate(people))
     notes += placeholder_notes(np.stack([kf.keypoints, *people]), src=kf.format)
-    notes += keypoint_file_scores(kf, 1 + len(others))[1]  # (the unsure joints, named as poselifter lift names them)
+    file_scores, doubt = keypoint_file_scores(kf, 1 + len(others))
+    notes += doubt  # (the unsure joints, named as poselifter lift names them)
     tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
     if kf.focal is not None:
         _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
@@ -357,7 +364,9 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     info = UploadInfo(name=nm, kind="keypoints", focal_source=src, focal_detail=detail, source_format=kf.format,
                       source=kf.source, num_people=1 + len(others), warnings=tuple(notes),
                       people_index=tuple(kf.people_index[:1 + len(others)]),
-                      people_ids=tuple(kf.people_ids[:1 + len(others)]))
+                      people_ids=tuple(kf.people_ids[:1 + len(others)]),
+                      scores=None if file_scores is None else file_scores[0],
+                      people_scores=() if file_scores is None else tuple(file_scores))
     image = photo.display if use_photo else display_canvas(size)  # type: ignore[union-attr]
     cam = upload_camera(focal, pp, size, nm, lens)  # (the lift undistorts with it: core.compute_frame)
     return Sample(key=key, label=f"upload: {nm}", keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=cam,
@@ -415,7 +424,9 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     else:
         lifted = tuple(dataclasses.replace(q, keypoints_2d=kp_all[i]) for i, q in enumerate(lifted))
     scores = None if info is None else info.scores
-    if scores is not None:  # (the detector's confidences are the largest person's)
+    if info is not None and len(info.people_scores) == len(lifted):  # (everyone's, as poselifter lift writes them)
+        lifted = tuple(dataclasses.replace(q, scores=sc) for q, sc in zip(lifted, info.people_scores))
+    elif scores is not None:  # (the detector's confidences are the largest person's)
         lifted = (dataclasses.replace(lifted[0], scores=scores), *lifted[1:])
     if info is not None and info.people_index and len(info.people_index) == len(lifted):  # who is who in the file
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)

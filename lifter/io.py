@@ -80,14 +80,24 @@ class PersonResult:
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
-        out = {"keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
-               "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
+        out = {"keypoints_2d": r(self.keypoints_2d, KEYPOINT_DECIMALS), "absolute": r(self.absolute),
+               "relative": r(self.relative), "root": r(self.root),
+               "canonical_depth": round(float(self.canonical_depth), 2),
                "scores": None if self.scores is None else r(self.scores, 3)}
         if self.input_index is not None:
             out["input_index"] = self.input_index
         if self.person_id is not None:
             out["person_id"] = self.person_id
         return out
+
+
+KEYPOINT_DECIMALS: Final[int] = 4
+"""Decimals of the 2D (px) in written records: a record read back lifts to its own result within 0.01 mm (at 2
+decimals, rounding by up to 0.005 px moved a clean 2D's root by 0.16 mm)."""
+
+CAMERA_DECIMALS: Final[int] = 9
+"""Decimals of the focal length and principal point (px) in written records: enough that a record read back
+lifts with its own camera (at 2 decimals a review's focal 801.234567 px moved the root 0.17 mm)."""
 
 
 @dataclass(frozen=True)
@@ -142,10 +152,12 @@ class LiftRecord:
                       "focal": "px", "principal_point": "px"},
             "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the "
                      + ("upright full-resolution image" if self.kind == "image" else "image the keypoints belong to"),
-            "keypoints_2d": r(self.keypoints_2d), "absolute": r(self.absolute), "relative": r(self.relative),
-            "root": r(self.root), "canonical_depth": round(float(self.canonical_depth), 2),
-            "focal": r(self.focal), "focal_source": self.focal_source,
-            "metric_depth": self.metric_depth, "principal_point": r(self.principal_point),
+            "keypoints_2d": r(self.keypoints_2d, KEYPOINT_DECIMALS), "absolute": r(self.absolute),
+            "relative": r(self.relative), "root": r(self.root),
+            "canonical_depth": round(float(self.canonical_depth), 2),
+            # (the camera unrounded, as the lens is: reading the record back lifts with the same camera)
+            "focal": r(self.focal, CAMERA_DECIMALS), "focal_source": self.focal_source,
+            "metric_depth": self.metric_depth, "principal_point": r(self.principal_point, CAMERA_DECIMALS),
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
                                                    "distortion_model": self.distortion_model}),
@@ -258,6 +270,10 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
                               f"{hint}")
     conf = a[:, 2] if a.shape[1] == 3 else None
     if conf is not None:
+        if np.isinf(conf).any():
+            j = int(np.flatnonzero(np.isinf(conf))[0])
+            raise PoseLifterError(f"{where}: keypoint {j}'s confidence is {conf[j]:g}: a confidence is a finite number "
+                                  "(0 or null marks a missing joint)")
         c = conf[np.isfinite(conf)]
         if c.size and (float(np.median(np.abs(c))) > Z_LIKE_THIRD_VALUE or float(c.min()) < -Z_LIKE_THIRD_VALUE):
             raise PoseLifterError(
@@ -387,6 +403,12 @@ def _camera_matrix_field(meta: dict[str, Any], *, where: str) -> tuple[str, np.n
     return None
 
 
+def _parse_int(text: str) -> int | float:
+    """A JSON integer; one too large for a float (``1e400`` written out) becomes infinity, which the field checks
+    refuse by name (a review's crashed with OverflowError)."""
+    return int(text) if len(text) <= 300 else float("-inf" if text.startswith("-") else "inf")
+
+
 def _load_json(p: Path) -> Any:
     try:
         size = p.stat().st_size
@@ -403,15 +425,17 @@ def _load_json(p: Path) -> Any:
         raise PoseLifterError(f"{p}: the file is empty; a keypoint file is JSON with the 2D joints (formats: README, "
                               "'Photos in, absolute 3D out')")
     try:
-        return json.loads(text)
+        return json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as exc:
         raise PoseLifterError(f"{p}: not valid JSON ({exc})") from None
     except RecursionError:
         raise PoseLifterError(f"{p}: JSON nested too deeply to be a keypoint file") from None
 
 
-PERSON_ID_KEYS: Final[tuple[str, ...]] = ("person_id", "id", "track_id")
-"""A person object's own identifier, copied to the output (the first of these keys it has, a string or integer)."""
+PERSON_ID_KEYS: Final[tuple[str, ...]] = ("person_id", "track_id", "id")
+"""A person object's own identifier, copied to the output (the first of these keys it has, a string or integer). A
+``track_id`` comes before an ``id``: in COCO and PoseTrack annotations ``id`` names the annotation (new in every
+frame) and ``track_id`` the person (a review saw two people swap at a cut while their ``track_id`` said otherwise)."""
 
 
 def _person_id(q: Any) -> str | int | None:
@@ -532,6 +556,18 @@ def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
     return sorted({k for q in objs for k in CAMERA_FIELDS if k in q})
 
 
+def _check_person_keypoints_field(q: dict[str, Any], p: Path, n: int) -> None:
+    """Refuse a person object that holds its joints under another tool's name (``kpts``, ``joints``, ``landmarks``:
+    :data:`_FIELD_NAMES_ELSEWHERE`) and has no ``keypoints``: it would be left out without a word (a review lost the
+    larger of two people so). A person whose ``keypoints`` is null or absent otherwise is left out as nobody."""
+    if "keypoints" in q:
+        return
+    other = [k for k in q if isinstance(k, str) and _FIELD_NAMES_ELSEWHERE.get(k.lower()) == "keypoints"]
+    if other:
+        raise PoseLifterError(f"{p}: person {n + 1} has {other[0]!r} and no 'keypoints': name the field 'keypoints' "
+                              "(a list of [x, y] or [x, y, confidence] rows)")
+
+
 def _scored(q: dict[str, Any], p: Path) -> Any:
     """A person object's ``keypoints``, with MMPose's / RTMPose's separate ``keypoint_scores`` (one per joint) made
     their third values, so that they are read as every other confidence is (a score <= 0 marks a missing joint)."""
@@ -618,20 +654,25 @@ def _people_of(d: Any, p: Path, fmt: str | None
                                   f"{{\"keypoints\": [...]}} objects, got {_short(d['people'])}")
         people = []
         ids = [_person_id(q) for q in d["people"]]
-        for q in d["people"]:
+        own = False
+        for n, q in enumerate(d["people"]):
             if isinstance(q, dict) and "pose_keypoints_2d" in q:
                 people.append(q["pose_keypoints_2d"])
                 fmt = fmt or "openpose25"
             elif isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q:  # poselifter's own output
                 people.append(_own_scored(q))
-                fmt = fmt or H36M17
+                own = True
             elif isinstance(q, dict):
+                _check_person_keypoints_field(q, p, n)
                 people.append(_scored(q, p))
             else:
                 people.append(q)
         meta = {k: v for k, v in d.items() if k != "people"}
-        if isinstance(meta.get("format"), str):
-            fmt = meta["format"]
+        if meta.get("format") is not None:
+            fmt = meta["format"]  # (its type is checked below)
+        elif own:
+            fmt = H36M17  # (its 'keypoints_2d' are H36M's whatever format the other files have: a review re-lifted
+            # a result with --format coco17 and got its 2D read as COCO's, the root 46 % too near)
     elif isinstance(d, list) and d and all(isinstance(q, dict) for q in d):  # COCO-style results
         found = {q["image_id"] for q in d if q.get("image_id") is not None and isinstance(q["image_id"], (int, str))}
         images = sorted(found, key=lambda i: (isinstance(i, str), i))  # (numbers in number order, then names)
@@ -654,7 +695,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
         people = [_own_scored(d)]
         ids = [_person_id(d)]
         meta = d
-        fmt = d.get("format") or fmt or H36M17
+        fmt = d.get("format") or H36M17  # (H36M's, whatever format the other files have)
     else:
         keys = [k for k in d if isinstance(k, str)] if isinstance(d, dict) else []
         near = [k for k in keys if _FIELD_NAMES_ELSEWHERE.get(k.lower()) == "keypoints"] or \
@@ -723,8 +764,14 @@ def _face_first(xy: np.ndarray, missing: np.ndarray) -> bool:
     return bool(face_first_people(xy, missing)[0])
 
 
+def _score_note(top: float) -> str:
+    """The note on confidences above :data:`SCORE_NOTE_ABOVE` (the largest ``top``): another scale than [0, 1]."""
+    return (f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks a "
+            "missing joint)")
+
+
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
-                   *, layout_format: bool = False, frame: int | None = None) -> _People:
+                   *, layout_format: bool = False, frame: int | None = None, score_note: bool = True) -> _People:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format,
     with a missing face or mid-body joint stood in for where the format allows (:data:`lifter.keypoints.STAND_INS`);
     the people still missing a joint the lifter needs (confidence 0 or null, or null / non-finite coordinates) are
@@ -739,9 +786,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
             top = max([top, *conf[np.isfinite(conf)].tolist()])
         parsed.append((xy, missing, conf))
-    if top > SCORE_NOTE_ABOVE:
-        notes.append(f"third values up to {top:.4g}: read as a detector's unnormalised scores (only a value <= 0 marks "
-                     "a missing joint)")
+    if top > SCORE_NOTE_ABOVE and score_note:
+        notes.append(_score_note(top))
     if not parsed:
         return _People([], fmt or H36M17, [], [], [], [])
 
@@ -966,6 +1012,24 @@ class KeypointSequence:
     people_scores: list[list[np.ndarray | None]] | None = None
     """Per frame, for each of its people: their ``(J,)`` confidences as :attr:`KeypointFile.people_scores` reads them,
     None where they have none; None when no frame has any."""
+    frame_indices: list[int] | None = None
+    """Each frame's index in its video (:func:`frame_indices`: a frame's ``index``, as poselifter's own records
+    write it, where frames were left out), or None: the frames are consecutive from 0."""
+
+
+def frame_indices(frames: list[Any], where: Path) -> tuple[list[int] | None, list[str]]:
+    """The frames' own indices in their video when every frame is an object with a whole-number ``index`` (a
+    poselifter record's frames; undecodable frames are left out of them), increasing, else None; and a note when
+    some frames have an ``index`` that cannot be read so (the frames are then taken as consecutive). A review saw a
+    record's frames 5 and 6 read back as 3 and 4, their times 0.2 s early."""
+    given = [fr.get("index") if isinstance(fr, dict) else None for fr in frames]
+    if all(v is None for v in given):
+        return None, []
+    whole = [int(v) for v in given if isinstance(v, int) and not isinstance(v, bool) and v >= 0]
+    if len(whole) == len(given) and all(b > a for a, b in zip(whole, whole[1:])):
+        return (None if whole == list(range(len(whole))) else whole), []
+    return None, [f"{where}: the frames' 'index' fields are not read (each frame needs a whole number >= 0, "
+                  "increasing): the frames are taken as consecutive from 0"]
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -975,6 +1039,13 @@ def is_keypoint_sequence(path: str | Path) -> bool:
     except PoseLifterError:
         return False
     return isinstance(d, dict) and "frames" in d
+
+
+def _own_sequence(frames: list[Any]) -> bool:
+    """Whether a sequence's frames are poselifter's own output (people with ``keypoints_2d``, H36M's 17 joints, and
+    no ``keypoints``): their format is H36M's whatever ``default_format`` the other files are read with."""
+    return any(isinstance(fr, dict) and isinstance(fr.get("people"), list) and any(
+        isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q for q in fr["people"]) for fr in frames)
 
 
 def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None) -> KeypointSequence:
@@ -999,10 +1070,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                               "(frames/s, in (0, 1000])")
     if not (_is_number(fps) and math.isfinite(fps) and 0 < fps <= 1000):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(fps)}")
-    fmt = d.get("format") or default_format
+    fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
-    notes: list[str] = []
+    indices, notes = frame_indices(raw, p)
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     scores: list[list[np.ndarray | None]] = []
@@ -1019,8 +1090,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
             scores.append([])
             continue
         people, f_fmt, _, layout_format = _people_of(fr, where, fmt)
-        found = _people_arrays(people, where, f_fmt, notes if fmt is None and not frames else [],
-                               layout_format=layout_format, frame=i)
+        # (the format's note from the first frame with people, which settles it; the scores' note over every frame:
+        # a review saw both lost after a leading empty frame, or for scores above 2 past the first frame)
+        found = _people_arrays(people, where, f_fmt, notes if fmt is None else [], layout_format=layout_format,
+                               frame=i, score_note=False)
         arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
         for _, said in found.stood_in:
             for phrase in said:
@@ -1036,6 +1109,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         scores.append(list(found.scores))
         dropped += [(i, g) for g in gone]
     fmt = fmt or H36M17
+    top = max((float(np.max(c[np.isfinite(c)])) for fr in scores for c in fr
+               if c is not None and np.isfinite(c).any()), default=0.0)
+    if top > SCORE_NOTE_ABOVE:
+        notes.append(_score_note(top))
     if _visibility_flags([c for fr in scores for c in fr]):
         notes.append(FLAGS_NOTE)
         scores = [[None for _ in fr] for fr in scores]
@@ -1067,7 +1144,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                             distortion_model=model,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None,
                             unread=tuple(unread), assumed_focal=assumed,
-                            people_scores=scores if any(c is not None for fr in scores for c in fr) else None)
+                            people_scores=scores if any(c is not None for fr in scores for c in fr) else None,
+                            frame_indices=indices)
 
 
 def _read_umask() -> int:

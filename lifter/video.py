@@ -20,6 +20,7 @@ Units: px and mm, seconds; camera frame OpenCV (+x right, +y down, +z forward).
 
 from __future__ import annotations
 
+import bisect
 import math
 import os
 import re
@@ -45,7 +46,7 @@ from .detect import (
     people_h36m,
     people_scores,
 )
-from .io import depth_is_metric, distortion_tuple, parse_keypoint_sequence
+from .io import CAMERA_DECIMALS, KEYPOINT_DECIMALS, depth_is_metric, distortion_tuple, parse_keypoint_sequence
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
@@ -109,7 +110,8 @@ class PersonState:
 
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=1: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
-        return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, 2), "absolute": r(self.absolute),
+        return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, KEYPOINT_DECIMALS),
+                "absolute": r(self.absolute),
                 "relative": r(self.relative), "root": r(self.root),
                 "canonical_depth": round(float(self.canonical_depth), 1),
                 "root_unsmoothed": r(self.root_raw),
@@ -215,16 +217,20 @@ def track_animation(seen: list[tuple[int, PersonState]]) -> np.ndarray:
 
 
 def tracked_output_notes(net: Any, frames: list[FrameResult], principal_point: Any, *, source: str,
-                         only: set[int] | None = None, focal: Any = None) -> dict[str, tuple[int, int, str]]:
+                         only: set[int] | None = None, focal: Any = None,
+                         lifted_2d: dict[int, np.ndarray] | None = None) -> dict[str, tuple[int, int, str]]:
     """What looks wrong in tracked frames' lifts (``net.output_notes``, :meth:`lifter.Lifter.output_notes`, on each
     person's unsmoothed root), collected per kind (:func:`collect_output_notes`), each note naming the person by
     the track id the record gives them (``"track 3"``: a frame position would not find them in the record).
-    ``only``: the frame indices to look at (those whose lift had notes); None: every frame."""
+    ``only``: the frame indices to look at (those whose lift had notes); None: every frame. ``lifted_2d``: per frame
+    index, the ``(n, 17, 2)`` px 2D that was lifted, in the frame's order of people, where it is not the record's own
+    (undistorted through a lens: a review saw the lens's distorted 2D judged against the lift, a false note)."""
     acc: dict[str, tuple[int, int, str]] = {}
     for fr in frames:
         if not fr.people or (only is not None and fr.index not in only):
             continue
-        kp = np.stack([q.keypoints_2d for q in fr.people])
+        kp = (lifted_2d[fr.index] if lifted_2d is not None and fr.index in lifted_2d
+              else np.stack([q.keypoints_2d for q in fr.people]))
         root = np.stack([q.root_raw for q in fr.people])
         collect_output_notes(acc, fr.index, net.output_notes(kp, principal_point, root, source=source,
                                                              names=[f"track {q.track_id}" for q in fr.people],
@@ -287,9 +293,9 @@ class SequenceRecord:
             "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the full-resolution frame",
             "fps": round(self.fps, 4), "num_frames": len(self.frames), "num_frames_in_file": self.num_frames_in_file,
             "image_size": None if self.image_size is None else [int(v) for v in self.image_size],
-            "focal": [round(v, 2) for v in self.focal], "focal_source": self.focal_source,
+            "focal": [round(v, CAMERA_DECIMALS) for v in self.focal], "focal_source": self.focal_source,
             "metric_depth": self.metric_depth,
-            "principal_point": [round(v, 2) for v in self.principal_point], "source": self.source,
+            "principal_point": [round(v, CAMERA_DECIMALS) for v in self.principal_point], "source": self.source,
             **({} if self.distortion is None else {"distortion": [float(v) for v in self.distortion],
                                                    "distortion_model": self.distortion_model}),
             "source_format": self.source_format, "detector": self.detector,
@@ -735,12 +741,17 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         assumed_focal=ks.assumed_focal)
     warnings.extend(notes)
     frames = ks.frames
+    at = ks.frame_indices or list(range(len(frames)))  # each frame's index in its video (a record leaves some out)
     limit = int(math.floor(max_seconds * ks.fps + 1e-9))
-    if len(frames) > limit:
-        warnings.append(f"the sequence has {len(frames)} frames ({len(frames) / ks.fps:.1f} s); only the first "
-                        f"{max_seconds:g} s ({limit} frames) are lifted (the duration bound, --max-seconds)")
-        frames = frames[:limit]
-    crowded = [i for i, fr in enumerate(frames) if len(fr) > max_people]
+    if limit == 0:
+        raise PoseLifterError(f"{path}: max_seconds {max_seconds:g} (--max-seconds) is shorter than one frame of "
+                              f"this {ks.fps:g} frames/s sequence: give at least {1 / ks.fps:.3g} s")
+    within = bisect.bisect_left(at, limit)  # (the frames that start before max_seconds)
+    if len(frames) > within:
+        warnings.append(f"the sequence has {len(frames)} frames ({(at[-1] + 1) / ks.fps:.1f} s); only the first "
+                        f"{max_seconds:g} s ({within} frames) are lifted (the duration bound, --max-seconds)")
+        frames = frames[:within]
+    crowded = [at[i] for i, fr in enumerate(frames) if len(fr) > max_people]
     if crowded:
         warnings.append(_crowd_note(max_people, crowded))
     ids = None if ks.people_ids is None else list(ks.people_ids[:len(frames)])
@@ -753,14 +764,14 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
         names = [None] * len(fr) if names_by_frame is None else list(names_by_frame[i])
-        keep = followed.keep(i, boxes, names)
+        keep = followed.keep(at[i], boxes, names)
         kept_frames.append([fr[j] for j in keep])
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
         if kept_ids is not None and ids is not None:
             kept_ids.append([ids[i][j] for j in keep])
     frames, ids = kept_frames, kept_ids
     counts = [len(fr) for fr in frames]
-    nobody = [i for i, c in enumerate(counts) if c == 0]
+    nobody = [at[i] for i, c in enumerate(counts) if c == 0]
     if nobody:
         warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if not sum(counts):
@@ -773,15 +784,17 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
                       distortion=ks.distortion, distortion_model=ks.distortion_model)
     root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
-    lifted, k = [], 0
+    seen = np.asarray(res.keypoints_2d).reshape(-1, 17, 2)  # (the 2D lifted: undistorted through a lens)
+    lifted, lifted_2d, k = [], {}, 0
     for i, c in enumerate(counts):
-        lifted.append((i, i / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c],
+        lifted.append((at[i], at[i] / ks.fps, kp17[k:k + c], root[k:k + c], rel[k:k + c],
                        _frame_scores(kept_scores[i], ks.format)))
+        lifted_2d[at[i]] = seen[k:k + c]
         k += c
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
-                                                               source=ks.source, focal=f)))
+                                                               source=ks.source, focal=f, lifted_2d=lifted_2d)))
     warnings.extend(track_gap_notes(out))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)

@@ -828,3 +828,27 @@ def test_a_result_with_an_assumed_focal_uploaded_again_says_it_is_assumed_again(
     assert info is not None and info.focal_source == "default-fov" and view.state.focal_px != pytest.approx(555.0)
     assert any(w.startswith("the file's focal length ([555.0, 555.0] px) was assumed when it was written")
                for w in info.warnings), info.warnings
+
+
+def test_keypoint_file_scores_reach_the_download(tmp_path: Path) -> None:
+    """Everyone's confidences of an uploaded keypoint file are in the app's download, as ``poselifter lift`` writes
+    them (a review's download had none)."""
+    from conftest import tiny_lifter
+
+    from lifter import demo_sample
+    from lifter.pipeline import lift_keypoint_file
+
+    kp = np.asarray(demo_sample("walking").keypoints_2d, np.float64)
+    sc = np.linspace(0.5, 1.0, 17).round(3)
+    doc = {"people": [{"keypoints": np.c_[kp, sc].tolist()}, {"keypoints": np.c_[kp * 0.8 + 30, sc[::-1]].tolist()}],
+           "format": "h36m17", "image_size": [800, 600], "focal": 800}
+    sample = up.keypoint_sample("scores.json", json.dumps(doc).encode(), key="upload/t/scores.json")
+    lf = tiny_lifter()
+    got = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(800.0, 800.0),
+                           people=[sample.keypoints_2d, *sample.others_2d]).to_json()
+    path = tmp_path / "scores.json"
+    path.write_text(json.dumps(doc))
+    want = lift_keypoint_file(path, lifter=lf).to_json()
+    assert got["scores"] == want["scores"] == pytest.approx(sc.tolist())
+    assert [p["scores"] for p in got["people"]] == [p["scores"] for p in want["people"]]
+    assert got["people"][1]["scores"] == pytest.approx(sc[::-1].tolist())

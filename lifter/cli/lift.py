@@ -63,7 +63,7 @@ import os
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -184,29 +184,55 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
     return list(unique.values()), problems, notes
 
 
-def output_names(files: list[Path], out_dir: Path) -> tuple[list[str], list[str]]:
+PER_PERSON_STEM: Final = re.compile(r"(.+)_(?:person|track)\d+")
+"""The stems of the outputs written per person or track beside ``<name>.json`` (``<name>_person2.bvh``,
+``<name>_track3.bvh``): another input's outputs may not take them."""
+
+
+def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) -> tuple[list[str], list[str]]:
     """A unique output stem per input, and a note for each input whose outputs are not named by its own stem.
     The stem; on a clash with an earlier input, ``<folder>_<stem>`` when the two sit in different folders, else
-    ``<stem>_<suffix>``, then a number. A name whose JSON would overwrite one of the inputs is not used."""
+    ``<stem>_<suffix>``, then a number. A name whose JSON would overwrite one of the inputs is not used. With
+    ``per_person`` (``--bvh``: ``<stem>_person<k>`` and ``<stem>_track<ID>`` files too), a stem is not used where
+    one input's per-person names would be another's (``a`` and ``a_person2``: a review lost a BVH so)."""
     claimed: dict[str, Path] = {}
     inputs = {f.resolve() for f in files}
     names, notes = [], []
+
+    def owner(c: str) -> Path | None:
+        """The input that has ``c``, or whose per-person outputs could be named ``c``, or that could have ``c``'s."""
+        if c in claimed:
+            return claimed[c]
+        if per_person:
+            m = PER_PERSON_STEM.fullmatch(c)
+            if m is not None and m.group(1) in claimed:
+                return claimed[m.group(1)]
+            for d, f in claimed.items():
+                m = PER_PERSON_STEM.fullmatch(d)
+                if m is not None and m.group(1) == c:
+                    return f
+        return None
+
     for f in files:
-        first = claimed.get(f.stem)
+        first = owner(f.stem)
         cands = [f.stem]
         if first is not None and first.parent.name != f.parent.name and f.parent.name:
             cands.append(f"{f.parent.name}_{f.stem}")
         cands += [f"{f.stem}_{f.suffix.lstrip('.').lower()}"] + [f"{f.stem}_{i}" for i in range(2, 10_000)]
         for c in cands:
-            if c not in claimed and (out_dir / f"{c}.json").resolve() not in inputs:
+            if owner(c) is None and (out_dir / f"{c}.json").resolve() not in inputs:
                 break
         else:  # pragma: no cover
             raise PoseLifterError(f"cannot name the output of {f}")
         claimed[c] = f
         names.append(c)
         if c != f.stem:
-            why = (f"{first} is also named {f.stem}" if first is not None
-                   else f"{f.stem}.json in {out_dir} is an input")
+            if first is None:
+                why = f"{f.stem}.json in {out_dir} is an input"
+            elif first.stem == f.stem:
+                why = f"{first} is also named {f.stem}"
+            else:
+                why = f"it and {first} would share --bvh's per-person names <name>_person<k> / <name>_track<ID>"
             notes.append(f"{f}: its results are named {c}.* ({why})")
     return names, notes
 
@@ -340,7 +366,7 @@ def run_lift(args: argparse.Namespace) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise PoseLifterError(f"--out {args.out}: cannot create the output folder ({exc.strerror or exc})") from None
-    names, name_notes = output_names(files, args.out)
+    names, name_notes = output_names(files, args.out, per_person=args.bvh)
     for msg in name_notes:
         print(f"note: {msg}", file=sys.stderr)
     estimator: Any = None
