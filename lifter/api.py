@@ -225,16 +225,23 @@ def _lens_of(train_config: dict[str, Any] | None) -> Lens:
     return lens
 
 
-def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str) -> np.ndarray:
+def _broadcast(x: np.ndarray, lead: tuple[int, ...], *, name: str, given: Any = None) -> np.ndarray:
+    """``x`` ``(..., 2)`` broadcast to ``lead + (2,)``, else an error naming the shapes (``given``: what the caller
+    passed, when :func:`lifter._checks.as_pair` made its scalars or last axis of 1 into pairs)."""
     try:
         return np.broadcast_to(x, lead + (2,))
     except ValueError:
+        shape = tuple(x.shape)
+        if given is not None and np.shape(given) != shape:
+            shape_text = f"{np.shape(given)} (read as {shape}: one value is fx = fy)"
+        else:
+            shape_text = str(shape)
         if not lead:
-            raise PoseLifterError(f"{name}: shape {tuple(x.shape)} for a single pose (keypoints (17, 2)); give one "
+            raise PoseLifterError(f"{name}: shape {shape_text} for a single pose (keypoints (17, 2)); give one "
                                   f"(2,) {name}, e.g. {name}[0]") from None
         per_first = "" if len(lead) < 2 else (f", or {lead[:1] + (1,) * (len(lead) - 1) + (2,)} for one per "
                                                  f"index of the first axis")
-        raise PoseLifterError(f"{name}: shape {tuple(x.shape)} does not broadcast against the keypoints' leading "
+        raise PoseLifterError(f"{name}: shape {shape_text} does not broadcast against the keypoints' leading "
                               f"shape {lead}: its last axis is {_PAIRS.get(name, '(x, y)')}, so give (2,) for "
                               f"every pose, {lead + (2,)} for each{per_first}") from None
 
@@ -665,7 +672,7 @@ class Lifter:
                 focal_source = "default-fov"
             else:
                 focal, focal_source = CANONICAL_FOCAL, "reference"
-        f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True), lead, name="focal")
+        f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True), lead, name="focal", given=focal)
         for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
             if arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
                 raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "

@@ -125,6 +125,13 @@ def read_glb_joints(path: str | os.PathLike[str], *, person: int = 0) -> np.ndar
         v = v @ transform[:3, :3].T + transform[:3, 3]
         out[JOINT_NAMES.index(name)] = 0.5 * (v.min(0) + v.max(0))
     if np.isnan(out).any():
+        nodes = {str(node) for node in scene.graph.nodes_geometry}
+        people = 0
+        while person_prefix(people) + f"joint_{JOINT_NAMES[0]}" in nodes:
+            people += 1
+        if 0 < people <= person or person < 0:  # (a user trial's person=2 of two read "joint spheres missing")
+            raise PoseLifterError(f"{path}: person {person} is not in this GLB: it holds {people} "
+                                  f"{'person' if people == 1 else 'people'} (person = 0 .. {people - 1})")
         raise PoseLifterError(f"{path}: not a poselifter skeleton GLB (joint spheres missing)")
     return from_y_up(out * 1000.0)
 

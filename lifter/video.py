@@ -138,6 +138,7 @@ class SequenceTracker:
         self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
+        self._last: tuple[int, float] | None = None  # (frame, t) of the last step
 
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
              focal: np.ndarray, scores: np.ndarray | None = None,
@@ -167,6 +168,15 @@ class SequenceTracker:
                 raise PoseLifterError(f"SequenceTracker.step: focal: one focal length for the frame (scalar or (2,) "
                                       f"px), got {len(f)} different ones")
             focal = f[0]
+            bad = [i for i in range(n) if not (np.all(np.isfinite(root[i])) and np.all(np.isfinite(relative[i])))]
+            if bad:  # (one NaN root would leave its track's smoother NaN for good: a user trial's)
+                raise PoseLifterError(f"SequenceTracker.step: frame {frame}: person {bad[0]}'s root or relative pose "
+                                      "is not finite (NaN or inf); step only lifted poses (Lifter.lift refuses such "
+                                      "2D), and leave a person out of a frame rather than give NaN")
+        if self._last is not None and not (frame > self._last[0] and t > self._last[1]):
+            raise PoseLifterError(f"SequenceTracker.step: frame {frame} at {t:g} s comes after frame {self._last[0]} "
+                                  f"at {self._last[1]:g} s: frames and times must increase (nothing was updated)")
+        self._last = (int(frame), float(t))
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks or tid in self.tracker.resumed:
@@ -317,8 +327,9 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     as one of ``tracked_ids``, when the file names its people; else a box overlapping one of ``tracked`` by at least
     :data:`TRACKED_IOU`, the best overlap first, not counting a tracked person the file names otherwise;
     ``tracked_ids`` are the names of ``tracked``, in the same order, None where unnamed), then the largest of the
-    rest. So ``--max-people 1`` follows one person through a video or a keypoint sequence instead of switching to
-    whoever looks largest in a frame."""
+    rest, those overlapping a tracked box a little (below :data:`TRACKED_IOU`: a person whose arms moved; a user
+    trial's followed person was dropped for a stranger so) before the others. So ``--max-people 1`` follows one
+    person through a video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
     known = {i for i, pid in enumerate(ids or []) if pid is not None and pid in (tracked_ids or [])}
     names = list(ids) if ids is not None else [None] * len(boxes)
     tracked_names = list(tracked_ids) if tracked_ids is not None and len(tracked_ids) == len(tracked) else (
@@ -332,7 +343,7 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
         if i in known:
             return (0, 0.0, i)
         o = overlap(i)
-        return (1, -o, i) if o >= TRACKED_IOU else (2, 0.0, i)
+        return (1, -o, i) if o >= TRACKED_IOU else (2, -o, i) if o > 0 else (3, 0.0, i)
 
     return sorted(range(len(boxes)), key=rank)[:max_people]
 
@@ -341,13 +352,15 @@ def tracking_names(ids: list[list[Any]]) -> list[list[Any]]:
     """Per frame, the names the tracker follows among a sequence's person ids ``ids`` (per frame, per person; None:
     unnamed): an id seen in one frame only is left out (None), as are ids repeated within a frame. An annotation's
     own ``id``, new in every frame (COCO, PoseTrack), then leaves the people to their boxes instead of making each
-    sighting a new person (a review found that); a ``person_id`` or ``track_id`` that recurs decides."""
-    frames_of: dict[Any, int] = {}
-    for frame in ids:
+    sighting a new person (a review found that); a ``person_id`` or ``track_id`` that recurs decides. A name is its
+    text: ``1`` and ``"1"`` are one person (a user trial's file mixed them, and got two half-empty tracks)."""
+    texts = [[None if p is None else str(p) for p in frame] for frame in ids]
+    frames_of: dict[str, int] = {}
+    for frame in texts:
         for pid in set(p for p in frame if p is not None):
             frames_of[pid] = frames_of.get(pid, 0) + 1
-    out = []
-    for frame in ids:
+    out: list[list[Any]] = []
+    for frame in texts:
         twice = {p for p in frame if p is not None and frame.count(p) > 1}
         out.append([p if p is not None and frames_of[p] > 1 and p not in twice else None for p in frame])
     return out
@@ -358,7 +371,8 @@ class _Followed:
     """The people a keypoint sequence's ``max_people`` cut follows: each with the frame it was last kept in, its box
     ``(x, y, w, h)`` px and the file's name for it. Those kept again are refreshed; someone else joins only while
     there is room, so a person missing from a frame or two (a joint left out) is not replaced by whoever was alone
-    there; a person unseen for ``horizon`` frames (a track's timeout) is let go."""
+    there; a person unseen for ``horizon`` frames (a track's timeout) is let go. A person the cut kept for overlapping
+    a followed box only a little refreshes that box (else the box went stale and a stranger took its place)."""
 
     max_people: int
     horizon: int
@@ -383,6 +397,13 @@ class _Followed:
             elif len(self.people) < self.max_people:
                 self.people.append((frame, boxes[j], names[j]))
                 taken.add(len(self.people) - 1)
+            elif len(boxes) > self.max_people:  # (kept by the cut for a small overlap: that person, moved)
+                near = [(box_iou(b, boxes[j]), k) for k, (_, b, n) in enumerate(self.people)
+                        if k not in taken and (n is None or names[j] is None or n == names[j])]
+                o, k = max(near, default=(0.0, -1))
+                if o > 0:
+                    self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
+                    taken.add(k)
         return keep
 
 
@@ -548,6 +569,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             fps = 30.0
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = int(math.floor(max_seconds * fps + 1e-9))
+        if limit == 0:  # (a user trial read "the video has no frames (zero-length)" for a 40-frame video)
+            raise VideoError(f"{p}: max_seconds {max_seconds:g} (--max-seconds) is shorter than one frame of this "
+                             f"{fps:g} frames/s video: give at least {1 / fps:.3g} s")
         total = min(declared, limit) if declared > 0 else None
         if declared > limit:
             warnings.append(f"the video is {declared / fps:.1f} s long; only its first {max_seconds:g} s "
@@ -693,19 +717,26 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
 
 def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
                  fps: float, focal: np.ndarray, smoothing: float = 1.0,
-                 person_ids: list[list[str | int | None]] | None = None) -> list[FrameResult]:
+                 person_ids: list[list[str | int | None]] | None = None,
+                 names: list[list[Any]] | None = None) -> list[FrameResult]:
     """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
     relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place).
     ``person_ids``: per frame, the input's own id for each of its people (None: none), kept as each person's
-    ``person_id``; those that recur from frame to frame are followed by the tracker (:func:`tracking_names`)."""
+    ``person_id``; those that recur from frame to frame are followed by the tracker (:func:`tracking_names`), or
+    ``names``, per frame and person, when given: the names read from the whole input (a ``--max-people`` cut can
+    leave a recurring name in one frame only, which would then be no name: a user trial saw another name take the
+    followed track so)."""
     if person_ids is not None and len(person_ids) != len(lifted):
         raise PoseLifterError(f"track_lifted: person_ids for {len(person_ids)} frames, {len(lifted)} frames lifted")
-    names_by_frame = None if person_ids is None else tracking_names([list(fr) for fr in person_ids])
+    if names is not None and len(names) != len(lifted):
+        raise PoseLifterError(f"track_lifted: names for {len(names)} frames, {len(lifted)} frames lifted")
+    names_by_frame = names if names is not None else (
+        None if person_ids is None else tracking_names([list(fr) for fr in person_ids]))
     seq = SequenceTracker(fps=fps, smoothing=smoothing)
     out = []
     for k, (index, t, kp, root, rel, sc) in enumerate(lifted):
-        names = None if names_by_frame is None else names_by_frame[k]
-        states = seq.step(index, t, kp, root, rel, focal, scores=sc, person_ids=names) if len(kp) else []
+        frame_names = None if names_by_frame is None else names_by_frame[k]
+        states = seq.step(index, t, kp, root, rel, focal, scores=sc, person_ids=frame_names) if len(kp) else []
         if person_ids is not None:
             for st, pid in zip(states, person_ids[k]):  # (the tracker keeps each frame's order)
                 st.person_id = pid
@@ -759,6 +790,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kept_frames: list[list[np.ndarray]] = []
     kept_ids: list[list[Any]] | None = None if ids is None else []
     kept_scores: list[list[np.ndarray | None]] = []
+    kept_names: list[list[Any]] | None = None if ids is None else []
     followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)))
     names_by_frame = None if ids is None else tracking_names(ids)
     for i, fr in enumerate(frames):
@@ -769,6 +801,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
         if kept_ids is not None and ids is not None:
             kept_ids.append([ids[i][j] for j in keep])
+        if kept_names is not None:
+            kept_names.append([names[j] for j in keep])
     frames, ids = kept_frames, kept_ids
     counts = [len(fr) for fr in frames]
     nobody = [at[i] for i, c in enumerate(counts) if c == 0]
@@ -791,7 +825,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                        _frame_scores(kept_scores[i], ks.format)))
         lifted_2d[at[i]] = seen[k:k + c]
         k += c
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids)
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names)
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))

@@ -875,3 +875,12 @@ def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
     res = measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False)
     assert [w.kind for w in res.warnings] == ["misfit"] and "6 of 6 lifted pose(s) do not fit their 2D" in res.warnings[0]
     assert not measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings
+
+
+def test_a_focal_per_first_index_error_names_the_shape_given():
+    """A user trial's (5, 1) focal for (5, 2, 17, 2) keypoints was reported as shape (5, 2), the keypoints' own."""
+    kp = np.broadcast_to(np.asarray(demo_sample("walking").keypoints_2d), (5, 2, 17, 2))
+    with pytest.raises(PoseLifterError, match=r"focal: shape \(5, 1\) \(read as \(5, 2\): one value is fx = fy\)"):
+        tiny_lifter().lift(kp, focal=np.full((5, 1), 1000.0), principal_point=(500, 500))
+    out = tiny_lifter().lift(kp, focal=np.full((5, 1, 1), 1000.0), principal_point=(500, 500))
+    assert out.root.shape == (5, 2, 3)

@@ -88,7 +88,7 @@ def test_glb_several_people_in_one_scene(tmp_path):
     p = write_glb(poses, tmp_path / "three.glb")
     for k in range(3):
         np.testing.assert_allclose(read_glb_joints(p, person=k), poses[k], atol=1e-3)
-    with pytest.raises(PoseLifterError, match="joint spheres missing"):
+    with pytest.raises(PoseLifterError, match=r"person 3 is not in this GLB: it holds 3 people \(person = 0 .. 2\)"):
         read_glb_joints(p, person=3)
 
 

@@ -942,3 +942,80 @@ def test_track_animation_keeps_the_video_clock():
     np.testing.assert_allclose(anim[:, 0, 2], [1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000, 6000])
     with pytest.raises(PoseLifterError, match="no frames"):
         track_animation([])
+
+
+# ------------------------------------------------------------------------------------------------ a developer's trial
+
+
+def test_max_people_cut_keeps_the_names_of_the_whole_sequence(tmp_path, lifter):
+    """A user trial: with --max-people 1, B, alone in frame 5 of a sequence where A is followed, took A's track (the
+    cut left B's recurring name in one kept frame, which then read as no name). The names of the whole file decide."""
+    kp = _person(np.random.default_rng(4), 120)
+    frames = []
+    for t in range(10):
+        a = {"keypoints": (kp + [3 * t, 0]).tolist(), "person_id": "A"}
+        b = {"keypoints": (kp + [3 * t + 15, 0]).tolist(), "person_id": "B"}
+        frames.append({"people": [b] if t == 5 else [a, b]})
+    path = tmp_path / "names.json"
+    path.write_text(json.dumps({"fps": 25, "format": "h36m17", "focal": F, "principal_point": [W / 2, H / 2],
+                                "frames": frames}))
+    rec = lift_keypoint_sequence(path, lifter=lifter, max_people=1)
+    track = {fr.index: (fr.people[0].track_id, fr.people[0].person_id) for fr in rec.frames}
+    assert track[5][1] == "B" and track[5][0] != track[4][0]
+    assert {track[t] for t in range(10) if t != 5} == {track[0]} and track[0][1] == "A"
+
+
+def test_max_people_follows_a_person_whose_box_changed_shape():
+    """A user trial: the followed person's box changed shape (arms moved: overlap 0.26 with the followed box), the
+    followed box went stale, and three frames later the cut took a stranger. A small overlap still continues them."""
+    from lifter.detect import box_iou
+    from lifter.video import _Followed
+
+    followed = _Followed(max_people=1, horizon=25)
+    a, stranger = np.array([100.0, 100, 100, 220]), np.array([600.0, 50, 200, 250])  # the stranger is larger
+    assert followed.keep(0, [a], [None]) == [0]  # (alone: followed)
+    a_wide = np.array([10.0, 200, 280, 120])  # the same person, arms out
+    assert 0 < box_iou(a, a_wide) < 0.3
+    assert followed.keep(1, [stranger, a_wide], [None, None]) == [1]
+    a_on = a_wide + [200, 0, 0, 0]  # and on from there: it overlaps the refreshed box, not the first one
+    assert box_iou(a, a_on) == 0 and 0 < box_iou(a_wide, a_on) < 0.3
+    assert followed.keep(2, [stranger, a_on], [None, None]) == [1]
+
+
+def test_sequence_tracker_refuses_nan_and_frames_out_of_order():
+    """A user trial: one NaN root left its track's smoother NaN for good, silently; a step back in time was taken
+    after the tracker had already moved."""
+    from lifter.video import SequenceTracker
+
+    kp = _person(np.random.default_rng(5), 150)[None]
+    root, rel = np.array([[0.0, 0, 3000]]), np.zeros((1, 17, 3))
+    seq = SequenceTracker(fps=25)
+    seq.step(0, 0.0, kp, root, rel, F)
+    with pytest.raises(PoseLifterError, match="person 0's root or relative pose is not finite"):
+        seq.step(1, 0.04, kp, np.full((1, 3), np.nan), rel, F)
+    with pytest.raises(PoseLifterError, match="frames and times must increase"):
+        seq.step(0, 0.0, kp + 300, root, rel, F)
+    out = seq.step(2, 0.08, kp, root + [0, 0, 10], rel, F)  # (nothing was updated by the refused steps)
+    assert out[0].track_id == 1 and np.all(np.isfinite(out[0].root))
+
+
+def test_video_max_seconds_shorter_than_a_frame_is_named(tmp_path, lifter):
+    clip = _write_clip(tmp_path / "slow.avi", 5, fps=1.0)
+    with pytest.raises(VideoError, match="shorter than one frame"):
+        lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(5)), focal=F, max_seconds=0.5)
+
+
+def test_a_name_and_its_text_are_one_person():
+    from lifter.video import tracking_names
+
+    assert tracking_names([[1, None], ["1", 2], [1, "2"]]) == [["1", None], ["1", "2"], ["1", "2"]]
+
+
+def test_glb_person_out_of_range_is_named(tmp_path):
+    from lifter.export import read_glb_joints, write_glb
+
+    pose = random_pose_cam(np.random.default_rng(6), 2)
+    write_glb(pose, tmp_path / "two.glb")
+    np.testing.assert_allclose(read_glb_joints(tmp_path / "two.glb", person=1), pose[1], atol=0.01)
+    with pytest.raises(PoseLifterError, match=r"person 2 is not in this GLB: it holds 2 people \(person = 0 .. 1\)"):
+        read_glb_joints(tmp_path / "two.glb", person=2)
