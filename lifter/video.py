@@ -476,6 +476,51 @@ def track_gap_notes(frames: list[FrameResult]) -> list[str]:
     return notes
 
 
+JUMP_FRACTION: Final[float] = 0.15
+"""A frame's 2D jumps away from its track when its median joint lies this far (a fraction of the person's box
+diagonal) off the line between the frames either side, and more than twice as far as those two are apart. The
+ground truth's own motion in Human3.6M (S9, S11) never does at 10 or 5 frames/s; the Stacked-Hourglass detections
+do it in a few frames in 10,000 (``python scripts/jump_rate.py``, ``docs/results/jump_rate.txt``)."""
+
+JUMP_MAX_SPAN_S: Final[float] = 0.4
+"""The longest span (s) of three sightings that :func:`track_jump_notes` judges (5 frames/s: at 2 frames/s a
+person's own motion jumps as far)."""
+
+
+def track_jumps(frames: list[FrameResult], *, fps: float) -> dict[int, list[tuple[int, float, float]]]:
+    """Per track, the frames whose 2D jumps away from the frames either side (:data:`JUMP_FRACTION`) as ``(frame
+    index, median joint px off the line between the two, px between them)``; tracks without any are left out.
+    Sightings spanning more than :data:`JUMP_MAX_SPAN_S` are not judged."""
+    out: dict[int, list[tuple[int, float, float]]] = {}
+    for tid, seen in sorted(_tracks(frames).items()):
+        for (i0, p0), (i1, p1), (i2, p2) in zip(seen, seen[1:], seen[2:]):
+            if (i2 - i0) / fps > JUMP_MAX_SPAN_S + 1e-9:
+                continue
+            a, b, c = (np.asarray(q.keypoints_2d, np.float64) for q in (p0, p1, p2))
+            line = a + (c - a) * ((i1 - i0) / (i2 - i0))
+            off = float(np.nanmedian(np.linalg.norm(b - line, axis=-1)))
+            apart = float(np.nanmedian(np.linalg.norm(c - a, axis=-1)))
+            size = 0.5 * sum(float(np.hypot(*bbox_of(k)[2:])) for k in (a, c))
+            if off > JUMP_FRACTION * size and off > 2.0 * apart:
+                out.setdefault(tid, []).append((i1, off, apart))
+    return out
+
+
+def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
+    """One note per track with frames of :func:`track_jumps`: most likely the detector's mistake there (a user
+    trial's video frame put the head below the pelvis, 98 px off, with its neighbours 5 px apart, and lifted it
+    535 mm off with no word)."""
+    notes: list[str] = []
+    for tid, hits in track_jumps(frames, fps=fps).items():
+        first, off, apart = hits[0]
+        more = (f", and in {len(hits) - 1} more: {_frames_summary([h[0] for h in hits[1:]])}" if len(hits) > 1
+                else "")
+        notes.append(f"track {tid}: its 2D in frame {first} jumps away from the frames either side (median joint "
+                     f"{off:.0f} px off the line between them, which are {apart:.0f} px apart){more}: most likely "
+                     "the detector's mistake there, and the lift there is off too; check the 2D of those frames")
+    return notes
+
+
 def _frames_summary(idx: list[int], n: int = 8) -> str:
     return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
 
@@ -703,6 +748,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
     warnings.extend(track_gap_notes(frames))
+    warnings.extend(track_jump_notes(frames, fps=fps))
     warnings.extend(track_doubt_notes(frames))
     if noted:
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
@@ -830,6 +876,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))
     warnings.extend(track_gap_notes(out))
+    warnings.extend(track_jump_notes(out, fps=ks.fps))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
@@ -845,5 +892,5 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "Fra
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
-           "track_gap_notes",
+           "track_gap_notes", "track_jump_notes", "track_jumps",
            "track_lifted", "tracked_output_notes"]

@@ -1019,3 +1019,42 @@ def test_glb_person_out_of_range_is_named(tmp_path):
     np.testing.assert_allclose(read_glb_joints(tmp_path / "two.glb", person=1), pose[1], atol=0.01)
     with pytest.raises(PoseLifterError, match=r"person 2 is not in this GLB: it holds 2 people \(person = 0 .. 1\)"):
         read_glb_joints(tmp_path / "two.glb", person=2)
+
+
+def _track_of(kp: np.ndarray, *, fps: float = 10.0) -> list:
+    """FrameResults of one person whose 2D is ``kp`` ``(T, 17, 2)`` px (3D and depth not used)."""
+    from lifter.video import FrameResult, PersonState
+
+    zero = np.zeros((17, 3))
+    return [FrameResult(index=i, time_s=i / fps, people=[PersonState(
+        track_id=1, keypoints_2d=k, root=np.array([0.0, 0, 3000]), relative=zero, root_raw=np.array([0.0, 0, 3000]),
+        relative_raw=zero, canonical_depth=3000.0)]) for i, k in enumerate(kp)]
+
+
+def test_a_frame_whose_2d_jumps_away_from_its_track_is_named():
+    """A user trial: one video frame's detection put the head below the pelvis (98 px off, its neighbours 5 px
+    apart) and was lifted 535 mm off with no word."""
+    from lifter.video import track_jump_notes
+
+    base = _person(np.random.default_rng(7), 160)
+    walk = np.stack([base + [1.5 * i, 0] for i in range(12)])
+    assert track_jump_notes(_track_of(walk), fps=10) == []
+    glitch = walk.copy()
+    glitch[6] = glitch[6][::-1] + [0, 10]  # the joints upside down in frame 6
+    notes = track_jump_notes(_track_of(glitch), fps=10)
+    assert len(notes) == 1 and notes[0].startswith("track 1: its 2D in frame 6 jumps away from the frames either side")
+    assert track_jump_notes(_track_of(glitch), fps=2) == []  # (0.4 s or more between sightings: not judged)
+    glitch[9] = glitch[9] + 40
+    assert "and in 1 more: 9" in track_jump_notes(_track_of(glitch), fps=10)[0]
+
+
+@pytest.mark.parametrize("stride", [5, 10])
+def test_people_s_own_motion_does_not_jump(h36m, stride):
+    """Human3.6M's ground-truth motion at 10 and 5 frames/s (S9 and S11, every sequence, one camera) has no frame
+    that :func:`lifter.video.track_jump_notes` names."""
+    from lifter.video import track_jump_notes
+
+    for seq in h36m.sequences_of([9, 11]):
+        cam = h36m.camera(int(seq.split("/")[0][1:]), "54138969")
+        kp = cam.project(cam.world_to_camera(h36m.poses_world(seq)[::stride]))
+        assert track_jump_notes(_track_of(kp, fps=50 / stride), fps=50 / stride) == [], seq
