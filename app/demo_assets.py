@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 import trimesh
 
-from lifter.camera import project, world_to_camera
+from lifter.camera import image_centre, project, world_to_camera
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
 
 DEMO_DIR = Path(__file__).resolve().parent.parent / "assets" / "demo"
@@ -226,7 +226,9 @@ def render_mesh(
     W, H = size
     s = supersample
     f = np.asarray(focal, np.float64) * s
-    c = (np.asarray(principal_point, np.float64) + 0.5) * s - 0.5
+    # (pixel i covers [i, i + 1) as in lifter.camera.project, and OpenCV draws pixel k's centre at k: a point u px
+    # lands at u * s - 0.5 of the supersampled raster. A review measured the renders 0.5 px off with (pp + 0.5) * s.)
+    c = np.asarray(principal_point, np.float64) * s - 0.5
     img = np.empty((H * s, W * s, 3), np.uint8)
     grad = np.linspace(235, 200, H * s)[:, None]
     img[:] = np.stack([grad, grad, grad + 6], axis=-1).clip(0, 255).astype(np.uint8)
@@ -301,7 +303,8 @@ def make_sample(spec: DemoSpec, *, size: tuple[int, int] = IMAGE_SIZE) -> dict[s
     eye = target + dist * np.array([np.sin(az), -np.cos(az), 0.0])
     eye[2] = spec.camera_height
     R, t = look_at_camera(eye=eye, target=target)
-    pp = (W / 2.0, H / 2.0)
+    cx, cy = image_centre((W, H))
+    pp = (float(cx), float(cy))
     fxy = (spec.focal, spec.focal)
     mesh = build_mannequin(world, stool=pose_spec.stool)
     image = render_mesh(mesh, R=R, t=t, focal=fxy, principal_point=pp, size=size)

@@ -19,6 +19,7 @@ import numpy as np
 import viser
 import viser.transforms as vtf
 
+from lifter.camera import image_centre
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
 
 from . import framing
@@ -215,7 +216,7 @@ def draw_camera(nodes: CameraNodes, state: SessionState, *, new_sample: bool, ne
     nodes.frustum.points = np.stack(segs).astype(np.float32)
     W, H = state.image_size
     f = state.focal
-    nodes.image.position = tuple(image_plane(state, np.array([W / 2.0, H / 2.0])) + np.array([0, 0, 0.002]))
+    nodes.image.position = tuple(image_plane(state, image_centre((W, H))) + np.array([0, 0, 0.002]))
     d = image_plane_depth(state)
     nodes.image.render_width = W / f[0] * d
     nodes.image.render_height = H / f[1] * d

@@ -38,7 +38,7 @@ import numpy as np
 from lifter import Camera, PoseLifterError
 from lifter._text import sentence
 from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
-from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, lens_notes, undistort_pixels_opencv
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, image_centre, lens_notes, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -345,8 +345,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         if kf.assumed_focal is not None:  # (a result written with an assumed focal: assumed again, as lift says)
             notes.append(REASSUMED_NOTE.format(focal=kf.assumed_focal) + " (set it if you know it)")
         notes.append(g.detail)
-    pp = (float(kf.principal_point[0]), float(kf.principal_point[1])) if kf.principal_point is not None \
-        else (size[0] / 2.0, size[1] / 2.0)
+    cx, cy = kf.principal_point if kf.principal_point is not None else image_centre(size)
+    pp = (float(cx), float(cy))
     # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
     notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src,
                                 source_format=kf.format)
@@ -438,7 +438,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
             warnings.append(f"2D joints corrected in the app{who}: " + ", ".join(JOINT_NAMES[j] for j in sorted(joints)))
     if focal_changed:
         src = "app-slider"
-        warnings.append(f"focal length set in the app (slider or box) to {math.sqrt(focal[0] * focal[1]):.1f} px")
+        warnings.append(f"focal length set in the app (slider or box) to {float(focal_alpha(focal)):.1f} px")
     else:
         src = info.focal_source if info is not None else "calibrated-camera"
     top = lifted[0]

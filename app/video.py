@@ -15,7 +15,6 @@ the model and focal length in use. Units: px, mm, seconds; camera frame OpenCV.
 from __future__ import annotations
 
 import json
-import math
 import tempfile
 import threading
 from collections.abc import Callable
@@ -28,7 +27,7 @@ import numpy as np
 
 from lifter import PoseLifterError
 from lifter._text import sentence
-from lifter.camera import undistort_pixels_opencv
+from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
 from lifter.keypoints import H36M17
 from lifter.video import (
@@ -164,7 +163,7 @@ class VideoSequence:
     def _upload_focal(self, focal: tuple[float, float]) -> bool:
         """Whether ``focal`` is the upload's focal length, within :data:`FOCAL_SAME_PX` (alpha, px)."""
         f = self.record.focal
-        return abs(math.sqrt(float(focal[0]) * float(focal[1])) - math.sqrt(f[0] * f[1])) <= FOCAL_SAME_PX
+        return abs(float(focal_alpha(focal)) - float(focal_alpha(f))) <= FOCAL_SAME_PX
 
     def record_at(self, lifter: Any, focal: tuple[float, float]) -> SequenceRecord:
         """The whole sequence as ``poselifter lift`` writes it, for ``lifter`` at ``focal``: the upload's record
@@ -219,8 +218,8 @@ class VideoSequence:
                 # but its numbers differ once the upload's one-frame detections were left out: keep the upload's,
                 # which its notes and picker name)
                 st.track_id = was.track_id
-        note = (f"lifted again in the app: model {name!r} at focal length {math.sqrt(f[0] * f[1]):.1f} px (the upload's: "
-                f"{rec.model!r} at {math.sqrt(rec.focal[0] * rec.focal[1]):.1f} px)")
+        note = (f"lifted again in the app: model {name!r} at focal length {float(focal_alpha(f)):.1f} px (the upload's: "
+                f"{rec.model!r} at {float(focal_alpha(rec.focal)):.1f} px)")
         if undistorted:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")

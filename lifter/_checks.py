@@ -245,8 +245,9 @@ def narrow_view_notes(focal: Any, image_size: tuple[int, int] | None) -> list[st
     the distance). The depth is proportional to the focal length."""
     if image_size is None:
         return []
-    f = np.asarray(focal, np.float64).reshape(-1)
-    alpha = float(np.sqrt(f[0] * f[-1]))
+    from .camera import focal_alpha
+
+    alpha = float(focal_alpha(np.asarray(focal, np.float64).reshape(-1)))
     W, H = image_size
     fov = math.degrees(2.0 * math.atan(math.hypot(W, H) / (2.0 * alpha)))
     if not fov < MIN_PLAUSIBLE_VIEW_DEG:

@@ -48,6 +48,7 @@ from .camera import (
     check_lens,
     focal_alpha,
     focal_from_fov,
+    image_centre,
     lens_notes,
     undistort_pixels,
     undistort_pixels_opencv,
@@ -656,7 +657,7 @@ class Lifter:
             if wh is None:
                 raise PoseLifterError("principal_point is required (or pass image_size=(width, height) to use the "
                                       "image centre)")
-            principal_point = wh / 2.0
+            principal_point = image_centre(wh)
         pp = _broadcast(as_pair(principal_point, name="principal_point"), lead, name="principal_point")
         focal_source: FocalSource = "given"
         if focal is None:

@@ -51,6 +51,13 @@ def _last2(x: ArrayLike, *, name: str, positive: bool = False, scalar: bool = Fa
     return as_pair(x, name=name, positive=positive, scalar=scalar)[..., None, :]
 
 
+def image_centre(image_size: ArrayLike) -> np.ndarray:
+    """The centre ``(W / 2, H / 2)`` px of images of ``image_size`` ``(..., 2)`` (width, height), in this module's
+    pixel convention (pixel ``i`` covers ``[i, i + 1)``, its centre at ``i + 0.5``): the principal point of an ideal
+    camera, assumed when none is given."""
+    return np.asarray(image_size, np.float64) / 2.0
+
+
 def focal_alpha(focal: ArrayLike) -> np.ndarray:
     """``alpha = sqrt(fx * fy)`` for a scalar or ``(..., 2)`` focal length (px). Returns ``(...)``."""
     f = as_pair(focal, name="focal", positive=True, scalar=True)
@@ -707,8 +714,8 @@ class Camera:
 
     @property
     def alpha(self) -> float:
-        """``sqrt(fx * fy)`` in px."""
-        return float(np.sqrt(self.focal[0] * self.focal[1]))
+        """``sqrt(fx * fy)`` in px (:func:`focal_alpha`)."""
+        return float(focal_alpha(self.focal))
 
     @property
     def distortion(self) -> tuple[float, float, float, float, float] | None:

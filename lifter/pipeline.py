@@ -36,6 +36,7 @@ from .camera import (
     DistortionModel,
     check_distortion_model,
     check_lens,
+    image_centre,
     lens_notes,
 )
 from .detect import (
@@ -128,7 +129,7 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         pp = file_pp
     else:
         assert image_size is not None  # (checked above)
-        pp = np.asarray(image_size, np.float64) / 2.0
+        pp = image_centre(image_size)
     notes += principal_point_notes(pp, image_size)
     if src in FOCAL_GIVEN_SOURCES:
         notes += narrow_view_notes(focal, image_size)
