@@ -211,7 +211,9 @@ class VideoSequence:
             scores = people_scores([p.scores for p in fr.people])
             lifted.append((fr.index, fr.time_s, q, r, rl, scores))
         ids = [[p.person_id for p in fr.people] for fr in rec.frames]
-        frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing, person_ids=ids)
+        frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing, person_ids=ids,
+                              names=rec.tracking_names if rec.tracking_names is not None
+                              and len(rec.tracking_names) == len(lifted) else None)  # (the whole file's, as the upload's)
         for new, old in zip(frames, rec.frames):  # (the tracker keeps each frame's order)
             for st, was in zip(new.people, old.people):
                 # (the tracker reads the 2D and the file's ids as the upload did, so it groups as the upload did;

@@ -681,6 +681,8 @@ def _people_of(d: Any, p: Path, fmt: str | None
             raise PoseLifterError(f"{p}: a list of people from {len(images)} images (image_id {shown}); a keypoint "
                                   "file is one image, seen by one camera: split the list by image_id into one file "
                                   "per image (or give a sequence with 'frames')")
+        for n, q in enumerate(d):
+            _check_person_keypoints_field(q, p, n)
         people = [_scored(q, p) for q in d]
         ids = [_person_id(q) for q in d]
         fmt = fmt or "coco17"
@@ -933,7 +935,7 @@ def _written_assumed(focal: np.ndarray | None, meta: dict[str, Any], image_size:
     returned for the note that says so (:func:`lifter.pipeline.resolve_camera`'s callers). Otherwise unchanged."""
     if focal is None or meta.get("focal_source") != ASSUMED_FOCAL_SOURCE or image_size is None:
         return focal, None
-    return None, _short(meta.get("focal"))
+    return None, " x ".join(f"{v:.1f}" for v in dict.fromkeys(np.round(np.ravel(focal), 1).tolist()))
 
 
 def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) -> KeypointFile:
@@ -1017,19 +1019,25 @@ class KeypointSequence:
     write it, where frames were left out), or None: the frames are consecutive from 0."""
 
 
-def frame_indices(frames: list[Any], where: Path) -> tuple[list[int] | None, list[str]]:
-    """The frames' own indices in their video when every frame is an object with a whole-number ``index`` (a
-    poselifter record's frames; undecodable frames are left out of them), increasing, else None; and a note when
-    some frames have an ``index`` that cannot be read so (the frames are then taken as consecutive). A review saw a
-    record's frames 5 and 6 read back as 3 and 4, their times 0.2 s early."""
-    given = [fr.get("index") if isinstance(fr, dict) else None for fr in frames]
-    if all(v is None for v in given):
+def frame_indices(frames: list[Any], where: Path, fps: float) -> tuple[list[int] | None, list[str]]:
+    """The frames' own indices in their video, for poselifter's own records (every frame an object with a
+    whole-number ``index`` and its ``time_s`` = index / ``fps``; a video's undecodable frames are left out of them),
+    increasing; else None: the frames are consecutive from 0 (another tool's ``index`` may count from 1, or from
+    where a clip was cut out of a longer video: a review's clip of frames 18000-18029 was lost so). A note when the
+    frames look like a record's but their indices cannot be read so. A review saw a record's frames 5 and 6 read
+    back as 3 and 4, their times 0.2 s early."""
+    pairs = [(fr.get("index"), fr.get("time_s")) if isinstance(fr, dict) else (None, None) for fr in frames]
+    if not all(i is not None and t is not None for i, t in pairs):
         return None, []
-    whole = [int(v) for v in given if isinstance(v, int) and not isinstance(v, bool) and v >= 0]
-    if len(whole) == len(given) and all(b > a for a, b in zip(whole, whole[1:])):
+    whole = [int(i) for i, _ in pairs if isinstance(i, int) and not isinstance(i, bool) and i >= 0]
+    times = [float(t) for _, t in pairs if isinstance(t, (int, float)) and not isinstance(t, bool)]
+    timed = len(whole) == len(times) == len(pairs) and all(
+        abs(t - i / fps) <= 1e-3 + 1e-5 * i / fps for i, t in zip(whole, times))
+    if timed and all(b > a for a, b in zip(whole, whole[1:])):
         return (None if whole == list(range(len(whole))) else whole), []
-    return None, [f"{where}: the frames' 'index' fields are not read (each frame needs a whole number >= 0, "
-                  "increasing): the frames are taken as consecutive from 0"]
+    return None, [f"{where}: the frames' 'index' and 'time_s' are not read as a poselifter record's (each frame's "
+                  "index a whole number >= 0, increasing, its time_s index / fps): the frames are taken as consecutive "
+                  "from 0"]
 
 
 def is_keypoint_sequence(path: str | Path) -> bool:
@@ -1073,7 +1081,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
-    indices, notes = frame_indices(raw, p)
+    indices, notes = frame_indices(raw, p, float(fps))
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     scores: list[list[np.ndarray | None]] = []

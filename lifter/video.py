@@ -176,8 +176,8 @@ class SequenceTracker:
         if self._last is not None and not (frame > self._last[0] and t > self._last[1]):
             raise PoseLifterError(f"SequenceTracker.step: frame {frame} at {t:g} s comes after frame {self._last[0]} "
                                   f"at {self._last[1]:g} s: frames and times must increase (nothing was updated)")
-        self._last = (int(frame), float(t))
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
+        self._last = (int(frame), float(t))  # (once the tracker took it: a refused frame may be given again)
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks or tid in self.tracker.resumed:
                 del self._smoothers[tid]  # ended tracks, and those a name took up again after the timeout
@@ -282,6 +282,9 @@ class SequenceRecord:
     source_format: str | None = None
     """The keypoint format the 2D came in before conversion to H36M (a sequence's ``format``, the detector's), or
     None when no frame had anyone."""
+    tracking_names: list[list[Any]] | None = None
+    """Per frame, for each person in it, the name the tracker followed (:func:`tracking_names` of the whole
+    input, before a ``max_people`` cut), or None: to track the frames again as they were (not written)."""
 
     def tracks(self) -> dict[int, list[tuple[int, PersonState]]]:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
@@ -327,25 +330,42 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     as one of ``tracked_ids``, when the file names its people; else a box overlapping one of ``tracked`` by at least
     :data:`TRACKED_IOU`, the best overlap first, not counting a tracked person the file names otherwise;
     ``tracked_ids`` are the names of ``tracked``, in the same order, None where unnamed), then the largest of the
-    rest, those overlapping a tracked box a little (below :data:`TRACKED_IOU`: a person whose arms moved; a user
-    trial's followed person was dropped for a stranger so) before the others. So ``--max-people 1`` follows one
-    person through a video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
+    rest, those that :func:`changed_shape` from a tracked box (a person whose arms moved: a user trial's followed
+    person was dropped for a stranger so) before the others. So ``--max-people 1`` follows one person through a
+    video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
     known = {i for i, pid in enumerate(ids or []) if pid is not None and pid in (tracked_ids or [])}
     names = list(ids) if ids is not None else [None] * len(boxes)
     tracked_names = list(tracked_ids) if tracked_ids is not None and len(tracked_ids) == len(tracked) else (
         [None] * len(tracked))
 
-    def overlap(i: int) -> float:  # (not with a tracked person the file names otherwise)
-        return max((box_iou(np.asarray(boxes[i], float), np.asarray(b, float)) for b, n in zip(tracked, tracked_names)
-                    if n is None or names[i] is None or n == names[i]), default=0.0)
+    def allowed(i: int) -> list[np.ndarray]:  # (not a tracked person the file names otherwise)
+        return [np.asarray(b, float) for b, n in zip(tracked, tracked_names)
+                if n is None or names[i] is None or n == names[i]]
 
     def rank(i: int) -> tuple[int, float, int]:
         if i in known:
             return (0, 0.0, i)
-        o = overlap(i)
-        return (1, -o, i) if o >= TRACKED_IOU else (2, -o, i) if o > 0 else (3, 0.0, i)
+        box = np.asarray(boxes[i], float)
+        o = max((box_iou(box, b) for b in allowed(i)), default=0.0)
+        if o >= TRACKED_IOU:
+            return (1, -o, i)
+        return (2, -o, i) if any(changed_shape(b, box) for b in allowed(i)) else (3, 0.0, i)
 
     return sorted(range(len(boxes)), key=rank)[:max_people]
+
+
+def changed_shape(tracked: np.ndarray, box: np.ndarray) -> bool:
+    """Whether ``box`` ``(x, y, w, h)`` px, overlapping the ``tracked`` box by less than :data:`TRACKED_IOU`, is
+    still most likely the same person with their box's shape changed (arms out, a crouch): its centre within a
+    quarter of the tracked box's width and height of the tracked centre, and its area within a factor 2. A
+    neighbour beside them is not (a review: a neighbour touching the followed box took the followed person's place
+    while they were hidden, for good)."""
+    t, b = np.asarray(tracked, np.float64), np.asarray(box, np.float64)
+    if min(t[2], t[3], b[2], b[3]) <= 0:
+        return False
+    d = np.abs((b[:2] + b[2:] / 2) - (t[:2] + t[2:] / 2))
+    ratio = (b[2] * b[3]) / (t[2] * t[3])
+    return bool(d[0] <= 0.25 * t[2] and d[1] <= 0.25 * t[3] and 0.5 <= ratio <= 2.0)
 
 
 def tracking_names(ids: list[list[Any]]) -> list[list[Any]]:
@@ -371,8 +391,9 @@ class _Followed:
     """The people a keypoint sequence's ``max_people`` cut follows: each with the frame it was last kept in, its box
     ``(x, y, w, h)`` px and the file's name for it. Those kept again are refreshed; someone else joins only while
     there is room, so a person missing from a frame or two (a joint left out) is not replaced by whoever was alone
-    there; a person unseen for ``horizon`` frames (a track's timeout) is let go. A person the cut kept for overlapping
-    a followed box only a little refreshes that box (else the box went stale and a stranger took its place)."""
+    there; a person unseen for ``horizon`` frames (a track's timeout) is let go. A person the cut kept because their
+    box :func:`changed_shape` from a followed one refreshes that box (else it went stale, and a stranger took its
+    place three frames later in a user trial)."""
 
     max_people: int
     horizon: int
@@ -397,11 +418,12 @@ class _Followed:
             elif len(self.people) < self.max_people:
                 self.people.append((frame, boxes[j], names[j]))
                 taken.add(len(self.people) - 1)
-            elif len(boxes) > self.max_people:  # (kept by the cut for a small overlap: that person, moved)
+            elif len(boxes) > self.max_people:  # (kept by the cut as one whose box changed shape: that person)
                 near = [(box_iou(b, boxes[j]), k) for k, (_, b, n) in enumerate(self.people)
-                        if k not in taken and (n is None or names[j] is None or n == names[j])]
-                o, k = max(near, default=(0.0, -1))
-                if o > 0:
+                        if k not in taken and (n is None or names[j] is None or n == names[j])
+                        and changed_shape(b, boxes[j])]
+                if near:
+                    k = max(near)[1]
                     self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
                     taken.add(k)
         return keep
@@ -885,7 +907,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
                           distortion=distortion_tuple(ks.distortion), distortion_model=ks.distortion_model,
-                          source_format=ks.format)
+                          source_format=ks.format, tracking_names=kept_names)
 
 
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",

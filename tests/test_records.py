@@ -121,11 +121,22 @@ def test_unreadable_frame_indices_are_said(tmp_path):
     d["frames"][2]["index"] = 9  # (not increasing)
     ks = parse_keypoint_sequence(write(tmp_path / "bad.json", d))
     assert ks.frame_indices is None
-    assert any("'index' fields are not read" in w for w in ks.warnings)
-    consecutive = [{"index": i, "people": [{"keypoints": KP.tolist()}]} for i in range(3)]
+    assert any("'index' and 'time_s' are not read" in w for w in ks.warnings)
+    consecutive = [{"index": i, "time_s": i / 5, "people": [{"keypoints": KP.tolist()}]} for i in range(3)]
     plain = parse_keypoint_sequence(write(tmp_path / "ok.json", {"fps": 5, "format": "h36m17",
                                                                  "frames": consecutive}))
     assert plain.frame_indices is None and not any("index" in w for w in plain.warnings)
+
+
+def test_another_tools_frame_numbers_are_not_read_as_times(tmp_path, default):
+    """A review: a clip cut out of a long video keeps its source frame numbers (18000 on) as each frame's 'index';
+    read as poselifter's own indices, every frame fell past --max-seconds ("no person in any frame")."""
+    frames = [{"index": 18000 + i, "people": [{"keypoints": (KP + [i, 0]).tolist()}]} for i in range(30)]
+    p = write(tmp_path / "clip.json", {"fps": 30, "format": "h36m17", "image_size": [800, 600], "focal": 800,
+                                       "frames": frames})
+    assert parse_keypoint_sequence(p).frame_indices is None
+    rec = lift_keypoint_sequence(p, lifter=default)
+    assert [f.index for f in rec.frames] == list(range(30)) and not any("index" in w for w in rec.warnings)
 
 
 def test_max_seconds_shorter_than_a_frame_is_named(tmp_path, default):
@@ -238,3 +249,57 @@ def test_record_read_back_lifts_with_its_own_camera_and_2d(tmp_path, default):
     np.testing.assert_allclose(kf.principal_point, [401.2345, 299.8765], rtol=0, atol=1e-9)
     again = lift_keypoint_file(out, lifter=default)
     np.testing.assert_allclose(again.root, first.root, atol=0.01)
+
+
+def test_a_refused_step_can_be_given_again():
+    """A review: a step refused by the tracker (two names for one person) still counted as taken, so the same frame
+    given again correctly was refused as out of order."""
+    from lifter.video import SequenceTracker
+
+    seq = SequenceTracker(fps=25)
+    root, rel = np.array([[0.0, 0, 3000]]), np.zeros((1, 17, 3))
+    with pytest.raises(PoseLifterError, match="2 person ids for 1 people"):
+        seq.step(0, 0.0, KP[None], root, rel, 1000.0, person_ids=["a", "b"])
+    assert seq.step(0, 0.0, KP[None], root, rel, 1000.0, person_ids=["a"])[0].track_id == 1
+
+
+def test_a_person_under_another_tools_name_is_refused_in_a_coco_list(tmp_path):
+    p = write(tmp_path / "coco.json", [{"keypoints": np.c_[KP, np.ones(17)].ravel().tolist(), "image_id": 1},
+                                       {"kpts": (KP * 1.3).tolist(), "image_id": 1}])
+    with pytest.raises(PoseLifterError, match="person 2 has 'kpts' and no 'keypoints'"):
+        parse_keypoint_json(p, default_format="h36m17")
+
+
+def test_the_reassumed_focal_note_reads_like_a_focal(tmp_path, default):
+    obj = {"keypoints": KP.tolist(), "format": "h36m17", "image_size": [800, 600]}
+    first = lift_keypoint_file(write(tmp_path / "in.json", obj), lifter=default)
+    assert first.focal_source == "default-fov"
+    again = lift_keypoint_file(write(tmp_path / "out.json", first.to_json()), lifter=default)
+    want = f"the file's focal length ({first.focal[0]:.1f} px) was assumed when it was written"
+    assert any(w.startswith(want) for w in again.warnings), again.warnings
+
+
+def test_a_sequence_tracked_again_with_its_names_groups_as_it_did(tmp_path, default):
+    """A review: the app's re-lift tracked a cut record again with the record's own ids, so a name alone in one kept
+    frame joined the followed person's track (their smoothing blended, 95 mm). The record keeps the names its
+    tracker followed (``SequenceRecord.tracking_names``), and tracking again with them groups as the upload did."""
+    from lifter.video import track_lifted
+
+    frames = []
+    for t in range(10):
+        a = {"keypoints": (KP + [3 * t, 0]).tolist(), "person_id": "A"}
+        b = {"keypoints": (KP * 0.95 + [3 * t + 15, 0]).tolist(), "person_id": "B"}
+        frames.append({"people": [b] if t == 5 else [a, b]})
+    p = write(tmp_path / "names.json", {"fps": 25, "format": "h36m17", "focal": 1000, "image_size": [1000, 1000],
+                                        "frames": frames})
+    rec = lift_keypoint_sequence(p, lifter=default, max_people=1)
+    assert rec.tracking_names is not None and len(rec.tracking_names) == len(rec.frames)
+    lifted = [(f.index, f.time_s, np.stack([q.keypoints_2d for q in f.people]),
+               np.stack([q.root_raw for q in f.people]), np.stack([q.relative_raw for q in f.people]), None)
+              for f in rec.frames]
+    ids = [[q.person_id for q in f.people] for f in rec.frames]
+    again = track_lifted(lifted, fps=rec.fps, focal=np.asarray(rec.focal), smoothing=rec.smoothing, person_ids=ids,
+                         names=rec.tracking_names)
+    assert [f.people[0].track_id for f in again] == [f.people[0].track_id for f in rec.frames]
+    for a, b in zip(again, rec.frames):
+        np.testing.assert_allclose(a.people[0].root, b.people[0].root, atol=1e-6)

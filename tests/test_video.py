@@ -967,19 +967,37 @@ def test_max_people_cut_keeps_the_names_of_the_whole_sequence(tmp_path, lifter):
 
 def test_max_people_follows_a_person_whose_box_changed_shape():
     """A user trial: the followed person's box changed shape (arms moved: overlap 0.26 with the followed box), the
-    followed box went stale, and three frames later the cut took a stranger. A small overlap still continues them."""
+    followed box went stale, and three frames later the cut took a stranger. A box that only changed shape
+    continues them, and refreshes the followed box as they move on."""
     from lifter.detect import box_iou
-    from lifter.video import _Followed
+    from lifter.video import _Followed, changed_shape
 
     followed = _Followed(max_people=1, horizon=25)
     a, stranger = np.array([100.0, 100, 100, 220]), np.array([600.0, 50, 200, 250])  # the stranger is larger
     assert followed.keep(0, [a], [None]) == [0]  # (alone: followed)
-    a_wide = np.array([10.0, 200, 280, 120])  # the same person, arms out
-    assert 0 < box_iou(a, a_wide) < 0.3
+    a_wide = np.array([10.0, 200, 280, 120])  # the same person, crouching with arms out
+    assert 0 < box_iou(a, a_wide) < 0.3 and changed_shape(a, a_wide)
     assert followed.keep(1, [stranger, a_wide], [None, None]) == [1]
-    a_on = a_wide + [200, 0, 0, 0]  # and on from there: it overlaps the refreshed box, not the first one
-    assert box_iou(a, a_on) == 0 and 0 < box_iou(a_wide, a_on) < 0.3
-    assert followed.keep(2, [stranger, a_on], [None, None]) == [1]
+    for k in range(1, 5):  # then moving on, 40 px a frame: away from the first box, on from the refreshed one
+        assert followed.keep(1 + k, [stranger, a_wide + [40 * k, 0, 0, 0]], [None, None]) == [1], k
+    last = a_wide + [160, 0, 0, 0]  # (the first box alone would no longer keep them: neither overlap nor shape)
+    assert box_iou(a, last) < 0.3 and not changed_shape(a, last)
+
+
+def test_max_people_keeps_the_followed_place_from_a_neighbour_while_they_are_hidden():
+    """A review: a neighbour touching the followed person's box (overlap 0.05) took their place while they were
+    hidden for two frames, and kept it after they came back."""
+    from lifter.detect import box_iou
+    from lifter.video import _Followed, changed_shape
+
+    followed = _Followed(max_people=1, horizon=25)
+    a, s, t = np.array([100.0, 100, 100, 250]), np.array([190.0, 100, 100, 250]), np.array([600.0, 50, 200, 300])
+    assert 0 < box_iou(a, s) < 0.3 and not changed_shape(a, s)
+    assert followed.keep(0, [a], [None]) == [0]
+    assert followed.keep(1, [t, a, s], [None] * 3) == [1]
+    followed.keep(2, [t, s], [None] * 2)  # (hidden: whoever the cut takes meanwhile)
+    followed.keep(3, [t, s], [None] * 2)
+    assert followed.keep(4, [t, a, s], [None] * 3) == [1]  # back: followed again
 
 
 def test_sequence_tracker_refuses_nan_and_frames_out_of_order():
