@@ -173,6 +173,9 @@ class Player:
         self._thread: threading.Thread | None = None
         self.frame_ms: collections.deque[float] = collections.deque(maxlen=5000)
         self.shown_at: collections.deque[float] = collections.deque(maxlen=5000)
+        self.playing_key: str | None = None
+        """The key of the sequence the frame passed to ``show`` belongs to (set just before the call): a ``show``
+        can tell a frame of a sequence left meanwhile."""
 
     @property
     def playing(self) -> bool:
@@ -210,6 +213,7 @@ class Player:
                 target = clock.index(now)
                 if target != shown:
                     t0 = time.perf_counter()
+                    self.playing_key = key
                     self._show(target)
                     t1 = time.perf_counter()
                     self.frame_ms.append(1e3 * (t1 - t0))

@@ -403,7 +403,8 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         return demo_key(str(p.demo.value))
     if src == "motion":
         i = int(fr.value) if source_of(shown) == "motion" or fr.t > p.source.t else 0
-        return motion_key(i % max(motion_frames, 1))
+        return motion_key(min(max(i, 0), max(motion_frames, 1) - 1))  # (typed past an end: clamped, and said, as
+        # for Human3.6M; a browser trial's 300 showed frame 44 without a word. Playback loops by its own clock.)
     if src == "upload":
         if last_upload is None:
             raise PoseLifterError("nothing uploaded yet: use the 'upload photo, video or keypoint JSON' button (File "

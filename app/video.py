@@ -30,6 +30,7 @@ from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
 from lifter.keypoints import H36M17
+from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
@@ -165,15 +166,30 @@ class VideoSequence:
         f = self.record.focal
         return abs(float(focal_alpha(focal)) - float(focal_alpha(f))) <= FOCAL_SAME_PX
 
-    def record_at(self, lifter: Any, focal: tuple[float, float]) -> SequenceRecord:
+    def corrections(self, index: int, people_2d: list[np.ndarray],
+                    dragged: dict[int, frozenset[int]]) -> dict[int, dict[int, tuple[np.ndarray, frozenset[int]]]]:
+        """The joints dragged on frame ``index`` (as :meth:`sample` orders its people: ``people_2d``, each ``(17, 2)``
+        px, and ``dragged``, person -> joints) for :meth:`record_at`: ``{record frame index: {track id: (2D,
+        joints)}}``, empty when none were dragged."""
+        fr = self.frames[int(index)]
+        people = sorted(fr.people, key=lambda p: p.track_id)
+        out = {people[k].track_id: (np.asarray(people_2d[k], np.float64), frozenset(j)) for k, j in dragged.items()
+               if j and 0 <= k < len(people)}
+        return {fr.index: out} if out else {}
+
+    def record_at(self, lifter: Any, focal: tuple[float, float], *,
+                  corrected: dict[int, dict[int, tuple[np.ndarray, frozenset[int]]]] | None = None) -> SequenceRecord:
         """The whole sequence as ``poselifter lift`` writes it, for ``lifter`` at ``focal``: the upload's record
         when both are the upload's (:meth:`is_upload_pair`), else every frame's people lifted again in one batch and
         tracked and smoothed as the upload was (cached for the last pair), each person keeping their
         ``person_id``, with the new lift's notes on its output in place of the upload's and a note saying so. A
         lens is undone at the upload's own focal (:func:`app.core.lens_free_2d`); the record then holds that
-        undistorted 2D and no lens, so that lifting it again gives the same result."""
+        undistorted 2D and no lens, so that lifting it again gives the same result. ``corrected`` (:meth:`corrections`): joints
+        dragged in the app, lifted in place of those people's 2D on that frame and named in a note (a browser trial's
+        download of a sequence left them out, where the app had said to download to keep them)."""
         rec = self.record
-        if self.is_upload_pair(lifter, focal):
+        corrected = corrected or {}
+        if self.is_upload_pair(lifter, focal) and not corrected:
             return rec
         f = (float(focal[0]), float(focal[1]))
         same_focal = self._upload_focal(f)
@@ -182,7 +198,8 @@ class VideoSequence:
         name = str(getattr(lifter, "name", "custom"))
         key = (id(lifter), f)
         with self._lock:
-            if self._relifted is not None and self._relifted[0] == key and self._relifted[1] is lifter:
+            if (self._relifted is not None and self._relifted[0] == key and self._relifted[1] is lifter
+                    and not corrected):
                 return self._relifted[2]
         src = "clean" if rec.source == "clean" else "detected"
         net = lifter.network_for(src) if hasattr(lifter, "network_for") else lifter
@@ -193,14 +210,15 @@ class VideoSequence:
         if seen:
             pp = np.asarray(rec.principal_point, np.float64)
             # every frame's people in one array: undistorted (if at all) and lifted in one call each
-            kp = lens_free_2d(np.stack([p.keypoints_2d for fr in seen for p in fr.people]), camera=self.camera,
-                              lifter=lifter, source=src)
+            given = [[corrected.get(fr.index, {}).get(p.track_id, (p.keypoints_2d,))[0] for p in fr.people]
+                     for fr in seen]
+            kp = lens_free_2d(np.stack([k for fr in given for k in fr]), camera=self.camera, lifter=lifter, source=src)
             res = lifter.lift(kp, focal=f, principal_point=pp, source=src, warn=False)
             root, rel = np.asarray(res.root).reshape(-1, 3), np.asarray(res.relative).reshape(-1, 17, 3)
             k = 0
-            for fr in seen:
+            for fr, fr_given in zip(seen, given):
                 c = len(fr.people)
-                q = kp[k:k + c] if undistorted else np.stack([p.keypoints_2d for p in fr.people])
+                q = kp[k:k + c] if undistorted else np.stack(fr_given)
                 lifted_by_index[fr.index] = (q, root[k:k + c], rel[k:k + c])
                 if getattr(res, "warnings", ()) and hasattr(net, "output_notes"):
                     noted.add(fr.index)  # (said once tracked, by track id: tracked_output_notes)
@@ -231,12 +249,16 @@ class VideoSequence:
         # no longer what was used: a user trial's download said both "assumed ... 555.0 px" and "at 572.2 px")
         kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)
                 and (same_focal or not w.startswith(ASSUMED_FOCAL_NOTE))]
+        fixed = [f"2D joints corrected in the app: frame {i} (track {tid}): "
+                 + ", ".join(JOINT_NAMES[j] for j in sorted(joints))
+                 for i, people in sorted(corrected.items()) for tid, (_, joints) in sorted(people.items())]
         out = replace(rec, model=name, focal=f, focal_source=rec.focal_source if same_focal else "app-slider",
                       frames=frames,
-                      warnings=[*kept, *output_note_lines(output_notes), note],
+                      warnings=[*kept, *output_note_lines(output_notes), note, *fixed],
                       distortion=None if undistorted else rec.distortion)
-        with self._lock:
-            self._relifted = (key, lifter, out)
+        if not corrected:
+            with self._lock:
+                self._relifted = (key, lifter, out)
         return out
 
     def trajectories(self, lifter: Any, focal: tuple[float, float]) -> list[dict[int, np.ndarray]]:
@@ -340,19 +362,22 @@ def _without_opencv_lens(rec: SequenceRecord) -> SequenceRecord:
     return replace(rec, frames=frames, distortion=None, distortion_model="h36m", warnings=[*rec.warnings, note])
 
 
-def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:
+def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None,
+                        corrected: dict[int, dict[int, tuple[np.ndarray, frozenset[int]]]] | None = None) -> bytes:
     """The whole lifted sequence as ``poselifter lift clip.mp4`` writes ``DIR/clip.json`` (fps, frames, people with
-    ``track_id``; smoothed), for ``lifter`` at ``focal`` (:meth:`VideoSequence.record_at`; None: the upload's)."""
-    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal)
+    ``track_id``; smoothed), for ``lifter`` at ``focal`` (:meth:`VideoSequence.record_at`, with the joints
+    ``corrected`` in the app; None: the upload's)."""
+    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal, corrected=corrected)
     return json.dumps(rec.to_json(), indent=1).encode("utf-8")
 
 
-def sequence_glb_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None) -> bytes:
+def sequence_glb_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None,
+                       corrected: dict[int, dict[int, tuple[np.ndarray, frozenset[int]]]] | None = None) -> bytes:
     """The whole lifted sequence as the animated binary glTF of ``poselifter lift clip.mp4 --glb`` (every track;
-    metres, y-up), for ``lifter`` at ``focal`` (None: the upload's)."""
+    metres, y-up), for ``lifter`` at ``focal`` (None: the upload's), with the joints ``corrected`` in the app."""
     from lifter.export import write_glb_animation
 
-    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal)
+    rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal, corrected=corrected)
     tracks = rec.tracks()
     if not tracks:
         raise UploadError(f"{seq.info.name}: nobody in any frame; nothing to export")

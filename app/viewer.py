@@ -262,6 +262,9 @@ class SessionView:
         self._frame_note: tuple[int, int, str] | None = None
         """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_while_playing_at = -math.inf
+        self._play_shown: int | None = None  # (the player's last frame: Player's position while the box is typed in)
+        self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
+        self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
@@ -502,8 +505,11 @@ class SessionView:
 
     def _put(self, handle: Any, value: Any) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
-        pass its callback asked for applies it)."""
-        if handle.value != value and handle.update_timestamp <= self._pass_t0:
+        pass its callback asked for applies it). The player's frames are not the tab's: a frame of the sequence
+        being left, written during the pass that leaves it, is replaced (a browser trial's photo pick during
+        playback opened its sequence at the old one's frame number)."""
+        if handle.value != value and (handle.update_timestamp <= self._pass_t0 or (
+                handle is self.gui.play.frame and self._player_wrote(handle))):
             handle.value = value
 
     def _sync_pass(self) -> None:
@@ -661,6 +667,18 @@ class SessionView:
         assert self.gui.sample.sequence is not None
         return self.gui.sample.sequence.value
 
+    def _frame_pick_t(self) -> float:
+        """When the frame was last chosen: the frame box's timestamp, unless the player wrote it last (playback's
+        frames are not picks: a browser trial's photo entry picked during playback lost to them, and a subject
+        picked then opened at the playing frame number instead of 0)."""
+        h = self.gui.play.frame
+        return self._frame_user_t if self._player_wrote(h) else h.update_timestamp
+
+    def _player_wrote(self, h: Any) -> bool:
+        """Whether the frame box ``h`` holds the player's last write (its value, written since it began)."""
+        w = self._player_write
+        return w is not None and h.value == w[0] and h.update_timestamp >= w[1]
+
     def _picks(self) -> ss.Picks:
         g = self.gui.sample
 
@@ -670,7 +688,7 @@ class SessionView:
         src = g.source.value
         return ss.Picks(source=ss.Pick(LABEL_SOURCES.get(src, src), g.source.update_timestamp),
                         demo=ss.Pick(g.demo.value, g.demo.update_timestamp),
-                        frame=ss.Pick(self.gui.play.frame.value, self.gui.play.frame.update_timestamp),
+                        frame=ss.Pick(self.gui.play.frame.value, self._frame_pick_t()),
                         subject=pick(g.subject), sequence=pick(g.sequence), camera=pick(g.camera), photo=pick(g.photo))
 
     def _requested_sample(self) -> Sample | None:
@@ -704,6 +722,8 @@ class SessionView:
             f, last = h36m_frame.frame, self.app.h36m.num_frames(h36m_frame.subject, h36m_frame.sequence) - 1
         elif video is not None and (at := video.index_of(key)) is not None:
             f, last = at, video.num_frames - 1
+        elif source_of(key) == "motion" and (at := frame_of(key)) is not None:
+            f, last = at, self.app.motion.num_frames - 1
         else:
             self._frame_note = None
             typed = self._typed_at.get("frame")
@@ -1325,10 +1345,27 @@ class SessionView:
 
     def _play_position(self) -> tuple[SequenceSource, int] | None:
         seq = self.sequence()
-        return None if seq is None else (seq, int(self.gui.play.frame.value))
+        if seq is None:
+            return None
+        if self._since_typed("frame") < TYPING_SETTLE_S and self._play_shown is not None:
+            return seq, self._play_shown  # (playing on meanwhile; the frame typed is taken once the typing settles)
+        return seq, int(self.gui.play.frame.value)
 
     def _show_frame(self, index: int) -> None:
-        self.gui.play.frame.value = index  # a sync pass shows it (here, or in the pass running now)
+        """The player's next frame: into the frame box, for a sync pass to show (here, or in the pass running now);
+        not while the box is being typed in (a browser trial's playback wrote its frames between the keys, and
+        "1500" typed became 1920, or 670)."""
+        seq = self.sequence()
+        if seq is None or seq.key != self.player.playing_key:
+            return  # (a frame of the sequence left meanwhile: a browser trial's photo pick opened at its number)
+        self._play_shown = index
+        if self._since_typed("frame") < TYPING_SETTLE_S:
+            return
+        h = self.gui.play.frame
+        if not self._player_wrote(h):
+            self._frame_user_t = h.update_timestamp  # (set by the user, a picker or a pass since: theirs)
+        self._player_write = (int(index), time.time())  # (before the write: it may run a pass at once)
+        h.value = index
 
     def _player_stopped(self) -> None:
         try:
@@ -1453,10 +1490,13 @@ class SessionView:
             with self.lock:
                 st = self.state
                 stem, model, focal = up.download_stem(st.sample), st.model, st.focal
+                at = frame_of(st.sample.key)
+                dragged = {**st.others_dragged, st.person: frozenset(st.dragged)}
+                corrected = {} if at is None else seq.corrections(at, st.people_2d(), dragged)
             lifter = self.app.pool.get(model)  # (at the tab's model and focal length, as it shows them)
             if fmt == "json":
-                return f"{stem}.json", vid.sequence_json_bytes(seq, lifter=lifter, focal=focal)
-            return f"{stem}.glb", vid.sequence_glb_bytes(seq, lifter=lifter, focal=focal)
+                return f"{stem}.json", vid.sequence_json_bytes(seq, lifter=lifter, focal=focal, corrected=corrected)
+            return f"{stem}.glb", vid.sequence_glb_bytes(seq, lifter=lifter, focal=focal, corrected=corrected)
         with self.lock:
             st = self.state
             dragged = dict(st.others_dragged)

@@ -390,3 +390,27 @@ def test_labels_name_whose_root_it_is_and_leave_the_head_on_view(server) -> None
     assert other.visible and v.scene.camera.root_label.visible
     v.select_demo("walking")  # one person: the bare label
     assert wait_for(lambda: v.scene.camera.root_label.text.startswith("root Z"))
+
+
+def test_a_sequence_download_keeps_the_joints_dragged_on_its_frame(server) -> None:
+    """A browser trial: on a keypoint sequence's frame, a dragged wrist moved the lift, but the download (which the
+    app says to make to keep such drags) held the original joint and no note."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(10)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    v.gui.play.frame.value = 6
+    assert wait_for(lambda: v.state.sample.key.endswith("/6")), v.state.sample.key
+    tid = int(v.state.sample.person_tag(v.state.person).split()[-1])
+    before = json.loads(v.download_payload("json")[1])
+    moved = np.asarray(v.state.keypoints[16]) + [30.0, -20.0]
+    v.move_joint(16, moved)  # r_wrist
+    after = json.loads(v.download_payload("json")[1])
+    person = next(p for p in after["frames"][6]["people"] if p["track_id"] == tid)
+    np.testing.assert_allclose(person["keypoints_2d"][16], moved, atol=1e-3)
+    was = next(p for p in before["frames"][6]["people"] if p["track_id"] == tid)
+    assert person["root_unsmoothed"] != was["root_unsmoothed"]  # (lifted with the corrected joint)
+    assert f"2D joints corrected in the app: frame 6 (track {tid}): r_wrist" in after["warnings"]
+    for a, b in zip(after["frames"][:6], before["frames"][:6]):  # (the frames before it: as they were)
+        assert a["people"] == b["people"]
