@@ -450,7 +450,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       image_size=(int(cam.width), int(cam.height)), model=str(getattr(lifter, "name", "custom")),
                       scores=top.scores,
                       source_format=H36M17 if info is None else info.source_format,
-                      num_people=None if info is None else info.num_people,
+                      num_people=len(lifted) if info is None else info.num_people,  # (a trial read null)
                       detector=None if info is None else info.detector, warnings=tuple(warnings), source=source,
                       distortion=cam.distortion if keep_lens else None)
 

@@ -2103,3 +2103,12 @@ def test_a_frame_typed_while_playing_is_not_overwritten_by_the_playback(app: Pos
         finally:
             if v.playing:
                 v.gui.play.play.value = True
+
+
+def test_a_demo_sample_s_download_counts_its_people(view: SessionView) -> None:
+    """A browser trial: Human3.6M and demo downloads wrote "num_people": null beside one person in "people"."""
+    import json
+
+    view.select_demo("walking")
+    rec = json.loads(view.download_payload("json")[1])
+    assert rec["num_people"] == len(rec["people"]) == 1
