@@ -245,6 +245,7 @@ class SessionView:
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self._last_was_error = False
         self._status_focal: float | None = None
+        self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_about: str | None = None
         """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
@@ -371,6 +372,7 @@ class SessionView:
         title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
             self._status_focal = focal
+            self._status_fallback = False
             self.messages.append(text)
             self.messages = self.messages[-20:]
             self.notices = [*self.notices[-19:], (title, text, sticky)]
@@ -500,8 +502,11 @@ class SessionView:
             with self._status_lock:
                 if self._message_count == n and self.gui.readout.status.content and (
                         (self._status_about is not None and sequence_of(self.state.sample.key) != self._status_about)
-                        or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)):
-                    self.gui.readout.status.content = ""  # (about a sample no longer shown, or a focal since changed)
+                        or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)
+                        or (self._status_fallback and not ss.fell_back(self.state, input_pref=self._input_pref))):
+                    # (about a sample no longer shown, a focal since changed, or a frame without a detection left for
+                    # one with it: a browser trial read "no 2D detection ... frame 3" under frame 5's detection)
+                    self.gui.readout.status.content = ""
 
     def _put(self, handle: Any, value: Any) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
@@ -830,6 +835,7 @@ class SessionView:
             else:
                 self._fallback_said.add(seq_key)
                 self.show_message(note)
+                self._status_fallback = True
         if not kept and chosen:
             uploaded = src in UPLOADED_SOURCES  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
@@ -885,6 +891,7 @@ class SessionView:
             if ss.fell_back(st, input_pref=self._input_pref) and seq_key not in self._fallback_said:
                 self._fallback_said.add(seq_key)
                 self.show_message(ss.no_detection_note(st.sample))
+                self._status_fallback = True
 
     def _show_sample_controls(self, st: SessionState) -> None:
         """Pickers, 2D-input options, focal range and frame slider for ``st`` (the source dropdown last)."""

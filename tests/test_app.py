@@ -640,9 +640,11 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 7
     assert v.state.input_kind == "gt"
+    assert "no 2D detection" in v.gui.readout.status.content
     v.gui.play.frame.value = 10  # a detection again: the user's choice is back
     assert v.state.input_kind == "detected" and v.gui.sample.input.value == "SH detection"
     np.testing.assert_allclose(v.state.keypoints, v.state.sample.detected_2d)
+    assert "no 2D detection" not in v.gui.readout.status.content  # (a browser trial read it under a detection)
     for f in (11, 12, 15, 16):  # said once per sequence, not once per frame (playback flooded the tab with toasts)
         v.gui.play.frame.value = f
     assert v.state.input_kind == "gt" and sum("no 2D detection" in m for m in v.messages) == 1, v.messages
