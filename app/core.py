@@ -152,6 +152,11 @@ class SessionState:
         first), the selected person's included."""
         return [self.keypoints if k == self.person else self.others[k] for k in range(self.sample.num_people)]
 
+    def people_dragged(self) -> dict[int, frozenset[int]]:
+        """Every person's dragged joints, person index -> joints, the selected person's included (as
+        :meth:`people_2d` counts them)."""
+        return {**self.others_dragged, self.person: frozenset(self.dragged)}
+
 
 def focal_max(sample: Sample) -> float:
     """Upper end of the focal slider for ``sample``: :data:`FOCAL_MAX_PX`, or 2.5 x the camera's focal

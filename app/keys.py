@@ -18,8 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
-from lifter import PoseLifterError
-
 SEQUENCE_SOURCES: Final[tuple[str, ...]] = ("h36m", "motion", "video")
 """Sources whose keys end in a frame index."""
 
@@ -118,10 +116,3 @@ def parse_h36m(key: str) -> H36MKey | None:
         return None  # (a negative frame parses, for the catalogue's out-of-range message)
     return H36MKey(int(subj[1:]), sequence, camera, int(frame))
 
-
-def require_h36m(key: str) -> H36MKey:
-    """:func:`parse_h36m`, raising :class:`PoseLifterError` naming the key when it names no Human3.6M frame."""
-    parsed = parse_h36m(key)
-    if parsed is None:
-        raise PoseLifterError(f"not a Human3.6M frame's key: {key[:80]!r} (expected h36m/S9/SEQUENCE/CAMERA/FRAME)")
-    return parsed

@@ -1498,19 +1498,16 @@ class SessionView:
                 st = self.state
                 stem, model, focal = up.download_stem(st.sample), st.model, st.focal
                 at = frame_of(st.sample.key)
-                dragged = {**st.others_dragged, st.person: frozenset(st.dragged)}
-                corrected = {} if at is None else seq.corrections(at, st.people_2d(), dragged)
+                corrected = {} if at is None else seq.corrections(at, st.people_2d(), st.people_dragged())
             lifter = self.app.pool.get(model)  # (at the tab's model and focal length, as it shows them)
             if fmt == "json":
                 return f"{stem}.json", vid.sequence_json_bytes(seq, lifter=lifter, focal=focal, corrected=corrected)
             return f"{stem}.glb", vid.sequence_glb_bytes(seq, lifter=lifter, focal=focal, corrected=corrected)
         with self.lock:
             st = self.state
-            dragged = dict(st.others_dragged)
-            dragged[st.person] = frozenset(st.dragged)
             rec = up.result_record(st.sample, st.keypoints, lifter=self.app.pool.get(st.model), focal=st.focal,
                                    focal_changed=abs(st.focal_px - st.sample.camera.alpha) > 0.5,
-                                   people=st.people_2d(), people_dragged=dragged,
+                                   people=st.people_2d(), people_dragged=st.people_dragged(),
                                    source=lift_source(st.evolve(noise_level=0.0)))  # (clean 2D: no noise on it)
             stem = up.download_stem(st.sample)
         if fmt == "json":

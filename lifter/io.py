@@ -556,6 +556,12 @@ def _misplaced_camera_fields(d: Any, *, frame_level: bool) -> list[str]:
     return sorted({k for q in objs for k in CAMERA_FIELDS if k in q})
 
 
+def _is_own_person(q: Any) -> bool:
+    """Whether a person object is poselifter's own output: ``keypoints_2d`` (H36M's 17 joints) and no
+    ``keypoints``."""
+    return isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q
+
+
 def _check_person_keypoints_field(q: dict[str, Any], p: Path, n: int) -> None:
     """Refuse a person object that holds its joints under another tool's name (``kpts``, ``joints``, ``landmarks``:
     :data:`_FIELD_NAMES_ELSEWHERE`) and has no ``keypoints``: it would be left out without a word (a review lost the
@@ -659,7 +665,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
             if isinstance(q, dict) and "pose_keypoints_2d" in q:
                 people.append(q["pose_keypoints_2d"])
                 fmt = fmt or "openpose25"
-            elif isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q:  # poselifter's own output
+            elif _is_own_person(q):
                 people.append(_own_scored(q))
                 own = True
             elif isinstance(q, dict):
@@ -693,7 +699,7 @@ def _people_of(d: Any, p: Path, fmt: str | None
         fmt = d.get("format") or fmt
     elif isinstance(d, list):
         people = [d]
-    elif isinstance(d, dict) and "keypoints_2d" in d:  # a person of poselifter's own output, on its own
+    elif _is_own_person(d):  # a person of poselifter's own output, on its own
         people = [_own_scored(d)]
         ids = [_person_id(d)]
         meta = d
@@ -1053,7 +1059,7 @@ def _own_sequence(frames: list[Any]) -> bool:
     """Whether a sequence's frames are poselifter's own output (people with ``keypoints_2d``, H36M's 17 joints, and
     no ``keypoints``): their format is H36M's whatever ``default_format`` the other files are read with."""
     return any(isinstance(fr, dict) and isinstance(fr.get("people"), list) and any(
-        isinstance(q, dict) and "keypoints_2d" in q and "keypoints" not in q for q in fr["people"]) for fr in frames)
+        _is_own_person(q) for q in fr["people"]) for fr in frames)
 
 
 def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None) -> KeypointSequence:

@@ -338,20 +338,23 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     tracked_names = list(tracked_ids) if tracked_ids is not None and len(tracked_ids) == len(tracked) else (
         [None] * len(tracked))
 
-    def allowed(i: int) -> list[np.ndarray]:  # (not a tracked person the file names otherwise)
-        return [np.asarray(b, float) for b, n in zip(tracked, tracked_names)
-                if n is None or names[i] is None or n == names[i]]
-
     def rank(i: int) -> tuple[int, float, int]:
         if i in known:
             return (0, 0.0, i)
         box = np.asarray(boxes[i], float)
-        o = max((box_iou(box, b) for b in allowed(i)), default=0.0)
+        allowed = [np.asarray(b, float) for b, n in zip(tracked, tracked_names) if _names_agree(n, names[i])]
+        o = max((box_iou(box, b) for b in allowed), default=0.0)
         if o >= TRACKED_IOU:
             return (1, -o, i)
-        return (2, -o, i) if any(changed_shape(b, box) for b in allowed(i)) else (3, 0.0, i)
+        return (2, -o, i) if any(changed_shape(b, box) for b in allowed) else (3, 0.0, i)
 
     return sorted(range(len(boxes)), key=rank)[:max_people]
+
+
+def _names_agree(a: Any, b: Any) -> bool:
+    """Whether two people's names (None: unnamed) allow them to be one person: either is unnamed, or they are equal
+    (a tracked person the file names otherwise is not continued by another name)."""
+    return a is None or b is None or a == b
 
 
 def changed_shape(tracked: np.ndarray, box: np.ndarray) -> bool:
@@ -420,8 +423,7 @@ class _Followed:
                 taken.add(len(self.people) - 1)
             elif len(boxes) > self.max_people:  # (kept by the cut as one whose box changed shape: that person)
                 near = [(box_iou(b, boxes[j]), k) for k, (_, b, n) in enumerate(self.people)
-                        if k not in taken and (n is None or names[j] is None or n == names[j])
-                        and changed_shape(b, boxes[j])]
+                        if k not in taken and _names_agree(n, names[j]) and changed_shape(b, boxes[j])]
                 if near:
                     k = max(near)[1]
                     self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
@@ -547,6 +549,17 @@ def _frames_summary(idx: list[int], n: int = 8) -> str:
     return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
 
 
+def _frame_limit(max_seconds: float, fps: float, *, where: Any, what: str,
+                 error: type[PoseLifterError] = PoseLifterError) -> int:
+    """How many frames (from 0) start within ``max_seconds`` at ``fps``; ``error`` when not one does (a user trial
+    read "the video has no frames (zero-length)" for a 40-frame video)."""
+    limit = int(math.floor(max_seconds * fps + 1e-9))
+    if limit == 0:
+        raise error(f"{where}: max_seconds {max_seconds:g} (--max-seconds) is shorter than one frame of this {fps:g} "
+                    f"frames/s {what}: give at least {1 / fps:.3g} s")
+    return limit
+
+
 def _check_common(smoothing: float, max_people: int, max_seconds: float) -> None:
     PoseSmoother(smoothing)
     if max_people < 1:
@@ -635,10 +648,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
             fps = 30.0
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
-        limit = int(math.floor(max_seconds * fps + 1e-9))
-        if limit == 0:  # (a user trial read "the video has no frames (zero-length)" for a 40-frame video)
-            raise VideoError(f"{p}: max_seconds {max_seconds:g} (--max-seconds) is shorter than one frame of this "
-                             f"{fps:g} frames/s video: give at least {1 / fps:.3g} s")
+        limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
         total = min(declared, limit) if declared > 0 else None
         if declared > limit:
             warnings.append(f"the video is {declared / fps:.1f} s long; only its first {max_seconds:g} s "
@@ -841,10 +851,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     warnings.extend(notes)
     frames = ks.frames
     at = ks.frame_indices or list(range(len(frames)))  # each frame's index in its video (a record leaves some out)
-    limit = int(math.floor(max_seconds * ks.fps + 1e-9))
-    if limit == 0:
-        raise PoseLifterError(f"{path}: max_seconds {max_seconds:g} (--max-seconds) is shorter than one frame of "
-                              f"this {ks.fps:g} frames/s sequence: give at least {1 / ks.fps:.3g} s")
+    limit = _frame_limit(max_seconds, ks.fps, where=path, what="sequence")
     within = bisect.bisect_left(at, limit)  # (the frames that start before max_seconds)
     if len(frames) > within:
         warnings.append(f"the sequence has {len(frames)} frames ({(at[-1] + 1) / ks.fps:.1f} s); only the first "
