@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import re
 import tempfile
 from collections.abc import Callable, Sequence
@@ -37,8 +36,7 @@ import numpy as np
 
 from lifter import Camera, PoseLifterError
 from lifter._text import sentence
-from lifter.api import MIN_FOCAL_PX as LIFT_MIN_FOCAL_PX
-from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, image_centre, lens_notes, undistort_pixels_opencv
+from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, lens_notes, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
@@ -50,9 +48,9 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import REASSUMED_NOTE, LiftRecord, parse_keypoint_json
+from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
-from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes
+from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes, resolve_camera
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import lens_free_2d, undoes_lens
@@ -68,10 +66,6 @@ MAX_CANVAS_SIDE: Final[int] = 100_000
 CAMERA_HEIGHT_MM: Final[float] = 1600.0
 """Uploaded photos have no extrinsics: the camera is placed 1.6 m above the floor, looking horizontally
 along the world's +y axis (world z up), so the 3D view has the usual floor grid."""
-MIN_FOCAL_PX: Final[float] = LIFT_MIN_FOCAL_PX
-MAX_FOCAL_PX: Final[float] = 1e6
-"""Focal lengths (px) outside this range in a keypoint file are refused (the lower end is the library's and the
-focal slider's)."""
 MAX_PEOPLE: Final[int] = 6
 """People looked for in an uploaded photo / kept from a keypoint file (the largest first)."""
 DEFAULT_DETECTOR: Final[str] = "blazepose"
@@ -232,12 +226,6 @@ def _check_2d(kp: np.ndarray, where: str, size: tuple[int, int] | None = None) -
     return kp
 
 
-def _check_focal(focal: tuple[float, float], where: str) -> None:
-    if not all(math.isfinite(f) and MIN_FOCAL_PX <= f <= MAX_FOCAL_PX for f in focal):
-        raise UploadError(f"{where}: focal length {list(focal)} px is not plausible (expected {MIN_FOCAL_PX:g} .. "
-                          f"{MAX_FOCAL_PX:g} px)")
-
-
 # ------------------------------------------------------------------------------------------------
 # Photos
 # ------------------------------------------------------------------------------------------------
@@ -287,7 +275,9 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     Image size: the file's ``image_size``; else, when the file gives none, that of ``photo`` (the photo
     uploaded just before); else twice its ``principal_point``. The photo is drawn under the keypoints
     when its size matches. Focal: the file's ``focal``; else the photo's EXIF focal (when drawn on it);
-    else the default field of view ``fov_deg``. Principal point: the file's, else the image centre.
+    else the default field of view ``fov_deg``. Principal point: the file's, else the image centre. Focal and
+    principal point are resolved, checked and noted by :func:`lifter.pipeline.resolve_camera`, as for
+    ``poselifter lift``.
     """
     check_upload(name, content)
     nm = safe_name(name)
@@ -309,11 +299,6 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     file_scores, doubt = keypoint_file_scores(kf, 1 + len(others))
     notes += doubt  # (the unsure joints, named as poselifter lift names them)
     tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
-    if kf.focal is not None:
-        _check_focal((float(kf.focal[0]), float(kf.focal[1])), nm)
-    elif kf.distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)
-        raise UploadError(f"{nm}: \"distortion\" needs the camera's own focal length: add \"focal\" (px) to the "
-                          "file, or leave \"distortion\" out")
     size = kf.image_size
     use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
     if size is None and use_photo:
@@ -337,16 +322,19 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise
     if use_photo:
         notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
-    if kf.focal is not None:
-        focal, src, detail = (float(kf.focal[0]), float(kf.focal[1])), "keypoint-file", "focal from the keypoint file"
-    else:
-        g = guess_focal(size, exif=photo.exif if use_photo else None, fov_deg=fov_deg)  # type: ignore[union-attr]
-        focal, src, detail = (g.focal, g.focal), g.source, g.detail
-        if kf.assumed_focal is not None:  # (a result written with an assumed focal: assumed again, as lift says)
-            notes.append(REASSUMED_NOTE.format(focal=kf.assumed_focal) + " (set it if you know it)")
-        notes.append(g.detail)
-    cx, cy = kf.principal_point if kf.principal_point is not None else image_centre(size)
-    pp = (float(cx), float(cy))
+    # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes)
+    exif = photo.exif if use_photo else None  # type: ignore[union-attr]
+    try:
+        f, src, c, cam_notes = resolve_camera(
+            user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point, image_size=size,
+            exif=exif, sensor_width_mm=None, fov_deg=fov_deg, where=nm, file_distortion=kf.distortion,
+            assumed_focal=kf.assumed_focal, cli_options=False)
+    except PoseLifterError as exc:
+        raise UploadError(str(exc)) from None
+    notes += cam_notes
+    focal, pp = (float(f[0]), float(f[1])), (float(c[0]), float(c[1]))
+    detail = ("focal from the keypoint file" if src == "keypoint-file" else
+              guess_focal(size, exif=exif, fov_deg=fov_deg).detail)  # (the guess resolve_camera made, named)
     # what poselifter lift notes too: a focal in mm (a pose spanning > 120 deg), (0, 0) placeholders
     notes += plausibility_notes(np.stack([kp, *others]), np.array(focal), None, focal_source=src,
                                 source_format=kf.format)

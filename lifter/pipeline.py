@@ -60,31 +60,37 @@ def _px(v: Any) -> str:
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
             fov_deg: float, where: str, file_distortion: np.ndarray | None = None, unread: Sequence[str] = (),
-            assumed_focal: str | None = None) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
+            assumed_focal: str | None = None, cli_options: bool = True
+            ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     """The focal length, its source, the principal point and notes for one input, from what the user gave, the
     file's camera fields and the image size. A missing field raises a :class:`PoseLifterError` naming the ways
     to give it, followed by ``unread`` (a keypoint file's notes on fields it has but that are not read, e.g. a
     ``"focal_length"``: :attr:`lifter.io.KeypointFile.unread`), which likely explain it. ``assumed_focal``: the
     focal a result file says was assumed when it was written (:attr:`lifter.io.KeypointFile.assumed_focal`, not
-    passed as ``file_focal``); without a focal from the user, the first note says it is assumed again."""
+    passed as ``file_focal``); without a focal from the user, the first note says it is assumed again.
+    ``cli_options``: the messages name ``poselifter lift``'s options (``--focal``, ``--fov``) as ways to give what
+    is missing; False (the app, which has no such options at upload): they name the file's fields only."""
     try:
         f, src, pp, notes = _resolve_camera(
             user_focal=user_focal, user_pp=user_pp, file_focal=file_focal, file_pp=file_pp, image_size=image_size,
-            exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=where, file_distortion=file_distortion)
+            exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=where, file_distortion=file_distortion,
+            cli_options=cli_options)
     except PoseLifterError as exc:
         if not unread:
             raise
         raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(sentence(n) for n in unread)) from None
     if assumed_focal is not None and user_focal is None:
-        notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal) + " (give --focal if you know it)")
+        notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal)
+                     + (" (give --focal if you know it)" if cli_options else " (set it if you know it)"))
     return f, src, pp, notes
 
 
 def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
                     file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any,
-                    sensor_width_mm: float | None, fov_deg: float, where: str, file_distortion: np.ndarray | None
-                    ) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
+                    sensor_width_mm: float | None, fov_deg: float, where: str, file_distortion: np.ndarray | None,
+                    cli_options: bool) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
+    or_pass = ", pass --focal," if cli_options else ""
     if image_size is None:  # everything missing in one message, not one run per missing field
         have = {"focal": user_focal is not None or file_focal is not None,
                 "principal_point": user_pp is not None or file_pp is not None}
@@ -106,20 +112,21 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         if float(np.min(file_focal)) < MIN_FOCAL_PX:  # (else the lifter's message would name focal=, not the file)
             raise PoseLifterError(
                 f"{where}: the file's 'focal' {_px(file_focal)} is below {MIN_FOCAL_PX:g} px: it must be in pixels, "
-                "not mm (f_px = f_mm * image width px / sensor width mm); correct it, pass --focal, or remove it to "
+                f"not mm (f_px = f_mm * image width px / sensor width mm); correct it{or_pass or ','} or remove it to "
                 "assume a field of view from 'image_size'")
     else:
         assert image_size is not None  # (checked above, with every missing field named)
         if file_distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)
             raise PoseLifterError(f"{where}: 'distortion' needs the camera's own focal length: put 'focal' (px) in "
-                                  "the file or pass --focal, or leave 'distortion' out")
+                                  f"the file{' or pass --focal' if cli_options else ''}, or leave 'distortion' out")
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
         if g.focal < MIN_FOCAL_PX:  # (else the lifter's message would blame a focal length the user never gave)
             raise PoseLifterError(
                 f"{where}: the focal length assumed for this {image_size[0]} x {image_size[1]} px image ({g.detail}) "
-                f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length (--focal)"
-                + (", or a narrower field of view (--fov)" if g.source == "default-fov" else ""))
+                f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length "
+                + ("(--focal)" + (", or a narrower field of view (--fov)" if g.source == "default-fov" else "")
+                   if cli_options else "('focal', px, in the file)"))
         notes.append(g.detail)
     if user_pp is not None:
         pp = user_pp

@@ -756,7 +756,8 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
     assert any("undistorted with the camera's lens at its own focal length (1145.0 px)" in w for w in rec2.warnings)
 
     nofocal = {k: v for k, v in doc.items() if k != "focal"}
-    with pytest.raises(up.UploadError, match='"distortion" needs the camera\'s own focal length: add "focal"'):
+    with pytest.raises(up.UploadError, match="'distortion' needs the camera's own focal length: put 'focal' \\(px\\) "
+                                             "in the file, or leave 'distortion' out"):
         up.keypoint_sample("nofocal.json", json.dumps(nofocal).encode(), key="upload/t/nofocal.json")
 
 
@@ -852,3 +853,47 @@ def test_keypoint_file_scores_reach_the_download(tmp_path: Path) -> None:
     assert got["scores"] == want["scores"] == pytest.approx(sc.tolist())
     assert [p["scores"] for p in got["people"]] == [p["scores"] for p in want["people"]]
     assert got["people"][1]["scores"] == pytest.approx(sc[::-1].tolist())
+
+
+@pytest.mark.parametrize(("camera", "said"), [
+    ({"focal": 1145, "principal_point": [800, 600]}, "was that given as the principal point?"),
+    ({"focal": 100000}, "narrower than a 2000 mm telephoto lens's"),
+])
+def test_a_keypoint_upload_gets_the_camera_notes_poselifter_lift_gives(camera: dict, said: str,
+                                                                      tmp_path: Path) -> None:
+    """A review: the app resolved a keypoint file's camera by its own rules, not by
+    :func:`lifter.pipeline.resolve_camera`, so the notes ``poselifter lift`` gives on the same file (the image size
+    given as the principal point; a focal length no lens has on this image) were missing from the app."""
+    from conftest import tiny_lifter
+
+    from lifter import demo_sample
+    from lifter.pipeline import lift_keypoint_file
+
+    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
+           "image_size": [800, 600], "source": "clean", **camera}
+    path = tmp_path / "k.json"
+    path.write_text(json.dumps(doc))
+    rec = lift_keypoint_file(path, lifter=tiny_lifter())
+    assert any(said in w for w in rec.warnings), rec.warnings
+    sample = up.keypoint_sample("k.json", path.read_bytes(), key="upload/t/k.json")
+    assert any(said in w for w in sample.upload.warnings), sample.upload.warnings
+    assert sample.camera.principal_point == pytest.approx(tuple(doc.get("principal_point", (400, 300))))
+    assert sample.camera.alpha == pytest.approx(float(doc["focal"]))
+
+
+def test_a_keypoint_upload_with_a_focal_in_mm_is_refused_as_poselifter_lift_refuses_it(tmp_path: Path) -> None:
+    """The same rule and message as ``poselifter lift`` for a file's focal below 10 px (mm, not px)."""
+    from conftest import tiny_lifter
+
+    from lifter import PoseLifterError, demo_sample
+    from lifter.pipeline import lift_keypoint_file
+
+    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
+           "image_size": [800, 600], "focal": 4.2}
+    path = tmp_path / "mm.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(PoseLifterError, match="must be in pixels, not mm"):
+        lift_keypoint_file(path, lifter=tiny_lifter())
+    with pytest.raises(up.UploadError, match=r"mm\.json: the file's 'focal' 4\.2 x 4\.2 px is below 10 px: it must "
+                                             r"be in pixels, not mm .*; correct it, or remove it to assume"):
+        up.keypoint_sample("mm.json", path.read_bytes(), key="upload/t/mm.json")
