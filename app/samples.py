@@ -69,6 +69,14 @@ class Sample:
         return person_label(k, self.person_tag(k))
 
 
+def id_tag(person_id: object) -> str:
+    """How a person's own id in the input (a keypoint file's ``person_id`` / ``id``) is named in
+    :attr:`Sample.person_tags` and the picker: ``"id 7"``; parentheses become brackets, so that the picker's label
+    (:func:`person_label`) reads back, and it is cut to 40 characters."""
+    text = str(person_id).replace("(", "[").replace(")", "]")
+    return "id " + (text if len(text) <= 40 else text[:39] + "…")
+
+
 def person_label(k: int, tag: str = "") -> str:
     """The name of person index ``k`` (0 = largest): ``"person 1"``, ..., with the input's own name for them when
     it has one (``tag``: ``"id 7"`` from a keypoint file, ``"track 3"`` in a video): ``"person 2 (id 7)"``."""

@@ -55,7 +55,7 @@ from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import lens_free_2d, undoes_lens
 from .drawing import canvas
-from .samples import Sample
+from .samples import Sample, id_tag
 
 MAX_UPLOAD_BYTES: Final[int] = 20 * 1024 * 1024
 """Uploads larger than this (20 MiB) are refused (viser itself buffers uploads of any size)."""
@@ -298,7 +298,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     notes += placeholder_notes(np.stack([kf.keypoints, *people]), src=kf.format)
     file_scores, doubt = keypoint_file_scores(kf, 1 + len(others))
     notes += doubt  # (the unsure joints, named as poselifter lift names them)
-    tags = tuple("" if i is None else f"id {i}" for i in kf.people_ids[:1 + len(others)])
+    tags = tuple("" if i is None else id_tag(i) for i in kf.people_ids[:1 + len(others)])
     size = kf.image_size
     use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
     if size is None and use_photo:

@@ -44,7 +44,7 @@ from lifter.video import (
 
 from .core import lens_free_2d, undoes_lens
 from .keys import frame_of, sequence_of, with_frame
-from .samples import Sample
+from .samples import Sample, id_tag
 from .upload import (
     MAX_CANVAS_SIDE,
     MAX_PEOPLE,
@@ -79,9 +79,11 @@ def is_sequence_json(content: bytes) -> bool:
     return isinstance(doc, dict) and "frames" in doc
 
 
-def track_tag(track_id: int) -> str:
-    """How a video frame's sample names a tracked person (:attr:`Sample.person_tags`): ``"track 3"``."""
-    return f"track {int(track_id)}"
+def track_tag(track_id: int, person_id: object = None) -> str:
+    """How a video frame's sample names a tracked person (:attr:`Sample.person_tags`): ``"track 3"``, with the
+    input's own id of the track's person when it has one (:meth:`lifter.video.SequenceRecord.track_person_ids`):
+    ``"track 3, id kid"`` (:func:`app.samples.id_tag`)."""
+    return f"track {int(track_id)}" + ("" if person_id is None else f", {id_tag(person_id)}")
 
 
 @dataclass
@@ -114,6 +116,8 @@ class VideoSequence:
         self.camera = upload_camera(self.record.focal, self.record.principal_point, size, self.info.name,
                                     self.record.distortion)
         self._canvas = None if self.jpegs is not None else display_canvas(size, VIDEO_DISPLAY_MAX_SIDE)
+        ids = self.record.track_person_ids()
+        self._tags = {tid: track_tag(tid, pid) for tid, pid in ids.items()}
 
     def frame(self, index: int) -> Any:
         from .playback import SequenceFrame
@@ -137,7 +141,7 @@ class VideoSequence:
         return Sample(key=with_frame(self.key, i), label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
                       pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
                       upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]),
-                      person_tags=tuple(track_tag(p.track_id) for p in people))
+                      person_tags=tuple(self._tags[p.track_id] for p in people))
 
     def _canvas_for_bad(self) -> np.ndarray:
         return display_canvas(self.record.image_size or (1000, 1000), VIDEO_DISPLAY_MAX_SIDE)
@@ -145,7 +149,7 @@ class VideoSequence:
     def seen_after(self, tag: str, index: int) -> bool:
         """Whether the person ``tag`` (``"track 3"``, :attr:`Sample.person_tags`) is in any frame after frame
         ``index`` (0 .. :attr:`num_frames` - 1): False once their track has ended."""
-        return any(track_tag(p.track_id) == tag for fr in self.frames[int(index) + 1:] for p in fr.people)
+        return any(self._tags[p.track_id] == tag for fr in self.frames[int(index) + 1:] for p in fr.people)
 
     def index_of(self, key: str) -> int | None:
         """The frame index of a sample key of this sequence, else None."""

@@ -290,6 +290,12 @@ class SequenceRecord:
         """``track_id -> [(frame index, person), ...]`` in frame order."""
         return _tracks(self.frames)
 
+    def track_person_ids(self) -> dict[int, str | int | None]:
+        """``track_id -> `` the input's own id of the track's person (a keypoint sequence's ``person_id``), when
+        every sighting that has one gives the same; None for a video, an unnamed person, or ids new in every frame
+        (an annotation's own). As the written record's ``tracks`` give it."""
+        return {tid: _track_person_id(seen) for tid, seen in sorted(self.tracks().items())}
+
     @property
     def metric_depth(self) -> bool:
         """Whether the absolute depths (mm) rest on the camera's own focal length
@@ -297,8 +303,9 @@ class SequenceRecord:
         return depth_is_metric(self.focal_source)
 
     def to_json(self) -> dict[str, Any]:
+        ids = self.track_person_ids()
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
-                   "person_id": _track_person_id(seen)} for tid, seen in sorted(self.tracks().items())]
+                   "person_id": ids[tid]} for tid, seen in sorted(self.tracks().items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",

@@ -897,3 +897,20 @@ def test_a_keypoint_upload_with_a_focal_in_mm_is_refused_as_poselifter_lift_refu
     with pytest.raises(up.UploadError, match=r"mm\.json: the file's 'focal' 4\.2 x 4\.2 px is below 10 px: it must "
                                              r"be in pixels, not mm .*; correct it, or remove it to assume"):
         up.keypoint_sample("mm.json", path.read_bytes(), key="upload/t/mm.json")
+
+
+def test_a_person_id_with_parentheses_is_picked_by_its_label(app: PoseLifterApp) -> None:
+    """The picker's label "person 2 (id alice (left))" did not read back: picking it was refused as an unknown
+    person. Parentheses in a file's ids become brackets in the tag (:func:`app.samples.id_tag`)."""
+    s = app.demo.get(app.demo.names[1])
+    coco = _coco_from_h36m(s.keypoints_2d)
+    doc = {"people": [{"keypoints": coco.tolist(), "person_id": 7},
+                      {"keypoints": (0.5 * coco + 40.0).tolist(), "person_id": "alice (left)"}], "format": "coco17",
+           "image_size": [800, 600]}
+    v = app.headless_view()
+    assert v.load_upload("ids.json", json.dumps(doc).encode()) is True
+    assert list(v.gui.joints.person.options) == ["person 1 (id 7)", "person 2 (id alice [left])"]
+    v.gui.joints.person.value = "person 2 (id alice [left])"
+    assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id alice [left])"
+    name, payload = v.download_payload("json")  # (the record keeps the file's own id as it was)
+    assert [q["person_id"] for q in json.loads(payload)["people"]] == [7, "alice (left)"], name

@@ -414,3 +414,22 @@ def test_a_sequence_download_keeps_the_joints_dragged_on_its_frame(server) -> No
     assert f"2D joints corrected in the app: frame 6 (track {tid}): r_wrist" in after["warnings"]
     for a, b in zip(after["frames"][:6], before["frames"][:6]):  # (the frames before it: as they were)
         assert a["people"] == b["people"]
+
+
+def test_a_keypoint_sequence_s_person_picker_names_the_file_s_person_ids(server) -> None:
+    """A browser trial: a keypoint sequence's person picker said "person 1 (track 1)", "person 2 (track 2)", not the
+    file's own ``person_id``s, which the keypoint-file upload's picker shows ("person 1 (id 7)"). A track whose
+    person has one id in every frame is now named with it; a name with parentheses is still picked by its label."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist(), "person_id": pid}
+                          for p, pid in zip(pp, ("alice (left)", 7))]} for pp in _script(4)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("ids.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    labels = list(v.gui.joints.person.options)
+    assert labels == ["person 1 (track 1, id alice [left])", "person 2 (track 2, id 7)"], labels
+    v.gui.joints.person.value = labels[1]
+    assert v.state.person == 1 and v.state.sample.person_tag(1) == "track 2, id 7"
+    v.gui.joints.person.value = labels[0]
+    assert v.state.person == 0
+    assert "person 1 (track 1, id alice [left])" in v.gui.readout.readout.content
