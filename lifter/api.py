@@ -35,6 +35,7 @@ from ._checks import (
     face_first_notes,
     input_warnings,
     narrow_view_notes,
+    outside_image_notes,
     principal_point_notes,
     upside_down_notes,
     where_in_batch,
@@ -708,8 +709,10 @@ class Lifter:
                     if not said:
                         raise
                     raise PoseLifterError(f"{exc}. Also: {said[0]}") from None
-        in_list = input_warnings(kp, f if focal_source == "given" else None)
+        # (the view check at an assumed focal too, as the records check it: keypoints in another image's pixels)
+        in_list = input_warnings(kp, None if focal_source == "reference" else f, focal_given=focal_source == "given")
         in_list += said
+        in_list += outside_image_notes(kp, wh)
         if pp_given and wh is not None and wh.ndim == 1:  # (the records' own note, for API calls)
             flat = pp.reshape(-1, 2)
             if len(flat) and np.all(flat == flat[0]):

@@ -25,6 +25,7 @@ from ._checks import (
     as_pair,
     input_warnings,
     narrow_view_notes,
+    outside_image_notes,
     principal_point_notes,
     upside_down_notes,
     upside_down_people,
@@ -165,15 +166,7 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
                             placeholders=source_format == H36M17)
     if not detected:  # (the package's own detector gives upright image coordinates)
         notes += upside_down_notes(k)
-    if image_size is not None:
-        W, H = image_size
-        outside = (k[..., 0] < 0) | (k[..., 0] > W) | (k[..., 1] < 0) | (k[..., 1] > H)
-        share = outside.mean(1)
-        if float(share.max()) > 0.5:
-            n = f"{int((share > 0.5).sum())} of {len(k)} 2D pose(s)"
-            notes.append(f"the detector placed most joints of {n} outside the {W} x {H} px image (a person cut off "
-                         "by the frame, or half-invented): their 3D is uncertain" if detected else
-                         f"{n} lie mostly outside the {W} x {H} px image: are the keypoints in this image's pixels?")
+    notes += outside_image_notes(k, image_size, detected=detected)
     return notes
 
 

@@ -884,3 +884,33 @@ def test_a_focal_per_first_index_error_names_the_shape_given():
         tiny_lifter().lift(kp, focal=np.full((5, 1), 1000.0), principal_point=(500, 500))
     out = tiny_lifter().lift(kp, focal=np.full((5, 1, 1), 1000.0), principal_point=(500, 500))
     assert out.root.shape == (5, 2, 3)
+
+
+def test_lift_warns_of_keypoints_outside_the_image_size_given_as_records_do():
+    """A review: keypoints of a 4800 x 3600 px original given with its 800 x 600 px thumbnail's ``image_size`` were
+    lifted without a word (root [1885, 1372, 740] mm, against about [0, -31, 3367]); ``poselifter lift``'s records
+    say "lie mostly outside the ... image" from the same check (:func:`lifter._checks.outside_image_notes`), and
+    with the focal assumed from that size the 120-degree view check applies as it does there. Keypoints inside
+    their image, one size per pose, and no size at all are not flagged."""
+    lf = tiny_lifter()
+    kp = np.asarray(demo_sample("walking").keypoints_2d)
+    big = kp * 6.0
+    with pytest.warns(PoseLifterWarning) as got:
+        res = lf.lift(big, image_size=(800, 600))
+    said = [str(w.message) for w in got]
+    assert any("lie mostly outside the 800 x 600 px image: are the keypoints in this image's pixels?" in w
+               for w in said), said
+    assert set(said) <= set(res.input_warnings)
+    far = lf.lift(kp * 10.0, image_size=(800, 600), warn=False)
+    assert far.input_warnings[0].startswith("at the focal length used (784.8 px) a 2D pose spans 136 deg of view")
+    assert "the focal length was assumed, not given" in far.input_warnings[0]
+    with pytest.warns(PoseLifterWarning, match=r"1 of 2 2D pose\(s\) lie mostly outside the 800 x 600 px image"):
+        lf.lift(np.stack([kp, big]), focal=1145.0, image_size=(800, 600))
+    with pytest.warns(PoseLifterWarning, match=r"lie mostly outside"):  # (one image size per pose)
+        lf.lift(np.stack([kp, big]), focal=1145.0, image_size=[(800, 600), (800, 600)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(kp, image_size=(800, 600))
+        lf.lift(big, image_size=(4800, 3600))
+        lf.lift(np.stack([kp, big]), focal=1145.0, image_size=[(800, 600), (4800, 3600)])
+        lf.lift(big, focal=6870.0, principal_point=(2400, 1800))
