@@ -261,9 +261,16 @@ def check_distortion(distortion: ArrayLike, *, lead: tuple[int, ...] = ()) -> np
         d = np.asarray(distortion, np.float64)
     except (TypeError, ValueError):
         raise PoseLifterError(f"distortion must be numbers {form}, got {str(distortion)[:80]}") from None
+    # (4 or 8 values only OpenCV's distCoeffs have; a (1, n) row for one pose is cv2.calibrateCamera's)
+    opencv_like = d.ndim >= 1 and (d.shape[-1] in (4, 8) or (d.ndim == 2 and d.shape[0] == 1 and not lead
+                                                             and d.shape[-1] in OPENCV_DISTORTION_COUNTS))
+    hint = "; OpenCV's distCoeffs? pass distortion_model=\"opencv\"" if opencv_like else ""
     if d.ndim == 0 or d.shape[-1] != 5:
-        raise PoseLifterError(f"distortion must be {form}; got shape {d.shape} ({d.size} value(s))")
-    return _lens_rows(d, lead, label="distortion", one="(5,)")
+        raise PoseLifterError(f"distortion must be {form}; got shape {d.shape} ({d.size} value(s)){hint}")
+    try:
+        return _lens_rows(d, lead, label="distortion", one="(5,)")
+    except PoseLifterError as exc:
+        raise PoseLifterError(f"{exc}{hint}") from None
 
 
 def _lens_rows(d: np.ndarray, lead: tuple[int, ...], *, label: str, one: str) -> np.ndarray:
@@ -273,7 +280,8 @@ def _lens_rows(d: np.ndarray, lead: tuple[int, ...], *, label: str, one: str) ->
         d = np.broadcast_to(d, lead + d.shape[-1:])
     except ValueError:
         raise PoseLifterError(f"{label}: shape {d.shape} does not match the keypoints' poses {lead}: give one "
-                              f"{one} for all, or one row per pose {lead + d.shape[-1:]}") from None
+                              f"{one} for all" + (f", or one row per pose {lead + d.shape[-1:]}" if lead else
+                                                  " (the keypoints are one pose)")) from None
     bad = ~np.all(np.isfinite(d) & (np.abs(d) < MAX_DISTORTION_COEFFICIENT), axis=-1)
     if np.any(bad):
         row = d[tuple(np.argwhere(bad)[0])] if bad.ndim else d
@@ -364,8 +372,8 @@ def check_opencv_distortion(dist_coeffs: ArrayLike, *, lead: tuple[int, ...] = (
     except (TypeError, ValueError):
         raise PoseLifterError(f"distortion (opencv) must be numbers {_OPENCV_FORM}, got "
                               f"{str(dist_coeffs)[:80]}") from None
-    if d.ndim == 2 and d.shape[0] == 1 and not lead:
-        d = d[0]  # (cv2.calibrateCamera returns distCoeffs as a (1, n) row)
+    if d.ndim == 2 and 1 in d.shape and not lead:
+        d = d.reshape(-1)  # (cv2.calibrateCamera returns distCoeffs as a (1, n) row, cv2.FileStorage as (n, 1))
     if d.ndim == 0 or d.shape[-1] not in OPENCV_DISTORTION_COUNTS:
         raise PoseLifterError(f"distortion (opencv) must be {_OPENCV_FORM}; got shape {d.shape} ({d.size} value(s))"
                               + ("; OpenCV's thin-prism and tilted-sensor terms (12 or 14 values) are not taken: "

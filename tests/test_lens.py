@@ -638,3 +638,34 @@ def test_keypoint_file_and_sequence_with_an_opencv_lens(tmp_path, rng):
                      ({"distortion": [0.1, 0.2, 0.0], "distortion_model": "opencv"}, r"OpenCV's distCoeffs.*4, 5, 8")):
         with pytest.raises(PoseLifterError, match=msg):
             parse_keypoint_json(_write(tmp_path / "bad.json", {"keypoints": distorted[0].tolist(), **meta, **bad}))
+
+
+def test_opencv_shaped_lenses_given_as_human36m_name_the_opencv_model():
+    """A review: 4 or 8 coefficients (counts only OpenCV's distCoeffs have), or cv2.calibrateCamera's (1, 5) row, given
+    with the default distortion_model="h36m" were refused without naming distortion_model="opencv"; the (1, 5) row's
+    message offered the same shape twice ("give one (5,) for all, or one row per pose (5,)"); and OpenCV's (5, 1)
+    column (cv2.FileStorage, several cv2 APIs) was refused in opencv mode, where the (1, 5) row is taken."""
+    import cv2
+
+    from conftest import tiny_lifter
+
+    X = random_pose_cam(np.random.default_rng(4), 1)[0]
+    f, c = 1000.0, (500.0, 500.0)
+    lf = tiny_lifter()
+    lf.train_config = {"data": {"lens": "pinhole"}}
+    kp = cam.project(X, focal=f, principal_point=c)
+    for d in ([-0.28, 0.09, 0.001, -0.0005], [-0.28, 0.09, 0.001, -0.0005, -0.012, 0, 0, 0], np.zeros((1, 5))):
+        with pytest.raises(PoseLifterError, match=r"OpenCV's distCoeffs\? pass distortion_model=\"opencv\"") as got:
+            lf.lift(kp, focal=f, principal_point=c, distortion=d)
+        assert "or one row per pose (5,)" not in str(got.value), got.value
+    d5 = np.array([-0.28, 0.09, 0.0012, -0.0008, 0.05])
+    K = np.array([[f, 0, c[0]], [0, f, c[1]], [0, 0, 1.0]])
+    seen = cv2.projectPoints(X, np.zeros(3), np.zeros(3), K, d5)[0].reshape(-1, 2)
+    want = lf.lift(seen, focal=f, principal_point=c, distortion=d5, distortion_model="opencv", warn=False)
+    for shape in ((5, 1), (1, 5)):
+        got_ = lf.lift(seen, focal=f, principal_point=c, distortion=d5.reshape(shape), distortion_model="opencv",
+                       warn=False)
+        np.testing.assert_allclose(got_.absolute, want.absolute)
+    with pytest.raises(PoseLifterError, match=r"distortion: shape \(3, 5\) does not match the keypoints' poses \(2,\): "
+                                              r"give one \(5,\) for all, or one row per pose \(2, 5\)"):
+        lf.lift(np.stack([kp, kp]), focal=f, principal_point=c, distortion=np.zeros((3, 5)))
