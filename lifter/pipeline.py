@@ -69,8 +69,9 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
     ``"focal_length"``: :attr:`lifter.io.KeypointFile.unread`), which likely explain it. ``assumed_focal``: the
     focal a result file says was assumed when it was written (:attr:`lifter.io.KeypointFile.assumed_focal`, not
     passed as ``file_focal``); without a focal from the user, the first note says it is assumed again.
-    ``cli_options``: the messages name ``poselifter lift``'s options (``--focal``, ``--fov``) as ways to give what
-    is missing; False (the app, which has no such options at upload): they name the file's fields only."""
+    ``cli_options``: the messages name the ways to give what is missing as the Python arguments with
+    ``poselifter lift``'s options (``focal= (--focal)``, ``fov_deg= (--fov)``); False (the app, which has neither at
+    upload): they name the file's fields only."""
     try:
         f, src, pp, notes = _resolve_camera(
             user_focal=user_focal, user_pp=user_pp, file_focal=file_focal, file_pp=file_pp, image_size=image_size,
@@ -82,7 +83,7 @@ def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None,
         raise PoseLifterError(f"{exc}. Also in the file: " + " ".join(sentence(n) for n in unread)) from None
     if assumed_focal is not None and user_focal is None:
         notes.insert(0, REASSUMED_NOTE.format(focal=assumed_focal)
-                     + (" (give --focal if you know it)" if cli_options else " (set it if you know it)"))
+                     + (" (give focal= (--focal) if you know it)" if cli_options else " (set it if you know it)"))
     return f, src, pp, notes
 
 
@@ -91,11 +92,12 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
                     sensor_width_mm: float | None, fov_deg: float, where: str, file_distortion: np.ndarray | None,
                     cli_options: bool) -> tuple[np.ndarray, str, np.ndarray, list[str]]:
     notes: list[str] = []
-    or_pass = ", pass --focal," if cli_options else ""
+    or_pass = ", pass focal= (--focal)," if cli_options else ""
     if image_size is None:  # everything missing in one message, not one run per missing field
         have = {"focal": user_focal is not None or file_focal is not None,
                 "principal_point": user_pp is not None or file_pp is not None}
-        need = [(opt, f) for opt, f in (("--focal", "focal"), ("--principal-point", "principal_point")) if not have[f]]
+        need = [(opt, f) for opt, f in (("focal= (--focal)", "focal"),
+                                        ("principal_point= (--principal-point)", "principal_point")) if not have[f]]
         if need:
             what = " and no ".join("focal length" if f == "focal" else "principal point" for _, f in need)
             raise PoseLifterError(
@@ -106,7 +108,7 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):
             notes.append(f"the focal length given ({_px(user_focal)}) replaces the file's own ({_px(file_focal)})"
                          + ("; the file's 'distortion' is applied with it (lens coefficients act on (x - c) / f, so "
-                            "at another focal they bend the 2D differently: leave --focal out if the lens was "
+                            "at another focal they bend the 2D differently: leave focal= (--focal) out if the lens was "
                             "calibrated with the file's focal)" if file_distortion is not None else ""))
     elif file_focal is not None:
         focal, src = file_focal, "keypoint-file"
@@ -119,14 +121,16 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         assert image_size is not None  # (checked above, with every missing field named)
         if file_distortion is not None:  # (lens coefficients act on px / focal: an assumed focal makes them wrong)
             raise PoseLifterError(f"{where}: 'distortion' needs the camera's own focal length: put 'focal' (px) in "
-                                  f"the file{' or pass --focal' if cli_options else ''}, or leave 'distortion' out")
+                                  f"the file{' or pass focal= (--focal)' if cli_options else ''}, or leave "
+                                  "'distortion' out")
         g = guess_focal(image_size, exif=exif, sensor_width_mm=sensor_width_mm, fov_deg=fov_deg)
         focal, src = np.array([g.focal, g.focal]), g.source
         if g.focal < MIN_FOCAL_PX:  # (else the lifter's message would blame a focal length the user never gave)
             raise PoseLifterError(
                 f"{where}: the focal length assumed for this {image_size[0]} x {image_size[1]} px image ({g.detail}) "
                 f"is {g.focal:.3g} px, below {MIN_FOCAL_PX:g} px: give the focal length "
-                + ("(--focal)" + (", or a narrower field of view (--fov)" if g.source == "default-fov" else "")
+                + ("with focal= (--focal)" + (", or a narrower field of view with fov_deg= (--fov)"
+                                           if g.source == "default-fov" else "")
                    if cli_options else "('focal', px, in the file)"))
         notes.append(g.detail)
     if user_pp is not None:

@@ -182,8 +182,8 @@ def test_an_assumed_focal_below_the_limit_names_fov_not_a_focal_in_mm(tmp_path, 
     code, err = lift([str(p), "--out", str(tmp_path / "out"), "--weights", str(weights), "--fov", "150"], capsys)
     assert code == 1
     assert "the focal length assumed for this 40 x 30 px image (no focal length given: assumed a 150 deg diagonal " \
-           "field of view -> 6.7 px) is 6.7 px, below 10 px: give the focal length (--focal), or a narrower field of " \
-           "view (--fov)" in err, err
+           "field of view -> 6.7 px) is 6.7 px, below 10 px: give the focal length with focal= (--focal), or a " \
+           "narrower field of view with fov_deg= (--fov)" in err, err
     assert "not mm" not in err and "focal=None" not in err
 
 @pytest.mark.parametrize(

@@ -352,7 +352,7 @@ def test_keypoint_file_distortion_needs_a_focal_given_not_assumed(tmp_path, rng)
                                               "distortion": [*k, *p]})
     rec = lift_keypoint_file(with_focal, lifter=lf, focal=1300.0)
     assert any("replaces the file's own (1145 x 1145 px); the file's 'distortion' is applied with it" in w
-               and "leave --focal out" in w for w in rec.warnings), rec.warnings
+               and "leave focal= (--focal) out" in w for w in rec.warnings), rec.warnings
     plain = _write(tmp_path / "g.json", {"keypoints": d.tolist(), "focal": 1145.0, "principal_point": [512, 515]})
     assert not any("'distortion'" in w for w in lift_keypoint_file(plain, lifter=lf, focal=1300.0).warnings)
 
@@ -646,7 +646,6 @@ def test_opencv_shaped_lenses_given_as_human36m_name_the_opencv_model():
     message offered the same shape twice ("give one (5,) for all, or one row per pose (5,)"); and OpenCV's (5, 1)
     column (cv2.FileStorage, several cv2 APIs) was refused in opencv mode, where the (1, 5) row is taken."""
     import cv2
-
     from conftest import tiny_lifter
 
     X = random_pose_cam(np.random.default_rng(4), 1)[0]

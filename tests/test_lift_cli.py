@@ -89,8 +89,9 @@ def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
                      "--weights", str(weights)], capsys)
     assert code == 1 and "no focal length and no image size" in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--weights", str(weights)], capsys)
-    assert code == 1 and ("no focal length and no principal point and no image size: pass --focal and --principal-"
-                          "point, or put 'image_size' (or 'focal' and 'principal_point') in the file") in err
+    assert code == 1 and ("no focal length and no principal point and no image size: pass focal= (--focal) and "
+                          "principal_point= (--principal-point), or put 'image_size' (or 'focal' and "
+                          "'principal_point') in the file") in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
                      "--weights", str(weights)], capsys)
     assert code == 0 and "2 people in the file; each is lifted (largest first; 'input_index'" in err
