@@ -100,7 +100,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, PoseLifterWarning, _joint_labels, where_in_batch, zero_placeholders
+from ._checks import PoseLifterError, PoseLifterWarning, _joint_labels, _real_array, where_in_batch, zero_placeholders
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 H36M17: Final[str] = "h36m17"
@@ -511,10 +511,7 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
     False for callers that report it themselves (the records' notes, the app).
     """
     f_src, f_dst = get_format(src), get_format(dst)
-    try:
-        arr = np.asarray(keypoints, np.float64)
-    except (TypeError, ValueError) as exc:
-        raise PoseLifterError(f"keypoints: could not convert to a numeric array ({exc})") from None
+    arr = _real_array(keypoints, name="keypoints", what="a numeric array")  # (torch tensors as lift reads them)
     if arr.ndim < 2 or arr.shape[-1] not in (2, 3) or arr.shape[-2] != f_src.num_joints:
         raise PoseLifterError(
             f"keypoints: format {src!r} has {f_src.num_joints} joints, expected shape (..., {f_src.num_joints}, 2) "

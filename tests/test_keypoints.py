@@ -102,7 +102,7 @@ def test_bad_inputs():
         convert(bad, src="sh16")
     with pytest.raises(PoseLifterError, match="expected shape"):
         convert(np.zeros((16, 4)), src="sh16")
-    with pytest.raises(PoseLifterError, match="numeric"):
+    with pytest.raises(PoseLifterError, match="strings are not numbers"):
         convert([["a", "b"]] * 16, src="sh16")
 
 
@@ -192,3 +192,20 @@ def test_shape_errors_name_a_transposed_array_and_mediapipe_rows(tmp_path):
     p.write_text(json.dumps({"keypoints": [[0.5, 0.4, -0.1, 0.99]] * 33, "format": "blazepose33"}))
     with pytest.raises(PoseLifterError, match=r"rows of 4 values are MediaPipe's \(x, y, z, visibility\)\?"):
         parse_keypoint_json(p)
+
+
+def test_convert_takes_torch_tensors_as_lift_does():
+    """A review: ``Lifter.lift`` takes a tensor that requires grad, and a bfloat16 one, but ``lifter.convert`` raised
+    torch's RuntimeError ("Can't call numpy() on Tensor that requires grad") or a cryptic ScalarType error for
+    them. They are read as lift reads them; a complex array is refused by name."""
+    torch = pytest.importorskip("torch")
+    from lifter import PoseLifterError, convert
+
+    kp = np.random.default_rng(0).uniform(100, 600, (17, 2))
+    want = convert(kp, src="coco17")
+    got = convert(torch.tensor(kp, requires_grad=True), src="coco17")
+    np.testing.assert_allclose(got, want)
+    half = torch.tensor(kp, dtype=torch.bfloat16)
+    np.testing.assert_allclose(convert(half, src="coco17"), convert(half.double().numpy(), src="coco17"))
+    with pytest.raises(PoseLifterError, match="complex numbers are not pixel coordinates"):
+        convert(kp + 1j, src="coco17")
