@@ -151,8 +151,9 @@ class LiftResult:
     absolute: ``(..., 17, 3)`` the absolute pose, ``root + relative``.
     root: ``(..., 3)`` the pelvis: the input's 2D pelvis back-projected at depth ``root[..., 2]``.
     relative: ``(..., 17, 3)`` root-relative pose, root row zero.
-    canonical_depth: ``(...)`` ``Z * 1000 / alpha`` (mm as seen by a 1000-px camera; alpha = sqrt(fx fy)):
-        known whether or not the focal length is.
+    canonical_depth: ``(...)`` ``Z * 1000 / alpha`` (mm as seen by a 1000-px camera; alpha = sqrt(fx fy)). A
+        pixel-space model's does not depend on the focal length (known whether or not it is); the default's
+        (``input_space`` ``"camera"``) does, a little (see ``input_space``).
     keypoints_2d: ``(..., 17, 2)`` px, the 2D that was lifted: the input, undistorted when a ``distortion`` was given to
     a pinhole lifter. principal_point, focal: ``(..., 2)`` px used.
     focal_source: ``"given"``; ``"default-fov"`` (no focal: the default diagonal field of view of

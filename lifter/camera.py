@@ -523,8 +523,8 @@ def project(
 ) -> np.ndarray:
     """Project camera-frame points ``(..., J, 3)`` (mm, z > 0) to pixels ``(..., J, 2)``.
 
-    ``focal`` (px) and ``principal_point`` (px) are scalars / pairs, optionally batched as
-    ``(..., 2)`` over the leading dimensions. With ``k`` and ``p`` the H36M lens distortion is
+    ``focal`` (px) is a scalar or a pair ``(fx, fy)``, ``principal_point`` (px) a pair ``(cx, cy)``; either may be
+    batched as ``(..., 2)`` over the leading dimensions. With ``k`` and ``p`` the H36M lens distortion is
     applied (this is how H36M's own 2D annotations are made); without them it is a pinhole.
     """
     X = np.asarray(points_cam, np.float64)

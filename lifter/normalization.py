@@ -1,6 +1,6 @@
 """The PoseLifter normalization layer (paper Eq. 1-4), numpy or torch.
 
-Given 2D joints ``p_i`` (px) already expressed relative to the principal point ``c``:
+Given 2D joints ``p_i`` (image px) and the principal point ``c`` (px):
 
 1. ``p'_i = p_i - c``                                   (subtract the principal point; :func:`normalize_keypoints`)
 2. ``u = mean_i p'_i``                                   (2D location of the person, px)
