@@ -10,7 +10,7 @@ whatever order the callbacks run in.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -221,6 +221,16 @@ def reset_joints(state: SessionState) -> SessionState:
 _PERSON_LABEL = re.compile(r"person (\d+)(?: \(([^()]{0,60})\))?")
 
 
+def sequence_of_subject(sequences: Sequence[str], wanted: str) -> str:
+    """The sequence of a subject's ``sequences`` (Human3.6M names: ``"Phoning"``, ``"Phoning 2"``) to open for the
+    one ``wanted`` (the sequence picker's, from the subject shown before): itself when the subject has it; else the
+    first take of the same action (S9 'Phoning' -> S11 'Phoning 2'); else the subject's first sequence."""
+    if wanted in sequences:
+        return wanted
+    action = wanted.rstrip("0123456789").rstrip()
+    return next((q for q in sequences if q.rstrip("0123456789").rstrip() == action), sequences[0])
+
+
 def person_index(value: object, *, tags: tuple[str, ...] = ()) -> int:
     """A person index from an index or a picker label ``"person k"`` (with or without its tag). A label whose tag
     is among ``tags`` (the sample's :attr:`Sample.person_tags`: ``"track 3"``) names that person wherever they are
@@ -429,8 +439,7 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
     if p.subject.value not in [f"S{s}" for s in h36m.subjects]:
         raise PoseLifterError(f"unknown subject {str(p.subject.value)[:20]!r}")
     subject = int(p.subject.value[1:])
-    seqs = h36m.sequences(subject)
-    sequence = p.sequence.value if p.sequence.value in seqs else seqs[0]
+    sequence = sequence_of_subject(h36m.sequences(subject), str(p.sequence.value))
     was = parse_h36m(shown) or (parse_h36m(last_h36m) if last_h36m else None)
     same_seq = was is not None and was.subject == subject and was.sequence == sequence
     if same_seq and source_of(shown) == "h36m":

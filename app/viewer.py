@@ -707,11 +707,25 @@ class SessionView:
         self._note_frame_past_end(key, video)
         if key == shown:
             return None
+        self._note_sequence_of_subject(key)
         if self._last_upload is not None and key == self._last_upload.key:
             return self._last_upload
         if video is not None and (i := video.index_of(key)) is not None:
             return video.sample(i)
         return self.app.sample(key)
+
+    def _note_sequence_of_subject(self, key: str) -> None:
+        """Say so when the subject picked has no sequence of the sequence picker's name, and ``key`` opens another
+        (:func:`poselifter_app.session.sequence_of_subject`: a browser trial's S11 opened 'Directions', not a
+        word said, from S9 'Phoning')."""
+        want, g, h = parse_h36m(key), self.gui.sample, self.app.h36m
+        if want is None or h is None or g.sequence is None:
+            return
+        picked = str(g.sequence.value)
+        seqs = h.sequences(want.subject)
+        if picked not in seqs and want.sequence == ss.sequence_of_subject(seqs, picked):
+            self.show_message(f"{want.subject_name} has no {picked!r}: showing its {want.sequence!r}",
+                              about=sequence_of(key))
 
     def _note_frame_past_end(self, key: str, video: Any) -> None:
         """Say so when the frame asked for (typed in the slider's box) is past the sequence's end or before its start

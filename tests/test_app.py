@@ -2114,3 +2114,40 @@ def test_a_demo_sample_s_download_counts_its_people(view: SessionView) -> None:
     view.select_demo("walking")
     rec = json.loads(view.download_payload("json")[1])
     assert rec["num_people"] == len(rec["people"]) == 1
+
+
+def test_a_subject_without_the_sequence_shown_opens_the_same_action_and_says_so(h36m_app: PoseLifterApp) -> None:
+    """A browser trial: from S9 'Phoning', picking S11 (which has 'Phoning 2' and 'Phoning 3', no 'Phoning') opened
+    S11's first sequence, 'Directions', without a word. It now opens the same action's first take there and says
+    which; a subject with the sequence opens it, quietly; a subject without the action at all opens its first
+    sequence, and says so."""
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    assert "Phoning" in h.sequences(9) and "Phoning" not in h.sequences(11) and "Phoning 2" in h.sequences(11)
+    assert v.select_h36m(subject=9, sequence="Phoning", camera="55011271", frame=10) is True
+    said = len(v.messages)
+    v.gui.sample.subject.value = "S11"
+    assert v.state.sample.key == "h36m/S11/Phoning 2/55011271/0", v.state.sample.key
+    assert v.gui.sample.sequence.value == "Phoning 2"
+    assert any("S11 has no 'Phoning': showing its 'Phoning 2'" in m for m in v.messages[said:]), v.messages[said:]
+    said = len(v.messages)
+    v.gui.sample.subject.value = "S9"  # (S9 has 'Phoning 2'? no: 'Phoning', 'Phoning 1': the action's first take)
+    assert v.state.sample.key.startswith("h36m/S9/Phoning/"), v.state.sample.key
+    assert any("S9 has no 'Phoning 2': showing its 'Phoning'" in m for m in v.messages[said:]), v.messages[said:]
+    assert v.select_h36m(subject=9, sequence="Walking", camera="55011271", frame=0) is True
+    said = len(v.messages)
+    v.gui.sample.subject.value = "S11"  # (S11 has 'Walking')
+    assert v.state.sample.key.startswith("h36m/S11/Walking/") and not any("has no" in m for m in v.messages[said:])
+
+
+def test_sequence_of_subject_keeps_the_action() -> None:
+    """:func:`poselifter_app.session.sequence_of_subject`: the sequence itself, else the action's first take, else the
+    subject's first sequence (no such action)."""
+    from poselifter_app import session as ss
+
+    seqs = ["Directions", "Directions 1", "Phoning 2", "Phoning 3", "Walking", "WalkDog"]
+    assert ss.sequence_of_subject(seqs, "Walking") == "Walking"
+    assert ss.sequence_of_subject(seqs, "Phoning") == "Phoning 2"
+    assert ss.sequence_of_subject(seqs, "Phoning 1") == "Phoning 2"
+    assert ss.sequence_of_subject(seqs, "Walking 1") == "Walking"  # (not 'WalkDog')
+    assert ss.sequence_of_subject(seqs, "Greeting") == "Directions"
