@@ -1585,6 +1585,8 @@ class PoseLifterApp:
                 default_model = default_model_name()
             except PoseLifterError:
                 default_model = self.pool.names[0] if self.pool.names else ""
+        elif self.pool.names and default_model not in self.pool.names:  # (else every tab's session fails to build)
+            raise PoseLifterError(f"unknown model {default_model!r} (--model): expected one of {self.pool.names}")
         self.default_model = default_model
         self.error_model = error_model if error_model is not None else default_error_model()
         self.views: dict[int, SessionView] = {}

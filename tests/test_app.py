@@ -1352,8 +1352,11 @@ def test_rejected_and_crafted_gui_values_are_reported(app: PoseLifterApp) -> Non
 
 @pytest.mark.parametrize("args, expect", [(["--port", "99999"], "outside 0-65535"), (["--port", "-1"], "outside"),
                                           (["--host", "no.such.host.invalid"], "cannot use --host"),
-                                          (["--host", "203.0.113.7"], "cannot listen")])
+                                          (["--host", "203.0.113.7"], "cannot listen"),
+                                          (["--port", "0", "--model", "nosuch"],
+                                           "unknown model 'nosuch' (--model): expected one of ['blazepose'")])
 def test_bad_port_or_host_exits_quickly(args, expect) -> None:
+    """... or model: a README trial's --model nosuch started, then failed every tab's session with a traceback."""
     import subprocess
     import sys
     import time
