@@ -139,6 +139,22 @@ def _same_calibration(a: Any, b: Any) -> bool:
             and bool(np.allclose((*a.k, *a.p), (*b.k, *b.p))))
 
 
+def _same_camera(a: Any, b: Any, *, src: str, old_src: str) -> bool:
+    """Whether camera ``a`` of a sample from source ``src`` is the camera ``b`` of the sample shown before (from
+    ``old_src``), so that a chosen focal length stays: the same object (the frames of one sequence or upload); one
+    Human3.6M camera, whose calibration is the same for every subject (a user trial saw a chosen focal reset across
+    subjects); the walking demo's camera, which sees the demo motion too. Uploads are each their own camera, even
+    under the last one's file name (a review: a corrected clip.json kept the old file's focal)."""
+    if a is b:
+        return True
+    if src == old_src == "h36m":
+        return a.name == b.name or _same_calibration(a, b)
+    if {src, old_src} & set(UPLOADED_SOURCES):
+        return False
+    return a.name == b.name and _same_calibration(a, b) and bool(np.allclose(a.R, b.R)) and \
+        bool(np.allclose(a.t, b.t))
+
+
 class LatestWins:
     """Runs ``work`` when asked, never twice at once; a request made while it runs makes it run once more
     afterwards (in the thread that is running it). The caller of :meth:`request` returns at once when another
@@ -806,13 +822,9 @@ class SessionView:
             st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
                            others_dragged=left.others_dragged, input_kind=left.input_kind)
             self._upload_left = None
-        a, b = sample.camera, old.sample.camera
-        # (one Human3.6M camera's calibration is the same for every subject: a chosen focal is kept across subjects;
-        # a user trial saw it reset)
         src = source_of(sample.key)
-        same_camera = a is b or (src == source_of(old.sample.key) and (
-            a.name == b.name or src == "h36m" and _same_calibration(a, b)))
-        kept = same_camera and src in SEQUENCE_SOURCES
+        same = _same_camera(sample.camera, old.sample.camera, src=src, old_src=source_of(old.sample.key))
+        kept = same and src in SEQUENCE_SOURCES  # (a still sample opens at its camera's own focal)
         if kept:
             st = st.evolve(focal_px=old.focal_px)
         else:  # the new camera's focal replaces one being typed: the box shows it now (and the pass reads it back)
@@ -854,7 +866,8 @@ class SessionView:
             uploaded = src in UPLOADED_SOURCES  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
                               f"{focal_text(st.focal_px)} px (it was {focal_text(old.focal_px)} px: "
-                              f"{'a new input' if uploaded else 'another camera'})", focal=st.focal_px)
+                              f"{'a new input' if uploaded else 'a new sample' if same else 'another camera'})",
+                              focal=st.focal_px)
         cam = sample.camera
         view_key = (src, np.asarray(cam.R).tobytes(), np.asarray(cam.t, np.float64).tobytes())
         if reframe or view_key != self._view_key:  # a new camera (not a new frame of the same one)

@@ -2154,3 +2154,22 @@ def test_sequence_of_subject_keeps_the_action() -> None:
     assert ss.sequence_of_subject(seqs, "Phoning 1") == "Phoning 2"
     assert ss.sequence_of_subject(seqs, "Walking 1") == "Walking"  # (not 'WalkDog')
     assert ss.sequence_of_subject(seqs, "Greeting") == "Directions"
+
+
+def test_a_focal_chosen_on_the_walking_demo_is_kept_when_its_motion_plays(app: PoseLifterApp) -> None:
+    """A review: the demo motion is seen by the walking demo's camera, but a focal chosen on the walking demo was
+    replaced on pressing play (or picking the motion), with "(it was 1500 px: another camera)". It is kept; the
+    standing demo's camera (another calibration) still gives the motion its own focal, and says so."""
+    v = app.headless_view()
+    assert v.select_demo("walking") is not False
+    assert v.set_focal(1500.0) is True
+    n = len(v.messages)
+    assert v.set_source("motion") is True
+    assert v.state.sample.key.startswith("motion/") and v.state.focal_px == pytest.approx(1500.0)
+    assert not any("another camera" in m for m in v.messages[n:]), v.messages[n:]
+    assert v.select_demo("walking") is not False  # (a still sample: its camera's focal, and not "another camera")
+    assert v.state.focal_px == pytest.approx(800.0) and "(it was 1500 px: a new sample)" in v.messages[-1]
+    assert v.select_demo("standing") is not False
+    assert v.set_focal(1700.0) is True
+    assert v.set_source("motion") is True
+    assert v.state.focal_px == pytest.approx(app.motion.camera.alpha) and "another camera" in v.messages[-1]

@@ -433,3 +433,30 @@ def test_a_keypoint_sequence_s_person_picker_names_the_file_s_person_ids(server)
     v.gui.joints.person.value = labels[0]
     assert v.state.person == 0
     assert "person 1 (track 1, id alice [left])" in v.gui.readout.readout.content
+
+
+def test_a_new_sequence_with_the_same_file_name_is_lifted_at_its_own_focal(server) -> None:
+    """A review: uploading a corrected clip.json (another focal) under the last one's name kept the old file's
+    focal for every frame, without a word, and the download said "app-slider": the cameras were taken for one by
+    their names ("upload/clip.json"). A new upload is a new camera; the frames of one upload keep a chosen focal."""
+    from lifter import demo_sample
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    s = demo_sample("walking")
+
+    def seq(focal: float) -> bytes:
+        return json.dumps({"frames": [{"keypoints": (s.keypoints_2d + i).tolist()} for i in range(3)], "fps": 25,
+                           "image_size": list(map(int, s.image_size)), "focal": focal, "source": "clean"}).encode()
+
+    assert v.load_upload("clip.json", seq(800.0)) is True, v.messages[-3:]
+    v.gui.lift.focal.value = 1200.0
+    assert v.state.focal_px == pytest.approx(1200.0)
+    v.gui.play.frame.value = 2  # (another frame of the same upload: the chosen focal stays)
+    assert wait_for(lambda: v.state.sample.key.endswith("/2")) and v.state.focal_px == pytest.approx(1200.0)
+    assert v.load_upload("clip.json", seq(1500.0)) is True, v.messages[-3:]
+    assert v.state.focal_px == pytest.approx(1500.0), v.state.focal_px
+    assert "(it was 1200 px: a new input)" in " ".join(v.messages[-3:]), v.messages[-3:]
+    _, payload = v.download_payload("json")
+    doc = json.loads(payload)
+    assert doc["focal"] == [1500.0, 1500.0] and doc["focal_source"] == "keypoint-file", doc["focal_source"]
