@@ -362,12 +362,18 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                   person_tags=tags if any(tags) else ())
 
 
-def missing_detector_message(name: str, exc: Exception) -> str:
-    return (f"{safe_name(name)}: cannot find 2D joints in a photo: the MediaPipe detector is not installed "
-            f"(install it with: {INSTALL_DETECT}). "
-            "Uploading a keypoint JSON file still works (e.g. {\"keypoints\": [[x, y], ...], \"format\": \"coco17\", "
-            "\"image_size\": [W, H]}); one uploaded now is drawn on this photo when its image_size matches. "
-            f"[{type(exc).__name__}]")
+def missing_detector_message(name: str, exc: Exception, *, video: bool = False) -> str:
+    """What the app says when a photo (or a ``video``) cannot be lifted because the detector extra is missing: the
+    install command, and the keypoint JSON that still works."""
+    if video:
+        other = ("Uploading a keypoint sequence JSON still works (e.g. {\"frames\": [{\"keypoints\": [[x, y], ...]}, "
+                 "...], \"fps\": 25, \"format\": \"coco17\", \"image_size\": [W, H]}). ")
+    else:
+        other = ("Uploading a keypoint JSON file still works (e.g. {\"keypoints\": [[x, y], ...], \"format\": "
+                 "\"coco17\", \"image_size\": [W, H]}); one uploaded now is drawn on this photo when its image_size "
+                 "matches. ")
+    return (f"{safe_name(name)}: cannot find 2D joints in a {'video' if video else 'photo'}: the MediaPipe detector "
+            f"is not installed (install it with: {INSTALL_DETECT}). {other}[{type(exc).__name__}]")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -507,16 +513,17 @@ class UploadRefused(PoseLifterError):
 
 
 class UploadFailed(PoseLifterError):
-    """An upload that failed after its photo was decoded: ``photo`` is kept for a keypoint JSON uploaded next."""
+    """An upload that failed after its photo was decoded: ``photo`` is kept for a keypoint JSON uploaded next
+    (None: a video, which leaves the photo uploaded before as it was)."""
 
-    def __init__(self, message: str, *, photo: Photo) -> None:
+    def __init__(self, message: str, *, photo: Photo | None) -> None:
         super().__init__(message)
         self.photo = photo
 
 
 class DetectorMissing(UploadFailed):
-    """A photo that cannot be lifted because this install has no 2D detector: not the file's fault (not an
-    :class:`UploadRefused`)."""
+    """A photo or video that cannot be lifted because this install has no 2D detector: not the file's fault (not
+    an :class:`UploadRefused`)."""
 
 
 def upload_message(sample: Sample) -> str:

@@ -49,10 +49,13 @@ from .upload import (
     MAX_CANVAS_SIDE,
     MAX_PEOPLE,
     OPENCV_LENS_UNDONE_NOTE,
+    DetectorMissing,
+    MissingDependencyError,
     UploadError,
     UploadInfo,
     check_upload,
     display_canvas,
+    missing_detector_message,
     safe_name,
     upload_camera,
 )
@@ -307,7 +310,10 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             if is_video:
                 if estimator is None:
                     raise UploadError(f"{nm}: no 2D detector for videos")
-                est = estimator()
+                try:
+                    est = estimator()
+                except MissingDependencyError as exc:  # (the install's problem, as for a photo: not a refusal)
+                    raise DetectorMissing(missing_detector_message(nm, exc, video=True), photo=None) from None
                 shown: dict[int, bytes] = {}  # display copies, made while the video is decoded for lifting
                 with detect_lock:
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
@@ -328,6 +334,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                     rec = replace(rec, image_size=size, warnings=[
                         *rec.warnings, f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the "
                         "principal point) for the canvas"])
+        except DetectorMissing:
+            raise
         except PoseLifterError as exc:
             msg = str(exc).replace(str(path), nm)
             raise UploadError(msg) from None

@@ -1044,7 +1044,9 @@ class SessionView:
             self.trail = {}
             self._trail_key = None
         else:
-            key = (seq.key, st.model, st.focal_px, st.input_kind, st.noise_level, st.seed, st.analytic)
+            # (the input chosen, not the one a frame without a detection fell back to: a review saw the trail
+            # restart on every such frame)
+            key = (seq.key, st.model, st.focal_px, self._input_pref, st.noise_level, st.seed, st.analytic)
             if key != self._trail_key:
                 self.trail, self._trail_key = {}, key
             if not st.dragged:

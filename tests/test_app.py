@@ -2173,3 +2173,24 @@ def test_a_focal_chosen_on_the_walking_demo_is_kept_when_its_motion_plays(app: P
     assert v.set_focal(1700.0) is True
     assert v.set_source("motion") is True
     assert v.state.focal_px == pytest.approx(app.motion.camera.alpha) and "another camera" in v.messages[-1]
+
+
+def test_the_root_trail_keeps_the_frames_that_fall_back_to_ground_truth(h36m_app: PoseLifterApp) -> None:
+    """A review: with the SH detections chosen on a training subject (a detection every few frames; the others
+    fall back to the ground-truth 2D), the root trail restarted on every switch between the two, so it never held
+    more than a few frames. The README says it restarts on a model, focal or noise change: it is keyed on the 2D
+    input chosen, not the one each frame fell back to."""
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    cam = h.camera_ids[0]
+    assert v.select_h36m(subject=1, sequence="Walking", camera=cam, frame=0) is not False
+    assert v.set_input_kind("detected") is True
+    kinds = set()
+    for f in range(0, 21):
+        v.gui.play.frame.value = f
+        assert wait_for(lambda f=f: v.state.sample.key.endswith(f"/{f}")), v.state.sample.key
+        kinds.add(v.state.input_kind)
+    assert kinds == {"gt", "detected"}, kinds  # (both kinds shown: the case the trail broke on)
+    assert sorted(v.trail) == list(range(21)), sorted(v.trail)
+    assert v.set_input_kind("gt") is True  # (a change of input does restart it)
+    assert len(v.trail) == 1

@@ -460,3 +460,23 @@ def test_a_new_sequence_with_the_same_file_name_is_lifted_at_its_own_focal(serve
     _, payload = v.download_payload("json")
     doc = json.loads(payload)
     assert doc["focal"] == [1500.0, 1500.0] and doc["focal_source"] == "keypoint-file", doc["focal_source"]
+
+
+def test_a_video_upload_without_the_detector_is_the_install_s_problem(server, tmp_path: Path) -> None:
+    """A review: a video uploaded to an install without MediaPipe was "Upload refused: the file arrived, but it
+    cannot be used", with a bare "mediapipe is not installed"; a photo gets "Input problem" with the install command
+    and the keypoint-JSON way. A video now gets that too, naming the keypoint sequence layout."""
+    from lifter.detect import MissingDependencyError
+
+    def no_mediapipe():
+        raise MissingDependencyError("the BlazePose 2D detector needs the optional 'detect' extra")
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=no_mediapipe)
+    v = app.headless_view()
+    shown = v.state.sample.key
+    assert v.load_upload("clip.avi", _clip(tmp_path / "clip.avi", 3)) is False
+    msg = v.messages[-1]
+    assert "clip.avi: cannot find 2D joints in a video: the MediaPipe detector is not installed" in msg, msg
+    assert 'pip install -e ".[detect]"' in msg and '"frames"' in msg and "still works" in msg, msg
+    assert v.notices[-1][0] == "Input problem", v.notices[-1]
+    assert v.state.sample.key == shown
