@@ -282,6 +282,8 @@ class SessionView:
         self._play_shown: int | None = None  # (the player's last frame: Player's position while the box is typed in)
         self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
+        self._applied_t = -math.inf  # picks stamped up to here were read by a pass that ended (its start time)
+        self._own_t: dict[int, float] = {}  # id(picker) -> the timestamp of this view's own last write to it
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
@@ -513,6 +515,7 @@ class SessionView:
             n = self._message_count
             try:
                 self._sync_pass()
+                self._applied_t = self._pass_t0  # (a pick stamped during the pass is read by the next one)
             finally:
                 self._pass_t0 = math.inf
             with self._status_lock:
@@ -531,7 +534,7 @@ class SessionView:
         playback opened its sequence at the old one's frame number)."""
         if handle.value != value and (handle.update_timestamp <= self._pass_t0 or (
                 handle is self.gui.play.frame and self._player_wrote(handle))):
-            handle.value = value
+            self._write(handle, value)
 
     def _sync_pass(self) -> None:
         """One pass of :meth:`_sync` (under :attr:`lock`)."""
@@ -689,11 +692,29 @@ class SessionView:
         return self.gui.sample.sequence.value
 
     def _frame_pick_t(self) -> float:
-        """When the frame was last chosen: the frame box's timestamp, unless the player wrote it last (playback's
-        frames are not picks: a browser trial's photo entry picked during playback lost to them, and a subject
-        picked then opened at the playing frame number instead of 0)."""
+        """When the frame was last chosen: the frame box's timestamp; when the player wrote it last, and a pick the
+        tab made has not been applied by a pass yet (:meth:`_pick_pending`), the box's last timestamp before
+        playback's. A pick made during playback wins over the frames written meanwhile (a browser trial's photo
+        entry lost to them, and a subject picked then opened at the playing frame number instead of 0), and
+        playback wins over picks already applied (a later trial's playback stayed on the photo frame it started
+        on, or came to, while the frame box counted on)."""
         h = self.gui.play.frame
-        return self._frame_user_t if self._player_wrote(h) else h.update_timestamp
+        return self._frame_user_t if self._player_wrote(h) and self._pick_pending() else h.update_timestamp
+
+    def _pickers(self) -> list[Any]:
+        g = self.gui.sample
+        return [q for q in (g.source, g.demo, g.subject, g.sequence, g.camera, g.photo) if q is not None]
+
+    def _pick_pending(self) -> bool:
+        """Whether a sample picker holds a value the tab picked that no finished pass has read yet (not one this
+        view wrote itself: :meth:`_put` and the other writes record theirs in :attr:`_own_t`)."""
+        return any(q.update_timestamp > self._applied_t and self._own_t.get(id(q)) != q.update_timestamp
+                   for q in self._pickers())
+
+    def _write(self, handle: Any, value: Any) -> None:
+        """This view's own write of ``value`` to a control (not the tab's pick: :meth:`_pick_pending`)."""
+        handle.value = value
+        self._own_t[id(handle)] = handle.update_timestamp
 
     def _player_wrote(self, h: Any) -> bool:
         """Whether the frame box ``h`` holds the player's last write (its value, written since it began)."""
@@ -970,8 +991,8 @@ class SessionView:
             seqs = self.app.h36m.sequences(int(subj[1:]))
             if list(g.sequence.options) != seqs:
                 g.sequence.options = seqs
-                g.sequence.value = sequence  # (new options reset it to the first one, stamped as if the tab had picked
-                # it: a trial's photo pick then opened that sequence's frame 0)
+                self._write(g.sequence, sequence)  # (new options reset it to the first one, stamped as if the tab had
+                # picked it: a trial's photo pick then opened that sequence's frame 0)
             self._put(g.subject, subj)
             self._put(g.sequence, sequence)
             self._put(g.camera, camera)

@@ -2194,3 +2194,34 @@ def test_the_root_trail_keeps_the_frames_that_fall_back_to_ground_truth(h36m_app
     assert sorted(v.trail) == list(range(21)), sorted(v.trail)
     assert v.set_input_kind("gt") is True  # (a change of input does restart it)
     assert len(v.trail) == 1
+
+
+def test_playback_plays_through_the_photo_frames(h36m_app: PoseLifterApp) -> None:
+    """A browser trial (High): play on the app's first view (S9 'Posing 1', the photo frame 0) counted the frame box
+    up while the pose, image and readout stayed on frame 0; from frame 30 it froze at the photo frame 100. The
+    "frame with photo" picker, set by the app as it showed a photo frame, won over every later playback frame:
+    only a pick the tab made that no pass has applied yet wins over playback. A photo picked during playback is
+    still shown, and played on from."""
+    import time
+
+    with open_tab(h36m_app) as (tab, v):
+        start = v.state.sample.key
+        assert start.startswith("h36m/S9/Posing 1/") and start.endswith("/0") and \
+            v.gui.sample.photo.value != "(none)", (start, v.gui.sample.photo.value)
+
+        def shown() -> int:
+            return int(v.state.sample.key.rsplit("/", 1)[1])
+
+        v.gui.play.play.value = True
+        try:
+            assert wait_for(lambda: shown() > 130, timeout=10), (v.state.sample.key, v.gui.play.frame.value)
+            s, q, c, f = 9, "Posing 1", "55011271", 500
+            v.gui.sample.photo.value = f"S{s} {q} {c} {f}"  # (a pick during playback: shown, then played on)
+            assert wait_for(lambda: v.state.sample.key.startswith(f"h36m/S{s}/{q}/{c}/") and f <= shown() < f + 50,
+                            timeout=5), v.state.sample.key
+            assert wait_for(lambda: shown() > f + 60, timeout=10), (v.state.sample.key, v.gui.play.frame.value)
+        finally:
+            v.gui.play.play.value = False
+        assert wait_for(lambda: not v.playing, timeout=5)
+        time.sleep(0.3)
+        assert shown() == int(v.gui.play.frame.value)  # (paused: the box names the frame shown)
