@@ -569,13 +569,12 @@ def spread_details(spread: Spread) -> str:
 
 def trained_subjects(net: Any) -> tuple[int, ...]:
     """The Human3.6M training subjects of ``net`` (a :class:`lifter.Lifter`), from its checkpoint's training protocol
-    (:data:`lifter.data.PROTOCOLS`); ``()`` where the checkpoint has no training config."""
-    from lifter.data import PROTOCOLS
+    (:func:`lifter.data.trained_protocol`: the paper-table models' older checkpoints say it too; a browser trial saw
+    no note on S1 with them); ``()`` where the checkpoint does not say."""
+    from lifter.data import PROTOCOLS, trained_protocol
 
-    cfg = getattr(net, "train_config", None)
-    if not cfg:
-        return ()
-    return PROTOCOLS.get(int((cfg.get("data") or {}).get("protocol", 1)), ((), ()))[0]
+    p = trained_protocol(net)
+    return () if p is None else PROTOCOLS[p][0]
 
 
 def training_subject_note(key: str, trained: tuple[int, ...]) -> str:

@@ -21,7 +21,7 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Literal, get_args
+from typing import Any, Literal, get_args
 
 import numpy as np
 
@@ -45,6 +45,22 @@ PROTOCOLS: dict[int, tuple[tuple[int, ...], tuple[int, ...]]] = {
     2: ((1, 5, 6, 7, 8, 9), (11,)),
 }
 """Protocol -> (training subjects, test subjects)."""
+
+
+def trained_protocol(net: Any) -> int | None:
+    """The Human3.6M protocol (:data:`PROTOCOLS`) a network's checkpoint says it was trained on: its training
+    config's ``data.protocol`` (1, the default, when the config leaves it out), or an older checkpoint's
+    ``meta["train_config"]["protocol"]`` (the paper-table models'); None where the checkpoint does not say.
+    ``net``: a :class:`lifter.Lifter` (its ``train_config`` and ``meta``)."""
+    for cfg in (getattr(net, "train_config", None), (getattr(net, "meta", None) or {}).get("train_config")):
+        if not isinstance(cfg, dict):
+            continue
+        data = cfg.get("data")
+        p = data.get("protocol", 1) if isinstance(data, dict) else cfg.get("protocol")
+        if p in PROTOCOLS:
+            return int(p)
+    return None
+
 
 ACTIONS: tuple[str, ...] = (
     "Directions",

@@ -16,7 +16,7 @@ import torch
 
 from .._checks import PoseLifterError, PoseLifterWarning
 from ..api import Lifter, ensemble_parts
-from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS
+from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS, trained_protocol
 from ..detections import with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..io import check_writable, write_json_atomic
@@ -152,25 +152,13 @@ def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool 
     return ", ".join(f"{w} ({m.name})" for w, m in zip(said, members))
 
 
-def _trained_protocol(lifter: Lifter) -> int | None:
-    """The protocol a network's checkpoint says it was trained on (its training config's ``data.protocol``; an
-    older checkpoint's ``meta["train_config"]["protocol"]``), or None."""
-    for cfg in (lifter.train_config, lifter.meta.get("train_config")):
-        if isinstance(cfg, dict):
-            data = cfg.get("data")
-            p = data.get("protocol") if isinstance(data, dict) else cfg.get("protocol")
-            if p in PROTOCOLS:
-                return int(p)
-    return None
-
-
 def training_subject_notes(label: str, lifter: Lifter, protocol: int) -> list[str]:
     """Where a model's training subjects (its stored training config's protocol) do not match ``protocol``'s:
     trained on a subject this protocol tests on (seen data), or on fewer subjects than it trains on (not the
     paper's setting for that protocol). Nothing for a model whose checkpoint does not say how it was trained."""
     train_subjects, test_subjects = PROTOCOLS[protocol]
     out = []
-    trained = {p for p in (_trained_protocol(m) for m in lifter.networks().values()) if p is not None}
+    trained = {p for p in (trained_protocol(m) for m in lifter.networks().values()) if p is not None}
     for p in sorted(trained):
         seen = sorted(set(PROTOCOLS[p][0]) & set(test_subjects))
         if seen:
