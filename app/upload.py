@@ -322,11 +322,13 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise
     if use_photo:
         notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
-    # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes)
+    # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes), from
+    # the image's own size, not the canvas's guess (no focal is assumed from twice the principal point)
     exif = photo.exif if use_photo else None  # type: ignore[union-attr]
     try:
         f, src, c, cam_notes = resolve_camera(
-            user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point, image_size=size,
+            user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point,
+            image_size=kf.image_size if kf.image_size is not None else photo.size if use_photo else None,  # type: ignore[union-attr]
             exif=exif, sensor_width_mm=None, fov_deg=fov_deg, where=nm, file_distortion=kf.distortion,
             assumed_focal=kf.assumed_focal, cli_options=False)
     except PoseLifterError as exc:

@@ -100,9 +100,9 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
                                         ("principal_point= (--principal-point)", "principal_point")) if not have[f]]
         if need:
             what = " and no ".join("focal length" if f == "focal" else "principal point" for _, f in need)
-            raise PoseLifterError(
-                f"{where}: no {what} and no image size: pass {' and '.join(o for o, _ in need)}, or put "
-                f"'image_size' (or {' and '.join(repr(f) for _, f in need)}) in the file")
+            put = f"put 'image_size' (or {' and '.join(repr(f) for _, f in need)}) in the file"
+            raise PoseLifterError(f"{where}: no {what} and no image size: " + (
+                f"pass {' and '.join(o for o, _ in need)}, or {put}" if cli_options else put))
     if user_focal is not None:
         focal, src = user_focal, "user"
         if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):

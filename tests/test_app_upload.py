@@ -914,3 +914,28 @@ def test_a_person_id_with_parentheses_is_picked_by_its_label(app: PoseLifterApp)
     assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id alice [left])"
     name, payload = v.download_payload("json")  # (the record keeps the file's own id as it was)
     assert [q["person_id"] for q in json.loads(payload)["people"]] == [7, "alice (left)"], name
+
+
+def test_a_keypoint_file_with_only_a_principal_point_is_refused_as_poselifter_lift_refuses_it(tmp_path: Path) -> None:
+    """A review: a file with a principal point but no focal and no image size is refused by poselifter lift (no
+    focal length can be assumed without an image size), but the app assumed an image twice the principal point and
+    a focal from it. Both refuse it now, the app naming the file's fields only; with a focal it is taken (the
+    canvas is then twice the principal point, and said)."""
+    from conftest import tiny_lifter
+
+    from lifter import PoseLifterError, demo_sample
+    from lifter.pipeline import lift_keypoint_file
+
+    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
+           "principal_point": [400, 300]}
+    path = tmp_path / "pp.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(PoseLifterError, match="no focal length and no image size"):
+        lift_keypoint_file(path, lifter=tiny_lifter())
+    with pytest.raises(up.UploadError, match=r"pp\.json: no focal length and no image size: put 'image_size' \(or "
+                                             r"'focal'\) in the file$"):
+        up.keypoint_sample("pp.json", path.read_bytes(), key="upload/t/pp.json")
+    doc["focal"] = 800
+    sample = up.keypoint_sample("pp.json", json.dumps(doc).encode(), key="upload/t/pp.json")
+    assert (sample.camera.width, sample.camera.height) == (800, 600) and sample.camera.alpha == 800
+    assert any("twice the principal point" in w for w in sample.upload.warnings)
