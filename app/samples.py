@@ -19,6 +19,7 @@ import numpy as np
 
 from lifter import Camera, DemoSample, PoseLifterError, demo_sample, demo_sample_names
 from lifter.data import ACTIONS, CAMERA_IDS, DEFAULT_H36M_DIR, H36M
+from lifter.detections import detection_stride
 from lifter.keypoints import convert
 
 from .keys import demo_key, h36m_key
@@ -186,8 +187,7 @@ class H36MCatalog:
                 dkey = f"{key}/{camera_id}"
                 if dkey in self._detections.files:
                     rows = self._detections[dkey]
-                    # Training subjects have every 5th frame; S9/S11 every frame.
-                    step = 1 if rows.shape[0] * 2 > n else 5
+                    step = detection_stride(rows.shape[0], n, key=dkey)  # (every frame, or every 5th: the library's rule)
                     if frame % step == 0 and frame // step < rows.shape[0]:
                         det = convert(rows[frame // step], src="sh16")  # the library's sh16 rules
         p3 = cam.world_to_camera(world)

@@ -1164,7 +1164,8 @@ class SessionView:
             raise PoseLifterError(f"unknown sample source {source!r}; available: {self.app.sources}")
         label = SOURCE_LABELS[source]
         if source == "upload" and label not in self.gui.sample.source.options:
-            raise PoseLifterError("nothing uploaded yet: use the 'upload photo or keypoint JSON' button (File tab)")
+            raise PoseLifterError("nothing uploaded yet: use the 'upload photo, video or keypoint JSON' button (File "
+                                  "tab)")
         self._set_and_check(self.gui.sample.source, label, lambda: source_of(self.state.sample.key) == source)
 
     @control
@@ -1432,8 +1433,8 @@ class SessionView:
 
     @control
     def toggle_play(self) -> None:
-        """Play / pause the shown sequence; on a demo still, play the demo motion. Uploads are stills (video
-        playback comes with issue 14)."""
+        """Play / pause the shown sequence (Human3.6M, the demo motion, an uploaded video or keypoint sequence); on a
+        demo still, play the demo motion. An uploaded photo or keypoint file is a still: nothing to play."""
         if self.playing:
             self.stop_playback()
             return

@@ -22,6 +22,18 @@ from .normalization import pose_scale
 SH_DETECTIONS_FILE: str = "detections2d_sh_16j_px.npz"
 
 
+def detection_stride(rows: int, num_frames: int, *, key: str) -> int:
+    """The frame step of a sequence's Stacked-Hourglass detections (``key``: ``"<sequence>/<camera>"``) from their
+    row count: 1 when the file holds every frame (S9, S11), 5 when it holds every 5th (the training subjects; frame
+    ``f``'s row is ``f // 5``). Raises :class:`PoseLifterError` for any other count."""
+    if rows == num_frames:
+        return 1
+    if rows == -(-num_frames // 5):
+        return 5
+    raise PoseLifterError(f"{key}: {rows} detection rows for {num_frames} frames; expected {num_frames} or "
+                          f"{-(-num_frames // 5)}")
+
+
 def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: str = "sh16",
                        dst: str = "h36m17", lens: Lens = "h36m") -> tuple[np.ndarray, np.ndarray]:
     """The real Stacked-Hourglass detections of every sample of a :class:`lifter.data.PoseSamples`.
@@ -54,13 +66,7 @@ def load_sh_detections(samples: PoseSamples, *, data: H36M | None = None, fmt: s
         if key not in npz.files:
             continue
         det = npz[key]
-        nf = data.num_frames(name)
-        if det.shape[0] == nf:
-            stride = 1
-        elif det.shape[0] == -(-nf // 5):
-            stride = 5
-        else:
-            raise PoseLifterError(f"{key}: {det.shape[0]} detection rows for {nf} frames; expected {nf} or {-(-nf // 5)}")
+        stride = detection_stride(det.shape[0], data.num_frames(name), key=key)
         fr = frame[a:b]
         ok = (fr % stride == 0) & (fr // stride < det.shape[0])
         rows = np.arange(a, b)[ok]
