@@ -187,8 +187,11 @@ class H36MCatalog:
                 dkey = f"{key}/{camera_id}"
                 if dkey in self._detections.files:
                     rows = self._detections[dkey]
-                    step = detection_stride(rows.shape[0], n, key=dkey)  # (every frame, or every 5th: the library's rule)
-                    if frame % step == 0 and frame // step < rows.shape[0]:
+                    try:  # (every frame, or every 5th: the library's rule; any other count: no detection here)
+                        step = detection_stride(rows.shape[0], n, key=dkey)
+                    except PoseLifterError:
+                        step = 0
+                    if step and frame % step == 0 and frame // step < rows.shape[0]:
                         det = convert(rows[frame // step], src="sh16")  # the library's sh16 rules
         p3 = cam.world_to_camera(world)
         kp = cam.project(p3)

@@ -240,9 +240,11 @@ def person_index(value: object, *, tags: tuple[str, ...] = ()) -> int:
         m = _PERSON_LABEL.fullmatch(value.strip())
         if m is None or int(m.group(1)) < 1:
             raise PoseLifterError(f"unknown person {value[:40]!r}; expected 'person 1', 'person 2', ...")
-        if m.group(2) and m.group(2) in tags:
-            return tags.index(m.group(2))
-        return int(m.group(1)) - 1
+        k = int(m.group(1)) - 1
+        if m.group(2) and m.group(2) in tags and not (k < len(tags) and tags[k] == m.group(2)):
+            return tags.index(m.group(2))  # (moved in this frame's order; one in its own place is that person: two
+            # people whose ids read alike, "kid" twice, are each picked)
+        return k
     return _integer(value, "person")
 
 

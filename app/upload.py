@@ -273,11 +273,12 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     """A sample from an uploaded keypoint JSON (any layout ``poselifter lift`` accepts).
 
     Image size: the file's ``image_size``; else, when the file gives none, that of ``photo`` (the photo
-    uploaded just before); else twice its ``principal_point``. The photo is drawn under the keypoints
-    when its size matches. Focal: the file's ``focal``; else the photo's EXIF focal (when drawn on it);
-    else the default field of view ``fov_deg``. Principal point: the file's, else the image centre. Focal and
-    principal point are resolved, checked and noted by :func:`lifter.pipeline.resolve_camera`, as for
-    ``poselifter lift``.
+    uploaded just before). The photo is drawn under the keypoints when its size matches. Focal: the file's
+    ``focal``; else the photo's EXIF focal (when drawn on it); else the default field of view ``fov_deg`` of the
+    image size. Principal point: the file's, else the image centre. Focal and principal point are resolved, checked
+    and noted by :func:`lifter.pipeline.resolve_camera`, as for ``poselifter lift`` (a file with neither a focal nor
+    an image size is refused). A file with a focal and a principal point but no image size is drawn on a canvas
+    twice its principal point.
     """
     check_upload(name, content)
     nm = safe_name(name)
@@ -303,13 +304,25 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
     if size is None and use_photo:
         size = photo.size  # type: ignore[union-attr]
-    if size is None and kf.principal_point is not None:
-        size = (max(1, round(2 * float(kf.principal_point[0]))), max(1, round(2 * float(kf.principal_point[1]))))
-        notes.append(f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the principal point)")
-    if size is None:
+    if size is None and kf.principal_point is None:  # (nothing to draw the keypoints on)
         raise UploadError(f"{nm}: the keypoint file has no \"image_size\": [W, H] (nor a \"principal_point\"); "
                           "add it, or upload the photo first"
                           + (". Also in the file: " + " ".join(sentence(n) for n in kf.unread) if kf.unread else ""))
+    # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes), from
+    # the image's own size, not the canvas's guess below (no focal is assumed from twice the principal point);
+    # first, so that a file lift refuses for its camera is refused for that here too
+    exif = photo.exif if use_photo else None  # type: ignore[union-attr]
+    try:
+        f, src, c, cam_notes = resolve_camera(
+            user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point, image_size=size,
+            exif=exif, sensor_width_mm=None, fov_deg=fov_deg, where=nm, file_distortion=kf.distortion,
+            unread=kf.unread, assumed_focal=kf.assumed_focal, cli_options=False)
+    except PoseLifterError as exc:
+        raise UploadError(str(exc)) from None
+    if size is None and kf.principal_point is not None:
+        size = (max(1, round(2 * float(kf.principal_point[0]))), max(1, round(2 * float(kf.principal_point[1]))))
+        notes.append(f"no image_size in the file: assumed {size[0]} x {size[1]} px (twice the principal point)")
+    assert size is not None  # (a principal point, else refused above)
     if min(size) <= 0 or max(size) > MAX_CANVAS_SIDE:
         raise UploadError(f"{nm}: image_size {list(size)} px is not plausible")
     try:
@@ -322,17 +335,6 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
         raise
     if use_photo:
         notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
-    # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes), from
-    # the image's own size, not the canvas's guess (no focal is assumed from twice the principal point)
-    exif = photo.exif if use_photo else None  # type: ignore[union-attr]
-    try:
-        f, src, c, cam_notes = resolve_camera(
-            user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point,
-            image_size=kf.image_size if kf.image_size is not None else photo.size if use_photo else None,  # type: ignore[union-attr]
-            exif=exif, sensor_width_mm=None, fov_deg=fov_deg, where=nm, file_distortion=kf.distortion,
-            assumed_focal=kf.assumed_focal, cli_options=False)
-    except PoseLifterError as exc:
-        raise UploadError(str(exc)) from None
     notes += cam_notes
     focal, pp = (float(f[0]), float(f[1])), (float(c[0]), float(c[1]))
     detail = ("focal from the keypoint file" if src == "keypoint-file" else

@@ -317,11 +317,12 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                 shown: dict[int, bytes] = {}  # display copies, made while the video is decoded for lifting
                 with detect_lock:
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
-                                     max_seconds=max_seconds, progress=progress,
+                                     max_seconds=max_seconds, progress=progress, cli_options=False,
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
-                rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds)
+                rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds,
+                                             cli_options=False)
                 jpegs = None
                 if rec.distortion is not None and rec.distortion_model == "opencv":
                     rec = _without_opencv_lens(rec)  # (the app's cameras have Human3.6M's lens model)

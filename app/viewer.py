@@ -760,6 +760,9 @@ class SessionView:
             return
         picked = str(g.sequence.value)
         seqs = h.sequences(want.subject)
+        photo = None if g.photo is None else str(g.photo.value)
+        if photo == f"{want.subject_name} {want.sequence} {want.camera} {want.frame}":
+            return  # (a photo entry picked: that frame itself, no sequence replaced)
         if picked not in seqs and want.sequence == ss.sequence_of_subject(seqs, picked):
             self.show_message(f"{want.subject_name} has no {picked!r}: showing its {want.sequence!r}",
                               about=sequence_of(key))

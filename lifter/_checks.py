@@ -238,12 +238,14 @@ MIN_PLAUSIBLE_VIEW_DEG: float = 1.0
 (:func:`narrow_view_notes`): a 2000 mm lens on a full-frame camera still sees 1.2 deg."""
 
 
-def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: bool = False) -> list[str]:
+def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: bool = False,
+                        name_pose: bool = False) -> list[str]:
     """A note when 2D poses ``(..., 17, 2)`` px lie mostly (more than half their joints) outside their image
     ``image_size`` (``(W, H)`` px, one for all or ``(..., 2)`` one per pose; None: not checked): keypoints in
     another image's pixels (a full-size photo's with its thumbnail's size), whose root is then wrong. detected:
     the 2D is this package's detector's (a person cut off by the frame), which changes the advice. Used by
-    :meth:`lifter.Lifter.lift` and :func:`lifter.pipeline.plausibility_notes`."""
+    :meth:`lifter.Lifter.lift` (``name_pose``: the first such pose's index, :func:`where_in_batch`) and
+    :func:`lifter.pipeline.plausibility_notes`."""
     if image_size is None:
         return []
     k = np.asarray(keypoints, np.float64)
@@ -257,9 +259,10 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
     first = np.unravel_index(int(np.argmax(mostly)), mostly.shape) if mostly.ndim else ()
     W, H = (int(v) for v in np.broadcast_to(np.asarray(image_size, np.float64), mostly.shape + (2,))[first])
     n = f"{int(mostly.sum())} of {int(mostly.size)} 2D pose(s)"
+    at = where_in_batch(mostly) if name_pose else ""
     return [f"the detector placed most joints of {n} outside the {W} x {H} px image (a person cut off by the frame, "
             "or half-invented): their 3D is uncertain" if detected else
-            f"{n} lie mostly outside the {W} x {H} px image: are the keypoints in this image's pixels?"]
+            f"{n} lie mostly outside the {W} x {H} px image{at}: are the keypoints in this image's pixels?"]
 
 
 def narrow_view_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str]:

@@ -713,7 +713,7 @@ class Lifter:
         # (the view check at an assumed focal too, as the records check it: keypoints in another image's pixels)
         in_list = input_warnings(kp, None if focal_source == "reference" else f, focal_given=focal_source == "given")
         in_list += said
-        in_list += outside_image_notes(kp, wh)
+        in_list += outside_image_notes(kp, wh, name_pose=True)
         if pp_given and wh is not None and wh.ndim == 1:  # (the records' own note, for API calls)
             flat = pp.reshape(-1, 2)
             if len(flat) and np.all(flat == flat[0]):

@@ -582,11 +582,11 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                flip_test: bool | None = None, search_every_s: float = DEFAULT_SEARCH_EVERY_S,
                blas_threads: int | None = 1,
                progress: Callable[[int, int | None], None] | None = None,
-               on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
+               on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True) -> SequenceRecord:
     """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
     is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None);
     ``on_frame(index, bgr)`` with each lifted frame's decoded image (full resolution, OpenCV BGR), e.g. to keep
-    display copies without decoding the video twice.
+    display copies without decoding the video twice. ``cli_options``: as :func:`lifter.pipeline.resolve_camera`'s.
     Raises :class:`VideoError` for a file that cannot be opened or has no decodable frame.
 
     Detection: the whole frame is searched (the estimator's ``detect``) every ``search_every_s`` seconds, and
@@ -603,7 +603,7 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
-                           on_frame=on_frame)
+                           on_frame=on_frame, cli_options=cli_options)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -632,7 +632,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 principal_point: Any | None, fov_deg: float, smoothing: float, max_people: int,
                 max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
                 progress: Callable[[int, int | None], None] | None,
-                on_frame: Callable[[int, np.ndarray], None] | None = None) -> SequenceRecord:
+                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True) -> SequenceRecord:
     import cv2
 
     from .pipeline import plausibility_notes, resolve_camera
@@ -697,7 +697,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                     user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
                     user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
                     file_focal=None, file_pp=None, image_size=size, exif=None, sensor_width_mm=None,
-                    fov_deg=fov_deg, where=str(p))
+                    fov_deg=fov_deg, where=str(p), cli_options=cli_options)
                 cam = (f, src, pp)
                 warnings.extend(notes)
                 seq = SequenceTracker(fps=fps, smoothing=smoothing)
@@ -840,9 +840,10 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            principal_point: Any | None = None, default_format: str | None = None,
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
                            max_people: int = DEFAULT_MAX_PEOPLE, max_seconds: float = DEFAULT_MAX_SECONDS,
-                           flip_test: bool | None = None) -> SequenceRecord:
+                           flip_test: bool | None = None, cli_options: bool = True) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
-    person of every frame is lifted in one batch, then tracked and smoothed frame by frame."""
+    person of every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
+    :func:`lifter.pipeline.resolve_camera`'s (False: messages name the file's fields, not the CLI's options)."""
     from .camera import lens_notes
     from .pipeline import plausibility_notes, resolve_camera
 
@@ -854,7 +855,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
         file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread,
-        assumed_focal=ks.assumed_focal)
+        assumed_focal=ks.assumed_focal, cli_options=cli_options)
     warnings.extend(notes)
     frames = ks.frames
     at = ks.frame_indices or list(range(len(frames)))  # each frame's index in its video (a record leaves some out)

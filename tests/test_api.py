@@ -904,7 +904,8 @@ def test_lift_warns_of_keypoints_outside_the_image_size_given_as_records_do():
     far = lf.lift(kp * 10.0, image_size=(800, 600), warn=False)
     assert far.input_warnings[0].startswith("at the focal length used (784.8 px) a 2D pose spans 136 deg of view")
     assert "the focal length was assumed, not given" in far.input_warnings[0]
-    with pytest.warns(PoseLifterWarning, match=r"1 of 2 2D pose\(s\) lie mostly outside the 800 x 600 px image"):
+    with pytest.warns(PoseLifterWarning, match=r"1 of 2 2D pose\(s\) lie mostly outside the 800 x 600 px image "
+                                               r"\(pose at index \(1,\), 1 such pose\(s\)\)"):
         lf.lift(np.stack([kp, big]), focal=1145.0, image_size=(800, 600))
     with pytest.warns(PoseLifterWarning, match=r"lie mostly outside"):  # (one image size per pose)
         lf.lift(np.stack([kp, big]), focal=1145.0, image_size=[(800, 600), (800, 600)])

@@ -2235,3 +2235,18 @@ def test_playback_plays_through_the_photo_frames(h36m_app: PoseLifterApp) -> Non
         assert wait_for(lambda: not v.playing, timeout=5)
         time.sleep(0.3)
         assert shown() == int(v.gui.play.frame.value)  # (paused: the box names the frame shown)
+
+
+def test_a_photo_frame_picked_from_another_subject_is_not_said_to_replace_a_sequence(h36m_app: PoseLifterApp) -> None:
+    """A review: from S11 'Greeting 2', picking the photo entry "S7 Greeting 55011271 395" said "S7 has no
+    'Greeting 2': showing its 'Greeting'"; the user had picked that frame itself."""
+    v = h36m_app.headless_view()
+    h = h36m_app.h36m
+    s2, q2, c2, f2 = next(p for p in h.photo_frames() if p[0] == 7)
+    other = next(q for q in h.sequences(11) if q not in h.sequences(7) and q.rstrip(" 0123456789") ==
+                 q2.rstrip(" 0123456789"))
+    assert v.select_h36m(subject=11, sequence=other, camera=c2, frame=0) is True
+    n = len(v.messages)
+    v.gui.sample.photo.value = f"S{s2} {q2} {c2} {f2}"
+    assert v.state.sample.key == f"h36m/S{s2}/{q2}/{c2}/{f2}"
+    assert not any("has no" in m for m in v.messages[n:]), v.messages[n:]

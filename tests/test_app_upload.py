@@ -939,3 +939,22 @@ def test_a_keypoint_file_with_only_a_principal_point_is_refused_as_poselifter_li
     sample = up.keypoint_sample("pp.json", json.dumps(doc).encode(), key="upload/t/pp.json")
     assert (sample.camera.width, sample.camera.height) == (800, 600) and sample.camera.alpha == 800
     assert any("twice the principal point" in w for w in sample.upload.warnings)
+
+
+def test_people_whose_ids_read_alike_are_each_picked(app: PoseLifterApp) -> None:
+    """A review: two people of a file whose ids give one tag ("kid" twice; 7 and "7"; "a(b)" and "a[b]") could not
+    both be picked: "person 2 (id kid)" selected person 1, the first with that tag. A label's own position decides
+    when its tag is the one there."""
+    s = app.demo.get(app.demo.names[1])
+    coco = _coco_from_h36m(s.keypoints_2d)
+    for ids in (["kid", "kid"], [7, "7"], ["a(b)", "a[b]"]):
+        doc = {"people": [{"keypoints": coco.tolist(), "person_id": ids[0]},
+                          {"keypoints": (0.5 * coco + 40.0).tolist(), "person_id": ids[1]}], "format": "coco17",
+               "image_size": [800, 600]}
+        v = app.headless_view()
+        assert v.load_upload("ids.json", json.dumps(doc).encode()) is True
+        labels = list(v.gui.joints.person.options)
+        v.gui.joints.person.value = labels[1]
+        assert v.state.person == 1, (ids, labels)
+        v.gui.joints.person.value = labels[0]
+        assert v.state.person == 0, (ids, labels)

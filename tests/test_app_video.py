@@ -480,3 +480,20 @@ def test_a_video_upload_without_the_detector_is_the_install_s_problem(server, tm
     assert 'pip install -e ".[detect]"' in msg and '"frames"' in msg and "still works" in msg, msg
     assert v.notices[-1][0] == "Input problem", v.notices[-1]
     assert v.state.sample.key == shown
+
+
+def test_a_keypoint_sequence_s_camera_errors_name_the_file_s_fields(server) -> None:
+    """A review: a keypoint sequence uploaded to the app without a focal or image size was refused naming
+    poselifter lift's options ("pass focal= (--focal)"), which the app does not have (single keypoint files name
+    the file's fields)."""
+    from lifter import demo_sample
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    kp = demo_sample("walking").keypoints_2d
+    doc = {"frames": [{"keypoints": (kp + i).tolist()} for i in range(3)], "fps": 25, "format": "h36m17",
+           "principal_point": [400, 300]}
+    assert v.load_upload("seq.json", json.dumps(doc).encode()) is False
+    msg = v.messages[-1]
+    assert "no focal length and no image size: put 'image_size' (or 'focal') in the file" in msg, msg
+    assert "--focal" not in msg and "focal=" not in msg, msg
