@@ -881,22 +881,41 @@ def test_a_keypoint_upload_gets_the_camera_notes_poselifter_lift_gives(camera: d
     assert sample.camera.alpha == pytest.approx(float(doc["focal"]))
 
 
-def test_a_keypoint_upload_with_a_focal_in_mm_is_refused_as_poselifter_lift_refuses_it(tmp_path: Path) -> None:
-    """The same rule and message as ``poselifter lift`` for a file's focal below 10 px (mm, not px)."""
+@pytest.mark.parametrize(("camera", "lib", "app_says"), [
+    ({"image_size": [800, 600], "focal": 4.2}, "must be in pixels, not mm",
+     r"mm\.json: the file's 'focal' 4\.2 x 4\.2 px is below 10 px: it must be in pixels, not mm .*; correct it, or "
+     r"remove it to assume"),
+    ({"principal_point": [400, 300]}, "no focal length and no image size",
+     r"mm\.json: no focal length and no image size: put 'image_size' \(or 'focal'\) in the file$"),
+])
+def test_a_keypoint_file_lift_refuses_for_its_camera_is_refused_alike(camera: dict, lib: str, app_says: str,
+                                                                      tmp_path: Path) -> None:
+    """The same rules and messages as ``poselifter lift`` (reviews): a file's focal below 10 px (mm, not px); a file
+    with a principal point but no focal and no image size (the app had assumed an image twice the principal point
+    and a focal from it). The app's message names the file's fields, not CLI options."""
     from conftest import tiny_lifter
 
     from lifter import PoseLifterError, demo_sample
     from lifter.pipeline import lift_keypoint_file
 
-    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
-           "image_size": [800, 600], "focal": 4.2}
+    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17", **camera}
     path = tmp_path / "mm.json"
     path.write_text(json.dumps(doc))
-    with pytest.raises(PoseLifterError, match="must be in pixels, not mm"):
+    with pytest.raises(PoseLifterError, match=lib):
         lift_keypoint_file(path, lifter=tiny_lifter())
-    with pytest.raises(up.UploadError, match=r"mm\.json: the file's 'focal' 4\.2 x 4\.2 px is below 10 px: it must "
-                                             r"be in pixels, not mm .*; correct it, or remove it to assume"):
+    with pytest.raises(up.UploadError, match=app_says):
         up.keypoint_sample("mm.json", path.read_bytes(), key="upload/t/mm.json")
+
+
+def test_a_keypoint_file_with_a_focal_and_principal_point_but_no_size_is_drawn_on_a_canvas() -> None:
+    """With a focal it is taken: the canvas is twice the principal point, and said."""
+    from lifter import demo_sample
+
+    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
+           "principal_point": [400, 300], "focal": 800}
+    sample = up.keypoint_sample("pp.json", json.dumps(doc).encode(), key="upload/t/pp.json")
+    assert (sample.camera.width, sample.camera.height) == (800, 600) and sample.camera.alpha == 800
+    assert any("twice the principal point" in w for w in sample.upload.warnings)
 
 
 def test_a_person_id_with_parentheses_is_picked_by_its_label(app: PoseLifterApp) -> None:
@@ -914,31 +933,6 @@ def test_a_person_id_with_parentheses_is_picked_by_its_label(app: PoseLifterApp)
     assert v.state.person == 1 and v.gui.joints.person.value == "person 2 (id alice [left])"
     name, payload = v.download_payload("json")  # (the record keeps the file's own id as it was)
     assert [q["person_id"] for q in json.loads(payload)["people"]] == [7, "alice (left)"], name
-
-
-def test_a_keypoint_file_with_only_a_principal_point_is_refused_as_poselifter_lift_refuses_it(tmp_path: Path) -> None:
-    """A review: a file with a principal point but no focal and no image size is refused by poselifter lift (no
-    focal length can be assumed without an image size), but the app assumed an image twice the principal point and
-    a focal from it. Both refuse it now, the app naming the file's fields only; with a focal it is taken (the
-    canvas is then twice the principal point, and said)."""
-    from conftest import tiny_lifter
-
-    from lifter import PoseLifterError, demo_sample
-    from lifter.pipeline import lift_keypoint_file
-
-    doc = {"keypoints": np.asarray(demo_sample("walking").keypoints_2d).tolist(), "format": "h36m17",
-           "principal_point": [400, 300]}
-    path = tmp_path / "pp.json"
-    path.write_text(json.dumps(doc))
-    with pytest.raises(PoseLifterError, match="no focal length and no image size"):
-        lift_keypoint_file(path, lifter=tiny_lifter())
-    with pytest.raises(up.UploadError, match=r"pp\.json: no focal length and no image size: put 'image_size' \(or "
-                                             r"'focal'\) in the file$"):
-        up.keypoint_sample("pp.json", path.read_bytes(), key="upload/t/pp.json")
-    doc["focal"] = 800
-    sample = up.keypoint_sample("pp.json", json.dumps(doc).encode(), key="upload/t/pp.json")
-    assert (sample.camera.width, sample.camera.height) == (800, 600) and sample.camera.alpha == 800
-    assert any("twice the principal point" in w for w in sample.upload.warnings)
 
 
 def test_people_whose_ids_read_alike_are_each_picked(app: PoseLifterApp) -> None:
