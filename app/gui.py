@@ -18,6 +18,7 @@ import viser
 from lifter.skeleton import JOINT_NAMES
 
 from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, NOISE_MAX
+from .keys import NO_PHOTO, H36MKey
 from .video import VIDEO_MAX_SECONDS
 
 SOURCE_LABELS: dict[str, str] = {"demo": "demo sample", "motion": "demo motion", "h36m": "Human3.6M",
@@ -183,8 +184,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             seqs = h36m.sequences(int(subject.value[1:]))
             sequence = gui.add_dropdown("sequence", seqs, initial_value=seqs[0])
             camera = gui.add_dropdown("camera", list(h36m.camera_ids), initial_value=h36m.camera_ids[0])
-            photos = ["(none)"] + [f"S{s} {q} {c} {f}" for s, q, c, f in h36m.photo_frames()]
-            photo = gui.add_dropdown("frame with photo", photos, initial_value="(none)")
+            photos = [NO_PHOTO] + [H36MKey(*f).photo_entry for f in h36m.photo_frames()]
+            photo = gui.add_dropdown("frame with photo", photos, initial_value=NO_PHOTO)
         else:
             subject = sequence = camera = photo = None
         play = PlayGui(

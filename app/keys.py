@@ -96,6 +96,12 @@ class H36MKey:
         """The key of this frame's sequence seen by its camera (:func:`sequence_of`)."""
         return f"h36m/S{self.subject}/{self.sequence}/{self.camera}"
 
+    @property
+    def photo_entry(self) -> str:
+        """How the "frame with photo" picker names this frame: ``"S9 Posing 1 54138969 0"``
+        (:func:`parse_photo_entry` reads it back)."""
+        return f"{self.subject_name} {self.sequence} {self.camera} {self.frame}"
+
     def __str__(self) -> str:
         return with_frame(self.sequence_key, self.frame)
 
@@ -116,3 +122,15 @@ def parse_h36m(key: str) -> H36MKey | None:
         return None  # (a negative frame parses, for the catalogue's out-of-range message)
     return H36MKey(int(subj[1:]), sequence, camera, int(frame))
 
+
+NO_PHOTO: Final[str] = "(none)"
+"""The "frame with photo" picker's entry for a frame without a photo."""
+
+
+def parse_photo_entry(entry: str) -> H36MKey | None:
+    """The Human3.6M frame a "frame with photo" entry (:attr:`H36MKey.photo_entry`) names, else None."""
+    subj, _, rest = entry.partition(" ")
+    parts = rest.rsplit(" ", 2)
+    if subj[:1] != "S" or not subj[1:].isdigit() or len(parts) != 3 or not parts[2].removeprefix("-").isdigit():
+        return None
+    return H36MKey(int(subj[1:]), parts[0], parts[1], int(parts[2]))

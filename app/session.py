@@ -29,7 +29,18 @@ from .core import (
     focal_max,
     focal_min,
 )
-from .keys import demo_key, frame_of, h36m_key, motion_key, parse_h36m, sequence_of, source_of, with_frame
+from .keys import (
+    NO_PHOTO,
+    demo_key,
+    frame_of,
+    h36m_key,
+    motion_key,
+    parse_h36m,
+    parse_photo_entry,
+    sequence_of,
+    source_of,
+    with_frame,
+)
 from .samples import Sample
 
 INPUT_KINDS: tuple[str, ...] = ("gt", "detected")
@@ -428,16 +439,12 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
             return with_frame(base, min(max(i, 0), upload_frames - 1))
         return last_upload
     assert h36m is not None and p.subject is not None and p.sequence is not None and p.camera is not None
-    if p.photo is not None and p.photo.value != "(none)" and p.photo.t >= max(
+    if p.photo is not None and p.photo.value != NO_PHOTO and p.photo.t >= max(
             q.t for q in (p.subject, p.sequence, p.camera, fr)):
-        try:
-            s, rest = str(p.photo.value).split(" ", 1)
-            seq, cam, f = rest.rsplit(" ", 2)
-            if s[:1] != "S" or not s[1:].isdigit():
-                raise ValueError(s)
-            return h36m_key(int(s[1:]), seq, cam, int(f))
-        except ValueError:
-            raise PoseLifterError(f"unknown frame with photo {str(p.photo.value)[:60]!r}") from None
+        entry = parse_photo_entry(str(p.photo.value))
+        if entry is None:
+            raise PoseLifterError(f"unknown frame with photo {str(p.photo.value)[:60]!r}")
+        return str(entry)
     if p.subject.value not in [f"S{s}" for s in h36m.subjects]:
         raise PoseLifterError(f"unknown subject {str(p.subject.value)[:20]!r}")
     subject = int(p.subject.value[1:])

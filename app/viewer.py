@@ -56,6 +56,7 @@ from .core import (
 from .drawing import overlay, response_image, scaled_base
 from .gui import SOURCE_LABELS, Gui, build_gui
 from .keys import (
+    NO_PHOTO,
     SEQUENCE_SOURCES,
     UPLOADED_SOURCES,
     demo_key,
@@ -261,8 +262,8 @@ class SessionView:
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self._last_was_error = False
         self._status_focal: float | None = None
-        self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
+        self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         self._status_about: str | None = None
         """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
         another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
@@ -279,12 +280,12 @@ class SessionView:
         self._frame_note: tuple[int, int, str] | None = None
         """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_while_playing_at = -math.inf
+        """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._play_shown: int | None = None  # (the player's last frame: Player's position while the box is typed in)
         self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
         self._applied_t = -math.inf  # picks stamped up to here were read by a pass that ended (its start time)
         self._own_t: dict[int, float] = {}  # id(picker) -> the timestamp of this view's own last write to it
-        """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._still_frame_typed: float | None = None
         """The tab's time of the frame value typed on a still sample that was last answered (said once per value)."""
         self._due: dict[str, list[float]] = {}
@@ -760,8 +761,7 @@ class SessionView:
             return
         picked = str(g.sequence.value)
         seqs = h.sequences(want.subject)
-        photo = None if g.photo is None else str(g.photo.value)
-        if photo == f"{want.subject_name} {want.sequence} {want.camera} {want.frame}":
+        if g.photo is not None and g.photo.value == want.photo_entry:
             return  # (a photo entry picked: that frame itself, no sequence replaced)
         if picked not in seqs and want.sequence == ss.sequence_of_subject(seqs, picked):
             self.show_message(f"{want.subject_name} has no {picked!r}: showing its {want.sequence!r}",
@@ -989,8 +989,7 @@ class SessionView:
         h36m_frame = parse_h36m(sample.key)
         if h36m_frame is not None and self.app.h36m is not None and g.subject is not None and g.sequence is not None \
                 and g.camera is not None and g.photo is not None:
-            subj, sequence, camera, frame = (h36m_frame.subject_name, h36m_frame.sequence, h36m_frame.camera,
-                                             h36m_frame.frame)
+            subj, sequence, camera = h36m_frame.subject_name, h36m_frame.sequence, h36m_frame.camera
             seqs = self.app.h36m.sequences(int(subj[1:]))
             if list(g.sequence.options) != seqs:
                 g.sequence.options = seqs
@@ -999,8 +998,8 @@ class SessionView:
             self._put(g.subject, subj)
             self._put(g.sequence, sequence)
             self._put(g.camera, camera)
-            entry = f"{subj} {sequence} {camera} {frame}"
-            self._put(g.photo, entry if entry in g.photo.options else "(none)")
+            entry = h36m_frame.photo_entry
+            self._put(g.photo, entry if entry in g.photo.options else NO_PHOTO)
         label = SOURCE_LABELS["upload" if src == "video" else src]
         if label == SOURCE_LABELS["upload"] and label not in g.source.options:
             g.source.options = [*g.source.options, label]

@@ -251,13 +251,12 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
     k = np.asarray(keypoints, np.float64)
     if k.size == 0:
         return []
-    wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))[..., None, :]
-    outside = np.any((k < 0) | (k > wh), axis=-1)
-    mostly = outside.mean(-1) > 0.5
+    wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))  # (one size per pose)
+    mostly = np.any((k < 0) | (k > wh[..., None, :]), axis=-1).mean(-1) > 0.5
     if not np.any(mostly):
         return []
     first = np.unravel_index(int(np.argmax(mostly)), mostly.shape) if mostly.ndim else ()
-    W, H = (int(v) for v in np.broadcast_to(np.asarray(image_size, np.float64), mostly.shape + (2,))[first])
+    W, H = (int(v) for v in wh[first])
     n = f"{int(mostly.sum())} of {int(mostly.size)} 2D pose(s)"
     at = where_in_batch(mostly) if name_pose else ""
     return [f"the detector placed most joints of {n} outside the {W} x {H} px image (a person cut off by the frame, "

@@ -303,9 +303,8 @@ class SequenceRecord:
         return depth_is_metric(self.focal_source)
 
     def to_json(self) -> dict[str, Any]:
-        ids = self.track_person_ids()
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
-                   "person_id": ids[tid]} for tid, seen in sorted(self.tracks().items())]
+                   "person_id": _track_person_id(seen)} for tid, seen in sorted(self.tracks().items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",

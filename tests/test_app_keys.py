@@ -68,3 +68,17 @@ def test_catalogue_samples_carry_parseable_keys() -> None:
     motion = DemoMotion(demo)
     frame = motion.frame(5).people[0]
     assert keys.frame_of(frame.key) == 5 and keys.sequence_of(frame.key) == "motion"
+
+
+@given(subject=st.integers(1, 11), sequence=st.sampled_from(["Posing 1", "Walking", "Discussion 2"]),
+       camera=st.sampled_from(["54138969", "55011271"]), frame=st.integers(0, 10**5))
+def test_photo_entry_round_trip(subject: int, sequence: str, camera: str, frame: int) -> None:
+    """The "frame with photo" picker's entry: one writer (H36MKey.photo_entry) and one reader (parse_photo_entry)."""
+    k = keys.H36MKey(subject, sequence, camera, frame)
+    assert k.photo_entry == f"S{subject} {sequence} {camera} {frame}"
+    assert keys.parse_photo_entry(k.photo_entry) == k
+
+
+@pytest.mark.parametrize("entry", ["", keys.NO_PHOTO, "S9", "X9 Walking 54138969 3", "S9 Walking 54138969 x"])
+def test_photo_entry_refuses_what_names_no_frame(entry: str) -> None:
+    assert keys.parse_photo_entry(entry) is None
