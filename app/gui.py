@@ -14,6 +14,7 @@ from typing import Any, cast
 
 import numpy as np
 import viser
+from viser._gui_handles import GuiProgressBarHandle  # (not exported at the top level in viser 1.1.1)
 
 from lifter.skeleton import JOINT_NAMES
 
@@ -62,6 +63,9 @@ class SampleGui:
 @dataclass
 class PlayGui:
     frame: viser.GuiSliderHandle[int]
+    position: GuiProgressBarHandle
+    """Where in the sequence the frame shown is (0–100 %): it moves while playing; the frame box does not (a frame
+    sent to the box while someone types in it mixes with the keys), and shows the frame once playback stops."""
     play: viser.GuiButtonHandle
     speed: viser.GuiSliderHandle[float]
     trail: viser.GuiCheckboxHandle
@@ -191,7 +195,10 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
         play = PlayGui(
             frame=gui.add_slider("frame", 0, 1, 1, 0, hint="frame of the sequence (Human3.6M at 50 fps, demo motion "
                                  "at 25 fps, an uploaded video or keypoint sequence at its own rate; frames "
-                                 "with nobody are left out)"),
+                                 "with nobody are left out). While playing, the bar below shows the frame and "
+                                 "this box keeps what you type or drag to: playback goes on from there; paused, "
+                                 "the box shows the frame"),
+            position=gui.add_progress_bar(0.0),
             play=gui.add_button("play", icon=viser.Icon.PLAYER_PLAY, hint="play / pause the sequence"),
             speed=gui.add_slider("speed", SPEED_MIN, SPEED_MAX, 0.05, 1.0, marks=((SPEED_MIN, "0.1×"), (1.0, "1×"),
                                                                                    (SPEED_MAX, "4×"))),

@@ -14,6 +14,10 @@ Every callback and every public control goes through one error wrapper (:meth:`S
 :class:`lifter.PoseLifterError` becomes a message in the readout panel (and a notification in a real tab),
 refused values are put back in their control, and nothing propagates into viser's threads. viser internals
 are used only in :mod:`.viser_hooks`.
+
+**Playback leaves the frame box to the user.** The player's frames go into the frame box on the server only; the
+tab sees them in a bar and a line under it, and is sent the box's value once playback stops. A value sent to a
+box while someone types in it lands between the keys.
 """
 
 from __future__ import annotations
@@ -92,7 +96,7 @@ from .scene import (
 from .scene import head_on as scene_head_on
 from .scene import overview as scene_overview
 from .video import VideoSequence
-from .viser_hooks import limit_uploads, note_typed_values, report_rejected_values
+from .viser_hooks import limit_uploads, note_typed_values, report_rejected_values, send_value, set_value_here
 
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
@@ -284,6 +288,10 @@ class SessionView:
         self._play_shown: int | None = None  # (the player's last frame: Player's position while the box is typed in)
         self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
+        self._info_playing = False  # the play info line says "playing" (:meth:`_show_play_info`)
+        self._frame_unsent = False
+        """The frame box holds a value the tab has not been sent: playback's frames stay on the server (and in the bar
+        under the box) until it stops, so none lands in the box while someone types a frame in it (:meth:`_write`)."""
         self._applied_t = -math.inf  # picks stamped up to here were read by a pass that ended (its start time)
         self._own_t: dict[int, float] = {}  # id(picker) -> the timestamp of this view's own last write to it
         self._still_frame_typed: float | None = None
@@ -519,6 +527,11 @@ class SessionView:
                 self._applied_t = self._pass_t0  # (a pick stamped during the pass is read by the next one)
             finally:
                 self._pass_t0 = math.inf
+            if self._frame_unsent and not self.playing:  # (playback stopped: the box shows the frame shown)
+                self._frame_unsent = False
+                send_value(self.gui.play.frame)
+            if self._info_playing != self.playing:  # (started or stopped with no new frame: a trial's paused
+                self._show_play_info()  # upload still said "playing")
             with self._status_lock:
                 if self._message_count == n and self.gui.readout.status.content and (
                         (self._status_about is not None and sequence_of(self.state.sample.key) != self._status_about)
@@ -528,14 +541,16 @@ class SessionView:
                     # one with it: a browser trial read "no 2D detection ... frame 3" under frame 5's detection)
                     self.gui.readout.status.content = ""
 
-    def _put(self, handle: Any, value: Any) -> None:
+    def _put(self, handle: Any, value: Any, *, quiet: bool = False) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
         pass its callback asked for applies it). The player's frames are not the tab's: a frame of the sequence
         being left, written during the pass that leaves it, is replaced (a browser trial's photo pick during
-        playback opened its sequence at the old one's frame number)."""
-        if handle.value != value and (handle.update_timestamp <= self._pass_t0 or (
-                handle is self.gui.play.frame and self._player_wrote(handle))):
-            self._write(handle, value)
+        playback opened its sequence at the old one's frame number). ``quiet``: on the server only
+        (:meth:`_write`)."""
+        frame_box = handle is self.gui.play.frame
+        if (handle.value != value or (frame_box and self._frame_unsent and not quiet)) and (
+                handle.update_timestamp <= self._pass_t0 or (frame_box and self._player_wrote(handle))):
+            self._write(handle, value, quiet=quiet)
 
     def _sync_pass(self) -> None:
         """One pass of :meth:`_sync` (under :attr:`lock`)."""
@@ -712,9 +727,23 @@ class SessionView:
         return any(q.update_timestamp > self._applied_t and self._own_t.get(id(q)) != q.update_timestamp
                    for q in self._pickers())
 
-    def _write(self, handle: Any, value: Any) -> None:
-        """This view's own write of ``value`` to a control (not the tab's pick: :meth:`_pick_pending`)."""
-        handle.value = value
+    def _write(self, handle: Any, value: Any, *, quiet: bool = False) -> None:
+        """This view's own write of ``value`` to a control (not the tab's pick: :meth:`_pick_pending`). ``quiet``
+        (the frame box during playback): on the server, not sent to the tab, which keeps what it shows until a
+        write that is not quiet, or the pass after playback stops, sends the box's value (:attr:`_frame_unsent`).
+        Playback's frames sent to the tab landed in the box between the keys of a frame typed there: in
+        Chromium "200" became 146, then 0146."""
+        frame_box = handle is self.gui.play.frame
+        if quiet:
+            set_value_here(handle, value)
+            self._frame_unsent = self._frame_unsent or frame_box
+        else:
+            resend = frame_box and self._frame_unsent and handle.value == value  # (viser sends a changed value only)
+            handle.value = value
+            if resend:
+                send_value(handle)
+            if frame_box:
+                self._frame_unsent = False
         self._own_t[id(handle)] = handle.update_timestamp
 
     def _player_wrote(self, h: Any) -> bool:
@@ -831,6 +860,22 @@ class SessionView:
 
     def _frame_index(self) -> int | None:
         return frame_of(self.state.sample.key)
+
+    def _show_play_info(self) -> None:
+        """The line under the play controls: the frame shown, and while playing, where to jump (the frame box is left
+        to the user then: :meth:`_write`); a still sample says what play does."""
+        seq, idx = self.sequence(), self._frame_index()
+        self._info_playing = self.playing
+        if seq is not None and idx is not None:
+            text = (f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)"
+                    + (" · playing: the bar shows where; type or drag a frame above to jump there"
+                       if self._info_playing else "") + "</small>")
+        elif source_of(self.state.sample.key) == "demo":
+            text = "<small>a still sample: <b>play</b> switches to the demo motion</small>"
+        else:
+            text = "<small>a still upload (upload a video or a keypoint sequence to play it)</small>"
+        if self.gui.play.info.content != text:
+            self.gui.play.info.content = text
 
     def _show_sample(self, sample: Sample, *, reframe: bool) -> None:
         """Show ``sample`` now (drags reset; focal to its camera's unless the camera is the same one; model, noise,
@@ -975,14 +1020,18 @@ class SessionView:
         seq = self.sequence()
         idx = self._frame_index()
         if seq is not None and idx is not None:
-            if p.frame.max != seq.num_frames - 1:
+            new_range = p.frame.max != seq.num_frames - 1
+            if new_range:
                 p.frame.max = seq.num_frames - 1
-            self._put(p.frame, idx)
-            p.info.content = f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)</small>"
-        else:
-            p.info.content = "<small>a still sample: <b>play</b> switches to the demo motion</small>" \
-                if src == "demo" else "<small>a still upload (upload a video or a keypoint sequence to play it)</small>"
+            self._put(p.frame, idx, quiet=self.playing and not new_range)  # (playback's frames: on the server and
+            # the bar; another range is sent, so that the box never shows a frame past the new end)
+            at = round(100.0 * idx / max(seq.num_frames - 1, 1), 1)
+            if p.position.value != at:
+                p.position.value = at
+        self._show_play_info()
         p.frame.disabled = seq is None
+        if p.position.visible != (seq is not None):
+            p.position.visible = seq is not None
         still_upload = seq is None and src != "demo"
         if p.play.disabled != still_upload:  # (a trial pressed play on a photo after a video, and got an error)
             p.play.disabled = still_upload
@@ -1412,9 +1461,9 @@ class SessionView:
         return seq, int(self.gui.play.frame.value)
 
     def _show_frame(self, index: int) -> None:
-        """The player's next frame: into the frame box, for a sync pass to show (here, or in the pass running now);
-        not while the box is being typed in (a browser trial's playback wrote its frames between the keys, and
-        "1500" typed became 1920, or 670)."""
+        """The player's next frame: into the frame box on the server, for a sync pass to show (here, or in the pass
+        running now), and not sent to the tab (:meth:`_write`); not while the box is being typed in (a browser
+        trial's playback wrote its frames between the keys, and "1500" typed became 1920, or 670)."""
         seq = self.sequence()
         if seq is None or seq.key != self.player.playing_key:
             return  # (a frame of the sequence left meanwhile: a browser trial's photo pick opened at its number)
@@ -1425,9 +1474,10 @@ class SessionView:
         if not self._player_wrote(h):
             self._frame_user_t = h.update_timestamp  # (set by the user, a picker or a pass since: theirs)
         self._player_write = (int(index), time.time())  # (before the write: it may run a pass at once)
-        h.value = index
+        self._write(h, index, quiet=True)  # (the tab is sent it once playback stops: :meth:`_write`)
 
     def _player_stopped(self) -> None:
+        self._runner.request()  # (that pass sends the tab the frame box's value: :attr:`_frame_unsent`)
         try:
             self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
         except Exception:  # noqa: BLE001 - the tab may be gone

@@ -9,13 +9,18 @@ place. Each hook is best effort: when viser's internals change it does nothing (
 * :func:`note_typed_values`: the time a browser tab sends a value for a control is recorded before viser puts that
   value in the control (viser runs the control's callbacks later, on a thread pool: a sync pass running meanwhile
   would read the new value with the previous key's time);
+* :func:`set_value_here` / :func:`send_value`: a control's value set on the server (its callbacks run) without
+  telling the tab, and told later: a value that arrives in a number box while it is being typed in mixes with the
+  keys (playback's frames landed between a typed frame's keys: "200" became 146, then 0146);
 * :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly).
 """
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -153,6 +158,41 @@ def note_typed_values(gui: viser.GuiApi, controls: dict[str, Any], note: Callabl
 
     handlers.setdefault(_messages.GuiUpdateMessage, []).insert(0, on_update)
     return True
+
+
+def set_value_here(handle: Any, value: Any) -> None:
+    """What ``handle.value = value`` does on the server (the value, its time, the control's update callbacks, with
+    no client named: not the tab's), without sending the value to the tab. The tab goes on showing what it showed,
+    so nothing lands in a box being typed in; :func:`send_value` tells it later. Without the internals: a plain
+    assignment (sent)."""
+    try:
+        impl = handle._impl
+        value = type(impl.value)(value)
+        loop = impl.gui_api._event_loop
+    except AttributeError as exc:
+        log.warning("value sent to the tab (viser internals changed: %s)", exc)
+        handle.value = value
+        return
+    if impl.value == value:
+        return
+    impl.value = value
+    impl.update_timestamp = time.time()
+    for cb in list(impl.update_cb):
+        out = cb(viser.GuiEvent(client_id=None, client=None, target=handle))
+        if asyncio.iscoroutine(out):
+            asyncio.run_coroutine_threadsafe(out, loop)
+
+
+def send_value(handle: Any) -> None:
+    """Send the control's value to the tab as it stands on the server (after :func:`set_value_here`), even when the
+    tab last received the same value."""
+    try:
+        from viser import _messages
+
+        handle._impl.gui_api._websock_interface.queue_message(
+            _messages.GuiUpdateMessage(handle._impl.uuid, {"value": handle._impl.value}))
+    except AttributeError as exc:
+        log.warning("value not sent to the tab (viser internals changed: %s)", exc)
 
 
 def drag_callback(node: Any) -> Callable[[Any], None]:

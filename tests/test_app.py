@@ -2120,6 +2120,59 @@ def test_a_frame_typed_while_playing_is_not_overwritten_by_the_playback(app: Pos
                 v.gui.play.play.value = True
 
 
+def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifterApp) -> None:
+    """A Chromium trial: playback's frames, sent to the frame box 25 times a second, were still on their way when
+    the first key of a frame typed there was pressed; they landed in the box between the keys, so "200" typed
+    became 146, then 0146. While playing, the tab is sent no value for the box (the frames stay on the server,
+    and the bar under the box moves); a frame dragged or typed there is the tab's own. Once playback stops, the
+    tab is sent the frame shown."""
+    import threading
+    import time
+
+    from viser import _messages
+
+    with open_tab(app) as (tab, v):
+        box, bar = v.gui.play.frame, v.gui.play.position
+        ws = box._impl.gui_api._websock_interface
+        sent: list[tuple[str, object]] = []
+        guard = threading.Lock()
+        queue = ws.queue_message
+
+        def spy(msg: object) -> None:
+            if (isinstance(msg, _messages.GuiUpdateMessage) and "value" in msg.updates
+                    and getattr(msg, "excluded_self_client", None) is None):  # (viser's echo to other tabs)
+                with guard:
+                    sent.append((msg.uuid, msg.updates["value"]))
+            queue(msg)
+
+        ws.queue_message = spy
+        try:
+            v.gui.play.play.value = True  # a still demo sample plays the demo motion
+            assert v.playing and v.state.sample.key.startswith("motion/")
+            time.sleep(0.3)  # (the pass that opened the motion sent its first frame)
+            with guard:
+                sent.clear()
+            assert wait_for(lambda: box.value > 15, timeout=10), box.value
+            with guard:
+                assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent
+                bars = [val for uuid, val in sent if uuid == bar._impl.uuid]
+            assert len(bars) > 5 and bars == sorted(bars), bars  # the bar moved on, frame by frame
+            assert "playing: the bar shows where" in v.gui.play.info.content
+            _send_value(tab, box, 200)  # the tab's own frame: playback goes on from it, not sent back
+            assert wait_for(lambda: 200 < int(v.state.sample.key.split("/")[1]) < 260, timeout=10), v.state.sample.key
+            with guard:
+                assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent
+        finally:
+            v.gui.play.play.value = True  # pause
+        assert wait_for(lambda: not v.playing, timeout=5)
+        shown = int(v.state.sample.key.split("/")[1])
+        assert wait_for(lambda: any(u == box._impl.uuid and val == shown for u, val in list(sent)), timeout=5), (
+            shown, sent[-5:])
+        assert box.value == shown
+        assert wait_for(lambda: "playing" not in v.gui.play.info.content, timeout=5), v.gui.play.info.content
+        ws.queue_message = queue
+
+
 def test_a_demo_sample_s_download_counts_its_people(view: SessionView) -> None:
     """A browser trial: Human3.6M and demo downloads wrote "num_people": null beside one person in "people"."""
     import json

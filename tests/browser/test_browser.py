@@ -4,7 +4,8 @@
   in every tab the readout's ``Focal N px`` equals the slider's value (in the browser and on the server) and the
   readout is on screen (not covered, not scrolled away);
 * the WebGL view is not blank; in the head-on image view a 2D joint is dragged with the mouse and re-lifted
-  while the readout (with its side / top views) stays on screen; the demo motion plays;
+  while the readout (with its side / top views) stays on screen; the demo motion plays, and a frame typed while it
+  plays is the frame typed;
 * upload of a keypoint JSON through the upload button and download of the result.
 
 ``POSELIFTER_WRITE_SCREENSHOT=1`` rewrites the README's screenshots (``docs/app.png``, ``docs/app_drag.png``,
@@ -99,6 +100,11 @@ def _open_tab(app: Any, browser: Any) -> tuple[Any, Any]:
 
 def _focal_slider(page: Any) -> Any:
     return page.locator("[role=slider][aria-valuemax='6000']").first
+
+
+def _number_box(page: Any, slider: Any) -> Any:
+    """The number box beside a viser slider (the slider's root element carries the control's id)."""
+    return page.locator(f"[id='{slider._impl.uuid}']").locator("xpath=..").locator("input:not([type=hidden])").first
 
 
 def _readout(page: Any) -> Any:
@@ -279,8 +285,24 @@ def test_drag_playback_upload_download() -> None:
         if WRITE:
             _close_notifications(page)
             page.screenshot(path=str(DOCS / "app_playback.png"))
+        # 4b. a frame typed while it plays is the frame typed, key by key, and playback goes on from it (playback's
+        # frames sent to the box landed between the keys: "200" became 146, then 0146); paused, the box shows the
+        # frame shown
+        box = _number_box(page, view.gui.play.frame)
+        box.click()
+        page.keyboard.press("Control+A")
+        seen = []
+        for ch in "200":
+            page.keyboard.type(ch)
+            time.sleep(0.2)  # (five frames between keys)
+            seen.append(box.input_value())
+        assert seen == ["2", "20", "200"], seen
+        assert _wait(lambda: 200 <= int(view.state.sample.key.split("/")[1]) <= 255, 10), view.state.sample.key
+        assert view.playing and box.input_value() == "200"
         page.get_by_role("button", name="pause").click()
         assert _wait(lambda: not view.playing, 30)
+        shown = view.state.sample.key.split("/")[1]
+        assert _wait(lambda: box.input_value() == shown, 10), (box.input_value(), shown)
 
         # 5. upload a keypoint JSON through the upload button's file input, then download the result
         page.get_by_role("tab", name="File").click()
