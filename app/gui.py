@@ -196,8 +196,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             frame=gui.add_slider("frame", 0, 1, 1, 0, hint="frame of the sequence (Human3.6M at 50 fps, demo motion "
                                  "at 25 fps, an uploaded video or keypoint sequence at its own rate; frames "
                                  "with nobody are left out). While playing, the bar below shows the frame and "
-                                 "this box keeps what you type or drag to: playback goes on from there; paused, "
-                                 "the box shows the frame"),
+                                 "the box is empty: type a frame there (or drag) to jump, and playback goes on "
+                                 "from it; paused, the box shows the frame"),
             position=gui.add_progress_bar(0.0),
             play=gui.add_button("play", icon=viser.Icon.PLAYER_PLAY, hint="play / pause the sequence"),
             speed=gui.add_slider("speed", SPEED_MIN, SPEED_MAX, 0.05, 1.0, marks=((SPEED_MIN, "0.1×"), (1.0, "1×"),

@@ -16,8 +16,8 @@ refused values are put back in their control, and nothing propagates into viser'
 are used only in :mod:`.viser_hooks`.
 
 **Playback leaves the frame box to the user.** The player's frames go into the frame box on the server only; the
-tab sees them in a bar and a line under it, and is sent the box's value once playback stops. A value sent to a
-box while someone types in it lands between the keys.
+tab sees them in a bar and a line under it, its box is empty while playing, and it is sent the box's value once
+playback stops. A value sent to a box while someone types in it lands between the keys.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ from .scene import (
 from .scene import head_on as scene_head_on
 from .scene import overview as scene_overview
 from .video import VideoSequence
-from .viser_hooks import limit_uploads, note_typed_values, report_rejected_values, send_value, set_value_here
+from .viser_hooks import clear_box, limit_uploads, note_typed_values, report_rejected_values, send_value, set_value_here
 
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
@@ -729,8 +729,9 @@ class SessionView:
 
     def _write(self, handle: Any, value: Any, *, quiet: bool = False) -> None:
         """This view's own write of ``value`` to a control (not the tab's pick: :meth:`_pick_pending`). ``quiet``
-        (the frame box during playback): on the server, not sent to the tab, which keeps what it shows until a
-        write that is not quiet, or the pass after playback stops, sends the box's value (:attr:`_frame_unsent`).
+        (the frame box during playback): on the server, not sent to the tab, whose box stays empty (cleared as
+        playback starts) until a write that is not quiet, or the pass after playback stops, sends the box's value
+        (:attr:`_frame_unsent`).
         Playback's frames sent to the tab landed in the box between the keys of a frame typed there: in
         Chromium "200" became 146, then 0146."""
         frame_box = handle is self.gui.play.frame
@@ -1477,11 +1478,12 @@ class SessionView:
         self._write(h, index, quiet=True)  # (the tab is sent it once playback stops: :meth:`_write`)
 
     def _player_stopped(self) -> None:
-        self._runner.request()  # (that pass sends the tab the frame box's value: :attr:`_frame_unsent`)
         try:
             self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
         except Exception:  # noqa: BLE001 - the tab may be gone
             pass
+        self._do(self._runner.request)  # (that pass sends the tab the frame box's value: :attr:`_frame_unsent`;
+        # through the error wrapper: this runs on the player's thread too)
 
     @control
     def toggle_play(self) -> None:
@@ -1501,6 +1503,8 @@ class SessionView:
             if self.sequence() is None:
                 raise PoseLifterError("nothing to play")
         self.gui.play.play.label, self.gui.play.play.icon = "pause", viser.Icon.PLAYER_PAUSE
+        clear_box(self.gui.play.frame)  # (empty while playing: any frame typed there jumps, even the one it showed)
+        self._frame_unsent = True  # (the pass after playback stops sends the frame shown)
         self.player.start()
 
     def stop_playback(self, *, wait: bool = True) -> None:

@@ -9,9 +9,10 @@ place. Each hook is best effort: when viser's internals change it does nothing (
 * :func:`note_typed_values`: the time a browser tab sends a value for a control is recorded before viser puts that
   value in the control (viser runs the control's callbacks later, on a thread pool: a sync pass running meanwhile
   would read the new value with the previous key's time);
-* :func:`set_value_here` / :func:`send_value`: a control's value set on the server (its callbacks run) without
-  telling the tab, and told later: a value that arrives in a number box while it is being typed in mixes with the
-  keys (playback's frames landed between a typed frame's keys: "200" became 146, then 0146);
+* :func:`set_value_here` / :func:`send_value` / :func:`clear_box`: a control's value set on the server (its
+  callbacks run) without telling the tab, and told later; meanwhile its box is empty. A value that arrives in a
+  number box while it is being typed in mixes with the keys (playback's frames landed between a typed frame's keys:
+  "200" became 146, then 0146);
 * :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly).
 """
 
@@ -193,6 +194,20 @@ def send_value(handle: Any) -> None:
             _messages.GuiUpdateMessage(handle._impl.uuid, {"value": handle._impl.value}))
     except AttributeError as exc:
         log.warning("value not sent to the tab (viser internals changed: %s)", exc)
+
+
+def clear_box(handle: Any) -> None:
+    """Send the tab an empty number box for a slider (its value on the server unchanged). A box left showing a
+    number while the server's value moves on cannot take that number typed again (the browser sends nothing for
+    an unchanged box; a Chromium trial's "0" typed over "0" during playback did not jump back): an empty one
+    takes any. The slider's thumb goes to its start."""
+    try:
+        from viser import _messages
+
+        handle._impl.gui_api._websock_interface.queue_message(
+            _messages.GuiUpdateMessage(handle._impl.uuid, {"value": ""}))
+    except AttributeError as exc:
+        log.warning("box not cleared in the tab (viser internals changed: %s)", exc)
 
 
 def drag_callback(node: Any) -> Callable[[Any], None]:

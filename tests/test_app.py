@@ -2123,9 +2123,9 @@ def test_a_frame_typed_while_playing_is_not_overwritten_by_the_playback(app: Pos
 def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifterApp) -> None:
     """A Chromium trial: playback's frames, sent to the frame box 25 times a second, were still on their way when
     the first key of a frame typed there was pressed; they landed in the box between the keys, so "200" typed
-    became 146, then 0146. While playing, the tab is sent no value for the box (the frames stay on the server,
-    and the bar under the box moves); a frame dragged or typed there is the tab's own. Once playback stops, the
-    tab is sent the frame shown."""
+    became 146, then 0146. While playing, the tab is sent no value for the box, only an empty box as playback
+    starts (the frames stay on the server, and the bar under the box moves); a frame dragged or typed there is the
+    tab's own. Once playback stops, the tab is sent the frame shown."""
     import threading
     import time
 
@@ -2151,6 +2151,7 @@ def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifte
             assert v.playing and v.state.sample.key.startswith("motion/")
             time.sleep(0.3)  # (the pass that opened the motion sent its first frame)
             with guard:
+                assert [val for uuid, val in sent if uuid == box._impl.uuid][-1:] == [""], sent  # an empty box
                 sent.clear()
             assert wait_for(lambda: box.value > 15, timeout=10), box.value
             with guard:
@@ -2171,6 +2172,27 @@ def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifte
         assert box.value == shown
         assert wait_for(lambda: "playing" not in v.gui.play.info.content, timeout=5), v.gui.play.info.content
         ws.queue_message = queue
+
+
+def test_a_failed_pass_as_playback_stops_still_resets_play_and_is_said(app: PoseLifterApp) -> None:
+    """A review: the pass asked for as playback stops (to send the frame box's value) ran outside the error
+    wrapper and before the button was reset; a pass that failed left the button on "pause" and raised into the
+    player's thread (or the upload that stopped playback)."""
+    with open_tab(app) as (_tab, v):
+        v.gui.play.play.value = True
+        assert v.playing
+        real = v._sync_pass
+
+        def broken() -> None:
+            raise RuntimeError("a pass that fails")
+
+        v._sync_pass = broken
+        try:
+            v.stop_playback()  # (not through a control: as the player's own stop and an upload call it)
+        finally:
+            v._sync_pass = real
+        assert not v.playing and v.gui.play.play.label == "play"
+        assert any("internal error" in m.lower() or "a pass that fails" in m for m in v.messages[-3:]), v.messages[-3:]
 
 
 def test_a_demo_sample_s_download_counts_its_people(view: SessionView) -> None:

@@ -289,6 +289,7 @@ def test_drag_playback_upload_download() -> None:
         # frames sent to the box landed between the keys: "200" became 146, then 0146); paused, the box shows the
         # frame shown
         box = _number_box(page, view.gui.play.frame)
+        assert box.input_value() == ""  # (empty while playing: any frame typed there is taken)
         box.click()
         page.keyboard.press("Control+A")
         seen = []
