@@ -289,6 +289,7 @@ class SessionView:
         self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
         self._info_playing = False  # the play info line says "playing" (:meth:`_show_play_info`)
+        self._typed_name: dict[int, str] = {}  # id(handle) -> its name in _typed_at (:meth:`_typed_controls`)
         self._frame_unsent = False
         """The frame box holds a value the tab has not been sent: playback's frames stay on the server (and in the bar
         under the box) until it stops, so none lands in the box while someone types a frame in it (:meth:`_write`)."""
@@ -438,7 +439,7 @@ class SessionView:
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
-        typed = {id(h): name for name, h in self._typed_controls().items()}
+        typed = self._typed_name = {id(h): name for name, h in self._typed_controls().items()}
         for h in {id(h): h for h in [g.sample.source, g.sample.demo, *g.sample.h36m_pickers, g.play.frame,
                                      *g.value_handles()]}.values():
             if id(h) in typed:  # the key's time first, in the same callback: viser runs callbacks on a thread
@@ -548,6 +549,11 @@ class SessionView:
         playback opened its sequence at the old one's frame number). ``quiet``: on the server only
         (:meth:`_write`)."""
         frame_box = handle is self.gui.play.frame
+        name = self._typed_name.get(id(handle))
+        if name is not None and self._typed_at.get(name, -math.inf) > self._pass_t0:
+            return  # (the tab sent a value during this pass: viser puts the value in before its time, so a pass
+            # between the two read the new value with the old time, and put its own back: a trial's "1071" typed,
+            # paused, became 107 with no word; note_typed_values notes the key before either)
         if (handle.value != value or (frame_box and self._frame_unsent and not quiet)) and (
                 handle.update_timestamp <= self._pass_t0 or (frame_box and self._player_wrote(handle))):
             self._write(handle, value, quiet=quiet)

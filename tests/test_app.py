@@ -2195,6 +2195,32 @@ def test_a_failed_pass_as_playback_stops_still_resets_play_and_is_said(app: Pose
         assert any("internal error" in m.lower() or "a pass that fails" in m for m in v.messages[-3:]), v.messages[-3:]
 
 
+def test_a_pass_does_not_put_its_frame_over_one_the_tab_sent_during_it(app: PoseLifterApp) -> None:
+    """A browser trial (3 times, intermittent): "1071" typed in the paused frame box was rewritten to 107 about
+    170 ms later, with no message. viser puts a tab's value in the control before it stamps the control's time, so
+    a pass reading between the two saw 1071 with the time of "107", took it for its own older value and put 107
+    back. The time the key was sent (noted before either, :func:`note_typed_values`) now keeps the tab's value.
+    The window is set up here by hand: the value in, its time not yet."""
+    import time
+
+    with open_tab(app) as (_tab, v):
+        box = v.gui.play.frame
+        v.gui.sample.source.value = "demo motion"
+        assert v.state.sample.key.startswith("motion/")
+        with v.lock:
+            v._put(box, 107)
+            stamped = box.update_timestamp
+            v._pass_t0 = time.time()  # a pass begins, and reads the box
+            v._note_key("frame")  # the tab's "1071": its key noted,
+            box._impl.value = 1071  # its value put in by viser, its time not yet stamped
+            assert box.update_timestamp == stamped
+            try:
+                v._put(box, 107)  # the pass shows the frame it read
+            finally:
+                v._pass_t0 = float("inf")
+            assert box.value == 1071
+
+
 def test_a_demo_sample_s_download_counts_its_people(view: SessionView) -> None:
     """A browser trial: Human3.6M and demo downloads wrote "num_people": null beside one person in "people"."""
     import json
