@@ -9,7 +9,7 @@ side / top view of the lifted pose (the 3D response while dragging head-on).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
@@ -63,7 +63,7 @@ class SampleGui:
 @dataclass
 class PlayGui:
     frame: viser.GuiSliderHandle[int]
-    position: GuiProgressBarHandle
+    position: GuiProgressBarHandle = field(repr=False)  # (viser 1.1.1's repr of it raises: it has no label)
     """Where in the sequence the frame shown is (0–100 %): it moves while playing; the frame box does not (a frame
     sent to the box while someone types in it mixes with the keys), and shows the frame once playback stops."""
     play: viser.GuiButtonHandle

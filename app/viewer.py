@@ -1030,8 +1030,15 @@ class SessionView:
             new_range = p.frame.max != seq.num_frames - 1
             if new_range:
                 p.frame.max = seq.num_frames - 1
-            self._put(p.frame, idx, quiet=self.playing and not new_range)  # (playback's frames: on the server and
-            # the bar; another range is sent, so that the box never shows a frame past the new end)
+            typed = p.frame.value
+            if not (self._since_typed("frame") < TYPING_SETTLE_S and typed != idx
+                    and min(max(typed, 0), seq.num_frames - 1) == idx):  # (a frame typed past an end is left in
+                # the box until the typing settles, and the pass that says so puts the end frame there: a browser
+                # trial's "99999", typed slowly, read 1967 after its fourth key, then 19679)
+                self._put(p.frame, idx, quiet=self.playing)  # (playback's frames: on the server, and the bar)
+                if self.playing and new_range:
+                    self._clear_frame_box()  # (another sequence while playing: no frame number past its end, nor
+                    # one that the box would not take typed again)
             at = round(100.0 * idx / max(seq.num_frames - 1, 1), 1)
             if p.position.value != at:
                 p.position.value = at
@@ -1463,9 +1470,21 @@ class SessionView:
         seq = self.sequence()
         if seq is None:
             return None
-        if self._since_typed("frame") < TYPING_SETTLE_S and self._play_shown is not None:
+        if self._frame_box_waits(seq) and self._play_shown is not None:
             return seq, self._play_shown  # (playing on meanwhile; the frame typed is taken once the typing settles)
         return seq, int(self.gui.play.frame.value)
+
+    def _frame_box_waits(self, seq: SequenceSource) -> bool:
+        """The frame box is being typed in, or holds a frame typed past an end of ``seq`` that no pass has answered
+        yet (:meth:`_note_frame_past_end` says so and puts the end frame there): playback neither takes it nor
+        writes over it. A browser trial's "99999" typed during playback went to frame 1601, 99999 modulo the
+        sequence's length, without a word; or the next frame replaced it before the note was said."""
+        if self._since_typed("frame") < TYPING_SETTLE_S:
+            return True
+        try:
+            return not 0 <= int(self.gui.play.frame.value) < seq.num_frames
+        except (TypeError, ValueError):
+            return True
 
     def _show_frame(self, index: int) -> None:
         """The player's next frame: into the frame box on the server, for a sync pass to show (here, or in the pass
@@ -1475,13 +1494,20 @@ class SessionView:
         if seq is None or seq.key != self.player.playing_key:
             return  # (a frame of the sequence left meanwhile: a browser trial's photo pick opened at its number)
         self._play_shown = index
-        if self._since_typed("frame") < TYPING_SETTLE_S:
+        if self._frame_box_waits(seq):
             return
         h = self.gui.play.frame
         if not self._player_wrote(h):
             self._frame_user_t = h.update_timestamp  # (set by the user, a picker or a pass since: theirs)
         self._player_write = (int(index), time.time())  # (before the write: it may run a pass at once)
         self._write(h, index, quiet=True)  # (the tab is sent it once playback stops: :meth:`_write`)
+
+    def _clear_frame_box(self) -> None:
+        """Empty the tab's frame box while playing (:func:`~poselifter_app.viser_hooks.clear_box`): any frame typed
+        there jumps, even the one it showed (a Chromium check: "0" typed over a stale "0" sent nothing). The pass
+        after playback stops sends the frame shown (:attr:`_frame_unsent`)."""
+        clear_box(self.gui.play.frame)
+        self._frame_unsent = True
 
     def _player_stopped(self) -> None:
         try:
@@ -1509,8 +1535,7 @@ class SessionView:
             if self.sequence() is None:
                 raise PoseLifterError("nothing to play")
         self.gui.play.play.label, self.gui.play.play.icon = "pause", viser.Icon.PLAYER_PAUSE
-        clear_box(self.gui.play.frame)  # (empty while playing: any frame typed there jumps, even the one it showed)
-        self._frame_unsent = True  # (the pass after playback stops sends the frame shown)
+        self._clear_frame_box()
         self.player.start()
 
     def stop_playback(self, *, wait: bool = True) -> None:

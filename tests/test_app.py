@@ -2174,6 +2174,113 @@ def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifte
         ws.queue_message = queue
 
 
+def _spy_frame_box(v: SessionView) -> tuple[list[object], object]:
+    """The values the tab is sent for the frame box (not viser's echoes to other tabs), and a function that stops
+    recording."""
+    import threading
+
+    from viser import _messages
+
+    box = v.gui.play.frame
+    ws = box._impl.gui_api._websock_interface
+    sent: list[object] = []
+    guard = threading.Lock()
+    queue = ws.queue_message
+
+    def spy(msg: object) -> None:
+        if (isinstance(msg, _messages.GuiUpdateMessage) and msg.uuid == box._impl.uuid and "value" in msg.updates
+                and getattr(msg, "excluded_self_client", None) is None):
+            with guard:
+                sent.append(msg.updates["value"])
+        queue(msg)
+
+    ws.queue_message = spy
+
+    def stop() -> None:
+        ws.queue_message = queue
+
+    return sent, stop
+
+
+def test_a_frame_typed_past_the_end_while_playing_goes_to_the_end_and_is_said(app: PoseLifterApp) -> None:
+    """A browser trial: "99999" typed key by key while the demo motion played went to frame 160 (99999 modulo the
+    256 frames), with no word, and the box kept 99999, which the browser clamped to the last frame when it lost
+    focus: the next click jumped there. Now, once the typing settles, the note is said, the box is sent the last
+    frame, and playback goes on from it (looping to 0)."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    with open_tab(app) as (tab, v):
+        v.gui.play.play.value = True
+        assert v.playing and v.state.sample.key.startswith("motion/")
+        last = app.motion.num_frames - 1
+        sent, stop = _spy_frame_box(v)
+        n_msgs = len(v.messages)
+        try:
+            for typed in ("9", "99", "999", "9999", "99999"):
+                _send_value(tab, v.gui.play.frame, int(typed))
+                time.sleep(0.2)
+                if int(typed) > last:  # (past the end, still being typed: left in the box, not yet answered)
+                    assert v.gui.play.frame.value == int(typed) and last not in sent, (v.gui.play.frame.value, sent)
+            assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
+                            timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
+            assert last in sent  # the box shows the frame it went to
+            time.sleep(0.6)
+            f = int(v.state.sample.key.split("/")[1])
+            assert v.playing and f < 40, (f, v.state.sample.key)  # from the end round to the start, not from 99999 % n
+        finally:
+            stop()
+            v.gui.play.play.value = True
+        assert wait_for(lambda: not v.playing, timeout=5)
+
+
+def test_a_frame_typed_past_the_end_while_paused_is_left_until_the_typing_settles(h36m_app: PoseLifterApp) -> None:
+    """A browser trial: "99999" typed slowly in the paused frame box read 1967 (the end frame) after its fourth
+    key, then 19679, which was said as past the end. The box is left as typed until the typing settles."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    with open_tab(h36m_app) as (tab, v):
+        assert v.state.sample.key.startswith("h36m/")
+        last = v.sequence().num_frames - 1
+        sent, stop = _spy_frame_box(v)
+        n_msgs = len(v.messages)
+        try:
+            for typed in ("9", "99", "999", "9999", "99999"):
+                _send_value(tab, v.gui.play.frame, int(typed))
+                time.sleep(0.3)
+                assert v.gui.play.frame.value == int(typed) and last not in sent, (typed, v.gui.play.frame.value, sent)
+            assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
+                            timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
+            assert v.gui.play.frame.value == last and last in sent
+        finally:
+            stop()
+
+
+def test_another_sequence_picked_while_playing_leaves_the_box_empty(h36m_app: PoseLifterApp) -> None:
+    """A browser trial: a subject picked while playing left 0 in the frame box (a photo entry, 1750) while playback
+    went on: that number, typed again, sent nothing and jumped nowhere. Another sequence's range empties the box,
+    as playing does."""
+    h = h36m_app.h36m
+    with open_tab(h36m_app) as (_tab, v):
+        v.select_h36m(subject=9, sequence=h.sequences(9)[0], camera=h.camera_ids[0], frame=0)
+        other = next(s for s in h.sequences(11) if h.num_frames(11, s) != v.sequence().num_frames)
+        v.gui.play.play.value = True
+        assert v.playing
+        sent, stop = _spy_frame_box(v)
+        try:
+            v.gui.sample.sequence.value = other  # (S9's; then S11 at that action, a range of its own)
+            v.gui.sample.subject.value = "S11"
+            assert wait_for(lambda: v.state.sample.key.startswith("h36m/S11/"), timeout=10), v.state.sample.key
+            assert "" in sent and all(x == "" for x in sent), sent
+        finally:
+            stop()
+            v.gui.play.play.value = True
+        assert wait_for(lambda: not v.playing, timeout=5)
+
+
 def test_a_failed_pass_as_playback_stops_still_resets_play_and_is_said(app: PoseLifterApp) -> None:
     """A review: the pass asked for as playback stops (to send the frame box's value) ran outside the error
     wrapper and before the button was reset; a pass that failed left the button on "pause" and raised into the
