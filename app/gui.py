@@ -10,17 +10,19 @@ side / top view of the lifted pose (the 3D response while dragging head-on).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import viser
-from viser._gui_handles import GuiProgressBarHandle  # (not exported at the top level in viser 1.1.1)
 
 from lifter.skeleton import JOINT_NAMES
 
 from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, NOISE_MAX
 from .keys import NO_PHOTO, H36MKey
 from .video import VIDEO_MAX_SECONDS
+
+if TYPE_CHECKING:  # (not exported at viser 1.1.1's top level; annotations only)
+    from viser._gui_handles import GuiProgressBarHandle
 
 SOURCE_LABELS: dict[str, str] = {"demo": "demo sample", "motion": "demo motion", "h36m": "Human3.6M",
                                  "upload": "upload"}
@@ -196,8 +198,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             frame=gui.add_slider("frame", 0, 1, 1, 0, hint="frame of the sequence (Human3.6M at 50 fps, demo motion "
                                  "at 25 fps, an uploaded video or keypoint sequence at its own rate; frames "
                                  "with nobody are left out). While playing, the bar below shows the frame and "
-                                 "the box is empty: type a frame there (or drag) to jump, and playback goes on "
-                                 "from it; paused, the box shows the frame"),
+                                 "the box is left to you (empty until you type or drag): type a frame there (or "
+                                 "drag) to jump, and playback goes on from it; paused, the box shows the frame"),
             position=gui.add_progress_bar(0.0),
             play=gui.add_button("play", icon=viser.Icon.PLAYER_PLAY, hint="play / pause the sequence"),
             speed=gui.add_slider("speed", SPEED_MIN, SPEED_MAX, 0.05, 1.0, marks=((SPEED_MIN, "0.1×"), (1.0, "1×"),

@@ -399,6 +399,12 @@ class Picks:
 SOURCES: tuple[str, ...] = ("demo", "motion", "h36m", "upload")
 
 
+def clamp_frame(frame: int, num_frames: int) -> int:
+    """The frame shown for ``frame`` asked for in a sequence of ``num_frames``: the nearest end past either end (said
+    by the view once the typing settles). One rule for the pickers, the frame box and playback."""
+    return min(max(int(frame), 0), max(int(num_frames), 1) - 1)
+
+
 def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: str | None, sources: list[str],
                   h36m: Any | None, motion_frames: int, upload_frames: int | None = None) -> str:
     """The key of the sample the pickers ask for (``demo/<name>``, ``motion/<i>``, ``h36m/S<s>/<seq>/<cam>/<f>`` or
@@ -426,7 +432,7 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         return demo_key(str(p.demo.value))
     if src == "motion":
         i = int(fr.value) if source_of(shown) == "motion" or fr.t > p.source.t else 0
-        return motion_key(min(max(i, 0), max(motion_frames, 1) - 1))  # (typed past an end: clamped, and said, as
+        return motion_key(clamp_frame(i, motion_frames))  # (typed past an end: clamped, and said, as
         # for Human3.6M; a browser trial's 300 showed frame 44 without a word. Playback loops by its own clock.)
     if src == "upload":
         if last_upload is None:
@@ -436,7 +442,7 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         if last is not None and upload_frames:
             base = sequence_of(last_upload)
             i = int(fr.value) if sequence_of(shown) == base or fr.t > p.source.t else last
-            return with_frame(base, min(max(i, 0), upload_frames - 1))
+            return with_frame(base, clamp_frame(i, upload_frames))
         return last_upload
     assert h36m is not None and p.subject is not None and p.sequence is not None and p.camera is not None
     if p.photo is not None and p.photo.value != NO_PHOTO and p.photo.t >= max(
@@ -457,5 +463,5 @@ def requested_key(p: Picks, *, shown: str, last_h36m: str | None, last_upload: s
         frame = int(fr.value) if fr.t > p.source.t else was.frame
     else:  # another sequence: its start, unless the slider was moved since it was picked
         frame = int(fr.value) if fr.t > max(p.subject.t, p.sequence.t) else 0
-    frame = min(max(frame, 0), h36m.num_frames(subject, sequence) - 1)
+    frame = clamp_frame(frame, h36m.num_frames(subject, sequence))
     return h36m_key(subject, sequence, str(p.camera.value), frame)

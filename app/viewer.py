@@ -16,8 +16,8 @@ refused values are put back in their control, and nothing propagates into viser'
 are used only in :mod:`.viser_hooks`.
 
 **Playback leaves the frame box to the user.** The player's frames go into the frame box on the server only; the
-tab sees them in a bar and a line under it, its box is empty while playing, and it is sent the box's value once
-playback stops. A value sent to a box while someone types in it lands between the keys.
+tab sees them in a bar and a line under it, its box is empty while playing (or holds what the user typed or
+dragged to), and it is sent the box's value once playback stops. A value sent to a box while someone types in it lands between the keys.
 """
 
 from __future__ import annotations
@@ -285,14 +285,15 @@ class SessionView:
         """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
         self._typed_while_playing_at = -math.inf
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
-        self._play_shown: int | None = None  # (the player's last frame: Player's position while the box is typed in)
+        self._play_shown: int | None = None  # (the player's last frame: Player's position while the box waits)
         self._player_write: tuple[int, float] | None = None  # the player's last frame written, and when it began
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
         self._info_playing = False  # the play info line says "playing" (:meth:`_show_play_info`)
         self._typed_name: dict[int, str] = {}  # id(handle) -> its name in _typed_at (:meth:`_typed_controls`)
-        self._frame_unsent = False
-        """The frame box holds a value the tab has not been sent: playback's frames stay on the server (and in the bar
-        under the box) until it stops, so none lands in the box while someone types a frame in it (:meth:`_write`)."""
+        self._frame_box_stale = False
+        """The tab's frame box does not show the server's value: playback's frames stay on the server (and in the bar
+        under the box) until it stops, so none lands in the box while someone types a frame in it (:meth:`_write`),
+        and the box is emptied while playing (:meth:`_clear_frame_box`)."""
         self._applied_t = -math.inf  # picks stamped up to here were read by a pass that ended (its start time)
         self._own_t: dict[int, float] = {}  # id(picker) -> the timestamp of this view's own last write to it
         self._still_frame_typed: float | None = None
@@ -528,8 +529,8 @@ class SessionView:
                 self._applied_t = self._pass_t0  # (a pick stamped during the pass is read by the next one)
             finally:
                 self._pass_t0 = math.inf
-            if self._frame_unsent and not self.playing:  # (playback stopped: the box shows the frame shown)
-                self._frame_unsent = False
+            if self._frame_box_stale and not self.playing:  # (playback stopped: the box shows the frame shown)
+                self._frame_box_stale = False
                 send_value(self.gui.play.frame)
             if self._info_playing != self.playing:  # (started or stopped with no new frame: a trial's paused
                 self._show_play_info()  # upload still said "playing")
@@ -554,7 +555,7 @@ class SessionView:
             return  # (the tab sent a value during this pass: viser puts the value in before its time, so a pass
             # between the two read the new value with the old time, and put its own back: a trial's "1071" typed,
             # paused, became 107 with no word; note_typed_values notes the key before either)
-        if (handle.value != value or (frame_box and self._frame_unsent and not quiet)) and (
+        if (handle.value != value or (frame_box and self._frame_box_stale and not quiet)) and (
                 handle.update_timestamp <= self._pass_t0 or (frame_box and self._player_wrote(handle))):
             self._write(handle, value, quiet=quiet)
 
@@ -737,20 +738,20 @@ class SessionView:
         """This view's own write of ``value`` to a control (not the tab's pick: :meth:`_pick_pending`). ``quiet``
         (the frame box during playback): on the server, not sent to the tab, whose box stays empty (cleared as
         playback starts) until a write that is not quiet, or the pass after playback stops, sends the box's value
-        (:attr:`_frame_unsent`).
+        (:attr:`_frame_box_stale`).
         Playback's frames sent to the tab landed in the box between the keys of a frame typed there: in
         Chromium "200" became 146, then 0146."""
         frame_box = handle is self.gui.play.frame
         if quiet:
             set_value_here(handle, value)
-            self._frame_unsent = self._frame_unsent or frame_box
+            self._frame_box_stale = self._frame_box_stale or frame_box
         else:
-            resend = frame_box and self._frame_unsent and handle.value == value  # (viser sends a changed value only)
+            resend = frame_box and self._frame_box_stale and handle.value == value  # (viser sends a changed value only)
             handle.value = value
             if resend:
                 send_value(handle)
             if frame_box:
-                self._frame_unsent = False
+                self._frame_box_stale = False
         self._own_t[id(handle)] = handle.update_timestamp
 
     def _player_wrote(self, h: Any) -> bool:
@@ -1032,7 +1033,7 @@ class SessionView:
                 p.frame.max = seq.num_frames - 1
             typed = p.frame.value
             if not (self._since_typed("frame") < TYPING_SETTLE_S and typed != idx
-                    and min(max(typed, 0), seq.num_frames - 1) == idx):  # (a frame typed past an end is left in
+                    and ss.clamp_frame(typed, seq.num_frames) == idx):  # (a frame typed past an end is left in
                 # the box until the typing settles, and the pass that says so puts the end frame there: a browser
                 # trial's "99999", typed slowly, read 1967 after its fourth key, then 19679)
                 self._put(p.frame, idx, quiet=self.playing)  # (playback's frames: on the server, and the bar)
@@ -1482,14 +1483,16 @@ class SessionView:
         if self._since_typed("frame") < TYPING_SETTLE_S:
             return True
         try:
-            return not 0 <= int(self.gui.play.frame.value) < seq.num_frames
+            typed = int(self.gui.play.frame.value)
         except (TypeError, ValueError):
             return True
+        return ss.clamp_frame(typed, seq.num_frames) != typed
 
     def _show_frame(self, index: int) -> None:
         """The player's next frame: into the frame box on the server, for a sync pass to show (here, or in the pass
         running now), and not sent to the tab (:meth:`_write`); not while the box is being typed in (a browser
-        trial's playback wrote its frames between the keys, and "1500" typed became 1920, or 670)."""
+        trial's playback wrote its frames between the keys, and "1500" typed became 1920, or 670), nor over a frame
+        typed past an end that no pass has answered yet (:meth:`_frame_box_waits`)."""
         seq = self.sequence()
         if seq is None or seq.key != self.player.playing_key:
             return  # (a frame of the sequence left meanwhile: a browser trial's photo pick opened at its number)
@@ -1505,17 +1508,18 @@ class SessionView:
     def _clear_frame_box(self) -> None:
         """Empty the tab's frame box while playing (:func:`~poselifter_app.viser_hooks.clear_box`): any frame typed
         there jumps, even the one it showed (a Chromium check: "0" typed over a stale "0" sent nothing). The pass
-        after playback stops sends the frame shown (:attr:`_frame_unsent`)."""
+        after playback stops sends the frame shown (:attr:`_frame_box_stale`)."""
         clear_box(self.gui.play.frame)
-        self._frame_unsent = True
+        self._frame_box_stale = True
 
     def _player_stopped(self) -> None:
         try:
             self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
         except Exception:  # noqa: BLE001 - the tab may be gone
             pass
-        self._do(self._runner.request)  # (that pass sends the tab the frame box's value: :attr:`_frame_unsent`;
-        # through the error wrapper: this runs on the player's thread too)
+        if self._frame_box_stale or self._info_playing:  # (that pass sends the tab the frame box's value and drops
+            self._do(self._runner.request)  # "playing" from the line; through the error wrapper: this runs on the
+            # player's thread too)
 
     @control
     def toggle_play(self) -> None:
@@ -1535,8 +1539,8 @@ class SessionView:
             if self.sequence() is None:
                 raise PoseLifterError("nothing to play")
         self.gui.play.play.label, self.gui.play.play.icon = "pause", viser.Icon.PLAYER_PAUSE
-        self._clear_frame_box()
         self.player.start()
+        self._clear_frame_box()  # (after the start: a pass ending in between would send the number back)
 
     def stop_playback(self, *, wait: bool = True) -> None:
         self.player.stop(wait=wait)

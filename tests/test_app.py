@@ -2153,11 +2153,11 @@ def test_playback_sends_the_tab_no_frame_box_value_until_it_stops(app: PoseLifte
             with guard:
                 assert [val for uuid, val in sent if uuid == box._impl.uuid][-1:] == [""], sent  # an empty box
                 sent.clear()
-            assert wait_for(lambda: box.value > 15, timeout=10), box.value
+            assert wait_for(lambda: box.value > 60, timeout=20), box.value
             with guard:
                 assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent
                 bars = [val for uuid, val in sent if uuid == bar._impl.uuid]
-            assert len(bars) > 5 and bars == sorted(bars), bars  # the bar moved on, frame by frame
+            assert len(bars) >= 2 and bars == sorted(bars), bars  # the bar moved on
             assert "playing: the bar shows where" in v.gui.play.info.content
             _send_value(tab, box, 200)  # the tab's own frame: playback goes on from it, not sent back
             assert wait_for(lambda: 200 < int(v.state.sample.key.split("/")[1]) < 260, timeout=10), v.state.sample.key
@@ -2225,7 +2225,7 @@ def test_a_frame_typed_past_the_end_while_playing_goes_to_the_end_and_is_said(ap
                     assert v.gui.play.frame.value == int(typed) and last not in sent, (v.gui.play.frame.value, sent)
             assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
                             timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
-            assert last in sent  # the box shows the frame it went to
+            assert wait_for(lambda: last in sent, timeout=5), sent  # the box shows the frame it went to
             time.sleep(0.6)
             f = int(v.state.sample.key.split("/")[1])
             assert v.playing and f < 40, (f, v.state.sample.key)  # from the end round to the start, not from 99999 % n
@@ -2254,7 +2254,8 @@ def test_a_frame_typed_past_the_end_while_paused_is_left_until_the_typing_settle
                 assert v.gui.play.frame.value == int(typed) and last not in sent, (typed, v.gui.play.frame.value, sent)
             assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
                             timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
-            assert v.gui.play.frame.value == last and last in sent
+            assert wait_for(lambda: last in sent, timeout=5), sent
+            assert v.gui.play.frame.value == last
         finally:
             stop()
 
@@ -2274,7 +2275,9 @@ def test_another_sequence_picked_while_playing_leaves_the_box_empty(h36m_app: Po
             v.gui.sample.sequence.value = other  # (S9's; then S11 at that action, a range of its own)
             v.gui.sample.subject.value = "S11"
             assert wait_for(lambda: v.state.sample.key.startswith("h36m/S11/"), timeout=10), v.state.sample.key
-            assert "" in sent and all(x == "" for x in sent), sent
+            assert wait_for(lambda: "" in sent, timeout=10), sent
+            with v.lock:  # (no pass half done)
+                assert all(x == "" for x in sent), sent
         finally:
             stop()
             v.gui.play.play.value = True
@@ -2293,13 +2296,15 @@ def test_a_failed_pass_as_playback_stops_still_resets_play_and_is_said(app: Pose
         def broken() -> None:
             raise RuntimeError("a pass that fails")
 
+        v.player.stop()  # (its own passes done: only the one asked for as it stops fails)
+        said = len(v.messages)
         v._sync_pass = broken
         try:
-            v.stop_playback()  # (not through a control: as the player's own stop and an upload call it)
+            v._player_stopped()  # (as the player's thread and an upload call it: not through a control)
         finally:
             v._sync_pass = real
         assert not v.playing and v.gui.play.play.label == "play"
-        assert any("internal error" in m.lower() or "a pass that fails" in m for m in v.messages[-3:]), v.messages[-3:]
+        assert any("a pass that fails" in m for m in v.messages[said:]), v.messages[said:]
 
 
 def test_a_pass_does_not_put_its_frame_over_one_the_tab_sent_during_it(app: PoseLifterApp) -> None:

@@ -299,6 +299,7 @@ def test_drag_playback_upload_download() -> None:
             seen.append(box.input_value())
         assert seen == ["2", "20", "200"], seen
         assert _wait(lambda: 200 <= int(view.state.sample.key.split("/")[1]) <= 255, 10), view.state.sample.key
+        assert _wait(lambda: not 195 <= int(view.state.sample.key.split("/")[1]) <= 201, 10)  # and plays on from it
         assert view.playing and box.input_value() == "200"
         page.get_by_role("button", name="pause").click()
         assert _wait(lambda: not view.playing, 30)
