@@ -2202,6 +2202,25 @@ def _spy_frame_box(v: SessionView) -> tuple[list[object], object]:
     return sent, stop
 
 
+def _type_99999_past_the_end(tab: FakeTab, v: SessionView, sent: list[object], *, last: int, gap_s: float) -> None:
+    """Type "99999" into the frame box key by key (``gap_s`` apart) in a sequence whose last frame is ``last``: the
+    values past the end are left in the box while typed (the tab sent nothing else), then the note is said and the
+    tab is sent the last frame."""
+    import time
+
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    n_msgs = len(v.messages)
+    for typed in ("9", "99", "999", "9999", "99999"):
+        _send_value(tab, v.gui.play.frame, int(typed))
+        time.sleep(gap_s)
+        if int(typed) > last:  # (past the end, still being typed: left in the box, not yet answered)
+            assert v.gui.play.frame.value == int(typed) and last not in sent, (typed, v.gui.play.frame.value, sent)
+    assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
+                    timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
+    assert wait_for(lambda: last in sent, timeout=5), sent  # the box shows the frame it went to
+
+
 def test_a_frame_typed_past_the_end_while_playing_goes_to_the_end_and_is_said(app: PoseLifterApp) -> None:
     """A browser trial: "99999" typed key by key while the demo motion played went to frame 160 (99999 modulo the
     256 frames), with no word, and the box kept 99999, which the browser clamped to the last frame when it lost
@@ -2209,23 +2228,13 @@ def test_a_frame_typed_past_the_end_while_playing_goes_to_the_end_and_is_said(ap
     frame, and playback goes on from it (looping to 0)."""
     import time
 
-    from poselifter_app.viewer import TYPING_SETTLE_S
-
     with open_tab(app) as (tab, v):
         v.gui.play.play.value = True
         assert v.playing and v.state.sample.key.startswith("motion/")
         last = app.motion.num_frames - 1
         sent, stop = _spy_frame_box(v)
-        n_msgs = len(v.messages)
         try:
-            for typed in ("9", "99", "999", "9999", "99999"):
-                _send_value(tab, v.gui.play.frame, int(typed))
-                time.sleep(0.2)
-                if int(typed) > last:  # (past the end, still being typed: left in the box, not yet answered)
-                    assert v.gui.play.frame.value == int(typed) and last not in sent, (v.gui.play.frame.value, sent)
-            assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
-                            timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
-            assert wait_for(lambda: last in sent, timeout=5), sent  # the box shows the frame it went to
+            _type_99999_past_the_end(tab, v, sent, last=last, gap_s=0.2)
             time.sleep(0.6)
             f = int(v.state.sample.key.split("/")[1])
             assert v.playing and f < 40, (f, v.state.sample.key)  # from the end round to the start, not from 99999 % n
@@ -2238,23 +2247,12 @@ def test_a_frame_typed_past_the_end_while_playing_goes_to_the_end_and_is_said(ap
 def test_a_frame_typed_past_the_end_while_paused_is_left_until_the_typing_settles(h36m_app: PoseLifterApp) -> None:
     """A browser trial: "99999" typed slowly in the paused frame box read 1967 (the end frame) after its fourth
     key, then 19679, which was said as past the end. The box is left as typed until the typing settles."""
-    import time
-
-    from poselifter_app.viewer import TYPING_SETTLE_S
-
     with open_tab(h36m_app) as (tab, v):
         assert v.state.sample.key.startswith("h36m/")
         last = v.sequence().num_frames - 1
         sent, stop = _spy_frame_box(v)
-        n_msgs = len(v.messages)
         try:
-            for typed in ("9", "99", "999", "9999", "99999"):
-                _send_value(tab, v.gui.play.frame, int(typed))
-                time.sleep(0.3)
-                assert v.gui.play.frame.value == int(typed) and last not in sent, (typed, v.gui.play.frame.value, sent)
-            assert wait_for(lambda: any(m.startswith("frame 99999 is past the end") for m in v.messages[n_msgs:]),
-                            timeout=TYPING_SETTLE_S + 3), v.messages[n_msgs:]
-            assert wait_for(lambda: last in sent, timeout=5), sent
+            _type_99999_past_the_end(tab, v, sent, last=last, gap_s=0.3)
             assert v.gui.play.frame.value == last
         finally:
             stop()
