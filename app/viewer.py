@@ -17,7 +17,8 @@ are used only in :mod:`.viser_hooks`.
 
 **Playback leaves the frame box to the user.** The player's frames go into the frame box on the server only; the
 tab sees them in a bar and a line under it, its box is empty while playing (or holds what the user typed or
-dragged to), and it is sent the box's value once playback stops. A value sent to a box while someone types in it lands between the keys.
+dragged to), and it is sent the box's value once playback stops. A value sent to a box while someone types in it
+lands between the keys.
 """
 
 from __future__ import annotations

@@ -184,16 +184,21 @@ def set_value_here(handle: Any, value: Any) -> None:
             asyncio.run_coroutine_threadsafe(out, loop)
 
 
-def send_value(handle: Any) -> None:
-    """Send the control's value to the tab as it stands on the server (after :func:`set_value_here`), even when the
-    tab last received the same value."""
+def _show_in_tab(handle: Any, shown: Any) -> None:
+    """Send the tab ``shown`` for the control, whatever the tab last received; the server's value is unchanged."""
     try:
         from viser import _messages
 
         handle._impl.gui_api._websock_interface.queue_message(
-            _messages.GuiUpdateMessage(handle._impl.uuid, {"value": handle._impl.value}))
+            _messages.GuiUpdateMessage(handle._impl.uuid, {"value": shown}))
     except AttributeError as exc:
-        log.warning("value not sent to the tab (viser internals changed: %s)", exc)
+        log.warning("nothing sent to the tab (viser internals changed: %s)", exc)
+
+
+def send_value(handle: Any) -> None:
+    """Send the control's value to the tab as it stands on the server (after :func:`set_value_here`), even when the
+    tab last received the same value."""
+    _show_in_tab(handle, handle.value)
 
 
 def clear_box(handle: Any) -> None:
@@ -201,13 +206,7 @@ def clear_box(handle: Any) -> None:
     number while the server's value moves on cannot take that number typed again (the browser sends nothing for
     an unchanged box; a Chromium trial's "0" typed over "0" during playback did not jump back): an empty one
     takes any. The slider's thumb goes to its start."""
-    try:
-        from viser import _messages
-
-        handle._impl.gui_api._websock_interface.queue_message(
-            _messages.GuiUpdateMessage(handle._impl.uuid, {"value": ""}))
-    except AttributeError as exc:
-        log.warning("box not cleared in the tab (viser internals changed: %s)", exc)
+    _show_in_tab(handle, "")
 
 
 def drag_callback(node: Any) -> Callable[[Any], None]:
