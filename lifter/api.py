@@ -92,7 +92,8 @@ MIN_FOCAL_PX: Final[float] = 10.0
 H36M_POSE_PX: Final[tuple[float, float, float]] = (34.7, 208.1, 421.6)
 """Human3.6M's training 2D poses (Protocol 1, ground truth, every frame): the smallest and largest scale (RMS radius,
 :func:`lifter.normalization.pose_scale`) and the largest distance of their centre from the principal point, px. A
-network that reads pixels knows poses of these sizes (times its zoom augmentation), :attr:`Lifter.trained_pixel_range`."""
+network that reads pixels knows poses of these sizes (times its zoom augmentation),
+:attr:`Lifter.trained_pixel_range`."""
 
 FocalSource = Literal["given", "default-fov", "reference"]
 
@@ -135,9 +136,9 @@ class OutputNote(str):
 
 
 def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
-    """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``: one entry per kind of note
-    (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind the camera; any
-    other note by its text), with its first frame and how many frames had it."""
+    """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``:
+    one entry per kind of note (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind
+    the camera; any other note by its text), with its first frame and how many frames had it."""
     for note in notes:
         kind = getattr(note, "kind", note)
         first, n, message = acc.get(kind, (frame, 0, note))
@@ -268,7 +269,8 @@ class Lifter:
         if net.config != codec.config:
             raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
         if clean is not None and (clean.clean is not None or clean.ensemble):
-            raise PoseLifterError("the clean-2D lifter of a Lifter cannot have a clean lifter or an ensemble of its own")
+            raise PoseLifterError("the clean-2D lifter of a Lifter cannot have a clean lifter or an ensemble of "
+                                  "its own")
         if any(m.clean is not None or m.ensemble for m in ensemble):
             raise PoseLifterError("ensemble members cannot have a clean lifter or an ensemble of their own")
         if any(_lens_of(m.train_config) != _lens_of(train_config) for m in ensemble):
@@ -318,8 +320,9 @@ class Lifter:
         (:data:`H36M_POSE_PX`) widened by the typical range of its zoom augmentation, ``2 ** ±zoom_sigma`` (its
         training config; for the shipped ones without one, the registry's ``trained_zoom``). Beyond them its depth
         is an extrapolation: the shipped pixel models place people behind the camera on images 3-4 x H36M's size
-        (``benchmarks/bench_invariance.py``), and :meth:`lift` warns. The focal length alone does not matter to such a network (it only scales Z). None for
-        a reference-camera network (exact at every image size) and for a pixel checkpoint that does not say."""
+        (``benchmarks/bench_invariance.py``), and :meth:`lift` warns. The focal length alone does not matter to
+        such a network (it only scales Z). None for a reference-camera network (exact at every image size) and for
+        a pixel checkpoint that does not say."""
         if self.config.input_space != "pixel":
             return None
         zoom = self.meta.get("trained_zoom")
@@ -404,12 +407,13 @@ class Lifter:
             outside = (scale < span[0] * (1 - 1e-6)) | (scale > span[1] * (1 + 1e-6)) | (offset > span[2] * (1 + 1e-6))
             if np.any(outside):
                 first = np.unravel_index(int(np.argmax(outside)), outside.shape) if outside.ndim else ()
-                notes.append(OutputNote(f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
-                             f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
-                             f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
-                             f"{where_in_batch(outside, whose=whose, names=names)}: its depth is an extrapolation (it can place "
-                             "people behind the camera): use the default model, which is exact at any image size, or scale the "
-                             "image and its intrinsics down", kind="pixel-range"))
+                notes.append(OutputNote(
+                    f"model {self.name!r} reads pixels and was trained on 2D poses {span[0]:.0f}-{span[1]:.0f} "
+                    f"px in scale (RMS radius) centred within {span[2]:.0f} px of the principal point; this "
+                    f"one is {float(scale[first]):.0f} px, {float(offset[first]):.0f} px off centre"
+                    f"{where_in_batch(outside, whose=whose, names=names)}: its depth is an extrapolation (it can "
+                    "place people behind the camera): use the default model, which is exact at any image size, or "
+                    "scale the image and its intrinsics down", kind="pixel-range"))
         if source == "detected" and self.input_space == "camera" and root.size:
             k = self.distance_factor
             limit = _far_limit_mm(k)
@@ -444,8 +448,8 @@ class Lifter:
         if np.any(behind):
             notes.append(OutputNote(
                 f"the model placed {int(behind.sum())} of {behind.size} root(s) behind the camera (Z <= 0)"
-                f"{where_in_batch(behind, whose=whose, names=names)}: the 2D is outside what it was trained on; the result is not a "
-                "valid pose"
+                f"{where_in_batch(behind, whose=whose, names=names)}: the 2D is outside what it was trained on; "
+                "the result is not a valid pose"
                 + ("" if self.config.input_space == "camera" else " (a pixel-space model: use the default model)"),
                 kind="behind-camera"))
         return notes
@@ -463,8 +467,9 @@ class Lifter:
             inference = c.meta.get("inference")
             return bool(inference.get("flip_test", False)) if isinstance(inference, dict) else False
 
-        clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)", meta=clean.meta,
-                                                       train_config=clean.train_config, flip_test=flip(clean))
+        clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)",
+                                                       meta=clean.meta, train_config=clean.train_config,
+                                                       flip_test=flip(clean))
         members = [cls(m.net, m.codec, name=f"{name} (member {i + 2})", meta=m.meta, train_config=m.train_config,
                        flip_test=flip(m)) for i, m in enumerate(ensemble)]
         lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip(ck),
@@ -488,7 +493,8 @@ class Lifter:
         """Shipped weights by name (``"default"``, or one of :func:`available_models`), checked against their
         sha256; or a checkpoint path (``.pt``) of your own; or several joined by ``+`` (``"a.pt+b.pt"``): an
         ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
-        ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see :meth:`quantized`."""
+        ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see
+        :meth:`quantized`."""
         ref, shipped = str(name), assets.model_names()
         if "+" in ref and ref not in shipped and not Path(ref).is_file() and (
                 any(part in (*shipped, "default") for part in ref.split("+")) or not ref.endswith(".pt")):
@@ -513,9 +519,10 @@ class Lifter:
                                     name=f"shipped model {entry['name']!r} ({clean_file})")
         files, sums = entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])
         if len(sums) != len(files):
-            raise PoseLifterError(f"shipped model {entry['name']!r}: ensemble_files and ensemble_sha256 differ in length "
-                                  "(reinstall poselifter)")
-        members = [load_checkpoint(assets.read_bytes(f), expected_sha256=h, name=f"shipped model {entry['name']!r} ({f})")
+            raise PoseLifterError(f"shipped model {entry['name']!r}: ensemble_files and ensemble_sha256 differ in "
+                                  "length (reinstall poselifter)")
+        members = [load_checkpoint(assets.read_bytes(f), expected_sha256=h,
+                                   name=f"shipped model {entry['name']!r} ({f})")
                    for f, h in zip(files, sums)]
         if "trained_zoom" in entry:  # (shipped pixel models older than training configs in checkpoints)
             ck = dataclasses.replace(ck, meta={**ck.meta, "trained_zoom": entry["trained_zoom"]})
@@ -683,8 +690,8 @@ class Lifter:
         scale = pose_scale(kp)
         if np.any(scale < DEGENERATE_SCALE_PX):
             raise PoseLifterError(
-                f"degenerate pose{where_in_batch(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point (2D scale "
-                f"{float(scale.min()):.2g} px); the normalization needs a pose with non-zero extent")
+                f"degenerate pose{where_in_batch(scale < DEGENERATE_SCALE_PX)}: all 17 joints at (nearly) one point "
+                f"(2D scale {float(scale.min()):.2g} px); the normalization needs a pose with non-zero extent")
         if np.any(scale < MIN_POSE_SCALE_PX):
             raise PoseLifterError(
                 f"2D pose scale {float(scale.min()):.3g} px{where_in_batch(scale < MIN_POSE_SCALE_PX)} is too small "
@@ -693,8 +700,8 @@ class Lifter:
         if f.size and float(f.min()) < MIN_FOCAL_PX:
             raise PoseLifterError(
                 f"focal: {float(f.min()):.3g} px is too small (< {MIN_FOCAL_PX:g} px): the focal length must be in "
-                "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to assume "
-                "a default field of view")
+                "pixels, not mm (f_px = f_mm * image width px / sensor width mm), or leave it out (focal=None) to "
+                "assume a default field of view")
         said: list[str] = []  # (what looks wrong in the lens: lens_notes)
         if distortion is not None:
             if focal_source != "given":
@@ -705,7 +712,8 @@ class Lifter:
             if self.lens == "pinhole":
                 try:
                     kp = (undistort_pixels_opencv(kp, focal=f, principal_point=pp, dist_coeffs=d)
-                          if lens_model == "opencv" else undistort_pixels(kp, focal=f, principal_point=pp, distortion=d))
+                          if lens_model == "opencv"
+                          else undistort_pixels(kp, focal=f, principal_point=pp, distortion=d))
                 except PoseLifterError as exc:
                     if not said:
                         raise
@@ -756,7 +764,8 @@ class Lifter:
             for message in notes:
                 warnings.warn(PoseLifterWarning(message), stacklevel=3)
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
-                          keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f), focal_source=focal_source,
+                          keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f),
+                          focal_source=focal_source,
                           metric_depth=depth_is_metric(focal_source), source=source, input_space=self.input_space,
                           warnings=tuple(notes), input_warnings=in_notes)
 

@@ -122,11 +122,11 @@ class AugmentConfig:
                        "refuses it in the reference camera, where it is an exact symmetry)", default=False)
     zoom_sigma: float = _help("zoom: std of log2(scale)", default=0.25)
     zoom_clip: float = _help("zoom: |log2(scale)| limit (0.5: x0.71..x1.41)", default=0.5)
-    rotate_deg: float = _help("turn the camera about its centre by a pan and a tilt each uniform in +-this many degrees "
-                              "(0: off, at most 45): the 3D turns with it and every 2D point, detections included, "
-                              "moves as that camera would see it (the homography K R K^-1), so where a person stands "
-                              "in the image no longer tells their depth by the training cameras' pose (needs --lens "
-                              "pinhole)", default=0.0)
+    rotate_deg: float = _help("turn the camera about its centre by a pan and a tilt each uniform in +-this many "
+                              "degrees (0: off, at most 45): the 3D turns with it and every 2D point, detections "
+                              "included, moves as that camera would see it (the homography K R K^-1), so where a "
+                              "person stands in the image no longer tells their depth by the training cameras' pose "
+                              "(needs --lens pinhole)", default=0.0)
     roll_deg: float = _help("roll the camera about its optical axis by an angle uniform in +-this many degrees (0: "
                             "off, at most 45), after the pan and tilt of --rotate-deg if any: the picture turns in "
                             "its plane, as a hand-held photo's often does (needs --lens pinhole)", default=0.0)
@@ -137,10 +137,11 @@ class AugmentConfig:
     distance_prob: float = _help("move this share of the samples along their root's viewing ray, their root depth "
                                  "times a factor log-uniform in [--distance-min, --distance-max] (0: off): the 3D "
                                  "keeps its shape, the 2D is re-projected and a detection keeps its error relative to "
-                                 "the person's 2D size, so people nearer and farther than the training subjects' 3.3-6.9 "
-                                 "m are seen (needs --lens pinhole)", default=0.0)
+                                 "the person's 2D size, so people nearer and farther than the training subjects' "
+                                 "3.3-6.9 m are seen (needs --lens pinhole)", default=0.0)
     distance_min: float = _help("smallest root-depth factor of --distance-prob (0.4 to 1; a move that would bring a "
-                                "joint within 10 deg of the image plane, plus the camera turn, is not made)", default=0.5)
+                                "joint within 10 deg of the image plane, plus the camera turn, is not made)",
+                                default=0.5)
     distance_max: float = _help("largest root-depth factor of --distance-prob (1 to 10)", default=5.0)
 
     def __post_init__(self) -> None:
@@ -219,7 +220,8 @@ class ScheduleConfig:
         _prob("warmup_fraction", self.warmup_fraction)
         _prob("final_lr_fraction", self.final_lr_fraction)
         _positive("eval_every", self.eval_every, integer=True)
-        _check(isinstance(self.seed, int) and not isinstance(self.seed, bool), f"seed must be an integer, got {self.seed!r}")
+        _check(isinstance(self.seed, int) and not isinstance(self.seed, bool),
+               f"seed must be an integer, got {self.seed!r}")
 
 
 @dataclass(frozen=True)

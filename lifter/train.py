@@ -156,10 +156,11 @@ def rotate_batch(kp: torch.Tensor, pp: torch.Tensor, f: torch.Tensor, rel: torch
     """The samples as a camera turned about its centre by a random pan and tilt (each uniform in ``+-max_deg``),
     and with ``max_roll_deg`` a roll about its optical axis (uniform in ``+-max_roll_deg``; drawn after the pan and
     tilt, so runs without it draw as before), would see them: 2D ``kp`` ``(B, 17, 2)`` px (any 2D, detections
-    included) moved by the homography ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned by ``R``, and the root depth
-    ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D ``root_2d`` ``(B, 2)`` px
-    back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px. With ``prob`` below 1 only that share of the samples is
-    turned (drawn after the angles, so runs with every sample turned draw as before); the rest stay as they are."""
+    included) moved by the homography ``K R K^-1`` (pinhole), the root-relative 3D ``rel`` ``(B, 17, 3)`` mm turned
+    by ``R``, and the root depth ``depth`` ``(B,)`` mm that of the turned root, whose 3D is the true root's 2D
+    ``root_2d`` ``(B, 2)`` px back-projected to ``depth``. ``pp``, ``f``: ``(B, 2)`` px. With ``prob`` below 1 only
+    that share of the samples is turned (drawn after the angles, so runs with every sample turned draw as before);
+    the rest stay as they are."""
     bs, dev = len(kp), kp.device
 
     def uniform(deg: float) -> torch.Tensor:  # (B,) radians, uniform in +-deg
@@ -263,7 +264,8 @@ def target_statistics(codec: PoseCodec, T: Batch) -> tuple[np.ndarray, np.ndarra
     y = codec.encode_targets(T["rel"].double(), T["depth"].double(),
                              codec.encode(kp, principal_point=pp, focal=f, source="clean"))
     y_m = codec.encode_targets(mirror(T["rel"].double()), T["depth"].double(),  # (the mirror image's own view)
-                               codec.encode(PoseCodec.mirror_input(kp, pp), principal_point=pp, focal=f, source="clean"))
+                               codec.encode(PoseCodec.mirror_input(kp, pp), principal_point=pp, focal=f,
+                                            source="clean"))
     y = torch.cat([y, y_m])
     return y.mean(0).numpy(), y.std(0).numpy()
 
@@ -324,8 +326,9 @@ def check_teacher(teacher: Lifter, codec: PoseCodec, *, lens: str) -> None:
     learned other 2D than the ``lens`` trained on (``data.lens``): their raw outputs would not be targets of the
     student's (:func:`teacher_targets`)."""
     fields = ("input_space", "view", "mode", "scale_definition", "conditioning", "depth_target")
-    flags = {"input_space": "--input-space", "view": "--view", "mode": "--mode", "scale_definition": "--scale-definition",
-             "conditioning": "--conditioning", "depth_target": "--depth-target"}
+    flags = {"input_space": "--input-space", "view": "--view", "mode": "--mode",
+             "scale_definition": "--scale-definition", "conditioning": "--conditioning",
+             "depth_target": "--depth-target"}
     for m in teacher_networks(teacher):
         differ = [f"{k} {getattr(m.config, k)!r} (trained: {getattr(codec.config, k)!r}; {flags[k]})" for k in fields
                   if getattr(m.config, k) != getattr(codec.config, k)]
@@ -557,7 +560,8 @@ def train(
     T = {k: v.to(ctx.device) for k, v in T.items()}  # batches are drawn on the device, not copied to it
     model: torch.nn.Module = net
     if ctx.active:
-        model = torch.nn.parallel.DistributedDataParallel(net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
+        model = torch.nn.parallel.DistributedDataParallel(
+            net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
     ema = WeightAverage(net, decay=cfg.optim.ema_decay) if cfg.optim.ema_decay is not None else None
     eval_net: PoseLifterNet = ema.module if ema is not None else net  # type: ignore[assignment]
@@ -582,7 +586,8 @@ def train(
     pos = 0
     t0 = time.perf_counter()
     running: torch.Tensor | None = None  # on the device: read back only every FINITE_CHECK_EVERY steps
-    bar = tqdm(total=steps, disable=None if progress and ctx.main else True, unit="step", dynamic_ncols=True, mininterval=2.0)
+    bar = tqdm(total=steps, disable=None if progress and ctx.main else True, unit="step", dynamic_ncols=True,
+               mininterval=2.0)
     step = 0
     clock = torch.zeros(1, device=ctx.device)
 
