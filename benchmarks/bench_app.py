@@ -21,7 +21,8 @@ rounds of 50 events that alternate between the models, so that the machine's spe
 ratio of each model's p50 to the app's default's is reported (the absolute milliseconds follow the machine, the
 ratio follows the code). Playback is timed on the default only.
 
-Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25] [--compare universal] [--video clip.mp4] [--json out.json]``
+Usage: ``OMP_NUM_THREADS=1 python benchmarks/bench_app.py [--events 300] [--threads 1] [--target-ms 25]
+[--compare universal] [--video clip.mp4] [--json out.json]``
 Exit status 1 when the drag p95 exceeds the target or a noise-free playback shows fewer than 24 frames per second
 (unless ``--no-check``; the noise-1 playback, 65 poses lifted per frame, is reported only).
 """
@@ -45,7 +46,8 @@ def main() -> int:
     p.add_argument("--cloud", type=int, default=64)
     p.add_argument("--target-ms", type=float, default=25.0)
     p.add_argument("--play-seconds", type=float, default=8.0)
-    p.add_argument("--no-h36m", action="store_true", help="skip the Human3.6M playback run even if the data are present")
+    p.add_argument("--no-h36m", action="store_true",
+                   help="skip the Human3.6M playback run even if the data are present")
     p.add_argument("--no-check", action="store_true")
     p.add_argument("--compare", nargs="*", default=[], metavar="MODEL",
                    help="also time the drags with these models (the app's model menu), alternating with the default "
@@ -77,7 +79,8 @@ def main() -> int:
         models = [default_model, *[m for m in args.compare if m != default_model]]
         unknown = [m for m in models if m not in view.gui.lift.model.options]
         if unknown:
-            raise SystemExit(f"--compare: unknown model(s) {unknown}; the app offers {list(view.gui.lift.model.options)}")
+            raise SystemExit(f"--compare: unknown model(s) {unknown}; the app offers "
+                             f"{list(view.gui.lift.model.options)}")
         j = 13
         cb = drag_callback(view.scene.pose.joints2d[j])
         cam = view.state.sample.camera
@@ -90,12 +93,14 @@ def main() -> int:
             if view.state.model != model:
                 view.gui.lift.model.value = model  # the model menu, as a click does
                 assert wait_for(lambda: view.state.model == model), f"the app did not switch to {model}"
-            assert view.state.noise_level == 1.0 and view.state.cloud_samples == args.cloud, "the switch changed the noise"
+            assert view.state.noise_level == 1.0 and view.state.cloud_samples == args.cloud, \
+                "the switch changed the noise"
 
         def drag(i: int) -> float:
             uv = start + 60.0 * np.array([np.cos(i / 7.0), np.sin(i / 5.0)])
             p_world = R.T @ image_plane(view.state, uv) + C
-            ev = viser.SceneNodeDragEvent(client=view.target, client_id=view.target.client_id, target=view.scene.pose.joints2d[j],
+            ev = viser.SceneNodeDragEvent(client=view.target, client_id=view.target.client_id,
+                                          target=view.scene.pose.joints2d[j],
                                           phase="update", instance_index=None, start_position=tuple(p_world),
                                           start_screen_pos=(0.5, 0.5), end_position=tuple(p_world),
                                           end_screen_pos=(0.5, 0.5), button="left", modifier=None)
@@ -122,7 +127,8 @@ def main() -> int:
         drag(0)
         compute_ms, scene_ms = view.timing.compute_ms, view.timing.scene_ms
         times = by_model[default_model]
-        compared = {m: {"p50_ms": round(float(np.percentile(v, 50)), 2), "p95_ms": round(float(np.percentile(v, 95)), 2),
+        compared = {m: {"p50_ms": round(float(np.percentile(v, 50)), 2),
+                        "p95_ms": round(float(np.percentile(v, 95)), 2),
                         "p50_ratio_to_default": round(float(np.percentile(v, 50) / np.percentile(times, 50)), 3)}
                     for m, v in by_model.items() if m != default_model}
         t = np.array(times)
@@ -157,7 +163,8 @@ def main() -> int:
             assert ok, view.messages[-1]
             seq = view.sequence()
             play["video_upload"] = {"file": Path(args.video).name, "frames": seq.num_frames,
-                                    "upload_s": round(up_s, 2), "upload_ms_per_frame": round(1e3 * up_s / seq.num_frames, 1),
+                                    "upload_s": round(up_s, 2),
+                                    "upload_ms_per_frame": round(1e3 * up_s / seq.num_frames, 1),
                                     "pipeline_ms_per_frame": round(1e3 * (seq.record.seconds_per_frame or 0), 1),
                                     "playback": play_for(view, args.play_seconds)}
         if default_h36m_root() is not None and not args.no_h36m:  # (read at run time, never copied)
@@ -175,7 +182,8 @@ def main() -> int:
                 if h_tab is not None:
                     h_tab.close()
                 h_server.stop()
-        res = {"events": len(t), "cloud": args.cloud, "threads": args.threads, "p50_ms": round(float(np.percentile(t, 50)), 2),
+        res = {"events": len(t), "cloud": args.cloud, "threads": args.threads,
+               "p50_ms": round(float(np.percentile(t, 50)), 2),
                "p95_ms": round(float(np.percentile(t, 95)), 2), "max_ms": round(float(t.max()), 2),
                "mean_ms": round(float(t.mean()), 2), "target_p95_ms": args.target_ms,
                "last_compute_ms": round(compute_ms, 2), "last_scene_ms": round(scene_ms, 2),

@@ -102,7 +102,8 @@ def main() -> int:
     print("| mean 2D error (px) | " + " | ".join(f"{r['mean_2d_error_px']:.1f}" for r in first) + " |")
     for name in models:
         rows = result["models"][name]["scaled"]
-        print(f"| `{name}` MPJPE / MRPE (mm) | " + " | ".join(f"{r['mpjpe']:.1f} / {r['mrpe']:.0f}" for r in rows) + " |")
+        print(f"| `{name}` MPJPE / MRPE (mm) | "
+              + " | ".join(f"{r['mpjpe']:.1f} / {r['mrpe']:.0f}" for r in rows) + " |")
     print("\n| frame's mean 2D error (px) | " + " | ".join(models) + " |")
     print("|---|" + "---|" * len(models))
     for b in range(5):

@@ -454,8 +454,8 @@ def test_checkpoint_rejects_unknown_config_values(tmp_path, small_lifter, field,
         (lambda p: p.pop("model_config"), "model config must be a dict, got NoneType"),
         (lambda p: p["model_config"].__setitem__("width", 0), r"width must be an integer in \[1, 8192\], got 0"),
         (lambda p: p["model_config"].__setitem__("num_blocks", 10**6), r"num_blocks must be an integer in \[1, 16\]"),
-        (lambda p: p["model_config"].__setitem__("width", 4096), r"tensor 'stem.weight' has shape \(64, 38\), its model "
-                                                                 r"config needs \(4096, 38\)"),
+        (lambda p: p["model_config"].__setitem__("width", 4096),
+         r"tensor 'stem.weight' has shape \(64, 38\), its model config needs \(4096, 38\)"),
         (lambda p: p["model_config"].__setitem__("dropout", 1.5), r"dropout must be a number in \[0, 1\)"),
         (lambda p: p["model_config"].__setitem__("colour", "red"), r"unknown keys \['colour'\]"),
         (lambda p: p["state_dict"].pop("head.bias"), r"do not match its model config \(missing \['head.bias'\]"),
@@ -531,7 +531,8 @@ def test_lift_accepts_torch_tensors_that_require_grad(small_lifter, keypoints):
     res = small_lifter.lift(kp, focal=torch.tensor(1145.0, requires_grad=True),
                             principal_point=torch.tensor([512.0, 515.0], requires_grad=True))
     np.testing.assert_allclose(res.absolute, ref.absolute, rtol=1e-4, atol=1e-2)
-    half = small_lifter.lift(torch.tensor(keypoints, dtype=torch.bfloat16), focal=1145.0, principal_point=(512.0, 515.0))
+    half = small_lifter.lift(torch.tensor(keypoints, dtype=torch.bfloat16), focal=1145.0,
+                             principal_point=(512.0, 515.0))
     assert half.absolute.shape == ref.absolute.shape
 
 
@@ -873,7 +874,8 @@ def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
                 if w.kind == "misfit"]
     measured = Lifter(plain.net, plain.codec, meta={"misfit_limit": 0.15})
     res = measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False)
-    assert [w.kind for w in res.warnings] == ["misfit"] and "6 of 6 lifted pose(s) do not fit their 2D" in res.warnings[0]
+    assert [w.kind for w in res.warnings] == ["misfit"]
+    assert "6 of 6 lifted pose(s) do not fit their 2D" in res.warnings[0]
     assert not measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings
 
 

@@ -41,7 +41,8 @@ def _drag_event(view: SessionView, joint: int, uv: np.ndarray, *, client=None, p
     p_world = R.T @ p_cam + C
     return viser.SceneNodeDragEvent(client=client, client_id=0, target=view.scene.pose.joints2d[joint], phase=phase,
                                     instance_index=None, start_position=tuple(p_world), start_screen_pos=(0.5, 0.5),
-                                    end_position=tuple(p_world), end_screen_pos=(0.5, 0.5), button="left", modifier=None)
+                                    end_position=tuple(p_world), end_screen_pos=(0.5, 0.5), button="left",
+                                    modifier=None)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -400,7 +401,8 @@ def test_each_tab_has_its_own_state(app: PoseLifterApp) -> None:
         za = a.frame.root[2]
         a.gui.lift.focal.value = 3.0 * a.state.sample.camera.alpha
         assert a.state.focal_px == pytest.approx(3.0 * a.state.sample.camera.alpha)
-        assert a.frame.root[2] > 2 * za  # a longer lens: further away (not exactly 3x with the reference-camera default)
+        # a longer lens: further away (not exactly 3x with the reference-camera default)
+        assert a.frame.root[2] > 2 * za
         a.gui.noise.level.value = 1.0
         assert b.state.focal_px == pytest.approx(b.state.sample.camera.alpha) and b.state.noise_level == 0.0
         assert b.frame.root[2] == pytest.approx(za, rel=1e-6)
@@ -452,7 +454,8 @@ def test_h36m_browsing() -> None:
 # Usability review: GUI values follow the state, preferences survive sample changes
 # ----------------------------------------------------------------------------------------------
 
-requires_h36m_app = pytest.mark.skipif(default_h36m_root() is None, reason="Human3.6M not present at ../shared/data/h36m")
+requires_h36m_app = pytest.mark.skipif(default_h36m_root() is None,
+                                       reason="Human3.6M not present at ../shared/data/h36m")
 
 
 @pytest.fixture(scope="module")
@@ -599,7 +602,8 @@ def test_head_on_view(view: SessionView, app: PoseLifterApp) -> None:
     # up close the joint spheres shrink with the joints' extent (not hiding their neighbours); the overview
     # restores them
     r = view.scene.pose.joints2d[0].radius
-    assert r <= JOINT_RADIUS_M and r == pytest.approx(min(HEAD_ON_JOINT_RADIUS * 2.0 * max(ext), JOINT_RADIUS_M), rel=1e-6)
+    assert r <= JOINT_RADIUS_M
+    assert r == pytest.approx(min(HEAD_ON_JOINT_RADIUS * 2.0 * max(ext), JOINT_RADIUS_M), rel=1e-6)
     assert not view.scene.camera.ray.visible  # the root ray would pass next to the eye and cover the joints
     assert view.overview() is True
     assert all(h.radius == JOINT_RADIUS_M for h in view.scene.pose.joints2d) and view.scene.camera.ray.visible
@@ -636,7 +640,8 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     assert v.state.input_kind == "detected"
     np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 6  # no detection: ground truth, with a message
-    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth" and "no 2D detection" in v.messages[-1]
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth"
+    assert "no 2D detection" in v.messages[-1]
     np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 7
     assert v.state.input_kind == "gt"
@@ -779,7 +784,8 @@ def test_photo_dropdown_follows_the_frame(h36m_app: PoseLifterApp) -> None:
     s2, q2, c2, f2 = next(p for p in photos if p[0] == 7)
     assert v.select_h36m(subject=s2, sequence=q2, camera=c2, frame=f2) is True
     assert v.gui.sample.photo.value == f"S{s2} {q2} {c2} {f2}"
-    assert v.gui.sample.sequence.value == q2 and q2 in v.gui.sample.sequence.options and v.gui.sample.subject.value == f"S{s2}"
+    assert v.gui.sample.sequence.value == q2 and q2 in v.gui.sample.sequence.options
+    assert v.gui.sample.subject.value == f"S{s2}"
 
 
 def test_a_photo_of_another_subject_opens_its_own_sequence(h36m_app: PoseLifterApp) -> None:
@@ -849,7 +855,8 @@ def test_h36m_pickers_are_live_and_switch_the_source(h36m_app: PoseLifterApp) ->
     assert not v.gui.play.frame.disabled
     assert _json_upload(v, h36m_app.demo.get("standing")) is True
     v.gui.sample.camera.value = h36m_app.h36m.camera_ids[1]
-    assert v.state.sample.key.startswith("h36m/S11/") and v.state.sample.key.split("/")[3] == h36m_app.h36m.camera_ids[1]
+    assert v.state.sample.key.startswith("h36m/S11/")
+    assert v.state.sample.key.split("/")[3] == h36m_app.h36m.camera_ids[1]
 
 
 def test_3d_view_reframed_on_a_new_camera_only(h36m_app: PoseLifterApp) -> None:
@@ -951,7 +958,8 @@ def test_focal_typed_key_by_key_is_not_clamped_half_way(app: PoseLifterApp) -> N
         time.sleep(TYPING_SETTLE_S)
         assert sum("7000 px is outside" in m for m in v.messages[n_msgs:]) == 1, v.messages  # said once
         # a note, not an error: it stays in the readout past the settle timer's pass (a user trial saw it vanish)
-        assert v.gui.readout.status.content.startswith("ℹ️ focal length 7000 px is outside"), v.gui.readout.status.content
+        status = v.gui.readout.status.content
+        assert status.startswith("ℹ️ focal length 7000 px is outside"), status
 
 
 def test_a_focal_so_short_the_pose_spans_too_wide_a_view_is_cautioned(view: SessionView) -> None:
@@ -1136,7 +1144,8 @@ def test_bursts_end_on_the_last_value_in_every_tab(app: PoseLifterApp) -> None:
             for i in range(40):
                 _send_value(tab, v.gui.play.frame, 3 * i + k)
         for k, v in enumerate(views):
-            assert wait_for(lambda v=v, k=k: v.state.sample.key == f"motion/{3 * 39 + k}", timeout=30), v.state.sample.key
+            assert wait_for(lambda v=v, k=k: v.state.sample.key == f"motion/{3 * 39 + k}", timeout=30), \
+                v.state.sample.key
             np.testing.assert_allclose(v.frame.gt_3d, app.motion.frame(3 * 39 + k).people[0].pose_3d)
     finally:
         for t in tabs:
@@ -1231,7 +1240,8 @@ def test_per_joint_clouds_and_spread_readout(view: SessionView) -> None:
     colors = np.asarray(view.scene.pose.cloud.colors)
     assert colors.shape == (32 * 17, 3)
     np.testing.assert_array_equal(colors.reshape(32, 17, 3), np.broadcast_to(JOINT_RGB, (32, 17, 3)))
-    np.testing.assert_allclose(np.asarray(view.scene.pose.cloud.points, np.float64).reshape(32, 17, 3), fr.cloud / 1000, atol=4e-3)  # (float16)
+    np.testing.assert_allclose(np.asarray(view.scene.pose.cloud.points, np.float64).reshape(32, 17, 3),
+                               fr.cloud / 1000, atol=4e-3)  # (float16)
     np.testing.assert_array_equal(np.asarray(view.scene.pose.lifted_joints.colors), JOINT_RGB)
     assert len({tuple(c) for c in JOINT_RGB}) == 17  # every joint its own colour
     sp = fr.spread
@@ -1354,7 +1364,8 @@ def test_rejected_and_crafted_gui_values_are_reported(app: PoseLifterApp) -> Non
         _send_value(tab, v.gui.lift.focal, 2 * f0)  # the tab still works
         assert wait_for(lambda: v.state.focal_px == 2 * f0)
         _send_value(tab, v.gui.sample.input, "detected")  # not offered for demo samples
-        assert wait_for(lambda: v.gui.sample.input.value == "ground truth" and any("no 2D detection" in m for m in v.messages))
+        assert wait_for(lambda: v.gui.sample.input.value == "ground truth"
+                        and any("no 2D detection" in m for m in v.messages))
         assert list(v.gui.sample.input.options) == ["ground truth"]
     finally:
         tab.close()
@@ -1477,7 +1488,8 @@ def test_sample_rules_without_a_view() -> None:
               h36m=H(), motion_frames=250)
     base = dict(demo=Pick("walking", 1.0), frame=Pick(7, 2.0), subject=Pick("S9", 1.0), sequence=Pick("Walking 1", 1.0),
                 camera=Pick("c1", 1.0), photo=Pick("(none)", 1.0))
-    assert requested_key(Picks(source=Pick("demo", 5.0), **base), shown="h36m/S9/Walking 1/c1/7", **kw) == "demo/walking"
+    assert requested_key(Picks(source=Pick("demo", 5.0), **base), shown="h36m/S9/Walking 1/c1/7",
+                         **kw) == "demo/walking"
     # a Human3.6M picker set after the source picker shows Human3.6M (never greyed out)
     b = dict(base, camera=Pick("c2", 6.0))
     assert requested_key(Picks(source=Pick("demo", 5.0), **b), shown="demo/walking", **kw) == "h36m/S9/Walking 1/c2/40"
@@ -1485,14 +1497,16 @@ def test_sample_rules_without_a_view() -> None:
     b = dict(base, frame=Pick(77, 9.0))
     assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="demo/walking", **kw) == "h36m/S9/Walking 1/c1/77"
     b = dict(base, sequence=Pick("Posing 1", 6.0))
-    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="h36m/S9/Walking 1/c1/7", **kw) == "h36m/S9/Posing 1/c1/0"
+    assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="h36m/S9/Walking 1/c1/7",
+                         **kw) == "h36m/S9/Posing 1/c1/0"
     b = dict(base, frame=Pick(10**6, 9.0))
     assert requested_key(Picks(source=Pick("h36m", 5.0), **b), shown="h36m/S9/Walking 1/c1/7", **kw).endswith("/99")
     # the motion: from its start when switched to, else the slider (clamped, as for Human3.6M: a browser trial's
     # 300 typed showed frame 44 without a word; playback loops by its own clock)
     assert requested_key(Picks(source=Pick("motion", 5.0), **base), shown="demo/walking", **kw) == "motion/0"
     b = dict(base, frame=Pick(260, 9.0))
-    assert requested_key(Picks(source=Pick("motion", 5.0), **b), shown="motion/3", **kw) == f"motion/{kw['motion_frames'] - 1}"
+    assert requested_key(Picks(source=Pick("motion", 5.0), **b), shown="motion/3",
+                         **kw) == f"motion/{kw['motion_frames'] - 1}"
     b = dict(base, frame=Pick(-5, 9.0))
     assert requested_key(Picks(source=Pick("motion", 5.0), **b), shown="motion/3", **kw) == "motion/0"
     # a photo entry set last names its frame
@@ -1564,7 +1578,8 @@ def test_demo_motion_is_a_plausible_walk(app: PoseLifterApp) -> None:
     roots = np.array([s.pose_3d[0] for s in frames])
     assert np.ptp(roots[:, 0]) > 1000 and np.ptp(roots[:, 2]) > 500  # a loop in front of the camera
     w = [m.world_pose(i) for i in range(0, m.num_frames)]
-    lead = [np.dot(p[3] - p[6], p[0] - m.world_pose(i - 1)[0]) for i, p in enumerate(w)]  # right vs left ankle, along the walk
+    # right vs left ankle, along the walk
+    lead = [np.dot(p[3] - p[6], p[0] - m.world_pose(i - 1)[0]) for i, p in enumerate(w)]
     assert min(lead) < -50 and max(lead) > 50  # each leg leads in turn
 
 
@@ -2001,7 +2016,8 @@ def test_the_inset_zooms_onto_small_people_and_keeps_its_size() -> None:
     crop = inset_crop(size, [small, det])
     assert crop is not None
     x0, y0, x1, y1 = crop
-    assert 0 <= x0 < x1 <= 2000 and 0 <= y0 < y1 <= 1500 and (x1 - x0) / (y1 - y0) == pytest.approx(2000 / 1500, rel=0.01)
+    assert 0 <= x0 < x1 <= 2000 and 0 <= y0 < y1 <= 1500
+    assert (x1 - x0) / (y1 - y0) == pytest.approx(2000 / 1500, rel=0.01)
     for p in (small, det):
         assert np.all((p >= (x0, y0)) & (p <= (x1, y1)))
     assert (x1 - x0) == pytest.approx(1.5 * np.ptp(np.concatenate([small, det])[:, 1]) * 2000 / 1500, rel=0.02)

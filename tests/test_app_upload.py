@@ -159,20 +159,21 @@ def test_keypoint_json_upload_through_a_tab(app: PoseLifterApp) -> None:
 
 def _coco_from_h36m(kp: np.ndarray) -> np.ndarray:
     """COCO-17 keypoints for an H36M pose: limbs copied, the face placed around neck/nose and head."""
-    n = {name: i for i, name in enumerate(("pelvis", "r_hip", "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle", "spine",
-                                           "thorax", "neck_nose", "head_top", "l_shoulder", "l_elbow", "l_wrist",
-                                           "r_shoulder", "r_elbow", "r_wrist"))}
+    n = {name: i for i, name in enumerate(("pelvis", "r_hip", "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle",
+                                           "spine", "thorax", "neck_nose", "head_top", "l_shoulder", "l_elbow",
+                                           "l_wrist", "r_shoulder", "r_elbow", "r_wrist"))}
     head = 0.5 * (kp[n["neck_nose"]] + kp[n["head_top"]])
     face = [kp[n["neck_nose"]], head + (6, 0), head - (6, 0), head + (14, 3), head - (14, -3)]
-    limbs = ["l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist", "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee",
-             "l_ankle", "r_ankle"]
+    limbs = ["l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist", "r_wrist", "l_hip", "r_hip", "l_knee",
+             "r_knee", "l_ankle", "r_ankle"]
     return np.array(face + [kp[n[j]] for j in limbs], np.float64)
 
 
 def _openpose_from_h36m(kp: np.ndarray) -> np.ndarray:
     """OpenPose BODY_25 keypoints for an H36M pose (built from :func:`_coco_from_h36m`; feet at the ankles)."""
-    c = dict(zip(("nose", "l_eye", "r_eye", "l_ear", "r_ear", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist",
-                  "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle"), _coco_from_h36m(kp)))
+    c = dict(zip(("nose", "l_eye", "r_eye", "l_ear", "r_ear", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow",
+                  "l_wrist", "r_wrist", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle"),
+                 _coco_from_h36m(kp)))
     c["neck"] = 0.5 * (c["l_shoulder"] + c["r_shoulder"])
     c["mid_hip"] = 0.5 * (c["l_hip"] + c["r_hip"])
     for side in "lr":
@@ -249,8 +250,8 @@ def test_corrupt_and_not_an_image_uploads(view: SessionView, app: PoseLifterApp)
         "binary.json": (b"\x89PNG\r\n\x1a\n" + b"\x00" * 30, "not"),
         "far.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 1e6).tolist(),
                                  "image_size": [800, 600]}).encode(), "far outside"),
-        "focal.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 10.0).tolist(), "image_size": [800, 600],
-                                   "focal": 0}).encode(), "focal"),
+        "focal.json": (json.dumps({"keypoints": (np.arange(34).reshape(17, 2) * 10.0).tolist(),
+                                   "image_size": [800, 600], "focal": 0}).encode(), "focal"),
         "deep.json": (b"[" * 100000 + b"]" * 100000, "nested too deeply"),
     }
     from poselifter_app.viewer import UPLOAD_REFUSED_TITLE
@@ -401,7 +402,8 @@ def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch)
     server = local_server()
     try:
         a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
-                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d], full_width=800))
+                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d],
+                                                                  full_width=800))
         s = a.demo.get("standing")
         v = a.headless_view()
         assert lift_source(v.state) == "clean"  # a demo sample: exact 2D

@@ -51,7 +51,8 @@ def synthetic_samples(n: int, *, seed: int = 0) -> PoseSamples:
     kp = project(pose, focal=f, principal_point=c)
     z = np.zeros(n, np.int32)
     return PoseSamples(keypoints_2d=kp.astype(np.float32), pose_3d=pose.astype(np.float32),
-                       focal=np.tile(f, (n, 1)).astype(np.float32), principal_point=np.tile(c, (n, 1)).astype(np.float32),
+                       focal=np.tile(f, (n, 1)).astype(np.float32),
+                       principal_point=np.tile(c, (n, 1)).astype(np.float32),
                        image_size=np.tile([1000, 1000], (n, 1)).astype(np.int32), subject=z + 1, action=z, camera=z,
                        frame=np.arange(n, dtype=np.int32), sequence=z, sequence_names=("S1/Walking 1",),
                        distortion=np.zeros((n, 5), np.float32))
@@ -297,7 +298,8 @@ def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
 
 def test_fine_tuning_a_mirror_net_sets_its_output_mirror_from_the_codec():
     train_s, val_s = synthetic_samples(200, seed=5), synthetic_samples(20, seed=6)
-    cfg = replace(tiny_config(symmetry="mirror"), optim=OptimConfig(batch_size=200, lr=1e-9), augment=AugmentConfig(flip_prob=0.0))
+    cfg = replace(tiny_config(symmetry="mirror"), optim=OptimConfig(batch_size=200, lr=1e-9),
+                  augment=AugmentConfig(flip_prob=0.0))
     codec = PoseCodec(cfg.model, target_mean=np.linspace(-50, 50, 49), target_std=np.linspace(20, 90, 49))
     net = PoseLifterNet(cfg.model)  # its output mirror is that of mean 0 / std 1, not the codec's
     res = train(cfg, train_samples=train_s, init=(net, codec), val_sets=validation_sets(val_s, None), progress=False,
@@ -327,7 +329,8 @@ def test_real_detections_are_required_and_aligned():
     with pytest.raises(ValueError, match="real detections"):
         train(cfg, train_samples=train_s, val_sets=validation_sets(train_s, None), progress=False, ctx=Dist())
     with pytest.raises(ValueError, match="one row per training sample"):
-        train(cfg, train_samples=train_s, real_keypoints_2d=np.zeros((3, 17, 2)), val_sets=validation_sets(train_s, None),
+        train(cfg, train_samples=train_s, real_keypoints_2d=np.zeros((3, 17, 2)),
+              val_sets=validation_sets(train_s, None),
               progress=False, ctx=Dist())
 
 
@@ -484,7 +487,8 @@ def test_distillation_weight_splits_the_loss_and_training_follows_the_teacher():
     far.codec.target_mean[-1] += float(base.codec.depth_parameter(torch.tensor(600.0), enc).mean())
     depth = {}
     for weight in (0.0, 1.0):
-        cfg = replace(tiny_config(), teacher="far (given)", optim=OptimConfig(batch_size=128, lr=3e-3, distill_weight=weight),
+        cfg = replace(tiny_config(), teacher="far (given)",
+                      optim=OptimConfig(batch_size=128, lr=3e-3, distill_weight=weight),
                       schedule=ScheduleConfig(epochs=10, eval_every=10_000))
         res = train(cfg, train_samples=s, init=(base.net, base.codec), teacher=far, val_sets=validation_sets(s, None),
                     progress=False, log=lambda _: None, ctx=Dist())
@@ -497,7 +501,8 @@ def test_a_teacher_reading_other_features_is_refused():
     s = synthetic_samples(64, seed=9)
     pixel = Lifter(PoseLifterNet(ModelConfig(width=16, input_space="pixel", depth_target="canonical")),
                    PoseCodec(ModelConfig(width=16, input_space="pixel", depth_target="canonical")), name="pixel")
-    with pytest.raises(PoseLifterError, match="teacher network 'pixel'.*input_space 'pixel' .trained: 'camera'; --input"):
+    with pytest.raises(PoseLifterError,
+                       match="teacher network 'pixel'.*input_space 'pixel' .trained: 'camera'; --input"):
         train(tiny_config(), train_samples=s, teacher=pixel, val_sets=validation_sets(s, None), progress=False,
               log=lambda _: None, ctx=Dist())
     # a teacher that learned undistorted 2D is not given Human3.6M's distorted 2D (the run's data.lens)
@@ -628,7 +633,8 @@ def test_cli_reports_bad_checkpoint_and_bad_options(tmp_path, capsys):
     assert main(["train", "--out", str(tmp_path / "new" / "x.pt"), *nodata]) == 2  # writable: on to the data
     assert "Human3.6M data not found" in capsys.readouterr().err and (tmp_path / "new").is_dir()
     # a teacher that cannot serve, or is not there, is refused before the data is read, naming what differs
-    assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", "sh_mix", "--input-space", "camera", *nodata]) == 2
+    assert main(["train", "--out", str(tmp_path / "x.pt"), "--teacher", "sh_mix", "--input-space", "camera",
+                 *nodata]) == 2
     err = capsys.readouterr().err
     assert "teacher network 'sh_mix'" in err and "input_space 'pixel' (trained: 'camera'; --input-space)" in err
     assert "depth_target" not in err  # only what differs is named
@@ -802,18 +808,22 @@ def test_a_camera_turn_moves_2d_and_3d_as_that_camera_sees_them():
 
     n = 64
     root, rel, f, pp, kp = _scene(n, seed=0, x=1500, y=800, z=(3000, 7000), focal=(1145.0, 1143.0), pp=(512.0, 515.0))
-    kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=20.0, gen=torch.Generator().manual_seed(1))
-    r = camera_turn(*(torch.deg2rad(torch.tensor(20.0)) * (2 * torch.rand(2, n, generator=torch.Generator().manual_seed(1)) - 1))).double()
+    kp2, rel2, depth2 = rotate_batch(kp, pp, f, rel, root[:, 2], kp[:, 0], max_deg=20.0,
+                                     gen=torch.Generator().manual_seed(1))
+    u = 2 * torch.rand(2, n, generator=torch.Generator().manual_seed(1)) - 1
+    r = camera_turn(*(torch.deg2rad(torch.tensor(20.0)) * u)).double()
     turned = (root[:, None] + rel) @ r.transpose(1, 2)
     np.testing.assert_allclose(rel2.numpy(), (turned - turned[:, :1]).numpy(), atol=1e-9)
     np.testing.assert_allclose(depth2.numpy(), turned[:, 0, 2].numpy(), rtol=1e-12)
-    np.testing.assert_allclose(kp2.numpy(), project(turned.numpy(), focal=f.numpy(), principal_point=pp.numpy()), atol=1e-9)
+    np.testing.assert_allclose(kp2.numpy(), project(turned.numpy(), focal=f.numpy(), principal_point=pp.numpy()),
+                               atol=1e-9)
     assert not torch.allclose(kp2, kp) and torch.allclose(turned[:, 0].norm(dim=-1), root.norm(dim=-1))
     angle = torch.rad2deg(torch.arccos(((r.diagonal(dim1=1, dim2=2).sum(-1) - 1) / 2).clamp(-1, 1)))
     assert float(angle.max()) <= 20 * 2 ** 0.5 + 1e-6 and float(angle.max()) > 10  # pan and tilt, each within +-20 deg
     # through make_batch, flipped and turned: the samples stay consistent (float32)
     T = {"kp": kp.float(), "pp": pp.float(), "focal": f.float(), "rel": rel.float(), "depth": root[:, 2].float()}
-    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0), augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0))
+    cfg = TrainConfig(data=DataConfig(lens="pinhole", clean_prob=1.0),
+                      augment=AugmentConfig(flip_prob=0.5, rotate_deg=15.0))
     b = make_batch(T, torch.arange(n), cfg, torch.Generator().manual_seed(2))
     _assert_physically_consistent(b)
     assert not np.allclose(b["depth"].numpy(), T["depth"].numpy())
@@ -838,7 +848,8 @@ def test_moving_people_along_their_viewing_ray_keeps_samples_physical():
     det2, gt2, depth2 = move_batch(kp + err, kp, pp, f, rel, root[:, 2], factor)
     moved = root[:, None] * factor[:, None, None] + rel
     np.testing.assert_allclose(depth2.numpy(), moved[:, 0, 2].numpy(), rtol=1e-12)
-    np.testing.assert_allclose(gt2.numpy(), project(moved.numpy(), focal=f.numpy(), principal_point=pp.numpy()), atol=1e-9)
+    np.testing.assert_allclose(gt2.numpy(), project(moved.numpy(), focal=f.numpy(), principal_point=pp.numpy()),
+                               atol=1e-9)
     np.testing.assert_allclose(gt2[:, 0].numpy(), kp[:, 0].numpy(), atol=1e-9)  # the root's 2D stays
     ratio = pose_scale(gt2) / pose_scale(kp)
     assert float(ratio[0]) > 1.5 and float(ratio[-1]) < 0.3  # nearer is larger, farther smaller

@@ -213,7 +213,8 @@ def test_drag_playback_upload_download() -> None:
         img = cv2.imdecode(np.frombuffer(canvas.screenshot(), np.uint8), cv2.IMREAD_COLOR)
         assert img is not None and img.size > 0
         colours = len(np.unique((img // 16).reshape(-1, 3), axis=0))
-        assert float(img.std()) > 8.0 and colours > 20, f"WebGL canvas looks blank (std {img.std():.1f}, {colours} colours)"
+        assert float(img.std()) > 8.0 and colours > 20, \
+            f"WebGL canvas looks blank (std {img.std():.1f}, {colours} colours)"
 
         # 1b. a slider's value bubble does not cover the fields around it while dragging (the box shows the value)
         thumb = _focal_slider(page)
@@ -313,7 +314,8 @@ def test_drag_playback_upload_download() -> None:
                "image_size": [s.camera.width, s.camera.height], "focal": list(s.camera.focal)}
         page.locator(f"#file_upload_{view.gui.files.upload._impl.uuid}").set_input_files(
             files=[{"name": "walking_kp.json", "mimeType": "application/json", "buffer": json.dumps(doc).encode()}])
-        assert _wait(lambda: view.state.sample.key.startswith("upload/"), 60), f"upload not received: {view.messages[-3:]}"
+        assert _wait(lambda: view.state.sample.key.startswith("upload/"), 60), \
+            f"upload not received: {view.messages[-3:]}"
         np.testing.assert_allclose(view.state.keypoints, s.keypoints_2d, atol=1e-6)
         # no floor for an upload's guessed camera height (drawn just after the state is set: wait)
         assert _wait(lambda: not view.scene.camera.floor.visible, 30)
