@@ -241,8 +241,8 @@ def cloud_spread(cloud: np.ndarray) -> Spread:
     d = c - mean
     cov = np.einsum("nja,njb->jab", d, d) / (c.shape[0] - 1)
     rel_z = c[:, :, 2] - c[:, :1, 2]
-    return Spread(mean=mean, cov=cov, root_std=c[:, 0, :].std(axis=0, ddof=1), joint_depth_std=rel_z.std(axis=0, ddof=1),
-                  draws=int(c.shape[0]))
+    return Spread(mean=mean, cov=cov, root_std=c[:, 0, :].std(axis=0, ddof=1),
+                  joint_depth_std=rel_z.std(axis=0, ddof=1), draws=int(c.shape[0]))
 
 
 @dataclass(frozen=True)
@@ -335,8 +335,9 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         rng = np.random.default_rng(state.seed)
         noisy = error_model.sample(kp, level=state.noise_level, rng=rng)
         n = int(state.cloud_samples)
-        cloud_in = error_model.sample(np.broadcast_to(kp, (n, NUM_JOINTS, 2)), level=state.noise_level,
-                                      rng=np.random.default_rng([state.seed, 1])) if n > 0 else np.zeros((0, NUM_JOINTS, 2))
+        cloud_in = (error_model.sample(np.broadcast_to(kp, (n, NUM_JOINTS, 2)), level=state.noise_level,
+                                       rng=np.random.default_rng([state.seed, 1]))
+                    if n > 0 else np.zeros((0, NUM_JOINTS, 2)))
         batch = np.concatenate([noisy[None], cloud_in], axis=0)
     else:
         noisy = kp.copy()
@@ -372,8 +373,9 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
         if analytic is not None:
             metrics["analytic root error"] = float(np.linalg.norm(analytic[0] - gt[0]))
     spread = cloud_spread(cloud) if cloud is not None and cloud.shape[0] >= 2 else None
-    return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0], canonical_depth=float(res.canonical_depth[0]),
-                 focal=f, principal_point=pp, cloud=cloud, analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
+    return Frame(current_2d=kp, noisy_2d=noisy, lifted=lifted, root=res.root[0],
+                 canonical_depth=float(res.canonical_depth[0]), focal=f, principal_point=pp, cloud=cloud,
+                 analytic=analytic, gt_3d=gt, metrics=metrics, spread=spread,
                  others=others, reads_rays=used.input_space == "camera", trained_subjects=trained_subjects(used),
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                                             relative=res.relative[0], focal=f),
@@ -502,7 +504,8 @@ def _focal_origin(state: SessionState) -> str:
     if up is None:
         return "camera"
     return {"exif-35mm": "EXIF 35 mm equiv.", "exif-focal-plane": "EXIF", "exif-sensor-width": "EXIF",
-            "default-fov": "default field of view", "keypoint-file": "keypoint file"}.get(up.focal_source, str(up.focal_source))
+            "default-fov": "default field of view",
+            "keypoint-file": "keypoint file"}.get(up.focal_source, str(up.focal_source))
 
 
 def input_name(state: SessionState) -> str:
@@ -589,8 +592,9 @@ def training_subject_note(key: str, trained: tuple[int, ...]) -> str:
 
 def readout_markdown(frame: Frame, state: SessionState) -> str:
     """The readout panel (numbers without thousands separators): ``Focal N px`` (the focal length this frame
-    was lifted with, and the camera's; :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, which 2D was
-    lifted (:func:`input_line`), the spread of the uncertainty cloud (:func:`spread_line`) and the metrics."""
+    was lifted with, and the camera's; :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``,
+    which 2D was lifted (:func:`input_line`), the spread of the uncertainty cloud (:func:`spread_line`) and the
+    metrics."""
     X, Y, Z = frame.root
     alpha = frame.alpha
     lines = [
@@ -608,8 +612,8 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     lines.append(input_line(state))
     up = state.sample.upload
     if up is not None:
-        what = {"image": f"photo, {up.detector}", "video": f"video, {up.detector}"}.get(up.kind,
-                                                                                     f"keypoint file, {up.source_format}")
+        what = {"image": f"photo, {up.detector}",
+                "video": f"video, {up.detector}"}.get(up.kind, f"keypoint file, {up.source_format}")
         lines.append(f"**Input** {up.name} ({what})")
     if frame.others:
         lines.append(people_line(frame, state))

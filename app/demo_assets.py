@@ -85,9 +85,9 @@ POSES: dict[str, PoseSpec] = {
         r_upper=(0.15, 0.6, 0.8), r_fore=(0.05, 0.75, 0.65), l_upper=(-1.0, 0.15, -0.35), l_fore=(-1.0, 0.3, 0.1),
         spine=(0.0, 0.2, 1.0), r_thigh=(0.08, 0.1, -1.0), l_thigh=(-0.1, -0.1, -1.0)),
     "crouching": PoseSpec(
-        r_thigh=(0.3, 0.85, -0.45), r_shin=(0.05, -0.35, -1.0), l_thigh=(-0.3, 0.85, -0.45), l_shin=(-0.05, -0.35, -1.0),
-        spine=(0.0, 0.55, 1.0), neck=(0.0, 0.6, 1.0), r_upper=(0.1, 1.0, -0.5), r_fore=(0.0, 1.0, 0.1),
-        l_upper=(-0.1, 1.0, -0.5), l_fore=(0.0, 1.0, 0.1)),
+        r_thigh=(0.3, 0.85, -0.45), r_shin=(0.05, -0.35, -1.0), l_thigh=(-0.3, 0.85, -0.45),
+        l_shin=(-0.05, -0.35, -1.0), spine=(0.0, 0.55, 1.0), neck=(0.0, 0.6, 1.0), r_upper=(0.1, 1.0, -0.5),
+        r_fore=(0.0, 1.0, 0.1), l_upper=(-0.1, 1.0, -0.5), l_fore=(0.0, 1.0, 0.1)),
 }
 """The authored poses, by sample name."""
 
@@ -174,7 +174,8 @@ def build_mannequin(pose_world: np.ndarray, *, stool: bool = False) -> trimesh.T
     for (a, b), r in limb.items():
         parts.append(_capsule(P[a], P[b], r, TROUSERS if a in (1, 2, 4, 5) else SHIRT))
     parts.append(_capsule(P[0], P[J["spine"]], 120, TROUSERS))
-    parts.append(_capsule(P[J["spine"]], P[J["thorax"]] - 40 * _unit(tuple(P[J["thorax"]] - P[J["spine"]])), 125, SHIRT))
+    chest = P[J["thorax"]] - 40 * _unit(tuple(P[J["thorax"]] - P[J["spine"]]))
+    parts.append(_capsule(P[J["spine"]], chest, 125, SHIRT))
     parts.append(_capsule(P[J["l_hip"]], P[J["r_hip"]], 95, TROUSERS))
     parts.append(_capsule(P[J["l_shoulder"]], P[J["r_shoulder"]], 62, SHIRT))
     parts.append(_capsule(P[J["thorax"]], P[J["neck_nose"]], 45, SKIN))
@@ -261,7 +262,8 @@ def render_mesh(
     shade = 0.35 + 0.65 * np.clip(normals_c @ light, 0, 1)
     colors = np.asarray(mesh.visual.face_colors)[:, :3].astype(np.float64) * shade[:, None]
     order = np.argsort(-z[F].mean(1))
-    pts = np.round(uv[F] * 16).astype(np.int32)
+    # (faces behind the camera are not drawn, but their points are divided by ~0: kept within int32 at 1/16 px)
+    pts = np.round(np.clip(uv[F], -1e8, 1e8) * 16).astype(np.int32)
     for i in order:
         if facing[i] and np.all(z[F[i]] > 1):
             cv2.fillConvexPoly(img, pts[i], tuple(float(v) for v in colors[i]), lineType=cv2.LINE_AA, shift=4)

@@ -20,7 +20,8 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "current": (230, 30, 30),  # red: the current / dragged 2D
     "other": (0, 150, 150),  # teal: the other people of the image (select one with the person picker)
 }
-SIDE_COLORS: dict[str, tuple[int, int, int]] = {"left": (30, 110, 255), "right": (255, 60, 160), "center": (250, 250, 250)}
+SIDE_COLORS: dict[str, tuple[int, int, int]] = {"left": (30, 110, 255), "right": (255, 60, 160),
+                                                "center": (250, 250, 250)}
 """Left joints blue ring, right joints pink ring (subject's own sides)."""
 JOINT_RGB: np.ndarray = np.array([
     (90, 90, 90), (200, 40, 40), (235, 95, 35), (250, 150, 50),  # pelvis, r_hip, r_knee, r_ankle

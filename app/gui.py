@@ -208,10 +208,11 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             info=gui.add_markdown(""),
         )
         inp = gui.add_dropdown("2D input", ["ground truth", "SH detection"], initial_value="ground truth",
-                               hint="ground-truth 2D, or the Stacked-Hourglass detection (Human3.6M frames that have one)")
+                               hint="ground-truth 2D, or the Stacked-Hourglass detection (Human3.6M frames that have "
+                                    "one)")
         image = gui.add_image(np.zeros((60, 80, 3), np.uint8), label="input 2D", format="jpeg", jpeg_quality=85)
-        sample = SampleGui(source=source, demo=demo, input=cast(viser.GuiDropdownHandle[str], inp), image=image, subject=subject, sequence=sequence,
-                           camera=camera, photo=photo)
+        sample = SampleGui(source=source, demo=demo, input=cast(viser.GuiDropdownHandle[str], inp), image=image,
+                           subject=subject, sequence=sequence, camera=camera, photo=photo)
     with tabs.add_tab("Drag", viser.Icon.HAND_FINGER):
         gui.add_markdown("<small>Drag the joints on the image plane in the 3D view. <b>head-on image view</b> looks "
                          "straight at them for precise dragging; the readout's side / top views show the 3D "

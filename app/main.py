@@ -62,7 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="poselifter-app", description=plain_text(__doc__),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
-    p.add_argument("--port", type=_port, default=8080, help="port 0-65535 (default 8080; 0 = any free port; a busy port: the next free one)")
+    p.add_argument("--port", type=_port, default=8080,
+                   help="port 0-65535 (default 8080; 0 = any free port; a busy port: the next free one)")
     p.add_argument("--h36m", type=Path, default=None,
                    help="Human3.6M folder (default: ../shared/data/h36m or $POSELIFTER_H36M when present)")
     p.add_argument("--no-h36m", action="store_true", help="demo samples only, even if Human3.6M is present")

@@ -197,8 +197,9 @@ class H36MCatalog:
         kp = cam.project(p3)
         photo = self._photos.get((subject, sequence, camera_id, frame))
         image = _read_rgb(self.root / "demo" / photo) if photo else None
-        return Sample(key=h36m_key(subject, sequence, camera_id, frame), label=f"S{subject} {sequence} cam {camera_id} frame {frame}",
-                      keypoints_2d=kp, pose_3d=p3, detected_2d=det, camera=cam, image=image)
+        return Sample(key=h36m_key(subject, sequence, camera_id, frame),
+                      label=f"S{subject} {sequence} cam {camera_id} frame {frame}", keypoints_2d=kp, pose_3d=p3,
+                      detected_2d=det, camera=cam, image=image)
 
 
 def default_h36m_root() -> Path | None:

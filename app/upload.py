@@ -191,7 +191,8 @@ def upload_camera(focal: tuple[float, float], principal_point: tuple[float, floa
     d = (0.0,) * 5 if distortion is None else tuple(float(v) for v in distortion)
     R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # world z up -> camera y down, z = world y
     C = np.array([0.0, 0.0, CAMERA_HEIGHT_MM])
-    return Camera(focal=(float(focal[0]), float(focal[1])), principal_point=(float(principal_point[0]), float(principal_point[1])),
+    return Camera(focal=(float(focal[0]), float(focal[1])),
+                  principal_point=(float(principal_point[0]), float(principal_point[1])),
                   width=int(size[0]), height=int(size[1]), k=d[:3], p=d[3:], R=R, t=-R @ C,  # type: ignore[arg-type]
                   name=f"upload/{name}")
 
@@ -433,7 +434,8 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     for k, joints in sorted((people_dragged or {}).items()):
         if joints:
             who = f" (person {k + 1})" if len(people) > 1 else ""
-            warnings.append(f"2D joints corrected in the app{who}: " + ", ".join(JOINT_NAMES[j] for j in sorted(joints)))
+            warnings.append(f"2D joints corrected in the app{who}: "
+                            + ", ".join(JOINT_NAMES[j] for j in sorted(joints)))
     if focal_changed:
         src = "app-slider"
         warnings.append(f"focal length set in the app (slider or box) to {float(focal_alpha(focal)):.1f} px")
@@ -480,10 +482,10 @@ def glb_bytes(record: Any) -> bytes:
     return bytes(skeleton_scene(pose).export(file_type="glb"))
 
 
-__all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError", "Photo", "UploadError",
-           "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem", "glb_bytes", "is_json_upload", "json_bytes",
-           "keypoint_sample", "missing_detector_message", "oversize_message", "photo_sample", "result_record",
-           "safe_name", "upload_camera"]
+__all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError",
+           "Photo", "UploadError", "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem",
+           "glb_bytes", "is_json_upload", "json_bytes", "keypoint_sample", "missing_detector_message",
+           "oversize_message", "photo_sample", "result_record", "safe_name", "upload_camera"]
 
 
 def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, max_bytes: int,

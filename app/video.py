@@ -141,8 +141,9 @@ class VideoSequence:
             image = self._canvas_for_bad() if img is None else cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
         else:
             image = self._canvas
-        return Sample(key=with_frame(self.key, i), label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)", keypoints_2d=kp,
-                      pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image, has_gt_2d=False,
+        return Sample(key=with_frame(self.key, i), label=f"{self.info.name} frame {fr.index} ({fr.time_s:.2f} s)",
+                      keypoints_2d=kp, pose_3d=None, detected_2d=kp.copy(), camera=self.camera, image=image,
+                      has_gt_2d=False,
                       upload=self.info, others_2d=tuple(np.asarray(p.keypoints_2d, np.float64) for p in people[1:]),
                       person_tags=tuple(self._tags[p.track_id] for p in people))
 
@@ -191,9 +192,10 @@ class VideoSequence:
         tracked and smoothed as the upload was (cached for the last pair), each person keeping their
         ``person_id``, with the new lift's notes on its output in place of the upload's and a note saying so. A
         lens is undone at the upload's own focal (:func:`app.core.lens_free_2d`); the record then holds that
-        undistorted 2D and no lens, so that lifting it again gives the same result. ``corrected`` (:meth:`corrections`): joints
-        dragged in the app, lifted in place of those people's 2D on that frame and named in a note (a browser trial's
-        download of a sequence left them out, where the app had said to download to keep them)."""
+        undistorted 2D and no lens, so that lifting it again gives the same result. ``corrected``
+        (:meth:`corrections`): joints dragged in the app, lifted in place of those people's 2D on that frame and named
+        in a note (a browser trial's download of a sequence left them out, where the app had said to download to keep
+        them)."""
         rec = self.record
         corrected = corrected or {}
         if self.is_upload_pair(lifter, focal) and not corrected:
@@ -238,15 +240,16 @@ class VideoSequence:
         ids = [[p.person_id for p in fr.people] for fr in rec.frames]
         frames = track_lifted(lifted, fps=rec.fps, focal=np.asarray(f), smoothing=rec.smoothing, person_ids=ids,
                               names=rec.tracking_names if rec.tracking_names is not None
-                              and len(rec.tracking_names) == len(lifted) else None)  # (the whole file's, as the upload's)
+                              and len(rec.tracking_names) == len(lifted)
+                              else None)  # (the whole file's, as the upload's)
         for new, old in zip(frames, rec.frames):  # (the tracker keeps each frame's order)
             for st, was in zip(new.people, old.people):
                 # (the tracker reads the 2D and the file's ids as the upload did, so it groups as the upload did;
                 # but its numbers differ once the upload's one-frame detections were left out: keep the upload's,
                 # which its notes and picker name)
                 st.track_id = was.track_id
-        note = (f"lifted again in the app: model {name!r} at focal length {float(focal_alpha(f)):.1f} px (the upload's: "
-                f"{rec.model!r} at {float(focal_alpha(rec.focal)):.1f} px)")
+        note = (f"lifted again in the app: model {name!r} at focal length {float(focal_alpha(f)):.1f} px "
+                f"(the upload's: {rec.model!r} at {float(focal_alpha(rec.focal)):.1f} px)")
         if undistorted:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")

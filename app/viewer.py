@@ -270,9 +270,9 @@ class SessionView:
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         self._status_about: str | None = None
-        """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync pass that shows
-        another sample, or sequence, and no message of its own clears it (a user trial: a video's note stayed on
-        under a Human3.6M frame)."""
+        """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync
+        pass that shows another sample, or sequence, and no message of its own clears it (a user trial: a video's
+        note stayed on under a Human3.6M frame)."""
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -283,7 +283,8 @@ class SessionView:
         self._redraw_request = False
         self._flags = threading.Lock()
         self._frame_note: tuple[int, int, str] | None = None
-        """(frame asked for, frame shown, its sequence) to be said once typing settles (:meth:`_note_frame_past_end`)."""
+        """(frame asked for, frame shown, its sequence) to be said once typing settles
+        (:meth:`_note_frame_past_end`)."""
         self._typed_while_playing_at = -math.inf
         """time.monotonic() of the last (u, v) keystroke during playback (:data:`TYPED_WHILE_PLAYING`)."""
         self._play_shown: int | None = None  # (the player's last frame: Player's position while the box waits)
@@ -304,7 +305,8 @@ class SessionView:
         self._held: set[tuple[str, Any]] = set()
         """(control, typed value) of the clamps whose box keeps the keys (:data:`TYPING_IDLE_S`), once said."""
         self._typed_at: dict[str, float] = {}
-        """Control name -> time.time() of the tab's last value for it (browser updates only: :data:`TYPING_SETTLE_S`)."""
+        """Control name -> time.time() of the tab's last value for it (browser updates only:
+        :data:`TYPING_SETTLE_S`)."""
         self._typed_uv: tuple[int, int, int, int, np.ndarray] | None = None
         """The joint position being typed into the (u, v) boxes: (keystroke number, joint, sample generation, person,
         value px); applied once the typing settles (:meth:`_on_uv_event`)."""
@@ -339,7 +341,8 @@ class SessionView:
         """perf_counter() time at which each playback frame was shown."""
         self._runner = LatestWins(self._sync)
         self._pass_t0 = math.inf
-        """Start of the running sync pass (time.time()); a control updated after it is not overwritten (:meth:`_put`)."""
+        """Start of the running sync pass (time.time()); a control updated after it is not overwritten
+        (:meth:`_put`)."""
 
         h = app.h36m
         self.gui: Gui = build_gui(
@@ -388,15 +391,17 @@ class SessionView:
             return False
         with self._status_lock:
             if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
-                self.gui.readout.status.content = ""  # (a note stays a while: the controls it changed call back at once)
+                # (a note stays a while: the controls it changed call back at once)
+                self.gui.readout.status.content = ""
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
                      focal: float | None = None, title: str | None = None, sticky: bool = False) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
-        or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass that shows another
-        one clears the message). ``focal``: the focal length (px) the message says was set; a pass that finds
-        another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed since).
+        or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass
+        that shows another one clears the message). ``focal``: the focal length (px) the message says was set; a
+        pass that finds another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed
+        since).
         ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
         stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``."""
         title = title or ("Input problem" if error else "poselifter")
@@ -460,7 +465,8 @@ class SessionView:
         g.lift.overview.on_click(self._on(self.overview))
         g.lift.auto_frame.on_update(self._on(self._auto_frame))
         g.play.play.on_click(self._on(self.toggle_play))
-        g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name, g.files.upload.value.content)))
+        g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
+                                                                   g.files.upload.value.content)))
         g.files.download_json.on_click(self._on(self.download, "json"))
         g.files.download_glb.on_click(self._on(self.download, "glb"))
 
@@ -808,8 +814,8 @@ class SessionView:
     def _note_frame_past_end(self, key: str, video: Any) -> None:
         """Say so when the frame asked for (typed in the slider's box) is past the sequence's end or before its start
         and the last or first frame is shown instead (:func:`poselifter_app.session.requested_key` clamps it). While
-        the box is being typed in ("9999" on the way to "99999") the value is remembered and said once the typing settles
-        (:data:`TYPING_SETTLE_S`), even if the slider has been set to the last frame meanwhile."""
+        the box is being typed in ("9999" on the way to "99999") the value is remembered and said once the typing
+        settles (:data:`TYPING_SETTLE_S`), even if the slider has been set to the last frame meanwhile."""
         try:
             wanted = int(self.gui.play.frame.value)
         except (TypeError, ValueError):
@@ -895,7 +901,8 @@ class SessionView:
         if source_of(old.sample.key) == "upload" and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
-        left = self._upload_left if self._upload_left is not None and self._upload_left.sample.key == sample.key else None
+        left = (self._upload_left if self._upload_left is not None and self._upload_left.sample.key == sample.key
+                else None)
         if left is not None:
             st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
                            others_dragged=left.others_dragged, input_kind=left.input_kind)
