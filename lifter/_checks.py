@@ -371,6 +371,26 @@ def face_first_people(kp17: np.ndarray, missing: np.ndarray | None = None) -> np
         sub = k[maybe]
         out[maybe] = face_first_people(sub, ~np.isfinite(sub).all(-1) | zero_placeholders(sub))
         return out
+    with np.errstate(invalid="ignore"):
+        return face_spread(k, missing) < COCO_FACE_SPREAD  # (NaN: cannot tell, False)
+
+
+NOT_A_FACE_SPREAD: float = 0.2
+"""A 17-joint pose given as COCO-17 whose first five points spread over at least this share of its 2D size (box
+diagonal) does not start with a face (BlazePose's nose, eyes and ears on the 84 Human3.6M photos: at most 0.077) but
+likely with H36M's pelvis, hips, right knee and right foot (at least 0.214 on 200k Human3.6M poses;
+:data:`COCO_FACE_SPREAD`): H36M order given as COCO-17 (:func:`not_face_first_notes`)."""
+
+
+def face_spread(kp17: np.ndarray, missing: np.ndarray | None = None) -> np.ndarray:
+    """``(n,)``: how far the first five points of each 17-joint pose ``(n, 17, 2)`` px spread, as a share of the
+    pose's 2D size (box diagonals): under :data:`COCO_FACE_SPREAD` for COCO-17's face, over
+    :data:`NOT_A_FACE_SPREAD` for H36M's first five. ``missing`` ``(n, 17)``: the joints that are not there (None:
+    the non-finite ones and (0, 0) placeholders); NaN where too few are there to tell (fewer than 4 of the first
+    five, or than 10 of all)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    if missing is None:
+        missing = ~np.isfinite(k).all(-1) | zero_placeholders(k)
     ok = ~np.asarray(missing, bool).reshape(-1, 17)
     enough = (ok[:, :5].sum(1) >= 4) & (ok.sum(1) >= 10)
 
@@ -381,8 +401,25 @@ def face_first_people(kp17: np.ndarray, missing: np.ndarray | None = None) -> np
             return np.hypot(*np.moveaxis(hi - lo, -1, 0))
 
     size, spread = diagonal(k, ok), diagonal(k[:, :5], ok[:, :5])
-    with np.errstate(invalid="ignore"):
-        return enough & np.isfinite(size) & (size > 0) & (spread < COCO_FACE_SPREAD * size)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return np.where(enough & np.isfinite(size) & (size > 0), spread / size, np.nan)
+
+
+def not_face_first_message(kp17: np.ndarray, *, missing: np.ndarray | None = None) -> str | None:
+    """What to say of poses ``(n, 17, 2)`` px given as COCO-17 when each that can be told starts with five points
+    spread as H36M's pelvis, hips, right knee and right foot are (:data:`NOT_A_FACE_SPREAD`), not as a face: H36M
+    order given as COCO-17, which converting would scramble (a developer trial: lifted without a word but a misfit
+    note blaming the detector, the root at 55 % of its depth). None when any pose looks like COCO-17, or none can
+    be told."""
+    spread = face_spread(kp17, missing)
+    told = spread[np.isfinite(spread)]
+    if not len(told) or float(told.min()) < NOT_A_FACE_SPREAD:
+        return None
+    which = "the pose" if len(told) == 1 else f"each of {len(told)} poses"
+    return (f"format 'coco17', but the first five joints of {which} spread over {float(told.min()) * 100:.0f} % "
+            f"or more of {'its' if len(told) == 1 else 'their'} 2D size, as H36M's pelvis, hips, right knee and "
+            "right foot do (COCO-17's nose, eyes and "
+            f"ears lie within {COCO_FACE_SPREAD * 100:.0f} %): H36M-order keypoints?")
 
 
 def face_first_notes(kp17: np.ndarray) -> list[str]:

@@ -155,7 +155,9 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     try:
         payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
-        why = "it is a text file, JSON?" if data.lstrip()[:1] in (b"{", b"[") else _load_failure(exc)
+        why = ("it is a text file, JSON?" if data.lstrip()[:1] in (b"{", b"[") else
+               "it is not a torch file (torch.save writes a zip archive, which starts 'PK')"
+               if data and not data.startswith((b"PK", b"\x80")) else _load_failure(exc))
         raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
                               "give a .pt file written by poselifter train or a shipped model name") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:

@@ -43,7 +43,13 @@ from typing import Any, Final
 
 import numpy as np
 
-from ._checks import COCO_FACE_SPREAD, MEDIAPIPE_XY_NOTE, PoseLifterError, face_first_people
+from ._checks import (
+    COCO_FACE_SPREAD,
+    MEDIAPIPE_XY_NOTE,
+    PoseLifterError,
+    face_first_people,
+    not_face_first_message,
+)
 from .camera import (
     MAX_DISTORTION_COEFFICIENT,
     OPENCV_DISTORTION_COUNTS,
@@ -465,7 +471,8 @@ _FIELD_NAMES_ELSEWHERE: Final[dict[str, str]] = {
     "cy": "principal_point", "resolution": "image_size", "width": "image_size", "height": "image_size",
     "image_width": "image_size", "image_height": "image_size", "keypoint_format": "format", "fmt": "format",
     "framerate": "fps", "frame_rate": "fps", "focal_px": "focal", "focal_length_px": "focal", "f_px": "focal",
-    "focal_pixels": "focal", "image_shape": "image_size", "img_shape": "image_size", "imsize": "image_size",
+    "focal_pixels": "focal", "focal_mm": "focal", "focal_length_mm": "focal", "f_mm": "focal",
+    "image_shape": "image_size", "img_shape": "image_size", "imsize": "image_size",
     "keypoint": "keypoints", "kpts": "keypoints", "joints": "keypoints", "landmarks": "keypoints",
     "lens_model": "distortion_model", "camera_model": "distortion_model", "distortion_type": "distortion_model"}
 """Other tools' names for the fields this module reads (lower case): a file using them gets a note naming ours."""
@@ -541,6 +548,9 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
                     "'distortion'")
         elif ours == "focal and principal_point":
             hint = " (fx, fy and cx, cy of the camera matrix, px)"
+        elif ours == "focal" and "mm" in key.lower():
+            hint = (" It takes the focal length in pixels: f_px = f_mm * image width px / sensor width mm (or leave "
+                    "it out to assume a field of view)")
         notes.append(f"{key!r} is not read: did you mean {names}?{hint}")
     return notes
 
@@ -766,6 +776,16 @@ class _People:
     """The people with missing joints stood in for (:func:`lifter.keypoints.stand_in_missing`): ``(who, phrases)``."""
 
 
+def _refuse_h36m_as_coco(kp17: np.ndarray, p: Path) -> None:
+    """Refuse people ``(n, 17, 2)`` px read as COCO-17 whose first five joints each spread as H36M's do
+    (:func:`lifter._checks.not_face_first_message`), the mirror of a file without 'format' whose first five are a
+    face's: converted as COCO-17, H36M order is lifted scrambled."""
+    said = not_face_first_message(kp17)
+    if said is not None:
+        raise PoseLifterError(f"{p}: {said} Give \"format\": \"h36m17\" in the file, or --format h36m17 on the "
+                              "command line for a file without 'format'")
+
+
 def _face_first(xy: np.ndarray, missing: np.ndarray) -> bool:
     """Whether the 17-joint pose ``xy`` ``(17, 2)`` px (``missing`` ``(17,)``) starts with five points as close together
     as a face's (:func:`lifter._checks.face_first_people`, :data:`COCO_FACE_SPREAD`)."""
@@ -955,6 +975,8 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
     if not people:
         raise PoseLifterError(f"{p}: no person in the keypoint file")
     found = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
+    if found.format == "coco17" and found.arrays:
+        _refuse_h36m_as_coco(np.stack(found.arrays), p)
     people_scores: tuple[np.ndarray | None, ...] = tuple(found.scores)
     if _visibility_flags(people_scores):
         notes.append(FLAGS_NOTE)
@@ -1123,6 +1145,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         scores.append(list(found.scores))
         dropped += [(i, g) for g in gone]
     fmt = fmt or H36M17
+    if fmt == "coco17" and any(frames):
+        _refuse_h36m_as_coco(np.stack([a for fr in frames for a in fr]), p)
     top = max((float(np.max(c[np.isfinite(c)])) for fr in scores for c in fr
                if c is not None and np.isfinite(c).any()), default=0.0)
     if top > SCORE_NOTE_ABOVE:

@@ -100,7 +100,15 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._checks import PoseLifterError, PoseLifterWarning, _joint_labels, _real_array, where_in_batch, zero_placeholders
+from ._checks import (
+    PoseLifterError,
+    PoseLifterWarning,
+    _joint_labels,
+    _real_array,
+    not_face_first_message,
+    where_in_batch,
+    zero_placeholders,
+)
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
 H36M17: Final[str] = "h36m17"
@@ -535,6 +543,11 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
     if warn:
         for message in placeholder_notes(arr, src=src):
             warnings.warn(PoseLifterWarning(message), stacklevel=2)
+        said = (not_face_first_message(arr.reshape(-1, 17, 2)) if src == "coco17" and arr.size and arr.shape[-1] == 2
+                else None)
+        if said is not None:
+            warnings.warn(PoseLifterWarning(f"keypoints: {said} They are converted as COCO-17 (scrambled if they are "
+                                            "H36M's); lift takes H36M-17 order as it is"), stacklevel=2)
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)
     if dst == H36M17:
         return h36m

@@ -353,7 +353,8 @@ def test_checkpoint_refuses_pickled_code(tmp_path):
 
 
 @pytest.mark.parametrize("data, why", [(b'{"people": []}', "a text file, JSON"), (b"", "empty or truncated"),
-                                       (b"PK\x03\x04" + b"x" * 64, "zip archive")])
+                                       (b"PK\x03\x04" + b"x" * 64, "zip archive"),
+                                       (b"gibberish", "not a torch file (torch.save writes a zip archive")])
 def test_non_checkpoint_files_are_named_as_such(tmp_path, data, why):
     path = tmp_path / "not_weights.pt"
     path.write_bytes(data)

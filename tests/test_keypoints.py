@@ -26,6 +26,14 @@ SH = {n: i for i, n in enumerate(SH16_JOINT_NAMES)}
 H = {n: i for i, n in enumerate(JOINT_NAMES)}
 
 
+def _face_first(kp: np.ndarray) -> np.ndarray:
+    """COCO-17 keypoints ``(..., 17, 2)`` px with the first five (nose, eyes, ears) put around the first, as a face's
+    are (random keypoints spread them over the body, as H36M order does: :func:`lifter.convert` warns of that)."""
+    out = np.array(kp, np.float64)
+    out[..., 1:5, :] = out[..., :1, :] + np.array([[-6.0, -4.0], [6.0, -4.0], [-14.0, 0.0], [14.0, 0.0]])
+    return out
+
+
 def test_registry_names():
     assert "h36m17" in KEYPOINT_FORMATS and "sh16" in KEYPOINT_FORMATS
     assert set(KEYPOINT_FORMATS) <= set(keypoint_formats())
@@ -113,7 +121,7 @@ def test_convert_names_a_zero_placeholder_it_would_hide():
     from lifter.keypoints import COCO17_JOINT_NAMES, OPENPOSE25_JOINT_NAMES
 
     rng = np.random.default_rng(3)
-    coco = rng.uniform(300, 500, (2, 17, 2))
+    coco = _face_first(rng.uniform(300, 500, (2, 17, 2)))
     coco[1, COCO17_JOINT_NAMES.index("r_hip")] = 0.0
     with pytest.warns(PoseLifterWarning, match=r"joint\(s\) \['r_hip'\] of format 'coco17' at exactly \(0, 0\) px.*"
                       r"pose at index \(1,\)"):
@@ -121,8 +129,8 @@ def test_convert_names_a_zero_placeholder_it_would_hide():
     assert (out != 0).all()  # (what the lifter alone would not have noticed)
     op = rng.uniform(300, 500, (25, 2))
     op[OPENPOSE25_JOINT_NAMES.index("l_big_toe")] = 0.0
-    centred = rng.uniform(-50, 50, (17, 2))
-    centred[3] = 0.0
+    centred = _face_first(rng.uniform(-500, 500, (17, 2)))
+    centred[:5] -= centred[3]  # (the face around the origin, an ear at (0, 0))
     with warnings.catch_warnings():
         warnings.simplefilter("error", PoseLifterWarning)
         convert(op, src="openpose25")
@@ -164,7 +172,7 @@ def test_sh16_rule_errors_on_real_detections(h36m):
 
 def test_a_confidence_column_is_flagged_not_silently_converted_as_z():
     rng = np.random.default_rng(0)
-    xy = rng.uniform(100, 600, (17, 2))
+    xy = _face_first(rng.uniform(100, 600, (17, 2)))
     with pytest.warns(PoseLifterWarning, match=r"third column is all within \[0, 2\].*keypoints\[\.\.\., :2\]"):
         out = convert(np.c_[xy, np.full(17, 2.0)], src="coco17")
     assert out.shape == (17, 3)
@@ -201,7 +209,7 @@ def test_convert_takes_torch_tensors_as_lift_does():
     torch = pytest.importorskip("torch")
     from lifter import PoseLifterError, convert
 
-    kp = np.random.default_rng(0).uniform(100, 600, (17, 2))
+    kp = _face_first(np.random.default_rng(0).uniform(100, 600, (17, 2)))
     want = convert(kp, src="coco17")
     got = convert(torch.tensor(kp, requires_grad=True), src="coco17")
     np.testing.assert_allclose(got, want)

@@ -413,6 +413,10 @@ def test_other_names_for_read_fields_get_a_note_naming_ours(tmp_path):
     assert any(n.startswith("'dist_coeffs' is not read: did you mean 'distortion'? It takes Human3.6M's order")
                and "\"distortion_model\": \"opencv\"" in n for n in notes)
     assert any(n.startswith("'K' is not read: did you mean 'focal' and 'principal_point'?") for n in notes)
+    # (a developer trial: a focal length in mm under its own name was dropped without a word)
+    g = parse_keypoint_json(_write(tmp_path / "mm.json", {"keypoints": kp, "focal_mm": 35, "image_size": [800, 600]}))
+    assert any(n.startswith("'focal_mm' is not read: did you mean 'focal'? It takes the focal length in pixels: "
+                            "f_px = f_mm * image width px / sensor width mm") for n in g.warnings), g.warnings
     seq = parse_keypoint_sequence(_write(tmp_path / "s.json", {"frames": [kp, kp], "fps": 25, "Distortion": lens}))
     assert seq.distortion is None and any("'Distortion' is not read: did you mean 'distortion'?" in n
                                           for n in seq.warnings), seq.warnings

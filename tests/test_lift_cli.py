@@ -61,6 +61,34 @@ def coco_from_h36m(kp: np.ndarray) -> np.ndarray:
     return np.stack([face[n] if n in face else kp[H[n]] for n in COCO17_JOINT_NAMES])
 
 
+def test_h36m_order_given_as_coco17_is_refused(tmp_path, weights, capsys):
+    """A developer trial: H36M-order keypoints in a file that says "format": "coco17" were converted as COCO-17 and
+    lifted scrambled (root at 55 % of its depth), the only note blaming the detector. Like the mirror case (COCO-17
+    without 'format'), such a file is refused naming the fix; a sequence too, and lifter.convert warns. COCO-17
+    keypoints of the same pose (a face first) are not."""
+    from lifter import convert, demo_sample
+    from lifter.io import parse_keypoint_sequence
+
+    s = demo_sample("walking")
+    h36m, coco = s.keypoints_2d, coco_from_h36m(s.keypoints_2d)
+    cam = {"image_size": list(s.image_size), "focal": float(np.ravel(s.focal)[0])}
+    (tmp_path / "h.json").write_text(json.dumps({"keypoints": h36m.tolist(), "format": "coco17", **cam}))
+    (tmp_path / "c.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17", **cam}))
+    code, err = run([str(tmp_path / "h.json"), str(tmp_path / "c.json"), "--out", str(tmp_path / "o"),
+                     "--weights", str(weights)], capsys)
+    assert code == 0 and (tmp_path / "o" / "c.json").exists() and not (tmp_path / "o" / "h.json").exists(), err
+    assert "h.json: format 'coco17', but the first five joints of the pose spread over 51 % or more of its 2D size, " \
+           "as H36M's pelvis, hips, right knee and right foot do" in err and "Give \"format\": \"h36m17\"" in err
+    (tmp_path / "s.json").write_text(json.dumps({"frames": [h36m.tolist()] * 3, "fps": 25, "format": "coco17"}))
+    with pytest.raises(PoseLifterError, match="first five joints of each of 3 poses spread over 51 % or more of their"):
+        parse_keypoint_sequence(tmp_path / "s.json")
+    with pytest.warns(PoseLifterWarning, match="format 'coco17', but the first five joints.*lift takes H36M-17 order"):
+        convert(h36m, src="coco17")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        convert(coco, src="coco17")
+
+
 def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     d = tmp_path / "in"
     d.mkdir()
@@ -231,7 +259,7 @@ def test_a_result_file_can_be_lifted_again(tmp_path, weights, kp17, capsys):
     assert run([str(tmp_path / "k.json"), "--out", str(tmp_path / "o3"), "--max-people", "1", "--weights",
                 str(weights)], capsys)[0] == 0
     cut = json.loads((tmp_path / "o3" / "k.json").read_text())
-    assert len(cut["people"]) == 1 and "2 people in the file; the 1 largest are lifted (max_people)" in cut["warnings"]
+    assert len(cut["people"]) == 1 and "2 people in the file; the largest is lifted (max_people)" in cut["warnings"]
     assert not any("each is lifted" in w for w in cut["warnings"]), cut["warnings"]
 
 
@@ -352,7 +380,9 @@ def test_output_names(tmp_path):
 
 def test_parse_formats(tmp_path):
     p = tmp_path / "f.json"
-    p.write_text(json.dumps([{"keypoints": np.c_[np.arange(34.0).reshape(17, 2), np.ones(17)].ravel().tolist()}]))
+    xy = np.arange(34.0).reshape(17, 2) * 10
+    xy[1:5] = xy[0] + [[-3, -2], [3, -2], [-7, 0], [7, 0]]  # (a face first, as COCO-17's)
+    p.write_text(json.dumps([{"keypoints": np.c_[xy, np.ones(17)].ravel().tolist()}]))
     kf = parse_keypoint_json(p)
     assert kf.format == "coco17" and kf.keypoints.shape == (17, 2)
     p.write_text(json.dumps({"keypoints": [[0, 0]] * 17, "format": "nope"}))
@@ -607,6 +637,7 @@ def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weight
     """A COCO r_hip at (0, 0) without confidences (the user trial's silent 5.2 -> 2.2 m root): each file's record
     and the CLI name it, as a note per file, not a Python warning said once per process."""
     coco = np.column_stack([np.linspace(500, 700, 17), np.linspace(200, 600, 17)])
+    coco[1:5] = coco[0] + [[-6, -4], [6, -4], [-14, 0], [14, 0]]  # (a face first, as COCO-17's)
     coco[COCO17_JOINT_NAMES.index("r_hip")] = 0.0
     for name in ("a", "b"):
         (tmp_path / f"{name}.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17",
@@ -623,6 +654,7 @@ def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weight
     # (a user trial) a joint the conversion copies as it is (a wrist) is said once, in the file's format, not again
     # as the H36M joint
     coco = np.column_stack([np.linspace(500, 700, 17), np.linspace(200, 600, 17)])
+    coco[1:5] = coco[0] + [[-6, -4], [6, -4], [-14, 0], [14, 0]]
     coco[COCO17_JOINT_NAMES.index("r_wrist")] = 0.0
     (tmp_path / "w.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17",
                                                  "image_size": [1280, 720], "focal": 1000.0}))
