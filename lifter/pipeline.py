@@ -50,7 +50,7 @@ from .detect import (
     load_image,
     people_scores,
 )
-from .io import REASSUMED_NOTE, LiftRecord, PersonResult, distortion_tuple, parse_keypoint_json
+from .io import REASSUMED_NOTE, LiftRecord, PersonResult, _image_size_field, distortion_tuple, parse_keypoint_json
 from .keypoints import H36M17, convert, placeholder_notes
 
 
@@ -102,7 +102,8 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
             what = " and no ".join("focal length" if f == "focal" else "principal point" for _, f in need)
             put = f"put 'image_size' (or {' and '.join(repr(f) for _, f in need)}) in the file"
             raise PoseLifterError(f"{where}: no {what} and no image size: " + (
-                f"pass {' and '.join(o for o, _ in need)}, or {put}" if cli_options else put))
+                f"pass {' and '.join(o for o, _ in need)}, or the image's size, image_size= (--image-size W H), "
+                f"or {put}" if cli_options else put))
     if user_focal is not None:
         focal, src = user_focal, "user"
         if file_focal is not None and not np.allclose(np.broadcast_to(file_focal, (2,)), user_focal):
@@ -292,12 +293,31 @@ def keypoint_file_scores(kf: Any, count: int) -> tuple[np.ndarray | None, list[s
     return scores, (joint_doubt_notes(scores) if float(np.nanmax(conf)) <= 1.0 else [])
 
 
+def given_image_size(image_size: Any | None, file_size: tuple[int, int] | None, *,
+                     where: str) -> tuple[tuple[int, int] | None, list[str]]:
+    """The image size (px) a keypoint file is lifted with: ``image_size`` ``(W, H)`` given by the user
+    (``--image-size``; checked as a file's ``image_size``), which replaces the file's own ``file_size`` with a note
+    when they differ, else the file's (None: neither gave one)."""
+    if image_size is None:
+        return file_size, []
+    size = _image_size_field(list(image_size), where=where)
+    assert size is not None
+    if file_size is not None and tuple(file_size) != size:
+        return size, [f"the image size given ({size[0]} x {size[1]} px) replaces the file's own ({file_size[0]} x "
+                      f"{file_size[1]} px)"]
+    return size, []
+
+
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
-                       flip_test: bool | None = None, max_people: int | None = None) -> LiftRecord:
-    """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring)."""
+                       flip_test: bool | None = None, max_people: int | None = None,
+                       image_size: Any | None = None) -> LiftRecord:
+    """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring).
+    ``image_size`` ``(W, H)`` px: for a file that gives none (a list layout cannot), or in place of its own
+    (:func:`given_image_size`)."""
     kf = parse_keypoint_json(path, default_format=default_format)
-    notes = list(kf.warnings)
+    size, size_notes = given_image_size(image_size, kf.image_size, where="--image-size")
+    notes = list(kf.warnings) + size_notes
     people = kf.people or (kf.keypoints,)
     if max_people is not None and len(people) > max_people:
         each = f"{len(people)} people in the file; each is lifted"  # (the reader's note, no longer true)
@@ -313,10 +333,10 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     f, src, pp, cam_notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-        file_focal=kf.focal, file_pp=kf.principal_point, image_size=kf.image_size, exif=None,
+        file_focal=kf.focal, file_pp=kf.principal_point, image_size=size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread,
         assumed_focal=kf.assumed_focal)
-    cam_notes += plausibility_notes(kp17, f, kf.image_size, focal_source=src, source_format=kf.format)
+    cam_notes += plausibility_notes(kp17, f, size, focal_source=src, source_format=kf.format)
     cam_notes += lens_notes(kf.distortion, kf.distortion_model)
     lifted = lift_people(lifter, kp17, f, pp, flip_test=flip_test, source=kf.source, scores=scores, notes=cam_notes,
                          distortion=kf.distortion, distortion_model=kf.distortion_model)
@@ -327,7 +347,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     return LiftRecord(input=str(path), kind="keypoints", keypoints_2d=top.keypoints_2d, absolute=top.absolute,
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
-                      image_size=kf.image_size, model=lifter.name, source_format=kf.format,
+                      image_size=size, model=lifter.name, source_format=kf.format,
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
                       people=lifted, distortion=distortion_tuple(kf.distortion),
                       distortion_model=kf.distortion_model, scores=top.scores)

@@ -839,20 +839,24 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            principal_point: Any | None = None, default_format: str | None = None,
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
                            max_people: int = DEFAULT_MAX_PEOPLE, max_seconds: float = DEFAULT_MAX_SECONDS,
-                           flip_test: bool | None = None, cli_options: bool = True) -> SequenceRecord:
+                           flip_test: bool | None = None, cli_options: bool = True,
+                           image_size: Any | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
     person of every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
-    :func:`lifter.pipeline.resolve_camera`'s (False: messages name the file's fields, not the CLI's options)."""
+    :func:`lifter.pipeline.resolve_camera`'s (False: messages name the file's fields, not the CLI's options).
+    ``image_size`` ``(W, H)`` px: for a file that gives none, or in place of its own
+    (:func:`lifter.pipeline.given_image_size`)."""
     from .camera import lens_notes
-    from .pipeline import plausibility_notes, resolve_camera
+    from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
-    warnings = list(ks.warnings)
+    size, size_notes = given_image_size(image_size, ks.image_size, where="--image-size")
+    warnings = list(ks.warnings) + size_notes
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-        file_focal=ks.focal, file_pp=ks.principal_point, image_size=ks.image_size, exif=None,
+        file_focal=ks.focal, file_pp=ks.principal_point, image_size=size, exif=None,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread,
         assumed_focal=ks.assumed_focal, cli_options=cli_options)
     warnings.extend(notes)
@@ -895,7 +899,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     raw = np.stack([k for fr in frames for k in fr])  # every person of every frame, one batch
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))
-    warnings.extend(plausibility_notes(kp17, f, ks.image_size, focal_source=src, source_format=ks.format))
+    warnings.extend(plausibility_notes(kp17, f, size, focal_source=src, source_format=ks.format))
     warnings.extend(lens_notes(ks.distortion, ks.distortion_model))
     res = lifter.lift(kp17, focal=f, principal_point=pp, flip_test=flip_test, source=ks.source, warn=False,
                       distortion=ks.distortion, distortion_model=ks.distortion_model)
@@ -917,7 +921,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
     return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
-                          image_size=ks.image_size, focal=(float(f[0]), float(f[1])), focal_source=src,
+                          image_size=size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,
                           distortion=distortion_tuple(ks.distortion), distortion_model=ks.distortion_model,

@@ -89,6 +89,37 @@ def test_h36m_order_given_as_coco17_is_refused(tmp_path, weights, capsys):
         convert(coco, src="coco17")
 
 
+def test_image_size_option_for_keypoint_files_that_give_none(tmp_path, weights, kp17, capsys):
+    """A developer trial: a list of people (MMPose's or COCO's results) cannot hold 'image_size', and the message
+    named only that, or the full calibration. --image-size gives it (the principal point its centre, the focal
+    length the --fov field of view of it), and replaces a file's own with a note; photos are refused it."""
+    from lifter.camera import image_centre
+
+    coco = coco_from_h36m(kp17)
+    (tmp_path / "l.json").write_text(json.dumps([{"keypoints": coco.tolist(), "keypoint_scores": [0.9] * 17}]))
+    code, err = run([str(tmp_path / "l.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1 and "or the image's size, image_size= (--image-size W H)" in err, err
+    code, err = run([str(tmp_path / "l.json"), "--out", str(tmp_path / "o"), "--weights", str(weights),
+                     "--image-size", "1280", "720"], capsys)
+    rec = json.loads((tmp_path / "o" / "l.json").read_text())
+    want = default_focal((1280, 720))
+    assert code == 0 and rec["image_size"] == [1280, 720] and rec["principal_point"] == list(image_centre((1280, 720)))
+    assert rec["focal"] == pytest.approx([want, want], abs=0.01) and rec["focal_source"] == "default-fov", rec
+    (tmp_path / "s.json").write_text(json.dumps({"keypoints": coco.tolist(), "format": "coco17",
+                                                 "image_size": [640, 360]}))
+    code, err = run([str(tmp_path / "s.json"), "--out", str(tmp_path / "o"), "--weights", str(weights),
+                     "--image-size", "1280", "720"], capsys)
+    rec = json.loads((tmp_path / "o" / "s.json").read_text())
+    assert code == 0 and rec["image_size"] == [1280, 720]
+    assert "the image size given (1280 x 720 px) replaces the file's own (640 x 360 px)" in rec["warnings"]
+    (tmp_path / "p.png").write_bytes(b"not read")
+    code, err = run([str(tmp_path / "p.png"), "--out", str(tmp_path / "o"), "--weights", str(weights),
+                     "--image-size", "1280", "720"], capsys)
+    assert code == 1 and "p.png: --image-size is for keypoint files" in err, err
+    assert main(["lift", str(tmp_path / "l.json"), "--out", str(tmp_path / "o"), "--image-size", "0", "720"]) == 2
+    assert "--image-size: image_size must be [width, height] in px" in capsys.readouterr().err
+
+
 def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     d = tmp_path / "in"
     d.mkdir()
@@ -118,7 +149,8 @@ def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     assert code == 1 and "no focal length and no image size" in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 1 and ("no focal length and no principal point and no image size: pass focal= (--focal) and "
-                          "principal_point= (--principal-point), or put 'image_size' (or 'focal' and "
+                          "principal_point= (--principal-point), or the image's size, image_size= (--image-size W "
+                          "H), or put 'image_size' (or 'focal' and "
                           "'principal_point') in the file") in err
     code, err = run([str(tmp_path / "c.json"), "--out", str(out), "--principal-point", "640", "360", "--focal", "1000",
                      "--weights", str(weights)], capsys)

@@ -84,7 +84,7 @@ from ..detect import (
     check_max_side,
     load_image,
 )
-from ..io import LiftRecord, _camera_field, is_keypoint_sequence, write_json_atomic
+from ..io import LiftRecord, _camera_field, _image_size_field, is_keypoint_sequence, write_json_atomic
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
 from ..smoothing import check_strength
@@ -251,9 +251,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--focal", type=float, nargs="+", metavar="F", default=None,
                    help="focal length FX [FY] in px (one or two values) for every input (default, per input: a "
                    "keypoint file's focal; a photo's EXIF; else the --fov field of view of the image size, which a "
-                   "keypoint file then has to give as image_size)")
+                   "keypoint file then has to give as image_size, or --image-size)")
     p.add_argument("--principal-point", type=float, nargs=2, metavar=("CX", "CY"), default=None,
                    help="principal point in px (default: the image centre)")
+    p.add_argument("--image-size", type=float, nargs=2, metavar=("W", "H"), default=None,
+                   help="keypoint files: the image's size in px, for those that give no image_size (a list of "
+                        "people cannot), or in place of their own: the principal point defaults to its centre and "
+                        "the focal length to the --fov field of view of it (photos and videos: read from them)")
     p.add_argument("--fov", type=float, default=DEFAULT_DIAGONAL_FOV_DEG,
                    help="diagonal field of view (deg) assumed when no focal length is known")
     p.add_argument("--distortion", type=float, nargs="+", metavar="D", default=None,
@@ -312,6 +316,8 @@ def check_lift_options(args: argparse.Namespace) -> None:
                 "EXIF), or leave --focal out to use the photo's EXIF or the --fov field of view")
     if args.principal_point is not None:
         _camera_field(list(args.principal_point), name="--principal-point", where=None)
+    if args.image_size is not None:
+        _image_size_field(list(args.image_size), where="--image-size")
     if not (math.isfinite(args.fov) and MIN_FOV_DEG <= args.fov <= MAX_FOV_DEG):
         raise PoseLifterError(f"--fov must be a diagonal field of view in [{MIN_FOV_DEG:g}, {MAX_FOV_DEG:g}] degrees "
                               f"(a long telephoto to beyond the widest phone lens, ~120), got {args.fov:g}")
@@ -402,6 +408,9 @@ def run_lift(args: argparse.Namespace) -> int:
             for path, name in bar:
                 try:
                     sfx = path.suffix.lower()
+                    if args.image_size is not None and sfx != ".json":
+                        raise PoseLifterError(f"{path}: --image-size is for keypoint files; a photo's or video's "
+                                              "size is read from it")
                     if args.distortion is not None and (sfx == ".json" or sfx in VIDEO_SUFFIXES):
                         raise PoseLifterError(
                             f"{path}: --distortion is for photos; " + (
@@ -412,11 +421,11 @@ def run_lift(args: argparse.Namespace) -> int:
                     rec: LiftRecord | None = None
                     if sfx == ".json" and is_keypoint_sequence(path):
                         seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
-                                                     **seq_kw)
+                                                     image_size=args.image_size, **seq_kw)
                     elif sfx == ".json":
                         rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                                  default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
-                                                 max_people=args.max_people)
+                                                 max_people=args.max_people, image_size=args.image_size)
                     elif sfx in VIDEO_SUFFIXES:
                         est = get_estimator_once(path)
                         with tqdm(desc=f"  {path.name}", unit="frame", disable=quiet, file=sys.stderr, position=1,
