@@ -135,23 +135,34 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
     people ``others`` (``(person index, (17, 2) px)``, numbered from 1 at their head). RGB uint8.
     ``prescaled``: the result of :func:`scaled_base` for this image, to skip the resize. ``zoom``: where the people
     are small in the image, show only the region around them (:func:`inset_crop`), at the same inset size, marked
-    with its magnification ("zoom x2.5")."""
+    with its magnification ("zoom x2.5"). ``base`` may be a smaller copy of the ``size`` image (an upload's display
+    copy): the region is cut from it at its own scale."""
     crop = inset_crop(size, [p for p in (*poses.values(), *(kp for _, kp in others)) if p is not None]) \
         if zoom else None
     offset = np.zeros(2)
+    magnification = 1.0
     if crop is None:
         small, s = prescaled if prescaled is not None else scaled_base(base, size=size, max_width=max_width)
         img = small.copy()
     else:
         W, H = size
-        x0, y0, x1, y1 = crop
         src = canvas(W, H) if base is None else base
+        # the crop in the pixels of ``src`` (a display copy is smaller than ``size``: a browser trial's 4000 px photo
+        # had its crop cut from the 1280 px copy at full-resolution coordinates, empty, and the upload failed), whole
+        # pixels of it, and the full-resolution region they cover, which the poses are drawn in
+        sx, sy = src.shape[1] / float(W), src.shape[0] / float(H)
+        bx0 = min(int(np.floor(crop[0] * sx)), src.shape[1] - 1)
+        by0 = min(int(np.floor(crop[1] * sy)), src.shape[0] - 1)
+        bx1 = max(bx0 + 1, min(int(np.ceil(crop[2] * sx)), src.shape[1]))
+        by1 = max(by0 + 1, min(int(np.ceil(crop[3] * sy)), src.shape[0]))
+        x0, y0, x1, y1 = bx0 / sx, by0 / sy, bx1 / sx, by1 / sy
         out_w = max(1, int(round(W * min(1.0, max_width / float(W)))))
         out_h = max(1, int(round(out_w * (y1 - y0) / float(x1 - x0))))
         s = out_w / float(x1 - x0)
-        img = cv2.resize(src[y0:y1, x0:x1], (out_w, out_h),
-                         interpolation=cv2.INTER_AREA if s < 1.0 else cv2.INTER_LINEAR)
+        img = cv2.resize(src[by0:by1, bx0:bx1], (out_w, out_h),
+                         interpolation=cv2.INTER_AREA if out_w < bx1 - bx0 else cv2.INTER_LINEAR)
         offset = np.array([x0, y0], np.float64)
+        magnification = W / (x1 - x0)
         poses = {k: None if v is None else np.asarray(v, np.float64) - offset for k, v in poses.items()}
         others = [(k, np.asarray(kp, np.float64) - offset) for k, kp in others]
     # marks grow with the inset (readable on 1000-px frames) and shrink for a small person (a browser trial: discs
@@ -170,7 +181,7 @@ def overlay(base: np.ndarray | None, *, size: tuple[int, int], poses: dict[str, 
             draw_pose(img, kp, COLORS[key], scale=s, thickness=round(k * (2 if cur else 1.5)),
                       radius=max(1, round(k * (3 if cur else 2))), selected=selected if cur else None)
     if crop is not None:
-        text = f"zoom x{size[0] / float(crop[2] - crop[0]):.1f}"
+        text = f"zoom x{magnification:.1f}"
         org = (6, 16 + round(4 * (k - 1)))
         cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45 * k, (255, 255, 255), max(3, round(3 * k)),
                     cv2.LINE_AA)

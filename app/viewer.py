@@ -328,6 +328,8 @@ class SessionView:
         """Key of the last Human3.6M sample shown (coming back to Human3.6M goes back to that frame)."""
         self._photo: up.Photo | None = None
         self._video: VideoSequence | None = None
+        self._uploads_begun = 0
+        """Uploads this tab has begun: one that finishes after a later one began is not shown (:meth:`_superseded`)."""
         """The last uploaded video / keypoint sequence (its frames are the samples ``video/<id>/<name>/<i>``)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
@@ -698,14 +700,27 @@ class SessionView:
             self._set_control(name, getattr(st, name))
 
     def _apply(self, st: SessionState, *, new_sample: bool = False) -> None:
-        """Lift ``st`` and, if that works, make it the tab's state and draw it (raises, changing nothing, if not)."""
+        """Lift ``st`` and, if that works, make it the tab's state and draw it (raises, changing nothing, if not:
+        a drawing that fails part way is taken back, the previous state drawn again)."""
         t0 = time.perf_counter()
         frame = compute_frame(st, self.app.pool.get(st.model), self.app.error_model)
         t1 = time.perf_counter()
         focal_changed = st.focal_px != self.state.focal_px  # (not each new frame of a playing sequence: _push)
+        old_state, old_frame = self.state, self.frame
         self.state = st
         self.frame = frame
-        self._push(frame, new_sample=new_sample, focal_changed=focal_changed)
+        try:
+            self._push(frame, new_sample=new_sample, focal_changed=focal_changed)
+        except Exception:
+            # (a browser trial: an upload that failed while drawn left the new frustum under the old readout, and
+            # the focal typed next was not applied)
+            self.state, self.frame = old_state, old_frame
+            if old_frame is not None:
+                try:
+                    self._push(old_frame, new_sample=True, focal_changed=True)
+                except Exception:  # noqa: BLE001 - the first error is the one said
+                    log.error("drawing the previous state again failed:\n%s", traceback.format_exc())
+            raise
         t2 = time.perf_counter()
         self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
         self.update_count += 1
@@ -1570,10 +1585,23 @@ class SessionView:
         except PoseLifterError as exc:
             raise up.UploadRefused(str(exc)) from None
 
+    def _superseded(self, mine: int, since: float) -> str | None:
+        """Why an upload begun at ``since`` (time.time()) as this tab's ``mine``-th is not to be shown once its file
+        is read and lifted: another upload begun after it, or a sample picked since (a browser trial: a video
+        finishing late replaced the keypoint file uploaded, or the subject picked, while it was lifted). None: show
+        it, the last thing the user did."""
+        if self._uploads_begun != mine:
+            return "another file was uploaded"
+        if any(q.update_timestamp > since and self._own_t.get(id(q)) != q.update_timestamp for q in self._pickers()):
+            return "another sample was picked"
+        return None
+
     def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")
+        self._uploads_begun += 1
+        mine, since = self._uploads_begun, time.time()
         if vid.is_video_upload(name) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
-            self._load_video(name, content)
+            self._load_video(name, content, mine=mine, since=since)
             return
         try:
             sample, self._photo = up.upload_sample(
@@ -1583,6 +1611,12 @@ class SessionView:
         except up.UploadFailed as exc:
             self._photo = exc.photo
             raise
+        with self._runner.holding(), self.lock:
+            why = self._superseded(mine, since)
+            if why is not None:
+                self.show_message(f"{up.safe_name(name)}: read, but not shown: {why} meanwhile (upload it again to "
+                                  "see it)")
+                return
         if self.playing:
             self.stop_playback()
         with self._runner.holding(), self.lock:
@@ -1593,7 +1627,7 @@ class SessionView:
             self._last_upload = sample
         self.show_message(up.upload_message(sample))
 
-    def _load_video(self, name: str, content: bytes) -> None:
+    def _load_video(self, name: str, content: bytes, *, mine: int, since: float) -> None:
         """A video or keypoint sequence: lifted with a progress note (one notification, updated), then shown."""
         nm = up.safe_name(name)
         note: Any = None
@@ -1622,6 +1656,12 @@ class SessionView:
         finally:
             if note is not None:
                 note.remove()
+        with self._runner.holding(), self.lock:
+            why = self._superseded(mine, since)
+            if why is not None:
+                self.show_message(f"{nm}: lifted ({seq.num_frames} frames), but not shown: {why} while it was "
+                                  "lifted (upload it again to see it)")
+                return
         if self.playing:
             self.stop_playback()
         with self._runner.holding(), self.lock:

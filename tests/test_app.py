@@ -2001,6 +2001,29 @@ def test_input_2d_marks_shrink_for_a_small_person() -> None:
     assert ring_pixels(small) < 0.6 * ring_pixels(tall)  # the selected joint's ring too
 
 
+def test_the_inset_zooms_onto_the_same_region_of_a_display_copy() -> None:
+    """A browser trial: a 4000 px photo with a small person failed to upload ("internal error", cv2.resize of an
+    empty array) and a 5000 px one showed carpet in the inset: the zoomed region was cut from the upload's 1280 px
+    display copy at full-resolution coordinates. The inset from the copy now shows what the full image's does."""
+    import cv2
+    from poselifter_app.drawing import overlay
+
+    from lifter import demo_sample
+
+    kp = demo_sample("standing").keypoints_2d
+    size = (4000, 3000)
+    rng = np.random.default_rng(0)
+    full = cv2.resize(rng.integers(0, 255, (30, 40, 3), dtype=np.uint8), size, interpolation=cv2.INTER_NEAREST)
+    small = (kp - kp.mean(0)) * (500 / np.ptp(kp, 0).max()) + (2600, 1900)  # 500 px tall in 3000
+    display = cv2.resize(full, (1280, 960), interpolation=cv2.INTER_AREA)
+    want = overlay(full, size=size, poses={"current": small}, zoom=True)
+    got = overlay(display, size=size, poses={"current": small}, zoom=True)
+    assert got.shape == want.shape
+    assert float(np.mean(np.abs(got.astype(float) - want.astype(float)))) < 6.0  # (the copy's blur at the edges)
+    corner = (kp - kp.mean(0)) * (500 / np.ptp(kp, 0).max()) + (3700, 2700)  # at the image's corner
+    assert overlay(display, size=size, poses={"current": corner}, zoom=True).shape == want.shape
+
+
 def test_the_inset_zooms_onto_small_people_and_keeps_its_size() -> None:
     """A researcher trial: a person about 100 px tall in the inset left the ground truth and the detection too small
     to compare. With ``zoom`` the inset shows the region around the people (the image's aspect, inside the image,

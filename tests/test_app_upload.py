@@ -418,6 +418,45 @@ def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch)
         server.stop()
 
 
+def test_a_new_sample_that_fails_to_draw_leaves_the_tab_as_it_was(monkeypatch) -> None:
+    """A browser trial: an upload that failed while being drawn (the inset's crop, since mended) left the tab half
+    updated (the new photo's frustum, the old readout, the focal typed before reset) and a focal typed next was not
+    applied. A sample that fails to draw is now taken back: the state, frame and drawing are the previous ones, and
+    the tab goes on from them."""
+    import poselifter_app.viewer as viewer_module
+
+    server = local_server()
+    try:
+        a = PoseLifterApp(server, h36m_root=None, models=["gt"], default_model="gt",
+                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d],
+                                                                  full_width=800))
+        v = a.headless_view()
+        v.gui.lift.focal.value = 2000.0
+        assert v.state.focal_px == 2000.0
+        key, root = v.state.sample.key, v.frame.root.copy()
+        real = viewer_module.overlay
+        calls = [0]
+
+        def failing(*args, **kwargs):
+            calls[0] += 1
+            if calls[0] == 1:
+                raise RuntimeError("drawing failed")
+            return real(*args, **kwargs)
+
+        monkeypatch.setattr(viewer_module, "overlay", failing)
+        assert v.load_upload("one.jpg", _jpeg(a.demo.get("standing").image)) is False
+        assert "internal error: RuntimeError: drawing failed" in v.messages[-1]
+        assert v.state.sample.key == key and v.state.focal_px == 2000.0
+        np.testing.assert_array_equal(v.frame.root, root)
+        assert calls[0] == 2  # (the previous sample drawn again)
+        v.gui.lift.focal.value = 3000.0
+        assert v.state.focal_px == 3000.0 and "Focal 3000" in v.gui.readout.readout.content
+        assert v.load_upload("one.jpg", _jpeg(a.demo.get("standing").image)) is True  # (and the tab goes on)
+        assert v.state.sample.key.startswith("upload/")
+    finally:
+        server.stop()
+
+
 # ----------------------------------------------------------------------------------------------
 # Download
 # ----------------------------------------------------------------------------------------------

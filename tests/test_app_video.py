@@ -497,3 +497,44 @@ def test_a_keypoint_sequence_s_camera_errors_name_the_file_s_fields(server) -> N
     msg = v.messages[-1]
     assert "no focal length and no image size: put 'image_size' (or 'focal') in the file" in msg, msg
     assert "--focal" not in msg and "focal=" not in msg, msg
+
+
+@pytest.mark.parametrize("meanwhile", ["upload", "pick"])
+def test_an_upload_lifted_after_a_later_choice_is_not_shown_over_it(server, monkeypatch, meanwhile: str) -> None:
+    """A browser trial: a video still being lifted when a keypoint file was uploaded, or a sample picked, replaced
+    that choice once it finished (about 0.5 s later), without a word. The last thing the user did wins: the late
+    upload is not shown, and a note says so."""
+    import threading
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(6)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    real, go, lifting = vid.video_sequence, threading.Event(), threading.Event()
+
+    def slow(*args, **kwargs):
+        lifting.set()
+        assert go.wait(30)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(vid, "video_sequence", slow)
+    done: list[bool] = []
+    t = threading.Thread(target=lambda: done.append(v.load_upload("walk.json", json.dumps(doc).encode())))
+    t.start()
+    try:
+        assert lifting.wait(30)
+        if meanwhile == "upload":
+            one = {"keypoints": _script(1)[0][0].tolist(), "image_size": [W, H], "focal": F, "format": "h36m17"}
+            assert v.load_upload("one.json", json.dumps(one).encode()) is True
+            want = v.state.sample.key
+            assert want.startswith("upload/") and "one.json" in want
+        else:
+            v.gui.sample.demo.value = "crouching"
+            v.gui.sample.source.value = "demo"
+            assert wait_for(lambda: v.state.sample.key == "demo/crouching")
+            want = "demo/crouching"
+    finally:
+        go.set()
+        t.join(60)
+    assert done == [True] and v.state.sample.key == want and v.sequence() is None
+    assert "walk.json: lifted (6 frames), but not shown: another " in v.messages[-1], v.messages[-3:]
