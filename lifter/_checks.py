@@ -327,6 +327,39 @@ def upside_down_notes(kp17: np.ndarray) -> list[str]:
             "(an upside-down person, e.g. a handstand, is lifted as given)"]
 
 
+def sideways_notes(kp17: np.ndarray) -> list[str]:
+    """A note when most of the poses ``(n, 17, 2)`` px (H36M order) lie sideways in the image
+    (:func:`sideways_people`): keypoints given as (row, column) = (y, x), as image arrays index them, look so (a
+    developer trial: an upright person's (y, x) was lifted 1.6 m off without a word); so does a person lying down,
+    hence a note, not an error."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    side = sideways_people(k)
+    if not _most(side):
+        return []
+    return [f"the body lies sideways in {int(side.sum())} of {len(k)} pose(s) (head and ankles apart along the "
+            "image's x, the pose wider than tall): this package takes keypoints as (x, y) = (column, row); if yours "
+            "are (row, column), as image arrays index them, give keypoints[..., ::-1] (a person lying down is lifted "
+            "as given, a pose rare in the training data)"]
+
+
+def sideways_people(kp17: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the poses ``(n, 17, 2)`` px (H36M order) lie sideways in the image: wider than tall,
+    the head top and the ankles' midpoint apart along x by more than half the pose's width and more than twice as
+    far as along y (a joint at (0, 0), a detector's placeholder, gives no reading)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    h, ra, la = _HEAD_TOP, _R_ANKLE, _L_ANKLE
+    x = k[..., 0]
+    x_ext = x.max(1) - x.min(1)
+    dx = np.abs(x[:, h] - 0.5 * (x[:, ra] + x[:, la]))
+    side = dx > 0.5 * x_ext  # (first: cheap, and rarely true)
+    if side.any():  # (the rest only where it can matter: lift runs this on every batch)
+        sub = k[side]
+        dy = np.abs(sub[:, h, 1] - 0.5 * (sub[:, ra, 1] + sub[:, la, 1]))
+        side[side] = ((x_ext[side] > sub[..., 1].max(1) - sub[..., 1].min(1)) & (dx[side] > 2.0 * dy)
+                      & ~zero_placeholders(sub)[:, [h, ra, la]].any(1))
+    return side
+
+
 def upside_down_people(kp17: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: which of the poses ``(n, 17, 2)`` px (H36M order, image y down) are upright bodies upside down
     in the image: taller than wide, the head below both ankles by more than half the pose's height (a person lying

@@ -37,6 +37,7 @@ from ._checks import (
     narrow_view_notes,
     outside_image_notes,
     principal_point_notes,
+    sideways_notes,
     upside_down_notes,
     where_in_batch,
 )
@@ -731,6 +732,7 @@ class Lifter:
             if len(flat_focal) and np.all(flat_focal == flat_focal[0]):
                 in_list += narrow_view_notes(flat_focal[0], (int(wh[0]), int(wh[1])))
         in_list += upside_down_notes(kp)
+        in_list += sideways_notes(kp)
         in_list += face_first_notes(kp)
         in_notes = tuple(in_list)
         if warn:

@@ -27,6 +27,7 @@ from ._checks import (
     narrow_view_notes,
     outside_image_notes,
     principal_point_notes,
+    sideways_notes,
     upside_down_notes,
     upside_down_people,
 )
@@ -169,8 +170,9 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
         return notes
     notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES,
                             placeholders=source_format == H36M17)
-    if not detected:  # (the package's own detector gives upright image coordinates)
+    if not detected:  # (the package's own detector gives upright image coordinates, in (x, y) order)
         notes += upside_down_notes(k)
+        notes += sideways_notes(k)
     notes += outside_image_notes(k, image_size, detected=detected)
     return notes
 

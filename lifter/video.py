@@ -274,6 +274,8 @@ class SequenceRecord:
     warnings: list[str] = field(default_factory=list)
     detector: str | None = None
     seconds_per_frame: float | None = None
+    """Wall-clock seconds this run took per frame (detection, lift, tracking): a timing, not the frame period
+    (``1 / fps``), so it differs from run to run; None for keypoint sequences."""
     source: str = "detected"
     distortion: tuple[float, ...] | None = None
     """The lens distortion the 2D was given with (a keypoint sequence's ``distortion``), or None."""

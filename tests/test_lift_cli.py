@@ -120,6 +120,34 @@ def test_image_size_option_for_keypoint_files_that_give_none(tmp_path, weights, 
     assert "--image-size: image_size must be [width, height] in px" in capsys.readouterr().err
 
 
+def test_a_rerun_into_the_same_folder_leaves_no_stale_outputs(tmp_path, weights, kp17, capsys):
+    """A developer trial: a photo lifted again with --max-people 1 into the same --out rewrote pair.json for one
+    person but left pair_person2.bvh and the two-person pair.glb of the run before, without a word (a video's
+    <name>_track<ID>.bvh the same). The earlier files of a kind written again are removed; those of a kind not asked
+    for are left, and said; another input's own result is never touched."""
+    two = {"people": [{"keypoints": kp17.tolist()}, {"keypoints": (kp17 * 0.8 + [300, 40]).tolist()}],
+           "format": "h36m17", "image_size": [1280, 720], "focal": 1000.0}
+    (tmp_path / "pair.json").write_text(json.dumps(two))
+    out = tmp_path / "o"
+    code, err = run([str(tmp_path / "pair.json"), "--out", str(out), "--weights", str(weights), "--bvh", "--glb"],
+                    capsys)
+    assert code == 0 and {f.name for f in out.iterdir()} == {"pair.json", "pair.glb", "pair.bvh", "pair_person2.bvh"}
+    (out / "pair_track7.bvh").write_text("an earlier video's track")
+    (out / "pair_person3.json").write_text("{}")  # another input's result, with its own BVH
+    (out / "pair_person3.bvh").write_text("another input's")
+    code, err = run([str(tmp_path / "pair.json"), "--out", str(out), "--weights", str(weights), "--bvh",
+                     "--max-people", "1"], capsys)
+    assert code == 0 and len(json.loads((out / "pair.json").read_text())["people"]) == 1
+    assert {f.name for f in out.iterdir()} == {"pair.json", "pair.glb", "pair.bvh", "pair_person3.json",
+                                               "pair_person3.bvh"}
+    assert f"pair.json: note: removed pair_person2.bvh, pair_track7.bvh from {out}: an earlier run's, which this " \
+           "result replaces" in err, err
+    assert f"pair.json: note: pair.glb in {out} is an earlier run's, left as it was: it may not match this " \
+           "result (pair.json)" in err
+    code, err = run([str(tmp_path / "pair.json"), "--out", str(out), "--weights", str(weights), "--glb"], capsys)
+    assert code == 0 and "removed" not in err and (out / "pair.glb").exists() and (out / "pair.bvh").exists()
+
+
 def test_keypoint_json_inputs(tmp_path, weights, kp17, capsys):
     d = tmp_path / "in"
     d.mkdir()

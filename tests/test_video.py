@@ -31,7 +31,7 @@ def lifter():
 
 def _person(rng: np.random.Generator, x0: float) -> np.ndarray:
     """A 2D pose (17, 2) px around x = x0 in a 320 x 240 frame."""
-    kp = project(random_pose_cam(rng, 1)[0], focal=F, principal_point=(W / 2, H / 2))
+    kp = project(random_pose_cam(rng, 1, upright=False)[0], focal=F, principal_point=(W / 2, H / 2))
     kp = (kp - kp.mean(0)) * (90.0 / np.ptp(kp[:, 1])) + [x0, H / 2]
     return kp
 

@@ -381,6 +381,9 @@ def run_lift(args: argparse.Namespace) -> int:
     quiet = True if args.no_progress else None  # (tqdm's None: no bar when stderr is not a terminal, e.g. a pipe)
     bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=quiet, file=sys.stderr, position=0)
 
+    written: set[Path] = set()  # every file this run wrote (never tidied away as an earlier run's)
+    now: list[Path] = []
+
     def say(msg: str) -> None:  # a message on its own line, never glued onto a progress bar
         tqdm.write(msg, file=sys.stderr)
 
@@ -449,25 +452,31 @@ def run_lift(args: argparse.Namespace) -> int:
                         say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
                             f"({earlier}) written before")
                     if seq is not None:
-                        write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
+                        now = write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
                         for b in seq.bad_frames[:20]:
                             say(f"{path}: frame {b['index']}: {b['error']}")
                         for msg in seq.warnings:
                             say(f"{path}: note: {msg}")
                     elif rec is not None:
                         write_json_atomic(args.out / f"{name}.json", rec.to_json())
+                        now = [args.out / f"{name}.json"]
                         poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
                         if args.glb:
                             from ..export import write_glb
 
                             write_glb(poses, args.out / f"{name}.glb")
+                            now.append(args.out / f"{name}.glb")
                         if args.bvh:
                             from ..export import write_bvh
 
                             for k, pose in enumerate(poses):
-                                write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
+                                now.append(args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
+                                write_bvh(pose, now[-1])
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
+                    written.update(now)
+                    for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh):
+                        say(f"{path}: note: {msg}")
                     ok += 1
                 except PoseLifterError as exc:
                     msg = str(exc)
@@ -507,17 +516,56 @@ def _earlier_input(target: Path, path: Path) -> str | None:
     return None if same else str(earlier)
 
 
+def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool, bvh: bool) -> list[str]:
+    """Notes on the files of ``<name>``'s outputs in ``out`` that this run did not write (``written``): an earlier
+    run's, which no longer match ``<name>.json`` (a developer trial: a photo lifted again with --max-people 1 left
+    ``pair_person2.bvh`` and a two-person ``pair.glb`` beside the one-person result). Those of a kind written now
+    (``--bvh``: ``<name>.bvh``, ``<name>_person<K>.bvh``, ``<name>_track<ID>.bvh``; ``--glb``: ``<name>.glb``) are
+    removed; those of a kind not asked for are left, and said."""
+    bvh_family = re.compile(re.escape(name) + r"(?:_person\d+|_track\d+)?\.bvh")
+    removed: list[str] = []
+    left: list[str] = []
+    try:
+        entries = sorted(out.iterdir())
+    except OSError:
+        return []
+    for f in entries:
+        is_bvh, is_glb = bvh_family.fullmatch(f.name) is not None, f.name == f"{name}.glb"
+        if not (is_bvh or is_glb) or f in written or not f.is_file():
+            continue
+        if is_bvh and f.stem != name and (out / f"{f.stem}.json").exists():
+            continue  # (another input's own result: "pair_person2.jpg" writes pair_person2.json and .bvh)
+        if (is_bvh and bvh) or (is_glb and glb):
+            try:
+                f.unlink()
+                removed.append(f.name)
+            except OSError as exc:
+                left.append(f"{f.name} (could not be removed: {exc.strerror})")
+        else:
+            left.append(f.name)
+    notes = []
+    if removed:
+        notes.append(f"removed {', '.join(removed)} from {out}: an earlier run's, which this result replaces")
+    if left:
+        notes.append(f"{', '.join(left)} in {out} {'is' if len(left) == 1 else 'are'} an earlier run's, left as "
+                     f"{'it was: it' if len(left) == 1 else 'they were: they'} may not match this result ({name}.json)")
+    return notes
+
+
 def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
-                           say: Any = print) -> None:
+                           say: Any = print) -> list[Path]:
     """``out/<name>.json`` for a lifted video or keypoint sequence; with ``bvh`` one animation per track
-    (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``."""
+    (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``. Returns the
+    files written."""
     write_json_atomic(out / f"{name}.json", seq.to_json())
+    written = [out / f"{name}.json"]
     tracks = seq.tracks()
     if bvh:
         from ..export import write_bvh_animation
 
         for tid, seen in sorted(tracks.items()):
-            write_bvh_animation(track_animation(seen), out / f"{name}_track{tid}.bvh", fps=seq.fps)
+            written.append(out / f"{name}_track{tid}.bvh")
+            write_bvh_animation(track_animation(seen), written[-1], fps=seq.fps)
         if not tracks:
             say(f"{seq.input}: note: nobody in any frame; no BVH written")
     if glb:
@@ -526,5 +574,7 @@ def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bo
         if tracks:
             write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
                                  for tid, seen in tracks.items()}, out / f"{name}.glb", fps=seq.fps)
+            written.append(out / f"{name}.glb")
         else:
             say(f"{seq.input}: note: nobody in any frame; no GLB written")
+    return written
