@@ -235,7 +235,10 @@ def zero_placeholders(keypoints: np.ndarray) -> np.ndarray:
 
 MIN_PLAUSIBLE_VIEW_DEG: float = 1.0
 """A focal length that gives the image a diagonal field of view narrower than this gets a note
-(:func:`narrow_view_notes`): a 2000 mm lens on a full-frame camera still sees 1.2 deg."""
+(:func:`view_angle_notes`): a 2000 mm lens on a full-frame camera still sees 1.2 deg."""
+MAX_PLAUSIBLE_IMAGE_VIEW_DEG: float = 150.0
+"""A focal length that gives the image a diagonal field of view wider than this gets a note
+(:func:`view_angle_notes`): the widest phone ultra-wides see about 120 deg, and a pinhole camera never 180."""
 
 
 def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: bool = False,
@@ -264,11 +267,13 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
             f"{n} lie mostly outside the {W} x {H} px image{at}: are the keypoints in this image's pixels?"]
 
 
-def narrow_view_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str]:
+def view_angle_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str]:
     """A note when the focal length ``focal`` (px, scalar or ``(fx, fy)``) gives the ``image_size`` image a diagonal
-    field of view narrower than :data:`MIN_PLAUSIBLE_VIEW_DEG` (None: not checked): a focal length in other pixels
-    or units, or a typo (a user trial's 100000 px on a 1000 px image placed a person at 438 m with only a note about
-    the distance). The depth is proportional to the focal length."""
+    field of view narrower than :data:`MIN_PLAUSIBLE_VIEW_DEG` or wider than :data:`MAX_PLAUSIBLE_IMAGE_VIEW_DEG`
+    (None: not checked): a focal length in other pixels or units, or a typo (a user trial's 100000 px on a 1000 px
+    image placed a person at 438 m with only a note about the distance; a developer trial's 26 mm phone focal on a
+    4000 x 3000 px photo, a small person near its centre, went unnoticed). The depth is proportional to the focal
+    length."""
     if image_size is None:
         return []
     from .camera import focal_alpha
@@ -276,6 +281,11 @@ def narrow_view_notes(focal: Any, image_size: tuple[int, int] | None) -> list[st
     alpha = float(focal_alpha(np.asarray(focal, np.float64).reshape(-1)))
     W, H = image_size
     fov = math.degrees(2.0 * math.atan(math.hypot(W, H) / (2.0 * alpha)))
+    if fov > MAX_PLAUSIBLE_IMAGE_VIEW_DEG:
+        return [f"the focal length {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.0f} deg "
+                "(diagonal), wider than any camera's without a fisheye lens (the widest phone ultra-wides: about "
+                "120 deg): is it in mm, not px (f_px = f_mm * image width px / sensor width mm)? Every depth is "
+                "proportional to it"]
     if not fov < MIN_PLAUSIBLE_VIEW_DEG:
         return []
     return [f"the focal length {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.2g} deg "

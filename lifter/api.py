@@ -34,11 +34,11 @@ from ._checks import (
     as_points,
     face_first_notes,
     input_warnings,
-    narrow_view_notes,
     outside_image_notes,
     principal_point_notes,
     sideways_notes,
     upside_down_notes,
+    view_angle_notes,
     where_in_batch,
 )
 from .camera import (
@@ -730,7 +730,7 @@ class Lifter:
         if focal_source == "given" and wh is not None and wh.ndim == 1:
             flat_focal = f.reshape(-1, 2)
             if len(flat_focal) and np.all(flat_focal == flat_focal[0]):
-                in_list += narrow_view_notes(flat_focal[0], (int(wh[0]), int(wh[1])))
+                in_list += view_angle_notes(flat_focal[0], (int(wh[0]), int(wh[1])))
         in_list += upside_down_notes(kp)
         in_list += sideways_notes(kp)
         in_list += face_first_notes(kp)

@@ -24,12 +24,12 @@ from ._checks import (
     PoseLifterError,
     as_pair,
     input_warnings,
-    narrow_view_notes,
     outside_image_notes,
     principal_point_notes,
     sideways_notes,
     upside_down_notes,
     upside_down_people,
+    view_angle_notes,
 )
 from ._text import sentence
 from .api import MIN_FOCAL_PX
@@ -146,7 +146,7 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         pp = image_centre(image_size)
     notes += principal_point_notes(pp, image_size)
     if src in FOCAL_GIVEN_SOURCES:
-        notes += narrow_view_notes(focal, image_size)
+        notes += view_angle_notes(focal, image_size)
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 

@@ -781,6 +781,21 @@ def test_lift_and_keypoint_files_say_when_the_body_lies_sideways(tmp_path):
     assert any(w.startswith("the body lies sideways in 1 of 1 pose(s)") for w in rec.warnings), rec.warnings
 
 
+def test_a_focal_length_in_mm_is_noted_from_the_image_size_when_the_person_is_small():
+    """A developer trial: a 26 mm phone focal given as px for a 4000 x 3000 photo, the person 60 px tall near the
+    centre, spans too little of the view for the pose's own check; the image's view at that focal (179 deg) tells."""
+    lf = tiny_lifter()
+    kp = demo_sample("walking").keypoints_2d
+    small = (kp - kp.mean(0)) * (60 / np.ptp(kp[:, 1])) + [2010, 1490]
+    with pytest.warns(PoseLifterWarning, match=r"the focal length 26 px gives this 4000 x 3000 px image a field of "
+                                               r"view of 179 deg \(diagonal\), wider than any camera's"):
+        res = lf.lift(small, focal=26.0, image_size=(4000, 3000))
+    assert sum("179 deg" in w for w in res.input_warnings) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        lf.lift(small, focal=4000 / 3.46, image_size=(4000, 3000))  # (a 120 deg phone ultra-wide)
+
+
 def test_lift_warns_of_coco17_keypoints_given_in_place_of_h36m17():
     """A user trial: COCO-17 keypoints passed to Lifter.lift unconverted were lifted as H36M order (the nose taken for
     the pelvis) without a word, the root at 39 % of its depth, where a keypoint file without 'format' is refused.

@@ -899,6 +899,7 @@ def test_keypoint_file_scores_reach_the_download(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("camera", "said"), [
     ({"focal": 1145, "principal_point": [800, 600]}, "was that given as the principal point?"),
     ({"focal": 100000}, "narrower than a 2000 mm telephoto lens's"),
+    ({"focal": 20}, "wider than any camera's without a fisheye lens"),
 ])
 def test_a_keypoint_upload_gets_the_camera_notes_poselifter_lift_gives(camera: dict, said: str,
                                                                       tmp_path: Path) -> None:
