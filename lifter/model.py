@@ -247,7 +247,8 @@ class PoseLifterNet(nn.Module):
         self.blocks = nn.Sequential(*[ResidualBlock(config.width, config.dropout, coupled=mirrored)
                                       for _ in range(config.num_blocks)])
         self.head = nn.Linear(config.width, NUM_OUTPUTS)
-        nn.init.normal_(self.head.weight, std=1e-3)
+        if not self.head.weight.is_meta:  # (a meta net, for shapes only, has no values: its first normal_ costs ~1.5 s)
+            nn.init.normal_(self.head.weight, std=1e-3)
         nn.init.zeros_(self.head.bias)
         if mirrored:
             perm, sign = feature_mirror(config.mode, num_extra=config.num_features - num_features(config.mode))
