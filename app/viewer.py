@@ -329,7 +329,9 @@ class SessionView:
         self._photo: up.Photo | None = None
         self._video: VideoSequence | None = None
         self._uploads_begun = 0
-        """Uploads this tab has begun: one that finishes after a later one began is not shown (:meth:`_superseded`)."""
+        """Uploads this tab has begun, numbered from 1 (:meth:`_superseded`)."""
+        self._upload_shown = 0
+        """The number of the latest upload shown: one begun before it and finished after is not shown."""
         """The last uploaded video / keypoint sequence (its frames are the samples ``video/<id>/<name>/<i>``)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
@@ -1587,10 +1589,10 @@ class SessionView:
 
     def _superseded(self, mine: int, since: float) -> str | None:
         """Why an upload begun at ``since`` (time.time()) as this tab's ``mine``-th is not to be shown once its file
-        is read and lifted: another upload begun after it, or a sample picked since (a browser trial: a video
-        finishing late replaced the keypoint file uploaded, or the subject picked, while it was lifted). None: show
-        it, the last thing the user did."""
-        if self._uploads_begun != mine:
+        is read and lifted: another upload begun after it and shown (not one refused), or a sample picked since (a
+        browser trial: a video finishing late replaced the keypoint file uploaded, or the subject picked, while it
+        was lifted). None: show it, the last thing the user did. Call it holding :attr:`lock`."""
+        if self._upload_shown > mine:
             return "another file was uploaded"
         if any(q.update_timestamp > since and self._own_t.get(id(q)) != q.update_timestamp for q in self._pickers()):
             return "another sample was picked"
@@ -1598,32 +1600,41 @@ class SessionView:
 
     def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")
-        self._uploads_begun += 1
-        mine, since = self._uploads_begun, time.time()
+        with self.lock:
+            self._uploads_begun += 1
+            mine, since = self._uploads_begun, time.time()
         if vid.is_video_upload(name) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
             self._load_video(name, content, mine=mine, since=since)
             return
         try:
-            sample, self._photo = up.upload_sample(
+            sample, photo = up.upload_sample(
                 name, content, key=upload_key(self.app.next_upload_id(), up.safe_name(name)), photo=self._photo,
                 max_bytes=self.app.max_upload_bytes, estimator=self.app.estimator,
                 lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock)
         except up.UploadFailed as exc:
-            self._photo = exc.photo
+            with self.lock:
+                if self._uploads_begun == mine:  # (the photo a later keypoint file is drawn on: not a stale one's)
+                    self._photo = exc.photo
             raise
+        said = f"{up.safe_name(name)}: read, but not shown: {{}} meanwhile (upload it again to see it)"
         with self._runner.holding(), self.lock:
             why = self._superseded(mine, since)
             if why is not None:
-                self.show_message(f"{up.safe_name(name)}: read, but not shown: {why} meanwhile (upload it again to "
-                                  "see it)")
+                self.show_message(said.format(why))
                 return
         if self.playing:
             self.stop_playback()
         with self._runner.holding(), self.lock:
+            why = self._superseded(mine, since)  # (again: the player stopped outside the lock)
+            if why is not None:
+                self.show_message(said.format(why))
+                return
             try:
                 self._show_sample(sample, reframe=True)  # (a new photo: a new person to look at)
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
+            self._photo = photo  # (only once shown: a later keypoint file is drawn on it)
+            self._upload_shown = max(self._upload_shown, mine)
             self._last_upload = sample
         self.show_message(up.upload_message(sample))
 
@@ -1656,15 +1667,20 @@ class SessionView:
         finally:
             if note is not None:
                 note.remove()
+        said = f"{nm}: lifted ({seq.num_frames} frames), but not shown: {{}} while it was lifted (upload it again to " \
+               "see it)"
         with self._runner.holding(), self.lock:
             why = self._superseded(mine, since)
             if why is not None:
-                self.show_message(f"{nm}: lifted ({seq.num_frames} frames), but not shown: {why} while it was "
-                                  "lifted (upload it again to see it)")
+                self.show_message(said.format(why))
                 return
         if self.playing:
             self.stop_playback()
         with self._runner.holding(), self.lock:
+            why = self._superseded(mine, since)  # (again: the player stopped outside the lock)
+            if why is not None:
+                self.show_message(said.format(why))
+                return
             old = self._video
             self._video = seq
             try:
@@ -1672,6 +1688,10 @@ class SessionView:
             except PoseLifterError as exc:
                 self._video = old
                 raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
+            except BaseException:  # (a drawing that failed: the previous state is shown again, and its sequence)
+                self._video = old
+                raise
+            self._upload_shown = max(self._upload_shown, mine)
         self.show_message(vid.video_message(seq))
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:

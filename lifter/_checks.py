@@ -279,6 +279,8 @@ def view_angle_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str
     from .camera import focal_alpha
 
     alpha = float(focal_alpha(np.asarray(focal, np.float64).reshape(-1)))
+    if not (math.isfinite(alpha) and alpha > 0):  # (a focal that small is refused elsewhere, naming MIN_FOCAL_PX)
+        return []
     W, H = image_size
     fov = math.degrees(2.0 * math.atan(math.hypot(W, H) / (2.0 * alpha)))
     if fov > MAX_PLAUSIBLE_IMAGE_VIEW_DEG:

@@ -302,7 +302,8 @@ def given_image_size(image_size: Any | None, file_size: tuple[int, int] | None, 
     when they differ, else the file's (None: neither gave one)."""
     if image_size is None:
         return file_size, []
-    size = _image_size_field(list(image_size), where=where)
+    raw = list(image_size) if isinstance(image_size, (list, tuple)) else np.asarray(image_size).reshape(-1).tolist()
+    size = _image_size_field(raw, where=where)
     assert size is not None
     if file_size is not None and tuple(file_size) != size:
         return size, [f"the image size given ({size[0]} x {size[1]} px) replaces the file's own ({file_size[0]} x "
@@ -318,7 +319,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     ``image_size`` ``(W, H)`` px: for a file that gives none (a list layout cannot), or in place of its own
     (:func:`given_image_size`)."""
     kf = parse_keypoint_json(path, default_format=default_format)
-    size, size_notes = given_image_size(image_size, kf.image_size, where="--image-size")
+    size, size_notes = given_image_size(image_size, kf.image_size, where="image_size= (--image-size)")
     notes = list(kf.warnings) + size_notes
     people = kf.people or (kf.keypoints,)
     if max_people is not None and len(people) > max_people:

@@ -853,7 +853,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format)
-    size, size_notes = given_image_size(image_size, ks.image_size, where="--image-size")
+    size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
     warnings = list(ks.warnings) + size_notes
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),

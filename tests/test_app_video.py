@@ -537,4 +537,53 @@ def test_an_upload_lifted_after_a_later_choice_is_not_shown_over_it(server, monk
         go.set()
         t.join(60)
     assert done == [True] and v.state.sample.key == want and v.sequence() is None
-    assert "walk.json: lifted (6 frames), but not shown: another " in v.messages[-1], v.messages[-3:]
+    assert any("walk.json: lifted (6 frames), but not shown: another " in m for m in v.messages[-3:]), v.messages[-3:]
+
+
+def test_a_refused_upload_does_not_stop_one_being_lifted_and_a_failed_drawing_keeps_the_sequence(
+        server, monkeypatch) -> None:
+    """A review of the rule above: a later upload that is refused (a text file) does not count as the user's
+    choice, so the video being lifted is still shown; and a sequence upload whose drawing fails leaves the tab on the
+    previous sequence with that sequence still playable (its frames, not None)."""
+    import threading
+
+    import poselifter_app.viewer as viewer_module
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(6)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    real, go, lifting = vid.video_sequence, threading.Event(), threading.Event()
+
+    def slow(*args, **kwargs):
+        lifting.set()
+        assert go.wait(30)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(vid, "video_sequence", slow)
+    done: list[bool] = []
+    t = threading.Thread(target=lambda: done.append(v.load_upload("a.json", json.dumps(doc).encode())))
+    t.start()
+    try:
+        assert lifting.wait(30)
+        assert v.load_upload("oops.txt", b"not a pose") is False
+    finally:
+        go.set()
+        t.join(60)
+    assert done == [True] and v.state.sample.key.startswith("video/") and "a.json" in v.state.sample.key
+    first = v.sequence()
+    assert first is not None and first.num_frames == 6
+    monkeypatch.setattr(vid, "video_sequence", real)
+    calls = [0]
+    draw = viewer_module.overlay
+
+    def failing(*args, **kwargs):
+        calls[0] += 1
+        if calls[0] == 1:
+            raise RuntimeError("drawing failed")
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(viewer_module, "overlay", failing)
+    key = v.state.sample.key
+    assert v.load_upload("b.json", json.dumps(doc).encode()) is False
+    assert v.state.sample.key == key and v.sequence() is first

@@ -57,6 +57,7 @@ input is processed; a photo with several people uses the largest and says so; im
 from __future__ import annotations
 
 import argparse
+import glob
 import json
 import math
 import os
@@ -447,8 +448,8 @@ def run_lift(args: argparse.Namespace) -> int:
                                          fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
                                          max_people=args.max_people, distortion=args.distortion,
                                          distortion_model=args.distortion_model)
-                    earlier = _earlier_input(args.out / f"{name}.json", path)
-                    if earlier is not None:
+                    earlier, again = _result_input(args.out / f"{name}.json", path)  # (again: this input's own)
+                    if earlier is not None and not again:
                         say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
                             f"({earlier}) written before")
                     if seq is not None:
@@ -475,8 +476,10 @@ def run_lift(args: argparse.Namespace) -> int:
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
                     written.update(now)
-                    for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh):
-                        say(f"{path}: note: {msg}")
+                    if again:  # (only this input's own earlier result: never another's, nor the user's files)
+                        for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh,
+                                                        sequence=seq is not None):
+                            say(f"{path}: note: {msg}")
                     ok += 1
                 except PoseLifterError as exc:
                     msg = str(exc)
@@ -500,33 +503,42 @@ def run_lift(args: argparse.Namespace) -> int:
     return 0 if ok else 1
 
 
-def _earlier_input(target: Path, path: Path) -> str | None:
-    """The ``input`` an existing result file ``target`` was written for, when that is surely not ``path`` (a result
-    of another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None. Reads only
-    the file's start (``input`` is its first field). A relative ``input`` was relative to a working folder that may
-    not be this one: only another file name tells then."""
+def _result_input(target: Path, path: Path) -> tuple[str | None, bool]:
+    """The ``input`` an existing result file ``target`` was written for, and whether that is ``path`` (None, False:
+    no readable result there). Reads only the file's start (``input`` is its first field). A relative ``input`` was
+    relative to a working folder that may not be this one: only the file name tells then."""
     m = re.match(r'\s*\{\s*"input":\s*("(?:[^"\\]|\\.)*")', _head(target).decode("utf-8", "replace"))
     if m is None:
-        return None
+        return None, False
     try:
         earlier = Path(json.loads(m.group(1)))
     except ValueError:
-        return None
+        return None, False
     same = earlier.resolve() == path.resolve() if earlier.is_absolute() else earlier.name == path.name
-    return None if same else str(earlier)
+    return str(earlier), same
 
 
-def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool, bvh: bool) -> list[str]:
-    """Notes on the files of ``<name>``'s outputs in ``out`` that this run did not write (``written``): an earlier
-    run's, which no longer match ``<name>.json`` (a developer trial: a photo lifted again with --max-people 1 left
+def _earlier_input(target: Path, path: Path) -> str | None:
+    """The ``input`` an existing result file ``target`` was written for, when that is surely not ``path`` (a result
+    of another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None."""
+    earlier, same = _result_input(target, path)
+    return None if same else earlier
+
+
+def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool, bvh: bool,
+                         sequence: bool) -> list[str]:
+    """Notes on the files of ``<name>``'s outputs in ``out`` that this run did not write (``written``), for an input
+    whose own earlier result ``<name>.json`` this run replaced (the caller checks: never another input's, nor files
+    of the user's): they no longer match it (a developer trial: a photo lifted again with --max-people 1 left
     ``pair_person2.bvh`` and a two-person ``pair.glb`` beside the one-person result). Those of a kind written now
-    (``--bvh``: ``<name>.bvh``, ``<name>_person<K>.bvh``, ``<name>_track<ID>.bvh``; ``--glb``: ``<name>.glb``) are
-    removed; those of a kind not asked for are left, and said."""
-    bvh_family = re.compile(re.escape(name) + r"(?:_person\d+|_track\d+)?\.bvh")
+    (``--bvh``: ``<name>.bvh`` and ``<name>_person<K>.bvh`` of a photo or keypoint file, ``<name>_track<ID>.bvh`` of
+    a video or sequence, ``sequence``; ``--glb``: ``<name>.glb``) are removed; those of a kind not asked for are
+    left, and said."""
+    bvh_family = re.compile(re.escape(name) + (r"_track\d+\.bvh" if sequence else r"(?:_person\d+)?\.bvh"))
     removed: list[str] = []
     left: list[str] = []
     try:
-        entries = sorted(out.iterdir())
+        entries = sorted(out.glob(glob.escape(name) + "*"))
     except OSError:
         return []
     for f in entries:
