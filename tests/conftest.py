@@ -128,3 +128,35 @@ def view(app):
     v = app.headless_view()
     assert v.frame is not None
     return v
+
+
+def hold(monkeypatch, module, name: str, *, when=lambda *args, **kwargs: True):
+    """Patch ``module.name`` so that a call for which ``when(*args, **kwargs)`` holds waits until the test lets it go
+    (a slow upload, deterministically): returns ``(started, go)``, two :class:`threading.Event` s."""
+    import threading
+
+    real, started, go = getattr(module, name), threading.Event(), threading.Event()
+
+    def held(*args, **kwargs):
+        if when(*args, **kwargs):
+            started.set()
+            assert go.wait(30)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, held)
+    return started, go
+
+
+def fail_once(monkeypatch, module, name: str) -> list[int]:
+    """Patch ``module.name`` to raise ``RuntimeError("drawing failed")`` on its first call and to work after; returns
+    the one-element list counting the calls."""
+    real, calls = getattr(module, name), [0]
+
+    def failing(*args, **kwargs):
+        calls[0] += 1
+        if calls[0] == 1:
+            raise RuntimeError("drawing failed")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, failing)
+    return calls

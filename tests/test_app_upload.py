@@ -16,6 +16,7 @@ import pytest
 viser = pytest.importorskip("viser")
 
 
+from conftest import fail_once, hold  # noqa: E402
 from poselifter_app import upload as up  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
 from poselifter_app.scene import image_plane  # noqa: E402
@@ -27,6 +28,14 @@ from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_
 from lifter.io import LiftRecord  # noqa: E402
 
 LIFT_FIELDS = {"keypoints_2d", "absolute", "root", "canonical_depth", "focal", "principal_point"}
+
+
+def _standing_app(server, *, default_model: str = "gt") -> PoseLifterApp:
+    """An app with the "gt" (and "mixture") models whose detector finds the demo sample "standing" in any photo."""
+    models = ["gt", "mixture"] if default_model == "mixture" else ["gt"]
+    a = PoseLifterApp(server, h36m_root=None, models=models, default_model=default_model,
+                      estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d], full_width=800))
+    return a
 
 
 class FakeEstimator:
@@ -401,9 +410,7 @@ def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch)
 
     server = local_server()
     try:
-        a = PoseLifterApp(server, h36m_root=None, models=["gt", "mixture"], default_model="mixture",
-                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d],
-                                                                  full_width=800))
+        a = _standing_app(server, default_model="mixture")
         s = a.demo.get("standing")
         v = a.headless_view()
         assert lift_source(v.state) == "clean"  # a demo sample: exact 2D
@@ -427,23 +434,12 @@ def test_a_new_sample_that_fails_to_draw_leaves_the_tab_as_it_was(monkeypatch) -
 
     server = local_server()
     try:
-        a = PoseLifterApp(server, h36m_root=None, models=["gt"], default_model="gt",
-                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d],
-                                                                  full_width=800))
+        a = _standing_app(server)
         v = a.headless_view()
         v.gui.lift.focal.value = 2000.0
         assert v.state.focal_px == 2000.0
         key, root = v.state.sample.key, v.frame.root.copy()
-        real = viewer_module.overlay
-        calls = [0]
-
-        def failing(*args, **kwargs):
-            calls[0] += 1
-            if calls[0] == 1:
-                raise RuntimeError("drawing failed")
-            return real(*args, **kwargs)
-
-        monkeypatch.setattr(viewer_module, "overlay", failing)
+        calls = fail_once(monkeypatch, viewer_module, "overlay")
         assert v.load_upload("one.jpg", _jpeg(a.demo.get("standing").image)) is False
         assert "internal error: RuntimeError: drawing failed" in v.messages[-1]
         assert v.state.sample.key == key and v.state.focal_px == 2000.0
@@ -464,19 +460,9 @@ def test_a_photo_read_after_a_later_upload_is_neither_shown_nor_drawn_on(monkeyp
 
     server = local_server()
     try:
-        a = PoseLifterApp(server, h36m_root=None, models=["gt"], default_model="gt",
-                          estimator_factory=lambda: FakeEstimator([a.demo.get("standing").keypoints_2d],
-                                                                  full_width=800))
+        a = _standing_app(server)
         v = a.headless_view()
-        real, go, reading = up.upload_sample, threading.Event(), threading.Event()
-
-        def slow(name, *args, **kwargs):
-            if name == "a.jpg":
-                reading.set()
-                assert go.wait(30)
-            return real(name, *args, **kwargs)
-
-        monkeypatch.setattr(up, "upload_sample", slow)
+        reading, go = hold(monkeypatch, up, "upload_sample", when=lambda name, *args, **kwargs: name == "a.jpg")
         img = a.demo.get("standing").image
         done: list[bool] = []
         t = threading.Thread(target=lambda: done.append(v.load_upload("a.jpg", _jpeg(img))))

@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("viser")
 
-from conftest import ScriptedEstimator, require_shipped_models  # noqa: E402
+from conftest import ScriptedEstimator, fail_once, hold, require_shipped_models  # noqa: E402
 from poselifter_app import video as vid  # noqa: E402
 from poselifter_app.testing import local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp  # noqa: E402
@@ -47,6 +47,12 @@ def _clip(path: Path, n: int, fps: float = 25.0) -> bytes:
         vw.write(np.full((H, W, 3), 40 + 7 * i % 200, np.uint8))
     vw.release()
     return path.read_bytes()
+
+
+def _sequence_doc(n: int) -> dict:
+    """A keypoint sequence upload of :func:`_script`'s two people, ``n`` frames at 10 fps."""
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(n)]
+    return {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
 
 
 @pytest.fixture()
@@ -508,16 +514,8 @@ def test_an_upload_lifted_after_a_later_choice_is_not_shown_over_it(server, monk
 
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()
-    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(6)]
-    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
-    real, go, lifting = vid.video_sequence, threading.Event(), threading.Event()
-
-    def slow(*args, **kwargs):
-        lifting.set()
-        assert go.wait(30)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(vid, "video_sequence", slow)
+    doc = _sequence_doc(6)
+    lifting, go = hold(monkeypatch, vid, "video_sequence")
     done: list[bool] = []
     t = threading.Thread(target=lambda: done.append(v.load_upload("walk.json", json.dumps(doc).encode())))
     t.start()
@@ -551,16 +549,9 @@ def test_a_refused_upload_does_not_stop_one_being_lifted_and_a_failed_drawing_ke
 
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()
-    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(6)]
-    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
-    real, go, lifting = vid.video_sequence, threading.Event(), threading.Event()
-
-    def slow(*args, **kwargs):
-        lifting.set()
-        assert go.wait(30)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(vid, "video_sequence", slow)
+    doc = _sequence_doc(6)
+    real = vid.video_sequence
+    lifting, go = hold(monkeypatch, vid, "video_sequence")
     done: list[bool] = []
     t = threading.Thread(target=lambda: done.append(v.load_upload("a.json", json.dumps(doc).encode())))
     t.start()
@@ -574,16 +565,7 @@ def test_a_refused_upload_does_not_stop_one_being_lifted_and_a_failed_drawing_ke
     first = v.sequence()
     assert first is not None and first.num_frames == 6
     monkeypatch.setattr(vid, "video_sequence", real)
-    calls = [0]
-    draw = viewer_module.overlay
-
-    def failing(*args, **kwargs):
-        calls[0] += 1
-        if calls[0] == 1:
-            raise RuntimeError("drawing failed")
-        return draw(*args, **kwargs)
-
-    monkeypatch.setattr(viewer_module, "overlay", failing)
+    fail_once(monkeypatch, viewer_module, "overlay")
     key = v.state.sample.key
     assert v.load_upload("b.json", json.dumps(doc).encode()) is False
     assert v.state.sample.key == key and v.sequence() is first
