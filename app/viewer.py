@@ -1598,6 +1598,23 @@ class SessionView:
             return "another sample was picked"
         return None
 
+    @contextlib.contextmanager
+    def _showing_upload(self, mine: int, since: float, said: str) -> Iterator[bool]:
+        """Whether the upload ``mine`` begun at ``since`` is still to be shown (:meth:`_superseded`; if not, ``said``
+        is shown with the reason in its ``{}``), asked before playback is stopped for it and again, holding
+        :attr:`lock`, for the body that shows it; a body that returns normally marks it the latest shown."""
+        with self._runner.holding(), self.lock:
+            why = self._superseded(mine, since)
+        if why is None and self.playing:
+            self.stop_playback()
+        with self._runner.holding(), self.lock:
+            why = why or self._superseded(mine, since)  # (again: the player stopped outside the lock)
+            if why is not None:
+                self.show_message(said.format(why))
+            yield why is None
+            if why is None:
+                self._upload_shown = max(self._upload_shown, mine)
+
     def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")
         with self.lock:
@@ -1617,24 +1634,14 @@ class SessionView:
                     self._photo = exc.photo
             raise
         said = f"{up.safe_name(name)}: read, but not shown: {{}} meanwhile (upload it again to see it)"
-        with self._runner.holding(), self.lock:
-            why = self._superseded(mine, since)
-            if why is not None:
-                self.show_message(said.format(why))
-                return
-        if self.playing:
-            self.stop_playback()
-        with self._runner.holding(), self.lock:
-            why = self._superseded(mine, since)  # (again: the player stopped outside the lock)
-            if why is not None:
-                self.show_message(said.format(why))
+        with self._showing_upload(mine, since, said) as wanted:
+            if not wanted:
                 return
             try:
                 self._show_sample(sample, reframe=True)  # (a new photo: a new person to look at)
             except PoseLifterError as exc:
                 raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
             self._photo = photo  # (only once shown: a later keypoint file is drawn on it)
-            self._upload_shown = max(self._upload_shown, mine)
             self._last_upload = sample
         self.show_message(up.upload_message(sample))
 
@@ -1669,29 +1676,18 @@ class SessionView:
                 note.remove()
         said = f"{nm}: lifted ({seq.num_frames} frames), but not shown: {{}} while it was lifted (upload it again to " \
                "see it)"
-        with self._runner.holding(), self.lock:
-            why = self._superseded(mine, since)
-            if why is not None:
-                self.show_message(said.format(why))
-                return
-        if self.playing:
-            self.stop_playback()
-        with self._runner.holding(), self.lock:
-            why = self._superseded(mine, since)  # (again: the player stopped outside the lock)
-            if why is not None:
-                self.show_message(said.format(why))
+        with self._showing_upload(mine, since, said) as wanted:
+            if not wanted:
                 return
             old = self._video
             self._video = seq
             try:
                 self._show_sample(seq.sample(0), reframe=True)
-            except PoseLifterError as exc:
+            except BaseException as exc:  # (refused, or a drawing that failed: the previous sequence is kept)
                 self._video = old
-                raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
-            except BaseException:  # (a drawing that failed: the previous state is shown again, and its sequence)
-                self._video = old
+                if isinstance(exc, PoseLifterError):
+                    raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
                 raise
-            self._upload_shown = max(self._upload_shown, mine)
         self.show_message(vid.video_message(seq))
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:

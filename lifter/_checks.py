@@ -424,7 +424,7 @@ NOT_A_FACE_SPREAD: float = 0.2
 """A 17-joint pose given as COCO-17 whose first five points spread over at least this share of its 2D size (box
 diagonal) does not start with a face (BlazePose's nose, eyes and ears on the 84 Human3.6M photos: at most 0.077) but
 likely with H36M's pelvis, hips, right knee and right foot (at least 0.214 on 200k Human3.6M poses;
-:data:`COCO_FACE_SPREAD`): H36M order given as COCO-17 (:func:`not_face_first_notes`)."""
+:data:`COCO_FACE_SPREAD`): H36M order given as COCO-17 (:func:`not_face_first_message`)."""
 
 
 def face_spread(kp17: np.ndarray, missing: np.ndarray | None = None) -> np.ndarray:
@@ -450,21 +450,21 @@ def face_spread(kp17: np.ndarray, missing: np.ndarray | None = None) -> np.ndarr
         return np.where(enough & np.isfinite(size) & (size > 0), spread / size, np.nan)
 
 
-def not_face_first_message(kp17: np.ndarray, *, missing: np.ndarray | None = None) -> str | None:
+def not_face_first_message(kp17: np.ndarray) -> str | None:
     """What to say of poses ``(n, 17, 2)`` px given as COCO-17 when each that can be told starts with five points
     spread as H36M's pelvis, hips, right knee and right foot are (:data:`NOT_A_FACE_SPREAD`), not as a face: H36M
     order given as COCO-17, which converting would scramble (a developer trial: lifted without a word but a misfit
     note blaming the detector, the root at 55 % of its depth). None when any pose looks like COCO-17, or none can
     be told."""
-    spread = face_spread(kp17, missing)
+    spread = face_spread(kp17)
     told = spread[np.isfinite(spread)]
     if not len(told) or float(told.min()) < NOT_A_FACE_SPREAD:
         return None
     which = "the pose" if len(told) == 1 else f"each of {len(told)} poses"
     return (f"format 'coco17', but the first five joints of {which} spread over {float(told.min()) * 100:.0f} % "
             f"or more of {'its' if len(told) == 1 else 'their'} 2D size, as H36M's pelvis, hips, right knee and "
-            "right foot do (COCO-17's nose, eyes and "
-            f"ears lie within {COCO_FACE_SPREAD * 100:.0f} %): H36M-order keypoints?")
+            f"right foot do (COCO-17's nose, eyes and ears lie within {COCO_FACE_SPREAD * 100:.0f} %): H36M-order "
+            "keypoints?")
 
 
 def face_first_notes(kp17: np.ndarray) -> list[str]:

@@ -13,6 +13,12 @@ def plain_text(doc: str | None) -> str:
     return re.sub(r"``([^`]+)``", r"\1", text)
 
 
+def largest_lifted(max_people: int) -> str:
+    """The end of the note when more people were found than ``max_people`` are lifted."""
+    return ("the largest is lifted (max_people)" if max_people == 1
+            else f"the {max_people} largest are lifted (max_people)")
+
+
 def sentence(note: str) -> str:
     """``note`` ending in one full stop (notes that end in ".", "?" or "!" get none added), for notes joined into
     one message."""

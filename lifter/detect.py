@@ -1140,8 +1140,10 @@ def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: Pos
     if max_people is not None and len(people) > max_people:
         from dataclasses import replace
 
-        note = ("more than 1 person found; the largest is lifted (max_people)" if max_people == 1 else
-                f"more than {max_people} people found; the {max_people} largest are lifted (max_people)")
+        from ._text import largest_lifted
+
+        note = (f"more than {max_people} {'person' if max_people == 1 else 'people'} found; "
+                f"{largest_lifted(max_people)}")
         people = [replace(q, warnings=q.warnings + (note,)) for q in people[:max_people]]
     return people
 

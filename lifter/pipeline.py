@@ -31,7 +31,7 @@ from ._checks import (
     upside_down_people,
     view_angle_notes,
 )
-from ._text import sentence
+from ._text import largest_lifted, sentence
 from .api import MIN_FOCAL_PX
 from .camera import (
     DEFAULT_DIAGONAL_FOV_DEG,
@@ -325,8 +325,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     if max_people is not None and len(people) > max_people:
         each = f"{len(people)} people in the file; each is lifted"  # (the reader's note, no longer true)
         notes = [n for n in notes if not n.startswith(each)]
-        notes.append(f"{len(people)} people in the file; " + ("the largest is lifted (max_people)" if max_people == 1
-                     else f"the {max_people} largest are lifted (max_people)"))
+        notes.append(f"{len(people)} people in the file; {largest_lifted(max_people)}")
         people = people[:max_people]
     raw = np.stack(people)
     kp17 = convert(raw, src=kf.format, warn=False)

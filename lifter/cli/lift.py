@@ -518,13 +518,6 @@ def _result_input(target: Path, path: Path) -> tuple[str | None, bool]:
     return str(earlier), same
 
 
-def _earlier_input(target: Path, path: Path) -> str | None:
-    """The ``input`` an existing result file ``target`` was written for, when that is surely not ``path`` (a result
-    of another input about to be replaced: ``clip.mp4`` and then ``clip.avi`` into one folder); else None."""
-    earlier, same = _result_input(target, path)
-    return None if same else earlier
-
-
 def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool, bvh: bool,
                          sequence: bool) -> list[str]:
     """Notes on the files of ``<name>``'s outputs in ``out`` that this run did not write (``written``), for an input
