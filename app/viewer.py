@@ -915,6 +915,9 @@ class SessionView:
         old = self.state
         st, note = ss.for_sample(old, sample, input_pref=self._input_pref)
         st, followed, follow_note = self._follow(st, sample)
+        with self._flags:
+            typed_uv = self._typed_uv
+        kept_books = (self._upload_left, self._typed_at.get("focal_px"), self._sample_gen)
         if source_of(old.sample.key) == "upload" and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
@@ -935,7 +938,18 @@ class SessionView:
         chosen = abs(old.focal_px - old.sample.camera.alpha) > 0.5 and abs(st.focal_px - old.focal_px) > 0.5
         self._sample_gen += 1
         self._drop_typed_uv()
-        self._apply(st, new_sample=True)
+        try:
+            self._apply(st, new_sample=True)
+        except Exception:
+            # not shown: the tab's own bookkeeping is taken back too (a review: joints corrected on an upload, waiting
+            # for it, were forgotten when going back to it failed to draw)
+            self._upload_left, typed_focal_at, self._sample_gen = kept_books
+            if typed_focal_at is not None:
+                self._typed_at.setdefault("focal_px", typed_focal_at)
+            with self._flags:
+                if self._typed_uv is None:
+                    self._typed_uv = typed_uv
+            raise
         self._followed = followed  # (only once shown: a refused sample changes nothing)
         if source_of(sample.key) == "h36m":
             self._last_h36m = sample.key

@@ -453,6 +453,33 @@ def test_a_new_sample_that_fails_to_draw_leaves_the_tab_as_it_was(monkeypatch) -
         server.stop()
 
 
+def test_corrected_upload_joints_survive_a_return_that_fails_to_draw(monkeypatch) -> None:
+    """A review: going back to an upload whose joints the user corrected forgot the corrections before the upload was
+    drawn, so a drawing that failed (and was taken back) lost them for good. They now wait until the upload is
+    shown, and come back on the next try."""
+    import poselifter_app.viewer as viewer_module
+
+    server = local_server()
+    try:
+        a = _standing_app(server)
+        v = a.headless_view()
+        assert v.load_upload("one.jpg", _jpeg(a.demo.get("standing").image)) is True
+        upload_key = v.state.sample.key
+        assert v.move_joint(16, v.state.keypoints[16] + [12.0, -7.0]) is True
+        moved = v.state.keypoints.copy()
+        assert v.set_source("demo") is True and v.state.sample.key != upload_key
+        demo_key = v.state.sample.key
+        calls = fail_once(monkeypatch, viewer_module, "overlay")
+        v.set_source("upload")  # (the picker still says "upload": the pass tries again, and it is shown then)
+        assert calls[0] >= 3 and any("internal error: RuntimeError: drawing failed" in m for m in v.messages)
+        assert v.state.sample.key == upload_key
+        np.testing.assert_allclose(v.state.keypoints, moved)
+        assert v.state.dragged == {16} and "corrected are back" in v.messages[-1]
+        assert v.set_source("demo") is True and v.state.sample.key == demo_key
+    finally:
+        server.stop()
+
+
 def test_a_photo_read_after_a_later_upload_is_neither_shown_nor_drawn_on(monkeypatch) -> None:
     """A review: a slow photo that finished after a later photo was shown was not shown, but still became the photo
     a keypoint file uploaded next is drawn on. Only a photo shown is."""
