@@ -15,7 +15,7 @@ from typing import Any, Final, Literal
 import numpy as np
 
 from lifter import Lifter, PoseLifterError, analytic_root, available_models
-from lifter.api import MIN_FOCAL_PX
+from lifter.camera import MIN_FOCAL_PX
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 

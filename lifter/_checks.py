@@ -483,3 +483,27 @@ def face_first_notes(kp17: np.ndarray) -> list[str]:
 
 _HEAD_TOP, _R_ANKLE, _L_ANKLE = 10, 3, 6
 """H36M-17 indices of the head's top and the ankles (:data:`lifter.skeleton.JOINT_NAMES`; a test pins them)."""
+
+
+class OutputNote(str):
+    """A note on a lift's output (an entry of :attr:`LiftResult.warnings`): the text, and its ``kind``,
+    ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on), ``"far"`` (a detected
+    person farther than the networks learned) or ``"behind-camera"`` (a root at Z <= 0), by which the video records
+    count the frames that had it."""
+
+    kind: str
+
+    def __new__(cls, text: str, *, kind: str = "") -> OutputNote:
+        note = super().__new__(cls, text)
+        note.kind = kind
+        return note
+
+
+def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
+    """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``:
+    one entry per kind of note (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind
+    the camera; any other note by its text), with its first frame and how many frames had it."""
+    for note in notes:
+        kind = getattr(note, "kind", note)
+        first, n, message = acc.get(kind, (frame, 0, note))
+        acc[kind] = (first, n + 1, message)

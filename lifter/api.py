@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 from . import resources as assets
 from ._checks import (
     CheckpointError,
+    OutputNote,
     PoseLifterError,
     PoseLifterWarning,
     as_pair,
@@ -44,6 +45,7 @@ from ._checks import (
 from .camera import (
     CANONICAL_FOCAL,
     DEFAULT_DIAGONAL_FOV_DEG,
+    MIN_FOCAL_PX,
     DistortionModel,
     _misfit,
     check_distortion_model,
@@ -86,9 +88,6 @@ MIN_POSE_SCALE_PX: Final[float] = 2.0
 MAX_ABS_PX: Final[float] = 1e6
 """Keypoints, principal point and focal length beyond this magnitude (px) are refused: float32 overflow
 territory, and never image pixels."""
-MIN_FOCAL_PX: Final[float] = 10.0
-"""Smallest focal length :meth:`Lifter.lift` accepts (px). A real camera's is hundreds to thousands of pixels
-(``image width / (2 tan(horizontal FOV / 2))``); a few pixels is a focal length in mm (or normalized) by mistake."""
 
 H36M_POSE_PX: Final[tuple[float, float, float]] = (34.7, 208.1, 421.6)
 """Human3.6M's training 2D poses (Protocol 1, ground truth, every frame): the smallest and largest scale (RMS radius,
@@ -120,30 +119,6 @@ TRAINING_ROOT_MAX_MM: Final[float] = 7600.0
 def _far_limit_mm(distance_factor: float) -> float:
     """:attr:`Lifter.far_root_depth_mm` for networks whose training moved people ``distance_factor`` times farther."""
     return FAR_ROOT_DEPTH_MM if distance_factor <= 1.0 else TRAINING_ROOT_MAX_MM * distance_factor
-
-
-class OutputNote(str):
-    """A note on a lift's output (an entry of :attr:`LiftResult.warnings`): the text, and its ``kind``,
-    ``"pixel-range"`` (a pixel-space network given 2D outside the sizes it was trained on), ``"far"`` (a detected
-    person farther than the networks learned) or ``"behind-camera"`` (a root at Z <= 0), by which the video records
-    count the frames that had it."""
-
-    kind: str
-
-    def __new__(cls, text: str, *, kind: str = "") -> OutputNote:
-        note = super().__new__(cls, text)
-        note.kind = kind
-        return note
-
-
-def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes: Any) -> None:
-    """Gather :attr:`LiftResult.warnings` of one frame (a video frame; a batch of an evaluation) into ``acc``:
-    one entry per kind of note (:attr:`OutputNote.kind`: a pixel model outside its trained sizes, roots behind
-    the camera; any other note by its text), with its first frame and how many frames had it."""
-    for note in notes:
-        kind = getattr(note, "kind", note)
-        first, n, message = acc.get(kind, (frame, 0, note))
-        acc[kind] = (first, n + 1, message)
 
 
 @dataclass(frozen=True, eq=False)

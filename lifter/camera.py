@@ -34,6 +34,10 @@ from ._array import namespace as array_namespace
 from ._checks import PoseLifterError, as_pair, where_in_batch
 from .skeleton import mirror
 
+MIN_FOCAL_PX: Final[float] = 10.0
+"""Smallest focal length :meth:`Lifter.lift` accepts (px). A real camera's is hundreds to thousands of pixels
+(``image width / (2 tan(horizontal FOV / 2))``); a few pixels is a focal length in mm (or normalized) by mistake."""
+
 CANONICAL_FOCAL: float = 1000.0
 """F0, the reference focal length (px) of the canonical depth and of the reference camera."""
 DEFAULT_DIAGONAL_FOV_DEG: float = 65.0

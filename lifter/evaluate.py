@@ -15,9 +15,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 from tqdm.auto import tqdm
 
-from ._checks import PoseLifterWarning
+from ._checks import PoseLifterWarning, collect_output_notes
 from .analytic import analytic_root
-from .api import Lifter, collect_output_notes
+from .api import Lifter
 from .camera import camera_turn, project, turn_pixels
 from .codec import Source
 from .data import ACTIONS, PoseSamples

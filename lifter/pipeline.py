@@ -32,9 +32,9 @@ from ._checks import (
     view_angle_notes,
 )
 from ._text import largest_lifted, sentence
-from .api import MIN_FOCAL_PX
 from .camera import (
     DEFAULT_DIAGONAL_FOV_DEG,
+    MIN_FOCAL_PX,
     DistortionModel,
     check_distortion_model,
     check_lens,

@@ -32,8 +32,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from ._checks import PoseLifterError, as_pair
-from .api import collect_output_notes
+from ._checks import PoseLifterError, as_pair, collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,

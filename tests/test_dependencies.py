@@ -79,3 +79,32 @@ def test_torch_names_still_resolve_lazily():
     assert callable(lifter.checkpoint.save_checkpoint)
     with pytest.raises(AttributeError):
         lifter.no_such_name  # noqa: B018
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["lift", "--help"], ["--version"], ["lfit"]])
+def test_cli_help_does_not_import_torch(argv):
+    """``poselifter --help`` took 2.5 s (a developer trial): building the parser imported every sub-command's module,
+    and with them torch. Now only the named sub-command's module is imported, and ``lift``'s parser needs no torch.
+    A misspelled sub-command is refused as quickly, naming the choices."""
+    code = ("import sys; sys.modules['torch'] = None\n"
+            "from lifter.cli import main\n"
+            f"sys.exit(main({argv!r}))\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    if argv == ["lfit"]:
+        assert proc.returncode == 2 and "invalid choice: 'lfit'" in proc.stderr and "'lift'" in proc.stderr
+    else:
+        assert proc.returncode == 0, proc.stderr
+        assert "poselifter" in proc.stdout
+
+
+def test_cli_builds_every_sub_command_when_asked():
+    """The full parser (no command named) still has each sub-command's own options; the lazy one lists the others."""
+    from lifter.cli import COMMANDS, build_parser
+
+    full, lazy = build_parser(), build_parser("lift")
+    subs = [a for a in full._actions if a.__class__.__name__ == "_SubParsersAction"][0]
+    lazy_subs = [a for a in lazy._actions if a.__class__.__name__ == "_SubParsersAction"][0]
+    assert set(subs.choices) == set(lazy_subs.choices) == set(COMMANDS)
+    assert "--protocol" in subs.choices["fit-noise"].format_help()
+    assert "--protocol" not in lazy_subs.choices["fit-noise"].format_help()
+    assert subs.choices["lift"].format_help() == lazy_subs.choices["lift"].format_help()

@@ -7,21 +7,43 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 
 from .. import __version__
 from .._checks import PoseLifterError
-from . import evaluate, fit_noise, lift, train
+
+COMMANDS: dict[str, tuple[str, str]] = {
+    "train": ("train", "train a lifter on Human3.6M (also under torchrun)"),
+    "evaluate": ("evaluate", "evaluate lifters on Human3.6M and print the results table"),
+    "fit-noise": ("fit_noise", "fit the Gaussian + uniform 2D error model to real SH detections"),
+    "lift": ("lift", "lift photos, videos or 2D keypoint files to absolute 3D poses (JSON, optional GLB / BVH)"),
+}
+"""Sub-command -> (its module in this package, its one-line help). A module is imported only to build its own
+sub-command's parser (:func:`build_parser`): ``poselifter --help`` and ``poselifter lift --help`` do not wait for
+torch."""
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``poselifter`` parser; with ``command`` (a name of :data:`COMMANDS`), only that sub-command's arguments
+    are built (and only its module imported), the others listed by name and help."""
     parser = argparse.ArgumentParser(prog="poselifter", description="PoseLifter: absolute 3D pose from 2D keypoints")
     parser.add_argument("--version", action="version", version=f"poselifter {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    for module in (train, evaluate, fit_noise, lift):
-        module.add_parser(sub)
+    for name, (module, help_text) in COMMANDS.items():
+        if command is None or command == name:
+            importlib.import_module(f".{module}", __name__).add_parser(sub)
+        else:
+            sub.add_parser(name, help=help_text)
     return parser
+
+
+def _command(argv: Sequence[str] | None) -> str:
+    """The sub-command named in ``argv`` (the first argument, as the top level's only options, ``--version`` and
+    ``--help``, take no value); "" if none is named."""
+    args = sys.argv[1:] if argv is None else list(argv)
+    return next((a for a in args if not a.startswith("-")), "")
 
 
 def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace:
@@ -57,7 +79,7 @@ def _stdout_reader_gone() -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(_command(argv))
     args = _parse(parser, argv)
     try:
         return int(args.func(args) or 0)

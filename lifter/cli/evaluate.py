@@ -22,6 +22,7 @@ from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_
 from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
 from ..resources import model_names
+from . import COMMANDS
 from ._help import HelpFormatter, h36m_help, positive_int
 
 
@@ -55,7 +56,7 @@ def _pp_shift(text: str) -> tuple[float, float]:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = sub.add_parser("evaluate", help="evaluate lifters on Human3.6M and print the results table",
+    p = sub.add_parser("evaluate", help=COMMANDS["evaluate"][1],
                        formatter_class=HelpFormatter)
     p.add_argument("weights", nargs="*", default=["default"],
                    help="checkpoint paths or shipped model names; LABEL=PATH to name a row; A.pt+B.pt: the "

@@ -20,6 +20,7 @@ from ..noise_fit import (
     plot_depth_vs_scale,
     plot_error_histograms,
 )
+from . import COMMANDS
 from ._help import HelpFormatter, h36m_help
 
 DEFAULT_JSON = Path("assets/error_model/sh_mixture.json")
@@ -28,7 +29,7 @@ DEFAULT_PLOT_DIR = Path("docs/noise")
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register the ``fit-noise`` sub-command on an ``add_subparsers()`` object."""
-    p = sub.add_parser("fit-noise", help="fit the Gaussian + uniform 2D error model to real SH detections",
+    p = sub.add_parser("fit-noise", help=COMMANDS["fit-noise"][1],
                        formatter_class=HelpFormatter)
     p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2), help="fit on this protocol's training subjects")

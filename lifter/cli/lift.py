@@ -69,11 +69,11 @@ from typing import Any, Final
 import numpy as np
 
 from .._checks import PoseLifterError, as_pair
-from ..api import MIN_FOCAL_PX
 from ..camera import (
     DEFAULT_DIAGONAL_FOV_DEG,
     DISTORTION_MODELS,
     MAX_FOV_DEG,
+    MIN_FOCAL_PX,
     MIN_FOV_DEG,
     check_lens,
 )
@@ -99,6 +99,7 @@ from ..video import (
     limit_blas_threads,
     track_animation,
 )
+from . import COMMANDS
 from ._help import HelpFormatter, positive_int
 
 # ------------------------------------------------------------------------------------------------
@@ -241,7 +242,7 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register the ``lift`` sub-command on an ``add_subparsers()`` object."""
     p = sub.add_parser(
-        "lift", help="lift photos, videos or 2D keypoint files to absolute 3D poses (JSON, optional GLB / BVH)",
+        "lift", help=COMMANDS["lift"][1],
         description="Photos and videos (2D detector: MediaPipe BlazePose, the 'detect' extra) or keypoint JSON files "
                     "in, absolute 3D poses of everyone found out. Exit code 0 if at least one input was lifted, 1 if "
                     "all failed.",

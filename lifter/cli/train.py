@@ -30,11 +30,12 @@ from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
 from ..train import check_teacher, init_distributed, save_training_outputs, train, validation_sets
+from . import COMMANDS
 from ._help import h36m_help, plain_text
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = sub.add_parser("train", help="train a lifter on Human3.6M (also under torchrun)",
+    p = sub.add_parser("train", help=COMMANDS["train"][1],
                        description=plain_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
     p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
