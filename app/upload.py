@@ -52,6 +52,7 @@ from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes, resolve_camera
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
+from lifter.video import MEDIA_HEAD_BYTES, misnamed_media
 
 from .core import lens_free_2d, undoes_lens
 from .drawing import canvas
@@ -239,9 +240,11 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
     suffix = Path(safe_name(name)).suffix.lower()
     suffix = suffix if suffix in IMAGE_SUFFIXES else ".img"
     img: LoadedImage = _with_temp_file(name, content, suffix, lambda p: load_image(p, max_side=max_side))
+    _, misnamed = misnamed_media(safe_name(name), content[:MEDIA_HEAD_BYTES])  # (a JPEG renamed .mp4)
+    notes = img.notes if misnamed is None else (misnamed, *img.notes)
     img = LoadedImage(rgb=img.rgb, size=img.size, scale=img.scale, exif=img.exif, path=Path(safe_name(name)),
-                      notes=img.notes)
-    return Photo(name=safe_name(name), display=_display(img.rgb), size=img.size, exif=img.exif, notes=img.notes), img
+                      notes=notes)
+    return Photo(name=safe_name(name), display=_display(img.rgb), size=img.size, exif=img.exif, notes=notes), img
 
 
 def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estimator: PoseEstimator2D,

@@ -32,11 +32,13 @@ from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
+    MEDIA_HEAD_BYTES,
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
     SequenceRecord,
     lift_keypoint_sequence,
     lift_video,
+    misnamed_media,
     output_note_lines,
     track_lifted,
     tracked_output_notes,
@@ -68,9 +70,14 @@ VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
 """Frames are kept for display downscaled to this longer side, as JPEG."""
 
 
-def is_video_upload(name: str) -> bool:
-    """A file name with a video suffix (:data:`lifter.video.VIDEO_SUFFIXES`)."""
-    return Path(safe_name(name)).suffix.lower() in VIDEO_SUFFIXES
+def is_video_upload(name: str, content: bytes = b"") -> bool:
+    """A video: by ``content``'s first bytes when they say (:func:`lifter.video.misnamed_media`: a JPEG renamed
+    ``.mp4`` is a photo, a video named ``.jpg`` a video), else by a video suffix in the name
+    (:data:`lifter.video.VIDEO_SUFFIXES`). A keypoint file's name or content is never a video's."""
+    nm = safe_name(name)
+    if Path(nm).suffix.lower() == ".json":
+        return False
+    return misnamed_media(nm, bytes(content[:MEDIA_HEAD_BYTES]))[0] == "video"
 
 
 def is_sequence_json(content: bytes) -> bool:
@@ -304,8 +311,9 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
-    is_video = is_video_upload(nm)
-    suffix = Path(nm).suffix.lower() if is_video else ".json"
+    is_video = is_video_upload(nm, content)
+    misnamed = misnamed_media(nm, content[:MEDIA_HEAD_BYTES])[1] if is_video else None
+    suffix = (Path(nm).suffix.lower() if Path(nm).suffix.lower() in VIDEO_SUFFIXES else ".mp4") if is_video else ".json"
     with tempfile.TemporaryDirectory(prefix="poselifter-upload-") as d:
         path = Path(d) / f"upload{suffix}"
         path.write_bytes(content)
@@ -344,7 +352,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             msg = str(exc).replace(str(path), nm)
             raise UploadError(msg) from None
     # the user's file name, not the server's temporary copy (in the download's "input" and in any note)
-    rec = replace(rec, input=nm, warnings=[w.replace(str(path), nm) for w in rec.warnings])
+    rec = replace(rec, input=nm, warnings=[*([misnamed] if misnamed else []),
+                                           *(w.replace(str(path), nm) for w in rec.warnings)])
     tracks = rec.tracks()
     notes = list(rec.warnings)
     empty = sum(1 for fr in rec.frames if not fr.people)

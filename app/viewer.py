@@ -1634,7 +1634,7 @@ class SessionView:
         with self.lock:
             self._uploads_begun += 1
             mine, since = self._uploads_begun, time.time()
-        if vid.is_video_upload(name) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
+        if vid.is_video_upload(name, content) or (up.is_json_upload(name, content) and vid.is_sequence_json(content)):
             self._load_video(name, content, mine=mine, since=since)
             return
         try:

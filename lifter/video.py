@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, Final, Literal
 
 import numpy as np
 
@@ -59,6 +59,53 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 VIDEO_SUFFIXES: Final[frozenset[str]] = frozenset(
     {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp", ".ts"})
 """File suffixes treated as videos (a folder's videos are lifted too)."""
+
+MEDIA_HEAD_BYTES: Final[int] = 512
+"""How many of a file's first bytes :func:`media_kind` reads."""
+
+_HEIF_IMAGE_BRANDS: Final[frozenset[bytes]] = frozenset({b"heic", b"heix", b"heim", b"heis", b"mif1", b"avif"})
+"""ISO-BMFF major brands of still images (HEIC, AVIF); any other ``ftyp`` brand is a video (MP4, MOV, 3GP, ...)."""
+
+
+def media_kind(head: bytes) -> Literal["image", "video"] | None:
+    """What a file's first bytes (:data:`MEDIA_HEAD_BYTES` of them) say it holds: ``"image"`` (JPEG, PNG, GIF, BMP,
+    WebP, TIFF, PNM, HEIC / AVIF), ``"video"`` (MP4 / MOV / 3GP, Matroska / WebM, AVI, MPEG program or transport
+    stream, ASF / WMV, FLV) or None (neither signature: go by the file's name)."""
+    h = bytes(head[:MEDIA_HEAD_BYTES])
+    if h[4:8] == b"ftyp":
+        return "image" if h[8:12] in _HEIF_IMAGE_BRANDS else "video"
+    if h.startswith((b"\xff\xd8\xff", b"\x89PNG\r\n\x1a\n", b"GIF87a", b"GIF89a", b"II*\x00", b"MM\x00*")):
+        return "image"
+    if h.startswith(b"RIFF") and h[8:12] in (b"WEBP", b"AVI "):
+        return "image" if h[8:12] == b"WEBP" else "video"
+    if h.startswith(b"BM") and len(h) >= 26 and h[6:10] == b"\x00\x00\x00\x00":  # (BMP: its reserved bytes are 0)
+        return "image"
+    if len(h) >= 3 and h[0:1] == b"P" and h[1:2] in b"123456" and h[2:3] in b" \t\r\n#":  # (a bare "P" is not PNM)
+        return "image"
+    if h.startswith((b"\x1a\x45\xdf\xa3", b"\x00\x00\x01\xba", b"\x00\x00\x01\xb3", b"FLV\x01",
+                     b"\x30\x26\xb2\x75\x8e\x66\xcf\x11")):
+        return "video"
+    if h[4:8] in (b"moov", b"mdat", b"wide", b"free", b"skip", b"pnot"):  # (QuickTime without an ftyp box)
+        return "video"
+    if len(h) > 188 and h[0] == 0x47 and h[188] == 0x47:  # (MPEG transport stream: a sync byte every 188)
+        return "video"
+    return None
+
+
+def misnamed_media(name: str | os.PathLike[str], head: bytes) -> tuple[Literal["image", "video"] | None, str | None]:
+    """``(kind, note)`` for a photo or video file called ``name`` whose first bytes are ``head``: ``kind`` is
+    ``"video"`` or ``"image"``, by its content when :func:`media_kind` knows it, else by its suffix
+    (:data:`VIDEO_SUFFIXES`; anything else is tried as an image); ``note`` says so when the two disagree (a JPEG
+    renamed ``.mp4`` was lifted as a one-frame video; a video named ``.jpg`` was refused as "not an image")."""
+    by_name: Literal["image", "video"] = "video" if Path(name).suffix.lower() in VIDEO_SUFFIXES else "image"
+    by_content = media_kind(head)
+    if by_content is None or by_content == by_name:
+        return by_name, None
+    held = "an image" if by_content == "image" else "a video"
+    lifted = "a photo" if by_content == "image" else "a video"
+    return by_content, (f"{Path(name).name} holds {held}, not {'a video' if by_name == 'video' else 'an image'} as "
+                        f"its name says: lifted as {lifted}")
+
 
 DEFAULT_MAX_SECONDS: Final[float] = 600.0
 """Videos and keypoint sequences longer than this are lifted up to this duration only."""

@@ -151,6 +151,29 @@ def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
     assert v.state.sample.key == key and v.sequence() is None
 
 
+def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_path: Path) -> None:
+    """A browser trial: a JPEG renamed .mp4 played as a one-frame video, and a video named .jpg was refused as "not an
+    image". Each is now shown as what its bytes hold, and the upload's message says so."""
+    import io
+
+    from PIL import Image
+
+    est = ScriptedEstimator(_script(6), full_width=W)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    assert v.load_upload("walk.jpg", _clip(tmp_path / "walk.avi", 6)) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert isinstance(seq, vid.VideoSequence) and seq.num_frames == 6 and not v.gui.play.play.disabled
+    assert seq.info.warnings[0] == "walk.jpg holds a video, not an image as its name says: lifted as a video"
+    assert any("walk.jpg holds a video" in m for m in v.messages[-3:])
+    buf = io.BytesIO()
+    Image.new("RGB", (W, H), (40, 40, 40)).save(buf, format="JPEG")
+    est.n = 0
+    assert v.load_upload("still.mp4", buf.getvalue()) is True, v.messages[-3:]
+    assert v.sequence() is None and v.state.sample.upload.kind == "image" and v.gui.play.play.disabled
+    assert "Note: still.mp4 holds an image, not a video as its name says: lifted as a photo." in v.messages[-1]
+
+
 def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()

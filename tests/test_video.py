@@ -848,6 +848,74 @@ def test_library_refuses_a_duration_bound_that_is_not_a_finite_positive_number(t
         lift_keypoint_sequence(tmp_path / "never_read.json", lifter=lifter, max_seconds=max_seconds)
 
 
+def _image_bytes(fmt: str) -> bytes:
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGB", (16, 12), (90, 80, 70)).save(buf, format=fmt)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("fmt", ["JPEG", "PNG", "GIF", "BMP", "WEBP", "TIFF", "PPM"])
+def test_media_kind_knows_images_by_their_bytes(fmt):
+    from lifter.video import media_kind
+
+    assert media_kind(_image_bytes(fmt)) == "image"
+
+
+@pytest.mark.parametrize(("fourcc", "suffix"), [("MJPG", ".avi"), ("mp4v", ".mp4"), ("MJPG", ".mkv")])
+def test_media_kind_knows_videos_by_their_bytes(tmp_path, fourcc, suffix):
+    from lifter.video import media_kind
+
+    clip = tmp_path / f"c{suffix}"
+    vw = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*fourcc), 10.0, (W, H))
+    if not vw.isOpened():
+        pytest.skip(f"this OpenCV cannot write {fourcc} into {suffix}")
+    for i in range(3):
+        vw.write(np.full((H, W, 3), 40 * i, np.uint8))
+    vw.release()
+    assert media_kind(clip.read_bytes()[:512]) == "video"
+
+
+@pytest.mark.parametrize("head", [b"", b"P", b"hello world", b'{"keypoints": []}', b"BM", b"\0" * 64,
+                                  b"RIFF\0\0\0\0WAVEfmt ", b"\0\0\0\x18ftypheic"])
+def test_media_kind_is_none_or_right_for_other_bytes(head):
+    from lifter.video import media_kind
+
+    assert media_kind(head) == ("image" if head.endswith(b"heic") else None)  # (HEIC: a still, in an ftyp box)
+
+
+def test_cli_lifts_a_misnamed_photo_or_video_as_what_it_holds(tmp_path, lifter, capsys):
+    """A user trial: a JPEG renamed .mp4 was lifted as a one-frame "video" at 25 fps, and a video named .jpg was
+    refused as "not an image". Each is now lifted as what its bytes hold, and the result says so."""
+    from lifter.checkpoint import save_checkpoint
+
+    weights = tmp_path / "tiny.pt"
+    save_checkpoint(weights, lifter.net, lifter.codec, meta={"name": "tiny"})
+    register_estimator("_scripted_misnamed", lambda **kw: ScriptedEstimator(_script(15)), overwrite=True)
+    _write_clip(tmp_path / "clip.avi", 6).rename(tmp_path / "walk.jpg")
+    from PIL import Image
+
+    Image.new("RGB", (W, H), (40, 40, 40)).save(tmp_path / "photo.mp4", format="JPEG")
+    out = tmp_path / "out"
+    code = main(["lift", "--no-progress", str(tmp_path / "walk.jpg"), str(tmp_path / "photo.mp4"), "--out", str(out),
+                 "--detector", "_scripted_misnamed", "--weights", str(weights), "--focal", str(F)])
+    err = capsys.readouterr().err
+    assert code == 0 and "lifted 2 of 2" in err, err
+    assert "walk.jpg: note: walk.jpg holds a video, not an image as its name says: lifted as a video" in err
+    assert "photo.mp4: note: photo.mp4 holds an image, not a video as its name says: lifted as a photo" in err
+    walk, photo = (json.loads((out / f"{n}.json").read_text()) for n in ("walk", "photo"))
+    assert walk["kind"] == "video" and len(walk["frames"]) == 6 and "holds a video" in walk["warnings"][0]
+    assert photo["kind"] == "image" and "frames" not in photo and "holds an image" in photo["warnings"][0]
+    # named rightly, or unknown bytes: by the name, with no note
+    from lifter.video import misnamed_media
+
+    assert misnamed_media("a.avi", (tmp_path / "walk.jpg").read_bytes()) == ("video", None)
+    assert misnamed_media("a.jpg", b"") == ("image", None) and misnamed_media("a.MP4", b"??") == ("video", None)
+
+
 def test_cli_damaged_video_error_without_ffmpeg_log_lines(tmp_path, lifter):
     """A truncated mp4: our one error line, not FFmpeg's '[mov,mp4,... @ 0x..] moov atom not found' before it (fd 2
     of a fresh process: FFmpeg writes there directly and reads its log level once)."""

@@ -57,6 +57,7 @@ input is processed; a photo with several people uses the largest and says so; im
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import glob
 import json
 import math
@@ -97,6 +98,7 @@ from ..video import (
     lift_keypoint_sequence,
     lift_video,
     limit_blas_threads,
+    misnamed_media,
     track_animation,
 )
 from . import COMMANDS
@@ -108,7 +110,8 @@ from ._help import HelpFormatter, positive_int
 
 
 def _head(path: Path) -> bytes:
-    """The first 4 KB of a file (empty when it cannot be read): a result's identifying fields come first."""
+    """The first 4 KB of a file (empty when it cannot be read): a result's identifying fields come first, and a photo's
+    or video's signature (:func:`lifter.video.misnamed_media`)."""
     try:
         with open(path, "rb") as f:
             return f.read(4096)
@@ -413,10 +416,11 @@ def run_lift(args: argparse.Namespace) -> int:
             for path, name in bar:
                 try:
                     sfx = path.suffix.lower()
+                    kind, misnamed = ("keypoints", None) if sfx == ".json" else misnamed_media(path, _head(path))
                     if args.image_size is not None and sfx != ".json":
                         raise PoseLifterError(f"{path}: --image-size is for keypoint files; a photo's or video's "
                                               "size is read from it")
-                    if args.distortion is not None and (sfx == ".json" or sfx in VIDEO_SUFFIXES):
+                    if args.distortion is not None and kind != "image":
                         raise PoseLifterError(
                             f"{path}: --distortion is for photos; " + (
                                 "a keypoint file gives its lens in the file: 'distortion' (and 'distortion_model')"
@@ -431,7 +435,7 @@ def run_lift(args: argparse.Namespace) -> int:
                         rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                                  default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
                                                  max_people=args.max_people, image_size=args.image_size)
-                    elif sfx in VIDEO_SUFFIXES:
+                    elif kind == "video":
                         est = get_estimator_once(path)
                         with tqdm(desc=f"  {path.name}", unit="frame", disable=quiet, file=sys.stderr, position=1,
                                   leave=False) as fbar:
@@ -449,6 +453,10 @@ def run_lift(args: argparse.Namespace) -> int:
                                          fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
                                          max_people=args.max_people, distortion=args.distortion,
                                          distortion_model=args.distortion_model)
+                    if misnamed is not None and seq is not None:
+                        seq.warnings.insert(0, misnamed)
+                    elif misnamed is not None and rec is not None:
+                        rec = dataclasses.replace(rec, warnings=(misnamed, *rec.warnings))
                     earlier, again = _result_input(args.out / f"{name}.json", path)  # (again: this input's own)
                     if earlier is not None and not again:
                         say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
