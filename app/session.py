@@ -55,6 +55,15 @@ def input_options(sample: Sample) -> list[str]:
     return opts
 
 
+def input_choices(sample: Sample) -> list[str]:
+    """What the 2D-input dropdown offers on ``sample``: :func:`input_options`, and on every Human3.6M frame both
+    (a training subject's detections cover every 5th frame: the dropdown, rebuilt frame by frame during playback,
+    flipped between one and two entries and could not be used; a frame without one falls back, said once:
+    :func:`no_detection_note`)."""
+    opts = input_options(sample)
+    return list(INPUT_KINDS) if sample.has_gt_2d and source_of(sample.key) == "h36m" else opts
+
+
 def input_label(sample: Sample, kind: str) -> str:
     """What the 2D-input dropdown shows for ``kind`` (``"gt"`` / ``"detected"``) on ``sample``: "ground truth", and
     for ``"detected"`` "SH detection" on Human3.6M frames, "uploaded 2D" for an uploaded keypoint file, "detected

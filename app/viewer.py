@@ -24,6 +24,7 @@ lands between the keys.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import itertools
 import logging
@@ -585,7 +586,7 @@ class SessionView:
                 self._show_sample_controls(self.state)
                 self.show_message(str(exc), error=True)
         old = self.state
-        values = self._control_values()
+        values, input_notes = self._input_choice(old, self._control_values())
         st, rejected = ss.apply_controls(old, values, known_model=self.app.pool.get)
         picked = None
         if st.person != old.person:
@@ -617,6 +618,8 @@ class SessionView:
             (r.message + ("; the box keeps what you typed for now" if r in held else ""), r.refused,
              float(r.value) if r.control == "focal_px" and not r.refused  # type: ignore[arg-type]
              and isinstance(r.value, (int, float)) else None) for r in rejected if r not in said_before]
+        notes += [(text, False, None) for text in input_notes]  # (last: the status line then says it, and goes
+        # once a frame with a detection is shown, as when a frame without one is opened: _show_sample)
         if reset:
             st = ss.reset_joints(st)
         refused_drag = False
@@ -639,8 +642,7 @@ class SessionView:
             if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
                 self._last_plane = None
                 self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
-            for text, error, focal in notes:
-                self.show_message(text, error=error, focal=focal)
+            self._say_pass_notes(notes, fallback=bool(input_notes))
             return
         try:
             self._apply(st)
@@ -652,8 +654,15 @@ class SessionView:
             notes.append((str(exc), True, None))
             self._show_controls(old)
             self._draw_2d(old.keypoints)
+        self._say_pass_notes(notes, fallback=bool(input_notes))
+
+    def _say_pass_notes(self, notes: list[tuple[str, bool, float | None]], *, fallback: bool) -> None:
+        """Say a pass's notes ``(text, error, focal set)`` in turn; ``fallback``: the last one is
+        :func:`ss.no_detection_note`, which the status line keeps while frames without a detection are shown."""
         for text, error, focal in notes:
             self.show_message(text, error=error, focal=focal)
+        if fallback:
+            self._status_fallback = True
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
@@ -670,6 +679,26 @@ class SessionView:
         except (TypeError, ValueError):
             return False
         return 0 < typed < focal_min(self.state.sample)
+
+    def _input_choice(self, old: SessionState, values: ss.ControlValues) -> tuple[ss.ControlValues, list[str]]:
+        """The 2D input a pass lifts, and what to say: a choice the dropdown holds (:meth:`_shown_input`) for a
+        Human3.6M frame without a detection is kept for the frames that have one (:attr:`_input_pref`), and this frame
+        goes on with ground truth (:func:`ss.no_detection_note`, said); choosing ground truth there is a choice too
+        (the dropdown showed the detection chosen before)."""
+        picked = values.input_kind
+        if picked not in ss.INPUT_KINDS or source_of(old.sample.key) != "h36m" or not old.sample.has_gt_2d:
+            return values, []
+        if picked == self._shown_input(old) and picked == old.input_kind:
+            return values, []
+        said: list[str] = []
+        if picked != self._input_pref:
+            self._input_pref = picked
+            if picked not in ss.input_options(old.sample):  # (chosen here: said, whether or not said before)
+                self._fallback_said.add(sequence_of(old.sample.key))
+                said.append(ss.no_detection_note(old.sample))
+        if picked not in ss.input_options(old.sample):
+            values = dataclasses.replace(values, input_kind=old.input_kind)
+        return values, said
 
     def _control_values(self) -> ss.ControlValues:
         g = self.gui
@@ -699,7 +728,12 @@ class SessionView:
     def _show_controls(self, st: SessionState) -> None:
         """Every value control shows ``st``."""
         for name in ("model", "input_kind", "focal_px", "noise_level", "seed", "cloud_samples", "analytic", "person"):
-            self._set_control(name, getattr(st, name))
+            self._set_control(name, self._shown_input(st) if name == "input_kind" else getattr(st, name))
+
+    def _shown_input(self, st: SessionState) -> str:
+        """The 2D input the dropdown shows for ``st``: the one chosen (:attr:`_input_pref`) on a Human3.6M frame that
+        has no detection and so falls back to ground truth (:func:`ss.fell_back`), else the one lifted."""
+        return self._input_pref if ss.fell_back(st, input_pref=self._input_pref) else st.input_kind
 
     def _apply(self, st: SessionState, *, new_sample: bool = False) -> None:
         """Lift ``st`` and, if that works, make it the tab's state and draw it (raises, changing nothing, if not:
@@ -1041,11 +1075,12 @@ class SessionView:
         g, p = self.gui.sample, self.gui.play
         sample = st.sample
         src = source_of(sample.key)
-        opts = [ss.input_label(sample, kind) for kind in ss.input_options(sample)]
+        opts = [ss.input_label(sample, kind) for kind in ss.input_choices(sample)]
+        shown = ss.input_label(sample, self._shown_input(st))
         if list(g.input.options) != opts:
             g.input.options = opts
-            g.input.value = ss.input_label(sample, st.input_kind)  # (new options can reset it to the first one)
-        self._put(g.input, ss.input_label(sample, st.input_kind))
+            g.input.value = shown  # (new options can reset it to the first one)
+        self._put(g.input, shown)
         people = [sample.person_name(k) for k in range(sample.num_people)]
         pick = self.gui.joints.person
         if list(pick.options) != people:

@@ -639,8 +639,10 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v.gui.sample.input.value = "SH detection"
     assert v.state.input_kind == "detected"
     np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
-    v.gui.play.frame.value = 6  # no detection: ground truth, with a message
-    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth"
+    v.gui.play.frame.value = 6  # no detection: ground truth, with a message; the dropdown keeps the choice (a
+    # browser trial: rebuilt frame by frame during playback, it flipped and could not be used)
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "SH detection"
+    assert list(v.gui.sample.input.options) == ["ground truth", "SH detection"]
     assert "no 2D detection" in v.messages[-1]
     np.testing.assert_allclose(_uv_box(v), v.state.sample.keypoints_2d[_selected(v)], atol=0.05)
     v.gui.play.frame.value = 7
@@ -653,6 +655,21 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     for f in (11, 12, 15, 16):  # said once per sequence, not once per frame (playback flooded the tab with toasts)
         v.gui.play.frame.value = f
     assert v.state.input_kind == "gt" and sum("no 2D detection" in m for m in v.messages) == 1, v.messages
+    assert v.gui.sample.input.value == "SH detection"
+    # ground truth chosen on a frame without a detection is a choice: kept on a frame with one
+    v.gui.sample.input.value = "ground truth"
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth"
+    assert "no 2D detection" not in v.gui.readout.status.content
+    v.gui.play.frame.value = 20
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "ground truth"
+    v.gui.play.frame.value = 21  # and the detection chosen there: said, and taken on the next frame with one
+    n = len(v.messages)
+    v.gui.sample.input.value = "SH detection"
+    assert v.state.input_kind == "gt" and v.gui.sample.input.value == "SH detection"
+    assert len(v.messages) == n + 1 and "no 2D detection" in v.messages[-1] and not v._last_was_error
+    v.gui.play.frame.value = 25
+    assert v.state.input_kind == "detected" and v.gui.sample.input.value == "SH detection"
+    assert "no 2D detection" not in v.gui.readout.status.content
     v.gui.play.frame.value = 10
     # an upload forces "detected" without changing the preference; choosing gt does
     assert _json_upload(v, h36m_app.demo.get("standing")) is True and v.state.input_kind == "detected"
