@@ -384,7 +384,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                          *short_focal_caution(focal=f, camera_focal=cam.alpha,
                                                               input_space=used.input_space,
                                                               camera_focal_known=camera_focal_known(state)),
-                                         *bone_caution(res_rel[0])))
+                                         *bone_caution(res_rel[0], why=bone_cause(state))))
 
 
 BONE_RATIO_LIMITS: Final[tuple[float, float]] = (0.4, 2.0)
@@ -402,10 +402,11 @@ def reference_bones_mm() -> np.ndarray:
     return bone_lengths(demo_sample("standing").pose_3d)
 
 
-def bone_caution(relative: np.ndarray) -> list[str]:
+def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
     """The readout's caution when a bone of the lifted pose ``(17, 3)`` mm is out of :data:`BONE_RATIO_LIMITS` of
-    the reference body's: no body has it, so the 2D (dragged joints, often) is one the lift cannot explain (a trial
-    dragged a wrist within the allowed range and got a 1258-mm forearm, the wrist at the camera, without a word)."""
+    the reference body's: no body has it, so the 2D is one the lift cannot explain (a trial dragged a wrist within
+    the allowed range and got a 1258-mm forearm, the wrist at the camera, without a word). ``why``: the likely cause
+    said after "the 2D" (:func:`bone_cause`)."""
     from lifter.skeleton import EDGES, JOINT_NAMES, bone_lengths
 
     ref = reference_bones_mm()
@@ -418,8 +419,19 @@ def bone_caution(relative: np.ndarray) -> list[str]:
     said = ", ".join(f"{JOINT_NAMES[EDGES[i][0]]}-{JOINT_NAMES[EDGES[i][1]]} {lengths[i]:.0f} mm (a body's: about "
                      f"{ref[i]:.0f})" for i in bad[:2])
     more = f" and {len(bad) - 2} more" if len(bad) > 2 else ""
-    return [f"the lifted pose has bones no body has: {said}{more}; the 2D (a dragged joint?) is not one a body makes, "
-            "so this lift is not a pose to trust"]
+    cause = f" ({why})" if why else ""
+    return [f"the lifted pose has bones no body has: {said}{more}; the 2D{cause} is not one a body makes, so this lift "
+            "is not a pose to trust"]
+
+
+def bone_cause(state: SessionState) -> str:
+    """What most likely bent the 2D of ``state`` when :func:`bone_caution` fires: the noise drawn on it, joints
+    dragged, or the detection (a teacher's noise level 3 on an undragged demo read "a dragged joint?")."""
+    if state.noise_level > 0:
+        return f"with the noise drawn at level {state.noise_level:g}"
+    if state.dragged or any(state.others_dragged.values()):
+        return "a dragged joint?"
+    return "a detection error?" if state.input_kind == "detected" else ""
 
 
 def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
@@ -447,8 +459,8 @@ SHORT_FOCAL_FACTOR: Final[float] = 0.5
 """A focal length below this multiple of the camera's own gets :func:`short_focal_caution` (ray-reading models)."""
 
 SHORT_FOCAL_MEASURED: Final[str] = (
-    "the default on Human3.6M's test frames: PA-MPJPE 41 / 71 / 124 mm at ×0.5 / ×0.25 / ×0.1 of the true focal, "
-    "29 at it, and Z/f +3 / +9 / +27 %")
+    "the default over Human3.6M's test frames: mean PA-MPJPE 41 / 71 / 124 mm at ×0.5 / ×0.25 / ×0.1 of the true "
+    "focal, 29 at it, and median Z/f +3 / +9 / +27 %; one frame's own can differ")
 """What a too-short focal does to the default (``python scripts/wrong_focal.py``, docs/results/wrong_focal.txt)."""
 
 
@@ -477,8 +489,8 @@ def short_focal_caution(*, focal: Any, camera_focal: float, input_space: Literal
     if input_space != "camera" or ratio >= SHORT_FOCAL_FACTOR or not camera_focal_known:
         return []
     return [f"at {alpha:.0f} px, ×{ratio:.3g} of the camera's own focal length "
-            f"({float(camera_focal):.0f} px), this model's lift bends and its Z/f no longer follows Z ∝ f "
-            f"({SHORT_FOCAL_MEASURED})"]
+            f"({float(camera_focal):.0f} px), this model's lift bends and its Z/f drifts from Z ∝ f, more the "
+            f"shorter the focal ({SHORT_FOCAL_MEASURED})"]
 
 
 def lift_source(state: SessionState) -> Literal["clean", "detected"]:
@@ -605,7 +617,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
             "the drawn trajectory)" if source_of(state.sample.key) == "video" else ""),
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px "
         + ("(this model reads the rays: Z/f shifts with f, for the default within 3 % from ×0.5 to ×6 of the "
-           "camera's focal, more below)" if frame.reads_rays else
+           "camera's focal, median over Human3.6M's test frames, and more at shorter ones)" if frame.reads_rays else
            "(this pixel-space model: the same at any f)"),
     ]
     lines += [f"**Caution** {note}" for note in frame.caution]

@@ -136,6 +136,11 @@ class DemoMotion:
         return SequenceFrame((s,))
 
 
+def clamp_speed(speed: float, *, low: float, high: float) -> float:
+    """``speed`` (× real time) within ``[low, high]``; 1 for a value that is not a finite number."""
+    return min(max(float(speed), low), high) if math.isfinite(float(speed)) else 1.0
+
+
 @dataclass
 class PlayClock:
     """Which frame to show at time ``now`` (s) while playing: ``index0`` at ``t0``, advancing at ``fps * speed``

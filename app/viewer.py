@@ -60,7 +60,7 @@ from .core import (
     spread_details,
 )
 from .drawing import overlay, response_image, scaled_base
-from .gui import SOURCE_LABELS, Gui, build_gui
+from .gui import SOURCE_LABELS, SPEED_MAX, SPEED_MIN, Gui, build_gui
 from .keys import (
     NO_PHOTO,
     SEQUENCE_SOURCES,
@@ -75,7 +75,7 @@ from .keys import (
     video_key,
 )
 from .noise import ErrorModelLike, default_error_model, model_name
-from .playback import DemoMotion, H36MSequence, Player, SequenceSource
+from .playback import DemoMotion, H36MSequence, Player, SequenceSource, clamp_speed
 from .samples import DemoCatalog, H36MCatalog, Sample, open_h36m
 from .scene import (
     JOINT_RADIUS_M,
@@ -271,6 +271,7 @@ class SessionView:
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         self._status_about: str | None = None
+        self._status_frame_key: str | None = None  # the frame the status line is about (show_message's frame_key)
         """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync
         pass that shows another sample, or sequence, and no message of its own clears it (a user trial: a video's
         note stayed on under a Human3.6M frame)."""
@@ -313,6 +314,7 @@ class SessionView:
         value px); applied once the typing settles (:meth:`_on_uv_event`)."""
         self._typed_seq = itertools.count()
         self._fallback_said: set[str] = set()
+        self._speed_typed = -1  # the last key's number in the speed box (:meth:`_on_speed`)
         """Sequences whose missing-detection note was said (once per sequence, not once per frame in playback)."""
         self._last_plane: np.ndarray | None = None
         self._base_key: tuple | None = None
@@ -338,7 +340,7 @@ class SessionView:
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         self.trail: dict[int, np.ndarray] = {}
         self._trail_key: tuple | None = None
-        self.player = Player(position=self._play_position, speed=lambda: float(self.gui.play.speed.value),
+        self.player = Player(position=self._play_position, speed=self._speed,
                              show=self._show_frame, on_stop=self._player_stopped)
         self.play_ms = self.player.frame_ms
         """Server-side time of each frame shown by playback (ms)."""
@@ -401,17 +403,20 @@ class SessionView:
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
-                     focal: float | None = None, title: str | None = None, sticky: bool = False) -> None:
+                     focal: float | None = None, title: str | None = None, sticky: bool = False,
+                     frame_key: str | None = None) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass
         that shows another one clears the message). ``focal``: the focal length (px) the message says was set; a
         pass that finds another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed
-        since).
+        since). ``frame_key``: the one frame it is about; a pass that shows another clears it (a browser trial read
+        "frame 99999 is past the end ...; showing frame 1967" under frame 391).
         ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
         stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``."""
         title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
             self._status_focal = focal
+            self._status_frame_key = frame_key
             self._status_fallback = False
             self.messages.append(text)
             self.messages = self.messages[-20:]
@@ -470,10 +475,34 @@ class SessionView:
         g.lift.overview.on_click(self._on(self.overview))
         g.lift.auto_frame.on_update(self._on(self._auto_frame))
         g.play.play.on_click(self._on(self.toggle_play))
+        g.play.speed.on_update(self._on(self._on_speed))
         g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
                                                                    g.files.upload.value.content)))
         g.files.download_json.on_click(self._on(self.download, "json"))
         g.files.download_glb.on_click(self._on(self.download, "glb"))
+
+    def _speed(self) -> float:
+        """Playback speed (× real time): the speed box's, within the slider's range."""
+        return clamp_speed(self.gui.play.speed.value, low=SPEED_MIN, high=SPEED_MAX)
+
+    def _on_speed(self) -> None:
+        with self._flags:
+            seq = next(self._typed_seq)
+            self._speed_typed = seq
+        self._later(TYPING_SETTLE_S, self._settle_speed, seq)
+
+    def _settle_speed(self, seq: int) -> None:
+        """Once the speed box's typing settles: a value outside the slider's range is put in range, in the box too,
+        and said (a browser trial's box kept "10" beside a slider at 4×, and "0" beside 0.1×, with no word)."""
+        with self._flags:
+            if seq != self._speed_typed:
+                return  # (a newer key: its own timer settles it)
+        h = self.gui.play.speed
+        typed = h.value
+        speed = self._speed()
+        if speed != typed:
+            h.value = speed
+            self.show_message(f"speed {typed:g}× is outside [{SPEED_MIN:g}×, {SPEED_MAX:g}×]; set to {speed:g}×")
 
     def _typed_controls(self) -> dict[str, Any]:
         """The controls whose typed values wait for more keys (:data:`TYPING_SETTLE_S`), by state name."""
@@ -550,6 +579,7 @@ class SessionView:
                 if self._message_count == n and self.gui.readout.status.content and (
                         (self._status_about is not None and sequence_of(self.state.sample.key) != self._status_about)
                         or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)
+                        or (self._status_frame_key is not None and self.state.sample.key != self._status_frame_key)
                         or (self._status_fallback and not ss.fell_back(self.state, input_pref=self._input_pref))):
                     # (about a sample no longer shown, a focal since changed, or a frame without a detection left for
                     # one with it: a browser trial read "no 2D detection ... frame 3" under frame 5's detection)
@@ -909,7 +939,7 @@ class SessionView:
         self._frame_note = None
         where = "past the end" if wanted > at else "before the start"
         self.show_message(f"frame {wanted} is {where} of this sequence (frames 0–{last}); showing frame {at}",
-                          about=about)
+                          about=about, frame_key=key if f == at else None)
         self._put(self.gui.play.frame, at)  # (said once: the slider shows the frame in use)
 
     def sequence(self) -> SequenceSource | None:

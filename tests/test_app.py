@@ -1012,6 +1012,8 @@ def test_a_focal_far_shorter_than_the_cameras_is_cautioned(view: SessionView) ->
     md = view.gui.readout.readout.content
     assert "**Caution** at 360 px, ×0.45 of the camera's own focal length (800 px), this model's lift bends" in md, md
     assert "PA-MPJPE 41 / 71 / 124 mm at ×0.5 / ×0.25 / ×0.1" in md and "spans" not in md
+    # (a browser trial read the dataset's figures as this frame's, whose own Z/f had moved 0.2 % at ×0.5)
+    assert "over Human3.6M's test frames: mean PA-MPJPE" in md and "one frame's own can differ" in md
     assert view.set_model("gt") is not False
     assert "camera's own focal length (800 px)" not in view.gui.readout.readout.content
     view.reset_focal()
@@ -1331,6 +1333,29 @@ def test_auto_reframing_keeps_the_skeleton_in_view(view: SessionView, app: PoseL
     np.testing.assert_array_equal(np.asarray(app.server.initial_camera.position), before)  # off: the view stays
     view.gui.lift.auto_frame.value = True
     view.reset_focal()
+
+
+def test_a_speed_typed_outside_the_slider_is_put_in_range_and_said(app: PoseLifterApp) -> None:
+    """A browser trial typed 10 in the speed box: it kept "10" beside a slider at 4x, with no word (and "0" beside
+    0.1x). Playback never runs outside the range; once the typing settles the box shows the speed used, and says
+    so."""
+    from poselifter_app.gui import SPEED_MAX, SPEED_MIN
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    v = app.headless_view()
+    for typed, used in ((10.0, SPEED_MAX), (0.0, SPEED_MIN), (-3.0, SPEED_MIN)):
+        n = len(v.messages)
+        v.gui.play.speed.value = typed
+        assert v._speed() == used  # (at once: playback reads this)
+        assert wait_for(lambda used=used: v.gui.play.speed.value == used, timeout=TYPING_SETTLE_S + 3)
+        assert len(v.messages) == n + 1 and v.messages[-1] == (
+            f"speed {typed:g}× is outside [{SPEED_MIN:g}×, {SPEED_MAX:g}×]; set to {used:g}×")
+    n = len(v.messages)
+    v.gui.play.speed.value = 1.5  # (in range: nothing said)
+    import time
+
+    time.sleep(TYPING_SETTLE_S + 0.5)
+    assert v.gui.play.speed.value == 1.5 and v._speed() == 1.5 and len(v.messages) == n
 
 
 def test_playback_of_the_demo_motion_draws_the_root_trajectory(app: PoseLifterApp) -> None:
@@ -1671,7 +1696,9 @@ def test_a_frame_past_the_sequence_end_is_said(h36m_app: PoseLifterApp) -> None:
     v.gui.play.frame.value = last + 500
     assert v.state.sample.key.endswith(f"/{last}") and v.gui.play.frame.value == last
     assert len(v.messages) == n + 1 and f"frame {last + 500} is past the end" in v.messages[-1]
-    v.gui.play.frame.value = last - 1  # within the sequence: nothing said
+    assert "past the end" in v.gui.readout.status.content
+    v.gui.play.frame.value = last - 1  # within the sequence: nothing said, and the status line no longer says it
+    assert "past the end" not in v.gui.readout.status.content  # (a browser trial read it under another frame)
     v.gui.play.frame.value = last
     assert len(v.messages) == n + 1
     # before the start: the first frame, said the same way (a helper's -5 got an "Input problem" error instead)
@@ -2112,8 +2139,14 @@ def test_a_lift_with_bones_no_body_has_is_cautioned(app: PoseLifterApp) -> None:
 
     forearm = next(i for i, e in enumerate(EDGES) if set(e) == {12, 13})  # l_elbow-l_wrist
     assert np.linalg.norm(v.frame.lifted[13] - v.frame.lifted[12]) > 2 * reference_bones_mm()[forearm]
+    assert "the 2D (a dragged joint?) is not one a body makes" in said[0]
     v.reset_joints()
     assert not any("bones no body has" in c for c in v.frame.caution)
+    # noise drawn, nothing dragged: the caution names the noise (a teacher's level 3 read "a dragged joint?")
+    v.gui.noise.seed.value = 1
+    v.gui.noise.level.value = 3.0
+    said = [c for c in v.frame.caution if "bones no body has" in c]
+    assert said and "the 2D (with the noise drawn at level 3) is not one a body makes" in said[0], v.frame.caution
 
 
 def test_dragged_joints_are_tethered_to_their_own_2d(app: PoseLifterApp) -> None:
