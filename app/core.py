@@ -425,12 +425,14 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
 
 
 def bone_cause(state: SessionState) -> str:
-    """What most likely bent the 2D of ``state`` when :func:`bone_caution` fires: the noise drawn on it, joints
-    dragged, or the detection (a teacher's noise level 3 on an undragged demo read "a dragged joint?")."""
-    if state.noise_level > 0:
-        return f"with the noise drawn at level {state.noise_level:g}"
-    if state.dragged or any(state.others_dragged.values()):
-        return "a dragged joint?"
+    """What most likely bent the selected person's 2D in ``state`` when :func:`bone_caution` fires: a joint dragged,
+    the noise drawn on it, or the detection (a teacher's noise level 3 on an undragged demo read "a dragged
+    joint?")."""
+    noise = f"the noise drawn at level {state.noise_level:g}" if state.noise_level > 0 else ""
+    if state.dragged:
+        return "a dragged joint?" + (f" or {noise}" if noise else "")
+    if noise:
+        return f"with {noise}"
     return "a detection error?" if state.input_kind == "detected" else ""
 
 

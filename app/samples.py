@@ -42,6 +42,8 @@ class Sample:
         picker makes any of them the draggable one.
     person_tags: the input's own name for each person, this one first (``"id 7"``, ``"track 3"``; ``""`` when it
         has none), shown in the person picker; empty when there are none.
+    sequence_detected: a Human3.6M frame whose sequence and camera have 2D detections (on every frame, or every 5th
+        for the training subjects), whether or not this frame has one.
     """
 
     key: str
@@ -55,6 +57,7 @@ class Sample:
     upload: Any = None
     others_2d: tuple[np.ndarray, ...] = ()
     person_tags: tuple[str, ...] = ()
+    sequence_detected: bool = False
 
     @property
     def num_people(self) -> int:
@@ -182,7 +185,7 @@ class H36MCatalog:
         with self._lock:
             world = self.data.poses_world(key, frame)
             cam = self.data.camera(subject, camera_id)
-            det = None
+            det, step = None, 0
             if self._detections is not None:
                 dkey = f"{key}/{camera_id}"
                 if dkey in self._detections.files:
@@ -199,7 +202,7 @@ class H36MCatalog:
         image = _read_rgb(self.root / "demo" / photo) if photo else None
         return Sample(key=h36m_key(subject, sequence, camera_id, frame),
                       label=f"S{subject} {sequence} cam {camera_id} frame {frame}", keypoints_2d=kp, pose_3d=p3,
-                      detected_2d=det, camera=cam, image=image)
+                      detected_2d=det, camera=cam, image=image, sequence_detected=step > 0)
 
 
 def default_h36m_root() -> Path | None:

@@ -56,12 +56,12 @@ def input_options(sample: Sample) -> list[str]:
 
 
 def input_choices(sample: Sample) -> list[str]:
-    """What the 2D-input dropdown offers on ``sample``: :func:`input_options`, and on every Human3.6M frame both
-    (a training subject's detections cover every 5th frame: the dropdown, rebuilt frame by frame during playback,
-    flipped between one and two entries and could not be used; a frame without one falls back, said once:
-    :func:`no_detection_note`)."""
+    """What the 2D-input dropdown offers on ``sample``: :func:`input_options`, and both on every frame of a Human3.6M
+    sequence and camera that has detections (:attr:`Sample.sequence_detected`; a training subject's cover every 5th
+    frame: the dropdown, rebuilt frame by frame during playback, flipped between one and two entries and could not
+    be used; a frame without one falls back, said once: :func:`no_detection_note`)."""
     opts = input_options(sample)
-    return list(INPUT_KINDS) if sample.has_gt_2d and source_of(sample.key) == "h36m" else opts
+    return list(INPUT_KINDS) if sample.has_gt_2d and sample.sequence_detected else opts
 
 
 def input_label(sample: Sample, kind: str) -> str:

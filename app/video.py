@@ -73,7 +73,7 @@ VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
 def is_video_upload(name: str, content: bytes = b"") -> bool:
     """A video: by ``content``'s first bytes when they say (:func:`lifter.video.misnamed_media`: a JPEG renamed
     ``.mp4`` is a photo, a video named ``.jpg`` a video), else by a video suffix in the name
-    (:data:`lifter.video.VIDEO_SUFFIXES`). A keypoint file's name or content is never a video's."""
+    (:data:`lifter.video.VIDEO_SUFFIXES`). A ``.json`` name is never a video's."""
     nm = safe_name(name)
     if Path(nm).suffix.lower() == ".json":
         return False

@@ -672,7 +672,7 @@ class SessionView:
             if refused_drag:  # the sphere and the (u, v) box go back to the joint's position
                 self._last_plane = None
                 self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
-            self._say_pass_notes(notes, fallback=bool(input_notes))
+            self._say_pass_notes(notes, fallback=input_notes)
             return
         try:
             self._apply(st)
@@ -684,14 +684,14 @@ class SessionView:
             notes.append((str(exc), True, None))
             self._show_controls(old)
             self._draw_2d(old.keypoints)
-        self._say_pass_notes(notes, fallback=bool(input_notes))
+        self._say_pass_notes(notes, fallback=input_notes)
 
-    def _say_pass_notes(self, notes: list[tuple[str, bool, float | None]], *, fallback: bool) -> None:
-        """Say a pass's notes ``(text, error, focal set)`` in turn; ``fallback``: the last one is
-        :func:`ss.no_detection_note`, which the status line keeps while frames without a detection are shown."""
+    def _say_pass_notes(self, notes: list[tuple[str, bool, float | None]], *, fallback: list[str]) -> None:
+        """Say a pass's notes ``(text, error, focal set)`` in turn. When the last one said is in ``fallback``
+        (:func:`ss.no_detection_note`), the status line keeps it while frames without a detection are shown."""
         for text, error, focal in notes:
             self.show_message(text, error=error, focal=focal)
-        if fallback:
+        if notes and notes[-1][0] in fallback:
             self._status_fallback = True
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
@@ -716,8 +716,8 @@ class SessionView:
         goes on with ground truth (:func:`ss.no_detection_note`, said); choosing ground truth there is a choice too
         (the dropdown showed the detection chosen before)."""
         picked = values.input_kind
-        if picked not in ss.INPUT_KINDS or source_of(old.sample.key) != "h36m" or not old.sample.has_gt_2d:
-            return values, []
+        if picked not in ss.INPUT_KINDS or picked not in ss.input_choices(old.sample):
+            return values, []  # (a choice the sample does not offer is refused as before: with_input says why)
         if picked == self._shown_input(old) and picked == old.input_kind:
             return values, []
         said: list[str] = []
@@ -762,8 +762,10 @@ class SessionView:
 
     def _shown_input(self, st: SessionState) -> str:
         """The 2D input the dropdown shows for ``st``: the one chosen (:attr:`_input_pref`) on a Human3.6M frame that
-        has no detection and so falls back to ground truth (:func:`ss.fell_back`), else the one lifted."""
-        return self._input_pref if ss.fell_back(st, input_pref=self._input_pref) else st.input_kind
+        has no detection and so falls back to ground truth (:func:`ss.fell_back`) where the dropdown offers it
+        (:func:`ss.input_choices`), else the one lifted."""
+        keep = ss.fell_back(st, input_pref=self._input_pref) and self._input_pref in ss.input_choices(st.sample)
+        return self._input_pref if keep else st.input_kind
 
     def _apply(self, st: SessionState, *, new_sample: bool = False) -> None:
         """Lift ``st`` and, if that works, make it the tab's state and draw it (raises, changing nothing, if not:
@@ -1007,12 +1009,20 @@ class SessionView:
         except Exception:
             # not shown: the tab's own bookkeeping is taken back too (a review: joints corrected on an upload, waiting
             # for it, were forgotten when going back to it failed to draw)
-            self._upload_left, typed_focal_at, self._sample_gen = kept_books
+            self._upload_left, typed_focal_at, _ = kept_books
             if typed_focal_at is not None:
                 self._typed_at.setdefault("focal_px", typed_focal_at)
-            with self._flags:
-                if self._typed_uv is None:
-                    self._typed_uv = typed_uv
+            # (the generation stays new: a key typed meanwhile was stamped with it; the (u, v) being typed for the
+            # sample still shown is stamped again, and its timer, which may have fired meanwhile, set again)
+            if typed_uv is not None:
+                with self._flags:
+                    restore = self._typed_uv is None
+                    if restore:
+                        self._typed_uv = (typed_uv[0], typed_uv[1], self._sample_gen, *typed_uv[3:])
+                if restore:
+                    self._later(TYPING_SETTLE_S, self._settle_typed_uv, typed_uv[0])
+            if self._drag_gen == kept_books[2]:  # (a drag begun on the sample still shown goes on)
+                self._drag_gen = self._sample_gen
             raise
         self._followed = followed  # (only once shown: a refused sample changes nothing)
         if source_of(sample.key) == "h36m":

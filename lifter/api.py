@@ -33,6 +33,7 @@ from ._checks import (
     PoseLifterWarning,
     as_pair,
     as_points,
+    collect_output_notes,  # noqa: F401 -- (re-exported: it lived here, lifter.api.collect_output_notes)
     face_first_notes,
     input_warnings,
     outside_image_notes,

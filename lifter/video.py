@@ -63,8 +63,11 @@ VIDEO_SUFFIXES: Final[frozenset[str]] = frozenset(
 MEDIA_HEAD_BYTES: Final[int] = 512
 """How many of a file's first bytes :func:`media_kind` reads."""
 
-_HEIF_IMAGE_BRANDS: Final[frozenset[bytes]] = frozenset({b"heic", b"heix", b"heim", b"heis", b"mif1", b"avif"})
-"""ISO-BMFF major brands of still images (HEIC, AVIF); any other ``ftyp`` brand is a video (MP4, MOV, 3GP, ...)."""
+_HEIF_IMAGE_BRANDS: Final[frozenset[bytes]] = frozenset(
+    {b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"hevm", b"hevs", b"mif1", b"msf1", b"avif", b"avis",
+     b"crx "})
+"""ISO-BMFF brands of images (HEIC / HEIF and AVIF, stills and image sequences, Canon CR3): an ``ftyp`` box whose
+major or compatible brands include one is an image; any other is a video (MP4, MOV, 3GP, ...)."""
 
 
 def media_kind(head: bytes) -> Literal["image", "video"] | None:
@@ -72,22 +75,24 @@ def media_kind(head: bytes) -> Literal["image", "video"] | None:
     WebP, TIFF, PNM, HEIC / AVIF), ``"video"`` (MP4 / MOV / 3GP, Matroska / WebM, AVI, MPEG program or transport
     stream, ASF / WMV, FLV) or None (neither signature: go by the file's name)."""
     h = bytes(head[:MEDIA_HEAD_BYTES])
-    if h[4:8] == b"ftyp":
-        return "image" if h[8:12] in _HEIF_IMAGE_BRANDS else "video"
+    size = int.from_bytes(h[0:4], "big") if len(h) >= 4 else 0
+    if h[4:8] == b"ftyp" and size >= 16:
+        brands = [h[8:12]] + [h[i:i + 4] for i in range(16, min(size, len(h)) - 3, 4)]  # (major, then compatible)
+        return "image" if any(b in _HEIF_IMAGE_BRANDS for b in brands) else "video"
     if h.startswith((b"\xff\xd8\xff", b"\x89PNG\r\n\x1a\n", b"GIF87a", b"GIF89a", b"II*\x00", b"MM\x00*")):
         return "image"
     if h.startswith(b"RIFF") and h[8:12] in (b"WEBP", b"AVI "):
         return "image" if h[8:12] == b"WEBP" else "video"
     if h.startswith(b"BM") and len(h) >= 26 and h[6:10] == b"\x00\x00\x00\x00":  # (BMP: its reserved bytes are 0)
         return "image"
-    if len(h) >= 3 and h[0:1] == b"P" and h[1:2] in b"123456" and h[2:3] in b" \t\r\n#":  # (a bare "P" is not PNM)
+    if re.match(rb"P[1-6](\s+\d|\s*#)", h):  # (PNM: "P6", then a width or a comment; "P1 is ..." is text)
         return "image"
     if h.startswith((b"\x1a\x45\xdf\xa3", b"\x00\x00\x01\xba", b"\x00\x00\x01\xb3", b"FLV\x01",
                      b"\x30\x26\xb2\x75\x8e\x66\xcf\x11")):
         return "video"
-    if h[4:8] in (b"moov", b"mdat", b"wide", b"free", b"skip", b"pnot"):  # (QuickTime without an ftyp box)
-        return "video"
-    if len(h) > 188 and h[0] == 0x47 and h[188] == 0x47:  # (MPEG transport stream: a sync byte every 188)
+    if h[4:8] in (b"moov", b"mdat", b"wide", b"free", b"skip", b"pnot") and 8 <= size < 1 << 24:
+        return "video"  # (QuickTime without an ftyp box: a small first box; "Get free ..." is text)
+    if len(h) > 376 and h[0] == h[188] == h[376] == 0x47:  # (MPEG transport stream: a sync byte every 188)
         return "video"
     return None
 

@@ -632,6 +632,26 @@ def test_head_on_view_moves_a_tabs_camera(app: PoseLifterApp) -> None:
     assert wait_for(lambda: len(app.views) == n0)
 
 
+def test_human36m_without_detections_offers_none(tmp_path) -> None:
+    """A review: with the detections file missing, the dropdown offered "SH detection" on every frame (and the note
+    promised detections on every 5th frame). Only a sequence and camera that have detections offer them."""
+    root = default_h36m_root()
+    if root is None:
+        pytest.skip("Human3.6M not present at ../shared/data/h36m")
+    require_shipped_models()
+    for name in ("poses3d_world_17j_mm.npz", "cameras.json"):
+        (tmp_path / name).symlink_to(root / name)
+    server = local_server()
+    try:
+        v = PoseLifterApp(server, h36m_root=tmp_path).headless_view()
+        assert v.select_h36m(subject=9, sequence="Walking 1", camera="54138969", frame=10) is True
+        assert list(v.gui.sample.input.options) == ["ground truth"] and not v.state.sample.sequence_detected
+        assert v.set_input_kind("detected") is False and v.state.input_kind == "gt"
+        assert "no 2D detection" in v.messages[-1]
+    finally:
+        server.stop()
+
+
 def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None:
     v = h36m_app.headless_view()
     seq = "Directions 1"
@@ -639,6 +659,7 @@ def test_detected_input_is_kept_while_scrubbing(h36m_app: PoseLifterApp) -> None
     v.gui.sample.input.value = "SH detection"
     assert v.state.input_kind == "detected"
     np.testing.assert_allclose(_uv_box(v), v.state.sample.detected_2d[_selected(v)], atol=0.05)
+    assert v.state.sample.sequence_detected
     v.gui.play.frame.value = 6  # no detection: ground truth, with a message; the dropdown keeps the choice (a
     # browser trial: rebuilt frame by frame during playback, it flipped and could not be used)
     assert v.state.input_kind == "gt" and v.gui.sample.input.value == "SH detection"
@@ -2147,6 +2168,11 @@ def test_a_lift_with_bones_no_body_has_is_cautioned(app: PoseLifterApp) -> None:
     v.gui.noise.level.value = 3.0
     said = [c for c in v.frame.caution if "bones no body has" in c]
     assert said and "the 2D (with the noise drawn at level 3) is not one a body makes" in said[0], v.frame.caution
+    # both: the drag named first (a review: noise 0.1 on a wrist dragged to u = -150 blamed the noise)
+    v.gui.noise.level.value = 0.1
+    v.move_joint("l_wrist", (-150.0, float(v.state.keypoints[13, 1])))
+    said = [c for c in v.frame.caution if "bones no body has" in c]
+    assert said and "the 2D (a dragged joint? or the noise drawn at level 0.1) is not" in said[0], v.frame.caution
 
 
 def test_dragged_joints_are_tethered_to_their_own_2d(app: PoseLifterApp) -> None:

@@ -480,6 +480,47 @@ def test_corrected_upload_joints_survive_a_return_that_fails_to_draw(monkeypatch
         server.stop()
 
 
+def test_a_joint_position_being_typed_survives_a_sample_that_fails_to_draw(monkeypatch) -> None:
+    """A (u, v) being typed when another sample fails to draw (and is taken back) is still applied, to the joint of
+    the sample still shown, once the typing settles, also when its timer fired while the other was drawn (a review:
+    the value came back without a timer, and was never applied)."""
+    import time
+
+    import poselifter_app.viewer as viewer_module
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    server = local_server()
+    try:
+        a = _standing_app(server)
+        v = a.headless_view()
+        key, j = v.state.sample.key, v.selected
+        target = v.state.keypoints[j] + [9.0, -6.0]
+        v.gui.joints.uv._impl.value = tuple(target)  # (viser's private field: the value as a tab's key puts it)
+        later = v._later
+        v._later = lambda *args: None  # (its timer: the call in failing() below stands for it)
+        v._note_typed_uv()  # (as a tab's keystroke: applied once the typing settles)
+        v._later = later
+        seq = v._typed_uv[0]
+        real = viewer_module.overlay
+
+        def failing(*args, **kwargs):  # (the typing's timer fires while the other sample is being drawn)
+            monkeypatch.setattr(viewer_module, "overlay", real)
+            v._settle_typed_uv(seq)
+            raise RuntimeError("drawing failed")
+
+        monkeypatch.setattr(viewer_module, "overlay", failing)
+        with pytest.raises(RuntimeError, match="drawing failed"):
+            with v.lock:
+                v._show_sample(a.demo.get(a.demo.names[1]), reframe=False)
+        assert v.state.sample.key == key
+        time.sleep(TYPING_SETTLE_S + 0.5)
+        assert wait_for(lambda: np.allclose(v.state.keypoints[j], np.round(target, 1), atol=0.06)), \
+            (v.state.keypoints[j], target)
+        assert v.state.dragged == {j}
+    finally:
+        server.stop()
+
+
 def test_a_photo_read_after_a_later_upload_is_neither_shown_nor_drawn_on(monkeypatch) -> None:
     """A review: a slow photo that finished after a later photo was shown was not shown, but still became the photo
     a keypoint file uploaded next is drawn on. Only a photo shown is."""
