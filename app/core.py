@@ -635,7 +635,7 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         lines.append(spread_line(frame.spread))
     if frame.metrics:
         m = frame.metrics
-        lines.append(f"**MPJPE** {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
+        lines.append(f"**MPJPE** (roots aligned) {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
                      f"**root error** {m['root error']:.0f} mm" + training_subject_note(state.sample.key,
                                                                                        frame.trained_subjects))
     else:

@@ -123,6 +123,8 @@ def test_initial_view_shows_everything(view: SessionView) -> None:
     assert fr.lifted.shape == (17, 3) and np.all(fr.lifted[:, 2] > 0)
     assert {"MPJPE", "PA-MPJPE", "root error"} <= set(fr.metrics)
     assert "Canonical depth" in view.gui.readout.readout.content and "MPJPE" in view.gui.readout.readout.content
+    # (a teacher's question: MPJPE stayed put while the focal moved the root by metres)
+    assert "**MPJPE** (roots aligned) " in view.gui.readout.readout.content
     assert view.scene.pose.gt.visible and not view.scene.pose.cloud.visible and not view.scene.pose.analytic.visible
     assert view.gui.sample.image.image.shape[2] == 3
     np.testing.assert_allclose(np.asarray(view.scene.pose.lifted_joints.points), fr.lifted / 1000, atol=2e-3)
