@@ -461,12 +461,12 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
 def download_stem(sample: Sample) -> str:
     """A file-name stem for the result of ``sample``: an uploaded video's keeps its file type (``two_mp4``), so that
     it is not named as a photo of the same name is (a trial's ``two.jpg`` and ``two.mp4`` both gave
-    ``two_lifted.json``)."""
-    from lifter.video import VIDEO_SUFFIXES
-
-    name = Path(sample.upload.name) if sample.upload is not None else None
-    raw = sample.key if name is None else (
-        f"{name.stem}_{name.suffix[1:].lower()}" if name.suffix.lower() in VIDEO_SUFFIXES else name.stem)
+    ``two_lifted.json``). A video is told by what the upload held, not by its name (a JPEG renamed ``.mp4`` is a
+    photo: :func:`lifter.video.misnamed_media`)."""
+    up = sample.upload
+    name = Path(up.name) if up is not None else None
+    raw = sample.key if up is None or name is None else (
+        f"{name.stem}_{name.suffix[1:].lower() or 'video'}" if up.kind == "video" else name.stem)
     stem = re.sub(r"[^A-Za-z0-9._-]+", "_", raw).strip("._") or "pose"
     return stem[:80] + "_lifted"
 

@@ -166,12 +166,14 @@ def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_
     assert isinstance(seq, vid.VideoSequence) and seq.num_frames == 6 and not v.gui.play.play.disabled
     assert seq.info.warnings[0] == "walk.jpg holds a video, not an image as its name says: lifted as a video"
     assert any("walk.jpg holds a video" in m for m in v.messages[-3:])
+    assert v.download_payload("json")[0].startswith("walk_jpg_lifted")  # (a video's download keeps its file type)
     buf = io.BytesIO()
     Image.new("RGB", (W, H), (40, 40, 40)).save(buf, format="JPEG")
     est.n = 0
     assert v.load_upload("still.mp4", buf.getvalue()) is True, v.messages[-3:]
     assert v.sequence() is None and v.state.sample.upload.kind == "image" and v.gui.play.play.disabled
     assert "Note: still.mp4 holds an image, not a video as its name says: lifted as a photo." in v.messages[-1]
+    assert v.download_payload("json")[0].startswith("still_lifted")  # (a photo's does not)
 
 
 def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
