@@ -271,10 +271,11 @@ class SessionView:
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
         self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
         self._status_about: str | None = None
-        self._status_frame_key: str | None = None  # the frame the status line is about (show_message's frame_key)
         """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync
         pass that shows another sample, or sequence, and no message of its own clears it (a user trial: a video's
         note stayed on under a Human3.6M frame)."""
+        self._status_frame_key: str | None = None
+        """The one frame the status line's message is about (:meth:`show_message`'s ``frame_key``), or None."""
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -314,8 +315,9 @@ class SessionView:
         value px); applied once the typing settles (:meth:`_on_uv_event`)."""
         self._typed_seq = itertools.count()
         self._fallback_said: set[str] = set()
-        self._speed_typed = -1  # the last key's number in the speed box (:meth:`_on_speed`)
         """Sequences whose missing-detection note was said (once per sequence, not once per frame in playback)."""
+        self._speed_typed = -1
+        """The number of the speed box's last key (:meth:`_on_speed`; from :attr:`_typed_seq`)."""
         self._last_plane: np.ndarray | None = None
         self._base_key: tuple | None = None
         self._image_key: tuple | None = None
