@@ -985,7 +985,7 @@ class SessionView:
         st, followed, follow_note = self._follow(st, sample)
         with self._flags:
             typed_uv = self._typed_uv
-        kept_books = (self._upload_left, self._typed_at.get("focal_px"), self._sample_gen)
+        upload_left, typed_focal_at, gen = self._upload_left, self._typed_at.get("focal_px"), self._sample_gen
         if source_of(old.sample.key) == "upload" and old.sample.key != sample.key:
             # an upload's corrected joints wait for it (a user trial lost them going to a demo sample and back)
             self._upload_left = old if (old.dragged or any(old.others_dragged.values())) else None
@@ -1011,7 +1011,7 @@ class SessionView:
         except Exception:
             # not shown: the tab's own bookkeeping is taken back too (a review: joints corrected on an upload, waiting
             # for it, were forgotten when going back to it failed to draw)
-            self._upload_left, typed_focal_at, _ = kept_books
+            self._upload_left = upload_left
             if typed_focal_at is not None:
                 self._typed_at.setdefault("focal_px", typed_focal_at)
             # (the generation stays new: a key typed meanwhile was stamped with it; the (u, v) being typed for the
@@ -1023,7 +1023,7 @@ class SessionView:
                         self._typed_uv = (typed_uv[0], typed_uv[1], self._sample_gen, *typed_uv[3:])
                 if restore:
                     self._later(TYPING_SETTLE_S, self._settle_typed_uv, typed_uv[0])
-            if self._drag_gen == kept_books[2]:  # (a drag begun on the sample still shown goes on)
+            if self._drag_gen == gen:  # (a drag begun on the sample still shown goes on)
                 self._drag_gen = self._sample_gen
             raise
         self._followed = followed  # (only once shown: a refused sample changes nothing)

@@ -3,7 +3,9 @@ smoothed (lifter.video), the frames played like a Human3.6M sequence with each t
 
 from __future__ import annotations
 
+import contextlib
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -53,6 +55,24 @@ def _sequence_doc(n: int) -> dict:
     """A keypoint sequence upload of :func:`_script`'s two people, ``n`` frames at 10 fps."""
     frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(n)]
     return {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+
+
+@contextlib.contextmanager
+def _held_upload(monkeypatch, v, name: str, doc: dict) -> Iterator[list[bool]]:
+    """Upload the keypoint sequence ``doc`` as ``name`` on a thread, its lift held until the block ends (what the
+    block does happens while it is being lifted); yields the list that gets ``load_upload``'s result."""
+    import threading
+
+    lifting, go = hold(monkeypatch, vid, "video_sequence")
+    done: list[bool] = []
+    t = threading.Thread(target=lambda: done.append(v.load_upload(name, json.dumps(doc).encode())))
+    t.start()
+    try:
+        assert lifting.wait(30)
+        yield done
+    finally:
+        go.set()
+        t.join(60)
 
 
 @pytest.fixture()
@@ -535,17 +555,10 @@ def test_an_upload_lifted_after_a_later_choice_is_not_shown_over_it(server, monk
     """A browser trial: a video still being lifted when a keypoint file was uploaded, or a sample picked, replaced
     that choice once it finished (about 0.5 s later), without a word. The last thing the user did wins: the late
     upload is not shown, and a note says so."""
-    import threading
-
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()
     doc = _sequence_doc(6)
-    lifting, go = hold(monkeypatch, vid, "video_sequence")
-    done: list[bool] = []
-    t = threading.Thread(target=lambda: done.append(v.load_upload("walk.json", json.dumps(doc).encode())))
-    t.start()
-    try:
-        assert lifting.wait(30)
+    with _held_upload(monkeypatch, v, "walk.json", doc) as done:
         if meanwhile == "upload":
             one = {"keypoints": _script(1)[0][0].tolist(), "image_size": [W, H], "focal": F, "format": "h36m17"}
             assert v.load_upload("one.json", json.dumps(one).encode()) is True
@@ -556,9 +569,6 @@ def test_an_upload_lifted_after_a_later_choice_is_not_shown_over_it(server, monk
             v.gui.sample.source.value = "demo"
             assert wait_for(lambda: v.state.sample.key == "demo/crouching")
             want = "demo/crouching"
-    finally:
-        go.set()
-        t.join(60)
     assert done == [True] and v.state.sample.key == want and v.sequence() is None
     assert any("walk.json: lifted (6 frames), but not shown: another " in m for m in v.messages[-3:]), v.messages[-3:]
 
@@ -568,24 +578,14 @@ def test_a_refused_upload_does_not_stop_one_being_lifted_and_a_failed_drawing_ke
     """A review of the rule above: a later upload that is refused (a text file) does not count as the user's
     choice, so the video being lifted is still shown; and a sequence upload whose drawing fails leaves the tab on the
     previous sequence with that sequence still playable (its frames, not None)."""
-    import threading
-
     import poselifter_app.viewer as viewer_module
 
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
     v = app.headless_view()
     doc = _sequence_doc(6)
     real = vid.video_sequence
-    lifting, go = hold(monkeypatch, vid, "video_sequence")
-    done: list[bool] = []
-    t = threading.Thread(target=lambda: done.append(v.load_upload("a.json", json.dumps(doc).encode())))
-    t.start()
-    try:
-        assert lifting.wait(30)
+    with _held_upload(monkeypatch, v, "a.json", doc) as done:
         assert v.load_upload("oops.txt", b"not a pose") is False
-    finally:
-        go.set()
-        t.join(60)
     assert done == [True] and v.state.sample.key.startswith("video/") and "a.json" in v.state.sample.key
     first = v.sequence()
     assert first is not None and first.num_frames == 6
