@@ -52,7 +52,7 @@ from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes, resolve_camera
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
-from lifter.video import MEDIA_HEAD_BYTES, misnamed_media
+from lifter.video import MEDIA_HEAD_BYTES, input_kind
 
 from .core import lens_free_2d, undoes_lens
 from .drawing import canvas
@@ -161,11 +161,9 @@ def oversize_message(name: str, size_bytes: int, *, max_bytes: int = MAX_UPLOAD_
 
 
 def is_json_upload(name: str, content: bytes) -> bool:
-    """A ``.json`` name, or content that starts like JSON (``{`` or ``[``)."""
-    if safe_name(name).lower().endswith(".json"):
-        return True
-    head = content[:64].lstrip(b"\xef\xbb\xbf \t\r\n")
-    return head[:1] in (b"{", b"[")
+    """A keypoint file: content that starts like JSON (``{`` or ``[``), or a ``.json`` name on content that is not a
+    photo's or video's (:func:`lifter.video.input_kind`: a JPEG named ``.json`` is a photo)."""
+    return input_kind(safe_name(name), bytes(content[:MEDIA_HEAD_BYTES]))[0] == "keypoints"
 
 
 def _with_temp_file(name: str, content: bytes, suffix: str, func: Callable[[Path], Any]) -> Any:
@@ -240,7 +238,7 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
     suffix = Path(safe_name(name)).suffix.lower()
     suffix = suffix if suffix in IMAGE_SUFFIXES else ".img"
     img: LoadedImage = _with_temp_file(name, content, suffix, lambda p: load_image(p, max_side=max_side))
-    _, misnamed = misnamed_media(safe_name(name), content[:MEDIA_HEAD_BYTES])  # (a JPEG renamed .mp4)
+    _, misnamed = input_kind(safe_name(name), content[:MEDIA_HEAD_BYTES])  # (a JPEG renamed .mp4)
     notes = img.notes if misnamed is None else (misnamed, *img.notes)
     img = LoadedImage(rgb=img.rgb, size=img.size, scale=img.scale, exif=img.exif, path=Path(safe_name(name)),
                       notes=notes)
@@ -293,7 +291,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
     kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)
-    notes = list(kf.warnings)
+    misnamed = input_kind(nm, content[:MEDIA_HEAD_BYTES])[1]  # (keypoint JSON named .mp4)
+    notes = [*([misnamed] if misnamed else []), *kf.warnings]
     people = list(kf.people[1:])
     if len(people) + 1 > MAX_PEOPLE:
         notes.append(f"{len(people) + 1} people in the file; the {MAX_PEOPLE} largest are shown")
@@ -462,7 +461,7 @@ def download_stem(sample: Sample) -> str:
     """A file-name stem for the result of ``sample``: an uploaded video's keeps its file type (``two_mp4``), so that
     it is not named as a photo of the same name is (a trial's ``two.jpg`` and ``two.mp4`` both gave
     ``two_lifted.json``). A video is told by what the upload held, not by its name (a JPEG renamed ``.mp4`` is a
-    photo: :func:`lifter.video.misnamed_media`)."""
+    photo: :func:`lifter.video.input_kind`)."""
     up = sample.upload
     name = Path(up.name) if up is not None else None
     raw = sample.key if up is None or name is None else (

@@ -36,9 +36,9 @@ from lifter.video import (
     OUTPUT_NOTE_LINE,
     VIDEO_SUFFIXES,
     SequenceRecord,
+    input_kind,
     lift_keypoint_sequence,
     lift_video,
-    misnamed_media,
     output_note_lines,
     track_lifted,
     tracked_output_notes,
@@ -71,13 +71,10 @@ VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
 
 
 def is_video_upload(name: str, content: bytes = b"") -> bool:
-    """A video: by ``content``'s first bytes when they say (:func:`lifter.video.misnamed_media`: a JPEG renamed
-    ``.mp4`` is a photo, a video named ``.jpg`` a video), else by a video suffix in the name
-    (:data:`lifter.video.VIDEO_SUFFIXES`). A ``.json`` name is never a video's."""
-    nm = safe_name(name)
-    if Path(nm).suffix.lower() == ".json":
-        return False
-    return misnamed_media(nm, bytes(content[:MEDIA_HEAD_BYTES]))[0] == "video"
+    """A video: by ``content``'s first bytes when they say (:func:`lifter.video.input_kind`: a JPEG renamed ``.mp4`` is
+    a photo, a video named ``.jpg`` a video, keypoint JSON named ``.mp4`` keypoints), else by a video suffix in the
+    name (:data:`lifter.video.VIDEO_SUFFIXES`)."""
+    return input_kind(safe_name(name), bytes(content[:MEDIA_HEAD_BYTES]))[0] == "video"
 
 
 def is_sequence_json(content: bytes) -> bool:
@@ -311,8 +308,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
-    is_video = is_video_upload(nm, content)
-    misnamed = misnamed_media(nm, content[:MEDIA_HEAD_BYTES])[1] if is_video else None
+    kind, misnamed = input_kind(nm, content[:MEDIA_HEAD_BYTES])  # (is_video_upload's rule)
+    is_video = kind == "video"
     suffix = (Path(nm).suffix.lower() if Path(nm).suffix.lower() in VIDEO_SUFFIXES else ".mp4") if is_video else ".json"
     with tempfile.TemporaryDirectory(prefix="poselifter-upload-") as d:
         path = Path(d) / f"upload{suffix}"

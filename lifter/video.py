@@ -36,6 +36,7 @@ from ._checks import PoseLifterError, as_pair, collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
+    IMAGE_SUFFIXES,
     PoseEstimator2D,
     bbox_of,
     box_iou,
@@ -57,7 +58,7 @@ from .tracking import Tracker
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
 VIDEO_SUFFIXES: Final[frozenset[str]] = frozenset(
-    {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp", ".ts"})
+    {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp", ".ts", ".m2ts", ".mts"})
 """File suffixes treated as videos (a folder's videos are lifted too)."""
 
 MEDIA_HEAD_BYTES: Final[int] = 512
@@ -73,7 +74,7 @@ major or compatible brands include one is an image; any other is a video (MP4, M
 def media_kind(head: bytes) -> Literal["image", "video"] | None:
     """What a file's first bytes (:data:`MEDIA_HEAD_BYTES` of them) say it holds: ``"image"`` (JPEG, PNG, GIF, BMP,
     WebP, TIFF, PNM, HEIC / AVIF), ``"video"`` (MP4 / MOV / 3GP, Matroska / WebM, AVI, MPEG program or transport
-    stream, ASF / WMV, FLV) or None (neither signature: go by the file's name)."""
+    stream, M2TS, ASF / WMV, FLV) or None (neither signature: go by the file's name)."""
     h = bytes(head[:MEDIA_HEAD_BYTES])
     size = int.from_bytes(h[0:4], "big") if len(h) >= 4 else 0
     if h[4:8] == b"ftyp" and size >= 16:
@@ -94,22 +95,40 @@ def media_kind(head: bytes) -> Literal["image", "video"] | None:
         return "video"  # (QuickTime without an ftyp box: a small first box; "Get free ..." is text)
     if len(h) > 376 and h[0] == h[188] == h[376] == 0x47:  # (MPEG transport stream: a sync byte every 188)
         return "video"
+    if len(h) > 388 and h[4] == h[196] == h[388] == 0x47:  # (BDAV / AVCHD .m2ts: 192-byte packets, 4-byte stamps)
+        return "video"
     return None
 
 
-def misnamed_media(name: str | os.PathLike[str], head: bytes) -> tuple[Literal["image", "video"] | None, str | None]:
-    """``(kind, note)`` for a photo or video file called ``name`` whose first bytes are ``head``: ``kind`` is
-    ``"video"`` or ``"image"``, by its content when :func:`media_kind` knows it, else by its suffix
-    (:data:`VIDEO_SUFFIXES`; anything else is tried as an image); ``note`` says so when the two disagree (a JPEG
-    renamed ``.mp4`` was lifted as a one-frame video; a video named ``.jpg`` was refused as "not an image")."""
-    by_name: Literal["image", "video"] = "video" if Path(name).suffix.lower() in VIDEO_SUFFIXES else "image"
-    by_content = media_kind(head)
+def looks_like_json(head: bytes) -> bool:
+    """Whether a file's first bytes start like JSON text: ``{`` or ``[`` after an optional UTF-8 byte-order mark and
+    white space (a keypoint file, whatever its name)."""
+    return bytes(head[:MEDIA_HEAD_BYTES]).lstrip(b"\xef\xbb\xbf").lstrip(b" \t\r\n")[:1] in (b"{", b"[")
+
+
+InputKind = Literal["keypoints", "image", "video"]
+"""What ``poselifter lift`` and the app's upload take a file for (:func:`input_kind`)."""
+
+
+def input_kind(name: str | os.PathLike[str], head: bytes) -> tuple[InputKind, str | None]:
+    """``(kind, note)`` for a file called ``name`` whose first bytes are ``head``, by its content first: a photo's or
+    video's signature (:func:`media_kind`), else JSON text (:func:`looks_like_json`: keypoints), else its name
+    (``.json``: keypoints; :data:`VIDEO_SUFFIXES`: a video; anything else is tried as an image). ``note`` says so
+    when the content and the name disagree (a keypoint file named ``.mp4`` was tried as a video; a JPEG named
+    ``.json`` was refused as "cannot read"; a JPEG renamed ``.mp4`` was lifted as a one-frame video at 25 fps; a video
+    named ``.jpg`` was refused as "not an image"); a name whose suffix says nothing (``.txt``, none) is not noted.
+    ``poselifter lift`` and the app's upload both go by it."""
+    sfx = Path(name).suffix.lower()
+    by_name: InputKind = "keypoints" if sfx == ".json" else "video" if sfx in VIDEO_SUFFIXES else "image"
+    by_content: InputKind | None = media_kind(head) or ("keypoints" if looks_like_json(head) else None)
     if by_content is None or by_content == by_name:
         return by_name, None
-    held = "an image" if by_content == "image" else "a video"
-    lifted = "a photo" if by_content == "image" else "a video"
-    return by_content, (f"{Path(name).name} holds {held}, not {'a video' if by_name == 'video' else 'an image'} as "
-                        f"its name says: lifted as {lifted}")
+    if by_name == "image" and sfx not in IMAGE_SUFFIXES:
+        return by_content, None
+    said = {"keypoints": "keypoint JSON", "image": "an image", "video": "a video"}
+    lifted = {"keypoints": "a keypoint file", "image": "a photo", "video": "a video"}
+    return by_content, (f"{Path(name).name} holds {said[by_content]}, not {said[by_name]} as its name says: lifted "
+                        f"as {lifted[by_content]}")
 
 
 DEFAULT_MAX_SECONDS: Final[float] = 600.0
@@ -984,6 +1003,6 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
 __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
-           "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines", "track_doubt_notes",
-           "track_gap_notes", "track_jump_notes", "track_jumps",
+           "input_kind", "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines",
+           "track_doubt_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
            "track_lifted", "tracked_output_notes"]

@@ -194,6 +194,17 @@ def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_
     assert v.sequence() is None and v.state.sample.upload.kind == "image" and v.gui.play.play.disabled
     assert "Note: still.mp4 holds an image, not a video as its name says: lifted as a photo." in v.messages[-1]
     assert v.download_payload("json")[0].startswith("still_lifted")  # (a photo's does not)
+    # a later trial: keypoint JSON named .mp4 was tried as a video, and a JPEG named .json refused as not UTF-8
+    est.n = 0
+    assert v.load_upload("photo.json", buf.getvalue()) is True, v.messages[-3:]
+    assert v.sequence() is None and v.state.sample.upload.kind == "image"
+    assert "Note: photo.json holds an image, not keypoint JSON as its name says: lifted as a photo." in v.messages[-1]
+    kp = _script(1)[0][0]
+    doc = {"keypoints": kp.tolist(), "format": "h36m17", "focal": F, "image_size": [W, H]}
+    assert v.load_upload("pose.mp4", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assert v.sequence() is None and v.state.sample.upload.kind == "keypoints"
+    np.testing.assert_allclose(v.state.sample.keypoints_2d, kp)
+    assert "pose.mp4 holds keypoint JSON, not a video as its name says: lifted as a keypoint file" in v.messages[-1]
 
 
 def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:

@@ -875,7 +875,7 @@ def test_an_animated_avif_is_an_image():
 
     from PIL import Image, features
 
-    from lifter.video import media_kind, misnamed_media
+    from lifter.video import input_kind, media_kind
 
     if not features.check("avif"):
         pytest.skip("this Pillow writes no AVIF")
@@ -883,7 +883,7 @@ def test_an_animated_avif_is_an_image():
     frames = [Image.new("RGB", (16, 12), (40 * i, 0, 0)) for i in range(3)]
     frames[0].save(buf, format="AVIF", save_all=True, append_images=frames[1:])
     assert buf.getvalue()[8:12] == b"avis" and media_kind(buf.getvalue()) == "image"
-    assert misnamed_media("anim.avif", buf.getvalue()) == ("image", None)
+    assert input_kind("anim.avif", buf.getvalue()) == ("image", None)
 
 
 @pytest.mark.parametrize(("fourcc", "suffix"), [("MJPG", ".avi"), ("mp4v", ".mp4"), ("MJPG", ".mkv")])
@@ -898,6 +898,17 @@ def test_media_kind_knows_videos_by_their_bytes(tmp_path, fourcc, suffix):
         vw.write(np.full((H, W, 3), 40 * i, np.uint8))
     vw.release()
     assert media_kind(clip.read_bytes()[:512]) == "video"
+
+
+def test_media_kind_knows_m2ts_by_its_packets():
+    """BDAV / AVCHD .m2ts (a camcorder's): MPEG transport packets of 192 bytes, each with a 4-byte time stamp first, so
+    the sync byte 0x47 is at 4, 196, 388 (a plain transport stream's are at 0, 188, 376)."""
+    from lifter.video import VIDEO_SUFFIXES, input_kind, media_kind
+
+    packet = bytes(4) + b"\x47" + bytes(187)
+    assert media_kind(packet * 3) == "video" and media_kind((packet * 3)[:388]) is None
+    assert media_kind(b"x" + (packet * 3)[1:4] + b"\x48" + (packet * 3)[5:]) is None
+    assert {".m2ts", ".mts"} <= VIDEO_SUFFIXES and input_kind("clip.jpg", packet * 3)[0] == "video"
 
 
 @pytest.mark.parametrize("head", [b"", b"P", b"hello world", b'{"keypoints": []}', b"BM", b"\0" * 64,
@@ -921,21 +932,56 @@ def test_cli_lifts_a_misnamed_photo_or_video_as_what_it_holds(tmp_path, lifter, 
     from PIL import Image
 
     Image.new("RGB", (W, H), (40, 40, 40)).save(tmp_path / "photo.mp4", format="JPEG")
+    Image.new("RGB", (W, H), (40, 40, 40)).save(tmp_path / "still.json", format="JPEG")
+    # (a later trial: keypoint JSON named .mp4 was tried as a video, a JPEG named .json refused as "cannot read")
+    kp = _script(1)[0][0]
+    (tmp_path / "pose.mp4").write_text(json.dumps({"keypoints": kp.tolist(), "format": "h36m17", "focal": F,
+                                                   "image_size": [W, H]}))
     out = tmp_path / "out"
-    code = main(["lift", "--no-progress", str(tmp_path / "walk.jpg"), str(tmp_path / "photo.mp4"), "--out", str(out),
-                 "--detector", "_scripted_misnamed", "--weights", str(weights), "--focal", str(F)])
+    code = main(["lift", "--no-progress", *(str(tmp_path / n) for n in ("walk.jpg", "photo.mp4", "still.json",
+                                                                          "pose.mp4")),
+                 "--out", str(out), "--detector", "_scripted_misnamed", "--weights", str(weights), "--focal", str(F)])
     err = capsys.readouterr().err
-    assert code == 0 and "lifted 2 of 2" in err, err
+    assert code == 0 and "lifted 4 of 4" in err, err
     assert "walk.jpg: note: walk.jpg holds a video, not an image as its name says: lifted as a video" in err
     assert "photo.mp4: note: photo.mp4 holds an image, not a video as its name says: lifted as a photo" in err
-    walk, photo = (json.loads((out / f"{n}.json").read_text()) for n in ("walk", "photo"))
+    assert "still.json: note: still.json holds an image, not keypoint JSON as its name says: lifted as a photo" in err
+    assert ("pose.mp4: note: pose.mp4 holds keypoint JSON, not a video as its name says: lifted as a keypoint file"
+            in err)
+    walk, photo, still, pose = (json.loads((out / f"{n}.json").read_text()) for n in ("walk", "photo", "still", "pose"))
     assert walk["kind"] == "video" and len(walk["frames"]) == 6 and "holds a video" in walk["warnings"][0]
     assert photo["kind"] == "image" and "frames" not in photo and "holds an image" in photo["warnings"][0]
+    assert still["kind"] == "image" and "holds an image" in still["warnings"][0]
+    assert pose["kind"] == "keypoints" and "holds keypoint JSON" in pose["warnings"][0]
+    np.testing.assert_allclose(pose["keypoints_2d"], kp, atol=1e-3)
     # named rightly, or unknown bytes: by the name, with no note
-    from lifter.video import misnamed_media
+    from lifter.video import input_kind
 
-    assert misnamed_media("a.avi", (tmp_path / "walk.jpg").read_bytes()) == ("video", None)
-    assert misnamed_media("a.jpg", b"") == ("image", None) and misnamed_media("a.MP4", b"??") == ("video", None)
+    assert input_kind("a.avi", (tmp_path / "walk.jpg").read_bytes()) == ("video", None)
+    assert input_kind("a.jpg", b"") == ("image", None) and input_kind("a.MP4", b"??") == ("video", None)
+    assert input_kind("a.json", b"") == ("keypoints", None) and input_kind("a.JSON", b"??") == ("keypoints", None)
+
+
+@pytest.mark.parametrize(("name", "head", "kind", "note"), [
+    ("kp.mp4", b'{"keypoints": []}', "keypoints", "kp.mp4 holds keypoint JSON, not a video as its name says: lifted "
+     "as a keypoint file"),
+    ("kp.jpg", b"\xef\xbb\xbf \n [[1, 2]]", "keypoints", "kp.jpg holds keypoint JSON, not an image as its name says: "
+     "lifted as a keypoint file"),
+    ("kp.txt", b'{"keypoints": []}', "keypoints", None),  # (.txt says nothing: no note)
+    ("kp", b"[]", "keypoints", None),
+    ("photo.json", b"\xff\xd8\xff\xe0", "image", "photo.json holds an image, not keypoint JSON as its name says: "
+     "lifted as a photo"),
+    ("clip.json", b"\x1a\x45\xdf\xa3", "video", "clip.json holds a video, not keypoint JSON as its name says: lifted "
+     "as a video"),
+    ("clip.txt", b"\x1a\x45\xdf\xa3", "video", None),
+    ("notes.txt", b"hello", "image", None),  # (neither: by the name; an unknown suffix is tried as an image)
+])
+def test_input_kind_goes_by_content_first(name, head, kind, note):
+    """A trial: a keypoint JSON named .mp4 was tried as a video ("cannot open as a video"), and a JPEG named .json was
+    refused ("cannot read ('utf-8' codec ...)"). Content first: a photo's or video's signature, else JSON text."""
+    from lifter.video import input_kind
+
+    assert input_kind(name, head) == (kind, note)
 
 
 def test_cli_damaged_video_error_without_ffmpeg_log_lines(tmp_path, lifter):

@@ -95,10 +95,10 @@ from ..video import (
     DEFAULT_MAX_SECONDS,
     VIDEO_SUFFIXES,
     SequenceRecord,
+    input_kind,
     lift_keypoint_sequence,
     lift_video,
     limit_blas_threads,
-    misnamed_media,
     track_animation,
 )
 from . import COMMANDS
@@ -111,7 +111,7 @@ from ._help import HelpFormatter, positive_int
 
 def _head(path: Path) -> bytes:
     """The first 4 KB of a file (empty when it cannot be read): a result's identifying fields come first, and a photo's
-    or video's signature (:func:`lifter.video.misnamed_media`)."""
+    or video's signature, or JSON text (:func:`lifter.video.input_kind`)."""
     try:
         with open(path, "rb") as f:
             return f.read(4096)
@@ -415,23 +415,22 @@ def run_lift(args: argparse.Namespace) -> int:
         try:
             for path, name in bar:
                 try:
-                    sfx = path.suffix.lower()
-                    kind, misnamed = ("keypoints", None) if sfx == ".json" else misnamed_media(path, _head(path))
-                    if args.image_size is not None and sfx != ".json":
+                    kind, misnamed = input_kind(path, _head(path))
+                    if args.image_size is not None and kind != "keypoints":
                         raise PoseLifterError(f"{path}: --image-size is for keypoint files; a photo's or video's "
                                               "size is read from it")
                     if args.distortion is not None and kind != "image":
                         raise PoseLifterError(
                             f"{path}: --distortion is for photos; " + (
                                 "a keypoint file gives its lens in the file: 'distortion' (and 'distortion_model')"
-                                if sfx == ".json" else "a video's frames are not undistorted: lift it without "
+                                if kind == "keypoints" else "a video's frames are not undistorted: lift it without "
                                 "--distortion, or undistort the video first (e.g. OpenCV's cv2.undistort per frame)"))
                     seq: SequenceRecord | None = None
                     rec: LiftRecord | None = None
-                    if sfx == ".json" and is_keypoint_sequence(path):
+                    if kind == "keypoints" and is_keypoint_sequence(path):
                         seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
                                                      image_size=args.image_size, **seq_kw)
-                    elif sfx == ".json":
+                    elif kind == "keypoints":
                         rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                                  default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
                                                  max_people=args.max_people, image_size=args.image_size)
