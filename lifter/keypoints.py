@@ -506,17 +506,25 @@ def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
             "null in a keypoint file), fill it in, or leave the pose out"]
 
 
-def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = True) -> np.ndarray:
+def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = True,
+            scores: ArrayLike | None = None) -> np.ndarray:
     """Convert keypoints ``(..., J_src, D)`` (D = 2 px or 3 mm) from format ``src`` to ``dst``.
 
     Returns float64 ``(..., J_dst, D)``. ``src -> h36m17`` applies the format's rules. ``h36m17 -> dst`` exists
     only for a format whose every joint H36M has or interpolates (``sh16``: its ``from_h36m``, so
     ``sh16 -> h36m17 -> sh16`` is the identity); the detector formats (``coco17``, ``openpose25``, ``blazepose33``)
     have face, hand and foot points H36M lacks, so converting into them raises. Other pairs go through h36m17. Raises
-    :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension, and NaN/inf input
-    (mark missing joints before converting; the lifter needs all 17). ``warn``: warn
-    (:class:`lifter.PoseLifterWarning`) of a (0, 0) placeholder the rules would hide (:func:`placeholder_notes`);
-    False for callers that report it themselves (the records' notes, the app).
+    :class:`PoseLifterError` for an unknown format, a wrong joint count or dimension, and NaN/inf input without
+    ``scores``. ``warn``: warn (:class:`lifter.PoseLifterWarning`) of a (0, 0) placeholder the rules would hide
+    (:func:`placeholder_notes`) and of joints stood in for; False for callers that report it themselves (the
+    records' notes, the app).
+
+    scores: a detector's confidences ``(..., J_src)`` for 2D keypoints, as a keypoint file gives them: a joint whose
+    score is 0 or less (or NaN), or whose coordinates are NaN, is missing. A missing face or mid-body joint is stood
+    in for from the others, as the keypoint-file reader does (:func:`stand_in_missing`, :data:`STAND_INS`: a hidden
+    ear from the other ear, OpenPose's neck from the shoulders); a missing joint that H36M's joints are made from
+    and that nothing stands in for (a wrist, a knee) raises, naming it and its pose. Detector output in memory:
+    ``convert(kp[..., :2], src="coco17", scores=kp[..., 2])``.
     """
     f_src, f_dst = get_format(src), get_format(dst)
     arr = _real_array(keypoints, name="keypoints", what="a numeric array")  # (torch tensors as lift reads them)
@@ -524,11 +532,15 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
         raise PoseLifterError(
             f"keypoints: format {src!r} has {f_src.num_joints} joints, expected shape (..., {f_src.num_joints}, 2) "
             f"or (..., {f_src.num_joints}, 3), got {tuple(arr.shape)}")
+    if scores is not None:
+        arr = _stood_in(arr, scores, src=src, warn=warn)
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.all(np.isfinite(arr), axis=-1))
         joints = sorted({f_src.joint_names[int(i[-1])] for i in bad[:50]})
-        raise PoseLifterError(f"keypoints: {len(bad)} joint(s) with NaN/inf coordinates (e.g. {joints}) in format "
-                              f"{src!r}; every joint must be detected")
+        raise PoseLifterError(
+            f"keypoints: {len(bad)} joint(s) with NaN/inf coordinates (e.g. {joints}) in format {src!r}: pass the "
+            "detector's scores (convert(..., scores=...)) to have a missing face or mid-body joint stood in for, as "
+            "the keypoint-file reader does; every other joint must be detected")
     if arr.shape[-1] == 3 and arr.size:
         third, xy = arr[..., 2], arr[..., :2]
         ext = xy.max(-2) - xy.min(-2)  # (..., 2) each pose's box
@@ -540,7 +552,7 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
                 "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
-    if warn:
+    if warn and scores is None:  # (with scores, a missing joint is marked, not a (0, 0))
         for message in placeholder_notes(arr, src=src):
             warnings.warn(PoseLifterWarning(message), stacklevel=2)
         said = (not_face_first_message(arr.reshape(-1, 17, 2)) if src == "coco17" and arr.size and arr.shape[-1] == 2
@@ -555,6 +567,43 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
         raise PoseLifterError(f"keypoint format {dst!r} cannot be produced from h36m17 (it has joints H36M lacks)")
     assert f_dst.from_matrix is not None  # (exists whenever from_h36m does)
     return np.einsum("jk,...kd->...jd", f_dst.from_matrix, h36m)
+
+
+def _stood_in(arr: np.ndarray, scores: ArrayLike, *, src: str, warn: bool) -> np.ndarray:
+    """:func:`convert`'s keypoints ``(..., J, 2)`` with their missing joints (``scores`` ``(..., J)`` 0 or less or NaN,
+    or NaN coordinates) stood in for (:func:`stand_in_missing`); joints no rule reads left missing are set to 0."""
+    f = get_format(src)
+    sc = _real_array(scores, name="scores", what="a numeric array")
+    if arr.shape[-1] != 2:
+        raise PoseLifterError(f"scores are for 2D keypoints (..., {f.num_joints}, 2); got {tuple(arr.shape)}")
+    if sc.shape != arr.shape[:-1]:
+        raise PoseLifterError(f"scores: expected shape {tuple(arr.shape[:-1])} (one per joint), got {tuple(sc.shape)}")
+    flat = arr.reshape(-1, f.num_joints, 2).copy()
+    flat_sc = sc.reshape(-1, f.num_joints)
+    lacking: list[str] = []
+    said_all: list[str] = []
+    needed = list(f.rule_joints)
+    for i in range(len(flat)):
+        missing = ~np.all(np.isfinite(flat[i]), axis=-1) | ~(flat_sc[i] > 0)
+        if not missing.any():
+            continue
+        xy, missing, _, said = stand_in_missing(flat[i], missing, src=src)
+        where = "" if len(flat) == 1 else f" (pose {i})"
+        bad = [f.joint_names[k] for k in needed if missing[k]]
+        if bad:
+            lacking.append(f"{bad}{where}")
+        said_all += [f"{phrase}{where}" for phrase in said]
+        flat[i] = np.where(missing[:, None], 0.0, xy)
+    if lacking:
+        raise PoseLifterError(
+            f"keypoints: joint(s) missing (score 0 or less, or NaN) that format {src!r}'s conversion to H36M needs and "
+            f"that nothing stands in for: {'; '.join(lacking[:5])}{'; ...' if len(lacking) > 5 else ''}. Give those "
+            "joints (placed by hand, or interpolated from neighbouring frames), or leave the pose out")
+    if warn and said_all:
+        warnings.warn(PoseLifterWarning(
+            f"keypoints: stood in for missing joint(s): {', '.join(said_all[:6])}{', ...' if len(said_all) > 6 else ''}"
+            " (lifter.keypoints.STAND_INS)"), stacklevel=3)
+    return flat.reshape(arr.shape)
 
 
 def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:

@@ -217,3 +217,50 @@ def test_convert_takes_torch_tensors_as_lift_does():
     np.testing.assert_allclose(convert(half, src="coco17"), convert(half.double().numpy(), src="coco17"))
     with pytest.raises(PoseLifterError, match="complex numbers are not pixel coordinates"):
         convert(kp + 1j, src="coco17")
+
+
+def _coco_pose(rng: np.random.Generator) -> np.ndarray:
+    """A COCO-17 pose (px) with a face: nose, eyes and ears about a head, limbs below it."""
+    head = np.array([400.0, 200.0])
+    face = [head + (0, 8), head + (-6, 0), head + (6, 0), head + (-14, 3), head + (14, 3)]
+    body = [(-40, 60), (40, 60), (-55, 130), (55, 130), (-60, 200), (60, 200), (-25, 210), (25, 210), (-28, 310),
+            (28, 310), (-30, 400), (30, 400)]
+    return np.array(face + [head + b for b in body]) + rng.normal(0, 1.0, (17, 2))
+
+
+def test_convert_with_scores_stands_in_as_the_keypoint_file_reader_does(tmp_path, rng):
+    """A developer trial: a COCO pose with a hidden ear raised "every joint must be detected" in memory, while the same
+    pose in a keypoint file (the ear's confidence 0) was stood in for and lifted. convert(..., scores=) now does what
+    the reader does, and a wrist nothing can stand in for is named."""
+    import json
+
+    from lifter.io import parse_keypoint_json
+
+    coco = _coco_pose(rng)
+    scores = np.full(17, 0.9)
+    scores[3] = 0.0  # l_ear hidden
+    held = coco.copy()
+    held[3] = np.nan
+    (tmp_path / "p.json").write_text(json.dumps({"format": "coco17", "image_size": [800, 600], "keypoints": np.c_[
+        np.where(np.isfinite(held), held, 0.0), scores].tolist()}))
+    from_file = convert(parse_keypoint_json(tmp_path / "p.json").keypoints, src="coco17", warn=False)
+    with pytest.warns(PoseLifterWarning, match="stood in for missing joint.*l_ear"):
+        in_memory = convert(held, src="coco17", scores=scores)
+    np.testing.assert_allclose(in_memory, from_file, atol=1e-9)
+    with pytest.raises(PoseLifterError, match=r"pass the detector's scores"):
+        convert(held, src="coco17")
+    # a batch: each pose on its own; a NaN coordinate is missing even with a positive score
+    batch = np.stack([coco, held])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = convert(batch, src="coco17", scores=np.stack([np.full(17, 0.9), np.full(17, 0.9)]), warn=False)
+    np.testing.assert_allclose(out[0], convert(coco, src="coco17"))
+    np.testing.assert_allclose(out[1], from_file, atol=1e-9)
+    wrist = scores.copy()
+    wrist[9] = 0.0
+    with pytest.raises(PoseLifterError, match=r"\['l_wrist'\] \(pose 1\)"):
+        convert(batch, src="coco17", scores=np.stack([np.full(17, 0.9), wrist]))
+    with pytest.raises(PoseLifterError, match=r"scores: expected shape \(2, 17\)"):
+        convert(batch, src="coco17", scores=wrist)
+    with pytest.raises(PoseLifterError, match="scores are for 2D keypoints"):
+        convert(np.zeros((17, 3)) + 1, src="coco17", scores=scores)
