@@ -29,6 +29,7 @@ from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
+from lifter.io import is_sequence_doc
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
@@ -78,12 +79,13 @@ def is_video_upload(name: str, content: bytes = b"") -> bool:
 
 
 def is_sequence_json(content: bytes) -> bool:
-    """A keypoint JSON with ``frames`` (a keypoint sequence)."""
+    """A keypoint sequence (:func:`lifter.io.is_sequence_doc`: an object with ``frames``, or MMPose's predictions of
+    several frames)."""
     try:
         doc = json.loads(content.decode("utf-8-sig"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
         return False  # the keypoint-file reader says what is wrong with it
-    return isinstance(doc, dict) and "frames" in doc
+    return is_sequence_doc(doc)
 
 
 def track_tag(track_id: int, person_id: object = None) -> str:

@@ -35,6 +35,7 @@ import difflib
 import json
 import math
 import os
+import re
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -221,11 +222,6 @@ def depth_is_metric(focal_source: str) -> bool:
     (:data:`ASSUMED_FOCAL_SOURCE`, or ``"reference"``, :meth:`lifter.Lifter.lift`'s virtual 1000-px camera)."""
     return focal_source not in (ASSUMED_FOCAL_SOURCE, "reference")
 
-
-MMPOSE_SEQUENCE_FORM: Final[str] = (
-    '{"frames": [its per-frame objects, each with "instances"], "fps": FPS, "format": "coco17"} '
-    "(README, keypoint JSON)")
-"""How a message asks for MMPose's per-frame predictions as a keypoint sequence."""
 
 REASSUMED_NOTE: Final[str] = (
     "the file's focal length ({focal} px) was assumed when it was written (focal_source 'default-fov'), not known: it "
@@ -646,8 +642,9 @@ def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
                               f"frames with 'instances', got {_short(info)}")
     if len(info) > 1:
         where = "'instance_info'" if label.endswith("file") else "'instances' per frame"
-        raise PoseLifterError(f"{p}: {label} of {len(info)} frames ({where}): a keypoint sequence needs its frame "
-                              f"rate; give it as {MMPOSE_SEQUENCE_FORM}")
+        raise PoseLifterError(f"{p}: {label} of {len(info)} frames ({where}) is a keypoint sequence: poselifter lift "
+                              "lifts it as one, given its frame rate (\"fps\" at the file's top level, or --fps); "
+                              "in Python lifter.video.lift_keypoint_sequence(path, fps=...)")
     people = info[0]["instances"]
     if not isinstance(people, list):
         raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(people)}")
@@ -1071,13 +1068,93 @@ def frame_indices(frames: list[Any], where: Path, fps: float) -> tuple[list[int]
                   "from 0"]
 
 
+OPENPOSE_FRAME_FILE: Final = re.compile(r"(?P<video>.+)_(?P<frame>\d{12})_keypoints\.json")
+"""OpenPose's ``--write_json`` file of one frame of a video: ``<video>_<12-digit frame>_keypoints.json``."""
+
+FRAME_PATTERN: Final = re.compile(r"%0(?P<width>[1-9]\d?)d")
+"""A printf-style frame number in a file name (``video_%012d_keypoints.json``), as OpenCV names image sequences."""
+
+
+def frame_pattern_files(pattern: str | Path) -> list[tuple[int, Path]]:
+    """The files that a frame pattern ``DIR/name_%0Nd_rest.json`` names (:data:`FRAME_PATTERN`: exactly N digits in
+    its place), as ``(frame number, path)`` by frame number; empty when the name has no pattern or nothing matches."""
+    p = Path(pattern)
+    m = FRAME_PATTERN.search(p.name)
+    if m is None or not p.parent.is_dir():
+        return []
+    rx = re.compile(re.escape(p.name[:m.start()]) + rf"(\d{{{m.group('width')}}})" + re.escape(p.name[m.end():]))
+    found = [(int(mm.group(1)), q) for q in p.parent.iterdir() if (mm := rx.fullmatch(q.name)) and q.is_file()]
+    return sorted(found)
+
+
+def is_frame_pattern(path: str | Path) -> bool:
+    """Whether ``path`` is a frame pattern (:data:`FRAME_PATTERN`) rather than a file of that name."""
+    p = Path(path)
+    return FRAME_PATTERN.search(p.name) is not None and not p.exists()
+
+
+def openpose_frame_pattern(files: Sequence[Path]) -> list[tuple[Path, list[Path]]]:
+    """OpenPose's per-frame files among ``files`` (:data:`OPENPOSE_FRAME_FILE`), by video: ``(pattern, its files)``
+    for each video with at least two frames, the pattern ``DIR/<video>_%012d_keypoints.json``."""
+    by_video: dict[Path, list[Path]] = {}
+    for f in files:
+        m = OPENPOSE_FRAME_FILE.fullmatch(f.name)
+        if m is not None:
+            by_video.setdefault(f.parent / f"{m.group('video')}_%012d_keypoints.json", []).append(f)
+    return [(k, sorted(v)) for k, v in by_video.items() if len(v) >= 2]
+
+
+def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
+    """MMPose's predictions of several frames (the demo's ``{"meta_info", "instance_info": [{"frame_id",
+    "instances"}, ...]}``, MMPoseInferencer's ``[{"frame_id", "instances"}, ...]``) as a sequence document
+    ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too), COCO-17 unless it says; else None."""
+    if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
+        info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}
+    elif isinstance(d, list):
+        info, rest = d, {}
+    else:
+        return None
+    if len(info) < 2 or not all(isinstance(q, dict) and "instances" in q for q in info):
+        return None
+    return {**rest, "frames": info, "format": rest.get("format") or "coco17"}  # (each frame: _mmpose_frame)
+
+
+def _sequence_doc(p: Path, fps: float | None) -> Any:
+    """The decoded sequence document of ``p``: its JSON (MMPose's predictions of several frames in the sequence
+    layout: :func:`_mmpose_sequence`), or for a frame pattern (:func:`frame_pattern_files`: OpenPose's per-frame files)
+    ``{"frames": [each file's JSON], "fps": fps}``, the frames' numbers kept where they are not 0, 1, 2, ...."""
+    if not is_frame_pattern(p):
+        d = _load_json(p)
+        return _mmpose_sequence(d) or d
+    found = frame_pattern_files(p)
+    if not found:
+        raise PoseLifterError(f"{p}: no files match this frame pattern (%0Nd: a frame number of N digits)")
+    if len(found) > MAX_SEQUENCE_FRAMES:
+        raise PoseLifterError(f"{p}: {len(found)} frames is more than the {MAX_SEQUENCE_FRAMES} a sequence may have")
+    frames = [_load_json(f) for _, f in found]
+    numbers = [n for n, _ in found]
+    if numbers != list(range(len(numbers))) and fps is not None:  # (a frame's index and time, as a record's)
+        frames = [{**fr, "index": n, "time_s": n / fps} if isinstance(fr, dict) else fr
+                  for fr, n in zip(frames, numbers)]
+    return {"frames": frames, **({} if fps is None else {"fps": fps})}
+
+
+def is_sequence_doc(d: Any) -> bool:
+    """Whether decoded JSON is a keypoint sequence: an object with ``frames``, or MMPose's predictions of several
+    frames (:func:`_mmpose_sequence`)."""
+    return (isinstance(d, dict) and "frames" in d) or _mmpose_sequence(d) is not None
+
+
 def is_keypoint_sequence(path: str | Path) -> bool:
-    """Whether a JSON file holds a keypoint sequence (an object with ``frames``); False when unreadable."""
+    """Whether a JSON file holds a keypoint sequence (:func:`is_sequence_doc`), or ``path`` is a frame pattern naming
+    per-frame files (:func:`frame_pattern_files`); False when unreadable."""
+    if is_frame_pattern(path):
+        return bool(frame_pattern_files(path))
     try:
         d = _load_json(Path(path))
     except PoseLifterError:
         return False
-    return isinstance(d, dict) and "frames" in d
+    return is_sequence_doc(d)
 
 
 def _own_sequence(frames: list[Any]) -> bool:
@@ -1087,13 +1164,17 @@ def _own_sequence(frames: list[Any]) -> bool:
         _is_own_person(q) for q in fr["people"]) for fr in frames)
 
 
-def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None) -> KeypointSequence:
+def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None,
+                            fps: float | None = None) -> KeypointSequence:
     """Read a keypoint sequence: ``{"frames": [FRAME, ...], "fps": 50, "format": ..., "image_size": ...,
     "focal": ..., "principal_point": ..., "distortion": ..., "source": ...}`` where each FRAME is any single-frame
     layout of the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
-    or an empty list / ``{"people": []}`` for a frame with nobody. ``fps`` is required (frames/s, in (0, 1000])."""
+    or an empty list / ``{"people": []}`` for a frame with nobody; MMPose's predictions of several frames; or a frame
+    pattern naming one file per frame (``DIR/video_%012d_keypoints.json``, OpenPose's ``--write_json`` output of a
+    video: :func:`frame_pattern_files`). The frame rate is required (frames/s, in (0, 1000]): the file's ``fps``,
+    else ``fps`` (``poselifter lift --fps``); where both are given and differ the file's is used, with a note."""
     p = Path(path)
-    d = _load_json(p)
+    d = _sequence_doc(p, fps)
     if not (isinstance(d, dict) and "frames" in d):
         raise PoseLifterError(f"{p}: a keypoint sequence is an object with 'frames' (a list of frames)")
     raw = d["frames"]
@@ -1103,16 +1184,26 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         raise PoseLifterError(f"{p}: 'frames' is empty (a zero-length sequence)")
     if len(raw) > MAX_SEQUENCE_FRAMES:
         raise PoseLifterError(f"{p}: {len(raw)} frames is more than the {MAX_SEQUENCE_FRAMES} a sequence may have")
-    fps: Any = d.get("fps")
-    if "fps" not in d:
-        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate, e.g. \"fps\": 30 "
-                              "(frames/s, in (0, 1000])")
+    given_fps = fps
+    if given_fps is not None and not (_is_number(given_fps) and math.isfinite(given_fps) and 0 < given_fps <= 1000):
+        raise PoseLifterError(f"fps (--fps) must be the frame rate, a number in (0, 1000] frames/s, got "
+                              f"{_short(given_fps)}")
+    fps = d["fps"] if "fps" in d else given_fps  # (a file's "fps": null is refused below, not filled in)
+    if "fps" not in d and fps is None and is_frame_pattern(p):
+        raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
+                              "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
+    if "fps" not in d and fps is None:
+        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate: \"fps\": 30 at the "
+                              "file's top level (a list of frames: {\"frames\": [...], \"fps\": 30}), or --fps 30 on "
+                              "the command line (frames/s, in (0, 1000])")
     if not (_is_number(fps) and math.isfinite(fps) and 0 < fps <= 1000):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(fps)}")
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
     indices, notes = frame_indices(raw, p, float(fps))
+    if given_fps is not None and "fps" in d and not is_frame_pattern(p) and float(d["fps"]) != float(given_fps):
+        notes.append(f"the file's own fps ({float(d['fps']):g}) is used, not --fps {float(given_fps):g}")
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     scores: list[list[np.ndarray | None]] = []

@@ -912,17 +912,18 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
                            max_people: int = DEFAULT_MAX_PEOPLE, max_seconds: float = DEFAULT_MAX_SECONDS,
                            flip_test: bool | None = None, cli_options: bool = True,
-                           image_size: Any | None = None) -> SequenceRecord:
-    """Lift, track and smooth a keypoint JSON with ``frames`` (:func:`lifter.io.parse_keypoint_sequence`): every
-    person of every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
+                           image_size: Any | None = None, fps: float | None = None) -> SequenceRecord:
+    """Lift, track and smooth a keypoint sequence (:func:`lifter.io.parse_keypoint_sequence`: a JSON with ``frames``,
+    MMPose's predictions of several frames, or a frame pattern naming OpenPose's per-frame files): every person of
+    every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
     :func:`lifter.pipeline.resolve_camera`'s (False: messages name the file's fields, not the CLI's options).
     ``image_size`` ``(W, H)`` px: for a file that gives none, or in place of its own
-    (:func:`lifter.pipeline.given_image_size`)."""
+    (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own."""
     from .camera import lens_notes
     from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
-    ks = parse_keypoint_sequence(path, default_format=default_format)
+    ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
     warnings = list(ks.warnings) + size_notes
     f, src, pp, notes = resolve_camera(

@@ -219,6 +219,15 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     assert 3000 < v.frame.root[2] < 5000
     _, payload = v.download_payload("json")  # the user's file name, not the server's temporary copy (user trial)
     assert json.loads(payload)["input"] == "walk.json"
+    # MMPose's predictions of a video, with its rate at the top level, play too (a developer trial: refused)
+    mm = {"meta_info": {}, "fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17",
+          "instance_info": [{"frame_id": i, "instances": [{"keypoints": p.tolist(), "keypoint_scores": [0.9] * 17}
+                                                          for p in people]} for i, people in enumerate(_script(10))]}
+    assert v.load_upload("mmpose.json", json.dumps(mm).encode()) is True, v.messages[-3:]
+    mseq = v.sequence()
+    assert isinstance(mseq, vid.VideoSequence) and mseq.num_frames == 10 and v.state.sample.num_people == 2
+    assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     no_size = dict(doc)
     del no_size["image_size"]
     assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is False

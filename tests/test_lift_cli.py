@@ -1367,7 +1367,7 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     assert kf.image_size == (1280, 720) and kf.focal is not None and float(np.ravel(kf.focal)[0]) == 1000.0
     assert kf.format == "coco17" and len(kf.people) == 1
     p.write_text(json.dumps({"meta_info": {}, "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
-    with pytest.raises(PoseLifterError, match=r"MMPose predictions file of 2 frames.*\"fps\": FPS"):
+    with pytest.raises(PoseLifterError, match=r"MMPose predictions file of 2 frames.*is a keypoint sequence.*--fps"):
         parse_keypoint_json(p)
     # MMPoseInferencer's predictions of a video (a list of {frame_id, instances}): one frame is read, several are
     # refused with the sequence layout, which then reads them (a trial: "no person in the keypoint file")
@@ -1375,13 +1375,30 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     p.write_text(json.dumps(video[:1]))
     assert parse_keypoint_json(p).format == "coco17"
     p.write_text(json.dumps(video))
-    with pytest.raises(PoseLifterError, match=r"MMPose predictions of 3 frames .*\"fps\": FPS"):
+    with pytest.raises(PoseLifterError, match=r"MMPose predictions of 3 frames .*lift_keypoint_sequence\(path, fps="):
         parse_keypoint_json(p)
-    from lifter.io import parse_keypoint_sequence
+    from lifter.io import is_keypoint_sequence, parse_keypoint_sequence
 
     p.write_text(json.dumps({"frames": video, "fps": 25, "format": "coco17", "image_size": [1280, 720]}))
     ks = parse_keypoint_sequence(p)
     assert ks.format == "coco17" and [len(f) for f in ks.frames] == [1, 1, 1]
+    # a developer trial: MMPose's predictions of a video were refused even with "fps" at the top level; they are a
+    # sequence as they stand, their frame rate from the file or from fps= (--fps)
+    p.write_text(json.dumps(video))
+    assert is_keypoint_sequence(p)
+    with pytest.raises(PoseLifterError, match=r"'fps' is missing.*--fps 30 on the command line"):
+        parse_keypoint_sequence(p)
+    ks = parse_keypoint_sequence(p, fps=30)
+    assert ks.fps == 30 and ks.format == "coco17" and [len(f) for f in ks.frames] == [1, 1, 1]
+    p.write_text(json.dumps({"meta_info": {}, "fps": 25, "image_size": [1280, 720],
+                             "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
+    assert is_keypoint_sequence(p)
+    ks = parse_keypoint_sequence(p, fps=30)  # (the file's own rate wins, with a note)
+    assert ks.fps == 25 and ks.image_size == (1280, 720) and len(ks.frames) == 2
+    assert "the file's own fps (25) is used, not --fps 30" in ks.warnings
+    np.testing.assert_allclose(ks.frames[1][0], coco)
+    with pytest.raises(PoseLifterError, match=r"fps \(--fps\) must be the frame rate"):
+        parse_keypoint_sequence(p, fps=0)
     npy = tmp_path / "kp.npy"
     np.save(npy, kp17)
     with pytest.raises(ImageError, match=r"if it holds keypoints, write them as a keypoint JSON file .* or lift the "
@@ -1408,3 +1425,42 @@ def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, cap
     monkeypatch.chdir(tmp_path)
     code, err = run([str(a), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and "replaces" not in err, err
+
+
+def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, kp17, capsys):
+    """A developer trial: a folder of OpenPose's --write_json output of a video (video_000000000000_keypoints.json,
+    ...) was lifted as unrelated stills, untracked, each repeating its notes, and the command line had no way to give a
+    frame rate. They are one keypoint sequence now, tracked and smoothed, at --fps; a gap in the numbers is kept."""
+    d = tmp_path / "opdir"
+    d.mkdir()
+    other = kp17 * 0.7 + [300.0, 40.0]
+    numbers = [0, 1, 2, 4, 5, 6, 7]  # (frame 3's file is missing)
+    for n in numbers:
+        people = [_openpose_person(kp17 + [2.0 * n, 0.0]), _openpose_person(other - [2.0 * n, 0.0])]
+        (d / f"video_{n:012d}_keypoints.json").write_text(json.dumps({"version": 1.3, "people": people}))
+    (d / "still_000000000000_keypoints.json").write_text(json.dumps({"people": [_openpose_person(kp17)]}))  # (one)
+    base = ["--weights", str(weights), "--image-size", "1280", "720"]
+    code, err = run([str(d), "--out", str(tmp_path / "a"), *base], capsys)
+    assert code == 0 and "lifted 1 of 2" in err, err  # (the still is lifted; the sequence needs its rate)
+    assert "7 OpenPose per-frame files (video_000000000000_keypoints.json ... video_000000000007_keypoints.json) " \
+           "are lifted as one keypoint sequence" in err
+    assert "one file per frame carries no frame rate: give it, e.g. --fps 30" in err
+    code, err = run([str(d), "--out", str(tmp_path / "b"), "--fps", "30", *base], capsys)
+    assert code == 0 and "lifted 2 of 2" in err, err
+    out = json.loads((tmp_path / "b" / "video.json").read_text())
+    assert out["kind"] == "keypoint-sequence" and out["fps"] == 30 and len(out["tracks"]) == 2
+    assert [fr["index"] for fr in out["frames"]] == numbers
+    assert [fr["time_s"] for fr in out["frames"]] == pytest.approx([n / 30 for n in numbers], abs=1e-4)  # (rounded)
+    assert all(len(fr["people"]) == 2 for fr in out["frames"])
+    from lifter.keypoints import convert
+
+    last = np.reshape(_openpose_person(kp17 + [14.0, 0.0])["pose_keypoints_2d"], (25, 3))[:, :2]
+    np.testing.assert_allclose(out["frames"][-1]["people"][0]["keypoints_2d"], convert(last, src="openpose25"),
+                               atol=1e-3)
+    assert json.loads((tmp_path / "b" / "still_000000000000_keypoints.json").read_text())["kind"] == "keypoints"
+    # the pattern itself is an input, as OpenCV names image sequences
+    code, err = run([str(d / "video_%012d_keypoints.json"), "--out", str(tmp_path / "c"), "--fps", "25", *base],
+                    capsys)
+    assert code == 0 and json.loads((tmp_path / "c" / "video.json").read_text())["fps"] == 25, err
+    code, err = run([str(d), "--out", str(tmp_path / "e"), "--fps", "0", *base], capsys)
+    assert code != 0 and "--fps must be a frame rate in (0, 1000] frames/s, got 0" in err

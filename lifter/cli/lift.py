@@ -86,7 +86,17 @@ from ..detect import (
     check_max_side,
     load_image,
 )
-from ..io import LiftRecord, _camera_field, _image_size_field, is_keypoint_sequence, write_json_atomic
+from ..io import (
+    FRAME_PATTERN,
+    LiftRecord,
+    _camera_field,
+    _image_size_field,
+    frame_pattern_files,
+    is_frame_pattern,
+    is_keypoint_sequence,
+    openpose_frame_pattern,
+    write_json_atomic,
+)
 from ..keypoints import get_format, keypoint_formats
 from ..pipeline import lift_image, lift_keypoint_file
 from ..smoothing import check_strength
@@ -171,10 +181,16 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
             if not found:
                 problems.append(f"{p}: folder has no images, videos or .json files")
             files.extend(found)
-        elif p.is_file():
+        elif p.is_file() or (is_frame_pattern(p) and frame_pattern_files(p)):  # (a pattern: one file per frame)
             files.append(p)
         else:
             problems.append(f"{p}: no such file or folder")
+    for pattern, members in openpose_frame_pattern(files):  # (OpenPose's --write_json output of a video)
+        at = files.index(members[0])
+        kept = set(members)
+        files = [f for f in files[:at] if f not in kept] + [pattern] + [f for f in files[at:] if f not in kept]
+        notes.append(f"{len(members)} OpenPose per-frame files ({members[0].name} ... {members[-1].name}) are "
+                     f"lifted as one keypoint sequence, {pattern}, tracked and smoothed (its frame rate: --fps)")
     unique: dict[Path, Path] = {}
     twice = []
     for f in files:
@@ -192,6 +208,17 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
 PER_PERSON_STEM: Final = re.compile(r"(.+)_(?:person|track)\d+")
 """The stems of the outputs written per person or track beside ``<name>.json`` (``<name>_person2.bvh``,
 ``<name>_track3.bvh``): another input's outputs may not take them."""
+
+
+def input_stem(f: Path) -> str:
+    """An input's name for its outputs: the file's stem; for a frame pattern (:func:`lifter.io.frame_pattern_files`)
+    the name without its frame number (OpenPose's ``video_%012d_keypoints.json``: ``video``)."""
+    m = FRAME_PATTERN.search(f.name)
+    if m is None or not is_frame_pattern(f):
+        return f.stem
+    if f.name.endswith("_%012d_keypoints.json") and len(f.name) > len("_%012d_keypoints.json"):
+        return f.name[:-len("_%012d_keypoints.json")]
+    return Path(f.name[:m.start()] + f.name[m.end():]).stem.strip("_-. ") or "frames"
 
 
 def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) -> tuple[list[str], list[str]]:
@@ -219,11 +246,12 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
         return None
 
     for f in files:
-        first = owner(f.stem)
-        cands = [f.stem]
+        stem = input_stem(f)
+        first = owner(stem)
+        cands = [stem]
         if first is not None and first.parent.name != f.parent.name and f.parent.name:
-            cands.append(f"{f.parent.name}_{f.stem}")
-        cands += [f"{f.stem}_{f.suffix.lstrip('.').lower()}"] + [f"{f.stem}_{i}" for i in range(2, 10_000)]
+            cands.append(f"{f.parent.name}_{stem}")
+        cands += [f"{stem}_{f.suffix.lstrip('.').lower()}"] + [f"{stem}_{i}" for i in range(2, 10_000)]
         for c in cands:
             if owner(c) is None and (out_dir / f"{c}.json").resolve() not in inputs:
                 break
@@ -231,11 +259,11 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
             raise PoseLifterError(f"cannot name the output of {f}")
         claimed[c] = f
         names.append(c)
-        if c != f.stem:
+        if c != stem:
             if first is None:
-                why = f"{f.stem}.json in {out_dir} is an input"
-            elif first.stem == f.stem:
-                why = f"{first} is also named {f.stem}"
+                why = f"{stem}.json in {out_dir} is an input"
+            elif input_stem(first) == stem:
+                why = f"{first} is also named {stem}"
             else:
                 why = f"it and {first} would share --bvh's per-person names <name>_person<k> / <name>_track<ID>"
             notes.append(f"{f}: its results are named {c}.* ({why})")
@@ -291,6 +319,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth, at most 10)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="keypoint sequences that give no frame rate of their own (MMPose's predictions of a video, "
+                        "OpenPose's per-frame files: a folder of <video>_<12 digits>_keypoints.json is lifted as one "
+                        "sequence): frames/s, in (0, 1000]")
     p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
                    help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX,
@@ -335,6 +367,8 @@ def check_lift_options(args: argparse.Namespace) -> None:
     check_strength(args.smoothing, name="--smoothing")
     if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
+    if args.fps is not None and not (math.isfinite(args.fps) and 0 < args.fps <= 1000):
+        raise PoseLifterError(f"--fps must be a frame rate in (0, 1000] frames/s, got {args.fps:g}")
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
     if args.distortion is not None:
@@ -429,7 +463,7 @@ def run_lift(args: argparse.Namespace) -> int:
                     rec: LiftRecord | None = None
                     if kind == "keypoints" and is_keypoint_sequence(path):
                         seq = lift_keypoint_sequence(path, lifter=lifter_for["keypoints"], default_format=args.format,
-                                                     image_size=args.image_size, **seq_kw)
+                                                     image_size=args.image_size, fps=args.fps, **seq_kw)
                     elif kind == "keypoints":
                         rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                                  default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
