@@ -1188,20 +1188,23 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if given_fps is not None and not (_is_number(given_fps) and math.isfinite(given_fps) and 0 < given_fps <= 1000):
         raise PoseLifterError(f"fps (--fps) must be the frame rate, a number in (0, 1000] frames/s, got "
                               f"{_short(given_fps)}")
-    fps = d["fps"] if "fps" in d else given_fps  # (a file's "fps": null is refused below, not filled in)
-    if "fps" not in d and fps is None and is_frame_pattern(p):
+    if "fps" in d:
+        rate: Any = d["fps"]  # (a file's "fps": null is refused below, not filled in)
+    elif given_fps is not None:
+        rate = given_fps
+    elif is_frame_pattern(p):
         raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
                               "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
-    if "fps" not in d and fps is None:
+    else:
         raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate: \"fps\": 30 at the "
                               "file's top level (a list of frames: {\"frames\": [...], \"fps\": 30}), or --fps 30 on "
                               "the command line (frames/s, in (0, 1000])")
-    if not (_is_number(fps) and math.isfinite(fps) and 0 < fps <= 1000):
-        raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(fps)}")
+    if not (_is_number(rate) and math.isfinite(rate) and 0 < rate <= 1000):
+        raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
-    indices, notes = frame_indices(raw, p, float(fps))
+    indices, notes = frame_indices(raw, p, float(rate))
     if given_fps is not None and "fps" in d and not is_frame_pattern(p) and float(d["fps"]) != float(given_fps):
         notes.append(f"the file's own fps ({float(d['fps']):g}) is used, not --fps {float(given_fps):g}")
     frames: list[list[np.ndarray]] = []
@@ -1271,7 +1274,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     notes += unread
     image_size, focal, pp, source, dist, model = _camera_meta(d, p)
     focal, assumed = _written_assumed(focal, d, image_size)
-    return KeypointSequence(frames=frames, format=fmt, fps=float(fps), image_size=image_size, focal=focal,
+    return KeypointSequence(frames=frames, format=fmt, fps=float(rate), image_size=image_size, focal=focal,
                             principal_point=pp, warnings=tuple(notes), source=source, distortion=dist,
                             distortion_model=model,
                             people_ids=ids if any(i is not None for fr in ids for i in fr) else None,

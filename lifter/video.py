@@ -259,7 +259,8 @@ class SequenceTracker:
                                    relative=rel, root_raw=np.asarray(root[i], np.float64),
                                    relative_raw=np.asarray(relative[i], np.float64),
                                    canonical_depth=float(canonical_depth_from_depth(r[2], focal=focal)),
-                                   scores=None if scores is None else np.asarray(scores[i], np.float64)))
+                                   scores=None if scores is None else np.asarray(scores[i], np.float64),
+                                   person_id=None if person_ids is None else person_ids[i]))
         return out
 
 
@@ -509,9 +510,14 @@ class _Followed:
         return keep
 
 
-def _crowd_note(max_people: int, crowded: list[int]) -> str:
+def _crowd_note(max_people: int, crowded: list[int], *, searched: int | None = None) -> str:
+    """The note on frames with more people than ``max_people``; ``searched``: a video's count of frames searched in
+    full (between those only the people followed are looked for, so a crowd is seen in those frames only)."""
     people = "person" if max_people == 1 else "people"
-    return (f"more than {max_people} {people} in {len(crowded)} frames ({_frames_summary(crowded)}); {max_people} "
+    where = (f"{len(crowded)} frames" if searched is None else
+             f"{len(crowded)} of the {searched} frames searched in full (between them only the people followed are "
+             "looked for)")
+    return (f"more than {max_people} {people} in {where} ({_frames_summary(crowded)}); {max_people} "
             f"{'was' if max_people == 1 else 'were'} lifted (--max-people): those already tracked, else the largest")
 
 
@@ -735,6 +741,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         bad: list[dict[str, Any]] = []
         nobody: list[int] = []
         crowded: list[int] = []
+        full_searches = 0  # (frames searched in full: _crowd_note)
         size: tuple[int, int] | None = None
         cam: tuple[np.ndarray, str, np.ndarray] | None = None
         seq: SequenceTracker | None = None
@@ -788,6 +795,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 if people is None:
                     people = people_h36m(img, estimator=estimator)
                     last_search = index
+                    full_searches += 1
             except PoseLifterError as exc:
                 bad.append({"index": index, "error": f"{exc}; skipped"})
                 continue
@@ -850,7 +858,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if nobody:
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:
-        warnings.append(_crowd_note(max_people, crowded))
+        warnings.append(_crowd_note(max_people, crowded,
+                                    searched=None if full_searches >= len(frames) + len(bad) else full_searches))
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam

@@ -797,6 +797,12 @@ def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lift
     every = FrameIndexedEstimator(_script(12))
     lift_video(clip, lifter=lifter, estimator=every, focal=F, search_every_s=0)
     assert [k for k, _ in every.calls] == ["full"] * 12
+    # a developer trial: with --max-people 1 the note said "more than 1 person in 4 frames (0, 5, 10, 15)" of a clip
+    # with two people in every frame: a crowd is seen only where the whole frame is searched, and the note says so
+    one = lift_video(clip, lifter=lifter, estimator=FrameIndexedEstimator(_script(12)), focal=F, search_every_s=0.5,
+                     max_people=1)
+    assert any(w.startswith("more than 1 person in 3 of the 3 frames searched in full (between them only the people "
+                            "followed are looked for) (0, 5, 10)") for w in one.warnings), one.warnings
 
 
 def test_limit_blas_threads():
@@ -1060,6 +1066,13 @@ def test_sequence_tracker_step_checks_its_shapes():
     assert [p.track_id for p in trk.step(4, 0.16, kp, root, rel, 1145.0)] == [1, 2]  # (back within the timeout)
     with pytest.raises(PoseLifterError, match="2 different ones"):
         trk.step(2, 0.08, kp, root, rel, np.array([[1145.0, 1145.0], [1000.0, 1000.0]]))
+    # the names given are echoed in the states, in the frame's order (a developer trial read person_id None)
+    named = SequenceTracker(fps=25.0)
+    first = named.step(0, 0.0, kp, root, rel, 1145.0, person_ids=["ann", "bob"])
+    assert [(p.track_id, p.person_id) for p in first] == [(1, "ann"), (2, "bob")]
+    swapped = named.step(1, 0.04, kp[::-1], root[::-1], rel[::-1], 1145.0, person_ids=["bob", "ann"])
+    assert [(p.track_id, p.person_id) for p in swapped] == [(2, "bob"), (1, "ann")]
+    assert [p.person_id for p in named.step(2, 0.08, kp, root, rel, 1145.0)] == [None, None]
 
 
 def test_track_animation_keeps_the_video_clock():

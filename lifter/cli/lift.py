@@ -51,7 +51,8 @@ JSON numbers: ``image_size`` whole px in [1, 100000] (:data:`MAX_IMAGE_SIDE_PX`)
 Bad input never stops the batch: each failure is reported as ``<input>: error: ...`` and the next
 input is processed; a photo with several people uses the largest and says so; images larger than
 ``--max-side`` px are downscaled for detection. **Exit code**: 0 when at least one input was lifted,
-1 when every input failed (or none was found), 2 for a usage error (bad arguments, no lifter weights).
+1 when every input failed (or none was found; with ``--strict``, when any failed), 2 for a usage error (bad
+arguments, no lifter weights).
 """
 
 from __future__ import annotations
@@ -276,11 +277,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "lift", help=COMMANDS["lift"][1],
         description="Photos and videos (2D detector: MediaPipe BlazePose, the 'detect' extra) or keypoint JSON files "
                     "in, absolute 3D poses of everyone found out. Exit code 0 if at least one input was lifted, 1 if "
-                    "all failed.",
+                    "all failed (--strict: if any failed).",
         formatter_class=HelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="images, videos, folders of them, keypoint .json files (one frame, or 'frames')")
     p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--strict", action="store_true",
+                   help="exit code 1 when any input fails, not only when all do (for pipelines; the inputs that "
+                        "could be lifted are still written)")
     p.add_argument("--focal", type=float, nargs="+", metavar="F", default=None,
                    help="focal length FX [FY] in px (one or two values) for every input (default, per input: a "
                    "keypoint file's focal; a photo's EXIF; else the --fov field of view of the image size, which a "
@@ -541,8 +545,9 @@ def run_lift(args: argparse.Namespace) -> int:
               "written are complete: each is written whole or not at all)", file=sys.stderr)
         return 130
     print(f"lifted {ok} of {total} input(s) into {args.out}"
-          + (f"; {failed} failed (see the messages above)" if failed else ""), file=sys.stderr)
-    return 0 if ok else 1
+          + (f"; {failed} failed (see the messages above)" if failed else "")
+          + ("; exit code 1 (--strict)" if failed and ok and args.strict else ""), file=sys.stderr)
+    return 0 if ok and not (args.strict and failed) else 1
 
 
 def _result_input(target: Path, path: Path) -> tuple[str | None, bool]:
