@@ -59,7 +59,7 @@ from .camera import (
     check_distortion_model,
     check_opencv_distortion,
 )
-from .keypoints import H36M17, get_format, keypoint_formats, stand_in_missing
+from .keypoints import H36M17, fill_missing, get_format, keypoint_formats
 from .skeleton import JOINT_NAMES
 
 FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose25", 33: "blazepose33"}
@@ -626,7 +626,8 @@ def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     ..., "instance_info": [{"frame_id": 1, "instances": [...]}]}``, or its instances directly), MMPoseInferencer's
     predictions (``[{"frame_id": 0, "instances": [...]}, ...]``) and one such frame of a sequence, as
     ``{"people": instances, ...the file's other fields}``, COCO-17 unless a format is given. Several frames are a
-    video's: refused, with the sequence layout to give them in. Anything else comes back as it is."""
+    video's, a keypoint sequence (:func:`_mmpose_sequence`): refused here, naming how to lift them. Anything else comes
+    back as it is."""
     if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
         info, label, rest = d["instance_info"], "an MMPose predictions file", ("instance_info", "meta_info")
         if isinstance(info, list) and all(isinstance(q, dict) and "instances" not in q for q in info):
@@ -860,14 +861,12 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                 + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format on the command line)"
                    if same else _no_format_with(len(xy))))
         if missing.any():
-            xy, missing, conf, said = stand_in_missing(xy, missing, src=fmt, scores=conf)
-            bad = [f.joint_names[k] for k in f.rule_joints if missing[k]]  # (only these are needed)
+            xy, conf, said, bad = fill_missing(xy, missing, src=fmt, scores=conf)  # (bad: needed, still missing)
             if bad:
                 dropped.append((_who(pos, pid, len(people), frame=frame), bad))
                 continue
             if said:
                 stood_in.append((_who(pos, pid, len(people), frame=frame), said))
-            xy = np.where(missing[:, None], 0.0, xy)
         out.append(xy)
         kept.append((pos, pid))
         scores.append(conf)
@@ -1088,26 +1087,38 @@ def frame_pattern_files(pattern: str | Path) -> list[tuple[int, Path]]:
 
 
 def is_frame_pattern(path: str | Path) -> bool:
-    """Whether ``path`` is a frame pattern (:data:`FRAME_PATTERN`) rather than a file of that name."""
+    """Whether ``path`` names keypoint files by a frame pattern (:data:`FRAME_PATTERN`; a ``.json`` name) rather than
+    being a file of that name. (Images named so are not read as a video: lift the folder, or make a video.)"""
     p = Path(path)
-    return FRAME_PATTERN.search(p.name) is not None and not p.exists()
+    return p.suffix.lower() == ".json" and FRAME_PATTERN.search(p.name) is not None and not p.exists()
 
 
 def openpose_frame_pattern(files: Sequence[Path]) -> list[tuple[Path, list[Path]]]:
-    """OpenPose's per-frame files among ``files`` (:data:`OPENPOSE_FRAME_FILE`), by video: ``(pattern, its files)``
-    for each video with at least two frames, the pattern ``DIR/<video>_%012d_keypoints.json``."""
+    """OpenPose's per-frame files of a video among ``files`` (:data:`OPENPOSE_FRAME_FILE`): ``(pattern, its files)``
+    per video, the pattern ``DIR/<video>_%012d_keypoints.json``, where ``files`` hold at least two of its frames, all
+    the files the pattern names (:func:`frame_pattern_files`: so the pattern reads these and no others), and their
+    numbers are dense (their span at most twice their count: OpenPose run on a folder of COCO images writes
+    ``COCO_val2014_000000000139_keypoints.json``, stills whose numbers are image ids)."""
     by_video: dict[Path, list[Path]] = {}
     for f in files:
         m = OPENPOSE_FRAME_FILE.fullmatch(f.name)
         if m is not None:
             by_video.setdefault(f.parent / f"{m.group('video')}_%012d_keypoints.json", []).append(f)
-    return [(k, sorted(v)) for k, v in by_video.items() if len(v) >= 2]
+    out = []
+    for pattern, members in by_video.items():
+        named = frame_pattern_files(pattern)
+        numbers = [n for n, _ in named]
+        if (len(members) >= 2 and {q.resolve() for q in members} == {q.resolve() for _, q in named}
+                and numbers[-1] - numbers[0] + 1 <= 2 * len(numbers)):
+            out.append((pattern, [q for _, q in named]))
+    return out
 
 
 def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     """MMPose's predictions of several frames (the demo's ``{"meta_info", "instance_info": [{"frame_id",
     "instances"}, ...]}``, MMPoseInferencer's ``[{"frame_id", "instances"}, ...]``) as a sequence document
-    ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too), COCO-17 unless it says; else None."""
+    ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too); else None. Its frames are read as
+    COCO-17 unless the file or the caller (``--format``) says otherwise."""
     if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
         info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}
     elif isinstance(d, list):
@@ -1116,7 +1127,7 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
         return None
     if len(info) < 2 or not all(isinstance(q, dict) and "instances" in q for q in info):
         return None
-    return {**rest, "frames": info, "format": rest.get("format") or "coco17"}  # (each frame: _mmpose_frame)
+    return {**rest, "frames": info}  # (each frame: _mmpose_frame, COCO-17 unless the file or the caller says)
 
 
 def _sequence_doc(p: Path, fps: float | None) -> Any:
@@ -1268,8 +1279,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     unread: list[str] = []
     if misplaced:
         unread.append(f"{', '.join(f'{k!r} (first in frame {i})' for k, i in sorted(misplaced.items()))} inside a "
-                      "frame is not read: a sequence's camera fields and 'source' go at its top level, beside "
-                      "'frames'")
+                      "frame is not read: " + (
+                          "files of one frame each have no top level for the sequence's camera: give it on the command "
+                          "line (--image-size, --focal, --principal-point)" if is_frame_pattern(p) else
+                          "a sequence's camera fields and 'source' go at its top level, beside 'frames'"))
     unread += unread_field_notes(d)
     notes += unread
     image_size, focal, pp, source, dist, model = _camera_meta(d, p)

@@ -484,6 +484,19 @@ KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
 
+
+def fill_missing(keypoints: np.ndarray, missing: np.ndarray, *, src: str, scores: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray | None, list[str], list[str]]:
+    """One person's keypoints ``(J, 2)`` px of format ``src`` with their ``missing`` joints ``(J,)`` handled as the
+    keypoint-file reader and :func:`convert` (``scores=``) handle them: stood in for where :data:`STAND_INS` allows
+    (:func:`stand_in_missing`), and those no rule reads set to 0. Returns ``(keypoints, scores, phrases, lacking)``:
+    ``phrases`` one per joint stood in for, ``lacking`` the names of the joints still missing that the conversion to
+    H36M needs (the person cannot be lifted when it is not empty)."""
+    f = get_format(src)
+    xy, miss, sc, said = stand_in_missing(keypoints, missing, src=src, scores=scores)
+    lacking = [f.joint_names[k] for k in f.rule_joints if miss[k]]
+    return np.where(miss[:, None], 0.0, xy), sc, said, lacking
+
 def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
     """A note when 2D keypoints ``(..., J, 2)`` px of format ``src`` have a joint at exactly (0, 0) far from the rest
     of its pose (a detector's placeholder for a missing joint) that the rules to H36M read: mixed into a computed
@@ -552,7 +565,7 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
                 "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
     if src == dst:
         return arr.copy()
-    if warn and scores is None:  # (with scores, a missing joint is marked, not a (0, 0))
+    if warn:  # (with scores: the joints given, a missing one is stood in for or not read by the rules)
         for message in placeholder_notes(arr, src=src):
             warnings.warn(PoseLifterWarning(message), stacklevel=2)
         said = (not_face_first_message(arr.reshape(-1, 17, 2)) if src == "coco17" and arr.size and arr.shape[-1] == 2
@@ -578,22 +591,22 @@ def _stood_in(arr: np.ndarray, scores: ArrayLike, *, src: str, warn: bool) -> np
         raise PoseLifterError(f"scores are for 2D keypoints (..., {f.num_joints}, 2); got {tuple(arr.shape)}")
     if sc.shape != arr.shape[:-1]:
         raise PoseLifterError(f"scores: expected shape {tuple(arr.shape[:-1])} (one per joint), got {tuple(sc.shape)}")
+    if np.any(np.isinf(sc)):
+        raise PoseLifterError("scores: infinite values; a detector's confidence is a finite number (0 or less, or "
+                              "NaN: a missing joint)")
     flat = arr.reshape(-1, f.num_joints, 2).copy()
     flat_sc = sc.reshape(-1, f.num_joints)
     lacking: list[str] = []
     said_all: list[str] = []
-    needed = list(f.rule_joints)
     for i in range(len(flat)):
         missing = ~np.all(np.isfinite(flat[i]), axis=-1) | ~(flat_sc[i] > 0)
         if not missing.any():
             continue
-        xy, missing, _, said = stand_in_missing(flat[i], missing, src=src)
+        flat[i], _, said, bad = fill_missing(flat[i], missing, src=src)
         where = "" if len(flat) == 1 else f" (pose {i})"
-        bad = [f.joint_names[k] for k in needed if missing[k]]
         if bad:
             lacking.append(f"{bad}{where}")
         said_all += [f"{phrase}{where}" for phrase in said]
-        flat[i] = np.where(missing[:, None], 0.0, xy)
     if lacking:
         raise PoseLifterError(
             f"keypoints: joint(s) missing (score 0 or less, or NaN) that format {src!r}'s conversion to H36M needs and "
@@ -615,5 +628,5 @@ def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 __all__: Sequence[str] = ("BLAZEPOSE33_JOINT_NAMES", "COCO17_JOINT_NAMES", "KEYPOINT_FORMATS", "KeypointFormat",
                           "OPENPOSE25_JOINT_NAMES", "SH16_JOINT_NAMES", "body_rules", "convert", "fit_line_weight",
-                          "placeholder_notes", "EAR_EYE_SPACING", "STAND_INS", "stand_in_missing",
+                          "placeholder_notes", "EAR_EYE_SPACING", "STAND_INS", "fill_missing", "stand_in_missing",
                           "get_format", "keypoint_formats", "register_format")

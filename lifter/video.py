@@ -120,7 +120,9 @@ def input_kind(name: str | os.PathLike[str], head: bytes) -> tuple[InputKind, st
     ``poselifter lift`` and the app's upload both go by it."""
     sfx = Path(name).suffix.lower()
     by_name: InputKind = "keypoints" if sfx == ".json" else "video" if sfx in VIDEO_SUFFIXES else "image"
-    by_content: InputKind | None = media_kind(head) or ("keypoints" if looks_like_json(head) else None)
+    # (JSON text first: no photo's or video's signature starts with "{" or "[", but a transport stream's sync bytes
+    # are a weak test that JSON text with "G" in the right places passes)
+    by_content: InputKind | None = "keypoints" if looks_like_json(head) else media_kind(head)
     if by_content is None or by_content == by_name:
         return by_name, None
     if by_name == "image" and sfx not in IMAGE_SUFFIXES:
@@ -859,7 +861,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:
         warnings.append(_crowd_note(max_people, crowded,
-                                    searched=None if full_searches >= len(frames) + len(bad) else full_searches))
+                                    searched=None if full_searches >= len(frames) else full_searches))
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam

@@ -264,3 +264,16 @@ def test_convert_with_scores_stands_in_as_the_keypoint_file_reader_does(tmp_path
         convert(batch, src="coco17", scores=wrist)
     with pytest.raises(PoseLifterError, match="scores are for 2D keypoints"):
         convert(np.zeros((17, 3)) + 1, src="coco17", scores=scores)
+    with pytest.raises(PoseLifterError, match="scores: infinite values"):
+        convert(coco, src="coco17", scores=np.full(17, np.inf))
+    # a review: with scores, the checks of the joints given were off (H36M order given as COCO; a (0, 0) placeholder
+    # scored above 0, as some detectors write one)
+    with pytest.warns(PoseLifterWarning, match=r"\(0, 0\) px, far from the rest of the pose"):
+        placeholder = coco.copy()
+        placeholder[9] = 0.0
+        convert(placeholder, src="coco17", scores=np.full(17, 0.2))
+    h36m_order = np.array([[400, 300], [380, 300], [380, 400], [380, 500], [420, 300], [420, 400], [420, 500],
+                           [400, 250], [400, 200], [400, 185], [400, 160], [440, 205], [460, 260], [470, 300],
+                           [360, 205], [340, 260], [330, 300]], np.float64)
+    with pytest.warns(PoseLifterWarning, match="converted as COCO-17"):
+        convert(h36m_order, src="coco17", scores=np.full(17, 0.9))

@@ -1415,6 +1415,7 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
     assert ks.fps == 25 and ks.image_size == (1280, 720) and len(ks.frames) == 2
     assert "the file's own fps (25) is used, not --fps 30" in ks.warnings
     np.testing.assert_allclose(ks.frames[1][0], coco)
+    assert ks.format == "coco17" and parse_keypoint_sequence(p, default_format="h36m17").format == "h36m17"  # (review)
     with pytest.raises(PoseLifterError, match=r"fps \(--fps\) must be the frame rate"):
         parse_keypoint_sequence(p, fps=0)
     npy = tmp_path / "kp.npy"
@@ -1458,13 +1459,14 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
         (d / f"video_{n:012d}_keypoints.json").write_text(json.dumps({"version": 1.3, "people": people}))
     (d / "still_000000000000_keypoints.json").write_text(json.dumps({"people": [_openpose_person(kp17)]}))  # (one)
     base = ["--weights", str(weights), "--image-size", "1280", "720"]
-    code, err = run([str(d), "--out", str(tmp_path / "a"), *base], capsys)
-    assert code == 0 and "lifted 1 of 2" in err, err  # (the still is lifted; the sequence needs its rate)
+    code, err = run([str(d), "--out", str(tmp_path / "a"), *base], capsys)  # (no frame rate: one by one, as before)
+    assert code == 0 and "lifted 8 of 8" in err, err
     assert "7 OpenPose per-frame files (video_000000000000_keypoints.json ... video_000000000007_keypoints.json) " \
-           "are lifted as one keypoint sequence" in err
-    assert "one file per frame carries no frame rate: give it, e.g. --fps 30" in err
+           "are lifted one by one; give their frame rate (--fps 30) to lift them as one tracked" in err
     code, err = run([str(d), "--out", str(tmp_path / "b"), "--fps", "30", *base], capsys)
     assert code == 0 and "lifted 2 of 2" in err, err
+    assert "7 OpenPose per-frame files (video_000000000000_keypoints.json ... video_000000000007_keypoints.json) " \
+           "are lifted as one keypoint sequence" in err
     out = json.loads((tmp_path / "b" / "video.json").read_text())
     assert out["kind"] == "keypoint-sequence" and out["fps"] == 30 and len(out["tracks"]) == 2
     assert [fr["index"] for fr in out["frames"]] == numbers
@@ -1482,3 +1484,18 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
     assert code == 0 and json.loads((tmp_path / "c" / "video.json").read_text())["fps"] == 25, err
     code, err = run([str(d), "--out", str(tmp_path / "e"), "--fps", "0", *base], capsys)
     assert code != 0 and "--fps must be a frame rate in (0, 1000] frames/s, got 0" in err
+    # a review: two files given of a video's seven were read as all seven; a subset stays files
+    two = [str(d / f"video_{n:012d}_keypoints.json") for n in (0, 1)]
+    code, err = run([*two, "--out", str(tmp_path / "f"), "--fps", "30", *base], capsys)
+    assert code == 0 and "lifted 2 of 2" in err and "keypoint sequence" not in err, err
+    assert json.loads((tmp_path / "f" / "video_000000000001_keypoints.json").read_text())["kind"] == "keypoints"
+    # ... and OpenPose's output for a folder of COCO images (numbers are image ids, sparse) stays stills
+    coco = tmp_path / "coco"
+    coco.mkdir()
+    for n in (139, 285, 632):
+        (coco / f"COCO_val2014_{n:012d}_keypoints.json").write_text(json.dumps({"people": [_openpose_person(kp17)]}))
+    code, err = run([str(coco), "--out", str(tmp_path / "g"), "--fps", "30", *base], capsys)
+    assert code == 0 and "lifted 3 of 3" in err and "OpenPose per-frame" not in err, err
+    # a pattern is for keypoint files: images named so are not a video
+    code, err = run([str(coco / "frame_%04d.jpg"), "--out", str(tmp_path / "h"), *base], capsys)
+    assert code == 1 and "a frame pattern is read for keypoint files only" in err

@@ -804,6 +804,17 @@ def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lift
     assert any(w.startswith("more than 1 person in 3 of the 3 frames searched in full (between them only the people "
                             "followed are looked for) (0, 5, 10)") for w in one.warnings), one.warnings
 
+    class FailsOnFrame3(FrameIndexedEstimator):
+        def detect(self, image: np.ndarray) -> list[Detection]:
+            if self._frame(image) == 3:
+                raise PoseLifterError("scripted failure")
+            return super().detect(image)
+
+    # every frame searched in full, one of them bad: no word of searches in between (a review's case)
+    bad = lift_video(clip, lifter=lifter, estimator=FailsOnFrame3(_script(12)), focal=F, search_every_s=0,
+                     max_people=1)
+    assert any(w.startswith("more than 1 person in 11 frames (") for w in bad.warnings), bad.warnings
+
 
 def test_limit_blas_threads():
     threadpoolctl = pytest.importorskip("threadpoolctl")
@@ -981,6 +992,7 @@ def test_cli_lifts_a_misnamed_photo_or_video_as_what_it_holds(tmp_path, lifter, 
      "as a video"),
     ("clip.txt", b"\x1a\x45\xdf\xa3", "video", None),
     ("notes.txt", b"hello", "image", None),  # (neither: by the name; an unknown suffix is tried as an image)
+    ("g.json", b'["abG' + b"G" * 600 + b'"]', "keypoints", None),  # (JSON whose "G"s look like M2TS sync bytes)
 ])
 def test_input_kind_goes_by_content_first(name, head, kind, note):
     """A trial: a keypoint JSON named .mp4 was tried as a video ("cannot open as a video"), and a JPEG named .json was

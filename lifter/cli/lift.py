@@ -136,13 +136,16 @@ def _is_result_file(path: Path) -> bool:
     return head.lstrip().startswith(b"{") and b'"model"' in head and b'"units"' in head
 
 
-def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple[list[Path], list[str], list[str]]:
+def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
+                  group_frames: bool = False) -> tuple[list[Path], list[str], list[str]]:
     """Files to process (folders expanded to their images, videos and .json files, sorted, not recursive) and a
     message for every input that is skipped: missing files, dangling symbolic links, folders without inputs,
     and entries of a folder that are neither files nor of a known kind, subfolders included (named, so nothing is
     skipped silently).
     A folder that is also the output folder ``out`` contributes no earlier results (``poselifter lift`` JSON), so a
     second run does not lift the first run's output; a result file named as an input itself is lifted.
+    ``group_frames`` (``--fps`` given): all of a video's OpenPose per-frame files among them become one input, their
+    frame pattern (:func:`lifter.io.openpose_frame_pattern`); without it they stay files, with a note naming --fps.
     Returns ``(files, problems, notes)``: problems count as failed inputs, notes (other files in a folder) do not."""
     files: list[Path] = []
     problems: list[str] = []
@@ -184,14 +187,21 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None) -> tuple
             files.extend(found)
         elif p.is_file() or (is_frame_pattern(p) and frame_pattern_files(p)):  # (a pattern: one file per frame)
             files.append(p)
+        elif FRAME_PATTERN.search(p.name) and p.suffix.lower() != ".json" and p.parent.is_dir():
+            problems.append(f"{p}: a frame pattern is read for keypoint files only (name.json); images are not read as "
+                            "a video: give their folder (each image is lifted), or make them a video")
         else:
             problems.append(f"{p}: no such file or folder")
     for pattern, members in openpose_frame_pattern(files):  # (OpenPose's --write_json output of a video)
-        at = files.index(members[0])
+        what = f"{len(members)} OpenPose per-frame files ({members[0].name} ... {members[-1].name})"
+        if not group_frames:
+            notes.append(f"{what} are lifted one by one; give their frame rate (--fps 30) to lift them as one tracked, "
+                         f"smoothed keypoint sequence ({pattern})")
+            continue
+        at = min(files.index(q) for q in members if q in files)
         kept = set(members)
         files = [f for f in files[:at] if f not in kept] + [pattern] + [f for f in files[at:] if f not in kept]
-        notes.append(f"{len(members)} OpenPose per-frame files ({members[0].name} ... {members[-1].name}) are "
-                     f"lifted as one keypoint sequence, {pattern}, tracked and smoothed (its frame rate: --fps)")
+        notes.append(f"{what} are lifted as one keypoint sequence, {pattern}, tracked and smoothed")
     unique: dict[Path, Path] = {}
     twice = []
     for f in files:
@@ -324,9 +334,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth, at most 10)")
     p.add_argument("--fps", type=float, default=None,
-                   help="keypoint sequences that give no frame rate of their own (MMPose's predictions of a video, "
-                        "OpenPose's per-frame files: a folder of <video>_<12 digits>_keypoints.json is lifted as one "
-                        "sequence): frames/s, in (0, 1000]")
+                   help="keypoint sequences that give no frame rate of their own (MMPose's predictions of a video; "
+                        "OpenPose's per-frame files: with --fps all of a video's <video>_<12 digits>_keypoints.json "
+                        "are lifted as one sequence, else one by one): frames/s, in (0, 1000]")
     p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
                    help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX,
@@ -397,7 +407,7 @@ def run_lift(args: argparse.Namespace) -> int:
         get_format(args.format)
     focal = None if args.focal is None else as_pair(args.focal, name="--focal", positive=True, scalar=True)
     pp = None if args.principal_point is None else np.asarray(args.principal_point, np.float64)
-    files, problems, notes = expand_inputs(args.inputs, out=args.out)
+    files, problems, notes = expand_inputs(args.inputs, out=args.out, group_frames=args.fps is not None)
     for msg in problems:
         print(f"error: {msg}", file=sys.stderr)
     for msg in notes:
