@@ -971,6 +971,13 @@ def test_cli_lifts_a_misnamed_photo_or_video_as_what_it_holds(tmp_path, lifter, 
     assert still["kind"] == "image" and "holds an image" in still["warnings"][0]
     assert pose["kind"] == "keypoints" and "holds keypoint JSON" in pose["warnings"][0]
     np.testing.assert_allclose(pose["keypoints_2d"], kp, atol=1e-3)
+    # a review: when the lift then failed, the error alone did not say what the file was read as
+    (tmp_path / "blank.json").write_bytes((tmp_path / "still.json").read_bytes())
+    register_estimator("_scripted_nobody", lambda **kw: ScriptedEstimator([[]]), overwrite=True)
+    code = main(["lift", "--no-progress", str(tmp_path / "blank.json"), "--out", str(tmp_path / "o2"), "--detector",
+                 "_scripted_nobody", "--weights", str(weights), "--focal", str(F)])
+    err = capsys.readouterr().err
+    assert code == 1 and "blank.json: note: blank.json holds an image, not keypoint JSON as its name says" in err, err
     # named rightly, or unknown bytes: by the name, with no note
     from lifter.video import input_kind
 

@@ -462,6 +462,7 @@ def run_lift(args: argparse.Namespace) -> int:
                   "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp}
         try:
             for path, name in bar:
+                misnamed: str | None = None
                 try:
                     kind, misnamed = input_kind(path, _head(path))
                     if args.image_size is not None and kind != "keypoints":
@@ -539,6 +540,8 @@ def run_lift(args: argparse.Namespace) -> int:
                     ok += 1
                 except PoseLifterError as exc:
                     msg = str(exc)
+                    if misnamed is not None:  # (what it was read as, which the error may not say)
+                        say(f"{path}: note: {misnamed}")
                     say(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}")
                     failed += 1
                 except Exception as exc:  # noqa: BLE001 -- one bad input must not stop the batch
