@@ -1999,8 +1999,12 @@ def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
                         timeout=TYPING_SETTLE_S + 5), v.messages[n:]
         _send_value(tab, v.gui.joints.uv, (120.0, 100.0))  # a second burst, later: said again, once
         time.sleep(TYPING_SETTLE_S + 0.3)
+        before = v._typed_while_playing_at
         _send_value(tab, v.gui.joints.uv, (140.0, 100.0))
         assert wait_for(lambda: sum("typed while the sequence plays" in m for m in v.messages[n:]) == 2, timeout=5)
+        # (the keystroke handled before the pause: a pause set here, server-side, can overtake the tab's message still
+        # in flight; a loaded CI machine saw it, the keystroke then handled as typed while paused)
+        assert wait_for(lambda: v._typed_while_playing_at > before, timeout=5)
         v.gui.play.play.value = True  # pause
         assert wait_for(lambda: not v.playing, timeout=5)
         kp = v.state.keypoints.copy()
