@@ -1176,14 +1176,15 @@ def _own_sequence(frames: list[Any]) -> bool:
 
 
 def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None,
-                            fps: float | None = None) -> KeypointSequence:
+                            fps: float | None = None, cli_options: bool = True) -> KeypointSequence:
     """Read a keypoint sequence: ``{"frames": [FRAME, ...], "fps": 50, "format": ..., "image_size": ...,
     "focal": ..., "principal_point": ..., "distortion": ..., "source": ...}`` where each FRAME is any single-frame
     layout of the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
     or an empty list / ``{"people": []}`` for a frame with nobody; MMPose's predictions of several frames; or a frame
     pattern naming one file per frame (``DIR/video_%012d_keypoints.json``, OpenPose's ``--write_json`` output of a
     video: :func:`frame_pattern_files`). The frame rate is required (frames/s, in (0, 1000]): the file's ``fps``,
-    else ``fps`` (``poselifter lift --fps``); where both are given and differ the file's is used, with a note."""
+    else ``fps`` (``poselifter lift --fps``); where both are given and differ the file's is used, with a note.
+    ``cli_options``: a message may name ``poselifter lift``'s options (False: the app, which has none)."""
     p = Path(path)
     d = _sequence_doc(p, fps)
     if not (isinstance(d, dict) and "frames" in d):
@@ -1208,8 +1209,9 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                               "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
     else:
         raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate: \"fps\": 30 at the "
-                              "file's top level (a list of frames: {\"frames\": [...], \"fps\": 30}), or --fps 30 on "
-                              "the command line (frames/s, in (0, 1000])")
+                              "file's top level (a list of frames: {\"frames\": [...], \"fps\": 30})"
+                              + (", or --fps 30 on the command line" if cli_options else "")
+                              + " (frames/s, in (0, 1000])")
     if not (_is_number(rate) and math.isfinite(rate) and 0 < rate <= 1000):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)

@@ -934,7 +934,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
-    ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps)
+    ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
     warnings = list(ks.warnings) + size_notes
     f, src, pp, notes = resolve_camera(

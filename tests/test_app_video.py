@@ -226,6 +226,10 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     assert v.load_upload("mmpose.json", json.dumps(mm).encode()) is True, v.messages[-3:]
     mseq = v.sequence()
     assert isinstance(mseq, vid.VideoSequence) and mseq.num_frames == 10 and v.state.sample.num_people == 2
+    del mm["fps"]  # (without its rate: refused, naming no command-line option, which the app has none of)
+    assert v.load_upload("nofps.json", json.dumps(mm).encode()) is False
+    assert "'fps' is missing" in v.messages[-1] and "--fps" not in v.messages[-1], v.messages[-1]
+    assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10}).encode()) is True, v.messages[-3:]
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
     assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     no_size = dict(doc)
