@@ -301,12 +301,43 @@ def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) ->
     return buf.tobytes()
 
 
+ASSUMED_SEQUENCE_FPS: Final[float] = 30.0
+"""The frame rate the app assumes for an uploaded keypoint sequence that gives none (MMPose's ``--save-predictions``
+file has none; the app has no --fps), with a note: as for a video file without a usable rate."""
+
+
+def _sequence_defaults(content: bytes, photo: Any | None) -> tuple[dict[str, Any], list[str]]:
+    """What an uploaded keypoint sequence lacks that the app can supply, as ``lift_keypoint_sequence`` keywords, and
+    the notes saying so: its frame rate (:data:`ASSUMED_SEQUENCE_FPS`), and with neither an image size nor a principal
+    point, the size of ``photo`` (the photo uploaded before, as a single keypoint file is drawn on it)."""
+    try:
+        doc = json.loads(content.decode("utf-8-sig"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        return {}, []  # (the reader says what is wrong)
+    kw: dict[str, Any] = {}
+    notes: list[str] = []
+    top = doc if isinstance(doc, dict) else {}  # (MMPoseInferencer's list of frames has no top level)
+    if "fps" not in top:
+        kw["fps"] = ASSUMED_SEQUENCE_FPS
+        notes.append(f"the file gives no frame rate: assumed {ASSUMED_SEQUENCE_FPS:g} frames/s for playback and "
+                     "smoothing (give \"fps\" at the file's top level)")
+    if photo is not None and not any(k in top for k in ("image_size", "principal_point")):
+        kw["image_size"] = tuple(photo.size)
+        notes.append(f"no image_size in the file: that of {photo.name} ({photo.size[0]} x {photo.size[1]} px), the "
+                     "photo uploaded before, is used")
+    return kw, notes
+
+
 def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
                    max_bytes: int, detect_lock: Any, max_seconds: float = VIDEO_MAX_SECONDS,
-                   progress: Callable[[int, int | None], None] | None = None) -> VideoSequence:
+                   progress: Callable[[int, int | None], None] | None = None, photo: Any | None = None
+                   ) -> VideoSequence:
     """Lift an uploaded video (``estimator()`` gives the 2D detector) or keypoint sequence JSON into a
     :class:`VideoSequence` (module docstring). Raises :class:`lifter.PoseLifterError` with a message for the user:
-    too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ..."""
+    too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ... A keypoint sequence
+    without a frame rate gets :data:`ASSUMED_SEQUENCE_FPS`, and one without an image size or principal point the
+    size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before), each with a note
+    (:func:`_sequence_defaults`)."""
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
@@ -331,8 +362,10 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
+                supplied, supplied_notes = _sequence_defaults(content, photo)
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds,
-                                             cli_options=False)
+                                             cli_options=False, **supplied)
+                rec = replace(rec, warnings=[*supplied_notes, *rec.warnings])
                 jpegs = None
                 if rec.distortion is not None and rec.distortion_model == "opencv":
                     rec = _without_opencv_lens(rec)  # (the app's cameras have Human3.6M's lens model)
@@ -357,7 +390,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     notes = list(rec.warnings)
     empty = sum(1 for fr in rec.frames if not fr.people)
     if empty:
-        notes.append(f"{empty} frame(s) with nobody in them are left out of playback")
+        notes.append(f"{empty} frame(s) with nobody in them are left out of playback: the player counts the frames "
+                     "shown, and names each one's own frame number in the file beside it")
     detail = next((w for w in notes if "px" in w and "field of view" in w),
                   {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,

@@ -967,7 +967,11 @@ class SessionView:
         seq, idx = self.sequence(), self._frame_index()
         self._info_playing = self.playing
         if seq is not None and idx is not None:
+            own = None  # (a video's or keypoint sequence's own frame number, where frames with nobody were left out)
+            if isinstance(seq, vid.VideoSequence) and 0 <= idx < seq.num_frames and seq.frames[idx].index != idx:
+                own = seq.frames[idx]
             text = (f"<small>{seq.label}: frame {idx} of 0–{seq.num_frames - 1} ({seq.fps:g} fps)"
+                    + ("" if own is None else f" · the file's frame {own.index} ({own.time_s:.2f} s)")
                     + (" · playing: the bar shows where; type or drag a frame above to jump there"
                        if self._info_playing else "") + "</small>")
         elif source_of(self.state.sample.key) == "demo":
@@ -1761,7 +1765,7 @@ class SessionView:
             seq = vid.video_sequence(name, content, key=video_key(self.app.next_upload_id(), nm),
                                      lifter=self.app.pool.get(self.state.model), estimator=self.app.estimator,
                                      max_bytes=self.app.max_upload_bytes, detect_lock=self.app.detect_lock,
-                                     progress=progress)
+                                     progress=progress, photo=self._photo)
         finally:
             if note is not None:
                 note.remove()

@@ -783,7 +783,7 @@ def _h36m_as_coco_notes(kp17: np.ndarray) -> list[str]:
     said = not_face_first_message(kp17)
     if said is None:
         return []
-    return [f"{said} If so, give \"format\": \"h36m17\" in the file (or --format h36m17 on the command line for "
+    return [f"{said} If so, give \"format\": \"h36m17\" in the file (or --format h36m17 with poselifter lift, for "
             "a file without 'format'): they were lifted as COCO-17"]
 
 
@@ -842,14 +842,14 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                 f"{p}: 17 joints without 'format', and each person's first five lie within "
                 f"{COCO_FACE_SPREAD * 100:.0f} % of their 2D size of each other, as COCO-17's nose, eyes and ears "
                 "do (H36M's first five, the pelvis, hips, right knee and right foot, span the legs): give "
-                "\"format\": \"coco17\" in the file, or --format coco17 on the command line (--format h36m17 if "
+                "\"format\": \"coco17\" in the file, or --format coco17 with poselifter lift (--format h36m17 if "
                 "this is H36M order)")
         if J == 17:
             notes.append("17 joints without 'format': assumed H36M order (for COCO keypoints give \"format\": "
-                         "\"coco17\" in the file, or --format coco17 on the command line)")
+                         "\"coco17\" in the file, or --format coco17 with poselifter lift)")
         else:
             notes.append(f"{J} joints without 'format': assumed {fmt!r} by the joint count (give 'format' in the "
-                         "file, or --format on the command line, if they are another layout)")
+                         "file, or --format with poselifter lift, if they are another layout)")
     f = get_format(fmt)
     out, kept, dropped, scores, stood_in = [], [], [], [], []
     for (xy, missing, conf), (pos, pid) in zip(parsed, identity):
@@ -858,7 +858,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             raise PoseLifterError(
                 f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}"
                 + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
-                + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format on the command line)"
+                + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
                    if same else _no_format_with(len(xy))))
         if missing.any():
             xy, conf, said, bad = fill_missing(xy, missing, src=fmt, scores=conf)  # (bad: needed, still missing)
@@ -1208,10 +1208,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
                               "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
     else:
-        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate: \"fps\": 30 at the "
-                              "file's top level (a list of frames: {\"frames\": [...], \"fps\": 30})"
-                              + (", or --fps 30 on the command line" if cli_options else "")
-                              + " (frames/s, in (0, 1000])")
+        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate in frames/s, in "
+                              "(0, 1000]: \"fps\": 30 at the file's top level (a list of frames becomes "
+                              "{\"frames\": [...], \"fps\": 30})" + (", or --fps 30 on the command line" if cli_options
+                                                                        else ""))
     if not (_is_number(rate) and math.isfinite(rate) and 0 < rate <= 1000):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)

@@ -208,7 +208,8 @@ def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_
 
 
 def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
-    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    nobody = ScriptedEstimator([[]], full_width=W)  # (photos: decoded and kept, nobody found)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: nobody)
     v = app.headless_view()
     frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(10)]
     doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
@@ -226,16 +227,33 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     assert v.load_upload("mmpose.json", json.dumps(mm).encode()) is True, v.messages[-3:]
     mseq = v.sequence()
     assert isinstance(mseq, vid.VideoSequence) and mseq.num_frames == 10 and v.state.sample.num_people == 2
-    del mm["fps"]  # (without its rate: refused, naming no command-line option, which the app has none of)
-    assert v.load_upload("nofps.json", json.dumps(mm).encode()) is False
-    assert "'fps' is missing" in v.messages[-1] and "--fps" not in v.messages[-1], v.messages[-1]
-    assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10}).encode()) is True, v.messages[-3:]
+    # a browser trial: MMPose's own file has neither "fps" nor "image_size", and the app has no control for either.
+    # The app assumes 30 frames/s, and takes the size of the photo uploaded before, each with a note
+    del mm["fps"], mm["image_size"]
+    assert v.load_upload("bare.json", json.dumps(mm).encode()) is False  # (no photo yet: no size, no principal point)
+    assert "image_size" in v.messages[-1] and "--" not in v.messages[-1], v.messages[-1]
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGB", (W, H), (60, 60, 60)).save(buf, format="JPEG")
+    assert v.load_upload("room.jpg", buf.getvalue()) is False  # (nobody found: not shown, but kept, as for a file)
+    assert v.load_upload("bare.json", json.dumps(mm).encode()) is True, v.messages[-3:]
+    bare = v.sequence()
+    assert isinstance(bare, vid.VideoSequence) and bare.record.fps == 30 and bare.record.image_size == (W, H)
+    assert bare.info.warnings[:2] == (
+        "the file gives no frame rate: assumed 30 frames/s for playback and smoothing (give \"fps\" at the file's top "
+        "level)", f"no image_size in the file: that of room.jpg ({W} x {H} px), the photo uploaded before, is used")
+    assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same camera: the same)
+    assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10, "image_size": [W, H]}).encode()) is True
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
     assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     no_size = dict(doc)
     del no_size["image_size"]
-    assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is False
-    assert "image_size" in v.messages[-1]
+    assert v.load_upload("nosize.json", json.dumps(no_size).encode()) is True  # (room.jpg above gives its size)
+    nosize = v.sequence()
+    assert nosize is not None and nosize.record.image_size == (W, H)
     # with a principal point but no image size (which poselifter lift accepts), the canvas is twice the principal
     # point, as for a single keypoint file, and a note says so (a user trial's sequence was refused)
     no_size["principal_point"] = [W / 2 + 10, H / 2 - 20]
@@ -618,3 +636,26 @@ def test_a_refused_upload_does_not_stop_one_being_lifted_and_a_failed_drawing_ke
     key = v.state.sample.key
     assert v.load_upload("b.json", json.dumps(doc).encode()) is False
     assert v.state.sample.key == key and v.sequence() is first
+
+
+def test_a_sequence_with_an_empty_frame_names_each_frame_s_own_number(server) -> None:
+    """A browser trial: after a frame with nobody (left out of playback), the player's frame 15 showed the file's
+    frame 16 with no word, while the notes and the download count the file's frames. The play line names the file's
+    own frame number where the two differ."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    people = _script(8)
+    frames = [{"people": [] if i == 3 else [{"keypoints": p.tolist()} for p in fr]} for i, fr in enumerate(people)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("gap.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert isinstance(seq, vid.VideoSequence) and seq.num_frames == 7
+    assert any("left out of playback: the player counts the frames shown" in w for w in seq.info.warnings)
+    v.gui.play.frame.value = 2
+    assert wait_for(lambda: v.state.sample.key == f"{seq.key}/2")
+    assert "frame 2 of 0–6 (10 fps)</small>" in v.gui.play.info.content  # (the same number: nothing added)
+    v.gui.play.frame.value = 3
+    assert wait_for(lambda: v.state.sample.key == f"{seq.key}/3")
+    assert wait_for(lambda: "frame 3 of 0–6 (10 fps) · the file's frame 4 (0.40 s)" in v.gui.play.info.content), \
+        v.gui.play.info.content
+    np.testing.assert_allclose(v.state.keypoints, people[4][0], atol=1e-6)
