@@ -103,6 +103,20 @@ from .viser_hooks import clear_box, limit_uploads, note_typed_values, report_rej
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
 
+TOAST_MAX_CHARS: int = 240
+"""A browser notification shows at most about this many characters of a message (a longer one is cut at a word, and
+says the Readout has it whole): a browser trial read toasts whose title had scrolled away, cut mid-sentence."""
+
+
+def toast_text(text: str, *, limit: int = TOAST_MAX_CHARS) -> str:
+    """``text`` for a notification: as it is up to ``limit`` characters, else its start cut at a word and a pointer to
+    the Readout's status line, which shows it whole."""
+    if len(text) <= limit:
+        return text
+    cut = text[:limit].rsplit(" ", 1)[0].rstrip(" ,;:(")
+    return f"{cut} … (the whole note: Readout)"
+
+
 INFO_MESSAGE_SECONDS: float = 8.0
 """A note in the readout's status line (not an error) stays at least this long: the step that shows it (a camera
 switch that resets the focal length) sets controls whose callbacks succeed right after it, and a success would
@@ -434,7 +448,7 @@ class SessionView:
                 log.exception("could not show message %r", text)
         try:
             if isinstance(self.target, viser.ClientHandle):
-                note = self.target.add_notification(title=title, body=text,
+                note = self.target.add_notification(title=title, body=toast_text(text),
                                                     auto_close_seconds=None if sticky else 6.0,
                                                     color="red" if error else "blue")
                 if sticky:  # (one refused upload's note at a time: they do not pile up)

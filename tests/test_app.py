@@ -97,6 +97,20 @@ def test_demo_renderer_puts_points_where_project_does(pp: tuple[float, float]) -
 # ----------------------------------------------------------------------------------------------
 
 
+def test_a_long_note_is_cut_in_its_toast_not_in_the_readout() -> None:
+    """A browser trial: a long upload note's toast had its title scrolled away and its text cut mid-sentence ("may be
+    off (an occluded or"). The toast is cut at a word and points to the Readout, which keeps the whole text."""
+    from poselifter_app.viewer import TOAST_MAX_CHARS, toast_text
+
+    short = "photo.jpg: 1 person found"
+    assert toast_text(short) == short
+    long = "; ".join(f"note {i}: the detector is unsure of some joints (an occluded limb?)" for i in range(9))
+    cut = toast_text(long)
+    assert len(long) > TOAST_MAX_CHARS and cut.endswith(" … (the whole note: Readout)")
+    head = cut.removesuffix(" … (the whole note: Readout)")
+    assert long.startswith(head) and len(head) <= TOAST_MAX_CHARS and long[len(head)] in " ,;:("  # (at a word)
+
+
 def test_server_binds_localhost_on_a_free_port(app: PoseLifterApp) -> None:
     port = app.server.get_port()
     assert port > 0 and app.server.get_host() == "127.0.0.1"
