@@ -29,7 +29,7 @@ from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
-from lifter.io import is_sequence_doc
+from lifter.io import is_sequence_doc, parse_keypoint_sequence
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
@@ -83,7 +83,7 @@ def is_sequence_json(content: bytes) -> bool:
     several frames)."""
     try:
         doc = json.loads(content.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+    except (UnicodeDecodeError, ValueError, RecursionError):  # (ValueError: not JSON, or an integer too long)
         return False  # the keypoint-file reader says what is wrong with it
     return is_sequence_doc(doc)
 
@@ -306,25 +306,39 @@ ASSUMED_SEQUENCE_FPS: Final[float] = 30.0
 file has none; the app has no --fps), with a note: as for a video file without a usable rate."""
 
 
-def _sequence_defaults(content: bytes, photo: Any | None) -> tuple[dict[str, Any], list[str]]:
-    """What an uploaded keypoint sequence lacks that the app can supply, as ``lift_keypoint_sequence`` keywords, and
-    the notes saying so: its frame rate (:data:`ASSUMED_SEQUENCE_FPS`), and with neither an image size nor a principal
-    point, the size of ``photo`` (the photo uploaded before, as a single keypoint file is drawn on it)."""
+def _sequence_defaults(path: Path, content: bytes, photo: Any | None, nm: str) -> tuple[dict[str, Any], list[str]]:
+    """What an uploaded keypoint sequence (its copy at ``path``) lacks that the app can supply, as
+    ``lift_keypoint_sequence`` keywords, and the notes saying so: its frame rate (:data:`ASSUMED_SEQUENCE_FPS`), and
+    when the reader finds neither an image size nor a principal point (in any of the fields it reads), the size of
+    ``photo`` (the photo uploaded before, as a single keypoint file is drawn on it), provided most poses lie mostly
+    inside it; else :class:`UploadError` naming the photo (a review: any earlier photo's size was taken, ~3 m off)."""
     try:
         doc = json.loads(content.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+    except (UnicodeDecodeError, ValueError, RecursionError):  # (ValueError: JSONDecodeError, an integer too long)
         return {}, []  # (the reader says what is wrong)
     kw: dict[str, Any] = {}
     notes: list[str] = []
-    top = doc if isinstance(doc, dict) else {}  # (MMPoseInferencer's list of frames has no top level)
-    if "fps" not in top:
+    if "fps" not in (doc if isinstance(doc, dict) else {}):  # (MMPoseInferencer's list of frames has no top level)
         kw["fps"] = ASSUMED_SEQUENCE_FPS
         notes.append(f"the file gives no frame rate: assumed {ASSUMED_SEQUENCE_FPS:g} frames/s for playback and "
                      "smoothing (give \"fps\" at the file's top level)")
-    if photo is not None and not any(k in top for k in ("image_size", "principal_point")):
-        kw["image_size"] = tuple(photo.size)
-        notes.append(f"no image_size in the file: that of {photo.name} ({photo.size[0]} x {photo.size[1]} px), the "
-                     "photo uploaded before, is used")
+    if photo is None:
+        return kw, notes
+    try:
+        ks = parse_keypoint_sequence(path, fps=kw.get("fps"), cli_options=False)
+    except PoseLifterError:
+        return kw, notes  # (the lift says what is wrong)
+    if ks.image_size is not None or ks.principal_point is not None:
+        return kw, notes
+    W, H = (int(v) for v in photo.size)
+    poses = [np.asarray(k, np.float64) for fr in ks.frames for k in fr]
+    inside = [float(np.mean((k[:, 0] >= 0) & (k[:, 0] <= W) & (k[:, 1] >= 0) & (k[:, 1] <= H))) > 0.5 for k in poses]
+    if poses and np.mean(inside) < 0.5:
+        raise UploadError(f"{nm}: the keypoint sequence has no \"image_size\": [W, H] (nor a principal point), and "
+                          f"its poses lie mostly outside {photo.name} ({W} x {H} px), the photo uploaded before, "
+                          "whose size would be used: add the file's own \"image_size\"")
+    kw["image_size"] = (W, H)
+    notes.append(f"no image_size in the file: that of {photo.name} ({W} x {H} px), the photo uploaded before, is used")
     return kw, notes
 
 
@@ -362,7 +376,7 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
-                supplied, supplied_notes = _sequence_defaults(content, photo)
+                supplied, supplied_notes = _sequence_defaults(path, content, photo, nm)
                 rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds,
                                              cli_options=False, **supplied)
                 rec = replace(rec, warnings=[*supplied_notes, *rec.warnings])
@@ -391,7 +405,7 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     empty = sum(1 for fr in rec.frames if not fr.people)
     if empty:
         notes.append(f"{empty} frame(s) with nobody in them are left out of playback: the player counts the frames "
-                     "shown, and names each one's own frame number in the file beside it")
+                     "shown, and names a frame's own number in the file where the two differ")
     detail = next((w for w in notes if "px" in w and "field of view" in w),
                   {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,

@@ -113,8 +113,13 @@ def toast_text(text: str, *, limit: int = TOAST_MAX_CHARS) -> str:
     the Readout's status line, which shows it whole."""
     if len(text) <= limit:
         return text
-    cut = text[:limit].rsplit(" ", 1)[0].rstrip(" ,;:(")
+    cut = text[:limit].rsplit(" ", 1)[0].rstrip(" ,;:(") or text[:limit]  # (no word to cut at: mid-word)
     return f"{cut} … (the whole note: Readout)"
+
+
+LONG_NOTE_SECONDS: float = 60.0
+"""A note too long for its notification (:func:`toast_text`) stays in the Readout's status line at least this long
+(other notes: :data:`INFO_MESSAGE_SECONDS`), so that the notification's pointer to it holds."""
 
 
 INFO_MESSAGE_SECONDS: float = 8.0
@@ -438,7 +443,8 @@ class SessionView:
             self.messages = self.messages[-20:]
             self.notices = [*self.notices[-19:], (title, text, sticky)]
             self._message_count += 1
-            self._note_until = 0.0 if error else time.monotonic() + INFO_MESSAGE_SECONDS
+            self._note_until = 0.0 if error else time.monotonic() + (
+                LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS)
             self._last_was_error = error
             self._status_about = about if about is not None else (
                 sequence_of(self.state.sample.key) if hasattr(self, "state") else None)

@@ -109,6 +109,20 @@ def test_a_long_note_is_cut_in_its_toast_not_in_the_readout() -> None:
     assert len(long) > TOAST_MAX_CHARS and cut.endswith(" … (the whole note: Readout)")
     head = cut.removesuffix(" … (the whole note: Readout)")
     assert long.startswith(head) and len(head) <= TOAST_MAX_CHARS and long[len(head)] in " ,;:("  # (at a word)
+    assert "x" * 10 in toast_text(" " + "x" * 300)  # (no word to cut at: cut mid-word, not emptied)
+
+
+def test_a_long_note_stays_in_the_readout(view: SessionView) -> None:
+    """A review: the toast pointed to the Readout, whose status line the next success cleared after 8 s. A note too
+    long for its toast stays there for LONG_NOTE_SECONDS."""
+    import time
+
+    from poselifter_app.viewer import INFO_MESSAGE_SECONDS, LONG_NOTE_SECONDS, TOAST_MAX_CHARS
+
+    view.show_message("x " * (TOAST_MAX_CHARS // 2 + 10))
+    assert view._note_until - time.monotonic() > LONG_NOTE_SECONDS - 5 > INFO_MESSAGE_SECONDS
+    view.show_message("short")
+    assert view._note_until - time.monotonic() <= INFO_MESSAGE_SECONDS
 
 
 def test_server_binds_localhost_on_a_free_port(app: PoseLifterApp) -> None:

@@ -248,6 +248,23 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same camera: the same)
     assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10, "image_size": [W, H]}).encode()) is True
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
+    # a review: the photo's size was taken for a file whose camera is a K matrix (its principal point read), and for
+    # poses that do not fit the photo (another image's pixels: ~3 m off in depth)
+    K = [[F, 0.0, W], [0.0, F, H], [0.0, 0.0, 1.0]]
+    assert v.load_upload("k.json", json.dumps({**mm, "K": K}).encode()) is True, v.messages[-3:]
+    ksq = v.sequence()
+    assert ksq is not None and ksq.record.image_size == (2 * W, 2 * H)  # (twice its principal point, not the photo)
+    assert not any("room.jpg" in w for w in ksq.info.warnings), ksq.info.warnings
+    big = json.loads(json.dumps(mm))
+    for fr in big["instance_info"]:
+        for q in fr["instances"]:
+            q["keypoints"] = (np.asarray(q["keypoints"]) * 3 + [W, H]).tolist()
+    key = v.state.sample.key
+    assert v.load_upload("big.json", json.dumps(big).encode()) is False
+    assert f"its poses lie mostly outside room.jpg ({W} x {H} px), the photo uploaded before" in v.messages[-1]
+    assert v.state.sample.key == key  # (the tab keeps what it showed)
+    huge = b'{"fps": 10, "frames": [], "n": ' + b"9" * 5000 + b"}"  # (an integer too long for Python's JSON reader)
+    assert v.load_upload("huge.json", huge) is False and "internal error" not in v.messages[-1], v.messages[-1]
     assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     no_size = dict(doc)
     del no_size["image_size"]
