@@ -291,6 +291,7 @@ def test_coco_keypoints_without_format_are_refused_not_lifted_as_h36m(tmp_path, 
     code, err = run([str(tmp_path / "coco.json"), *common], capsys)
     assert code == 1 and "17 joints without 'format', and each person's first five lie within 12 %" in err, err
     assert "give \"format\": \"coco17\" in the file, or --format coco17" in err and "Traceback" not in err
+    assert "--format coco17 with poselifter lift (--format h36m17" in err  # (a browser trial: "on the command line")
     code, err = run([str(tmp_path / "coco.json"), *common, "--format", "coco17"], capsys)
     assert code == 0, err
     assert json.loads((tmp_path / "o" / "coco.json").read_text())["source_format"] == "coco17"
