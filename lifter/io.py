@@ -59,7 +59,7 @@ from .camera import (
     check_distortion_model,
     check_opencv_distortion,
 )
-from .keypoints import H36M17, fill_missing, get_format, keypoint_formats
+from .keypoints import H36M17, fill_missing, get_format, keypoint_formats, missing_joints
 from .skeleton import JOINT_NAMES
 
 FORMAT_BY_COUNT: Final[dict[int, str]] = {17: H36M17, 16: "sh16", 25: "openpose25", 33: "blazepose33"}
@@ -810,9 +810,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
     top = -math.inf
     for _, q, _ in people:
         xy, conf = _rows(q, str(p))
-        missing = ~np.all(np.isfinite(xy), axis=1)
+        missing = missing_joints(xy, conf)
         if conf is not None:
-            missing |= ~(conf > 0)  # OpenPose / COCO mark undetected joints with confidence 0; null: unknown
             top = max([top, *conf[np.isfinite(conf)].tolist()])
         parsed.append((xy, missing, conf))
     if top > SCORE_NOTE_ABOVE and score_note:

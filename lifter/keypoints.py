@@ -484,6 +484,13 @@ KEYPOINT_FORMATS: Final[tuple[str, ...]] = keypoint_formats()
 """The built-in format names (see :func:`keypoint_formats` for the live registry)."""
 
 
+def missing_joints(keypoints: np.ndarray, scores: np.ndarray | None) -> np.ndarray:
+    """Which joints of one person's keypoints ``(J, 2)`` are missing, ``(J,)`` bool: non-finite coordinates, or a
+    score ``(J,)`` of 0 or less, or NaN (OpenPose and COCO mark undetected joints with confidence 0; null: unknown).
+    The one rule of the keypoint-file reader and :func:`convert` (``scores=``)."""
+    missing = ~np.all(np.isfinite(keypoints), axis=-1)
+    return missing if scores is None else missing | ~(np.asarray(scores) > 0)
+
 
 def fill_missing(keypoints: np.ndarray, missing: np.ndarray, *, src: str, scores: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray | None, list[str], list[str]]:
@@ -496,6 +503,7 @@ def fill_missing(keypoints: np.ndarray, missing: np.ndarray, *, src: str, scores
     xy, miss, sc, said = stand_in_missing(keypoints, missing, src=src, scores=scores)
     lacking = [f.joint_names[k] for k in f.rule_joints if miss[k]]
     return np.where(miss[:, None], 0.0, xy), sc, said, lacking
+
 
 def placeholder_notes(keypoints: ArrayLike, *, src: str) -> list[str]:
     """A note when 2D keypoints ``(..., J, 2)`` px of format ``src`` have a joint at exactly (0, 0) far from the rest
@@ -599,7 +607,7 @@ def _stood_in(arr: np.ndarray, scores: ArrayLike, *, src: str, warn: bool) -> np
     lacking: list[str] = []
     said_all: list[str] = []
     for i in range(len(flat)):
-        missing = ~np.all(np.isfinite(flat[i]), axis=-1) | ~(flat_sc[i] > 0)
+        missing = missing_joints(flat[i], flat_sc[i])
         if not missing.any():
             continue
         flat[i], _, said, bad = fill_missing(flat[i], missing, src=src)
@@ -628,5 +636,6 @@ def fit_line_weight(target: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 __all__: Sequence[str] = ("BLAZEPOSE33_JOINT_NAMES", "COCO17_JOINT_NAMES", "KEYPOINT_FORMATS", "KeypointFormat",
                           "OPENPOSE25_JOINT_NAMES", "SH16_JOINT_NAMES", "body_rules", "convert", "fit_line_weight",
-                          "placeholder_notes", "EAR_EYE_SPACING", "STAND_INS", "fill_missing", "stand_in_missing",
+                          "placeholder_notes", "EAR_EYE_SPACING", "STAND_INS", "fill_missing", "missing_joints",
+                          "stand_in_missing",
                           "get_format", "keypoint_formats", "register_format")

@@ -111,8 +111,8 @@ InputKind = Literal["keypoints", "image", "video"]
 
 
 def input_kind(name: str | os.PathLike[str], head: bytes) -> tuple[InputKind, str | None]:
-    """``(kind, note)`` for a file called ``name`` whose first bytes are ``head``, by its content first: a photo's or
-    video's signature (:func:`media_kind`), else JSON text (:func:`looks_like_json`: keypoints), else its name
+    """``(kind, note)`` for a file called ``name`` whose first bytes are ``head``, by its content first: JSON text
+    (:func:`looks_like_json`: keypoints), else a photo's or video's signature (:func:`media_kind`), else its name
     (``.json``: keypoints; :data:`VIDEO_SUFFIXES`: a video; anything else is tried as an image). ``note`` says so
     when the content and the name disagree (a keypoint file named ``.mp4`` was tried as a video; a JPEG named
     ``.json`` was refused as "cannot read"; a JPEG renamed ``.mp4`` was lifted as a one-frame video at 25 fps; a video
