@@ -29,7 +29,7 @@ from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
-from lifter.io import is_sequence_doc, parse_keypoint_sequence
+from lifter.io import ASSUMED_FPS, is_sequence_doc
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
@@ -301,47 +301,6 @@ def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) ->
     return buf.tobytes()
 
 
-ASSUMED_SEQUENCE_FPS: Final[float] = 30.0
-"""The frame rate the app assumes for an uploaded keypoint sequence that gives none (MMPose's ``--save-predictions``
-file has none; the app has no --fps), with a note: as for a video file without a usable rate."""
-
-
-def _sequence_defaults(path: Path, content: bytes, photo: Any | None, nm: str) -> tuple[dict[str, Any], list[str]]:
-    """What an uploaded keypoint sequence (its copy at ``path``) lacks that the app can supply, as
-    ``lift_keypoint_sequence`` keywords, and the notes saying so: its frame rate (:data:`ASSUMED_SEQUENCE_FPS`), and
-    when the reader finds neither an image size nor a principal point (in any of the fields it reads), the size of
-    ``photo`` (the photo uploaded before, as a single keypoint file is drawn on it), provided most poses lie mostly
-    inside it; else :class:`UploadError` naming the photo (a review: any earlier photo's size was taken, ~3 m off)."""
-    try:
-        doc = json.loads(content.decode("utf-8-sig"))
-    except (UnicodeDecodeError, ValueError, RecursionError):  # (ValueError: JSONDecodeError, an integer too long)
-        return {}, []  # (the reader says what is wrong)
-    kw: dict[str, Any] = {}
-    notes: list[str] = []
-    if "fps" not in (doc if isinstance(doc, dict) else {}):  # (MMPoseInferencer's list of frames has no top level)
-        kw["fps"] = ASSUMED_SEQUENCE_FPS
-        notes.append(f"the file gives no frame rate: assumed {ASSUMED_SEQUENCE_FPS:g} frames/s for playback and "
-                     "smoothing (give \"fps\" at the file's top level)")
-    if photo is None:
-        return kw, notes
-    try:
-        ks = parse_keypoint_sequence(path, fps=kw.get("fps"), cli_options=False)
-    except PoseLifterError:
-        return kw, notes  # (the lift says what is wrong)
-    if ks.image_size is not None or ks.principal_point is not None:
-        return kw, notes
-    W, H = (int(v) for v in photo.size)
-    poses = [np.asarray(k, np.float64) for fr in ks.frames for k in fr]
-    inside = [float(np.mean((k[:, 0] >= 0) & (k[:, 0] <= W) & (k[:, 1] >= 0) & (k[:, 1] <= H))) > 0.5 for k in poses]
-    if poses and np.mean(inside) < 0.5:
-        raise UploadError(f"{nm}: the keypoint sequence has no \"image_size\": [W, H] (nor a principal point), and "
-                          f"its poses lie mostly outside {photo.name} ({W} x {H} px), the photo uploaded before, "
-                          "whose size would be used: add the file's own \"image_size\"")
-    kw["image_size"] = (W, H)
-    notes.append(f"no image_size in the file: that of {photo.name} ({W} x {H} px), the photo uploaded before, is used")
-    return kw, notes
-
-
 def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
                    max_bytes: int, detect_lock: Any, max_seconds: float = VIDEO_MAX_SECONDS,
                    progress: Callable[[int, int | None], None] | None = None, photo: Any | None = None
@@ -349,9 +308,9 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     """Lift an uploaded video (``estimator()`` gives the 2D detector) or keypoint sequence JSON into a
     :class:`VideoSequence` (module docstring). Raises :class:`lifter.PoseLifterError` with a message for the user:
     too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ... A keypoint sequence
-    without a frame rate gets :data:`ASSUMED_SEQUENCE_FPS`, and one without an image size or principal point the
-    size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before), each with a note
-    (:func:`_sequence_defaults`)."""
+    without a frame rate gets :data:`lifter.io.ASSUMED_FPS` (the app has no --fps), and one without an image size or
+    principal point the size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before) where its poses fit
+    it, each with a note (``lift_keypoint_sequence``'s ``assumed_fps`` and ``fallback_image``)."""
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
@@ -376,10 +335,10 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
-                supplied, supplied_notes = _sequence_defaults(path, content, photo, nm)
-                rec = lift_keypoint_sequence(path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds,
-                                             cli_options=False, **supplied)
-                rec = replace(rec, warnings=[*supplied_notes, *rec.warnings])
+                rec = lift_keypoint_sequence(
+                    path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds, cli_options=False,
+                    assumed_fps=ASSUMED_FPS,
+                    fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before", photo.size))
                 jpegs = None
                 if rec.distortion is not None and rec.distortion_model == "opencv":
                     rec = _without_opencv_lens(rec)  # (the app's cameras have Human3.6M's lens model)

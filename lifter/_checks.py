@@ -241,6 +241,14 @@ MAX_PLAUSIBLE_IMAGE_VIEW_DEG: float = 150.0
 (:func:`view_angle_notes`): the widest phone ultra-wides see about 120 deg, and a pinhole camera never 180."""
 
 
+def mostly_outside(keypoints: np.ndarray, image_size: Any) -> np.ndarray:
+    """Which 2D poses ``(..., J, 2)`` px lie mostly (more than half their joints) outside their image ``image_size``
+    (``(W, H)`` px, one for all or ``(..., 2)`` one per pose; a joint on the border is inside): ``(...)`` bool."""
+    k = np.asarray(keypoints, np.float64)
+    wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))  # (one size per pose)
+    return np.any((k < 0) | (k > wh[..., None, :]), axis=-1).mean(-1) > 0.5
+
+
 def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: bool = False,
                         name_pose: bool = False) -> list[str]:
     """A note when 2D poses ``(..., 17, 2)`` px lie mostly (more than half their joints) outside their image
@@ -254,8 +262,8 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
     k = np.asarray(keypoints, np.float64)
     if k.size == 0:
         return []
-    wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))  # (one size per pose)
-    mostly = np.any((k < 0) | (k > wh[..., None, :]), axis=-1).mean(-1) > 0.5
+    wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))
+    mostly = mostly_outside(k, wh)
     if not np.any(mostly):
         return []
     first = np.unravel_index(int(np.argmax(mostly)), mostly.shape) if mostly.ndim else ()

@@ -1012,6 +1012,12 @@ MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
 """Keypoint sequences with more frames are refused."""
 
 
+ASSUMED_FPS: Final[float] = 30.0
+"""The frame rate (frames/s) assumed, with a note, for a video whose container gives no usable one, and for a keypoint
+sequence that gives none where the caller asks for it (``assumed_fps=`` of :func:`parse_keypoint_sequence`: the app,
+which has no ``--fps``)."""
+
+
 @dataclass(frozen=True)
 class KeypointSequence:
     """A parsed keypoint sequence: per frame a list of people ``(J, 2)`` px (largest first) in ``format``,
@@ -1175,7 +1181,8 @@ def _own_sequence(frames: list[Any]) -> bool:
 
 
 def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = None,
-                            fps: float | None = None, cli_options: bool = True) -> KeypointSequence:
+                            fps: float | None = None, cli_options: bool = True,
+                            assumed_fps: float | None = None) -> KeypointSequence:
     """Read a keypoint sequence: ``{"frames": [FRAME, ...], "fps": 50, "format": ..., "image_size": ...,
     "focal": ..., "principal_point": ..., "distortion": ..., "source": ...}`` where each FRAME is any single-frame
     layout of the module docstring (``{"people": [...]}``, ``{"keypoints": [...]}``, a list of rows, a list of people)
@@ -1183,9 +1190,15 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     pattern naming one file per frame (``DIR/video_%012d_keypoints.json``, OpenPose's ``--write_json`` output of a
     video: :func:`frame_pattern_files`). The frame rate is required (frames/s, in (0, 1000]): the file's ``fps``,
     else ``fps`` (``poselifter lift --fps``); where both are given and differ the file's is used, with a note.
+    ``assumed_fps``: the rate used, with a note, where neither gives one (e.g. :data:`ASSUMED_FPS`; None: refused).
     ``cli_options``: a message may name ``poselifter lift``'s options (False: the app, which has none)."""
     p = Path(path)
-    d = _sequence_doc(p, fps)
+    for name, value in (("fps", fps), ("assumed_fps", assumed_fps)):
+        if value is not None and not (_is_number(value) and math.isfinite(value) and 0 < value <= 1000):
+            raise PoseLifterError(f"{name}{' (--fps)' if name == 'fps' else ''} must be the frame rate, a number in "
+                                  f"(0, 1000] frames/s, got {_short(value)}")
+    pattern = is_frame_pattern(p)
+    d = _sequence_doc(p, fps if fps is not None or not pattern else assumed_fps)
     if not (isinstance(d, dict) and "frames" in d):
         raise PoseLifterError(f"{p}: a keypoint sequence is an object with 'frames' (a list of frames)")
     raw = d["frames"]
@@ -1196,14 +1209,18 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if len(raw) > MAX_SEQUENCE_FRAMES:
         raise PoseLifterError(f"{p}: {len(raw)} frames is more than the {MAX_SEQUENCE_FRAMES} a sequence may have")
     given_fps = fps
-    if given_fps is not None and not (_is_number(given_fps) and math.isfinite(given_fps) and 0 < given_fps <= 1000):
-        raise PoseLifterError(f"fps (--fps) must be the frame rate, a number in (0, 1000] frames/s, got "
-                              f"{_short(given_fps)}")
-    if "fps" in d:
+    assumed_note = None
+    if "fps" in d and not (pattern and fps is None):
         rate: Any = d["fps"]  # (a file's "fps": null is refused below, not filled in)
     elif given_fps is not None:
         rate = given_fps
-    elif is_frame_pattern(p):
+    elif assumed_fps is not None:
+        rate = assumed_fps
+        assumed_note = (f"{'files of one frame each give' if pattern else 'the file gives'} no frame rate: assumed "
+                        f"{float(assumed_fps):g} frames/s for playback and smoothing (give "
+                        + ("it" if pattern else "\"fps\" at the file's top level")
+                        + (", or --fps" if cli_options else "") + ")")
+    elif pattern:
         raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
                               "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
     else:
@@ -1217,6 +1234,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
     indices, notes = frame_indices(raw, p, float(rate))
+    if assumed_note is not None:
+        notes.insert(0, assumed_note)
     if given_fps is not None and "fps" in d and not is_frame_pattern(p) and float(d["fps"]) != float(given_fps):
         notes.append(f"the file's own fps ({float(d['fps']):g}) is used, not --fps {float(given_fps):g}")
     frames: list[list[np.ndarray]] = []

@@ -46,7 +46,14 @@ from .detect import (
     people_h36m,
     people_scores,
 )
-from .io import CAMERA_DECIMALS, KEYPOINT_DECIMALS, depth_is_metric, distortion_tuple, parse_keypoint_sequence
+from .io import (
+    ASSUMED_FPS,
+    CAMERA_DECIMALS,
+    KEYPOINT_DECIMALS,
+    depth_is_metric,
+    distortion_tuple,
+    parse_keypoint_sequence,
+)
 from .keypoints import convert, placeholder_notes
 from .skeleton import JOINT_NAMES
 from .smoothing import PoseSmoother
@@ -731,8 +738,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
         source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
         if not (math.isfinite(fps) and 0 < fps <= 1000):
-            warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed 30 frames/s")
-            fps = 30.0
+            warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed {ASSUMED_FPS:g} frames/s")
+            fps = ASSUMED_FPS
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
         total = min(declared, limit) if declared > 0 else None
@@ -918,24 +925,56 @@ def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.n
     return None if given is None else h36m_joint_scores(given, keypoint_format)
 
 
+def _fallback_image_size(image: tuple[str, Any], ks: Any, path: str | Path) -> tuple[tuple[int, int], list[str]]:
+    """The size ``(W, H)`` px of ``image`` (``(name, (W, H))``) for keypoint sequence ``ks`` read from ``path``, which
+    gives neither an image size nor a principal point, and the note saying so; :class:`PoseLifterError` when most of
+    its poses lie mostly outside that image (:func:`lifter._checks.mostly_outside`)."""
+    from ._checks import mostly_outside
+    from .pipeline import given_image_size
+
+    name, wh = image
+    size = given_image_size(wh, None, where=f"fallback_image ({name})")[0]
+    assert size is not None
+    W, H = size
+    poses = [k for fr in ks.frames for k in fr]
+    if poses and float(np.mean(mostly_outside(np.stack(poses), (W, H)))) > 0.5:
+        raise PoseLifterError(f"{path}: the keypoint sequence has no \"image_size\": [W, H] (nor a principal point), "
+                              f"and its poses lie mostly outside {name} ({W} x {H} px), whose size would be used: add "
+                              "the file's own \"image_size\"")
+    return (W, H), [f"no image_size in the file: that of {name} ({W} x {H} px) is used"]
+
+
 def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None = None,
                            principal_point: Any | None = None, default_format: str | None = None,
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
                            max_people: int = DEFAULT_MAX_PEOPLE, max_seconds: float = DEFAULT_MAX_SECONDS,
                            flip_test: bool | None = None, cli_options: bool = True,
-                           image_size: Any | None = None, fps: float | None = None) -> SequenceRecord:
+                           image_size: Any | None = None, fps: float | None = None,
+                           assumed_fps: float | None = None,
+                           fallback_image: tuple[str, Any] | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint sequence (:func:`lifter.io.parse_keypoint_sequence`: a JSON with ``frames``,
     MMPose's predictions of several frames, or a frame pattern naming OpenPose's per-frame files): every person of
     every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
     :func:`lifter.pipeline.resolve_camera`'s (False: messages name the file's fields, not the CLI's options).
     ``image_size`` ``(W, H)`` px: for a file that gives none, or in place of its own
-    (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own."""
+    (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own;
+    ``assumed_fps``: the rate assumed, with a note, where neither does (:data:`lifter.io.ASSUMED_FPS`; None: refused).
+    ``fallback_image``: ``(name, (W, H) px)`` of the image the keypoints were found in (the app: the photo uploaded
+    before), whose size is used, with a note, where neither ``image_size`` nor the file gives an image size or a
+    principal point; refused (:class:`PoseLifterError` naming it) when most poses lie mostly outside it, as keypoints
+    in another image's pixels would (the root then metres off)."""
     from .camera import lens_notes
     from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
-    ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options)
+    ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options,
+                                 assumed_fps=assumed_fps)
+    fallback_notes: list[str] = []
+    if (fallback_image is not None and image_size is None and ks.image_size is None
+            and ks.principal_point is None):
+        image_size, fallback_notes = _fallback_image_size(fallback_image, ks, path)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
+    size_notes = [*fallback_notes, *size_notes]
     warnings = list(ks.warnings) + size_notes
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),

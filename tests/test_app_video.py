@@ -207,7 +207,7 @@ def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_
     assert "pose.mp4 holds keypoint JSON, not a video as its name says: lifted as a keypoint file" in v.messages[-1]
 
 
-def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
+def test_keypoint_sequence_upload_plays_on_a_canvas(server, monkeypatch) -> None:
     nobody = ScriptedEstimator([[]], full_width=W)  # (photos: decoded and kept, nobody found)
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: nobody)
     v = app.headless_view()
@@ -239,12 +239,18 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
     buf = io.BytesIO()
     Image.new("RGB", (W, H), (60, 60, 60)).save(buf, format="JPEG")
     assert v.load_upload("room.jpg", buf.getvalue()) is False  # (nobody found: not shown, but kept, as for a file)
+    import lifter.io as lio
+
+    reads: list[object] = []
+    monkeypatch.setattr(lio, "_load_json", lambda p, _load=lio._load_json: reads.append(p) or _load(p))
     assert v.load_upload("bare.json", json.dumps(mm).encode()) is True, v.messages[-3:]
+    assert len(reads) == 1, reads  # (the reader reads the upload once: the app's defaults are the lift's own)
+    monkeypatch.undo()
     bare = v.sequence()
     assert isinstance(bare, vid.VideoSequence) and bare.record.fps == 30 and bare.record.image_size == (W, H)
     assert bare.info.warnings[:2] == (
         "the file gives no frame rate: assumed 30 frames/s for playback and smoothing (give \"fps\" at the file's top "
-        "level)", f"no image_size in the file: that of room.jpg ({W} x {H} px), the photo uploaded before, is used")
+        "level)", f"no image_size in the file: that of the photo room.jpg uploaded before ({W} x {H} px) is used")
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same camera: the same)
     assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10, "image_size": [W, H]}).encode()) is True
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
@@ -261,7 +267,7 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server) -> None:
             q["keypoints"] = (np.asarray(q["keypoints"]) * 3 + [W, H]).tolist()
     key = v.state.sample.key
     assert v.load_upload("big.json", json.dumps(big).encode()) is False
-    assert f"its poses lie mostly outside room.jpg ({W} x {H} px), the photo uploaded before" in v.messages[-1]
+    assert f"its poses lie mostly outside the photo room.jpg uploaded before ({W} x {H} px)" in v.messages[-1]
     assert v.state.sample.key == key  # (the tab keeps what it showed)
     huge = b'{"fps": 10, "frames": [], "n": ' + b"9" * 5000 + b"}"  # (an integer too long for Python's JSON reader)
     assert v.load_upload("huge.json", huge) is False and "internal error" not in v.messages[-1], v.messages[-1]

@@ -303,3 +303,61 @@ def test_a_sequence_tracked_again_with_its_names_groups_as_it_did(tmp_path, defa
     assert [f.people[0].track_id for f in again] == [f.people[0].track_id for f in rec.frames]
     for a, b in zip(again, rec.frames):
         np.testing.assert_allclose(a.people[0].root, b.people[0].root, atol=1e-6)
+
+
+def test_a_sequence_without_a_frame_rate_takes_the_assumed_one_with_a_note(tmp_path):
+    """``assumed_fps`` (the app's: it has no --fps) fills in a missing frame rate, with a note first; a file's own rate
+    and ``fps=`` (--fps) come before it, and without it the missing rate is refused as before."""
+    from lifter.io import ASSUMED_FPS
+
+    frames = [{"keypoints": (KP + [5 * i, 0]).tolist()} for i in range(3)]
+    bare = write(tmp_path / "bare.json", {"frames": frames, "image_size": [1000, 1000], "format": "h36m17"})
+    with pytest.raises(PoseLifterError, match=r"'fps' is missing"):
+        parse_keypoint_sequence(bare)
+    ks = parse_keypoint_sequence(bare, assumed_fps=ASSUMED_FPS, cli_options=False)
+    assert ks.fps == ASSUMED_FPS == 30.0
+    assert ks.warnings[0] == ("the file gives no frame rate: assumed 30 frames/s for playback and smoothing (give "
+                              "\"fps\" at the file's top level)")
+    assert "or --fps" in parse_keypoint_sequence(bare, assumed_fps=30).warnings[0]  # (the command line's option)
+    told = parse_keypoint_sequence(bare, fps=12, assumed_fps=30)
+    assert told.fps == 12 and not any("assumed" in w for w in told.warnings)
+    own = write(tmp_path / "own.json", {"frames": frames, "fps": 25, "image_size": [1000, 1000], "format": "h36m17"})
+    ks = parse_keypoint_sequence(own, assumed_fps=30)
+    assert ks.fps == 25 and not any("assumed" in w for w in ks.warnings)
+    with pytest.raises(PoseLifterError, match=r"assumed_fps must be the frame rate"):
+        parse_keypoint_sequence(bare, assumed_fps=float("nan"))
+    # OpenPose's files of one frame each carry no rate: assumed too, their frames' times at that rate
+    d = tmp_path / "op"
+    d.mkdir()
+    for n in (0, 1, 3):
+        write(d / f"v_{n:012d}_keypoints.json", {"people": [{"pose_keypoints_2d": [
+            c for x, y in KP.tolist() + [[0.0, 0.0]] * 8 for c in (x, y, 0.9)]}]})
+    ks = parse_keypoint_sequence(d / "v_%012d_keypoints.json", assumed_fps=10)
+    assert ks.fps == 10 and ks.frame_indices == [0, 1, 3]
+    assert ks.warnings[0].startswith("files of one frame each give no frame rate: assumed 10 frames/s")
+
+
+def test_a_sequence_without_an_image_size_takes_the_fallback_image_s_where_its_poses_fit(tmp_path, default):
+    """``fallback_image`` (the app: the photo uploaded before) gives the size of a sequence that has neither an image
+    size nor a principal point, with a note; poses mostly outside it are refused naming it (another image's pixels put
+    the root metres off), and a file's own size, principal point or ``image_size=`` come first."""
+    F, W, H = 1000.0, 1000, 1000
+    frames = [{"keypoints": (KP + [5 * i, 0]).tolist()} for i in range(3)]
+    sized = write(tmp_path / "sized.json", {"frames": frames, "fps": 10, "focal": F, "image_size": [W, H],
+                                            "format": "h36m17"})
+    bare = write(tmp_path / "bare.json", {"frames": frames, "fps": 10, "focal": F, "format": "h36m17"})
+    ref = lift_keypoint_sequence(sized, lifter=default)
+    rec = lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (W, H)))
+    assert rec.image_size == (W, H) and rec.principal_point == ref.principal_point
+    assert f"no image_size in the file: that of room.jpg ({W} x {H} px) is used" in rec.warnings
+    np.testing.assert_allclose(rec.frames[0].people[0].root, ref.frames[0].people[0].root, atol=1e-6)
+    with pytest.raises(PoseLifterError, match=r"bare.json: the keypoint sequence has no \"image_size\".*its poses lie "
+                                              r"mostly outside room.jpg \(200 x 150 px\), whose size would be used"):
+        lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (200, 150)))
+    for path, kw in ((sized, {}), (bare, {"image_size": (800, 800)}),
+                     (write(tmp_path / "pp.json", {"frames": frames, "fps": 10, "focal": F, "format": "h36m17",
+                                                   "principal_point": [W / 2, H / 2]}), {})):
+        rec = lift_keypoint_sequence(path, lifter=default, fallback_image=("room.jpg", (200, 150)), **kw)
+        assert rec.image_size != (200, 150) and not any("room.jpg" in w for w in rec.warnings), path
+    with pytest.raises(PoseLifterError, match=r"fallback_image \(room.jpg\)"):
+        lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (0, 150)))
