@@ -228,9 +228,10 @@ REASSUMED_NOTE: Final[str] = (
     "is assumed again from the image size")
 """The note when a result written with an assumed focal is read back without a focal given (``{focal}``: px)."""
 
-STAND_IN_NOTE: Final[str] = ("missing joint(s) stood in for: {what} (lifter.keypoints.STAND_INS); the head's and "
-                              "trunk's H36M joints made from them are approximate")
-"""The note when a missing face or mid-body joint was stood in for (``{what}``: which, from what)."""
+STAND_IN_NOTE: Final[str] = ("missing joint(s) stood in for: {what}; the head's and trunk's H36M joints made from "
+                              "them are approximate")
+"""The note when a missing face or mid-body joint was stood in for (``{what}``: which, from what; the rules are
+:data:`lifter.keypoints.STAND_INS`). It names no module: the app shows it to people in a browser (a trial)."""
 
 MAX_KEYPOINT_FILE_BYTES: Final[int] = 64 * 1024 * 1024
 """Keypoint JSON files larger than this are refused before they are parsed."""
