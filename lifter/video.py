@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Final, Literal
+from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
@@ -595,47 +595,131 @@ def track_gap_notes(frames: list[FrameResult]) -> list[str]:
 
 JUMP_FRACTION: Final[float] = 0.15
 """A frame's 2D jumps away from its track when its median joint lies this far (a fraction of the person's box
-diagonal) off the line between the frames either side, and more than twice as far as those two are apart. The
-ground truth's own motion in Human3.6M (S9, S11) never does at 10 or 5 frames/s; the Stacked-Hourglass detections
-do it in a few frames in 10,000 (``python scripts/jump_rate.py``, ``docs/results/jump_rate.txt``)."""
+diagonal) off the line between the frames either side, and more than twice as far as those two are apart; the same
+for each limb's two outer joints (:data:`JUMP_LIMBS`), and for a track's first and last frame against where the two
+frames next to it lead. The ground truth's own motion in Human3.6M (S9, S11) never does, within the spans judged
+(:data:`JUMP_MAX_SPAN_S`, :data:`JUMP_LIMB_MAX_SPAN_S`, :data:`JUMP_END_MAX_SPAN_S`); the Stacked-Hourglass detections
+do (``python scripts/jump_rate.py``, ``docs/results/jump_rate.txt``)."""
 
 JUMP_MAX_SPAN_S: Final[float] = 0.4
-"""The longest span (s) of three sightings that :func:`track_jump_notes` judges (5 frames/s: at 2 frames/s a
-person's own motion jumps as far)."""
+"""The longest span (s) of three sightings whose middle one :func:`track_jump_notes` judges as a whole (5 frames/s: at
+2 frames/s a person's own motion jumps as far)."""
+
+JUMP_LIMB_MAX_SPAN_S: Final[float] = 0.2
+"""The longest span (s) of three sightings whose middle one is judged limb by limb (10 frames/s): an arm's own
+motion over 0.4 s (a wave, a greeting) moves as far as a detector's swapped wrists, and Human3.6M's ground truth
+would be named."""
+
+JUMP_END_MAX_SPAN_S: Final[float] = 0.1
+"""The longest span (s) of a track's first or last three sightings whose end one is judged against where the other
+two lead (20 frames/s): a guess forward from two frames drifts faster than the line between two (at 10 frames/s
+Human3.6M's ground truth would be named). A user trial: a wrong arm on a video's last frame went unflagged."""
+
+JUMP_LIMBS: Final[tuple[tuple[str, tuple[str, str]], ...]] = (
+    ("left arm", ("l_elbow", "l_wrist")), ("right arm", ("r_elbow", "r_wrist")),
+    ("left leg", ("l_knee", "l_ankle")), ("right leg", ("r_knee", "r_ankle")))
+"""The limbs judged on their own (their two outer H36M joints): four wrong arm joints do not move the median of 17."""
 
 
-def track_jumps(frames: list[FrameResult], *, fps: float) -> dict[int, list[tuple[int, float, float]]]:
-    """Per track, the frames whose 2D jumps away from the frames either side (:data:`JUMP_FRACTION`) as ``(frame
-    index, median joint px off the line between the two, px between them)``; tracks without any are left out.
-    Sightings spanning more than :data:`JUMP_MAX_SPAN_S` are not judged."""
-    out: dict[int, list[tuple[int, float, float]]] = {}
+class TrackJump(NamedTuple):
+    """A frame of :func:`track_jumps`: where the 2D (``part``: ``"2D"`` for the whole pose, else a limb of
+    :data:`JUMP_LIMBS`) lies ``off_px`` (median joint, px) away from the line between the frames either side, or at
+    a track's end (``at_end``) from where the two frames next to it lead, which are ``apart_px`` apart."""
+
+    frame: int
+    off_px: float
+    apart_px: float
+    part: str = "2D"
+    at_end: bool = False
+
+
+_LIMB_JOINTS: Final = tuple((name, [JOINT_NAMES.index(j) for j in js]) for name, js in JUMP_LIMBS)
+
+
+def _worst_part(dist: np.ndarray, apart: np.ndarray, size: np.ndarray, limbs: np.ndarray,
+                ) -> list[tuple[str, float, float] | None]:
+    """Per pose (``(N, 17)`` joint px off their expected place, ``(N, 17)`` px between the two sightings judging it,
+    ``(N,)`` box diagonals px, ``(N,)`` whether its limbs are judged), its worst jumping part as ``(part, median joint
+    px off, px apart)``: the whole pose first (it says more than one limb), else the limb furthest off; None when none
+    jumps (:data:`JUMP_FRACTION`)."""
+    parts = [("2D", list(range(dist.shape[-1])))] + [(name, js) for name, js in _LIMB_JOINTS]
+    off = np.stack([np.nanmedian(dist[:, js], axis=-1) for _, js in parts], axis=-1)  # (N, parts)
+    gap = np.stack([np.nanmedian(apart[:, js], axis=-1) for _, js in parts], axis=-1)
+    jumps = (off > JUMP_FRACTION * size[:, None]) & (off > 2.0 * gap)
+    jumps[:, 1:] &= limbs[:, None]
+    out: list[tuple[str, float, float] | None] = []
+    for n in range(len(off)):
+        hit = np.flatnonzero(jumps[n])
+        k = None if not hit.size else 0 if hit[0] == 0 else int(hit[np.argmax(off[n, hit])])
+        out.append(None if k is None else (parts[k][0], float(off[n, k]), float(gap[n, k])))
+    return out
+
+
+def track_jumps(frames: list[FrameResult], *, fps: float) -> dict[int, list[TrackJump]]:
+    """Per track, the frames whose 2D jumps away from its sightings either side (:data:`JUMP_FRACTION`), as a whole
+    or (within :data:`JUMP_LIMB_MAX_SPAN_S`) limb by limb, and its first and last frame against where the two next
+    to it lead (within :data:`JUMP_END_MAX_SPAN_S`), in frame order; tracks without any are left out. Sightings
+    spanning more than :data:`JUMP_MAX_SPAN_S` are not judged."""
+    out: dict[int, list[TrackJump]] = {}
+    tol = 1e-9
     for tid, seen in sorted(_tracks(frames).items()):
-        for (i0, p0), (i1, p1), (i2, p2) in zip(seen, seen[1:], seen[2:]):
-            if (i2 - i0) / fps > JUMP_MAX_SPAN_S + 1e-9:
+        if len(seen) < 3:
+            continue
+        idx = np.array([i for i, _ in seen], np.float64)
+        kp = np.stack([np.asarray(q.keypoints_2d, np.float64) for _, q in seen])  # (T, 17, 2)
+        size = np.hypot(*(np.nanmax(kp, 1) - np.nanmin(kp, 1)).T)  # (T,) box diagonals (bbox_of's)
+        found: dict[int, TrackJump] = {}
+        # inner sightings, against the line between their neighbours
+        span = (idx[2:] - idx[:-2]) / fps
+        a, b, c = kp[:-2], kp[1:-1], kp[2:]
+        line = a + (c - a) * ((idx[1:-1] - idx[:-2]) / (idx[2:] - idx[:-2]))[:, None, None]
+        judged = np.flatnonzero(span <= JUMP_MAX_SPAN_S + tol)
+        worst = _worst_part(np.linalg.norm(b - line, axis=-1)[judged], np.linalg.norm(c - a, axis=-1)[judged],
+                            0.5 * (size[:-2] + size[2:])[judged], span[judged] <= JUMP_LIMB_MAX_SPAN_S + tol)
+        for n, w in zip(judged, worst):
+            if w is not None:
+                found[int(n) + 1] = TrackJump(int(idx[n + 1]), w[1], w[2], w[0])
+        # the first and last sightings, against where the two next to them lead
+        for n, m1, m2 in ((0, 1, 2), (len(seen) - 1, len(seen) - 2, len(seen) - 3)):
+            if abs(idx[n] - idx[m2]) / fps > JUMP_END_MAX_SPAN_S + tol:
                 continue
-            a, b, c = (np.asarray(q.keypoints_2d, np.float64) for q in (p0, p1, p2))
-            line = a + (c - a) * ((i1 - i0) / (i2 - i0))
-            off = float(np.nanmedian(np.linalg.norm(b - line, axis=-1)))
-            apart = float(np.nanmedian(np.linalg.norm(c - a, axis=-1)))
-            size = 0.5 * sum(float(np.hypot(*bbox_of(k)[2:])) for k in (a, c))
-            if off > JUMP_FRACTION * size and off > 2.0 * apart:
-                out.setdefault(tid, []).append((i1, off, apart))
+            near, far = kp[m1], kp[m2]
+            ahead = near + (near - far) * ((idx[n] - idx[m1]) / (idx[m1] - idx[m2]))
+            w = _worst_part(np.linalg.norm(kp[n] - ahead, axis=-1)[None], np.linalg.norm(near - far, axis=-1)[None],
+                            size[m1:m1 + 1], np.array([True]))[0]
+            if w is not None:
+                found[n] = TrackJump(int(idx[n]), w[1], w[2], w[0], True)
+        if found:
+            out[tid] = [found[n] for n in sorted(found)]
     return out
 
 
 def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
     """One note per track with frames of :func:`track_jumps`: most likely the detector's mistake there (a user
     trial's video frame put the head below the pelvis, 98 px off, with its neighbours 5 px apart, and lifted it
-    535 mm off with no word)."""
+    535 mm off with no word; another's wrong arm on the video's last frame went unflagged)."""
     notes: list[str] = []
     for tid, hits in track_jumps(frames, fps=fps).items():
-        first, off, apart = hits[0]
-        more = (f", and in {len(hits) - 1} more: {_frames_summary([h[0] for h in hits[1:]])}" if len(hits) > 1
+        h = hits[0]
+        what = "its 2D" if h.part == "2D" else f"its {h.part}"
+        size = "median joint " if h.part == "2D" else ""
+        if h.at_end:
+            said = (f"{what} in frame {h.frame}, the track's {'first' if _is_first(frames, tid, h.frame) else 'last'}"
+                    f", jumps away from where the two frames next to it lead ({size}{h.off_px:.0f} px off, and they "
+                    f"are {h.apart_px:.0f} px apart)")
+        else:
+            said = (f"{what} in frame {h.frame} jumps away from the frames either side ({size}{h.off_px:.0f} px off "
+                    f"the line between them, which are {h.apart_px:.0f} px apart)")
+        more = (f", and in {len(hits) - 1} more: {_frames_summary([q.frame for q in hits[1:]])}" if len(hits) > 1
                 else "")
-        notes.append(f"track {tid}: its 2D in frame {first} jumps away from the frames either side (median joint "
-                     f"{off:.0f} px off the line between them, which are {apart:.0f} px apart){more}: most likely "
-                     "the detector's mistake there, and the lift there is off too; check the 2D of those frames")
+        notes.append(f"track {tid}: {said}{more}: most likely the detector's mistake there, and the lift there is off "
+                     "too; check the 2D of those frames")
     return notes
+
+
+def _is_first(frames: list[FrameResult], tid: int, index: int) -> bool:
+    """Whether frame ``index`` is track ``tid``'s first sighting in ``frames``."""
+    return index == min(fr.index for fr in frames if any(q.track_id == tid for q in fr.people))
 
 
 def _frames_summary(idx: list[int], n: int = 8) -> str:
@@ -1055,5 +1139,5 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "Fra
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "input_kind", "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines",
-           "track_doubt_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
+           "TrackJump", "track_doubt_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
            "track_lifted", "tracked_output_notes"]

@@ -1234,10 +1234,45 @@ def test_a_frame_whose_2d_jumps_away_from_its_track_is_named():
     assert "and in 1 more: 9" in track_jump_notes(_track_of(glitch), fps=10)[0]
 
 
-@pytest.mark.parametrize("stride", [5, 10])
+def test_a_limb_that_jumps_alone_or_at_a_track_s_end_is_named():
+    """A user trial: a wrong arm on a video's last frame went unflagged (the median over 17 joints does not move for
+    four, and the last frame has no frame after it). A limb is judged on its own (within 0.2 s), and the first and
+    last frames against where the two next to them lead (within 0.1 s)."""
+    from lifter.skeleton import JOINT_NAMES as N
+    from lifter.video import TrackJump, track_jump_notes, track_jumps
+
+    base = _person(np.random.default_rng(7), 160)
+    walk = np.stack([base + [1.5 * i, 0] for i in range(12)])
+    size = float(np.hypot(*np.ptp(base, axis=0)))
+    l_arm = [N.index(j) for j in ("l_elbow", "l_wrist")]
+    r_arm = [N.index(j) for j in ("r_elbow", "r_wrist")]
+    glitch = walk.copy()
+    glitch[5, l_arm] += [0.3 * size, 0.0]  # the detector put the left arm on something else in frame 5
+    glitch[11, r_arm] += [0.0, -0.3 * size]  # and the right arm in the last frame
+    hits = track_jumps(_track_of(glitch, fps=30), fps=30)[1]
+    assert [(h.frame, h.part, h.at_end) for h in hits] == [(5, "left arm", False), (11, "right arm", True)], hits
+    assert isinstance(hits[0], TrackJump) and hits[0].off_px > 2 * hits[0].apart_px
+    notes = track_jump_notes(_track_of(glitch, fps=30), fps=30)
+    assert len(notes) == 1 and notes[0].startswith("track 1: its left arm in frame 5 jumps away from the frames either "
+                                                   "side ("), notes
+    assert "and in 1 more: 11" in notes[0]
+    ends = glitch.copy()
+    ends[5] = walk[5]
+    assert track_jump_notes(_track_of(ends, fps=30), fps=30)[0].startswith(
+        "track 1: its right arm in frame 11, the track's last, jumps away from where the two frames next to it lead")
+    first = walk.copy()
+    first[0, l_arm] -= [0.3 * size, 0.0]
+    assert track_jump_notes(_track_of(first, fps=30), fps=30)[0].startswith(
+        "track 1: its left arm in frame 0, the track's first, jumps away")
+    assert track_jumps(_track_of(walk, fps=30), fps=30) == {}
+    assert track_jumps(_track_of(glitch, fps=5), fps=5) == {}  # (0.4 s: an arm's own motion goes as far)
+    assert [h.frame for h in track_jumps(_track_of(glitch, fps=10), fps=10)[1]] == [5]  # (the end: 0.2 s, not judged)
+
+
+@pytest.mark.parametrize("stride", [1, 2, 5, 10])
 def test_people_s_own_motion_does_not_jump(h36m, stride):
-    """Human3.6M's ground-truth motion at 10 and 5 frames/s (S9 and S11, every sequence, one camera) has no frame
-    that :func:`lifter.video.track_jump_notes` names."""
+    """Human3.6M's ground-truth motion at 50, 25, 10 and 5 frames/s (S9 and S11, every sequence, one camera) has no
+    frame that :func:`lifter.video.track_jump_notes` names: as a whole, limb by limb or at a track's ends."""
     from lifter.video import track_jump_notes
 
     for seq in h36m.sequences_of([9, 11]):
