@@ -122,6 +122,14 @@ LONG_NOTE_SECONDS: float = 60.0
 (other notes: :data:`INFO_MESSAGE_SECONDS`), so that the notification's pointer to it holds."""
 
 
+NOTES_TOGETHER_SECONDS: float = 2.0
+"""Notes shown within this many seconds of each other (one change's: a camera switch that drops dragged joints and
+resets a typed focal) stay in the Readout's status line together, at most :data:`MAX_STATUS_NOTES`; a browser trial
+read only the last of two, and nothing said the drags were gone once the notifications had closed."""
+
+MAX_STATUS_NOTES: int = 3
+
+
 INFO_MESSAGE_SECONDS: float = 8.0
 """A note in the readout's status line (not an error) stays at least this long: the step that shows it (a camera
 switch that resets the focal length) sets controls whose callbacks succeed right after it, and a success would
@@ -285,6 +293,8 @@ class SessionView:
         thread shows messages without :attr:`lock`, and a pass's "no message since, clear it" must not land between
         its message's count and its text. Taken after :attr:`lock` when both are held, never before."""
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
+        self._note_shown_at = -math.inf  # (time.monotonic() of the last note: NOTES_TOGETHER_SECONDS)
+        self._status_notes: list[str] = []  # (the notes the status line shows, when it shows notes)
         self._last_was_error = False
         self._status_focal: float | None = None
         """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
@@ -436,6 +446,15 @@ class SessionView:
         stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``."""
         title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
+            now = time.monotonic()
+            shown = self.gui.readout.status.content
+            together = (not error and not self._last_was_error and now - self._note_shown_at < NOTES_TOGETHER_SECONDS
+                        and bool(self._status_notes) and shown.startswith("ℹ️ "))
+            if together:  # (one change's notes: all stay, each clearing rule kept)
+                focal = focal if focal is not None else self._status_focal
+                frame_key = frame_key if frame_key is not None else self._status_frame_key
+            self._status_notes = [*self._status_notes[1 - MAX_STATUS_NOTES:], text] if together else [text]
+            self._note_shown_at = now if not error else -math.inf
             self._status_focal = focal
             self._status_frame_key = frame_key
             self._status_fallback = False
@@ -443,13 +462,14 @@ class SessionView:
             self.messages = self.messages[-20:]
             self.notices = [*self.notices[-19:], (title, text, sticky)]
             self._message_count += 1
-            self._note_until = 0.0 if error else time.monotonic() + (
-                LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS)
+            self._note_until = 0.0 if error else max(self._note_until if together else 0.0, now + (
+                LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS))
             self._last_was_error = error
             self._status_about = about if about is not None else (
                 sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
             try:
-                self.gui.readout.status.content = ("⚠️ " if error else "ℹ️ ") + text
+                self.gui.readout.status.content = ("⚠️ " + text if error else
+                                                   "\n\n".join("ℹ️ " + t for t in self._status_notes))
             except Exception:  # noqa: BLE001
                 log.exception("could not show message %r", text)
         try:

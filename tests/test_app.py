@@ -117,12 +117,16 @@ def test_a_long_note_stays_in_the_readout(view: SessionView) -> None:
     long for its toast stays there for LONG_NOTE_SECONDS."""
     import time
 
-    from poselifter_app.viewer import INFO_MESSAGE_SECONDS, LONG_NOTE_SECONDS, TOAST_MAX_CHARS
+    from poselifter_app.viewer import INFO_MESSAGE_SECONDS, LONG_NOTE_SECONDS, NOTES_TOGETHER_SECONDS, TOAST_MAX_CHARS
 
     view.show_message("x " * (TOAST_MAX_CHARS // 2 + 10))
     assert view._note_until - time.monotonic() > LONG_NOTE_SECONDS - 5 > INFO_MESSAGE_SECONDS
+    view.show_message("short")  # (shown together with it: both stay as long as the long one)
+    assert view._note_until - time.monotonic() > LONG_NOTE_SECONDS - 5
+    view._note_shown_at -= NOTES_TOGETHER_SECONDS  # (a later change's note replaces them)
     view.show_message("short")
     assert view._note_until - time.monotonic() <= INFO_MESSAGE_SECONDS
+    assert view.gui.readout.status.content == "ℹ️ short"
 
 
 def test_server_binds_localhost_on_a_free_port(app: PoseLifterApp) -> None:
@@ -2610,3 +2614,23 @@ def test_a_photo_frame_picked_from_another_subject_is_not_said_to_replace_a_sequ
     v.gui.sample.photo.value = f"S{s2} {q2} {c2} {f2}"
     assert v.state.sample.key == f"h36m/S{s2}/{q2}/{c2}/{f2}"
     assert not any("has no" in m for m in v.messages[n:]), v.messages[n:]
+
+
+def test_two_notes_of_one_change_both_stay_in_the_readout(app: PoseLifterApp) -> None:
+    """A browser trial: a camera switch that dropped dragged joints and reset a typed focal sent two notes together,
+    and the Readout's status line kept only the second; once the notifications had closed, nothing said the drags
+    were gone. Notes arriving together stay there together; a later change's note replaces them."""
+    v = app.headless_view()
+    names = list(app.demo.names)
+    assert v.select_demo(names[0]) is True
+    other = next(n for n in names[1:] if abs(app.demo.get(n).camera.alpha - v.state.sample.camera.alpha) > 1)
+    v.gui.lift.focal.value = 2000.0
+    v.move_joint("r_wrist", v.state.keypoints[16] + (30.0, 0.0))
+    assert v.select_demo(other) is True
+    status = v.gui.readout.status.content
+    assert "dragged joint on demo: " + names[0] + " dropped" in status, status
+    assert "focal length set to this camera's" in status, status
+    v._do(lambda: None)  # (the controls it set call back: both stay)
+    assert "dropped" in v.gui.readout.status.content and "focal length set" in v.gui.readout.status.content
+    v.gui.lift.focal.value = 3000.0  # (a focal set since: the focal note no longer holds, and they go)
+    assert "focal length set" not in v.gui.readout.status.content
