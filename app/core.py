@@ -635,7 +635,9 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         lines.append(spread_line(frame.spread))
     if frame.metrics:
         m = frame.metrics
-        lines.append(f"**MPJPE** (roots aligned) {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm · "
+        above = (" _(above MPJPE: the Procrustes fit minimises the squared distances, not their mean)_"
+                 if round(m["PA-MPJPE"], 1) > round(m["MPJPE"], 1) else "")  # (two trials took it for a bug)
+        lines.append(f"**MPJPE** (roots aligned) {m['MPJPE']:.1f} mm · **PA-MPJPE** {m['PA-MPJPE']:.1f} mm{above} · "
                      f"**root error** {m['root error']:.0f} mm" + training_subject_note(state.sample.key,
                                                                                        frame.trained_subjects))
     else:

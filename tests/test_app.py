@@ -157,6 +157,15 @@ def test_initial_view_shows_everything(view: SessionView) -> None:
     assert "Canonical depth" in view.gui.readout.readout.content and "MPJPE" in view.gui.readout.readout.content
     # (a teacher's question: MPJPE stayed put while the focal moved the root by metres)
     assert "**MPJPE** (roots aligned) " in view.gui.readout.readout.content
+    # a PA-MPJPE above MPJPE says why (two trials took it for a metric bug); below it, nothing is added
+    from dataclasses import replace
+
+    from poselifter_app.core import readout_markdown
+
+    m = dict(fr.metrics)
+    assert "above MPJPE" not in readout_markdown(replace(fr, metrics={**m, "PA-MPJPE": m["MPJPE"] - 1}), view.state)
+    assert ("PA-MPJPE** 48.0 mm _(above MPJPE: the Procrustes fit minimises the squared distances, not their mean)_"
+            in readout_markdown(replace(fr, metrics={**m, "MPJPE": 44.0, "PA-MPJPE": 48.0}), view.state))
     assert view.scene.pose.gt.visible and not view.scene.pose.cloud.visible and not view.scene.pose.analytic.visible
     assert view.gui.sample.image.image.shape[2] == 3
     np.testing.assert_allclose(np.asarray(view.scene.pose.lifted_joints.points), fr.lifted / 1000, atol=2e-3)
