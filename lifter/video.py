@@ -610,10 +610,12 @@ JUMP_LIMB_MAX_SPAN_S: Final[float] = 0.2
 motion over 0.4 s (a wave, a greeting) moves as far as a detector's swapped wrists, and Human3.6M's ground truth
 would be named."""
 
-JUMP_END_MAX_SPAN_S: Final[float] = 0.1
-"""The longest span (s) of a track's first or last three sightings whose end one is judged against where the other
-two lead (20 frames/s): a guess forward from two frames drifts faster than the line between two (at 10 frames/s
-Human3.6M's ground truth would be named). A user trial: a wrong arm on a video's last frame went unflagged."""
+JUMP_END_MAX_SPAN_S: Final[float] = 0.15
+"""The longest span (s) of a track's first or last four sightings whose end one is judged against where the next two
+lead (20 frames/s and faster): a guess forward from two frames drifts faster than the line between two (at 10
+frames/s Human3.6M's ground truth would be named). The fourth tells which of the end and its neighbour is wrong: the
+neighbour must lie where the two after it lead, within a quarter of the end's jump (a review: a wrong second frame
+named the first). A user trial: a wrong arm on a video's last frame went unflagged."""
 
 JUMP_LIMBS: Final[tuple[tuple[str, tuple[str, str]], ...]] = (
     ("left arm", ("l_elbow", "l_wrist")), ("right arm", ("r_elbow", "r_wrist")),
@@ -624,16 +626,24 @@ JUMP_LIMBS: Final[tuple[tuple[str, tuple[str, str]], ...]] = (
 class TrackJump(NamedTuple):
     """A frame of :func:`track_jumps`: where the 2D (``part``: ``"2D"`` for the whole pose, else a limb of
     :data:`JUMP_LIMBS`) lies ``off_px`` (median joint, px) away from the line between the frames either side, or at
-    a track's end (``at_end``) from where the two frames next to it lead, which are ``apart_px`` apart."""
+    a track's ``end`` (``"first"`` or ``"last"``; None: an inner frame) from where the two frames next to it lead,
+    which are ``apart_px`` apart."""
 
     frame: int
     off_px: float
     apart_px: float
     part: str = "2D"
-    at_end: bool = False
+    end: Literal["first", "last"] | None = None
 
 
 _LIMB_JOINTS: Final = tuple((name, [JOINT_NAMES.index(j) for j in js]) for name, js in JUMP_LIMBS)
+_PART_JOINTS: Final = {"2D": list(range(len(JOINT_NAMES))), **dict(_LIMB_JOINTS)}
+
+
+def _ahead(kp: np.ndarray, idx: np.ndarray, n: int, m1: int, m2: int) -> np.ndarray:
+    """Where sightings ``m1`` (nearer) and ``m2`` of ``kp`` ``(T, 17, 2)`` px, at frames ``idx``, lead at sighting
+    ``n``: on along their line, in proportion to the frames between."""
+    return kp[m1] + (kp[m1] - kp[m2]) * ((idx[n] - idx[m1]) / (idx[m1] - idx[m2]))
 
 
 def _worst_part(dist: np.ndarray, apart: np.ndarray, size: np.ndarray, limbs: np.ndarray,
@@ -680,15 +690,17 @@ def track_jumps(frames: list[FrameResult], *, fps: float) -> dict[int, list[Trac
             if w is not None:
                 found[int(n) + 1] = TrackJump(int(idx[n + 1]), w[1], w[2], w[0])
         # the first and last sightings, against where the two next to them lead
-        for n, m1, m2 in ((0, 1, 2), (len(seen) - 1, len(seen) - 2, len(seen) - 3)):
-            if abs(idx[n] - idx[m2]) / fps > JUMP_END_MAX_SPAN_S + tol:
+        last = len(seen) - 1
+        for n, m1, m2, m3 in ((0, 1, 2, 3), (last, last - 1, last - 2, last - 3)):
+            if m3 < 0 or m3 > last or abs(idx[n] - idx[m3]) / fps > JUMP_END_MAX_SPAN_S + tol or m1 in found:
+                continue  # (too few sightings, too far apart, or its neighbour jumps itself)
+            w = _worst_part(np.linalg.norm(kp[n] - _ahead(kp, idx, n, m1, m2), axis=-1)[None],
+                            np.linalg.norm(kp[m1] - kp[m2], axis=-1)[None], size[m1:m1 + 1], np.array([True]))[0]
+            if w is None:
                 continue
-            near, far = kp[m1], kp[m2]
-            ahead = near + (near - far) * ((idx[n] - idx[m1]) / (idx[m1] - idx[m2]))
-            w = _worst_part(np.linalg.norm(kp[n] - ahead, axis=-1)[None], np.linalg.norm(near - far, axis=-1)[None],
-                            size[m1:m1 + 1], np.array([True]))[0]
-            if w is not None:
-                found[n] = TrackJump(int(idx[n]), w[1], w[2], w[0], True)
+            js = _PART_JOINTS[w[0]]
+            if float(np.nanmedian(np.linalg.norm(kp[m1, js] - _ahead(kp, idx, m1, m2, m3)[js], axis=-1))) < w[1] / 4:
+                found[n] = TrackJump(int(idx[n]), w[1], w[2], w[0], "first" if n == 0 else "last")
         if found:
             out[tid] = [found[n] for n in sorted(found)]
     return out
@@ -703,8 +715,8 @@ def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
         h = hits[0]
         what = "its 2D" if h.part == "2D" else f"its {h.part}"
         size = "median joint " if h.part == "2D" else ""
-        if h.at_end:
-            said = (f"{what} in frame {h.frame}, the track's {'first' if _is_first(frames, tid, h.frame) else 'last'}"
+        if h.end is not None:
+            said = (f"{what} in frame {h.frame}, the track's {h.end}"
                     f", jumps away from where the two frames next to it lead ({size}{h.off_px:.0f} px off, and they "
                     f"are {h.apart_px:.0f} px apart)")
         else:
@@ -715,11 +727,6 @@ def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
         notes.append(f"track {tid}: {said}{more}: most likely the detector's mistake there, and the lift there is off "
                      "too; check the 2D of those frames")
     return notes
-
-
-def _is_first(frames: list[FrameResult], tid: int, index: int) -> bool:
-    """Whether frame ``index`` is track ``tid``'s first sighting in ``frames``."""
-    return index == min(fr.index for fr in frames if any(q.track_id == tid for q in fr.people))
 
 
 def _frames_summary(idx: list[int], n: int = 8) -> str:
@@ -1044,9 +1051,9 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own;
     ``assumed_fps``: the rate assumed, with a note, where neither does (:data:`lifter.io.ASSUMED_FPS`; None: refused).
     ``fallback_image``: ``(name, (W, H) px)`` of the image the keypoints were found in (the app: the photo uploaded
-    before), whose size is used, with a note, where neither ``image_size`` nor the file gives an image size or a
-    principal point; refused (:class:`PoseLifterError` naming it) when most poses lie mostly outside it, as keypoints
-    in another image's pixels would (the root then metres off)."""
+    before), whose size is used, with a note, where neither the arguments (``image_size``, ``principal_point``) nor
+    the file give an image size or a principal point; refused (:class:`PoseLifterError` naming it) when most poses
+    lie mostly outside it, as keypoints in another image's pixels would (the root then metres off)."""
     from .camera import lens_notes
     from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
@@ -1054,7 +1061,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options,
                                  assumed_fps=assumed_fps)
     fallback_notes: list[str] = []
-    if (fallback_image is not None and image_size is None and ks.image_size is None
+    if (fallback_image is not None and image_size is None and principal_point is None and ks.image_size is None
             and ks.principal_point is None):
         image_size, fallback_notes = _fallback_image_size(fallback_image, ks, path)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
