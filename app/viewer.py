@@ -130,6 +130,25 @@ read only the last of two, and nothing said the drags were gone once the notific
 MAX_STATUS_NOTES: int = 3
 
 
+@dataclass(frozen=True)
+class StatusNote:
+    """A message in the Readout's status line, with what clears it (:meth:`SessionView.show_message`): ``about`` a
+    sequence no longer shown, a ``focal`` (px) no longer in use, a ``frame_key`` no longer shown, or (``fallback``)
+    a frame with a detection shown where it said there was none."""
+
+    text: str
+    error: bool = False
+    about: str | None = None
+    focal: float | None = None
+    frame_key: str | None = None
+    fallback: bool = False
+
+
+def status_text(notes: list[StatusNote]) -> str:
+    """The status line's markdown for ``notes`` (each its own paragraph; "" for none)."""
+    return "\n\n".join(("⚠️ " if q.error else "ℹ️ ") + q.text for q in notes)
+
+
 INFO_MESSAGE_SECONDS: float = 8.0
 """A note in the readout's status line (not an error) stays at least this long: the step that shows it (a camera
 switch that resets the focal length) sets controls whose callbacks succeed right after it, and a success would
@@ -294,17 +313,10 @@ class SessionView:
         its message's count and its text. Taken after :attr:`lock` when both are held, never before."""
         self._note_until = 0.0  # (time.monotonic() until which the status line's note stays; 0 after an error)
         self._note_shown_at = -math.inf  # (time.monotonic() of the last note: NOTES_TOGETHER_SECONDS)
-        self._status_notes: list[str] = []  # (the notes the status line shows, when it shows notes)
+        self._status_notes: list[StatusNote] = []
+        """The messages the status line shows (several notes of one change, or one error), each with the rules that
+        clear it (:meth:`show_message`, :meth:`_clear_stale_status`)."""
         self._last_was_error = False
-        self._status_focal: float | None = None
-        """The focal length (px) the status line's message says was set (:meth:`show_message`), or None."""
-        self._status_fallback = False  # the status line says a frame has no detection (cleared once one has)
-        self._status_about: str | None = None
-        """:func:`poselifter_app.keys.sequence_of` the sample shown when the status line's message was shown: a sync
-        pass that shows another sample, or sequence, and no message of its own clears it (a user trial: a video's
-        note stayed on under a Human3.6M frame)."""
-        self._status_frame_key: str | None = None
-        """The one frame the status line's message is about (:meth:`show_message`'s ``frame_key``), or None."""
         self.frame: Frame | None = None
         self.timing = Timing()
         self.update_count = 0
@@ -431,33 +443,35 @@ class SessionView:
             if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
                 # (a note stays a while: the controls it changed call back at once)
                 self.gui.readout.status.content = ""
+                self._status_notes = []
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
                      focal: float | None = None, title: str | None = None, sticky: bool = False,
-                     frame_key: str | None = None) -> None:
+                     frame_key: str | None = None, fallback: bool = False) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass
         that shows another one clears the message). ``focal``: the focal length (px) the message says was set; a
         pass that finds another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed
         since). ``frame_key``: the one frame it is about; a pass that shows another clears it (a browser trial read
-        "frame 99999 is past the end ...; showing frame 1967" under frame 391).
+        "frame 99999 is past the end ...; showing frame 1967" under frame 391). ``fallback``: it says the frame
+        shown has no detection; a pass that shows one with it clears it.
         ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
-        stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``."""
+        stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``.
+        Notes shown within :data:`NOTES_TOGETHER_SECONDS` of each other (one change's) stay in the status line
+        together, each cleared by its own rules; an error replaces them."""
         title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
             now = time.monotonic()
             shown = self.gui.readout.status.content
             together = (not error and not self._last_was_error and now - self._note_shown_at < NOTES_TOGETHER_SECONDS
                         and bool(self._status_notes) and shown.startswith("ℹ️ "))
-            if together:  # (one change's notes: all stay, each clearing rule kept)
-                focal = focal if focal is not None else self._status_focal
-                frame_key = frame_key if frame_key is not None else self._status_frame_key
-            self._status_notes = [*self._status_notes[1 - MAX_STATUS_NOTES:], text] if together else [text]
+            note = StatusNote(text=text, error=error, focal=focal, frame_key=frame_key, fallback=fallback,
+                              about=about if about is not None else (
+                                  sequence_of(self.state.sample.key) if hasattr(self, "state") else None))
+            kept = [q for q in self._status_notes if q.text != text][1 - MAX_STATUS_NOTES:] if together else []
+            self._status_notes = [*kept, note]
             self._note_shown_at = now if not error else -math.inf
-            self._status_focal = focal
-            self._status_frame_key = frame_key
-            self._status_fallback = False
             self.messages.append(text)
             self.messages = self.messages[-20:]
             self.notices = [*self.notices[-19:], (title, text, sticky)]
@@ -465,11 +479,8 @@ class SessionView:
             self._note_until = 0.0 if error else max(self._note_until if together else 0.0, now + (
                 LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS))
             self._last_was_error = error
-            self._status_about = about if about is not None else (
-                sequence_of(self.state.sample.key) if hasattr(self, "state") else None)
             try:
-                self.gui.readout.status.content = ("⚠️ " + text if error else
-                                                   "\n\n".join("ℹ️ " + t for t in self._status_notes))
+                self.gui.readout.status.content = status_text(self._status_notes)
             except Exception:  # noqa: BLE001
                 log.exception("could not show message %r", text)
         try:
@@ -618,14 +629,27 @@ class SessionView:
             if self._info_playing != self.playing:  # (started or stopped with no new frame: a trial's paused
                 self._show_play_info()  # upload still said "playing")
             with self._status_lock:
-                if self._message_count == n and self.gui.readout.status.content and (
-                        (self._status_about is not None and sequence_of(self.state.sample.key) != self._status_about)
-                        or (self._status_focal is not None and abs(self.state.focal_px - self._status_focal) > 1e-6)
-                        or (self._status_frame_key is not None and self.state.sample.key != self._status_frame_key)
-                        or (self._status_fallback and not ss.fell_back(self.state, input_pref=self._input_pref))):
-                    # (about a sample no longer shown, a focal since changed, or a frame without a detection left for
-                    # one with it: a browser trial read "no 2D detection ... frame 3" under frame 5's detection)
-                    self.gui.readout.status.content = ""
+                if self._message_count == n and self.gui.readout.status.content and self._status_notes:
+                    self._clear_stale_status()
+
+    def _clear_stale_status(self) -> None:
+        """Drop the status line's messages that no longer hold (under :attr:`_status_lock`): about a sample no longer
+        shown, a focal since changed, another frame, or a frame without a detection left for one with it (a browser
+        trial read "no 2D detection ... frame 3" under frame 5's detection); the others stay."""
+        st = self.state
+        fell_back = None
+        fresh = []
+        for q in self._status_notes:
+            if q.fallback and fell_back is None:
+                fell_back = ss.fell_back(st, input_pref=self._input_pref)
+            if not ((q.about is not None and sequence_of(st.sample.key) != q.about)
+                    or (q.focal is not None and abs(st.focal_px - q.focal) > 1e-6)
+                    or (q.frame_key is not None and st.sample.key != q.frame_key)
+                    or (q.fallback and not fell_back)):
+                fresh.append(q)
+        if len(fresh) != len(self._status_notes):
+            self._status_notes = fresh
+            self.gui.readout.status.content = status_text(fresh)
 
     def _put(self, handle: Any, value: Any, *, quiet: bool = False) -> None:
         """Show ``value`` in a control, unless the tab sent it a newer value during this pass: that one wins (the
@@ -732,9 +756,7 @@ class SessionView:
         """Say a pass's notes ``(text, error, focal set)`` in turn. When the last one said is in ``fallback``
         (:func:`ss.no_detection_note`), the status line keeps it while frames without a detection are shown."""
         for text, error, focal in notes:
-            self.show_message(text, error=error, focal=focal)
-        if notes and notes[-1][0] in fallback:
-            self._status_fallback = True
+            self.show_message(text, error=error, focal=focal, fallback=text in fallback)
 
     def _settle_s(self, r: ss.Rejection, values: ss.ControlValues) -> float:
         """How long a clamped value typed into ``r.control`` waits for more keys (:data:`TYPING_GROW_S` for a
@@ -1096,8 +1118,7 @@ class SessionView:
                 self._later_once("fallback", TYPING_SETTLE_S + 0.05, self._say_no_detection)
             else:
                 self._fallback_said.add(seq_key)
-                self.show_message(note)
-                self._status_fallback = True
+                self.show_message(note, fallback=True)
         if not kept and chosen:
             uploaded = src in UPLOADED_SOURCES  # (a photo, keypoint file or video)
             self.show_message(f"focal length set to {'this input' if uploaded else 'this camera'}'s "
@@ -1153,8 +1174,7 @@ class SessionView:
             seq_key = sequence_of(key)
             if ss.fell_back(st, input_pref=self._input_pref) and seq_key not in self._fallback_said:
                 self._fallback_said.add(seq_key)
-                self.show_message(ss.no_detection_note(st.sample))
-                self._status_fallback = True
+                self.show_message(ss.no_detection_note(st.sample), fallback=True)
 
     def _show_sample_controls(self, st: SessionState) -> None:
         """Pickers, 2D-input options, focal range and frame slider for ``st`` (the source dropdown last)."""
@@ -1797,6 +1817,7 @@ class SessionView:
             text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
             with self._status_lock:
                 self.gui.readout.status.content = "⏳ " + text
+                self._status_notes = []  # (progress, not a message: no rule of theirs clears it)
                 self._note_until = 0.0  # (progress, not a note: the next success clears it)
             if note is not None:
                 note.body = text

@@ -2643,3 +2643,27 @@ def test_two_notes_of_one_change_both_stay_in_the_readout(app: PoseLifterApp) ->
     assert "dropped" in v.gui.readout.status.content and "focal length set" in v.gui.readout.status.content
     v.gui.lift.focal.value = 3000.0  # (a focal set since: the focal note no longer holds, and they go)
     assert "focal length set" not in v.gui.readout.status.content
+
+
+def test_stacked_notes_are_each_cleared_by_their_own_rule(app: PoseLifterApp, monkeypatch) -> None:
+    """A review: a "no 2D detection" note stacked with another lost its rule (cleared once a frame with a detection
+    is shown), and stayed through playback. Each note in the status line keeps its own; the others stay."""
+    import poselifter_app.viewer as viewer_mod
+
+    v = app.headless_view()
+    assert v.select_demo(app.demo.names[0]) is True
+    v.show_message("no 2D detection for this frame", fallback=True)
+    v.show_message("focal length set to this camera's", focal=v.state.focal_px)
+    v.show_message("focal length set to this camera's", focal=v.state.focal_px)  # (the same note again: once)
+    status = v.gui.readout.status.content
+    assert status.count("focal length set") == 1 and "no 2D detection" in status, status
+    monkeypatch.setattr(viewer_mod.ss, "fell_back", lambda *a, **k: True)
+    with v._status_lock:
+        v._clear_stale_status()
+    assert "no 2D detection" in v.gui.readout.status.content  # (still a frame without a detection)
+    monkeypatch.setattr(viewer_mod.ss, "fell_back", lambda *a, **k: False)  # (a frame with one)
+    with v._status_lock:
+        v._clear_stale_status()
+    assert v.gui.readout.status.content == "ℹ️ focal length set to this camera's"
+    v.show_message("a problem", error=True)  # (an error replaces the notes)
+    assert v.gui.readout.status.content == "⚠️ a problem"
