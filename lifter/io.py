@@ -1219,7 +1219,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         rate = assumed_fps
         assumed_note = (f"{'files of one frame each give' if pattern else 'the file gives'} no frame rate: assumed "
                         f"{float(assumed_fps):g} frames/s for playback and smoothing (give "
-                        + ("it" if pattern else "\"fps\" at the file's top level")
+                        + ("fps=" if pattern else "\"fps\" at the file's top level")
                         + (", or --fps" if cli_options else "") + ")")
     elif pattern:
         raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
@@ -1237,7 +1237,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     indices, notes = frame_indices(raw, p, float(rate))
     if assumed_note is not None:
         notes.insert(0, assumed_note)
-    if given_fps is not None and "fps" in d and not is_frame_pattern(p) and float(d["fps"]) != float(given_fps):
+    if given_fps is not None and "fps" in d and not pattern and float(d["fps"]) != float(given_fps):
         notes.append(f"the file's own fps ({float(d['fps']):g}) is used, not --fps {float(given_fps):g}")
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []

@@ -354,7 +354,7 @@ def test_a_sequence_without_an_image_size_takes_the_fallback_image_s_where_its_p
     with pytest.raises(PoseLifterError, match=r"bare.json: the keypoint sequence has no \"image_size\".*its poses lie "
                                               r"mostly outside room.jpg \(200 x 150 px\), whose size would be used"):
         lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (200, 150)))
-    for path, kw in ((sized, {}), (bare, {"image_size": (800, 800)}),
+    for path, kw in ((sized, {}), (bare, {"image_size": (800, 800)}), (bare, {"principal_point": (500, 500)}),
                      (write(tmp_path / "pp.json", {"frames": frames, "fps": 10, "focal": F, "format": "h36m17",
                                                    "principal_point": [W / 2, H / 2]}), {})):
         rec = lift_keypoint_sequence(path, lifter=default, fallback_image=("room.jpg", (200, 150)), **kw)
