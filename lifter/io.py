@@ -1013,6 +1013,13 @@ MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
 """Keypoint sequences with more frames are refused."""
 
 
+def check_frame_rate(value: Any, *, name: str) -> None:
+    """:class:`PoseLifterError` naming ``name`` unless ``value`` is None or a frame rate, a number in (0, 1000]
+    frames/s."""
+    if value is not None and not (_is_number(value) and math.isfinite(value) and 0 < value <= 1000):
+        raise PoseLifterError(f"{name} must be the frame rate, a number in (0, 1000] frames/s, got {_short(value)}")
+
+
 ASSUMED_FPS: Final[float] = 30.0
 """The frame rate (frames/s) assumed, with a note, for a video whose container gives no usable one, and for a keypoint
 sequence that gives none where the caller asks for it (``assumed_fps=`` of :func:`parse_keypoint_sequence`: the app,
@@ -1194,10 +1201,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     ``assumed_fps``: the rate used, with a note, where neither gives one (e.g. :data:`ASSUMED_FPS`; None: refused).
     ``cli_options``: a message may name ``poselifter lift``'s options (False: the app, which has none)."""
     p = Path(path)
-    for name, value in (("fps", fps), ("assumed_fps", assumed_fps)):
-        if value is not None and not (_is_number(value) and math.isfinite(value) and 0 < value <= 1000):
-            raise PoseLifterError(f"{name}{' (--fps)' if name == 'fps' else ''} must be the frame rate, a number in "
-                                  f"(0, 1000] frames/s, got {_short(value)}")
+    check_frame_rate(fps, name="fps (--fps)")
+    check_frame_rate(assumed_fps, name="assumed_fps")
     pattern = is_frame_pattern(p)
     d = _sequence_doc(p, fps if fps is not None or not pattern else assumed_fps)
     if not (isinstance(d, dict) and "frames" in d):

@@ -50,6 +50,7 @@ from .io import (
     ASSUMED_FPS,
     CAMERA_DECIMALS,
     KEYPOINT_DECIMALS,
+    check_frame_rate,
     depth_is_metric,
     distortion_tuple,
     parse_keypoint_sequence,
@@ -519,13 +520,14 @@ class _Followed:
         return keep
 
 
-def _crowd_note(max_people: int, crowded: list[int], *, searched: int | None = None) -> str:
+def _crowd_note(max_people: int, crowded: list[int], *, searched: tuple[int, int] | None = None) -> str:
     """The note on frames with more people than ``max_people``; ``searched``: a video's count of frames searched in
-    full (between those only the people followed are looked for, so a crowd is seen in those frames only)."""
+    full and of all its frames (between full searches only around the people followed, so a crowd can be missed
+    there)."""
     people = "person" if max_people == 1 else "people"
     where = (f"{len(crowded)} frames" if searched is None else
-             f"{len(crowded)} of the {searched} frames searched in full (between them only the people followed are "
-             "looked for)")
+             f"{len(crowded)} of the {searched[1]} frames ({searched[0]} of them searched in full; between those only "
+             "the people followed are looked for)")
     return (f"more than {max_people} {people} in {where} ({_frames_summary(crowded)}); {max_people} "
             f"{'was' if max_people == 1 else 'were'} lifted (--max-people): those already tracked, else the largest")
 
@@ -759,8 +761,11 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                flip_test: bool | None = None, search_every_s: float = DEFAULT_SEARCH_EVERY_S,
                blas_threads: int | None = 1,
                progress: Callable[[int, int | None], None] | None = None,
-               on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True) -> SequenceRecord:
-    """Detect, lift, track and smooth everyone in a video file (module docstring). ``progress(done, total)``
+               on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
+               fps: float | None = None) -> SequenceRecord:
+    """Detect, lift, track and smooth everyone in a video file (module docstring). ``fps`` (``--fps``): the frame
+    rate where the file gives no usable one (else :data:`lifter.io.ASSUMED_FPS`); the file's own wins, with a note
+    where they differ (as for a keypoint sequence). ``progress(done, total)``
     is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None);
     ``on_frame(index, bgr)`` with each lifted frame's decoded image (full resolution, OpenCV BGR), e.g. to keep
     display copies without decoding the video twice. ``cli_options``: as :func:`lifter.pipeline.resolve_camera`'s.
@@ -776,11 +781,12 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     spin beside MediaPipe's own threads cost more than they give (see the README's timings).
     """
     check_max_side(max_side)  # (up front: not as the same error for every frame)
+    check_frame_rate(fps, name="fps (--fps)")
     with limit_blas_threads(blas_threads):
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
-                           on_frame=on_frame, cli_options=cli_options)
+                           on_frame=on_frame, cli_options=cli_options, given_fps=fps)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -809,7 +815,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 principal_point: Any | None, fov_deg: float, smoothing: float, max_people: int,
                 max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
                 progress: Callable[[int, int | None], None] | None,
-                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True) -> SequenceRecord:
+                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
+                given_fps: float | None = None) -> SequenceRecord:
     import cv2
 
     from .pipeline import plausibility_notes, resolve_camera
@@ -829,8 +836,12 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
         source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
         if not (math.isfinite(fps) and 0 < fps <= 1000):
-            warnings.append(f"the file gives no usable frame rate ({fps:g}); assumed {ASSUMED_FPS:g} frames/s")
-            fps = ASSUMED_FPS
+            warnings.append(f"the file gives no usable frame rate ({fps:g}); " + (
+                f"assumed {ASSUMED_FPS:g} frames/s" + (" (give it: --fps)" if cli_options else "")
+                if given_fps is None else f"{given_fps:g} frames/s used (--fps)"))
+            fps = ASSUMED_FPS if given_fps is None else float(given_fps)
+        elif given_fps is not None and float(given_fps) != fps:
+            warnings.append(f"the file's own fps ({fps:g}) is used, not --fps {float(given_fps):g}")
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
         total = min(declared, limit) if declared > 0 else None
@@ -959,7 +970,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:
         warnings.append(_crowd_note(max_people, crowded,
-                                    searched=None if full_searches >= len(frames) else full_searches))
+                                    searched=None if full_searches >= len(frames) else (full_searches, len(frames))))
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam

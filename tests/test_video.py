@@ -272,6 +272,11 @@ def test_video_max_people_and_duration_bound(tmp_path, lifter):
     assert len(rec.frames) == 20 and all(len(f.people) == 1 for f in rec.frames)
     assert any("only its first 2 s (20 frames)" in w for w in rec.warnings)
     assert any("more than 1 person in 20 frames" in w for w in rec.warnings)
+    # a developer trial: --fps was ignored for a video without a word; the file's own rate wins, and says so
+    told = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_seconds=1.0, fps=25)
+    assert told.fps == 10 and "the file's own fps (10) is used, not --fps 25" in told.warnings
+    with pytest.raises(PoseLifterError, match=r"fps \(--fps\) must be the frame rate"):
+        lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, fps=0)
 
 
 def test_video_max_people_follows_one_person(tmp_path, lifter):
@@ -801,8 +806,19 @@ def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lift
     # with two people in every frame: a crowd is seen only where the whole frame is searched, and the note says so
     one = lift_video(clip, lifter=lifter, estimator=FrameIndexedEstimator(_script(12)), focal=F, search_every_s=0.5,
                      max_people=1)
-    assert any(w.startswith("more than 1 person in 3 of the 3 frames searched in full (between them only the people "
-                            "followed are looked for) (0, 5, 10)") for w in one.warnings), one.warnings
+    assert any(w.startswith("more than 1 person in 3 of the 12 frames (3 of them searched in full; between those "
+                            "only the people followed are looked for) (0, 5, 10)") for w in one.warnings), one.warnings
+
+    class SeesBothNear(FrameIndexedEstimator):  # (a search around the one followed finds the other too)
+        def detect_near(self, image: np.ndarray, boxes: list[np.ndarray]) -> list[Detection]:
+            self.calls.append(("near", self._frame(image)))
+            return self._dets(self.script[self._frame(image)])
+
+    # a developer trial read "more than 1 person in 22 of the 20 frames searched in full"
+    near = lift_video(clip, lifter=lifter, estimator=SeesBothNear(_script(12)), focal=F, search_every_s=0.5,
+                      max_people=1)
+    assert any(w.startswith("more than 1 person in 12 of the 12 frames (3 of them searched in full;")
+               for w in near.warnings), near.warnings
 
     class FailsOnFrame3(FrameIndexedEstimator):
         def detect(self, image: np.ndarray) -> list[Detection]:

@@ -335,9 +335,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth, at most 10)")
     p.add_argument("--fps", type=float, default=None,
-                   help="keypoint sequences that give no frame rate of their own (MMPose's predictions of a video; "
-                        "OpenPose's per-frame files: with --fps all of a video's <video>_<12 digits>_keypoints.json "
-                        "are lifted as one sequence, else one by one): frames/s, in (0, 1000]")
+                   help="videos and keypoint sequences that give no frame rate of their own (MMPose's predictions "
+                        "of a video; OpenPose's per-frame files: with --fps all of a video's <video>_<12 digits>"
+                        "_keypoints.json are lifted as one sequence, else one by one): frames/s, in (0, 1000]; a "
+                        "file's own rate wins, with a note")
     p.add_argument("--max-seconds", type=float, default=DEFAULT_MAX_SECONDS,
                    help="videos and keypoint sequences: lift at most this many seconds (a duration bound)")
     p.add_argument("--max-side", type=int, default=DEFAULT_MAX_SIDE_PX,
@@ -494,7 +495,7 @@ def run_lift(args: argparse.Namespace) -> int:
                                 fbar.update(done - fbar.n)
 
                             seq = lift_video(path, lifter=lifter_for["image"], estimator=est, max_side=args.max_side,
-                                             progress=progress, **seq_kw)
+                                             progress=progress, fps=args.fps, **seq_kw)
                     else:
                         img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
                         rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path),
