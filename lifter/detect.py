@@ -123,6 +123,13 @@ garbled second reading of that person (a user trial: a distorted, upside-down sk
 found at 0.93, ranked first in the output because its box was the largest), not another person. An upright
 candidate is never dropped by this rule: a partly hidden adult behind a child has the same boxes and
 visibilities."""
+SAME_SHOULDERS: Final[float] = 0.3
+"""``multi="windows"``: a candidate whose two shoulders each lie within this share of a kept person's box diagonal of
+that person's own shoulders, and whose box covers more than :data:`WEAKER_OVERLAP` [0] of the smaller box, while it
+is less visible, is a garbled second reading of that person (a developer trial's video frame: a second "person" on
+the first one's head and shoulders with its legs along the wall, visibility 0.77 against 0.90, lifted at 2.8 m where
+the person stood at 5.3 m, then given the person's track). Two people side by side have boxes that barely overlap;
+one standing right behind another is mostly hidden, and the more visible reading is kept."""
 SAME_PERSON: Final[float] = 0.1
 """Two detections are the same person when their median landmark distance is below this share of the larger
 box diagonal, or when each one's pelvis lies in the other's box."""
@@ -775,7 +782,8 @@ class BlazePoseEstimator:
     to 2:1, more in a wider one) are searched, one person each; a person found in a window must lie inside it
     (:data:`WINDOW_MIN_INSIDE`), the candidates are kept by mean visibility, and a candidate is dropped when it is
     the same person as one kept (:data:`SAME_PERSON`) or its box is mostly covered by kept people's boxes
-    (:data:`MAX_COVERED`: a body part, or two people merged). ``"mask"``: one person per pass; the person found
+    (:data:`MAX_COVERED`: a body part, or two people merged) or a garbled reading of one (:data:`WEAKER_OVERLAP`,
+    :data:`SAME_SHOULDERS`). ``"mask"``: one person per pass; the person found
     is masked (their landmark box, grown by 15 % per side, filled with the image's mean colour) and the
     landmarker runs again, up to ``max_people`` passes (a new detection whose box centre falls inside an earlier
     person's grown box is a remnant of that person). ``"tasks"``: one pass with the landmarker's own
@@ -879,6 +887,22 @@ class BlazePoseEstimator:
         return (inter > share * max(min(wa * ha, wb * hb), 1e-9)
                 and float(d.scores.mean()) < float(e.scores.mean()) - gap)
 
+    @staticmethod
+    def _on_shoulders(d: Detection, e: Detection) -> bool:
+        """``d`` has ``e``'s shoulders, covers most of the smaller box and is less visible (:data:`SAME_SHOULDERS`):
+        a garbled reading of the person ``e`` already is."""
+        names = get_format(d.keypoint_format).joint_names
+        if e.keypoint_format != d.keypoint_format or "l_shoulder" not in names or "r_shoulder" not in names:
+            return False
+        sh = [names.index("l_shoulder"), names.index("r_shoulder")]
+        diag = max(min(math.hypot(*d.bbox_xywh[2:]), math.hypot(*e.bbox_xywh[2:])), 1.0)
+        if float(np.max(np.linalg.norm(d.keypoints[sh] - e.keypoints[sh], axis=-1))) >= SAME_SHOULDERS * diag:
+            return False
+        (xa, ya, wa, ha), (xb, yb, wb, hb) = d.bbox_xywh, e.bbox_xywh
+        inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
+        return (inter > WEAKER_OVERLAP[0] * max(min(wa * ha, wb * hb), 1e-9)
+                and float(d.scores.mean()) < float(e.scores.mean()))
+
     def _select(self, cands: list[Detection], W: int, H: int) -> list[Detection]:
         """Candidates from several searches -> distinct people (class docstring), largest first."""
         kept: list[Detection] = []
@@ -889,7 +913,7 @@ class BlazePoseEstimator:
                 inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < W) & (k[:, 1] >= 0) & (k[:, 1] < H)))
                 if float(d.scores.mean()) < MIN_EXTRA_VISIBILITY or inside < 0.5:
                     continue
-                if any(self._same(d, e) or self._weaker_overlap(d, e) for e in kept):
+                if any(self._same(d, e) or self._weaker_overlap(d, e) or self._on_shoulders(d, e) for e in kept):
                     continue
                 x0, y0, x1, y1 = _cells(d.bbox_xywh, cover.shape)
                 if x1 > x0 and y1 > y0 and float(cover[y0:y1, x0:x1].mean()) > MAX_COVERED:

@@ -532,3 +532,37 @@ def test_window_search_drops_a_garbled_reading_over_someone_found():
     assert not est._weaker_overlap(upright_ghost, person)
     far = _det(body(100, 300, 110, 330, inverted=True), 0.6)  # upside down but elsewhere: not a reading of it
     assert not est._weaker_overlap(far, person)
+
+
+def test_window_search_drops_a_second_reading_on_someone_s_shoulders():
+    """A developer trial's video frame: a second "person" (visibility 0.77) on the head and shoulders of one found at
+    0.90, its legs along the wall (a wide box covering most of theirs), was lifted at 2.8 m where the person stood at
+    5.3 m, and later took over the person's track. A less visible candidate with a kept person's shoulders (each
+    within SAME_SHOULDERS of the smaller box's diagonal) over most of the smaller box is that person read again;
+    people side by side, or one behind another with their shoulders apart, are kept. No mediapipe needed."""
+    from lifter.detect import SAME_SHOULDERS, BlazePoseEstimator
+
+    est = object.__new__(BlazePoseEstimator)
+    est.max_people = 4
+    rng = np.random.default_rng(1)
+
+    def body(x0, y0, w, h, *, shoulders=None):
+        k = np.column_stack([rng.uniform(x0, x0 + w, 33), rng.uniform(y0, y0 + h, 33)])
+        k[[0, 32], 0], k[[0, 32], 1] = (x0, x0 + w), (y0, y0 + h)  # (the box spans the body)
+        k[[11, 12]] = shoulders if shoulders is not None else [[x0 + 0.3 * w, y0 + 0.25 * h],
+                                                                [x0 + 0.7 * w, y0 + 0.25 * h]]
+        return k
+
+    person = _det(body(179, 135, 55, 165), 0.90)  # the trial's boxes (px)
+    ghost = _det(body(154, 156, 234, 136, shoulders=person.keypoints[[11, 12]] + [[30.0, 15.0], [-15.0, 10.0]]), 0.77)
+    right = _det(body(745, 131, 40, 171), 0.83)
+    kept = est._select([person, ghost, right], 1000, 500)
+    assert len(kept) == 2 and all(k is not ghost for k in kept), [k.bbox_xywh for k in kept]
+    assert est._on_shoulders(ghost, person) and not est._on_shoulders(person, ghost)  # (the less visible goes)
+    diag = float(np.hypot(55, 165))
+    apart = _det(body(154, 156, 234, 136, shoulders=person.keypoints[[11, 12]] + [SAME_SHOULDERS * diag + 1, 0]),
+                 0.77)
+    assert not est._on_shoulders(apart, person)  # (shoulders apart: another person, however the boxes overlap)
+    beside = _det(body(179 + 45, 135, 55, 165, shoulders=person.keypoints[[11, 12]] + [45.0, 0.0]), 0.8)
+    assert not est._on_shoulders(beside, person)  # (side by side, shoulder to shoulder: boxes barely overlap)
+    assert len(est._select([person, beside], 1000, 500)) == 2
