@@ -39,6 +39,8 @@ class EvalRow:
     mrpe_z: float
     pck150: float
     auc: float
+    depth_bias: float = 0.0
+    """Mean signed root depth error (mm, predicted Z minus true Z): below 0, roots placed nearer than they are."""
     per_action: dict[str, dict[str, float]] = field(default_factory=dict)
     pck_curve: list[float] = field(default_factory=list)
 
@@ -102,7 +104,8 @@ def score(label: str, root_kind: str, rel: np.ndarray, root: np.ndarray, samples
     return EvalRow(label=label, root=root_kind, num_samples=len(samples), mpjpe=float(e.mean()),
                    pa_mpjpe=float(pa.mean()), mrpe=float(r.mean()), mrpe_x=float(rxyz[:, 0].mean()),
                    mrpe_y=float(rxyz[:, 1].mean()), mrpe_z=float(rxyz[:, 2].mean()), pck150=float(p.mean()),
-                   auc=float(curve.mean()), per_action=per_action, pck_curve=[float(v) for v in curve])
+                   auc=float(curve.mean()), per_action=per_action, pck_curve=[float(v) for v in curve],
+                   depth_bias=float(np.mean(np.asarray(root, np.float64)[:, 2] - samples.root[:, 2])))
 
 
 def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None = None, flip_test: bool | None = None,
@@ -119,11 +122,12 @@ def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None =
 def format_table(rows: Sequence[EvalRow]) -> str:
     """The results table: errors in mm, PCK150 and AUC in % (the JSON gives them as fractions)."""
     head = (f"{'model':<28} {'root':<9} {'MPJPE':>7} {'PA-MPJPE':>9} {'MRPE':>7} {'MRPE-X':>7} {'MRPE-Y':>7} "
-            f"{'MRPE-Z':>7} {'PCK150':>7} {'AUC':>6}")
-    lines = ["errors in mm; PCK150 (joints within 150 mm) and AUC (over 0-150 mm) in %", head, "-" * len(head)]
+            f"{'MRPE-Z':>7} {'Z-BIAS':>7} {'PCK150':>7} {'AUC':>6}")
+    lines = ["errors in mm; Z-BIAS: the mean signed root depth error (below 0: nearer than true); PCK150 (joints "
+             "within 150 mm) and AUC (over 0-150 mm) in %", head, "-" * len(head)]
     for r in rows:
         lines.append(f"{r.label:<28} {r.root:<9} {r.mpjpe:7.1f} {r.pa_mpjpe:9.1f} {r.mrpe:7.1f} {r.mrpe_x:7.1f} "
-                     f"{r.mrpe_y:7.1f} {r.mrpe_z:7.1f} {100 * r.pck150:7.1f} {100 * r.auc:6.1f}")
+                     f"{r.mrpe_y:7.1f} {r.mrpe_z:7.1f} {r.depth_bias:7.1f} {100 * r.pck150:7.1f} {100 * r.auc:6.1f}")
     return "\n".join(lines)
 
 

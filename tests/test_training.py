@@ -262,6 +262,11 @@ def test_tiny_training_learns(precision, symmetry, pose_loss):
         torch.testing.assert_close(res.net.out_scale, torch.from_numpy(scale))
     lifter = Lifter(res.net, res.codec, name="tiny")
     row = evaluate_lifter(lifter, val_s, progress=False, source="clean")[0]
+    assert abs(row.depth_bias) <= row.mrpe_z + 1e-9  # (a signed mean is within the mean absolute error)
+    from lifter.evaluate import score
+
+    nearer = score("t", "learned", val_s.relative, val_s.root - [0.0, 0.0, 100.0], val_s)
+    assert nearer.depth_bias == pytest.approx(-100.0) and nearer.mrpe_z == pytest.approx(100.0)
     mean_rel = np.concatenate([np.zeros((1, 3)), res.codec.target_mean[:48].reshape(16, 3)])
     from lifter.metrics import mpjpe
 
