@@ -79,4 +79,4 @@ __all__ = [
     "normalize_keypoints", "pa_mpjpe", "pck", "pose_features", "pose_scale", "project", "root_errors",
     "root_from_canonical_depth", "to_reference_camera",
 ]
-__version__ = "0.2.0"
+__version__ = "0.3.0"

@@ -108,3 +108,14 @@ def test_cli_builds_every_sub_command_when_asked():
     assert "--protocol" in subs.choices["fit-noise"].format_help()
     assert "--protocol" not in lazy_subs.choices["fit-noise"].format_help()
     assert subs.choices["lift"].format_help() == lazy_subs.choices["lift"].format_help()
+
+
+def test_the_package_version_is_one():
+    """A developer trial: two builds of different code both said 0.2.0, so pip kept the older one without a word.
+    The version is bumped with each release; lifter.__version__ and pyproject.toml's must agree."""
+    import tomllib
+
+    import lifter
+
+    with open(Path(__file__).resolve().parents[1] / "pyproject.toml", "rb") as f:
+        assert tomllib.load(f)["project"]["version"] == lifter.__version__
