@@ -3,7 +3,8 @@
 
 1. Mean signed root-depth error (% of the true depth, + = too far) of the default on Protocol 1's test frames
    (every ``--stride``-th, S9 and S11 apart, per camera): ground-truth 2D told ``source="clean"`` (the clean
-   network), the same exact 2D told ``"detected"`` (the detected networks), and the real SH detections.
+   network), the same exact 2D told ``"detected"`` (the detected networks), that 2D with Gaussian noise of
+   :data:`NOISE_PX` px per joint and axis (told detected), and the real SH detections.
 2. How much smaller than the ground-truth 2D pose a detector's 2D pose is (median ratio of
    :func:`lifter.normalization.pose_scale`): SH on the training and test frames per camera, BlazePose on the 84 demo
    photos (detections cached by ``scripts/eval_cascade.py``; the first run needs the ``detect`` extra).
@@ -45,6 +46,10 @@ FIT_CAMERA = "54138969"
 """The camera whose demo photos the BlazePose error model was fitted on (``eval_cascade.py --holdout-camera``)."""
 
 
+NOISE_PX: tuple[float, ...] = (4.0, 8.0)
+"""Gaussian 2D noise (px, per joint and axis) added to the exact 2D in the depth-bias table."""
+
+
 def depth_bias_table(lifter: Lifter, data: H36M, stride: int) -> list[str]:
     s = data.load_protocol(1, "test", stride=stride)
     det, ok = load_sh_detections(s, data=data)
@@ -52,8 +57,13 @@ def depth_bias_table(lifter: Lifter, data: H36M, stride: int) -> list[str]:
     cams = np.unique(s.camera)
     lines = ["| 2D, told | " + " | ".join(f"{CAMERA_IDS[c]} S9 / S11" for c in cams) + " |",
              "|---|" + "---|" * len(cams)]
-    for name, kp, src, m in (("GT 2D, clean", s.keypoints_2d, "clean", np.ones(len(s), bool)),
-                             ("GT 2D, detected", s.keypoints_2d, "detected", np.ones(len(s), bool)),
+    rng = np.random.default_rng(0)
+    every = np.ones(len(s), bool)
+    noisy = [(f"GT 2D + {sigma:g} px white noise per joint, detected",
+              s.keypoints_2d + rng.normal(0.0, sigma, s.keypoints_2d.shape), "detected", every)
+             for sigma in NOISE_PX]  # (a developer trial: roots pulled nearer as 2D noise grows)
+    for name, kp, src, m in (("GT 2D, clean", s.keypoints_2d, "clean", every),
+                             ("GT 2D, detected", s.keypoints_2d, "detected", every), *noisy,
                              ("SH detections, detected", det, "detected", ok)):
         r = lifter.lift(np.asarray(kp[m], np.float64), focal=s.focal[m], principal_point=s.principal_point[m],
                         source=src, distortion=s.distortion[m])
