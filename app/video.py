@@ -355,6 +355,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             raise
         except PoseLifterError as exc:
             msg = str(exc).replace(str(path), nm)
+            if not is_video and photo is None and "'image_size'" in msg:  # (a browser trial: the app's own way out)
+                msg += "; or upload the photo the keypoints were found in first: its size is then used"
             raise UploadError(msg) from None
     # the user's file name, not the server's temporary copy (in the download's "input" and in any note)
     rec = replace(rec, input=nm, warnings=[*([misnamed] if misnamed else []),

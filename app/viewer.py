@@ -476,8 +476,10 @@ class SessionView:
             self.messages = self.messages[-20:]
             self.notices = [*self.notices[-19:], (title, text, sticky)]
             self._message_count += 1
-            self._note_until = 0.0 if error else max(self._note_until if together else 0.0, now + (
-                LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS))
+            self._note_until = (now + LONG_NOTE_SECONDS if sticky else 0.0) if error else max(
+                self._note_until if together else 0.0,
+                now + (LONG_NOTE_SECONDS if len(text) > TOAST_MAX_CHARS else INFO_MESSAGE_SECONDS))
+            # (a refused upload stays: during playback every frame's pass would clear it at once; a browser trial)
             self._last_was_error = error
             try:
                 self.gui.readout.status.content = status_text(self._status_notes)
@@ -1753,6 +1755,15 @@ class SessionView:
             return "another sample was picked"
         return None
 
+    def _close_refusal(self) -> None:
+        """Close the notification of an upload refused before (it stays until closed), once an upload is shown."""
+        note, self._sticky_note = self._sticky_note, None
+        if note is not None:
+            try:
+                note.remove()
+            except Exception:  # noqa: BLE001 - the tab may have closed it, or gone
+                log.debug("could not close the refusal's notification", exc_info=True)
+
     @contextlib.contextmanager
     def _showing_upload(self, mine: int, since: float, said: str) -> Iterator[bool]:
         """Whether the upload ``mine`` begun at ``since`` is still to be shown (:meth:`_superseded`; if not, ``said``
@@ -1769,6 +1780,7 @@ class SessionView:
             yield why is None
             if why is None:
                 self._upload_shown = max(self._upload_shown, mine)
+                self._close_refusal()  # (a browser trial: "Upload refused" stayed up beside the same file shown)
 
     def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")

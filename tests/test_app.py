@@ -2667,3 +2667,32 @@ def test_stacked_notes_are_each_cleared_by_their_own_rule(app: PoseLifterApp, mo
     assert v.gui.readout.status.content == "ℹ️ focal length set to this camera's"
     v.show_message("a problem", error=True)  # (an error replaces the notes)
     assert v.gui.readout.status.content == "⚠️ a problem"
+
+
+def test_a_refused_upload_stays_in_the_readout_and_its_notification_goes_once_one_is_shown(
+        app: PoseLifterApp) -> None:
+    """A browser trial: an upload refused while a sequence played was never seen in the Readout (every frame's pass
+    cleared the error at once), and the red "Upload refused" notification stayed up beside the same file, shown after
+    the photo it needed. A refusal stays in the Readout as a long note does; showing an upload closes it."""
+    from poselifter_app.viewer import UPLOAD_REFUSED_TITLE
+
+    v = app.headless_view()
+    assert v.select_demo(app.demo.names[0]) is True
+    v.show_message("a typo", error=True)
+    v._do(lambda: None)  # (the next success clears a plain error at once, as before)
+    assert v.gui.readout.status.content == ""
+    v.show_message("bad.json: refused", error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
+    for _ in range(3):  # (passes that show no message of their own: playback's frames)
+        v._do(lambda: None)
+    assert v.gui.readout.status.content == "⚠️ bad.json: refused"
+
+    class Note:
+        removed = False
+
+        def remove(self) -> None:
+            self.removed = True
+
+    note = Note()
+    v._sticky_note = note
+    assert _json_upload(v, app.demo.get(app.demo.names[0])) is True
+    assert note.removed and v._sticky_note is None

@@ -232,6 +232,7 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server, monkeypatch) -> None
     del mm["fps"], mm["image_size"]
     assert v.load_upload("bare.json", json.dumps(mm).encode()) is False  # (no photo yet: no size, no principal point)
     assert "image_size" in v.messages[-1] and "--" not in v.messages[-1], v.messages[-1]
+    assert "or upload the photo the keypoints were found in first" in v.messages[-1]  # (a browser trial)
     import io
 
     from PIL import Image
