@@ -1756,7 +1756,13 @@ class SessionView:
         return None
 
     def _close_refusal(self) -> None:
-        """Close the notification of an upload refused before (it stays until closed), once an upload is shown."""
+        """Close the notification of an upload refused before (it stays until closed), and clear an error the status
+        line still shows (a refusal stays there a minute: :meth:`show_message`), once an upload is shown."""
+        with self._status_lock:
+            if self._status_notes and all(q.error for q in self._status_notes):
+                self._status_notes = []
+                self._note_until = 0.0
+                self.gui.readout.status.content = ""
         note, self._sticky_note = self._sticky_note, None
         if note is not None:
             try:

@@ -2696,3 +2696,7 @@ def test_a_refused_upload_stays_in_the_readout_and_its_notification_goes_once_on
     v._sticky_note = note
     assert _json_upload(v, app.demo.get(app.demo.names[0])) is True
     assert note.removed and v._sticky_note is None
+    assert "refused" not in v.gui.readout.status.content  # (the upload's own note replaces it)
+    v.show_message("bad.json: refused", error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
+    v._close_refusal()  # (an upload shown without a note of its own: the refusal no longer holds)
+    assert v.gui.readout.status.content == ""
