@@ -1112,8 +1112,8 @@ class SessionView:
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
         if moved and source_of(old.sample.key) != "upload" and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
-            self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped: "
-                              "another sample shows its own 2D (download the result first to keep them)")
+            self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped, "
+                              "as another sample shows its own 2D (download the result first to keep them)")
         if note and seq_key not in self._fallback_said:
             if self._since_typed("frame") < TYPING_SETTLE_S:  # said for the frame the typing ends on (a browser
                 # trial typed 101 and read "no 2D detection for ... frame 1", the first key's frame)
