@@ -545,4 +545,4 @@ def upload_message(sample: Sample) -> str:
         what += ", all lifted into one camera space (the Drag tab's person picker selects whose joints to drag)"
     notes = [n for n in info.warnings if n != info.focal_detail]
     return (f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
-            + "".join(f" Note: {sentence(n)}" for n in notes))
+            + "".join(f"\n\nNote: {sentence(n)}" for n in notes))  # (each its own paragraph)

@@ -427,7 +427,8 @@ def video_message(seq: VideoSequence) -> str:
     per = f", {1e3 * rec.seconds_per_frame:.0f} ms per frame" if rec.seconds_per_frame else ""
     notes = [n for n in seq.info.warnings if n != seq.info.focal_detail]
     return (f"{seq.label}: everyone lifted, tracked and smoothed{per}; press play (Sample tab) to play it with the "
-            f"root trajectories. Focal: {seq.info.focal_detail}." + "".join(f" Note: {sentence(n)}" for n in notes))
+            f"root trajectories. Focal: {seq.info.focal_detail}."
+            + "".join(f"\n\nNote: {sentence(n)}" for n in notes))  # (each its own paragraph: a browser trial)
 
 
 __all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json", "is_video_upload",
