@@ -463,9 +463,9 @@ class SessionView:
         title = title or ("Input problem" if error else "poselifter")
         with self._status_lock:
             now = time.monotonic()
-            shown = self.gui.readout.status.content
+            # (every write of the status line sets _status_notes: empty after a clear or a progress line)
             together = (not error and not self._last_was_error and now - self._note_shown_at < NOTES_TOGETHER_SECONDS
-                        and bool(self._status_notes) and shown.startswith("ℹ️ "))
+                        and bool(self._status_notes))
             note = StatusNote(text=text, error=error, focal=focal, frame_key=frame_key, fallback=fallback,
                               about=about if about is not None else (
                                   sequence_of(self.state.sample.key) if hasattr(self, "state") else None))

@@ -739,6 +739,13 @@ def _pelvis(d: Detection) -> np.ndarray:
     return convert(d.keypoints, src=d.keypoint_format)[0]
 
 
+def _share_of_smaller(a: np.ndarray, b: np.ndarray) -> float:
+    """How much of the smaller of boxes ``a`` and ``b`` (``(x, y, w, h)`` px) their intersection covers."""
+    (xa, ya, wa, ha), (xb, yb, wb, hb) = a, b
+    inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
+    return float(inter / max(min(wa * ha, wb * hb), 1e-9))
+
+
 def _in_box(box: np.ndarray, p: np.ndarray) -> bool:
     x, y, w, h = box
     return bool(x <= p[0] <= x + w and y <= p[1] <= y + h)
@@ -881,10 +888,8 @@ class BlazePoseEstimator:
         is."""
         if not (_upside_down(d) and _upside_down(e) is False):
             return False
-        (xa, ya, wa, ha), (xb, yb, wb, hb) = d.bbox_xywh, e.bbox_xywh
-        inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
         share, gap = WEAKER_OVERLAP
-        return (inter > share * max(min(wa * ha, wb * hb), 1e-9)
+        return (_share_of_smaller(d.bbox_xywh, e.bbox_xywh) > share
                 and float(d.scores.mean()) < float(e.scores.mean()) - gap)
 
     @staticmethod
@@ -898,9 +903,7 @@ class BlazePoseEstimator:
         diag = max(min(math.hypot(*d.bbox_xywh[2:]), math.hypot(*e.bbox_xywh[2:])), 1.0)
         if float(np.max(np.linalg.norm(d.keypoints[sh] - e.keypoints[sh], axis=-1))) >= SAME_SHOULDERS * diag:
             return False
-        (xa, ya, wa, ha), (xb, yb, wb, hb) = d.bbox_xywh, e.bbox_xywh
-        inter = max(0.0, min(xa + wa, xb + wb) - max(xa, xb)) * max(0.0, min(ya + ha, yb + hb) - max(ya, yb))
-        return (inter > WEAKER_OVERLAP[0] * max(min(wa * ha, wb * hb), 1e-9)
+        return (_share_of_smaller(d.bbox_xywh, e.bbox_xywh) > WEAKER_OVERLAP[0]
                 and float(d.scores.mean()) < float(e.scores.mean()))
 
     def _select(self, cands: list[Detection], W: int, H: int) -> list[Detection]:

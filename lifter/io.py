@@ -1013,11 +1013,20 @@ MAX_SEQUENCE_FRAMES: Final[int] = 1_000_000
 """Keypoint sequences with more frames are refused."""
 
 
+def is_frame_rate(value: Any) -> bool:
+    """Whether ``value`` is a usable frame rate: a number in (0, 1000] frames/s."""
+    return _is_number(value) and math.isfinite(value) and 0 < value <= 1000
+
+
 def check_frame_rate(value: Any, *, name: str) -> None:
-    """:class:`PoseLifterError` naming ``name`` unless ``value`` is None or a frame rate, a number in (0, 1000]
-    frames/s."""
-    if value is not None and not (_is_number(value) and math.isfinite(value) and 0 < value <= 1000):
+    """:class:`PoseLifterError` naming ``name`` unless ``value`` is None or a frame rate (:func:`is_frame_rate`)."""
+    if value is not None and not is_frame_rate(value):
         raise PoseLifterError(f"{name} must be the frame rate, a number in (0, 1000] frames/s, got {_short(value)}")
+
+
+def own_fps_note(own: float, given: float) -> str:
+    """The note when a file's own frame rate is used rather than the one given (``--fps``)."""
+    return f"the file's own fps ({float(own):g}) is used, not --fps {float(given):g}"
 
 
 ASSUMED_FPS: Final[float] = 30.0
@@ -1234,7 +1243,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                               "(0, 1000]: \"fps\": 30 at the file's top level (a list of frames becomes "
                               "{\"frames\": [...], \"fps\": 30})" + (", or --fps 30 on the command line" if cli_options
                                                                         else ""))
-    if not (_is_number(rate) and math.isfinite(rate) and 0 < rate <= 1000):
+    if not is_frame_rate(rate):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
     fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
     if fmt is not None and not isinstance(fmt, str):
@@ -1243,7 +1252,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if assumed_note is not None:
         notes.insert(0, assumed_note)
     if given_fps is not None and "fps" in d and not pattern and float(d["fps"]) != float(given_fps):
-        notes.append(f"the file's own fps ({float(d['fps']):g}) is used, not --fps {float(given_fps):g}")
+        notes.append(own_fps_note(d["fps"], given_fps))
     frames: list[list[np.ndarray]] = []
     ids: list[list[str | int | None]] = []
     scores: list[list[np.ndarray | None]] = []

@@ -53,6 +53,8 @@ from .io import (
     check_frame_rate,
     depth_is_metric,
     distortion_tuple,
+    is_frame_rate,
+    own_fps_note,
     parse_keypoint_sequence,
 )
 from .keypoints import convert, placeholder_notes
@@ -835,13 +837,13 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings: list[str] = []
         noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
         source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
-        if not (math.isfinite(fps) and 0 < fps <= 1000):
+        if not is_frame_rate(fps):
             warnings.append(f"the file gives no usable frame rate ({fps:g}); " + (
                 f"assumed {ASSUMED_FPS:g} frames/s" + (" (give it: --fps)" if cli_options else "")
                 if given_fps is None else f"{given_fps:g} frames/s used (--fps)"))
             fps = ASSUMED_FPS if given_fps is None else float(given_fps)
         elif given_fps is not None and float(given_fps) != fps:
-            warnings.append(f"the file's own fps ({fps:g}) is used, not --fps {float(given_fps):g}")
+            warnings.append(own_fps_note(fps, given_fps))
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
         total = min(declared, limit) if declared > 0 else None
@@ -1076,8 +1078,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
             and ks.principal_point is None):
         image_size, fallback_notes = _fallback_image_size(fallback_image, ks, path)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
-    size_notes = [*fallback_notes, *size_notes]
-    warnings = list(ks.warnings) + size_notes
+    warnings = [*ks.warnings, *fallback_notes, *size_notes]
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
