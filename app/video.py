@@ -310,7 +310,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ... A keypoint sequence
     without a frame rate gets :data:`lifter.io.ASSUMED_FPS` (the app has no --fps), and one without an image size or
     principal point the size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before) where its poses fit
-    it, each with a note (``lift_keypoint_sequence``'s ``assumed_fps`` and ``fallback_image``)."""
+    it, each with a note (``lift_keypoint_sequence``'s ``assumed_fps`` and ``fallback_image``); the photo's EXIF
+    focal length is then used where the sequence gives none, as for a single keypoint file."""
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
@@ -338,7 +339,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                 rec = lift_keypoint_sequence(
                     path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds, cli_options=False,
                     assumed_fps=ASSUMED_FPS,
-                    fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before", photo.size))
+                    fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before", photo.size,
+                                                               photo.exif))
                 jpegs = None
                 if rec.distortion is not None and rec.distortion_model == "opencv":
                     rec = _without_opencv_lens(rec)  # (the app's cameras have Human3.6M's lens model)
@@ -367,7 +369,7 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     if empty:
         notes.append(f"{empty} frame(s) with nobody in them are left out of playback: the player counts the frames "
                      "shown, and names a frame's own number in the file where the two differ")
-    detail = next((w for w in notes if "px" in w and "field of view" in w),
+    detail = next((w for w in notes if "px" in w and ("EXIF" in w or "field of view" in w)),
                   {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),

@@ -1029,14 +1029,22 @@ def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.n
     return None if given is None else h36m_joint_scores(given, keypoint_format)
 
 
-def _fallback_image_size(image: tuple[str, Any], ks: Any, path: str | Path) -> tuple[tuple[int, int], list[str]]:
-    """The size ``(W, H)`` px of ``image`` (``(name, (W, H))``) for keypoint sequence ``ks`` read from ``path``, which
-    gives neither an image size nor a principal point, and the note saying so; :class:`PoseLifterError` when most of
-    its poses lie mostly outside that image (:func:`lifter._checks.mostly_outside`)."""
+def _fallback_parts(image: tuple[Any, ...]) -> tuple[str, Any, Any]:
+    """``fallback_image`` as ``(name, (W, H), exif)``: its EXIF focal-length fields
+    (:class:`lifter.detect.ExifCamera`) are optional (None)."""
+    if not isinstance(image, tuple | list) or len(image) not in (2, 3):
+        raise PoseLifterError(f"fallback_image must be (name, (W, H)) or (name, (W, H), exif); got {image!r}")
+    return str(image[0]), image[1], image[2] if len(image) == 3 else None
+
+
+def _fallback_image_size(image: tuple[Any, ...], ks: Any, path: str | Path) -> tuple[tuple[int, int], list[str]]:
+    """The size ``(W, H)`` px of ``image`` (``(name, (W, H)[, exif])``) for keypoint sequence ``ks`` read from
+    ``path``, which gives neither an image size nor a principal point, and the note saying so; :class:`PoseLifterError`
+    when most of its poses lie mostly outside that image (:func:`lifter._checks.mostly_outside`)."""
     from ._checks import mostly_outside
     from .pipeline import given_image_size
 
-    name, wh = image
+    name, wh, _ = _fallback_parts(image)
     size = given_image_size(wh, None, where=f"fallback_image ({name})")[0]
     assert size is not None
     W, H = size
@@ -1055,7 +1063,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None, cli_options: bool = True,
                            image_size: Any | None = None, fps: float | None = None,
                            assumed_fps: float | None = None,
-                           fallback_image: tuple[str, Any] | None = None) -> SequenceRecord:
+                           fallback_image: tuple[Any, ...] | None = None) -> SequenceRecord:
     """Lift, track and smooth a keypoint sequence (:func:`lifter.io.parse_keypoint_sequence`: a JSON with ``frames``,
     MMPose's predictions of several frames, or a frame pattern naming OpenPose's per-frame files): every person of
     every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
@@ -1063,10 +1071,13 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     ``image_size`` ``(W, H)`` px: for a file that gives none, or in place of its own
     (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own;
     ``assumed_fps``: the rate assumed, with a note, where neither does (:data:`lifter.io.ASSUMED_FPS`; None: refused).
-    ``fallback_image``: ``(name, (W, H) px)`` of the image the keypoints were found in (the app: the photo uploaded
-    before), whose size is used, with a note, where neither the arguments (``image_size``, ``principal_point``) nor
-    the file give an image size or a principal point; refused (:class:`PoseLifterError` naming it) when most poses
-    lie mostly outside it, as keypoints in another image's pixels would (the root then metres off)."""
+    ``fallback_image``: ``(name, (W, H) px)`` or ``(name, (W, H) px, exif)`` of the image the keypoints were found in
+    (the app: the photo uploaded before), whose size is used, with a note, where neither the arguments
+    (``image_size``, ``principal_point``) nor the file give an image size or a principal point; refused
+    (:class:`PoseLifterError` naming it) when most poses lie mostly outside it, as keypoints in another image's pixels
+    would (the root then metres off). Its EXIF focal-length fields ``exif`` (:class:`lifter.detect.ExifCamera`, as
+    :func:`lifter.detect.load_image` reads them) give the focal length where neither ``focal`` nor the file does and
+    the image size lifted with is that image's (taken from it, or the same), as for a photo."""
     from .camera import lens_notes
     from .pipeline import given_image_size, plausibility_notes, resolve_camera
 
@@ -1079,10 +1090,18 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         image_size, fallback_notes = _fallback_image_size(fallback_image, ks, path)
     size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
     warnings = [*ks.warnings, *fallback_notes, *size_notes]
+    exif = None  # (the image's EXIF focal, where the keypoints are in that image's pixels: the app's photo before)
+    if fallback_image is not None and size is not None:
+        _, wh, fb_exif = _fallback_parts(fallback_image)
+        try:
+            same = [int(v) for v in wh] == [int(v) for v in size]
+        except (TypeError, ValueError):  # (a malformed size that was not needed: the file gives its own)
+            same = False
+        exif = fb_exif if same else None
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-        file_focal=ks.focal, file_pp=ks.principal_point, image_size=size, exif=None,
+        file_focal=ks.focal, file_pp=ks.principal_point, image_size=size, exif=exif,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=ks.distortion, unread=ks.unread,
         assumed_focal=ks.assumed_focal, cli_options=cli_options)
     warnings.extend(notes)

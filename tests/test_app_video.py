@@ -318,6 +318,33 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server, monkeypatch) -> None
     np.testing.assert_allclose(again.frames[3].people[0].root, ref.frames[3].people[0].root, atol=1e-3)
 
 
+def test_a_keypoint_sequence_in_the_photo_s_pixels_takes_its_exif_focal(server) -> None:
+    """As for a single keypoint file: a sequence with no focal and no image size, uploaded after the photo it was
+    found in, takes that photo's size and its EXIF focal length (it took the default field of view: a known gap)."""
+    import io
+
+    from PIL import Image
+
+    from lifter.detect import ExifCamera, guess_focal
+
+    nobody = ScriptedEstimator([[]], full_width=W)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: nobody)
+    v = app.headless_view()
+    exif = Image.new("RGB", (1, 1)).getexif()
+    exif.get_ifd(0x8769)[41989] = 26
+    buf = io.BytesIO()
+    Image.new("RGB", (W, H), (60, 60, 60)).save(buf, format="JPEG", exif=exif.tobytes())
+    assert v.load_upload("phone.jpg", buf.getvalue()) is False  # (nobody found: kept for the file after it)
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(10)]
+    assert v.load_upload("seq.json", json.dumps({"fps": 10, "format": "h36m17", "frames": frames}).encode()) is True, \
+        v.messages[-3:]
+    seq = v.sequence()
+    want = guess_focal((W, H), exif=ExifCamera(focal_35mm=26.0))
+    assert seq is not None and seq.record.image_size == (W, H) and seq.info.focal_source == "exif-35mm"
+    assert v.state.focal_px == pytest.approx(want.focal, rel=1e-6)
+    assert "EXIF" in seq.info.focal_detail and "EXIF" in v.gui.readout.readout.content
+
+
 def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(server) -> None:
     """A review: the download at another focal lost each person's person_id, and kept the upload's notes on its
     lift's output while dropping the new lift's. Now ids are kept, the output notes are the new lift's, and the

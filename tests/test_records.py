@@ -361,3 +361,38 @@ def test_a_sequence_without_an_image_size_takes_the_fallback_image_s_where_its_p
         assert rec.image_size != (200, 150) and not any("room.jpg" in w for w in rec.warnings), path
     with pytest.raises(PoseLifterError, match=r"fallback_image \(room.jpg\)"):
         lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (0, 150)))
+
+
+def test_a_sequence_in_the_fallback_image_s_pixels_takes_its_exif_focal(tmp_path, default):
+    """``fallback_image``'s EXIF (the app: the photo uploaded before) gives the focal length of a sequence in that
+    image's pixels that gives none, as for a photo (:func:`lifter.detect.guess_focal`); a file's or the caller's focal
+    comes first, and a file of another image size does not take it."""
+    from lifter.detect import ExifCamera, guess_focal
+
+    W, H = 1200, 900
+    exif = ExifCamera(focal_35mm=50.0)
+    want = guess_focal((W, H), exif=exif)
+    frames = [{"keypoints": (KP + [5 * i, 0]).tolist()} for i in range(3)]
+    bare = write(tmp_path / "bare.json", {"frames": frames, "fps": 10, "format": "h36m17"})
+    rec = lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (W, H), exif))
+    assert rec.focal_source == want.source == "exif-35mm"
+    np.testing.assert_allclose(rec.focal, want.focal, rtol=1e-6)
+    assert any(want.detail in w for w in rec.warnings)
+    # the same size given by the file: the same image, so its EXIF too
+    same = write(tmp_path / "same.json", {"frames": frames, "fps": 10, "image_size": [W, H], "format": "h36m17"})
+    assert lift_keypoint_sequence(same, lifter=default, fallback_image=("room.jpg", (W, H), exif)).focal_source == \
+        "exif-35mm"
+    # without EXIF, or another image, or a focal given: not used
+    assert lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (W, H))).focal_source == \
+        "default-fov"
+    other = write(tmp_path / "other.json", {"frames": frames, "fps": 10, "image_size": [1000, 1000],
+                                            "format": "h36m17"})
+    assert lift_keypoint_sequence(other, lifter=default, fallback_image=("room.jpg", (W, H), exif)).focal_source == \
+        "default-fov"
+    told = lift_keypoint_sequence(bare, lifter=default, focal=800.0, fallback_image=("room.jpg", (W, H), exif))
+    assert told.focal_source != "exif-35mm" and np.allclose(told.focal, 800.0)
+    filed = write(tmp_path / "filed.json", {"frames": frames, "fps": 10, "focal": 700.0, "format": "h36m17"})
+    rec = lift_keypoint_sequence(filed, lifter=default, fallback_image=("room.jpg", (W, H), exif))
+    assert rec.focal_source == "keypoint-file" and np.allclose(rec.focal, 700.0)
+    with pytest.raises(PoseLifterError, match=r"fallback_image must be \(name, \(W, H\)\)"):
+        lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg",))
