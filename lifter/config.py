@@ -185,7 +185,8 @@ class OptimConfig:
     ema_decay: float | None = _help("keep an exponential moving average of the weights (e.g. 0.999); validation "
                                     "and the saved network use it", default=None)
     precision: Literal["fp32", "bf16"] = _help("matmul precision of the residual blocks in training (bf16 "
-                                               "autocast; stem, head and loss stay float32)", default="fp32")
+                                               "autocast; stem, head and loss stay float32; on a CPU without "
+                                               "native bf16, float32, with a note)", default="fp32")
     distill_weight: float = _help("with --teacher: share of the loss taken against the teacher's outputs for the "
                                   "same 2D (the rest against the ground truth)", default=0.5)
 

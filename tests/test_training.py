@@ -243,16 +243,20 @@ def test_weight_average_is_an_exponential_moving_average():
 @pytest.mark.parametrize("precision,symmetry,pose_loss", [("fp32", "none", "l1"), ("bf16", "none", "l1"),
                                                            ("bf16", "mirror", "l1"), ("fp32", "none", "joint"),
                                                            ("bf16", "mirror", "joint")])
-def test_tiny_training_learns(precision, symmetry, pose_loss):
+def test_tiny_training_learns(precision, symmetry, pose_loss, monkeypatch):
     """A small network on synthetic poses beats the mean pose, in float32 and with bf16 blocks, and so does the
     mirror-equivariant network, which stays exactly equivariant after training (its output mirror follows the
     trained codec's statistics)."""
+    import lifter.train as lt
+
+    monkeypatch.setattr(lt, "cpu_has_native_bf16", lambda: True)  # (bf16 autocast runs, emulated or not)
     train_s, val_s = synthetic_samples(3000, seed=1), synthetic_samples(300, seed=2)
     cfg = TrainConfig(model=ModelConfig(width=128, dropout=0.0, symmetry=symmetry),
                       optim=OptimConfig(batch_size=128, lr=2e-3, precision=precision, pose_loss=pose_loss),
                       schedule=ScheduleConfig(epochs=8, eval_every=40))
     res = train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False, log=lambda s: None,
                 ctx=Dist())
+    assert res.config.optim.precision == precision
     losses = [c["train_loss"] for c in res.curve]
     # the joint loss's pose term is smaller than L1's, so the depth term, slower to fall here, is more of it
     assert losses[-1] < (0.8 if pose_loss == "joint" else 0.7) * losses[0], losses
@@ -278,6 +282,24 @@ def test_tiny_training_learns(precision, symmetry, pose_loss):
         a = lifter.lift(kp, focal=f, principal_point=pp, source="clean")
         b = lifter.lift(res.codec.mirror_input(kp, pp), focal=f, principal_point=pp, source="clean")
         np.testing.assert_allclose(b.relative, mirror(a.relative), atol=5e-3)
+
+
+def test_bf16_on_a_cpu_without_native_bf16_trains_in_float32_and_says_so(monkeypatch):
+    """bf16 autocast on a CPU without AVX512-BF16 or AMX is emulated, 12-20x slower than float32 (a session's
+    70-minute fine-tune saw 0.4M samples): training there runs in float32, logs why, and the result's config says
+    fp32; where the CPU has it, bf16 is kept without a word."""
+    import lifter.train as lt
+
+    train_s, val_s = synthetic_samples(256, seed=1), synthetic_samples(64, seed=2)
+    cfg = replace(tiny_config(), optim=OptimConfig(batch_size=64, lr=2e-3, precision="bf16"))
+    for native, want in ((False, "fp32"), (True, "bf16")):
+        monkeypatch.setattr(lt, "cpu_has_native_bf16", lambda native=native: native)
+        said: list[str] = []
+        res = train(cfg, train_samples=train_s, val_sets=validation_sets(val_s, None), progress=False,
+                    log=said.append, ctx=Dist())
+        assert res.config.optim.precision == want
+        assert (lt.BF16_EMULATED_NOTE in " ".join(said)) is (not native), said
+    assert isinstance(lt.cpu_has_native_bf16(), bool)
 
 
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
