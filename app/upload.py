@@ -253,7 +253,7 @@ def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estim
     rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg, max_people=max_people)
     kp = _check_2d(rec.keypoints_2d, photo.name)  # (detections may be extrapolated outside the image)
     others = tuple(_check_2d(p.keypoints_2d, f"{photo.name}, person {i + 2}") for i, p in enumerate(rec.people[1:]))
-    detail = next((w for w in rec.warnings if "px" in w and ("EXIF" in w or "field of view" in w)), rec.focal_source)
+    detail = focal_note(rec.warnings, rec.focal_source)
     info = UploadInfo(name=photo.name, kind="image", focal_source=rec.focal_source, focal_detail=detail,
                       scores=None if rec.scores is None else np.asarray(rec.scores, np.float64),
                       source_format=rec.source_format, num_people=rec.num_people, detector=rec.detector,
@@ -268,6 +268,12 @@ def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estim
 # ------------------------------------------------------------------------------------------------
 # Keypoint files
 # ------------------------------------------------------------------------------------------------
+
+
+def focal_note(notes: Sequence[str], fallback: str) -> str:
+    """The note of ``notes`` that says how a focal length not given was found (from EXIF, or the default field of
+    view: :func:`lifter.detect.guess_focal`'s detail, in px), else ``fallback``: the upload's "Focal: ..." line."""
+    return next((w for w in notes if "px" in w and ("EXIF" in w or "field of view" in w)), fallback)
 
 
 def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None = None,
@@ -486,7 +492,7 @@ def glb_bytes(record: Any) -> bytes:
 
 __all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError",
            "Photo", "UploadError", "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem",
-           "glb_bytes", "is_json_upload", "json_bytes", "keypoint_sample", "missing_detector_message",
+           "focal_note", "glb_bytes", "is_json_upload", "json_bytes", "keypoint_sample", "missing_detector_message",
            "oversize_message", "photo_sample", "result_record", "safe_name", "upload_camera"]
 
 

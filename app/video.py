@@ -58,6 +58,7 @@ from .upload import (
     UploadInfo,
     check_upload,
     display_canvas,
+    focal_note,
     missing_detector_message,
     safe_name,
     upload_camera,
@@ -369,8 +370,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     if empty:
         notes.append(f"{empty} frame(s) with nobody in them are left out of playback: the player counts the frames "
                      "shown, and names a frame's own number in the file where the two differ")
-    detail = next((w for w in notes if "px" in w and ("EXIF" in w or "field of view" in w)),
-                  {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source, rec.focal_source))
+    detail = focal_note(notes, {"keypoint-file": "focal length from the keypoint file"}.get(rec.focal_source,
+                                                                                            rec.focal_source))
     info = UploadInfo(name=nm, kind="video" if is_video else "keypoints", focal_source=rec.focal_source,
                       focal_detail=detail, num_people=max((len(fr.people) for fr in rec.frames), default=0),
                       source=rec.source, detector=rec.detector, warnings=tuple(notes),
