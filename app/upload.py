@@ -50,7 +50,14 @@ from lifter.detect import (
 )
 from lifter.io import LiftRecord, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
-from lifter.pipeline import keypoint_file_scores, lift_image, lift_people, plausibility_notes, resolve_camera
+from lifter.pipeline import (
+    keypoint_file_scores,
+    keypoints_image,
+    lift_image,
+    lift_people,
+    plausibility_notes,
+    resolve_camera,
+)
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 from lifter.video import MEDIA_HEAD_BYTES, input_kind
 
@@ -280,8 +287,10 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                     fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
     """A sample from an uploaded keypoint JSON (any layout ``poselifter lift`` accepts).
 
-    Image size: the file's ``image_size``; else, when the file gives none, that of ``photo`` (the photo
-    uploaded just before). The photo is drawn under the keypoints when its size matches. Focal: the file's
+    Image size: the file's ``image_size``; else, when the file gives neither it nor a principal point, that of
+    ``photo`` (the photo uploaded just before; refused when the keypoints lie mostly outside it), by
+    :func:`lifter.pipeline.keypoints_image`'s rule, as for a keypoint sequence. The photo is drawn under the
+    keypoints when the size lifted with is its own. Focal: the file's
     ``focal``; else the photo's EXIF focal (when drawn on it); else the default field of view ``fov_deg`` of the
     image size. Principal point: the file's, else the image centre. Focal and principal point are resolved, checked
     and noted by :func:`lifter.pipeline.resolve_camera`, as for ``poselifter lift`` (a file with neither a focal nor
@@ -309,10 +318,15 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     file_scores, doubt = keypoint_file_scores(kf, 1 + len(others))
     notes += doubt  # (the unsure joints, named as poselifter lift names them)
     tags = tuple("" if i is None else id_tag(i) for i in kf.people_ids[:1 + len(others)])
-    size = kf.image_size
-    use_photo = photo is not None and (size is None or tuple(size) == tuple(photo.size))
-    if size is None and use_photo:
-        size = photo.size  # type: ignore[union-attr]
+    # the photo's size (and EXIF focal) by the library's rule for the image the keypoints were found in (as for a
+    # keypoint sequence): where the file gives no image size nor principal point, or the same size
+    try:
+        found = keypoints_image(kf.image_size, kf.principal_point, poses=[kf.keypoints, *people], where=nm,
+                                fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before",
+                                                                           photo.size, photo.exif))
+    except PoseLifterError as exc:
+        raise UploadError(str(exc)) from None
+    size, use_photo = found.size, found.on_fallback
     if size is None and kf.principal_point is None:  # (nothing to draw the keypoints on)
         raise UploadError(f"{nm}: the keypoint file has no \"image_size\": [W, H] (nor a \"principal_point\"); "
                           "add it, or upload the photo first"
@@ -320,7 +334,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     # the camera by poselifter lift's rules and notes (a review: the app's own rules had left out its notes), from
     # the image's own size, not the canvas's guess below (no focal is assumed from twice the principal point);
     # first, so that a file lift refuses for its camera is refused for that here too
-    exif = photo.exif if use_photo else None  # type: ignore[union-attr]
+    exif = found.exif
     try:
         f, src, c, cam_notes = resolve_camera(
             user_focal=None, user_pp=None, file_focal=kf.focal, file_pp=kf.principal_point, image_size=size,
@@ -342,8 +356,9 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
             raise UploadError(f"{exc} (the file gives no \"image_size\", so the size of the photo {photo.name} "  # type: ignore[union-attr]
                               "uploaded before was used; add the file's own \"image_size\": [W, H])") from None
         raise
-    if use_photo:
-        notes.append(f"keypoints drawn on the photo {photo.name} uploaded before")  # type: ignore[union-attr]
+    notes += found.notes  # (the size taken from the photo)
+    if use_photo and not found.notes:  # (the file's own size is the photo's)
+        notes.append(f"keypoints drawn on the photo {photo.name} uploaded before (the same image size)")  # type: ignore[union-attr]
     notes += cam_notes
     focal, pp = (float(f[0]), float(f[1])), (float(c[0]), float(c[1]))
     detail = ("focal from the keypoint file" if src == "keypoint-file" else

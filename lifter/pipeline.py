@@ -15,7 +15,7 @@ import dataclasses
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -311,17 +311,83 @@ def given_image_size(image_size: Any | None, file_size: tuple[int, int] | None, 
     return size, []
 
 
+class KeypointsImage(NamedTuple):
+    """The image a keypoint file's (or sequence's) 2D is lifted in (:func:`keypoints_image`)."""
+
+    size: tuple[int, int] | None
+    """``(W, H)`` px lifted with (None: nobody gives one; the principal point must then be given)."""
+    notes: list[str]
+    """Where the size came from, when not from the file itself."""
+    exif: Any
+    """The fallback image's EXIF focal-length fields (:class:`lifter.detect.ExifCamera`) when the keypoints are in
+    its pixels (``on_fallback``) and it has them, else None."""
+    on_fallback: bool
+    """The keypoints are in the fallback image's pixels: its size is the one lifted with (taken from it, or the
+    same)."""
+
+
+def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, image_size: Any | None = None,
+                    principal_point: Any | None = None, fallback_image: tuple[Any, ...] | None = None,
+                    poses: Sequence[np.ndarray] = (), where: str | Path = "the keypoint file",
+                    what: str = "keypoint file") -> KeypointsImage:
+    """The image size (px) a keypoint ``what`` (a file, a sequence) read from ``where`` is lifted with, and whether
+    its keypoints are in the pixels of ``fallback_image`` (the image they were found in, as far as the caller knows:
+    the app's photo uploaded before), one rule for every reader.
+
+    ``image_size``: the caller's ``(W, H)`` (``--image-size``), which replaces the file's ``file_size`` with a note
+    (:func:`given_image_size`). ``fallback_image``: ``(name, (W, H) px)`` or ``(name, (W, H) px, exif)``; its size is
+    used, with a note, where neither the caller (``image_size``, ``principal_point``) nor the file (``file_size``,
+    ``file_pp``) gives an image size or a principal point (a principal point without a size belongs to another
+    camera: a K matrix's (W, H) is the centre of a 2W x 2H image). Refused (:class:`PoseLifterError` naming it)
+    when most ``poses`` (each ``(J, 2)`` px) lie mostly outside it, as keypoints in another image's pixels would (the
+    root then metres off). Its EXIF focal-length fields ``exif`` are returned where the size lifted with is its
+    own (taken from it, or the same), for :func:`resolve_camera`, as for a photo."""
+    from ._checks import mostly_outside
+
+    fallback = None
+    if fallback_image is not None:
+        if not isinstance(fallback_image, tuple | list) or len(fallback_image) not in (2, 3):
+            raise PoseLifterError(f"fallback_image must be (name, (W, H)) or (name, (W, H), exif); got "
+                                  f"{fallback_image!r}")
+        fallback = (str(fallback_image[0]), fallback_image[1], fallback_image[2] if len(fallback_image) == 3 else None)
+    notes: list[str] = []
+    if (fallback is not None and image_size is None and principal_point is None and file_size is None
+            and file_pp is None):
+        name, wh, _ = fallback
+        image_size = given_image_size(wh, None, where=f"fallback_image ({name})")[0]
+        assert image_size is not None
+        W, H = image_size
+        if len(poses) and float(np.mean(mostly_outside(np.stack(poses), (W, H)))) > 0.5:
+            raise PoseLifterError(f"{where}: the {what} has no \"image_size\": [W, H] (nor a principal point), and "
+                                  f"its poses lie mostly outside {name} ({W} x {H} px), whose size would be used: "
+                                  "add the file's own \"image_size\"")
+        notes.append(f"no image_size in the file: that of {name} ({W} x {H} px) is used")
+    size, size_notes = given_image_size(image_size, file_size, where="image_size= (--image-size)")
+    on_fallback = False
+    if fallback is not None and size is not None:
+        try:
+            on_fallback = [int(v) for v in fallback[1]] == [int(v) for v in size]
+        except (TypeError, ValueError):  # (a malformed size that was not needed: the file gives its own)
+            on_fallback = False
+    return KeypointsImage(size=size, notes=notes + size_notes, exif=fallback[2] if on_fallback and fallback else None,
+                          on_fallback=on_fallback)
+
+
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
                        flip_test: bool | None = None, max_people: int | None = None,
-                       image_size: Any | None = None) -> LiftRecord:
+                       image_size: Any | None = None, fallback_image: tuple[Any, ...] | None = None) -> LiftRecord:
     """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring).
     ``image_size`` ``(W, H)`` px: for a file that gives none (a list layout cannot), or in place of its own
-    (:func:`given_image_size`)."""
+    (:func:`given_image_size`). ``fallback_image``: ``(name, (W, H) px[, exif])`` of the image the keypoints were
+    found in, whose size (and EXIF focal) a file that gives no image size takes by :func:`keypoints_image`'s rule,
+    as :func:`lifter.video.lift_keypoint_sequence` does."""
     kf = parse_keypoint_json(path, default_format=default_format)
-    size, size_notes = given_image_size(image_size, kf.image_size, where="image_size= (--image-size)")
-    notes = list(kf.warnings) + size_notes
     people = kf.people or (kf.keypoints,)
+    img = keypoints_image(kf.image_size, kf.principal_point, image_size=image_size, principal_point=principal_point,
+                          fallback_image=fallback_image, poses=people, where=str(path), what="keypoint file")
+    size = img.size
+    notes = list(kf.warnings) + img.notes
     if max_people is not None and len(people) > max_people:
         each = f"{len(people)} people in the file; each is lifted"  # (the reader's note, no longer true)
         notes = [n for n in notes if not n.startswith(each)]
@@ -335,7 +401,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     f, src, pp, cam_notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
-        file_focal=kf.focal, file_pp=kf.principal_point, image_size=size, exif=None,
+        file_focal=kf.focal, file_pp=kf.principal_point, image_size=size, exif=img.exif,
         sensor_width_mm=None, fov_deg=fov_deg, where=str(path), file_distortion=kf.distortion, unread=kf.unread,
         assumed_focal=kf.assumed_focal)
     cam_notes += plausibility_notes(kp17, f, size, focal_source=src, source_format=kf.format)

@@ -1029,33 +1029,6 @@ def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.n
     return None if given is None else h36m_joint_scores(given, keypoint_format)
 
 
-def _fallback_parts(image: tuple[Any, ...]) -> tuple[str, Any, Any]:
-    """``fallback_image`` as ``(name, (W, H), exif)``: its EXIF focal-length fields
-    (:class:`lifter.detect.ExifCamera`) are optional (None)."""
-    if not isinstance(image, tuple | list) or len(image) not in (2, 3):
-        raise PoseLifterError(f"fallback_image must be (name, (W, H)) or (name, (W, H), exif); got {image!r}")
-    return str(image[0]), image[1], image[2] if len(image) == 3 else None
-
-
-def _fallback_image_size(image: tuple[Any, ...], ks: Any, path: str | Path) -> tuple[tuple[int, int], list[str]]:
-    """The size ``(W, H)`` px of ``image`` (``(name, (W, H)[, exif])``) for keypoint sequence ``ks`` read from
-    ``path``, which gives neither an image size nor a principal point, and the note saying so; :class:`PoseLifterError`
-    when most of its poses lie mostly outside that image (:func:`lifter._checks.mostly_outside`)."""
-    from ._checks import mostly_outside
-    from .pipeline import given_image_size
-
-    name, wh, _ = _fallback_parts(image)
-    size = given_image_size(wh, None, where=f"fallback_image ({name})")[0]
-    assert size is not None
-    W, H = size
-    poses = [k for fr in ks.frames for k in fr]
-    if poses and float(np.mean(mostly_outside(np.stack(poses), (W, H)))) > 0.5:
-        raise PoseLifterError(f"{path}: the keypoint sequence has no \"image_size\": [W, H] (nor a principal point), "
-                              f"and its poses lie mostly outside {name} ({W} x {H} px), whose size would be used: add "
-                              "the file's own \"image_size\"")
-    return (W, H), [f"no image_size in the file: that of {name} ({W} x {H} px) is used"]
-
-
 def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None = None,
                            principal_point: Any | None = None, default_format: str | None = None,
                            fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, smoothing: float = 1.0,
@@ -1071,33 +1044,21 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     ``image_size`` ``(W, H)`` px: for a file that gives none, or in place of its own
     (:func:`lifter.pipeline.given_image_size`). ``fps``: the frame rate of a sequence that does not give its own;
     ``assumed_fps``: the rate assumed, with a note, where neither does (:data:`lifter.io.ASSUMED_FPS`; None: refused).
-    ``fallback_image``: ``(name, (W, H) px)`` or ``(name, (W, H) px, exif)`` of the image the keypoints were found in
-    (the app: the photo uploaded before), whose size is used, with a note, where neither the arguments
-    (``image_size``, ``principal_point``) nor the file give an image size or a principal point; refused
-    (:class:`PoseLifterError` naming it) when most poses lie mostly outside it, as keypoints in another image's pixels
-    would (the root then metres off). Its EXIF focal-length fields ``exif`` (:class:`lifter.detect.ExifCamera`, as
-    :func:`lifter.detect.load_image` reads them) give the focal length where neither ``focal`` nor the file does and
-    the image size lifted with is that image's (taken from it, or the same), as for a photo."""
+    ``fallback_image``: ``(name, (W, H) px[, exif])`` of the image the keypoints were found in (the app: the photo
+    uploaded before): its size where nobody gives an image size or a principal point, and its EXIF focal where
+    neither ``focal`` nor the file gives one and the keypoints are in its pixels, by
+    :func:`lifter.pipeline.keypoints_image`'s rule (refused when most poses lie mostly outside it)."""
     from .camera import lens_notes
-    from .pipeline import given_image_size, plausibility_notes, resolve_camera
+    from .pipeline import keypoints_image, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options,
                                  assumed_fps=assumed_fps)
-    fallback_notes: list[str] = []
-    if (fallback_image is not None and image_size is None and principal_point is None and ks.image_size is None
-            and ks.principal_point is None):
-        image_size, fallback_notes = _fallback_image_size(fallback_image, ks, path)
-    size, size_notes = given_image_size(image_size, ks.image_size, where="image_size= (--image-size)")
-    warnings = [*ks.warnings, *fallback_notes, *size_notes]
-    exif = None  # (the image's EXIF focal, where the keypoints are in that image's pixels: the app's photo before)
-    if fallback_image is not None and size is not None:
-        _, wh, fb_exif = _fallback_parts(fallback_image)
-        try:
-            same = [int(v) for v in wh] == [int(v) for v in size]
-        except (TypeError, ValueError):  # (a malformed size that was not needed: the file gives its own)
-            same = False
-        exif = fb_exif if same else None
+    img = keypoints_image(ks.image_size, ks.principal_point, image_size=image_size, principal_point=principal_point,
+                          fallback_image=fallback_image, poses=[k for fr in ks.frames for k in fr], where=path,
+                          what="keypoint sequence")
+    size, exif = img.size, img.exif  # (exif: the image's, where the keypoints are in its pixels)
+    warnings = [*ks.warnings, *img.notes]
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),

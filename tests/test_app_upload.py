@@ -223,7 +223,8 @@ def test_keypoint_json_layouts(view: SessionView, app: PoseLifterApp, layout: st
         np.testing.assert_allclose(view.frame.lifted, app.pool.get(view.state.model).lift(
             kp, focal=1000.0, principal_point=(400, 300)).absolute, atol=1e-6)
     if layout == "openpose":
-        assert "drawn on the photo" in view.messages[-1] and view.state.sample.image.shape[:2] == (600, 800)
+        assert "that of the photo photo.jpg uploaded before (800 x 600 px) is used" in view.messages[-1]
+        assert view.state.sample.image.shape[:2] == (600, 800)
 
 
 def _dst_formats() -> set[str]:
@@ -331,13 +332,29 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
         s = a.demo.get("walking")
         assert v.load_upload("walking_kp.json", json.dumps({"keypoints": s.keypoints_2d.tolist(),
                                                             "format": "h36m17"}).encode()) is True
-        assert v.state.sample.image.shape[:2] == (600, 800) and "drawn on the photo walking.jpg" in v.messages[-1]
+        assert v.state.sample.image.shape[:2] == (600, 800)
+        assert "that of the photo walking.jpg uploaded before (800 x 600 px) is used" in v.messages[-1]
         assert float(v.state.sample.image.std()) > 20  # the photo, not a blank canvas
         # keypoints that do not fit the borrowed size: the refusal says where the size came from (user trial)
         far = (s.keypoints_2d * 3).tolist()
         assert v.load_upload("far.json", json.dumps({"keypoints": far, "format": "h36m17"}).encode()) is False
-        assert "the size of the photo walking.jpg uploaded before was used; add the file's own \"image_size\"" \
-            in v.messages[-1], v.messages[-1]
+        assert ("its poses lie mostly outside the photo walking.jpg uploaded before (800 x 600 px), whose size would "
+                "be used: add the file's own \"image_size\"") in v.messages[-1], v.messages[-1]
+        # a file with its own camera (a K matrix: a principal point) but no image size is another image's pixels, as
+        # for a keypoint sequence (lifter.pipeline.keypoints_image's rule): a canvas twice its principal point, not
+        # the photo (which had put the principal point at the photo's corner)
+        K = [[1000.0, 0.0, 800.0], [0.0, 1000.0, 600.0], [0.0, 0.0, 1.0]]
+        assert v.load_upload("k.json", json.dumps({"keypoints": (s.keypoints_2d * 2).tolist(), "format": "h36m17",
+                                                   "K": K}).encode()) is True, v.messages[-1]
+        cam = v.state.sample.camera
+        assert (cam.width, cam.height) == (1600, 1200) and cam.principal_point == (800.0, 600.0)
+        assert float(v.state.sample.image.std()) < 10  # (a plain canvas, not the photo: std > 20)
+        assert not any("walking.jpg" in w for w in v.state.sample.upload.warnings), v.state.sample.upload.warnings
+        # the photo's own size in the file: drawn on it, and said so
+        assert v.load_upload("same.json", json.dumps({"keypoints": s.keypoints_2d.tolist(), "format": "h36m17",
+                                                      "image_size": [800, 600]}).encode()) is True
+        assert "keypoints drawn on the photo walking.jpg uploaded before (the same image size)" in v.messages[-1]
+        assert float(v.state.sample.image.std()) > 20
         # a focal length in mm by mistake: lifted as given (not clamped to the slider) and said, as by the CLI
         n = v._message_count
         assert v.load_upload("mm.json", json.dumps({"keypoints": s.keypoints_2d.tolist(), "format": "h36m17",

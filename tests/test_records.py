@@ -363,6 +363,46 @@ def test_a_sequence_without_an_image_size_takes_the_fallback_image_s_where_its_p
         lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg", (0, 150)))
 
 
+@pytest.mark.parametrize("reader", ["file", "sequence"])
+def test_one_rule_for_the_image_a_keypoint_file_or_sequence_was_found_in(tmp_path, default, reader):
+    """A single keypoint file and a sequence take ``fallback_image``'s size and EXIF focal by one rule
+    (:func:`lifter.pipeline.keypoints_image`; the app's photo uploaded before): where neither the caller nor the file
+    gives an image size or a principal point, and not where the file's principal point (a K matrix) says the
+    keypoints are another image's; refused when they lie mostly outside it."""
+    from lifter.detect import ExifCamera, guess_focal
+
+    W, H = 1200, 900
+    exif = ExifCamera(focal_35mm=50.0)
+    want = guess_focal((W, H), exif=exif)
+
+    def doc(**fields):
+        kp = (KP + [100, 50]).tolist()
+        body = {"frames": [{"keypoints": kp}] * 2, "fps": 10} if reader == "sequence" else {"keypoints": kp}
+        return write(tmp_path / f"{len(list(tmp_path.iterdir()))}.json", {**body, "format": "h36m17", **fields})
+
+    def lift(path, image=("room.jpg", (W, H), exif), **kw):
+        if reader == "sequence":
+            return lift_keypoint_sequence(path, lifter=default, fallback_image=image, **kw)
+        return lift_keypoint_file(path, lifter=default, fallback_image=image, **kw)
+
+    rec = lift(doc())
+    assert rec.image_size == (W, H) and rec.principal_point == (W / 2, H / 2)
+    assert rec.focal_source == "exif-35mm" and np.allclose(rec.focal, want.focal)
+    assert f"no image_size in the file: that of room.jpg ({W} x {H} px) is used" in rec.warnings
+    assert lift(doc(image_size=[W, H])).focal_source == "exif-35mm"  # (its own size, the same: the same image)
+    assert lift(doc(image_size=[1000, 1000])).focal_source == "default-fov"  # (another image)
+    K = [[1000.0, 0.0, W], [0.0, 1000.0, H], [0.0, 0.0, 1.0]]  # (a principal point: not the photo's pixels)
+    rec = lift(doc(K=K))
+    assert rec.image_size is None and rec.focal_source == "keypoint-file" and rec.principal_point == (W, H)
+    assert not any("room.jpg" in w for w in rec.warnings), rec.warnings
+    assert lift(doc(), principal_point=(W, H), focal=1000.0).image_size is None
+    with pytest.raises(PoseLifterError, match=rf"the keypoint {reader} has no \"image_size\".*its poses lie mostly "
+                                              r"outside room.jpg \(200 x 150 px\), whose size would be used"):
+        lift(doc(), image=("room.jpg", (200, 150)))
+    with pytest.raises(PoseLifterError, match=r"fallback_image must be \(name, \(W, H\)\)"):
+        lift(doc(), image=("room.jpg",))
+
+
 def test_a_sequence_in_the_fallback_image_s_pixels_takes_its_exif_focal(tmp_path, default):
     """``fallback_image``'s EXIF (the app: the photo uploaded before) gives the focal length of a sequence in that
     image's pixels that gives none, as for a photo (:func:`lifter.detect.guess_focal`); a file's or the caller's focal
