@@ -622,11 +622,43 @@ def _own_scored(q: dict[str, Any]) -> Any:
     return [[*r, max(float(c), 1e-9)] for r, c in zip(rows, scores)]
 
 
+MMPOSE_JOINT_NAMES: Final[dict[str, tuple[str, ...]]] = {
+    "coco17": ("nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
+               "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee",
+               "right_knee", "left_ankle", "right_ankle"),
+    H36M17: ("root", "right_hip", "right_knee", "right_foot", "left_hip", "left_knee", "left_foot", "spine",
+             "thorax", "neck_base", "head", "left_shoulder", "left_elbow", "left_wrist", "right_shoulder",
+             "right_elbow", "right_wrist"),
+}
+"""The keypoint names of MMPose's dataset metadata (``meta_info["keypoint_id2name"]`` of a predictions file) for the
+formats read here, in their order."""
+
+MMPOSE_DATASETS: Final[dict[str, str]] = {"coco": "coco17", "h36m": H36M17}
+"""MMPose's ``meta_info["dataset_name"]`` of the formats read here."""
+
+
+def _mmpose_meta_format(meta: Any) -> str | None:
+    """The keypoint format an MMPose predictions file's ``meta_info`` names: by its ``keypoint_id2name`` (the joints
+    in order, :data:`MMPOSE_JOINT_NAMES`), else its ``dataset_name`` (:data:`MMPOSE_DATASETS`); None when it names
+    neither (a user trial: a file of H36M joints, saying so, was read as COCO-17 and lifted 2 m off)."""
+    if not isinstance(meta, dict):
+        return None
+    names = meta.get("keypoint_id2name")
+    if isinstance(names, dict):
+        ordered = tuple(str(names.get(str(i), "")).lower() for i in range(len(names)))  # (JSON's keys: strings)
+        found = next((f for f, want in MMPOSE_JOINT_NAMES.items() if ordered == want), None)
+        if found is not None:
+            return found
+    dataset = meta.get("dataset_name")
+    return MMPOSE_DATASETS.get(dataset.lower()) if isinstance(dataset, str) else None
+
+
 def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     """MMPose's prediction files as one frame of people: the demo's ``--save-predictions`` file (``{"meta_info":
     ..., "instance_info": [{"frame_id": 1, "instances": [...]}]}``, or its instances directly), MMPoseInferencer's
     predictions (``[{"frame_id": 0, "instances": [...]}, ...]``) and one such frame of a sequence, as
-    ``{"people": instances, ...the file's other fields}``, COCO-17 unless a format is given. Several frames are a
+    ``{"people": instances, ...the file's other fields}``, in the joints its ``meta_info`` names
+    (:func:`_mmpose_meta_format`), else COCO-17, unless a format is given. Several frames are a
     video's, a keypoint sequence (:func:`_mmpose_sequence`): refused here, naming how to lift them. Anything else comes
     back as it is."""
     if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
@@ -650,8 +682,9 @@ def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     people = info[0]["instances"]
     if not isinstance(people, list):
         raise PoseLifterError(f"{p}: 'instances' must be a list of people, got {_short(people)}")
+    meta_fmt = _mmpose_meta_format(d.get("meta_info")) if isinstance(d, dict) else None
     d = {**{k: v for k, v in d.items() if k not in rest}, "people": people}
-    return d, fmt or (d["format"] if isinstance(d.get("format"), str) else "coco17")
+    return d, fmt or (d["format"] if isinstance(d.get("format"), str) else meta_fmt or "coco17")
 
 
 def _people_of(d: Any, p: Path, fmt: str | None
@@ -1140,7 +1173,8 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     """MMPose's predictions of several frames (the demo's ``{"meta_info", "instance_info": [{"frame_id",
     "instances"}, ...]}``, MMPoseInferencer's ``[{"frame_id", "instances"}, ...]``) as a sequence document
     ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too); else None. Its frames are read as
-    COCO-17 unless the file or the caller (``--format``) says otherwise."""
+    the joints its ``meta_info`` names (:func:`_mmpose_meta_format`, as the file's ``format``), else COCO-17, unless
+    the file or the caller (``--format``) says otherwise."""
     if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
         info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}
     elif isinstance(d, list):
@@ -1149,6 +1183,9 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
         return None
     if len(info) < 2 or not all(isinstance(q, dict) and "instances" in q for q in info):
         return None
+    meta_fmt = _mmpose_meta_format(d.get("meta_info")) if isinstance(d, dict) else None
+    if meta_fmt is not None and "format" not in rest:  # (the joints its metadata names)
+        rest["format"] = meta_fmt
     return {**rest, "frames": info}  # (each frame: _mmpose_frame, COCO-17 unless the file or the caller says)
 
 

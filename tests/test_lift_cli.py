@@ -1427,6 +1427,38 @@ def test_near_miss_formats_get_messages_that_name_the_fix(tmp_path, kp17):
         load_image(npy)
 
 
+@pytest.mark.parametrize("meta", ["names", "dataset"])
+def test_an_mmpose_file_is_read_in_the_joints_its_metadata_names(tmp_path, kp17, meta):
+    """User trial: MMPose's predictions of an H36M model (``meta_info``: ``dataset_name`` "h36m" and
+    ``keypoint_id2name`` in H36M's order) were read as COCO-17, their joints scrambled and the root 2 m off, exit 0.
+    The joints the metadata names are read, in a single frame and in a sequence; COCO's metadata stays COCO-17."""
+    from lifter.io import MMPOSE_JOINT_NAMES, parse_keypoint_sequence
+
+    def info(fmt: str, dataset: str) -> dict:
+        names = {str(i): n for i, n in enumerate(MMPOSE_JOINT_NAMES[fmt])}
+        return {"keypoint_id2name": names} if meta == "names" else {"dataset_name": dataset, "num_keypoints": 17}
+
+    inst = {"keypoints": kp17.tolist(), "keypoint_scores": [0.9] * 17}
+    p = tmp_path / "h36m.json"
+    p.write_text(json.dumps({"meta_info": info("h36m17", "h36m"), "instance_info": [inst]}))
+    kf = parse_keypoint_json(p)
+    assert kf.format == "h36m17" and not any("COCO" in w for w in kf.warnings), kf.warnings
+    np.testing.assert_allclose(kf.keypoints, kp17)
+    p.write_text(json.dumps({"meta_info": info("h36m17", "h36m"), "fps": 25,
+                             "instance_info": [{"frame_id": i, "instances": [inst]} for i in (1, 2)]}))
+    ks = parse_keypoint_sequence(p)
+    assert ks.format == "h36m17" and len(ks.frames) == 2
+    coco = coco_from_h36m(kp17)
+    p.write_text(json.dumps({"meta_info": info("coco17", "coco"),
+                             "instance_info": [{**inst, "keypoints": coco.tolist()}]}))
+    assert parse_keypoint_json(p).format == "coco17"
+    # the file's own 'format' and the caller's come first
+    p.write_text(json.dumps({"meta_info": info("h36m17", "h36m"), "format": "coco17",
+                             "instance_info": [{**inst, "keypoints": coco.tolist()}]}))
+    assert parse_keypoint_json(p).format == "coco17"
+    assert parse_keypoint_json(p, default_format="coco17").format == "coco17"
+
+
 def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys, monkeypatch):
     """User trial: clip.mp4 and then clip.avi lifted into one folder: the second run replaced clip.json silently.
     Replacing the result of another input is said; lifting the same input again is not."""
