@@ -271,6 +271,10 @@ def _rows(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray | None]:
                 f"{MEDIAPIPE_XY_NOTE})") if four else ""
         raise PoseLifterError(f"{where}: 'keypoints' must be {form}; found {_short(bad if bad is not None else raw)}"
                               f"{hint}")
+    if np.isinf(a[:, :2]).any():  # (1e400, or an integer too long for a float: not a missing joint, null is)
+        j, k = (int(v) for v in np.argwhere(np.isinf(a[:, :2]))[0])
+        raise PoseLifterError(f"{where}: keypoint {j}'s {'xy'[k]} is {a[j, k]:g} (a number too large for a float): "
+                              "coordinates are finite pixels (null marks a missing joint)")
     conf = a[:, 2] if a.shape[1] == 3 else None
     if conf is not None:
         if np.isinf(conf).any():

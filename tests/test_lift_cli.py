@@ -732,6 +732,12 @@ def test_a_null_confidence_or_a_null_row_marks_a_missing_joint(tmp_path, kp17):
         parse_keypoint_json(p)
     p.write_text(json.dumps({"keypoints": rows, **cam}))  # every confidence > 0: all 17 joints
     np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
+    # a user trial: a coordinate too large for a float (1e400, a 400-digit integer, Infinity) was read as a missing
+    # joint and stood in for; refused, naming it (null marks a missing joint)
+    for big in ("1e400", "-" + "9" * 400, "Infinity"):
+        p.write_text(json.dumps({"keypoints": rows, **cam}).replace(f"[{rows[3][0]!r},", f"[{big},", 1))
+        with pytest.raises(PoseLifterError, match=r"keypoint 3's x is -?inf \(a number too large for a float\)"):
+            parse_keypoint_json(p)
 
 def test_a_zero_placeholder_in_a_keypoint_file_is_in_its_record(tmp_path, weights, kp17, capsys):
     """A COCO r_hip at (0, 0) without confidences (the user trial's silent 5.2 -> 2.2 m root): each file's record
