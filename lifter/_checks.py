@@ -55,8 +55,12 @@ def _untorch(x: Any) -> Any:
 
 
 def _real_array(x: Any, *, name: str, what: str) -> np.ndarray:
-    """``x`` as float64, refusing complex numbers, booleans and anything non-numeric with a clear message."""
+    """``x`` as float64, refusing complex numbers, booleans and anything non-numeric with a clear message. A numpy
+    masked array's masked values become NaN, which the callers refuse by name (a user trial: its mask was ignored and
+    the values under it lifted)."""
     x = _untorch(x)
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any() and x.dtype.kind in "biuf":
+        x = np.ma.filled(x.astype(np.float64), np.nan)
     try:
         raw = np.asarray(x)
     except (TypeError, ValueError, RuntimeError) as exc:
@@ -108,8 +112,9 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         where = where_in_batch(bad_joint.any(-1))
         fix = (" A joint the detector missed has to be filled in (from a neighbouring frame, or its left/right "
                "partner) or the pose left out" if dim == 2 else "")
+        masked = " or are masked" if isinstance(x, np.ma.MaskedArray) else ""
         raise PoseLifterError(
-            f"{name}: joint(s) {which} contain NaN/inf{where}; every joint needs a finite position.{fix}")
+            f"{name}: joint(s) {which} contain NaN/inf{masked}{where}; every joint needs a finite position.{fix}")
     return arr
 
 

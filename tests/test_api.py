@@ -192,6 +192,20 @@ def test_non_finite_keypoints(small_lifter, keypoints, value):
         small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
 
 
+def test_a_masked_array_s_masked_joints_are_refused_by_name(small_lifter, keypoints):
+    """A user trial: a numpy masked array's mask was ignored, and the values under it lifted. Masked joints are
+    named as missing ones are; a mask with nothing masked lifts the values."""
+    kp = np.ma.masked_array(keypoints, mask=np.zeros(keypoints.shape, bool))
+    np.testing.assert_allclose(small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0)).absolute,
+                               small_lifter.lift(keypoints, focal=1000.0, principal_point=(0, 0)).absolute)
+    kp.mask[2, 5] = True
+    with pytest.raises(PoseLifterError, match=r"joint\(s\) \['l_knee'\] contain NaN/inf or are masked \(pose at index "
+                       r"\(2,\), 1 such pose\(s\)\)"):
+        small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
+    with pytest.raises(PoseLifterError, match=r"focal"):
+        small_lifter.lift(keypoints, focal=np.ma.masked_array([1000.0], mask=[True]), principal_point=(0, 0))
+
+
 def test_non_finite_3d_input_is_named_without_detector_advice():
     from lifter import analytic_root
 
