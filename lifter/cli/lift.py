@@ -305,7 +305,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--image-size", type=float, nargs=2, metavar=("W", "H"), default=None,
                    help="keypoint files: the image's size in px, for those that give no image_size (a list of "
                         "people cannot), or in place of their own: the principal point defaults to its centre and "
-                        "the focal length to the --fov field of view of it (photos and videos: read from them)")
+                        "the focal length to the --fov field of view of it (photos and videos: their own size, "
+                        "with a note)")
     p.add_argument("--fov", type=float, default=DEFAULT_DIAGONAL_FOV_DEG,
                    help="diagonal field of view (deg) assumed when no focal length is known")
     p.add_argument("--distortion", type=float, nargs="+", metavar="D", default=None,
@@ -467,9 +468,9 @@ def run_lift(args: argparse.Namespace) -> int:
                 misnamed: str | None = None
                 try:
                     kind, misnamed = input_kind(path, _head(path))
-                    if args.image_size is not None and kind != "keypoints":
-                        raise PoseLifterError(f"{path}: --image-size is for keypoint files; a photo's or video's "
-                                              "size is read from it")
+                    if args.image_size is not None and kind != "keypoints":  # (a mixed batch: not a failure)
+                        media = "video" if kind == "video" else "photo"
+                        say(f"{path}: note: --image-size is for keypoint files; a {media}'s own size is read from it")
                     if args.distortion is not None and kind != "image":
                         raise PoseLifterError(
                             f"{path}: --distortion is for photos; " + (
