@@ -1158,18 +1158,41 @@ def openpose_frame_pattern(files: Sequence[Path]) -> list[tuple[Path, list[Path]
     the files the pattern names (:func:`frame_pattern_files`: so the pattern reads these and no others), and their
     numbers are dense (their span at most twice their count: OpenPose run on a folder of COCO images writes
     ``COCO_val2014_000000000139_keypoints.json``, stills whose numbers are image ids)."""
+    out = []
+    for pattern, members in _openpose_videos(files).items():
+        named = frame_pattern_files(pattern)
+        numbers = [n for n, _ in named]
+        if (len(members) >= 2 and {q.resolve() for q in members} == {q.resolve() for _, q in named}
+                and _dense(numbers)):
+            out.append((pattern, [q for _, q in named]))
+    return out
+
+
+def _openpose_videos(files: Sequence[Path]) -> dict[Path, list[Path]]:
+    """OpenPose's per-frame files among ``files`` (:data:`OPENPOSE_FRAME_FILE`) by their video's frame pattern."""
     by_video: dict[Path, list[Path]] = {}
     for f in files:
         m = OPENPOSE_FRAME_FILE.fullmatch(f.name)
         if m is not None:
             by_video.setdefault(f.parent / f"{m.group('video')}_%012d_keypoints.json", []).append(f)
+    return by_video
+
+
+def _dense(numbers: Sequence[int]) -> bool:
+    """Frame numbers (sorted) of a video's frames, not of stills: their span at most twice their count."""
+    return bool(numbers) and numbers[-1] - numbers[0] + 1 <= 2 * len(numbers)
+
+
+def openpose_partial_videos(files: Sequence[Path]) -> list[tuple[Path, int, int]]:
+    """OpenPose's per-frame files of a video of which ``files`` hold at least two but not all (the frames of a clip
+    picked out: :func:`openpose_frame_pattern` does not make them a sequence, which reads all the pattern names):
+    ``(pattern, how many are given, how many the pattern names)`` per such video (dense numbers, as a video's)."""
     out = []
-    for pattern, members in by_video.items():
+    for pattern, members in _openpose_videos(files).items():
         named = frame_pattern_files(pattern)
-        numbers = [n for n, _ in named]
-        if (len(members) >= 2 and {q.resolve() for q in members} == {q.resolve() for _, q in named}
-                and numbers[-1] - numbers[0] + 1 <= 2 * len(numbers)):
-            out.append((pattern, [q for _, q in named]))
+        given = {q.resolve() for q in members}
+        if 2 <= len(given) < len(named) and given <= {q.resolve() for _, q in named} and _dense([n for n, _ in named]):
+            out.append((pattern, len(given), len(named)))
     return out
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 import warnings
 from pathlib import Path
 
@@ -1488,6 +1489,26 @@ def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, cap
     assert code == 0 and "replaces" not in err, err
 
 
+def test_hidden_files_pipes_and_devices_are_named_as_such(tmp_path, weights, kp17, capsys):
+    """A user trial: macOS's ._x.json beside x.json was lifted (and failed, so --strict exited 1), and a pipe or a
+    device was called "no such file or folder". Hidden files of a folder are skipped with a note; a path that exists
+    but is neither a file nor a folder says so."""
+    d = tmp_path / "mac"
+    d.mkdir()
+    _kp_json(d / "x.json", kp17)
+    (d / "._x.json").write_bytes(b"\x00\x05\x16\x07Mac OS X")
+    code, err = run([str(d), "--strict", "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "lifted 1 of 1" in err, err
+    assert f"{d}: skipped 1 hidden file(s) (names starting with '.', as macOS's ._ files; give one as an input to " \
+           "lift it): ._x.json" in err
+    code, err = run([str(d / "._x.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 1 and "._x.json" in err and "no such file" not in err, err  # (named: read, and refused as such)
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    code, err = run([str(fifo), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code != 0 and f"{fifo}: not a regular file or folder (a pipe or a device?)" in err, err
+
+
 def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, kp17, capsys):
     """A developer trial: a folder of OpenPose's --write_json output of a video (video_000000000000_keypoints.json,
     ...) was lifted as unrelated stills, untracked, each repeating its notes, and the command line had no way to give a
@@ -1529,7 +1550,10 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
     # a review: two files given of a video's seven were read as all seven; a subset stays files
     two = [str(d / f"video_{n:012d}_keypoints.json") for n in (0, 1)]
     code, err = run([*two, "--out", str(tmp_path / "f"), "--fps", "30", *base], capsys)
-    assert code == 0 and "lifted 2 of 2" in err and "keypoint sequence" not in err, err
+    assert code == 0 and "lifted 2 of 2" in err and "lifted as one keypoint sequence" not in err, err
+    # ... and says why, and how to lift a part as one (a user trial: a clip's frames picked out, no word)
+    assert ("2 of the 7 OpenPose per-frame files of video are given: they are lifted one by one (a keypoint sequence "
+            "is all of a video's files") in err and "copy those files into a folder of their own" in err, err
     assert json.loads((tmp_path / "f" / "video_000000000001_keypoints.json").read_text())["kind"] == "keypoints"
     # ... and OpenPose's output for a folder of COCO images (numbers are image ids, sparse) stays stills
     coco = tmp_path / "coco"

@@ -96,6 +96,7 @@ from ..io import (
     is_frame_pattern,
     is_keypoint_sequence,
     openpose_frame_pattern,
+    openpose_partial_videos,
     write_json_atomic,
 )
 from ..keypoints import get_format, keypoint_formats
@@ -155,12 +156,14 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
         if p.is_symlink() and not p.exists():
             problems.append(f"{p}: dangling symbolic link (its target {os.readlink(p)!r} does not exist); skipped")
         elif p.is_dir():
-            found, skipped, subdirs, results = [], [], [], []
+            found, skipped, subdirs, results, hidden = [], [], [], [], []
             is_out = out is not None and out.exists() and p.resolve() == out.resolve()
             for q in sorted(p.iterdir()):
                 sfx = q.suffix.lower()
                 known = sfx in IMAGE_SUFFIXES or sfx in VIDEO_SUFFIXES or sfx == ".json"
-                if q.is_symlink() and not q.exists():
+                if q.name.startswith(".") and known and q.is_file():  # (macOS's ._x.jpg beside x.jpg: a user trial)
+                    hidden.append(q.name)
+                elif q.is_symlink() and not q.exists():
                     if known:
                         problems.append(f"{q}: dangling symbolic link (its target {os.readlink(q)!r} does not exist); "
                                         "skipped")
@@ -173,6 +176,10 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
                     skipped.append(q.name)
                 elif q.is_dir() and not q.name.startswith("."):
                     subdirs.append(q.name + "/")
+            if hidden:
+                notes.append(f"{p}: skipped {len(hidden)} hidden file(s) (names starting with '.', as macOS's ._ "
+                             "files; give one as an input to lift it): " + ", ".join(hidden[:5])
+                             + (" ..." if len(hidden) > 5 else ""))
             if results:
                 notes.append(f"{p}: is also the output folder; its {len(results)} earlier result file(s) are not "
                              "lifted again (name one as an input to lift it)")
@@ -190,6 +197,9 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
         elif FRAME_PATTERN.search(p.name) and p.suffix.lower() != ".json" and p.parent.is_dir():
             problems.append(f"{p}: a frame pattern is read for keypoint files only (name.json); images are not read as "
                             "a video: give their folder (each image is lifted), or make them a video")
+        elif p.exists():  # (a pipe, <(...), or a device: a user trial read "no such file" for them)
+            problems.append(f"{p}: not a regular file or folder (a pipe or a device?): write the input to a file and "
+                            "give that")
         else:
             problems.append(f"{p}: no such file or folder")
     for pattern, members in openpose_frame_pattern(files):  # (OpenPose's --write_json output of a video)
@@ -202,6 +212,11 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
         kept = set(members)
         files = [f for f in files[:at] if f not in kept] + [pattern] + [f for f in files[at:] if f not in kept]
         notes.append(f"{what} are lifted as one keypoint sequence, {pattern}, tracked and smoothed")
+    for pattern, given, total in openpose_partial_videos(files):  # (a clip's frames picked out: a user trial)
+        notes.append(f"{given} of the {total} OpenPose per-frame files of {pattern.name.split('_%012d')[0]} are given: "
+                     "they are lifted one by one (a keypoint sequence is all of a video's files, its folder or the "
+                     f"frame pattern {pattern}; to lift a part of it as one, copy those files into a folder of their "
+                     "own and give that folder with --fps)")
     unique: dict[Path, Path] = {}
     twice = []
     for f in files:
