@@ -48,7 +48,7 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, parse_keypoint_json
+from lifter.io import LiftRecord, json_text, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import (
     keypoint_file_scores,
@@ -300,9 +300,10 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     check_upload(name, content)
     nm = safe_name(name)
     try:
-        content.decode("utf-8-sig")
+        json_text(content)
     except UnicodeDecodeError:
-        raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 keypoint JSON file") from None
+        raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 (or UTF-16) keypoint JSON "
+                          "file") from None
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
     kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)

@@ -29,7 +29,7 @@ from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
-from lifter.io import ASSUMED_FPS, is_sequence_doc
+from lifter.io import ASSUMED_FPS, is_sequence_doc, json_text
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
@@ -83,7 +83,7 @@ def is_sequence_json(content: bytes) -> bool:
     """A keypoint sequence (:func:`lifter.io.is_sequence_doc`: an object with ``frames``, or MMPose's predictions of
     several frames)."""
     try:
-        doc = json.loads(content.decode("utf-8-sig"))
+        doc = json.loads(json_text(content))
     except (UnicodeDecodeError, ValueError, RecursionError):  # (ValueError: not JSON, or an integer too long)
         return False  # the keypoint-file reader says what is wrong with it
     return is_sequence_doc(doc)

@@ -31,6 +31,7 @@ Units: px for 2D, mm for 3D; camera frame OpenCV (+x right, +y down, +z forward)
 
 from __future__ import annotations
 
+import codecs
 import difflib
 import json
 import math
@@ -416,6 +417,29 @@ def _parse_int(text: str) -> int | float:
     return int(text) if len(text) <= 300 else float("-inf" if text.startswith("-") else "inf")
 
 
+JSON_BOMS: Final[tuple[tuple[bytes, str], ...]] = (
+    (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"),  # (before UTF-16's: FF FE starts both)
+    (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"),
+)
+"""The byte-order marks of JSON text not in UTF-8 (Windows PowerShell's ``>`` writes UTF-16 with one), and the codec
+each names."""
+
+
+def json_text(raw: bytes) -> str:
+    """The text of a JSON file's bytes: UTF-8 (a byte-order mark allowed), or UTF-16 / UTF-32 that start with their
+    byte-order mark (a user trial: PowerShell's output was refused with a codec error). Raises
+    :class:`UnicodeDecodeError` for anything else."""
+    codec = next((c for bom, c in JSON_BOMS if raw.startswith(bom)), "utf-8-sig")
+    return raw.decode(codec)
+
+
+def json_head(head: bytes) -> bytes:
+    """A file's first bytes as UTF-8, for sniffing: decoded from UTF-16 / UTF-32 where they start with that byte-order
+    mark (:data:`JSON_BOMS`; a character cut at the end is dropped), else as they are."""
+    codec = next((c for bom, c in JSON_BOMS if head.startswith(bom)), None)
+    return head if codec is None else head.decode(codec, errors="ignore").encode("utf-8")
+
+
 def _load_json(p: Path) -> Any:
     try:
         size = p.stat().st_size
@@ -425,9 +449,12 @@ def _load_json(p: Path) -> Any:
         raise PoseLifterError(f"{p}: {size / 1e6:.0f} MB is more than the {MAX_KEYPOINT_FILE_BYTES / 1e6:.0f} MB a "
                               "keypoint file may have")
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = json_text(p.read_bytes())
+    except OSError as exc:
         raise PoseLifterError(f"{p}: cannot read ({exc})") from None
+    except UnicodeDecodeError as exc:
+        raise PoseLifterError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}): save the keypoint file as "
+                              "UTF-8 (or UTF-16 with its byte-order mark)") from None
     if not text.strip():
         raise PoseLifterError(f"{p}: the file is empty; a keypoint file is JSON with the 2D joints (formats: README, "
                               "'Photos in, absolute 3D out')")

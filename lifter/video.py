@@ -54,6 +54,7 @@ from .io import (
     depth_is_metric,
     distortion_tuple,
     is_frame_rate,
+    json_head,
     own_fps_note,
     parse_keypoint_sequence,
 )
@@ -111,9 +112,9 @@ def media_kind(head: bytes) -> Literal["image", "video"] | None:
 
 
 def looks_like_json(head: bytes) -> bool:
-    """Whether a file's first bytes start like JSON text: ``{`` or ``[`` after an optional UTF-8 byte-order mark and
-    white space (a keypoint file, whatever its name)."""
-    return bytes(head[:MEDIA_HEAD_BYTES]).lstrip(b"\xef\xbb\xbf").lstrip(b" \t\r\n")[:1] in (b"{", b"[")
+    """Whether a file's first bytes start like JSON text: ``{`` or ``[`` after an optional byte-order mark (UTF-8's,
+    or UTF-16's / UTF-32's: :func:`lifter.io.json_head`) and white space (a keypoint file, whatever its name)."""
+    return json_head(bytes(head[:MEDIA_HEAD_BYTES])).lstrip(b"\xef\xbb\xbf").lstrip(b" \t\r\n")[:1] in (b"{", b"[")
 
 
 InputKind = Literal["keypoints", "image", "video"]

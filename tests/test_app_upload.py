@@ -193,6 +193,19 @@ def _openpose_from_h36m(kp: np.ndarray) -> np.ndarray:
     return np.array([c[j] for j in get_format("openpose25").joint_names], np.float64)
 
 
+def test_a_utf16_keypoint_file_and_sequence_are_read(view: SessionView, app: PoseLifterApp) -> None:
+    """A user trial: keypoint JSON written by Windows PowerShell (UTF-16 with its byte-order mark) was refused by
+    ``poselifter lift``; the app read it as "not a UTF-8 keypoint JSON file". Both read it, a sequence too."""
+    s = app.demo.get(app.demo.names[0])
+    one = {"keypoints": s.keypoints_2d.tolist(), "format": "h36m17", "image_size": [800, 600]}
+    assert view.load_upload("ps.json", json.dumps(one).encode("utf-16")) is True, view.messages[-1]
+    np.testing.assert_allclose(view.state.keypoints, s.keypoints_2d, atol=1e-9)
+    seq = {"frames": [{"keypoints": (s.keypoints_2d + [2.0 * i, 0]).tolist()} for i in range(3)], "fps": 10,
+           "format": "h36m17", "image_size": [800, 600]}
+    assert view.load_upload("seq.json", json.dumps(seq).encode("utf-16")) is True, view.messages[-1]
+    assert view.sequence() is not None and len(view.sequence().record.frames) == 3
+
+
 @pytest.mark.parametrize("layout", ["object_h36m", "openpose", "flat_rows_sh16"])
 def test_keypoint_json_layouts(view: SessionView, app: PoseLifterApp, layout: str) -> None:
     from lifter.keypoints import convert

@@ -1489,6 +1489,29 @@ def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, cap
     assert code == 0 and "replaces" not in err, err
 
 
+@pytest.mark.parametrize("codec", ["utf-16", "utf-16-le", "utf-16-be", "utf-32", "utf-8-sig"])
+def test_a_keypoint_file_in_utf16_with_its_byte_order_mark_is_read(tmp_path, weights, kp17, capsys, codec):
+    """A user trial: a keypoint file written by Windows PowerShell's ``>`` (UTF-16 with a byte-order mark) was refused
+    with a raw codec error. UTF-16 and UTF-32 with their mark are read as UTF-8 is, by content whatever the name; text
+    in no encoding read is refused, naming UTF-8."""
+    import codecs
+
+    from lifter.video import input_kind
+
+    text = json.dumps({"keypoints": kp17.tolist(), "image_size": [1280, 720]})
+    bom = {"utf-16-le": codecs.BOM_UTF16_LE, "utf-16-be": codecs.BOM_UTF16_BE}.get(codec, b"")
+    raw = bom + text.encode(codec)
+    p = tmp_path / "ps.json"
+    p.write_bytes(raw)
+    np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
+    assert input_kind("ps.txt", raw[:512]) == ("keypoints", None)  # (by content: JSON text)
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    p.write_bytes(b'{"keypoints": [], "name": "caf\xe9"}')  # (Latin-1)
+    with pytest.raises(PoseLifterError, match=r"ps.json: not UTF-8 text \(.*\): save the keypoint file as UTF-8"):
+        parse_keypoint_json(p)
+
+
 def test_hidden_files_pipes_and_devices_are_named_as_such(tmp_path, weights, kp17, capsys):
     """A user trial: macOS's ._x.json beside x.json was lifted (and failed, so --strict exited 1), and a pipe or a
     device was called "no such file or folder". Hidden files of a folder are skipped with a note; a path that exists
