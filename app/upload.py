@@ -247,8 +247,7 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
     img: LoadedImage = _with_temp_file(name, content, suffix, lambda p: load_image(p, max_side=max_side))
     _, misnamed = input_kind(safe_name(name), content[:MEDIA_HEAD_BYTES])  # (a JPEG renamed .mp4)
     notes = img.notes if misnamed is None else (misnamed, *img.notes)
-    img = LoadedImage(rgb=img.rgb, size=img.size, scale=img.scale, exif=img.exif, path=Path(safe_name(name)),
-                      notes=notes)
+    img = dataclasses.replace(img, path=Path(safe_name(name)), notes=notes)
     return Photo(name=safe_name(name), display=_display(img.rgb), size=img.size, exif=img.exif, notes=notes), img
 
 

@@ -290,6 +290,7 @@ class LoadedImage:
     size: ``(W, H)`` px of the upright **full-resolution** image: keypoints, focal length and principal
         point refer to it. scale: ``w / W`` (1.0 when not downscaled). exif: the focal-length fields.
     path: where it came from (or None). notes: messages for the user (downscaling, orientation).
+    orientation: the EXIF orientation (1 to 8) the file was turned upright by (1: none).
     """
 
     rgb: np.ndarray
@@ -298,6 +299,7 @@ class LoadedImage:
     exif: ExifCamera = field(default_factory=ExifCamera)
     path: Path | None = None
     notes: tuple[str, ...] = ()
+    orientation: int = 1
 
     @property
     def scale_xy(self) -> np.ndarray:
@@ -388,7 +390,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     if scale < 1.0:
         notes.append(f"downscaled {W0} x {H0} -> {w} x {h} px for detection; keypoints are in full-resolution px")
     return LoadedImage(rgb=np.asarray(img, np.uint8), size=(W0, H0), scale=scale, exif=exif, path=p,
-                       notes=tuple(notes))
+                       notes=tuple(notes), orientation=orientation if 1 <= orientation <= 8 else 1)
 
 
 def image_from_array(rgb: Any, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> LoadedImage:

@@ -421,6 +421,27 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       distortion_model=kf.distortion_model, scores=top.scores)
 
 
+def turned_calibration_notes(orientation: int, size: tuple[int, int], *, principal_point: Any | None,
+                             focal: Any | None, distortion: Any | None) -> list[str]:
+    """A note when a photo turned upright by its EXIF ``orientation`` (2 to 8) is given a calibration that depends on
+    the image's axes (a principal point, a lens, or a focal length whose ``fx`` and ``fy`` differ): it is taken in
+    the upright image's pixels (``size`` ``(W, H)``), and one made in the sensor's orientation (OpenCV's, as the file
+    is stored) would have to be turned with it (a user trial: nothing said which). Else none."""
+    if orientation == 1:
+        return []
+    f = None if focal is None else np.ravel(np.asarray(focal, np.float64))
+    axes = [name for name, given in (("principal point", principal_point is not None),
+                                     ("fx / fy", f is not None and f.size == 2 and f[0] != f[1]),
+                                     ("lens distortion", distortion is not None)) if given]
+    if not axes:
+        return []
+    turned = "turned by a quarter" if orientation in (5, 6, 7, 8) else "flipped or turned by a half"
+    return [f"the calibration given ({', '.join(axes)}) is taken in the pixels of the upright image ({size[0]} x "
+            f"{size[1]} px), "
+            f"which EXIF orientation {orientation} {turned} from the stored one: a calibration made with the "
+            "stored (sensor) orientation must be turned with it"]
+
+
 def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseEstimator2D, focal: Any | None = None,
                principal_point: Any | None = None, sensor_width_mm: float | None = None,
                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_side: int = DEFAULT_MAX_SIDE_PX,
@@ -452,6 +473,8 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
         file_focal=None, file_pp=None, image_size=img.size, exif=img.exif,
         sensor_width_mm=sensor_width_mm, fov_deg=fov_deg, where=str(path))
     kp_people = np.stack([d.keypoints_2d for d in dets])
+    notes += turned_calibration_notes(img.orientation, img.size, principal_point=principal_point, focal=focal,
+                                      distortion=distortion)
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detected_upside_down_notes(kp_people)
     notes += detector_doubt_notes([float(np.mean(d.scores)) for d in dets])  # (the 17 joints lifted)

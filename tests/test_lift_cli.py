@@ -634,6 +634,28 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert "downscaled" in err and "65 deg" in err
 
 
+def test_a_calibration_given_for_a_turned_photo_is_said_to_be_the_upright_image_s(tmp_path, weights, kp17, capsys):
+    """A user trial: --principal-point (or fx != fy, or a lens) given for a photo turned upright by its EXIF
+    orientation was taken in the upright image's pixels, and only "rotated upright" was said; a calibration in the
+    stored (sensor) orientation then had its axes swapped. It is said which; a focal length alone, or a photo not
+    turned, gets no such note."""
+    register_estimator("_stub_turn", lambda **kw: _StubEstimator([kp17 * 0.05]), overwrite=True)
+    turned = _jpeg_with_exif(tmp_path / "turned.jpg", (120, 80), orientation=6)
+    level = _jpeg_with_exif(tmp_path / "level.jpg", (80, 120))
+    base = ["--detector", "_stub_turn", "--weights", str(weights)]
+    said = "is taken in the pixels of the upright image (80 x 120 px), which EXIF orientation 6 turned by a quarter " \
+           "from the stored one: a calibration made with the stored (sensor) orientation must be turned"
+    for extra, note in ((["--principal-point", "40", "60"], "the calibration given (principal point) " + said),
+                        (["--focal", "100", "110"], "the calibration given (fx / fy) " + said),
+                        (["--focal", "100"], None)):
+        code, err = run([str(turned), "--out", str(tmp_path / "o"), *base, *extra], capsys)
+        rec = json.loads((tmp_path / "o" / "turned.json").read_text())
+        found = [w for w in rec["warnings"] if "upright image" in w]
+        assert code == 0 and (found == [note + " with it"] if note else not found), rec["warnings"]
+    code, err = run([str(level), "--out", str(tmp_path / "o"), *base, "--principal-point", "40", "60"], capsys)
+    assert code == 0 and "upright image" not in err, err
+
+
 def test_a_photos_opencv_lens_is_undone_before_the_lift(tmp_path, kp17, capsys):
     """``--distortion`` with ``--distortion-model opencv``: the detected 2D (through an OpenCV lens) is lifted as
     the pinhole 2D would be; the record keeps the 2D as detected and says which lens. It needs --focal, and is

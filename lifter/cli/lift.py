@@ -316,7 +316,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "keypoint file's focal; a photo's EXIF; else the --fov field of view of the image size, which a "
                    "keypoint file then has to give as image_size, or --image-size)")
     p.add_argument("--principal-point", type=float, nargs=2, metavar=("CX", "CY"), default=None,
-                   help="principal point in px (default: the image centre)")
+                   help="principal point in px (default: the image centre); for a photo, in the pixels of the "
+                        "upright image (after its EXIF orientation), as --focal FX FY and --distortion are")
     p.add_argument("--image-size", type=float, nargs=2, metavar=("W", "H"), default=None,
                    help="keypoint files: the image's size in px, for those that give no image_size (a list of "
                         "people cannot), or in place of their own: the principal point defaults to its centre and "
