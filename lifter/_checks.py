@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -520,3 +521,17 @@ def collect_output_notes(acc: dict[str, tuple[int, int, str]], frame: int, notes
         kind = getattr(note, "kind", note)
         first, n, message = acc.get(kind, (frame, 0, note))
         acc[kind] = (first, n + 1, message)
+
+
+PLOT_FORMATS: tuple[str, ...] = ("png", "pdf", "svg")
+"""The file formats a plot (:mod:`lifter.plots`) is written in, by its name's suffix."""
+
+
+def plot_format(path: str | Path, *, option: str = "the plot") -> str:
+    """The format of a plot written to ``path``, from its suffix (:data:`PLOT_FORMATS`); :class:`PoseLifterError`
+    naming ``option`` for any other (a user trial's ``--pck-plot x.jpg`` got PNG data under a .jpg name)."""
+    fmt = Path(path).suffix.lower().lstrip(".")
+    if fmt not in PLOT_FORMATS:
+        raise PoseLifterError(f"{option}: {Path(path).name} is not a name a plot can be written under: name it "
+                              + ", ".join(f".{f}" for f in PLOT_FORMATS[:-1]) + f" or .{PLOT_FORMATS[-1]}")
+    return fmt

@@ -13,6 +13,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ._checks import PoseLifterError, plot_format  # noqa: E402
+
 
 def curve_y_range(series: Sequence[Sequence[float]]) -> tuple[float, float]:
     """The y range of a validation panel: from 0.9x the lowest value to at most 2.5x it (the untrained first
@@ -52,10 +54,15 @@ def plot_learning_curve(curve: Sequence[dict[str, float]], path: str | Path, *, 
 
 
 def _save(fig: Any, path: Path) -> Path:
-    """Save a figure as PNG through a temporary file and a rename."""
+    """Save a figure in the format of its suffix (:func:`plot_format`) through a temporary file and a rename."""
+    try:
+        fmt = plot_format(path)
+    except PoseLifterError:
+        plt.close(fig)
+        raise
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, dpi=110, format="png")
+    fig.savefig(tmp, dpi=110, format=fmt)
     plt.close(fig)
     os.replace(tmp, path)
     return path

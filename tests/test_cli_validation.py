@@ -84,6 +84,9 @@ def test_train_rejects_bad_config_values(capsys, tmp_path):
         (["--focal-scales", "1", "--analytic-root", "--per-action"],
          "--analytic-root, --per-action cannot be combined with --focal-scales"),
         (["--pp-shift", "10,0"], "--pp-shift only applies to the virtual cameras of --focal-scales"),
+        # (a user trial: PNG data was written under the .jpg name)
+        (["--pck-plot", "x.jpg"], "--pck-plot: x.jpg is not a name a plot can be written under: name it .png, .pdf "
+                                  "or .svg"),
     ],
 )
 def test_evaluate_rejects_ignored_option_combinations(argv, expected, capsys):
@@ -280,3 +283,17 @@ def test_h36m_help_names_the_folder_it_reads(capsys, monkeypatch):
     with pytest.raises(SystemExit):
         main(["evaluate", "--help"])
     assert "(default:$POSELIFTER_H36M,/somewhere/h36m)" in "".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("suffix", ["png", "pdf", "svg"])
+def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, suffix):
+    """lifter.plots writes each plot in the format of its suffix (it wrote PNG data under any name)."""
+    from lifter import PoseLifterError
+    from lifter.plots import plot_pck_curves
+
+    out = plot_pck_curves({"a": (np.linspace(0, 150, 31), np.linspace(0, 1, 31))}, tmp_path / f"p.{suffix}")
+    head = out.read_bytes()[:64]
+    assert {"png": head.startswith(b"\x89PNG"), "pdf": head.startswith(b"%PDF"), "svg": b"<?xml" in head}[suffix]
+    with pytest.raises(PoseLifterError, match=r"the plot: p.jpg is not a name a plot can be written under"):
+        plot_pck_curves({"a": (np.linspace(0, 150, 31), np.linspace(0, 1, 31))}, tmp_path / "p.jpg")
+    assert not (tmp_path / "p.jpg").exists()

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .._checks import PoseLifterError, PoseLifterWarning
+from .._checks import PoseLifterError, PoseLifterWarning, plot_format
 from ..api import Lifter, ensemble_parts
 from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS, trained_protocol
 from ..detections import with_sh_detections
@@ -84,7 +84,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--max-frames-per-sequence", type=positive_int, default=None,
                    help="only the first this many frames of each sequence (after --stride; default all)")
     p.add_argument("--json", type=Path, default=None, help="write all numbers to this JSON file")
-    p.add_argument("--pck-plot", type=Path, default=None, help="write the 3DPCK-vs-threshold curves to this PNG")
+    p.add_argument("--pck-plot", type=Path, default=None,
+                   help="write the 3DPCK-vs-threshold curves to this .png (or .pdf, .svg)")
     p.add_argument("--quantize", action="store_true",
                    help="also evaluate each model with int8 block weights (Lifter.quantized)")
     p.add_argument("--source", default=None, choices=("clean", "detected"),
@@ -101,6 +102,8 @@ def check_evaluate_options(args: argparse.Namespace) -> None:
     for option, path in (("--json", args.json), ("--pck-plot", args.pck_plot)):
         if path is not None:
             check_writable(path, option=option)
+    if args.pck_plot is not None:
+        plot_format(args.pck_plot, option="--pck-plot")
     if args.focal_scales is None:
         if tuple(args.pp_shift) != (0.0, 0.0):
             raise PoseLifterError("--pp-shift only applies to the virtual cameras of --focal-scales; "
