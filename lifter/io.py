@@ -684,6 +684,27 @@ def _mmpose_meta_format(meta: Any) -> str | None:
     return MMPOSE_DATASETS.get(dataset.lower()) if isinstance(dataset, str) else None
 
 
+def _inferencer_results(d: Any) -> Any:
+    """MMPoseInferencer's results saved as they come (``{"predictions": [[instance, ...]], "visualization": [...]}``
+    per image or frame; a list of them for a video) as MMPose's frames (``{"instances": [...]}``, a list of
+    ``{"frame_id", "instances"}``), which :func:`_mmpose_frame` and :func:`_mmpose_sequence` read; anything else as
+    it is (a user trial's saved result was "expected an object with 'keypoints'"). Each result holds the images of
+    one call, and one file is one image: a result of several images is left as it is (refused as a layout)."""
+    def frame(r: Any) -> Any:
+        preds = r.get("predictions") if isinstance(r, dict) and "instances" not in r else None
+        if not (isinstance(preds, list) and len(preds) == 1 and isinstance(preds[0], list)):
+            return None
+        return {**{k: v for k, v in r.items() if k not in ("predictions", "visualization")}, "instances": preds[0]}
+
+    if isinstance(d, dict):
+        return frame(d) or d
+    if isinstance(d, list) and d and all(isinstance(r, dict) and "predictions" in r for r in d):
+        frames = [frame(r) for r in d]
+        if all(f is not None for f in frames):
+            return [{"frame_id": i, **f} for i, f in enumerate(frames)]
+    return d
+
+
 def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     """MMPose's prediction files as one frame of people: the demo's ``--save-predictions`` file (``{"meta_info":
     ..., "instance_info": [{"frame_id": 1, "instances": [...]}]}``, or its instances directly), MMPoseInferencer's
@@ -692,6 +713,7 @@ def _mmpose_frame(d: Any, p: Path, fmt: str | None) -> tuple[Any, str | None]:
     (:func:`_mmpose_meta_format`), else COCO-17, unless a format is given. Several frames are a
     video's, a keypoint sequence (:func:`_mmpose_sequence`): refused here, naming how to lift them. Anything else comes
     back as it is."""
+    d = _inferencer_results(d)
     if isinstance(d, dict) and "instance_info" in d and "people" not in d and "keypoints" not in d:
         info, label, rest = d["instance_info"], "an MMPose predictions file", ("instance_info", "meta_info")
         if isinstance(info, list) and all(isinstance(q, dict) and "instances" not in q for q in info):
@@ -790,6 +812,21 @@ def _people_of(d: Any, p: Path, fmt: str | None
     ids = ids or [None] * len(people)
     kept = [(i, q, pid) for i, (q, pid) in enumerate(zip(people, ids)) if q is not None and q != []]
     return kept, fmt, meta, fmt in LAYOUT_FORMATS and fmt != given and not (isinstance(d, dict) and d.get("format"))
+
+
+def _nobody_detail(d: Any) -> str:
+    """Why a decoded keypoint file gave nobody, for the message (a user trial read "no person" for ``{"keypoints":
+    null}`` and for objects without keypoints, as for a frame where nobody was found): empty for a layout that says
+    nobody was there (``"people": []``, ``[]``)."""
+    if isinstance(d, dict) and "keypoints" in d and d["keypoints"] is None:
+        return ": its 'keypoints' is null (a list of [x, y] or [x, y, confidence] rows)"
+    if isinstance(d, list) and d and all(isinstance(q, dict) for q in d):
+        keys = sorted({str(k) for q in d for k in q})
+        return (f": none of its {len(d)} object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] rows); "
+                f"they have {', '.join(repr(k) for k in keys[:8])}" + (", ..." if len(keys) > 8 else ""))
+    if isinstance(d, dict) and isinstance(d.get("people"), list) and d["people"]:
+        return f": none of its {len(d['people'])} 'people' has keypoints"
+    return ""
 
 
 def _one_of(names: Sequence[str]) -> str:
@@ -1036,7 +1073,7 @@ def parse_keypoint_json(path: str | Path, *, default_format: str | None = None) 
         raise PoseLifterError(f"{p}: a keypoint sequence ('frames'); read it with parse_keypoint_sequence")
     people, fmt, meta, layout_format = _people_of(d, p, default_format)
     if not people:
-        raise PoseLifterError(f"{p}: no person in the keypoint file")
+        raise PoseLifterError(f"{p}: no person in the keypoint file{_nobody_detail(d)}")
     found = _people_arrays(people, p, fmt, notes, layout_format=layout_format)
     if found.format == "coco17" and found.arrays:
         notes += _h36m_as_coco_notes(np.stack(found.arrays))
@@ -1229,6 +1266,7 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too); else None. Its frames are read as
     the joints its ``meta_info`` names (:func:`_mmpose_meta_format`, as the file's ``format``), else COCO-17, unless
     the file or the caller (``--format``) says otherwise."""
+    d = _inferencer_results(d)
     if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
         info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}
     elif isinstance(d, list):

@@ -1490,6 +1490,46 @@ def test_an_mmpose_file_is_read_in_the_joints_its_metadata_names(tmp_path, kp17,
     assert parse_keypoint_json(p, default_format="coco17").format == "coco17"
 
 
+def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
+    """A user trial: MMPoseInferencer's result saved as it comes (``{"predictions": [[instance, ...]],
+    "visualization": []}``) was "expected an object with 'keypoints'". One is a frame (COCO-17, its scores read), a
+    list of them a video's frames, a sequence; a result of several images is refused, as one file is one image."""
+    from lifter.io import is_keypoint_sequence, parse_keypoint_sequence
+
+    coco = coco_from_h36m(kp17)
+    inst = {"keypoints": coco.tolist(), "keypoint_scores": [0.9] * 17, "bbox": [[0, 0, 1, 1]], "bbox_score": 0.9}
+    p = tmp_path / "r.json"
+    p.write_text(json.dumps({"predictions": [[inst, {**inst, "keypoints": (coco * 0.5).tolist()}]],
+                             "visualization": []}))
+    kf = parse_keypoint_json(p)
+    assert kf.format == "coco17" and len(kf.people) == 2 and kf.people_scores[0] is not None
+    np.testing.assert_allclose(kf.keypoints, coco)
+    assert not is_keypoint_sequence(p)
+    p.write_text(json.dumps([{"predictions": [[inst]], "visualization": []} for _ in range(3)]))
+    assert is_keypoint_sequence(p)
+    ks = parse_keypoint_sequence(p, fps=30)
+    assert ks.format == "coco17" and [len(f) for f in ks.frames] == [1, 1, 1]
+    p.write_text(json.dumps({"predictions": [[inst], [inst]], "visualization": []}))
+    with pytest.raises(PoseLifterError, match="expected an object with 'keypoints'"):
+        parse_keypoint_json(p)
+
+
+@pytest.mark.parametrize("doc, said", [
+    ({"keypoints": None}, ": its 'keypoints' is null"),
+    ([{"bogus": 1}], ": none of its 1 object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] rows); they "
+                     "have 'bogus'"),
+    ({"people": []}, "no person in the keypoint file"),
+])
+def test_a_file_with_nobody_says_why(tmp_path, doc, said):
+    """A user trial: ``{"keypoints": null}`` and objects without keypoints read "no person in the keypoint file", as
+    a frame where nobody was found does. They say why; an empty 'people' is still nobody."""
+    p = tmp_path / "n.json"
+    p.write_text(json.dumps(doc))
+    with pytest.raises(PoseLifterError) as caught:
+        parse_keypoint_json(p)
+    assert said in str(caught.value) and ("'people'" not in str(caught.value) or doc != {"people": []}), caught.value
+
+
 def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys, monkeypatch):
     """User trial: clip.mp4 and then clip.avi lifted into one folder: the second run replaced clip.json silently.
     Replacing the result of another input is said; lifting the same input again is not."""
