@@ -83,6 +83,28 @@ _OTHER_FORMATS: dict[int, tuple[str, ...]] = {16: ("sh16",), 25: ("openpose25",)
 is also COCO's: the count cannot tell, so it gets none)."""
 
 
+OTHER_LAYOUTS: dict[int, tuple[str, str, str, str]] = {
+    26: ("Halpe-26 (AlphaPose)", "coco17", "the first 17 joints", "[..., :17, :]"),
+    32: ("Human3.6M's 32-joint mocap skeleton", "h36m17", "the 17 joints at lifter.skeleton.H36M32_INDICES",
+         "[..., lifter.skeleton.H36M32_INDICES, :]"),
+    133: ("COCO-WholeBody", "coco17", "the first 17 joints (the body)", "[..., :17, :]"),
+}
+"""Joint counts of layouts that hold one of the formats read (:mod:`lifter.keypoints`) among their joints: ``(layout,
+format, which joints, the index that takes them)``, for the messages about a joint count no format has (a user
+trial got a bare shape error for each)."""
+
+
+def other_layout_hint(num_joints: int, *, name: str | None = None) -> str:
+    """``"; 32 joints is ...: take ..."`` for a joint count of :data:`OTHER_LAYOUTS` (``name``: the array's, for
+    the API's message; None: a keypoint file's), else empty."""
+    if num_joints not in OTHER_LAYOUTS:
+        return ""
+    layout, fmt, which, index = OTHER_LAYOUTS[num_joints]
+    take = (f"lifter.convert({name}{index}, src=\"{fmt}\")" if name is not None else
+            f"write those 17 with \"format\": \"{fmt}\"")
+    return f"; {num_joints} joints is {layout}? {which[0].upper() + which[1:]} are {fmt}'s: {take}"
+
+
 MEDIAPIPE_XY_NOTE: str = "MediaPipe's x, y are fractions of the image: multiply by its width and height"
 """Said with each hint that rows of 4 values may be MediaPipe's (x, y, z, visibility) (here and in
 :mod:`lifter.io`)."""
@@ -106,6 +128,8 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
             fmts = " or ".join(f'src="{f}"' for f in _OTHER_FORMATS[arr.shape[-2]])
             hint = (f"; {arr.shape[-2]} joints is another detector's layout: convert it to Human3.6M's 17 with "
                     f"lifter.convert({name}, {fmts}) first")
+        elif num_joints == 17 and arr.ndim >= 2 and arr.shape[-1] == dim:
+            hint = other_layout_hint(arr.shape[-2], name=name)
         raise PoseLifterError(f"{name}: expected shape {expected}, got {tuple(arr.shape)}{hint}")
     if not np.all(np.isfinite(arr)):
         bad_joint = np.asarray(~np.isfinite(arr).all(-1))

@@ -51,6 +51,7 @@ from ._checks import (
     PoseLifterError,
     face_first_people,
     not_face_first_message,
+    other_layout_hint,
 )
 from .camera import (
     MAX_DISTORTION_COEFFICIENT,
@@ -840,9 +841,9 @@ def _no_format_with(num_joints: int) -> str:
     OpenPose's COCO-18 layout (a user trial's file), which is not read."""
     counts = ", ".join(f"{n} {get_format(n).num_joints}" for n in keypoint_formats())
     return (f": no format has {num_joints} joints (the formats and their joint counts: {counts}); convert the "
-            "keypoints to one of them" + (" (18 joints is OpenPose's COCO-18 / BODY_18 layout, which is not read: "
-                                          "run OpenPose with BODY_25, openpose25, or write the 17 COCO joints in "
-                                          "COCO order, coco17)" if num_joints == 18 else ""))
+            "keypoints to one of them" + other_layout_hint(num_joints)
+            + (" (18 joints is OpenPose's COCO-18 / BODY_18 layout, which is not read: run OpenPose with BODY_25, "
+               "openpose25, or write the 17 COCO joints in COCO order, coco17)" if num_joints == 18 else ""))
 
 
 def _needs(fmt: str) -> str:
@@ -936,7 +937,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
             counts = ", ".join(f"{get_format(n).num_joints} ({n})" for n in keypoint_formats())
             raise PoseLifterError(f"{p}: {J} joints per person, which no known keypoint format has; the formats and "
                                   f"their joint counts: {counts}. Give the joints of one of these formats (and "
-                                  "'format' where the count is shared)" + (COCO18_HINT if J == 18 else ""))
+                                  "'format' where the count is shared)" + (COCO18_HINT if J == 18 else "")
+                                  + other_layout_hint(J))
         fmt = FORMAT_BY_COUNT[J]
         if J == 17 and all(_face_first(xy, miss) for xy, miss, _ in parsed):
             raise PoseLifterError(

@@ -176,6 +176,12 @@ def test_large_batches_are_chunked_with_the_same_result(camera_lifter, keypoints
         (np.zeros((16, 2)), r"expected shape \(\.\.\., 17, 2\)"),
         (np.zeros((17, 3)), r"expected shape"),
         ("abc", "strings are not numbers"),
+        # (a user trial: these got a bare shape error; each layout holds a format's 17, and the hint takes them)
+        (np.zeros((26, 2)), r"26 joints is Halpe-26 \(AlphaPose\)\? The first 17 joints are coco17's: "
+                            r"lifter.convert\(keypoints\[\.\.\., :17, :\], src=\"coco17\"\)"),
+        (np.zeros((2, 32, 2)), r"32 joints is Human3.6M's 32-joint mocap skeleton\? .*"
+                               r"keypoints\[\.\.\., lifter.skeleton.H36M32_INDICES, :\], src=\"h36m17\""),
+        (np.zeros((133, 2)), r"133 joints is COCO-WholeBody\? The first 17 joints \(the body\) are coco17's"),
     ],
 )
 def test_bad_keypoint_shapes(small_lifter, bad, match):

@@ -1490,6 +1490,26 @@ def test_an_mmpose_file_is_read_in_the_joints_its_metadata_names(tmp_path, kp17,
     assert parse_keypoint_json(p, default_format="coco17").format == "coco17"
 
 
+def test_a_file_of_a_layout_that_holds_a_format_s_17_joints_says_which(tmp_path, kp17):
+    """A user trial: Halpe-26, Human3.6M's 32 mocap joints and COCO-WholeBody's 133 got a bare joint-count error. The
+    message names the layout and the 17 joints to write; the 17 at H36M32_INDICES are then read as H36M's."""
+    from lifter.skeleton import H36M32_INDICES
+
+    full = np.zeros((32, 2))
+    full[list(H36M32_INDICES)] = kp17
+    p = tmp_path / "k.json"
+    for doc, said in (({"keypoints": full.tolist()}, "32 joints is Human3.6M's 32-joint mocap skeleton? The 17 joints "
+                       "at lifter.skeleton.H36M32_INDICES are h36m17's: write those 17 with \"format\": \"h36m17\""),
+                      ({"keypoints": [[1.0, 2.0]] * 133, "format": "coco17"}, "133 joints is COCO-WholeBody? The "
+                       "first 17 joints (the body) are coco17's: write those 17 with \"format\": \"coco17\"")):
+        p.write_text(json.dumps({**doc, "image_size": [1280, 720]}))
+        with pytest.raises(PoseLifterError) as caught:
+            parse_keypoint_json(p)
+        assert said in str(caught.value), caught.value
+    p.write_text(json.dumps({"keypoints": full[list(H36M32_INDICES)].tolist(), "format": "h36m17"}))
+    np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
+
+
 def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
     """A user trial: MMPoseInferencer's result saved as it comes (``{"predictions": [[instance, ...]],
     "visualization": []}``) was "expected an object with 'keypoints'". One is a frame (COCO-17, its scores read), a
