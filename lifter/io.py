@@ -906,7 +906,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
                    *, layout_format: bool = False, frame: int | None = None, score_note: bool = True) -> _People:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format,
     with a missing face or mid-body joint stood in for where the format allows (:data:`lifter.keypoints.STAND_INS`);
-    the people still missing a joint the lifter needs (confidence 0 or null, or null / non-finite coordinates) are
+    the people still missing a joint the lifter needs (confidence 0 or below or null, or null / NaN coordinates) are
     left out. layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages.
     frame: the sequence's frame these people are of (None: a single-frame file), for the messages (:func:`_who`)."""
     parsed = []
@@ -978,7 +978,7 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
 
 def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
     who = "; ".join(f"{w}: {bad}" for w, bad in dropped[:5]) + ("; ..." if len(dropped) > 5 else "")
-    return (f"joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for {who}; {_needs(fmt)}"
+    return (f"joint(s) missing (confidence 0 or below or null, or null / NaN coordinates) for {who}; {_needs(fmt)}"
             + (". Give those joints (e.g. placed by hand, or interpolated from neighbouring frames)" if nobody_left
                else ""))
 
@@ -1436,8 +1436,8 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         joints = sorted({j for _, (_, bad) in dropped for j in bad})
         first_who = dropped[0][1][0]
         msg = (f"{len(dropped)} person(s) left out of {len(at)} frame(s) ({', '.join(map(str, at[:10]))}"
-               f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0 or null, or null / "
-               f"non-finite coordinates; first {first_who}); {_needs(fmt)}")
+               f"{', ...' if len(at) > 10 else ''}) for missing joints {joints} (confidence 0 or below or null, or "
+               f"null / NaN coordinates; first {first_who}); {_needs(fmt)}")
         if not any(frames):
             raise PoseLifterError(f"{p}: {msg}; nobody is left to lift. Give those joints (e.g. interpolated from "
                                   "neighbouring frames)")

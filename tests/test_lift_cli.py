@@ -722,12 +722,12 @@ def test_a_person_missing_a_joint_is_left_out_not_the_whole_file(tmp_path, weigh
     out = tmp_path / "out"
     code, err = run([str(two), str(one), str(h), "--out", str(out), "--weights", str(weights)], capsys)
     assert code == 0 and "lifted 1 of 3" in err, err
-    assert "1 of 2 people left out: joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for " \
+    assert "1 of 2 people left out: joint(s) missing (confidence 0 or below or null, or null / NaN coordinates) for " \
            "person 1 in the file (input_index 0, id 'A'): ['l_wrist']; the lifter needs every joint that the " \
            "openpose25 -> h36m17 rules use" in err
     got = json.loads((out / "two.json").read_text())
     assert got["num_people"] == 1 and got["people"][0]["person_id"] == "B" and got["people"][0]["input_index"] == 1
-    assert f"{one}: joint(s) missing (confidence 0 or null, or null / non-finite coordinates) for the person: " \
+    assert f"{one}: joint(s) missing (confidence 0 or below or null, or null / NaN coordinates) for the person: " \
            "['l_wrist']" in err and "Give those joints" in err and not (out / "one.json").exists()
     assert "the lifter needs all 17 joints" in err and "h36m17 -> h36m17" not in err
 
@@ -740,10 +740,10 @@ def test_a_null_confidence_or_a_null_row_marks_a_missing_joint(tmp_path, kp17):
 
     cam = {"image_size": [1280, 720], "focal": 1000.0, "format": "h36m17"}
     rows = [[float(x), float(y), 0.9] for x, y in kp17]
-    missing_msg = r"joint\(s\) missing \(confidence 0 or null, or null / non-finite coordinates\) for the person: " \
+    missing_msg = r"joint\(s\) missing \(confidence 0 or below or null, or null / NaN coordinates\) for the person: " \
                   r"\['l_wrist'\]"
     for bad in ([float(kp17[13, 0]), float(kp17[13, 1]), None], [float(kp17[13, 0]), float(kp17[13, 1]), 0], None,
-                [None, None, 0.9]):
+                [None, None, 0.9], [float(kp17[13, 0]), float(kp17[13, 1]), -1]):  # (-1: "0 or below", user trial)
         doc = [list(r) for r in rows]
         doc[13] = bad  # l_wrist
         p = tmp_path / "k.json"
