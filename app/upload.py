@@ -301,8 +301,8 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     try:
         json_text(content)
     except UnicodeDecodeError:
-        raise UploadError(f"{nm}: not a photo Pillow can read, and not a UTF-8 (or UTF-16) keypoint JSON "
-                          "file") from None
+        raise UploadError(f"{nm}: not a photo Pillow can read, and not a keypoint JSON file (JSON text in UTF-8, "
+                          "UTF-16 or UTF-32)") from None
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
     kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)
@@ -321,7 +321,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
     # the photo's size (and EXIF focal) by the library's rule for the image the keypoints were found in (as for a
     # keypoint sequence): where the file gives no image size nor principal point, or the same size
     try:
-        found = keypoints_image(kf.image_size, kf.principal_point, poses=[kf.keypoints, *people], where=nm,
+        found = keypoints_image(kf.image_size, kf.principal_point, poses=list(kf.people) or [kf.keypoints], where=nm,
                                 fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before",
                                                                            photo.size, photo.exif))
     except PoseLifterError as exc:

@@ -60,8 +60,16 @@ def _real_array(x: Any, *, name: str, what: str) -> np.ndarray:
     masked array's masked values become NaN, which the callers refuse by name (a user trial: its mask was ignored and
     the values under it lifted)."""
     x = _untorch(x)
-    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any() and x.dtype.kind in "biuf":
-        x = np.ma.filled(x.astype(np.float64), np.nan)
+    if isinstance(x, (list, tuple)) and any(isinstance(v, np.ma.MaskedArray) for v in x):
+        try:  # (a list of masked arrays: np.asarray would drop their masks)
+            x = np.ma.stack([np.ma.asarray(v) for v in x])
+        except (TypeError, ValueError):
+            pass  # (ragged: refused below as any ragged list is)
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any() and x.dtype.kind != "b":
+        try:
+            x = np.ma.filled(x.astype(np.float64), np.nan)
+        except (TypeError, ValueError):
+            pass  # (not numbers: refused below, naming what they are)
     try:
         raw = np.asarray(x)
     except (TypeError, ValueError, RuntimeError) as exc:
@@ -110,6 +118,12 @@ MEDIAPIPE_XY_NOTE: str = "MediaPipe's x, y are fractions of the image: multiply 
 :mod:`lifter.io`)."""
 
 
+def _has_mask(x: Any) -> bool:
+    """Whether ``x`` is a numpy masked array, or a list of them, with a value masked."""
+    parts = x if isinstance(x, (list, tuple)) else [x]
+    return any(isinstance(v, np.ma.MaskedArray) and bool(np.ma.getmaskarray(v).any()) for v in parts)
+
+
 def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np.ndarray:
     """Return ``x`` as a float64 array of shape ``(..., num_joints, dim)`` or raise a clear error.
     Torch tensors are accepted (detached and copied to the CPU)."""
@@ -137,7 +151,7 @@ def as_points(x: Any, *, name: str, dim: int, num_joints: int | None = 17) -> np
         where = where_in_batch(bad_joint.any(-1))
         fix = (" A joint the detector missed has to be filled in (from a neighbouring frame, or its left/right "
                "partner) or the pose left out" if dim == 2 else "")
-        masked = " or are masked" if isinstance(x, np.ma.MaskedArray) else ""
+        masked = " or are masked" if _has_mask(x) else ""
         raise PoseLifterError(
             f"{name}: joint(s) {which} contain NaN/inf{masked}{where}; every joint needs a finite position.{fix}")
     return arr

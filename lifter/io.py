@@ -426,19 +426,25 @@ JSON_BOMS: Final[tuple[tuple[bytes, str], ...]] = (
 each names."""
 
 
+def json_encoding(raw: bytes) -> str:
+    """The encoding of JSON text from its first bytes, as :func:`json.loads` finds it for bytes (RFC 8259: UTF-8,
+    UTF-16 or UTF-32, told by a byte-order mark or, without one, by where the first characters' zero bytes lie)."""
+    codec = next((c for bom, c in JSON_BOMS if raw.startswith(bom)), None)
+    return codec or json.detect_encoding(raw)
+
+
 def json_text(raw: bytes) -> str:
-    """The text of a JSON file's bytes: UTF-8 (a byte-order mark allowed), or UTF-16 / UTF-32 that start with their
-    byte-order mark (a user trial: PowerShell's output was refused with a codec error). Raises
-    :class:`UnicodeDecodeError` for anything else."""
-    codec = next((c for bom, c in JSON_BOMS if raw.startswith(bom)), "utf-8-sig")
-    return raw.decode(codec)
+    """The text of a JSON file's bytes in its encoding (:func:`json_encoding`: UTF-8 with or without a byte-order
+    mark, UTF-16 or UTF-32; a user trial: PowerShell's UTF-16 output was refused with a codec error). Raises
+    :class:`UnicodeDecodeError` (its ``encoding`` the one tried) for bytes that are not text in it."""
+    return raw.decode(json_encoding(raw))
 
 
 def json_head(head: bytes) -> bytes:
-    """A file's first bytes as UTF-8, for sniffing: decoded from UTF-16 / UTF-32 where they start with that byte-order
-    mark (:data:`JSON_BOMS`; a character cut at the end is dropped), else as they are."""
-    codec = next((c for bom, c in JSON_BOMS if head.startswith(bom)), None)
-    return head if codec is None else head.decode(codec, errors="ignore").encode("utf-8")
+    """A file's first bytes as UTF-8, for sniffing: decoded from UTF-16 / UTF-32 where :func:`json_encoding` finds
+    one (a character cut at the end dropped), else as they are."""
+    codec = json_encoding(head)
+    return head if codec.startswith("utf-8") else head.decode(codec, errors="ignore").encode("utf-8")
 
 
 def _load_json(p: Path) -> Any:
@@ -454,8 +460,9 @@ def _load_json(p: Path) -> Any:
     except OSError as exc:
         raise PoseLifterError(f"{p}: cannot read ({exc})") from None
     except UnicodeDecodeError as exc:
-        raise PoseLifterError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}): save the keypoint file as "
-                              "UTF-8 (or UTF-16 with its byte-order mark)") from None
+        enc = "UTF-8" if exc.encoding.startswith("utf-8") else exc.encoding.upper()
+        raise PoseLifterError(f"{p}: not {enc} text, as its first bytes say it is ({exc.reason} at byte {exc.start}): "
+                              "save the keypoint file as UTF-8 text") from None
     if not text.strip():
         raise PoseLifterError(f"{p}: the file is empty; a keypoint file is JSON with the 2D joints (formats: README, "
                               "'Photos in, absolute 3D out')")
@@ -692,7 +699,9 @@ def _inferencer_results(d: Any) -> Any:
     it is (a user trial's saved result was "expected an object with 'keypoints'"). Each result holds the images of
     one call, and one file is one image: a result of several images is left as it is (refused as a layout)."""
     def frame(r: Any) -> Any:
-        preds = r.get("predictions") if isinstance(r, dict) and "instances" not in r else None
+        theirs = isinstance(r, dict) and not any(k in r for k in ("instances", "keypoints", "people",
+                                                                    "pose_keypoints_2d", "frames"))
+        preds = r.get("predictions") if theirs else None
         if not (isinstance(preds, list) and len(preds) == 1 and isinstance(preds[0], list)):
             return None
         return {**{k: v for k, v in r.items() if k not in ("predictions", "visualization")}, "instances": preds[0]}
@@ -819,14 +828,18 @@ def _nobody_detail(d: Any) -> str:
     """Why a decoded keypoint file gave nobody, for the message (a user trial read "no person" for ``{"keypoints":
     null}`` and for objects without keypoints, as for a frame where nobody was found): empty for a layout that says
     nobody was there (``"people": []``, ``[]``)."""
+    d = _inferencer_results(d)
     if isinstance(d, dict) and "keypoints" in d and d["keypoints"] is None:
         return ": its 'keypoints' is null (a list of [x, y] or [x, y, confidence] rows)"
     if isinstance(d, list) and d and all(isinstance(q, dict) for q in d):
-        keys = sorted({str(k) for q in d for k in q})
-        return (f": none of its {len(d)} object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] rows); "
-                f"they have {', '.join(repr(k) for k in keys[:8])}" + (", ..." if len(keys) > 8 else ""))
-    if isinstance(d, dict) and isinstance(d.get("people"), list) and d["people"]:
-        return f": none of its {len(d['people'])} 'people' has keypoints"
+        if any(k in q for q in d for k in ("instances", "frame_id", "pose_keypoints_2d")):
+            return ""  # (MMPose's or OpenPose's frame where nobody was found)
+        if all("keypoints" in q for q in d):
+            return f": the 'keypoints' of its {len(d)} object(s) are empty or null"
+        if not any("keypoints" in q for q in d):
+            keys = sorted({str(k) for q in d for k in q})
+            return (f": none of its {len(d)} object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] "
+                    f"rows); they have {', '.join(repr(k) for k in keys[:8])}" + (", ..." if len(keys) > 8 else ""))
     return ""
 
 
@@ -1249,17 +1262,25 @@ def _dense(numbers: Sequence[int]) -> bool:
     return bool(numbers) and numbers[-1] - numbers[0] + 1 <= 2 * len(numbers)
 
 
-def openpose_partial_videos(files: Sequence[Path]) -> list[tuple[Path, int, int]]:
+def openpose_partial_videos(files: Sequence[Path]) -> list[tuple[Path, int, int, bool]]:
     """OpenPose's per-frame files of a video of which ``files`` hold at least two but not all (the frames of a clip
     picked out: :func:`openpose_frame_pattern` does not make them a sequence, which reads all the pattern names):
-    ``(pattern, how many are given, how many the pattern names)`` per such video (dense numbers, as a video's)."""
+    ``(pattern, how many are given, how many the pattern names, whether the numbers given are dense themselves,
+    so that in a folder of their own they would be a sequence)`` per such video (dense numbers, as a video's)."""
     out = []
     for pattern, members in _openpose_videos(files).items():
         named = frame_pattern_files(pattern)
+        number = {q.resolve(): n for n, q in named}
         given = {q.resolve() for q in members}
-        if 2 <= len(given) < len(named) and given <= {q.resolve() for _, q in named} and _dense([n for n, _ in named]):
-            out.append((pattern, len(given), len(named)))
+        if 2 <= len(given) < len(named) and given <= set(number) and _dense([n for n, _ in named]):
+            out.append((pattern, len(given), len(named), _dense(sorted(number[q] for q in given))))
     return out
+
+
+META_FORMAT_KEY: Final[str] = "\x00meta_format"
+"""Where :func:`_mmpose_sequence` leaves the format an MMPose file's ``meta_info`` names (a key no JSON file has):
+:func:`parse_keypoint_sequence` takes it after the file's ``format`` and the caller's ``default_format``, as
+:func:`_mmpose_frame` does for one frame."""
 
 
 def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
@@ -1278,8 +1299,8 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     if len(info) < 2 or not all(isinstance(q, dict) and "instances" in q for q in info):
         return None
     meta_fmt = _mmpose_meta_format(d.get("meta_info")) if isinstance(d, dict) else None
-    if meta_fmt is not None and "format" not in rest:  # (the joints its metadata names)
-        rest["format"] = meta_fmt
+    if meta_fmt is not None:  # (the joints its metadata names: below the file's 'format' and the caller's)
+        rest[META_FORMAT_KEY] = meta_fmt
     return {**rest, "frames": info}  # (each frame: _mmpose_frame, COCO-17 unless the file or the caller says)
 
 
@@ -1376,7 +1397,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                                                                         else ""))
     if not is_frame_rate(rate):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
-    fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format)
+    fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format) or d.get(META_FORMAT_KEY)
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
     indices, notes = frame_indices(raw, p, float(rate))

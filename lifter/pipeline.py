@@ -328,7 +328,7 @@ class KeypointsImage(NamedTuple):
 
 def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, image_size: Any | None = None,
                     principal_point: Any | None = None, fallback_image: tuple[Any, ...] | None = None,
-                    poses: Sequence[np.ndarray] = (), where: str | Path = "the keypoint file",
+                    poses: Sequence[np.ndarray] = (), where: str | Path = "",
                     what: str = "keypoint file") -> KeypointsImage:
     """The image size (px) a keypoint ``what`` (a file, a sequence) read from ``where`` is lifted with, and whether
     its keypoints are in the pixels of ``fallback_image`` (the image they were found in, as far as the caller knows:
@@ -358,9 +358,10 @@ def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, i
         assert image_size is not None
         W, H = image_size
         if len(poses) and float(np.mean(mostly_outside(np.stack(poses), (W, H)))) > 0.5:
-            raise PoseLifterError(f"{where}: the {what} has no \"image_size\": [W, H] (nor a principal point), and "
-                                  f"its poses lie mostly outside {name} ({W} x {H} px), whose size would be used: "
-                                  "add the file's own \"image_size\"")
+            at = f"{where}: " if str(where) else ""
+            raise PoseLifterError(f"{at}the {what} has no \"image_size\": [W, H] (nor a principal point), and its "
+                                  f"poses lie mostly outside {name} ({W} x {H} px), whose size would be used: add the "
+                                  "file's own \"image_size\"")
         notes.append(f"no image_size in the file: that of {name} ({W} x {H} px) is used")
     size, size_notes = given_image_size(image_size, file_size, where="image_size= (--image-size)")
     on_fallback = False
@@ -431,7 +432,8 @@ def turned_calibration_notes(orientation: int, size: tuple[int, int], *, princip
         return []
     f = None if focal is None else np.ravel(np.asarray(focal, np.float64))
     axes = [name for name, given in (("principal point", principal_point is not None),
-                                     ("fx / fy", f is not None and f.size == 2 and f[0] != f[1]),
+                                     ("fx / fy", f is not None and f.size == 2 and f[0] != f[1]
+                                      and orientation in (5, 6, 7, 8)),  # (a flip or a half turn keeps the axes)
                                      ("lens distortion", distortion is not None)) if given]
     if not axes:
         return []

@@ -210,6 +210,12 @@ def test_a_masked_array_s_masked_joints_are_refused_by_name(small_lifter, keypoi
         small_lifter.lift(kp, focal=1000.0, principal_point=(0, 0))
     with pytest.raises(PoseLifterError, match=r"focal"):
         small_lifter.lift(keypoints, focal=np.ma.masked_array([1000.0], mask=[True]), principal_point=(0, 0))
+    # a list of masked arrays, and an object-dtype one (a review: their masks were dropped)
+    with pytest.raises(PoseLifterError, match=r"\['l_knee'\] contain NaN/inf or are masked \(pose at index \(2,\)"):
+        small_lifter.lift(list(kp), focal=1000.0, principal_point=(0, 0))
+    with pytest.raises(PoseLifterError, match=r"\['l_knee'\] contain NaN/inf or are masked"):
+        small_lifter.lift(np.ma.masked_array(keypoints[2].astype(object), mask=kp.mask[2]), focal=1000.0,
+                          principal_point=(0, 0))
 
 
 def test_non_finite_3d_input_is_named_without_detector_advice():

@@ -353,6 +353,12 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
         assert v.load_upload("far.json", json.dumps({"keypoints": far, "format": "h36m17"}).encode()) is False
         assert ("its poses lie mostly outside the photo walking.jpg uploaded before (800 x 600 px), whose size would "
                 "be used: add the file's own \"image_size\"") in v.messages[-1], v.messages[-1]
+        # every person of the file counts for that rule, not only the six shown (a review: six inside and eight
+        # outside were drawn on the photo, where the library refuses them)
+        crowd = [{"keypoints": (s.keypoints_2d + [3.0 * i, 0.0]).tolist()} for i in range(6)] + \
+                [{"keypoints": (s.keypoints_2d * 0.2 + [2000.0 + 50 * i, 2000.0]).tolist()} for i in range(8)]
+        assert v.load_upload("crowd.json", json.dumps({"people": crowd, "format": "h36m17"}).encode()) is False
+        assert "its poses lie mostly outside the photo walking.jpg uploaded before" in v.messages[-1], v.messages[-1]
         # a file with its own camera (a K matrix: a principal point) but no image size is another image's pixels, as
         # for a keypoint sequence (lifter.pipeline.keypoints_image's rule): a canvas twice its principal point, not
         # the photo (which had put the principal point at the photo's corner)

@@ -654,6 +654,11 @@ def test_a_calibration_given_for_a_turned_photo_is_said_to_be_the_upright_image_
         assert code == 0 and (found == [note + " with it"] if note else not found), rec["warnings"]
     code, err = run([str(level), "--out", str(tmp_path / "o"), *base, "--principal-point", "40", "60"], capsys)
     assert code == 0 and "upright image" not in err, err
+    from lifter.pipeline import turned_calibration_notes  # (a half turn keeps the axes: fx / fy not said, a review)
+
+    assert turned_calibration_notes(3, (4000, 3000), principal_point=None, focal=(1000, 1100), distortion=None) == []
+    assert "(principal point)" in turned_calibration_notes(3, (4000, 3000), principal_point=(1, 2), focal=(1000, 1100),
+                                                           distortion=None)[0]
 
 
 def test_a_photos_opencv_lens_is_undone_before_the_lift(tmp_path, kp17, capsys):
@@ -1487,7 +1492,17 @@ def test_an_mmpose_file_is_read_in_the_joints_its_metadata_names(tmp_path, kp17,
     p.write_text(json.dumps({"meta_info": info("h36m17", "h36m"), "format": "coco17",
                              "instance_info": [{**inst, "keypoints": coco.tolist()}]}))
     assert parse_keypoint_json(p).format == "coco17"
+    # the caller's format (--format) comes before the metadata's, in a single frame and in a sequence (a review: a
+    # sequence took the metadata's over it)
+    one = {"meta_info": info("h36m17", "h36m"), "instance_info": [{**inst, "keypoints": coco.tolist()}]}
+    p.write_text(json.dumps(one))
     assert parse_keypoint_json(p, default_format="coco17").format == "coco17"
+    p.write_text(json.dumps({"meta_info": info("h36m17", "h36m"), "fps": 25, "instance_info": [
+        {"frame_id": i, "instances": [{**inst, "keypoints": coco.tolist()}]} for i in (1, 2)]}))
+    ks = parse_keypoint_sequence(p, default_format="coco17")
+    assert ks.format == "coco17" and not any("format" in w and "not read" in w for w in ks.warnings), ks.warnings
+    np.testing.assert_allclose(ks.frames[0][0], coco_from_h36m(kp17))
+    assert parse_keypoint_sequence(p).format == "h36m17"
 
 
 def test_a_file_of_a_layout_that_holds_a_format_s_17_joints_says_which(tmp_path, kp17):
@@ -1532,6 +1547,13 @@ def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
     p.write_text(json.dumps({"predictions": [[inst], [inst]], "visualization": []}))
     with pytest.raises(PoseLifterError, match="expected an object with 'keypoints'"):
         parse_keypoint_json(p)
+    # a review: COCO results with a 'predictions' field of their own were taken for the inferencer's, their own
+    # keypoints left unread
+    p.write_text(json.dumps([{"image_id": 1, "category_id": 1, "keypoints": np.c_[coco, np.full(17, 0.9)].ravel()
+                              .tolist(), "score": 0.9, "predictions": [[0.1, 0.2]]}]))
+    kf = parse_keypoint_json(p)
+    assert kf.format == "coco17" and len(kf.people) == 1
+    np.testing.assert_allclose(kf.keypoints, coco)
 
 
 @pytest.mark.parametrize("doc, said", [
@@ -1539,6 +1561,10 @@ def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
     ([{"bogus": 1}], ": none of its 1 object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] rows); they "
                      "have 'bogus'"),
     ({"people": []}, "no person in the keypoint file"),
+    ([{"image_id": 1, "keypoints": []}], ": the 'keypoints' of its 1 object(s) are empty or null"),
+    # (a frame where the detector found nobody: no more to say; a review read "none has 'keypoints'" for these)
+    ([{"frame_id": 0, "instances": []}], "no person in the keypoint file"),
+    ({"predictions": [[]], "visualization": []}, "no person in the keypoint file"),
 ])
 def test_a_file_with_nobody_says_why(tmp_path, doc, said):
     """A user trial: ``{"keypoints": null}`` and objects without keypoints read "no person in the keypoint file", as
@@ -1547,7 +1573,8 @@ def test_a_file_with_nobody_says_why(tmp_path, doc, said):
     p.write_text(json.dumps(doc))
     with pytest.raises(PoseLifterError) as caught:
         parse_keypoint_json(p)
-    assert said in str(caught.value) and ("'people'" not in str(caught.value) or doc != {"people": []}), caught.value
+    msg = str(caught.value)
+    assert said in msg and (said != "no person in the keypoint file" or msg.endswith(said)), msg
 
 
 def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, capsys, monkeypatch):
@@ -1571,7 +1598,8 @@ def test_a_result_of_another_input_replaced_is_said(tmp_path, weights, kp17, cap
     assert code == 0 and "replaces" not in err, err
 
 
-@pytest.mark.parametrize("codec", ["utf-16", "utf-16-le", "utf-16-be", "utf-32", "utf-8-sig"])
+@pytest.mark.parametrize("codec", ["utf-16", "utf-16-le", "utf-16-be", "utf-32", "utf-8-sig", "utf-16-le-no-bom",
+                                   "utf-16-be-no-bom"])
 def test_a_keypoint_file_in_utf16_with_its_byte_order_mark_is_read(tmp_path, weights, kp17, capsys, codec):
     """A user trial: a keypoint file written by Windows PowerShell's ``>`` (UTF-16 with a byte-order mark) was refused
     with a raw codec error. UTF-16 and UTF-32 with their mark are read as UTF-8 is, by content whatever the name; text
@@ -1582,15 +1610,19 @@ def test_a_keypoint_file_in_utf16_with_its_byte_order_mark_is_read(tmp_path, wei
 
     text = json.dumps({"keypoints": kp17.tolist(), "image_size": [1280, 720]})
     bom = {"utf-16-le": codecs.BOM_UTF16_LE, "utf-16-be": codecs.BOM_UTF16_BE}.get(codec, b"")
-    raw = bom + text.encode(codec)
+    raw = bom + text.encode(codec.removesuffix("-no-bom"))  # (without a mark: told by the zero bytes, as json.loads)
     p = tmp_path / "ps.json"
     p.write_bytes(raw)
     np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
     assert input_kind("ps.txt", raw[:512]) == ("keypoints", None)  # (by content: JSON text)
     code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 0, err
+    p.write_bytes(text.encode("utf-16")[:-1])  # (truncated: named as the UTF-16 it says it is, a review)
+    with pytest.raises(PoseLifterError, match=r"ps.json: not UTF-16-LE text, as its first bytes say it is"):
+        parse_keypoint_json(p)
     p.write_bytes(b'{"keypoints": [], "name": "caf\xe9"}')  # (Latin-1)
-    with pytest.raises(PoseLifterError, match=r"ps.json: not UTF-8 text \(.*\): save the keypoint file as UTF-8"):
+    with pytest.raises(PoseLifterError, match=r"ps.json: not UTF-8 text, as its first bytes say it is \(.*\): save "
+                                              r"the keypoint file as UTF-8"):
         parse_keypoint_json(p)
 
 
@@ -1606,6 +1638,9 @@ def test_hidden_files_pipes_and_devices_are_named_as_such(tmp_path, weights, kp1
     assert code == 0 and "lifted 1 of 1" in err, err
     assert f"{d}: skipped 1 hidden file(s) (names starting with '.', as macOS's ._ files; give one as an input to " \
            "lift it): ._x.json" in err
+    (d / "._y.json").symlink_to(tmp_path / "gone.json")  # (a hidden dangling link: skipped too, a review)
+    code, err = run([str(d), "--strict", "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0 and "skipped 2 hidden file(s)" in err, err
     code, err = run([str(d / "._x.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
     assert code == 1 and "._x.json" in err and "no such file" not in err, err  # (named: read, and refused as such)
     fifo = tmp_path / "pipe.json"
@@ -1659,6 +1694,9 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
     # ... and says why, and how to lift a part as one (a user trial: a clip's frames picked out, no word)
     assert ("2 of the 7 OpenPose per-frame files of video are given: they are lifted one by one (a keypoint sequence "
             "is all of a video's files") in err and "copy those files into a folder of their own" in err, err
+    sparse = [str(d / f"video_{n:012d}_keypoints.json") for n in (0, 7)]  # (not a clip: no such advice, a review)
+    code, err = run([*sparse, "--out", str(tmp_path / "g"), "--fps", "30", *base], capsys)
+    assert code == 0 and "2 of the 7 OpenPose" in err and "copy those files" not in err, err
     assert json.loads((tmp_path / "f" / "video_000000000001_keypoints.json").read_text())["kind"] == "keypoints"
     # ... and OpenPose's output for a folder of COCO images (numbers are image ids, sparse) stays stills
     coco = tmp_path / "coco"

@@ -401,6 +401,10 @@ def test_one_rule_for_the_image_a_keypoint_file_or_sequence_was_found_in(tmp_pat
         lift(doc(), image=("room.jpg", (200, 150)))
     with pytest.raises(PoseLifterError, match=r"fallback_image must be \(name, \(W, H\)\)"):
         lift(doc(), image=("room.jpg",))
+    from lifter.pipeline import keypoints_image  # (called on its own: the message names no file, a review)
+
+    with pytest.raises(PoseLifterError, match=r"^the keypoint file has no \"image_size\""):
+        keypoints_image(None, None, fallback_image=("room.jpg", (200, 150)), poses=[KP + [100, 50]])
 
 
 def test_a_sequence_in_the_fallback_image_s_pixels_takes_its_exif_focal(tmp_path, default):

@@ -161,7 +161,7 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
             for q in sorted(p.iterdir()):
                 sfx = q.suffix.lower()
                 known = sfx in IMAGE_SUFFIXES or sfx in VIDEO_SUFFIXES or sfx == ".json"
-                if q.name.startswith(".") and known and q.is_file():  # (macOS's ._x.jpg beside x.jpg: a user trial)
+                if q.name.startswith(".") and known and (q.is_file() or q.is_symlink()):  # (macOS's ._x.jpg: a trial)
                     hidden.append(q.name)
                 elif q.is_symlink() and not q.exists():
                     if known:
@@ -212,11 +212,11 @@ def expand_inputs(inputs: list[str | Path], *, out: Path | None = None,
         kept = set(members)
         files = [f for f in files[:at] if f not in kept] + [pattern] + [f for f in files[at:] if f not in kept]
         notes.append(f"{what} are lifted as one keypoint sequence, {pattern}, tracked and smoothed")
-    for pattern, given, total in openpose_partial_videos(files):  # (a clip's frames picked out: a user trial)
+    for pattern, given, total, dense in openpose_partial_videos(files):  # (a clip's frames picked out: a user trial)
         notes.append(f"{given} of the {total} OpenPose per-frame files of {pattern.name.split('_%012d')[0]} are given: "
                      "they are lifted one by one (a keypoint sequence is all of a video's files, its folder or the "
-                     f"frame pattern {pattern}; to lift a part of it as one, copy those files into a folder of their "
-                     "own and give that folder with --fps)")
+                     f"frame pattern {pattern}" + ("; to lift a part of it as one, copy those files into a folder of "
+                                                   "their own and give that folder with --fps)" if dense else ")"))
     unique: dict[Path, Path] = {}
     twice = []
     for f in files:
