@@ -765,10 +765,12 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                blas_threads: int | None = 1,
                progress: Callable[[int, int | None], None] | None = None,
                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
-               fps: float | None = None) -> SequenceRecord:
+               fps: float | None = None, video_fps: float | None = None) -> SequenceRecord:
     """Detect, lift, track and smooth everyone in a video file (module docstring). ``fps`` (``--fps``): the frame
     rate where the file gives no usable one (else :data:`lifter.io.ASSUMED_FPS`); the file's own wins, with a note
-    where they differ (as for a keypoint sequence). ``progress(done, total)``
+    where they differ (as for a keypoint sequence). ``video_fps`` (``--video-fps``): the frame rate used in place of
+    the file's own, with a note where they differ (a header that is wrong, a slow-motion clip whose capture rate is
+    the one wanted: times, smoothing and ``max_seconds`` run on it). ``progress(done, total)``
     is called after each frame (total: the frame count the file declares, within ``max_seconds``; may be None);
     ``on_frame(index, bgr)`` with each lifted frame's decoded image (full resolution, OpenCV BGR), e.g. to keep
     display copies without decoding the video twice. ``cli_options``: as :func:`lifter.pipeline.resolve_camera`'s.
@@ -785,11 +787,12 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     """
     check_max_side(max_side)  # (up front: not as the same error for every frame)
     check_frame_rate(fps, name="fps (--fps)")
+    check_frame_rate(video_fps, name="video_fps (--video-fps)")
     with limit_blas_threads(blas_threads):
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
-                           on_frame=on_frame, cli_options=cli_options, given_fps=fps)
+                           on_frame=on_frame, cli_options=cli_options, given_fps=fps, video_fps=video_fps)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -819,7 +822,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
                 progress: Callable[[int, int | None], None] | None,
                 on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
-                given_fps: float | None = None) -> SequenceRecord:
+                given_fps: float | None = None, video_fps: float | None = None) -> SequenceRecord:
     import cv2
 
     from .pipeline import plausibility_notes, resolve_camera
@@ -838,13 +841,19 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings: list[str] = []
         noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
         source_format: str | None = None  # (the detector's keypoint format, once anyone is found)
-        if not is_frame_rate(fps):
+        if video_fps is not None:  # (the caller's, in place of the file's: a user trial's header said 25 for 10)
+            if float(video_fps) != fps:
+                warnings.append(f"{float(video_fps):g} frames/s used (--video-fps), not the file's own "
+                                + (f"{fps:g}" if is_frame_rate(fps) else f"(no usable rate: {fps:g})"))
+            fps = float(video_fps)
+        elif not is_frame_rate(fps):
             warnings.append(f"the file gives no usable frame rate ({fps:g}); " + (
                 f"assumed {ASSUMED_FPS:g} frames/s" + (" (give it: --fps)" if cli_options else "")
                 if given_fps is None else f"{given_fps:g} frames/s used (--fps)"))
             fps = ASSUMED_FPS if given_fps is None else float(given_fps)
         elif given_fps is not None and float(given_fps) != fps:
-            warnings.append(own_fps_note(fps, given_fps))
+            warnings.append(own_fps_note(fps, given_fps) + (" (--video-fps to use it in place of the file's: a wrong "
+                                                            "header, slow motion)" if cli_options else ""))
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
         total = min(declared, limit) if declared > 0 else None

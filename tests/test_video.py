@@ -274,9 +274,18 @@ def test_video_max_people_and_duration_bound(tmp_path, lifter):
     assert any("more than 1 person in 20 frames" in w for w in rec.warnings)
     # a developer trial: --fps was ignored for a video without a word; the file's own rate wins, and says so
     told = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_seconds=1.0, fps=25)
-    assert told.fps == 10 and "the file's own fps (10) is used, not --fps 25" in told.warnings
+    assert told.fps == 10 and "the file's own fps (10) is used, not --fps 25 (--video-fps to use it in place of the " \
+        "file's: a wrong header, slow motion)" in told.warnings
     with pytest.raises(PoseLifterError, match=r"fps \(--fps\) must be the frame rate"):
         lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, fps=0)
+    # a user trial: a header's rate could not be corrected; video_fps (--video-fps) replaces it, with a note, and
+    # times and the duration bound run on it
+    fixed = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_seconds=1.0,
+                       video_fps=25)
+    assert fixed.fps == 25 and "25 frames/s used (--video-fps), not the file's own 10" in fixed.warnings
+    assert len(fixed.frames) == 25 and fixed.frames[5].time_s == pytest.approx(5 / 25)
+    with pytest.raises(PoseLifterError, match=r"video_fps \(--video-fps\) must be the frame rate"):
+        lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, video_fps=-1)
 
 
 def test_video_max_people_follows_one_person(tmp_path, lifter):

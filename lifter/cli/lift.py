@@ -351,6 +351,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth, at most 10)")
+    p.add_argument("--video-fps", type=float, default=None, metavar="FPS",
+                   help="videos: lift at this frame rate (frames/s, in (0, 1000]) in place of the one the file "
+                        "gives, with a note: for a header that is wrong, or a slow-motion clip whose capture rate is "
+                        "the one wanted (times, smoothing and --max-seconds run on it)")
     p.add_argument("--fps", type=float, default=None,
                    help="videos and keypoint sequences that give no frame rate of their own (MMPose's predictions "
                         "of a video; OpenPose's per-frame files: with --fps all of a video's <video>_<12 digits>"
@@ -400,8 +404,9 @@ def check_lift_options(args: argparse.Namespace) -> None:
     check_strength(args.smoothing, name="--smoothing")
     if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
-    if args.fps is not None and not (math.isfinite(args.fps) and 0 < args.fps <= 1000):
-        raise PoseLifterError(f"--fps must be a frame rate in (0, 1000] frames/s, got {args.fps:g}")
+    for option, rate in (("--fps", args.fps), ("--video-fps", args.video_fps)):
+        if rate is not None and not (math.isfinite(rate) and 0 < rate <= 1000):
+            raise PoseLifterError(f"{option} must be a frame rate in (0, 1000] frames/s, got {rate:g}")
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
     if args.distortion is not None:
@@ -512,7 +517,8 @@ def run_lift(args: argparse.Namespace) -> int:
                                 fbar.update(done - fbar.n)
 
                             seq = lift_video(path, lifter=lifter_for["image"], estimator=est, max_side=args.max_side,
-                                             progress=progress, fps=args.fps, **seq_kw)
+                                             progress=progress, fps=args.fps, video_fps=args.video_fps,
+                                             **seq_kw)
                     else:
                         img = load_image(path, max_side=args.max_side)  # bad files are reported as such, extra or not
                         rec = lift_image(img, lifter=lifter_for["image"], estimator=get_estimator_once(path),
