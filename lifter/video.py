@@ -380,7 +380,8 @@ class SequenceRecord:
         """``track_id -> `` the input's own id of the track's person (a keypoint sequence's ``person_id``), when
         every sighting that has one gives the same; None for a video, an unnamed person, or ids new in every frame
         (an annotation's own). As the written record's ``tracks`` give it."""
-        return {tid: _track_person_id(seen) for tid, seen in sorted(self.tracks().items())}
+        shared = _shared_person_ids(self.frames)
+        return {tid: _track_person_id(seen, shared) for tid, seen in sorted(self.tracks().items())}
 
     @property
     def metric_depth(self) -> bool:
@@ -389,8 +390,9 @@ class SequenceRecord:
         return depth_is_metric(self.focal_source)
 
     def to_json(self) -> dict[str, Any]:
+        named = self.track_person_ids()
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
-                   "person_id": _track_person_id(seen)} for tid, seen in sorted(self.tracks().items())]
+                   "person_id": named[tid]} for tid, seen in sorted(self.tracks().items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
@@ -535,11 +537,23 @@ def _crowd_note(max_people: int, crowded: list[int], *, searched: tuple[int, int
             f"{'was' if max_people == 1 else 'were'} lifted (--max-people): those already tracked, else the largest")
 
 
-def _track_person_id(seen: list[tuple[int, PersonState]]) -> str | int | None:
+def _shared_person_ids(frames: list[FrameResult]) -> set[str]:
+    """The input's person ids (as text: ``1`` and ``"1"`` are one) that some frame gives to more than one person: not
+    anyone's name (:func:`tracking_names` does not follow them either)."""
+    shared: set[str] = set()
+    for fr in frames:
+        texts = [str(q.person_id) for q in fr.people if q.person_id is not None]
+        shared.update(t for t in texts if texts.count(t) > 1)
+    return shared
+
+
+def _track_person_id(seen: list[tuple[int, PersonState]], shared: frozenset[str] | set[str] = frozenset()
+                     ) -> str | int | None:
     """The input's own id of a track's person (a keypoint sequence's ``person_id``) when every sighting that has one
-    gives the same; None for a video, an unnamed person, or ids new in every frame (an annotation's own)."""
+    gives the same; None for a video, an unnamed person, ids new in every frame (an annotation's own), or an id that
+    a frame gives to several people (``shared``: a user trial's two tracks both read person_id 1)."""
     ids = {q.person_id for _, q in seen if q.person_id is not None}
-    return ids.pop() if len(ids) == 1 else None
+    return ids.pop() if len(ids) == 1 and str(next(iter(ids))) not in shared else None
 
 
 def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]]]:
@@ -1095,6 +1109,13 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kept_names: list[list[Any]] | None = None if ids is None else []
     followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)))
     names_by_frame = None if ids is None else tracking_names(ids)
+    if ids is not None:  # (ids a frame gives to several people: said, as tracking_names leaves them out)
+        texts = [[str(p) for p in frame if p is not None] for frame in ids]
+        twice = [(at[i], t) for i, frame in enumerate(texts) for t in dict.fromkeys(frame) if frame.count(t) > 1]
+        if twice:
+            names = list(dict.fromkeys(t for _, t in twice))
+            warnings.append(f"person id(s) {', '.join(names[:5])} given to several people in one frame (first at frame "
+                            f"{twice[0][0]}): not used to follow anyone, nor as a track's person_id")
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
         names = [None] * len(fr) if names_by_frame is None else list(names_by_frame[i])

@@ -478,6 +478,19 @@ def test_tracking_names_leave_out_ids_that_do_not_recur(tmp_path):
         tracks = {q.track_id for fr in rec.frames for q in fr.people}
         assert len(tracks) == min(2, max_people), (max_people, tracks)
         assert rec.frames[3].people[0].person_id in (6, 7)  # (the file's ids are still kept)
+    # a user trial: one id given to both people of every frame named both tracks; no track takes it, and it is said
+    shared = [[{"keypoints": (a + i).tolist(), "id": 1}, {"keypoints": (b - i).tolist(), "id": "1"}] for i in range(10)]
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": shared}))
+    rec = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=0.0)
+    assert set(rec.track_person_ids().values()) == {None} and len(rec.track_person_ids()) == 2
+    assert all(t["person_id"] is None for t in rec.to_json()["tracks"])
+    assert "person id(s) 1 given to several people in one frame (first at frame 0): not used to follow anyone, nor " \
+           "as a track's person_id" in rec.warnings, rec.warnings
+    named = [[{"keypoints": (a + i).tolist(), "id": "kid"}, {"keypoints": (b - i).tolist(), "id": "dad"}]
+             for i in range(10)]  # (ids that name one person each are kept)
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": named}))
+    assert set(lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=0.0).track_person_ids().values()) == \
+        {"kid", "dad"}
 
 
 class _FakeCapture:
