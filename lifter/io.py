@@ -1287,8 +1287,8 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     """MMPose's predictions of several frames (the demo's ``{"meta_info", "instance_info": [{"frame_id",
     "instances"}, ...]}``, MMPoseInferencer's ``[{"frame_id", "instances"}, ...]``) as a sequence document
     ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too); else None. Its frames are read as
-    the joints its ``meta_info`` names (:func:`_mmpose_meta_format`, as the file's ``format``), else COCO-17, unless
-    the file or the caller (``--format``) says otherwise."""
+    the file's ``format``, else the caller's (``--format``), else the joints its ``meta_info`` names
+    (:func:`_mmpose_meta_format`, left under :data:`META_FORMAT_KEY`), else COCO-17."""
     d = _inferencer_results(d)
     if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
         info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}

@@ -430,14 +430,14 @@ def turned_calibration_notes(orientation: int, size: tuple[int, int], *, princip
     is stored) would have to be turned with it (a user trial: nothing said which). Else none."""
     if orientation == 1:
         return []
+    quarter = orientation in (5, 6, 7, 8)  # (a flip or a half turn keeps the axes: fx and fy stay)
     f = None if focal is None else np.ravel(np.asarray(focal, np.float64))
     axes = [name for name, given in (("principal point", principal_point is not None),
-                                     ("fx / fy", f is not None and f.size == 2 and f[0] != f[1]
-                                      and orientation in (5, 6, 7, 8)),  # (a flip or a half turn keeps the axes)
+                                     ("fx / fy", f is not None and f.size == 2 and f[0] != f[1] and quarter),
                                      ("lens distortion", distortion is not None)) if given]
     if not axes:
         return []
-    turned = "turned by a quarter" if orientation in (5, 6, 7, 8) else "flipped or turned by a half"
+    turned = "turned by a quarter" if quarter else "flipped or turned by a half"
     return [f"the calibration given ({', '.join(axes)}) is taken in the pixels of the upright image ({size[0]} x "
             f"{size[1]} px), "
             f"which EXIF orientation {orientation} {turned} from the stored one: a calibration made with the "

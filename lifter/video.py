@@ -380,8 +380,12 @@ class SequenceRecord:
         """``track_id -> `` the input's own id of the track's person (a keypoint sequence's ``person_id``), when
         every sighting that has one gives the same; None for a video, an unnamed person, or ids new in every frame
         (an annotation's own). As the written record's ``tracks`` give it."""
+        return self._person_ids(self.tracks())
+
+    def _person_ids(self, tracks: dict[int, list[tuple[int, PersonState]]]) -> dict[int, str | int | None]:
+        """:meth:`track_person_ids` of :meth:`tracks` already gathered."""
         shared = _shared_person_ids(self.frames)
-        return {tid: _track_person_id(seen, shared) for tid, seen in sorted(self.tracks().items())}
+        return {tid: _track_person_id(seen, shared) for tid, seen in sorted(tracks.items())}
 
     @property
     def metric_depth(self) -> bool:
@@ -390,9 +394,10 @@ class SequenceRecord:
         return depth_is_metric(self.focal_source)
 
     def to_json(self) -> dict[str, Any]:
-        named = self.track_person_ids()
+        by_track = self.tracks()
+        named = self._person_ids(by_track)
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
-                   "person_id": named[tid]} for tid, seen in sorted(self.tracks().items())]
+                   "person_id": named[tid]} for tid, seen in sorted(by_track.items())]
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
@@ -478,9 +483,17 @@ def tracking_names(ids: list[list[Any]]) -> list[list[Any]]:
             frames_of[pid] = frames_of.get(pid, 0) + 1
     out: list[list[Any]] = []
     for frame in texts:
-        twice = {p for p in frame if p is not None and frame.count(p) > 1}
+        twice = repeated_ids(frame)
         out.append([p if p is not None and frames_of[p] > 1 and p not in twice else None for p in frame])
     return out
+
+
+def repeated_ids(frame: list[Any]) -> dict[str, None]:
+    """The person ids one frame gives to more than one person (``frame``: each person's id, None: unnamed), as text
+    (``1`` and ``"1"`` are one), in first-seen order: nobody's name (:func:`tracking_names` does not follow them,
+    and they name no track)."""
+    texts = [str(p) for p in frame if p is not None]
+    return dict.fromkeys(t for t in texts if texts.count(t) > 1)
 
 
 @dataclass
@@ -540,11 +553,7 @@ def _crowd_note(max_people: int, crowded: list[int], *, searched: tuple[int, int
 def _shared_person_ids(frames: list[FrameResult]) -> set[str]:
     """The input's person ids (as text: ``1`` and ``"1"`` are one) that some frame gives to more than one person: not
     anyone's name (:func:`tracking_names` does not follow them either)."""
-    shared: set[str] = set()
-    for fr in frames:
-        texts = [str(q.person_id) for q in fr.people if q.person_id is not None]
-        shared.update(t for t in texts if texts.count(t) > 1)
-    return shared
+    return {t for fr in frames for t in repeated_ids([q.person_id for q in fr.people])}
 
 
 def _track_person_id(seen: list[tuple[int, PersonState]], shared: frozenset[str] | set[str] = frozenset()
@@ -1110,8 +1119,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)))
     names_by_frame = None if ids is None else tracking_names(ids)
     if ids is not None:  # (ids a frame gives to several people: said, as tracking_names leaves them out)
-        texts = [[str(p) for p in frame if p is not None] for frame in ids]
-        twice = [(at[i], t) for i, frame in enumerate(texts) for t in dict.fromkeys(frame) if frame.count(t) > 1]
+        twice = [(at[i], t) for i, frame in enumerate(ids) for t in repeated_ids(frame)]
         if twice:
             names = list(dict.fromkeys(t for _, t in twice))
             warnings.append(f"person id(s) {', '.join(names[:5])} given to several people in one frame (first at frame "
