@@ -48,7 +48,7 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, json_text, parse_keypoint_json
+from lifter.io import LiftRecord, json_text, model_info, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import (
     keypoint_file_scores,
@@ -471,6 +471,7 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
                       root=top.root, canonical_depth=top.canonical_depth, people=lifted,
                       focal=(float(focal[0]), float(focal[1])), focal_source=src, principal_point=pp,
                       image_size=(int(cam.width), int(cam.height)), model=str(getattr(lifter, "name", "custom")),
+                      model_info=model_info(lifter, source=source),
                       scores=top.scores,
                       source_format=H36M17 if info is None else info.source_format,
                       num_people=len(lifted) if info is None else info.num_people,  # (a trial read null)

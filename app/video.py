@@ -29,7 +29,7 @@ from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
 from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
-from lifter.io import ASSUMED_FPS, is_sequence_doc, json_text
+from lifter.io import ASSUMED_FPS, is_sequence_doc, json_text, model_info
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
@@ -269,7 +269,8 @@ class VideoSequence:
         fixed = [f"2D joints corrected in the app: frame {i} (track {tid}): "
                  + ", ".join(JOINT_NAMES[j] for j in sorted(joints))
                  for i, people in sorted(corrected.items()) for tid, (_, joints) in sorted(people.items())]
-        out = replace(rec, model=name, focal=f, focal_source=rec.focal_source if same_focal else "app-slider",
+        out = replace(rec, model=name, model_info=model_info(lifter, source=src), focal=f,
+                      focal_source=rec.focal_source if same_focal else "app-slider",
                       frames=frames,
                       warnings=[*kept, *output_note_lines(output_notes), note, *fixed],
                       distortion=None if undistorted else rec.distortion)

@@ -242,7 +242,8 @@ class Lifter:
 
     def __init__(self, net: PoseLifterNet, codec: PoseCodec, *, name: str = "custom",
                  meta: dict[str, Any] | None = None, train_config: dict[str, Any] | None = None,
-                 flip_test: bool = False, clean: Lifter | None = None, ensemble: Sequence[Lifter] = ()) -> None:
+                 flip_test: bool = False, clean: Lifter | None = None, ensemble: Sequence[Lifter] = (),
+                 weights_sha256: str | None = None) -> None:
         if net.config != codec.config:
             raise PoseLifterError(f"network and codec configs differ: {net.config} vs {codec.config}")
         if clean is not None and (clean.clean is not None or clean.ensemble):
@@ -272,6 +273,11 @@ class Lifter:
         """Default of :meth:`lift`'s ``flip_test``: the shipped default averages every pose with its mirror image,
         so mirror equivariance holds exactly (checkpoints: ``meta["inference"]["flip_test"]``). A network with
         ``symmetry="mirror"`` is mirror-equivariant by construction and never needs it (it is then ignored)."""
+        self.weights_sha256 = weights_sha256
+        """Hex sha256 of the checkpoint file :attr:`net` was loaded from (what ``sha256sum FILE`` prints; shipped
+        files' are checked against the registry's), or None for a network not loaded from a file. It names the file,
+        not the live weights: a network changed in memory after loading keeps it. Written into every result's
+        ``model_info`` (:meth:`provenance`)."""
 
     def network_rows(self, flip_test: bool | None = None) -> int:
         """Network rows per pose that :meth:`lift` runs through this network: 2 with the flip test's mirror-image
@@ -446,11 +452,11 @@ class Lifter:
 
         clean_lifter = None if clean is None else cls(clean.net, clean.codec, name=f"{name} (clean 2D)",
                                                        meta=clean.meta, train_config=clean.train_config,
-                                                       flip_test=flip(clean))
+                                                       flip_test=flip(clean), weights_sha256=clean.sha256)
         members = [cls(m.net, m.codec, name=f"{name} (member {i + 2})", meta=m.meta, train_config=m.train_config,
-                       flip_test=flip(m)) for i, m in enumerate(ensemble)]
+                       flip_test=flip(m), weights_sha256=m.sha256) for i, m in enumerate(ensemble)]
         lifter = cls(ck.net, ck.codec, name=name, meta=ck.meta, train_config=ck.train_config, flip_test=flip(ck),
-                     clean=clean_lifter, ensemble=members)
+                     clean=clean_lifter, ensemble=members, weights_sha256=ck.sha256)
         return lifter.quantized() if quantize else lifter
 
     @classmethod
@@ -515,17 +521,37 @@ class Lifter:
         default; no clean network, no ensemble): ``"detected"`` (:attr:`net`; ``"detected 1"``, ``"detected 2"``, ...
         with an :attr:`ensemble`) and ``"clean"`` when the model has a separate clean-2D network. For one network,
         ``{"detected": self}``-alike. What :meth:`save` writes, one at a time."""
+        return {key: Lifter(m.net, m.codec, name=f"{self.name} ({key})", meta=m.meta, train_config=m.train_config,
+                            flip_test=m.flip_test, weights_sha256=m.weights_sha256)
+                for key, m in self._keyed_networks()}
+
+    def _keyed_networks(self) -> list[tuple[str, Lifter]]:
+        """:meth:`networks`' keys with the lifters this model holds (not copies)."""
         detected = (self, *self.ensemble)
-        out: dict[str, Lifter] = {}
-        for i, m in enumerate(detected):
-            key = "detected" if len(detected) == 1 else f"detected {i + 1}"
-            out[key] = Lifter(m.net, m.codec, name=f"{self.name} ({key})", meta=m.meta, train_config=m.train_config,
-                              flip_test=m.flip_test)
-        if self.clean is not None:
-            c = self.clean
-            out["clean"] = Lifter(c.net, c.codec, name=f"{self.name} (clean)", meta=c.meta,
-                                  train_config=c.train_config, flip_test=c.flip_test)
-        return out
+        out = [("detected" if len(detected) == 1 else f"detected {i + 1}", m) for i, m in enumerate(detected)]
+        return out + ([] if self.clean is None else [("clean", self.clean)])
+
+    @property
+    def int8(self) -> bool:
+        """Whether :attr:`net` runs int8 weights (:meth:`quantized`)."""
+        return any(isinstance(m, QuantizedCoupledLinear) or type(m).__module__.startswith("torch.ao.nn.quantized")
+                   for m in self.net.modules())
+
+    def provenance(self, *, source: Source = "detected", flip_test: bool | None = None) -> dict[str, Any]:
+        """What lifted a result, as every written result's ``model_info`` gives it: the model's :attr:`name`, the
+        poselifter version, and each network that 2D told ``source`` runs through (:meth:`network_for`, with its
+        :attr:`ensemble`), in the order of :meth:`networks`. Per network: its key in :meth:`networks`, ``sha256`` of
+        its checkpoint file (:attr:`weights_sha256`; None when not loaded from a file), ``flip_test`` as
+        :meth:`lift` applies it with this ``flip_test`` argument (False for a mirror-equivariant network, which needs
+        no mirror pass: ``symmetry`` says so), and ``int8``. JSON-ready."""
+        from . import __version__
+
+        used = self.network_for(source)
+        members = {id(m) for m in (used, *used.ensemble)}
+        return {"name": self.name, "poselifter_version": __version__, "networks": [
+            {"network": key, "sha256": m.weights_sha256, "flip_test": m.network_rows(flip_test) == 2,
+             "symmetry": m.config.symmetry, "int8": m.int8}
+            for key, m in self._keyed_networks() if id(m) in members]}
 
     def save(self, path: str | os.PathLike[str], *, half: bool = False) -> Path:
         """Write this lifter's network (:attr:`net`, with its codec, training config and flip-test default) as a
@@ -539,8 +565,7 @@ class Lifter:
                 "the file would not lift like this model: save one of them, e.g. "
                 f"model.networks()[{names[0]!r}].save(path) (model: this Lifter), or refer to this model by its name "
                 f"(Lifter.from_pretrained({self.name!r}))")
-        if any(isinstance(m, QuantizedCoupledLinear) or type(m).__module__.startswith("torch.ao.nn.quantized")
-               for m in self.net.modules()):
+        if self.int8:
             raise PoseLifterError(f"model {self.name!r} has int8 weights, which a checkpoint does not hold: save the "
                                   "float32 lifter, and load it with from_checkpoint(path, quantize=True)")
         inference = self.meta.get("inference")
@@ -567,7 +592,7 @@ class Lifter:
                         body[i] = QuantizedCoupledLinear(layer)
         return Lifter(net, self.codec, name=f"{self.name} (int8)", meta=self.meta, train_config=self.train_config,
                       flip_test=self.flip_test, clean=None if self.clean is None else self.clean.quantized(),
-                      ensemble=[m.quantized() for m in self.ensemble])
+                      ensemble=[m.quantized() for m in self.ensemble], weights_sha256=self.weights_sha256)
 
     # -- lifting -------------------------------------------------------------------------------------
     def lift(

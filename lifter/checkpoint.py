@@ -51,6 +51,9 @@ class Checkpoint:
     codec: PoseCodec
     train_config: dict[str, Any] | None
     meta: dict[str, Any]
+    sha256: str | None = None
+    """Hex sha256 of the file's bytes as read (what ``sha256sum FILE`` prints): the weights a result was lifted
+    with, in the records' ``model_info``. None for a checkpoint not read from bytes."""
 
 
 def sha256_file(path: str | os.PathLike[str]) -> str:
@@ -146,8 +149,9 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
             raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger "
                                   f"than {MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")
         data = path.read_bytes()
+    file_sha256 = hashlib.sha256(data).hexdigest()
     if expected_sha256 is not None:
-        got = hashlib.sha256(data).hexdigest()
+        got = file_sha256
         if got != expected_sha256:
             raise CheckpointError(f"weights file {where} is damaged or was replaced: its sha256 is {got[:16]}..., "
                                   f"the registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore "
@@ -228,4 +232,4 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         if t.is_floating_point() and not torch.isfinite(t).all():
             raise CheckpointError(f"{where}: tensor {k!r} contains NaN/inf")
     net.eval()
-    return Checkpoint(net=net, codec=codec, train_config=train_config, meta=dict(meta))
+    return Checkpoint(net=net, codec=codec, train_config=train_config, meta=dict(meta), sha256=file_sha256)

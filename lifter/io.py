@@ -145,6 +145,9 @@ class LiftRecord:
     None; ``keypoints_2d`` stays as given (distorted)."""
     distortion_model: DistortionModel = "h36m"
     """The form of :attr:`distortion`: ``"h36m"`` or ``"opencv"`` (:data:`lifter.camera.DistortionModel`)."""
+    model_info: dict[str, Any] | None = None
+    """What lifted it (:func:`model_info`: the version, each network's checkpoint sha256, flip test, int8), or
+    None for a lifter-like object that does not say."""
 
     @property
     def metric_depth(self) -> bool:
@@ -155,7 +158,7 @@ class LiftRecord:
     def to_json(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         return {
-            "input": self.input, "kind": self.kind, "model": self.model,
+            "input": self.input, "kind": self.kind, "model": self.model, "model_info": self.model_info,
             "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
                       "focal": "px", "principal_point": "px"},
@@ -216,6 +219,14 @@ ASSUMED_FOCAL_SOURCE: Final[str] = "default-fov"
 """The ``focal_source`` of a focal length assumed from the image size (the default field of view): a depth lifted
 with it is not metric (:func:`depth_is_metric`); every other source (given, EXIF, a keypoint file) is taken as
 the camera's own."""
+
+
+def model_info(lifter: Any, *, source: str, flip_test: bool | None = None) -> dict[str, Any] | None:
+    """A written record's ``model_info``: :meth:`lifter.Lifter.provenance` of the lifter that lifted 2D told
+    ``source`` with this ``flip_test`` argument (None: the model's default); None for a lifter-like object without
+    one."""
+    provenance = getattr(lifter, "provenance", None)
+    return None if provenance is None else provenance(source=source, flip_test=flip_test)
 
 
 def depth_is_metric(focal_source: str) -> bool:
@@ -525,8 +536,8 @@ _OTHER_FIELDS: Final[frozenset[str]] = frozenset((
 never noted."""
 
 _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
-    "input", "kind", "model", "joint_names", "units", "frame", "keypoints_2d", "absolute", "relative", "root",
-    "canonical_depth", "focal_source", "metric_depth", "source_format", "detector", "num_people", "scores",
+    "input", "kind", "model", "model_info", "joint_names", "units", "frame", "keypoints_2d", "absolute", "relative",
+    "root", "canonical_depth", "focal_source", "metric_depth", "source_format", "detector", "num_people", "scores",
     "warnings", "tracks",
     "num_frames", "num_frames_in_file", "first_frame", "last_frame", "bad_frames", "smoothing", "filter",
     "strength", "seconds_per_frame", "time_s", "error", "index", "root_unsmoothed", "track_id", "person_id",

@@ -51,7 +51,15 @@ from .detect import (
     load_image,
     people_scores,
 )
-from .io import REASSUMED_NOTE, LiftRecord, PersonResult, _image_size_field, distortion_tuple, parse_keypoint_json
+from .io import (
+    REASSUMED_NOTE,
+    LiftRecord,
+    PersonResult,
+    _image_size_field,
+    distortion_tuple,
+    model_info,
+    parse_keypoint_json,
+)
 from .keypoints import H36M17, convert, placeholder_notes
 
 
@@ -417,6 +425,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=size, model=lifter.name, source_format=kf.format,
+                      model_info=model_info(lifter, source=kf.source, flip_test=flip_test),
                       num_people=len(kf.people) or 1, warnings=tuple(notes + cam_notes), source=kf.source,
                       people=lifted, distortion=distortion_tuple(kf.distortion),
                       distortion_model=kf.distortion_model, scores=top.scores)
@@ -499,5 +508,6 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                       relative=top.relative, root=top.root, canonical_depth=top.canonical_depth,
                       focal=(float(f[0]), float(f[1])), focal_source=src, principal_point=(float(pp[0]), float(pp[1])),
                       image_size=img.size, model=lifter.name, scores=det.scores, source_format=det.raw.keypoint_format,
+                      model_info=model_info(lifter, source="detected", flip_test=flip_test),
                       num_people=det.num_people, detector=estimator.name, warnings=tuple(warn + notes), people=lifted,
                       distortion=distortion_tuple(dist), distortion_model=distortion_model)

@@ -55,6 +55,7 @@ from .io import (
     distortion_tuple,
     is_frame_rate,
     json_head,
+    model_info,
     own_fps_note,
     parse_keypoint_sequence,
 )
@@ -368,6 +369,8 @@ class SequenceRecord:
     source_format: str | None = None
     """The keypoint format the 2D came in before conversion to H36M (a sequence's ``format``, the detector's), or
     None when no frame had anyone."""
+    model_info: dict[str, Any] | None = None
+    """What lifted it (:func:`lifter.io.model_info`), or None for a lifter-like object that does not say."""
     tracking_names: list[list[Any]] | None = None
     """Per frame, for each person in it, the name the tracker followed (:func:`tracking_names` of the whole
     input, before a ``max_people`` cut), or None: to track the frames again as they were (not written)."""
@@ -399,7 +402,8 @@ class SequenceRecord:
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
                    "person_id": named[tid]} for tid, seen in sorted(by_track.items())]
         return {
-            "input": self.input, "kind": self.kind, "model": self.model, "joint_names": list(JOINT_NAMES),
+            "input": self.input, "kind": self.kind, "model": self.model, "model_info": self.model_info,
+            "joint_names": list(JOINT_NAMES),
             "units": {"keypoints_2d": "px", "absolute": "mm", "relative": "mm", "root": "mm", "canonical_depth": "mm",
                       "focal": "px", "principal_point": "px", "time_s": "s", "fps": "frames/s"},
             "frame": "camera, OpenCV: +x right, +y down, +z forward; 2D in px of the full-resolution frame",
@@ -1019,6 +1023,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
                                                                source="detected", only=noted, focal=f)))
     return SequenceRecord(input=str(p), kind="video", model=lifter.name, fps=fps, image_size=size,
+                          model_info=model_info(lifter, source="detected", flip_test=flip_test),
                           focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])),
                           smoothing=float(smoothing), frames=frames, num_frames_in_file=declared or None,
@@ -1166,6 +1171,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
     return SequenceRecord(input=str(path), kind="keypoint-sequence", model=lifter.name, fps=ks.fps,
+                          model_info=model_info(lifter, source=ks.source, flip_test=flip_test),
                           image_size=size, focal=(float(f[0]), float(f[1])), focal_source=src,
                           principal_point=(float(pp[0]), float(pp[1])), smoothing=float(smoothing), frames=out,
                           num_frames_in_file=len(ks.frames), warnings=warnings, source=ks.source,

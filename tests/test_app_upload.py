@@ -620,6 +620,7 @@ def test_download_payload(app: PoseLifterApp, tmp_path: Path) -> None:
         assert d["focal_source"] == "app-slider" and any("r_wrist" in w for w in d["warnings"])
         assert d["kind"] == "keypoints" and d["image_size"] == [800, 600] and d["model"] == v.state.model
         assert d["source"] == "detected"  # (the file says nothing: detector 2D, as poselifter lift reads it)
+        assert d["model_info"] == lifter.provenance(source="detected")  # (the networks, their sha256, flip test)
         v.gui.files.download_glb.value = True
         assert sent[-1][0] == "sitting_kp_lifted.glb"
         path = tmp_path / "skeleton.glb"

@@ -379,6 +379,23 @@ def test_a_sequence_lifted_again_keeps_person_ids_and_replaces_output_notes(serv
         "(track 1, and 1 more)" in notes[0], far.warnings
 
 
+def test_a_sequence_lifted_again_with_another_model_says_which_in_model_info(server) -> None:
+    """The download of a sequence lifted again names the networks of the model that lifted it, not the upload's."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17",
+           "frames": [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(3)]}
+    assert v.load_upload("which.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None
+    first = app.pool.get(v.state.model)
+    assert seq.record.to_json()["model_info"] == first.provenance()
+    other = app.pool.get("universal_turn")
+    again = seq.record_at(other, (F, F)).to_json()
+    assert again["model"] == "universal_turn" and again["model_info"] == other.provenance()
+    assert again["model_info"]["networks"][0]["sha256"] != first.provenance()["networks"][0]["sha256"]
+
+
 def test_a_video_note_goes_when_another_sample_is_shown(server, tmp_path: Path) -> None:
     """A browser trial: right after a video's note ("... press play"), switching the source to Human3.6M left the
     note under the Human3.6M frame (a note stays a while, and no later event cleared it). A sync pass that shows

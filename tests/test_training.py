@@ -562,7 +562,7 @@ def test_zoom_is_refused_where_the_input_space_undoes_it():
 
 @requires_h36m
 def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
-    from lifter.checkpoint import load_checkpoint
+    from lifter.checkpoint import load_checkpoint, sha256_file
     from lifter.cli import main
 
     out = tmp_path / "tiny.pt"
@@ -595,6 +595,7 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
         and r["test_subjects"] == [9, 11] and r["flip_test"] is cfg_flip and r["units"].startswith("mm")
         and r["max_frames_per_sequence"] == 3 and r["sequences"] == 59 and r["missing_sequences"] == ["S9/Discussion 1"]
         and len(r["cameras"]) == 4 and len(r["pck_curve_thresholds_mm"]) == len(r["pck_curve"])
+        and r["model_info"]["networks"][0]["sha256"] == sha256_file(out)
         for r in rows), rows
     assert main(["evaluate", f"tiny={out}", "--protocol", "2", "--stride", "400", "--max-frames-per-sequence", "2",
                  "--no-flip-test", "--per-action", "--json", str(tmp_path / "ev2.json")]) == 0
@@ -613,7 +614,6 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert main(["train", "--out", str(ft), "--init", str(out), *quick, "--no-progress"]) == 0
     err = capsys.readouterr().err
     assert f"fine-tuning from --init {out}" in err and "not repeat" not in err
-    from lifter.checkpoint import sha256_file
     assert load_checkpoint(ft).meta["init_sha256"] == sha256_file(out)
     taught = tmp_path / "taught.pt"
     assert main(["train", "--out", str(taught), "--init", str(out), "--teacher", str(ft), "--distill-weight", "0.7",

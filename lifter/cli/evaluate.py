@@ -231,6 +231,7 @@ def _run(args: argparse.Namespace) -> int:
     # what each row's lift did: the flip test as given, else each network's own (a mirror-equivariant network's
     # single pass already is one)
     flip_used = {label: flip_test_used(lifter, args.flip_test, source) for label, lifter in lifters}
+    info = {label: lifter.provenance(source=source, flip_test=args.flip_test) for label, lifter in lifters}
     if args.focal_scales:
         factors = list(args.focal_scales)
         shift = tuple(args.pp_shift)
@@ -240,7 +241,7 @@ def _run(args: argparse.Namespace) -> int:
         print(format_focal_table(sweep, principal_shift=shift))
         if args.json:
             write_json_atomic(args.json, {k: [{**r.to_dict(), **how, "flip_test": flip_used[k],
-                                               "principal_shift_px": list(shift)} for r in v]
+                                               "principal_shift_px": list(shift), "model_info": info[k]} for r in v]
                                           for k, v in sweep.items()})
         return 0
     rows, row_how = [], []
@@ -248,7 +249,7 @@ def _run(args: argparse.Namespace) -> int:
         got = evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
                               analytic_root=args.analytic_root, source=source)
         rows.extend(got)
-        row_how += [{**how, "flip_test": flip_used[label]}] * len(got)
+        row_how += [{**how, "flip_test": flip_used[label], "model_info": info[label]}] * len(got)
     print(format_table(rows))
     if args.per_action:
         print(format_per_action(rows))

@@ -1,0 +1,107 @@
+"""What lifted a result: every written record's ``model_info`` (``Lifter.provenance``) names the version, each
+network's checkpoint sha256 (what ``sha256sum`` prints), the flip test as it ran, and int8 (a developer trial: a
+result JSON did not say whether the flip test was on, nor which ``--weights file.pt`` made it)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import tiny_lifter
+
+import lifter
+from lifter import Lifter
+from lifter import resources as assets
+from lifter.cli import main as cli_main
+from lifter.pipeline import lift_keypoint_file
+from lifter.video import lift_keypoint_sequence
+
+KP = np.asarray(lifter.demo_sample("walking").keypoints_2d, np.float64)  # (17, 2) px, H36M order
+
+
+@pytest.fixture(scope="module")
+def default() -> Lifter:
+    return Lifter.from_pretrained()
+
+
+def file_sha(rel: str) -> str:
+    return hashlib.sha256(assets.read_bytes(rel)).hexdigest()
+
+
+def test_the_default_names_each_network_s_file_by_its_bytes(default):
+    entry = assets.model_entry("default")
+    detected = default.provenance()
+    assert detected["name"] == entry["name"] and detected["poselifter_version"] == lifter.__version__
+    nets = detected["networks"]
+    assert [n["network"] for n in nets] == [k for k in default.networks() if k != "clean"]
+    assert [n["sha256"] for n in nets] == [file_sha(entry["file"]), *map(file_sha, entry["ensemble_files"])]
+    assert [n["sha256"] for n in nets] == [entry["sha256"], *entry["ensemble_sha256"]]
+    clean = default.provenance(source="clean")["networks"]
+    assert [n["network"] for n in clean] == ["clean"] and clean[0]["sha256"] == file_sha(entry["clean_file"])
+    assert json.loads(json.dumps(detected)) == detected  # (JSON-ready as it is)
+
+
+def test_the_flip_test_is_given_as_it_runs(default):
+    by_default = {n["network"]: n for n in default.provenance()["networks"]}
+    off = {n["network"]: n for n in default.provenance(flip_test=False)["networks"]}
+    on = {n["network"]: n for n in default.provenance(flip_test=True)["networks"]}
+    for key, m in default.networks().items():
+        if key == "clean":
+            continue
+        mirror = m.config.symmetry == "mirror"
+        assert by_default[key]["flip_test"] == (m.flip_test and not mirror)
+        assert off[key]["flip_test"] is False and on[key]["flip_test"] is (not mirror)
+        assert on[key]["symmetry"] == m.config.symmetry
+    assert any(n["flip_test"] for n in by_default.values())  # (the shipped default runs it on one network)
+
+
+def test_own_checkpoint_and_int8(tmp_path):
+    small = tiny_lifter(32)
+    assert small.weights_sha256 is None and small.provenance()["networks"][0]["sha256"] is None
+    path = small.save(tmp_path / "mine.pt")
+    loaded = Lifter.from_checkpoint(path)
+    sha = hashlib.sha256(path.read_bytes()).hexdigest()
+    assert loaded.weights_sha256 == sha
+    assert loaded.provenance()["networks"] == [{"network": "detected", "sha256": sha, "flip_test": False,
+                                                "symmetry": "none", "int8": False}]
+    q = loaded.quantized().provenance()
+    assert q["networks"][0]["int8"] is True and q["networks"][0]["sha256"] == sha
+    assert loaded.networks()["detected"].weights_sha256 == sha
+
+
+def test_records_carry_it_for_their_source_and_flip_test(tmp_path, default):
+    f = tmp_path / "clean.json"
+    f.write_text(json.dumps({"keypoints": KP.tolist(), "image_size": [1000, 1000], "focal": 1145,
+                             "source": "clean"}))
+    rec = lift_keypoint_file(f, lifter=default).to_json()
+    assert rec["model_info"] == default.provenance(source="clean")
+    d = tmp_path / "detected.json"
+    d.write_text(json.dumps({"keypoints": KP.tolist(), "image_size": [1000, 1000], "focal": 1145}))
+    rec = lift_keypoint_file(d, lifter=default, flip_test=False).to_json()
+    assert rec["model_info"] == default.provenance(flip_test=False)
+    # read back as a keypoint file, the field is known (no "unread field" note)
+    back = tmp_path / "back.json"
+    back.write_text(json.dumps(rec))
+    again = lift_keypoint_file(back, lifter=default)
+    assert not any("model_info" in w for w in again.warnings)
+    seq = tmp_path / "seq.json"
+    seq.write_text(json.dumps({"fps": 10, "image_size": [1000, 1000], "focal": 1145,
+                               "frames": [{"keypoints": (KP + [3 * i, 0]).tolist()} for i in range(3)]}))
+    srec = lift_keypoint_sequence(seq, lifter=default, flip_test=True).to_json()
+    assert srec["model_info"] == default.provenance(flip_test=True)
+
+
+def test_the_cli_writes_it_for_your_own_weights(tmp_path):
+    path = tiny_lifter(32).save(tmp_path / "mine.pt")
+    kp = tmp_path / "pose.json"
+    kp.write_text(json.dumps({"keypoints": KP.tolist(), "image_size": [1000, 1000], "focal": 1145}))
+    out = tmp_path / "out"
+    assert cli_main(["lift", str(kp), "--weights", str(path), "--out", str(out), "--flip-test"]) == 0
+    (written,) = Path(out).glob("*.json")
+    info = json.loads(written.read_text())["model_info"]
+    assert info["name"] == "mine" and info["networks"] == [
+        {"network": "detected", "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), "flip_test": True,
+         "symmetry": "none", "int8": False}]
