@@ -1288,18 +1288,12 @@ def openpose_partial_videos(files: Sequence[Path]) -> list[tuple[Path, int, int,
     return out
 
 
-META_FORMAT_KEY: Final[str] = "\x00meta_format"
-"""Where :func:`_mmpose_sequence` leaves the format an MMPose file's ``meta_info`` names (a key no JSON file has):
-:func:`parse_keypoint_sequence` takes it after the file's ``format`` and the caller's ``default_format``, as
-:func:`_mmpose_frame` does for one frame."""
-
-
-def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
+def _mmpose_sequence(d: Any) -> tuple[dict[str, Any], str | None] | None:
     """MMPose's predictions of several frames (the demo's ``{"meta_info", "instance_info": [{"frame_id",
     "instances"}, ...]}``, MMPoseInferencer's ``[{"frame_id", "instances"}, ...]``) as a sequence document
-    ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too); else None. Its frames are read as
-    the file's ``format``, else the caller's (``--format``), else the joints its ``meta_info`` names
-    (:func:`_mmpose_meta_format`, left under :data:`META_FORMAT_KEY`), else COCO-17."""
+    ``{"frames": [...], ...the file's other fields}`` (its top-level ``fps`` too), with the joints its ``meta_info``
+    names (:func:`_mmpose_meta_format`, or None); else None. Its frames are read as the file's ``format``, else the
+    caller's (``--format``), else that metadata's, else COCO-17, as :func:`_mmpose_frame` reads one frame."""
     d = _inferencer_results(d)
     if isinstance(d, dict) and isinstance(d.get("instance_info"), list) and "frames" not in d:
         info, rest = d["instance_info"], {k: v for k, v in d.items() if k not in ("instance_info", "meta_info")}
@@ -1310,18 +1304,17 @@ def _mmpose_sequence(d: Any) -> dict[str, Any] | None:
     if len(info) < 2 or not all(isinstance(q, dict) and "instances" in q for q in info):
         return None
     meta_fmt = _mmpose_meta_format(d.get("meta_info")) if isinstance(d, dict) else None
-    if meta_fmt is not None:  # (the joints its metadata names: below the file's 'format' and the caller's)
-        rest[META_FORMAT_KEY] = meta_fmt
-    return {**rest, "frames": info}  # (each frame: _mmpose_frame, COCO-17 unless the file or the caller says)
+    return {**rest, "frames": info}, meta_fmt  # (each frame: _mmpose_frame, COCO-17 unless the file or caller says)
 
 
-def _sequence_doc(p: Path, fps: float | None) -> Any:
+def _sequence_doc(p: Path, fps: float | None) -> tuple[Any, str | None]:
     """The decoded sequence document of ``p``: its JSON (MMPose's predictions of several frames in the sequence
     layout: :func:`_mmpose_sequence`), or for a frame pattern (:func:`frame_pattern_files`: OpenPose's per-frame files)
-    ``{"frames": [each file's JSON], "fps": fps}``, the frames' numbers kept where they are not 0, 1, 2, ...."""
+    ``{"frames": [each file's JSON], "fps": fps}``, the frames' numbers kept where they are not 0, 1, 2, ....; with
+    the format an MMPose file's metadata names (None for any other)."""
     if not is_frame_pattern(p):
         d = _load_json(p)
-        return _mmpose_sequence(d) or d
+        return _mmpose_sequence(d) or (d, None)
     found = frame_pattern_files(p)
     if not found:
         raise PoseLifterError(f"{p}: no files match this frame pattern (%0Nd: a frame number of N digits)")
@@ -1332,7 +1325,7 @@ def _sequence_doc(p: Path, fps: float | None) -> Any:
     if numbers != list(range(len(numbers))) and fps is not None:  # (a frame's index and time, as a record's)
         frames = [{**fr, "index": n, "time_s": n / fps} if isinstance(fr, dict) else fr
                   for fr, n in zip(frames, numbers)]
-    return {"frames": frames, **({} if fps is None else {"fps": fps})}
+    return {"frames": frames, **({} if fps is None else {"fps": fps})}, None
 
 
 def is_sequence_doc(d: Any) -> bool:
@@ -1376,7 +1369,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     check_frame_rate(fps, name="fps (--fps)")
     check_frame_rate(assumed_fps, name="assumed_fps")
     pattern = is_frame_pattern(p)
-    d = _sequence_doc(p, fps if fps is not None or not pattern else assumed_fps)
+    d, meta_format = _sequence_doc(p, fps if fps is not None or not pattern else assumed_fps)
     if not (isinstance(d, dict) and "frames" in d):
         raise PoseLifterError(f"{p}: a keypoint sequence is an object with 'frames' (a list of frames)")
     raw = d["frames"]
@@ -1408,7 +1401,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
                                                                         else ""))
     if not is_frame_rate(rate):
         raise PoseLifterError(f"{p}: 'fps' must be the frame rate, a number in (0, 1000] frames/s, got {_short(rate)}")
-    fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format) or d.get(META_FORMAT_KEY)
+    fmt = d.get("format") or (H36M17 if _own_sequence(raw) else default_format) or meta_format
     if fmt is not None and not isinstance(fmt, str):
         raise PoseLifterError(f"{p}: 'format' must be a string (one of {list(keypoint_formats())}), got {_short(fmt)}")
     indices, notes = frame_indices(raw, p, float(rate))
