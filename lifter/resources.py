@@ -140,6 +140,47 @@ def model_entry(name: str) -> ModelEntry:
     return {**reg["models"][name], "name": name}
 
 
+@dataclass(frozen=True)
+class ShippedFile:
+    """One weights file of a shipped model, checked (:func:`check_model_files`)."""
+
+    network: str
+    """Its key in :meth:`lifter.Lifter.networks` (``"detected"``, ``"detected 1"``, ..., ``"clean"``)."""
+    file: str
+    """Path inside the assets folder."""
+    sha256: str | None
+    """The registry's hex sha256 (None: the registry gives none)."""
+    size_bytes: int | None
+    """The file's size, or None when it is missing."""
+    status: str
+    """``"ok"`` (its bytes hash to :attr:`sha256`), ``"damaged"`` (they do not), ``"missing"`` or ``"unchecked"``
+    (no sha256 to check against)."""
+
+
+def check_model_files(name: str) -> list[ShippedFile]:
+    """Each weights file of the shipped model ``name`` (``"default"``: the default), in the order of
+    :meth:`lifter.Lifter.networks`, hashed against the registry: what ``poselifter models`` reports. The loader checks
+    the same before it reads a file (:func:`lifter.checkpoint.load_checkpoint`)."""
+    import hashlib
+
+    entry = model_entry(name)
+    ensemble = list(zip(entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])))
+    detected = [(entry["file"], entry.get("sha256")), *ensemble]
+    keyed = [("detected" if len(detected) == 1 else f"detected {i + 1}", f, h) for i, (f, h) in enumerate(detected)]
+    if "clean_file" in entry:
+        keyed.append(("clean", entry["clean_file"], entry.get("clean_sha256")))
+    out = []
+    for key, rel, sha in keyed:
+        node = asset(rel)
+        if not node.is_file():
+            out.append(ShippedFile(key, rel, sha, None, "missing"))
+            continue
+        data = node.read_bytes()
+        status = "unchecked" if sha is None else "ok" if hashlib.sha256(data).hexdigest() == sha else "damaged"
+        out.append(ShippedFile(key, rel, sha, len(data), status))
+    return out
+
+
 # ------------------------------------------------------------------------------------------------
 # Demo samples
 # ------------------------------------------------------------------------------------------------

@@ -105,3 +105,46 @@ def test_the_cli_writes_it_for_your_own_weights(tmp_path):
     assert info["name"] == "mine" and info["networks"] == [
         {"network": "detected", "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), "flip_test": True,
          "symmetry": "none", "int8": False}]
+
+
+def _copied_assets(tmp_path: Path) -> Path:
+    import shutil
+
+    src = Path(str(assets.asset("models.json"))).parent
+    dst = tmp_path / "assets"
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns("*.png", "demo"))
+    return dst
+
+
+def test_poselifter_models_lists_the_default_first_with_the_files_sha256(capsys, default):
+    assert cli_main(["models", "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    first = listing["models"][0]
+    assert first["name"] == listing["default"] == default.name and first["default"] is True
+    assert sorted(m["name"] for m in listing["models"]) == assets.model_names()
+    shas = {n["network"]: n["sha256"] for n in first["networks"]}
+    assert all(n["status"] == "ok" for m in listing["models"] for n in m["networks"])
+    for source in ("detected", "clean"):  # (the same sha256 as the records' model_info)
+        assert all(shas[n["network"]] == n["sha256"] for n in default.provenance(source=source)["networks"])
+    assert cli_main(["models"]) == 0
+    text = capsys.readouterr().out
+    assert f"{default.name}  (default): 3 networks" in text and shas["clean"] in text
+    assert cli_main(["models", "nope"]) == 2 and "unknown model 'nope'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("harm", ["damaged", "missing"])
+def test_poselifter_models_names_a_damaged_or_missing_file(tmp_path, monkeypatch, capsys, harm):
+    dst = _copied_assets(tmp_path)
+    entry = assets.model_entry("default")
+    f = dst / entry["ensemble_files"][0]
+    if harm == "damaged":
+        data = bytearray(f.read_bytes())
+        data[100] ^= 0xFF
+        f.write_bytes(bytes(data))
+    else:
+        f.unlink()
+    monkeypatch.setenv("POSELIFTER_ASSETS", str(dst))
+    assert cli_main(["models", "default", "gt"]) == 1
+    out, err = capsys.readouterr()
+    assert f"{entry['ensemble_files'][0]} is {harm}" in err and "reinstall poselifter" in err
+    assert "CHECK THE FILES BELOW" in out and "gt: 1 network, 8.6 MB, files ok" in out

@@ -1,7 +1,8 @@
 """``poselifter``: the command line. Each sub-command parses its arguments and calls the library.
 
-``train`` (:mod:`.train`), ``evaluate`` (:mod:`.evaluate`), ``fit-noise`` (:mod:`.fit_noise`) and ``lift``
-(:mod:`.lift`). Usage errors and bad input exit with code 2 and a message naming the problem.
+``train`` (:mod:`.train`), ``evaluate`` (:mod:`.evaluate`), ``fit-noise`` (:mod:`.fit_noise`), ``lift``
+(:mod:`.lift`) and ``models`` (:mod:`.models`). Usage errors and bad input exit with code 2 and a message naming the
+problem.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "evaluate": ("evaluate", "evaluate lifters on Human3.6M and print the results table"),
     "fit-noise": ("fit_noise", "fit the Gaussian + uniform 2D error model to real SH detections"),
     "lift": ("lift", "lift photos, videos or 2D keypoint files to absolute 3D poses (JSON, optional GLB / BVH)"),
+    "models": ("models", "list the shipped models and check their weights files' sha256"),
 }
 """Sub-command -> (its module in this package, its one-line help). A module is imported only to build its own
 sub-command's parser (:func:`build_parser`): ``poselifter --help`` and ``poselifter lift --help`` do not wait for

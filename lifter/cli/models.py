@@ -1,0 +1,83 @@
+"""``poselifter models``: the shipped models, which is the default, and whether their weights files are intact.
+
+Lists each model of the registry (:mod:`lifter.resources`) with its networks, their files, sizes and sha256, each
+file hashed against the registry (:func:`lifter.resources.check_model_files`). Exit code 1 when a file is damaged
+or missing (the fix: reinstall poselifter), 2 for an unknown name.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .. import __version__
+from .. import resources as assets
+from . import COMMANDS
+from ._help import HelpFormatter
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register the ``models`` sub-command on an ``add_subparsers()`` object."""
+    p = sub.add_parser("models", help=COMMANDS["models"][1], formatter_class=HelpFormatter,
+                       description="List the shipped models (the default first), each network's weights file with "
+                       "its size and sha256, and check every file against the registry's sha256 (exit code 1 when "
+                       "one is damaged or missing). The records of poselifter lift name the same sha256 in "
+                       "model_info.")
+    p.add_argument("names", nargs="*", metavar="NAME",
+                   help="only these models (a name, or 'default'); with one name, its full description and "
+                   "training commands")
+    p.add_argument("--json", action="store_true", help="print the listing as JSON instead")
+    p.set_defaults(func=run_models)
+    return p
+
+
+def _first_sentence(text: str) -> str:
+    head = text.split(". ")[0].strip()
+    return head if head.endswith(".") else head + "."
+
+
+def run_models(args: argparse.Namespace) -> int:
+    default = assets.default_model_name()
+    names = [assets.model_entry(n)["name"] for n in args.names] or sorted(
+        assets.model_names(), key=lambda n: (n != default, n))  # (an unknown name: error, exit 2)
+    names = list(dict.fromkeys(names))
+    rows = []
+    for name in names:
+        entry = assets.model_entry(name)
+        files = assets.check_model_files(name)
+        rows.append({"name": name, "default": name == default, "flip_test": entry.get("flip_test"),
+                     "description": entry.get("description", ""),
+                     "networks": [{"network": f.network, "file": f.file, "size_bytes": f.size_bytes,
+                                   "sha256": f.sha256, "status": f.status} for f in files]})
+    bad = [(r["name"], n) for r in rows for n in r["networks"] if n["status"] in ("damaged", "missing")]
+    if args.json:
+        print(json.dumps({"poselifter_version": __version__, "assets": str(assets.assets_root()), "default": default,
+                          "models": rows}, indent=1))
+    else:
+        print(f"poselifter {__version__}: shipped models in {assets.assets_root()} (default: {default})")
+        for r in rows:
+            size = sum(n["size_bytes"] or 0 for n in r["networks"]) / 1e6
+            state = "files ok" if all(n["status"] == "ok" for n in r["networks"]) else "CHECK THE FILES BELOW"
+            count = len(r["networks"])
+            print(f"\n{r['name']}{'  (default)' if r['default'] else ''}: {count} network{'s' * (count != 1)}, "
+                  f"{size:.1f} MB, {state}")
+            for n in r["networks"]:
+                mb = "-" if n["size_bytes"] is None else f"{n['size_bytes'] / 1e6:.1f} MB"
+                print(f"  {n['network']:<11} {n['file']:<36} {mb:>8}  sha256 {n['sha256'] or '(none)'}  "
+                      f"{n['status']}")
+            desc = r["description"]
+            if desc:
+                print(f"  {desc if len(names) == 1 else _first_sentence(desc)}")
+            if len(names) == 1:
+                entry = assets.model_entry(r["name"])
+                commands = [entry.get("train_command"), entry.get("clean_train_command"),
+                            *entry.get("ensemble_train_commands", [])]
+                for c in (c for c in commands if c):
+                    print(f"  trained with: {c}")
+    for name, n in bad:
+        print(f"poselifter models: error: model {name!r}: {n['file']} is {n['status']}"
+              + (" (its bytes do not hash to the registry's sha256)" if n["status"] == "damaged" else "")
+              + ": reinstall poselifter (pip install --force-reinstall poselifter), or restore the file",
+              file=sys.stderr)
+    return 1 if bad else 0
