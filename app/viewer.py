@@ -163,6 +163,9 @@ DRAGGED_WHILE_PLAYING: str = ("a joint dragged while the sequence plays is not m
 UPLOAD_REFUSED_TITLE: Final[str] = "Upload refused: the file arrived, but it cannot be used"
 """The title of the notification of a refused upload, which stays until closed: the browser has just said "File
 uploaded successfully" about the transfer itself (a user trial read both as success)."""
+UPLOAD_TOO_LARGE_TITLE: Final[str] = "Upload refused: the file is too large"
+"""The title of the notification of an upload stopped during its transfer for its size (:data:`UPLOAD_REFUSED_TITLE`
+said it had arrived, where its message said it was stopped: a user trial)."""
 
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
@@ -414,7 +417,7 @@ class SessionView:
         limit_uploads(target.gui, self.gui.files.upload, max_bytes=app.max_upload_bytes, client_id=client_id,
                       refuse=lambda name, size: self.show_message(
                           up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True,
-                          title=UPLOAD_REFUSED_TITLE, sticky=True))
+                          title=UPLOAD_TOO_LARGE_TITLE, sticky=True))
         report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
         note_typed_values(target.gui, self._typed_controls(), self._note_key, client_id=client_id)
 

@@ -300,6 +300,8 @@ def test_corrupt_and_not_an_image_uploads(view: SessionView, app: PoseLifterApp)
 
 
 def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
+    from poselifter_app.viewer import UPLOAD_TOO_LARGE_TITLE
+
     big = b"\xff\xd8" + b"\x00" * (up.MAX_UPLOAD_BYTES + 10)
     tab, v = _open_tab(app)
     try:
@@ -313,7 +315,9 @@ def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
         assert wait_for(lambda: "huge2.jpg" in (v.messages[-1] if v.messages else ""))
         time.sleep(0.5)  # (the parts sent after the start message arrive and are ignored)
         assert "more than the 20 MiB" in v.messages[-1] and not states
-        assert v.notices[-1][0].startswith("Upload refused") and v.notices[-1][2]
+        # (its own title: "the file arrived" contradicted "the upload was stopped", a user trial)
+        assert v.notices[-1][0] == UPLOAD_TOO_LARGE_TITLE and v.notices[-1][2]
+        assert "the upload was stopped" in v.messages[-1]
         _assert_unchanged(v, snap)
         # a client that announces 1 KiB and then sends more is stopped by the bytes received: viser never holds
         # more than the limit and one part of it
@@ -348,6 +352,13 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
         assert v.state.sample.image.shape[:2] == (600, 800)
         assert "that of the photo walking.jpg uploaded before (800 x 600 px) is used" in v.messages[-1]
         assert float(v.state.sample.image.std()) > 20  # the photo, not a blank canvas
+        assert "top-left quarter" not in v.messages[-1]
+        # keypoints of a half-size copy: drawn in its top-left corner, and said (a user trial's 26 m, unsaid)
+        half = (s.keypoints_2d / 2).tolist()
+        assert v.load_upload("half.json", json.dumps({"keypoints": half, "format": "h36m17"}).encode()) is True
+        assert ("every pose lies in the top-left quarter of the photo walking.jpg uploaded before (800 x 600 px)"
+                in v.messages[-1]), v.messages[-1]
+        assert any("top-left quarter" in w for w in v.state.sample.upload.warnings)  # (and in the download)
         # keypoints that do not fit the borrowed size: the refusal says where the size came from (user trial)
         far = (s.keypoints_2d * 3).tolist()
         assert v.load_upload("far.json", json.dumps({"keypoints": far, "format": "h36m17"}).encode()) is False

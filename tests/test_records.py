@@ -389,6 +389,12 @@ def test_one_rule_for_the_image_a_keypoint_file_or_sequence_was_found_in(tmp_pat
     assert rec.image_size == (W, H) and rec.principal_point == (W / 2, H / 2)
     assert rec.focal_source == "exif-35mm" and np.allclose(rec.focal, want.focal)
     assert f"no image_size in the file: that of room.jpg ({W} x {H} px) is used" in rec.warnings
+    assert not any("top-left quarter" in w for w in rec.warnings), rec.warnings
+    # a 5x larger image: the keypoints sit in its top-left corner, as those of a smaller copy would (a user trial's
+    # 1000-px frame's keypoints on a 5000-px photo, lifted 26 m away unsaid)
+    big = lift(doc(), image=("room.jpg", (5 * W, 5 * H)))
+    assert any(w.startswith(f"every pose lies in the top-left quarter of room.jpg ({5 * W} x {5 * H} px)") and
+               "add the file's own \"image_size\"" in w for w in big.warnings), big.warnings
     assert lift(doc(image_size=[W, H])).focal_source == "exif-35mm"  # (its own size, the same: the same image)
     assert lift(doc(image_size=[1000, 1000])).focal_source == "default-fov"  # (another image)
     K = [[1000.0, 0.0, W], [0.0, 1000.0, H], [0.0, 0.0, 1.0]]  # (a principal point: not the photo's pixels)
