@@ -444,7 +444,7 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
     leaves what its networks learned and bends (a teacher's slider at 100 px: PA-MPJPE over 200 mm); a pixel-space
     model (the paper's) lifts the same pose at every focal, and only its depth follows (a user trial: the caution
     said it bent). The camera's own focal length ``camera_focal`` (px) is named."""
-    from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
+    from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg, view_deg_text
 
     view = float(pose_view_deg(np.asarray(keypoints, np.float64), focal))
     if view <= MAX_PLAUSIBLE_VIEW_DEG:
@@ -452,9 +452,9 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
     what = ("the lift is outside what the networks learned, and bends" if input_space == "camera" else
             "no camera sees a person so; this pixel-space model lifts the same pose at every focal length, and only "
             "the depth follows the slider")
-    return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view:.0f}° of view (a whole person rarely "
-            f"spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the camera's "
-            f"own focal length is {camera_focal:.0f} px"]
+    return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view_deg_text(view)}° of view (a whole person "
+            f"rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the "
+            f"camera's own focal length is {camera_focal:.0f} px"]
 
 
 SHORT_FOCAL_FACTOR: Final[float] = 0.5

@@ -198,7 +198,7 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
     placeholders: False when the (0, 0) joints were already said in the keypoints' own format
     (:func:`lifter.keypoints.placeholder_notes`), whose advice fits a file better.
     :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
-    from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg
+    from .camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg, view_deg_text
 
     notes: list[str] = []
     k = np.asarray(keypoints, np.float64)
@@ -217,9 +217,10 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
             if np.any(wide):  # (quoted: the widest pose and its own focal length)
                 widest = np.unravel_index(int(np.argmax(view)), view.shape) if lead else ()
                 alpha_w = float(np.broadcast_to(alpha, lead)[widest])
-                notes.append(f"at the focal length used ({alpha_w:.4g} px) a 2D pose spans {float(np.max(view)):.0f} "
-                             f"deg of view (a whole person rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f} deg, "
-                             f"even through an ultra-wide lens){where_in_batch(wide)}: " + (
+                notes.append(f"at the focal length used ({alpha_w:.4g} px) a 2D pose spans "
+                             f"{view_deg_text(np.max(view))} deg of view (a whole person rarely spans more than "
+                             f"{MAX_PLAUSIBLE_VIEW_DEG:.0f} deg, even through an ultra-wide lens)"
+                             f"{where_in_batch(wide)}: " + (
                                  "is the focal length in pixels? (f_px = f_mm * image width px / sensor width mm; or "
                                  "leave it out to assume a field of view)" if focal_given else
                                  "the focal length was assumed, not given: are the keypoints in this image's pixels? "

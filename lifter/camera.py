@@ -84,6 +84,17 @@ def pose_view_deg(keypoints: ArrayLike, focal: ArrayLike) -> np.ndarray:
     return np.degrees(2 * np.arctan(diag / (2 * focal_alpha(focal))))
 
 
+def view_deg_text(view_deg: float) -> str:
+    """An angle of view (deg) beyond :data:`MAX_PLAUSIBLE_VIEW_DEG` written with as many decimals (up to 3) as it
+    takes to read beyond it: 120.4 is "120.4", not "120" (a teacher's caution read "spans 120° ... rarely spans more
+    than 120°")."""
+    v = float(view_deg)
+    digits = 0
+    while digits < 3 and round(v, digits) <= MAX_PLAUSIBLE_VIEW_DEG:
+        digits += 1
+    return f"{v:.{digits}f}"
+
+
 def world_to_camera(points_world: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:
     """``X_cam = R @ X_world + t`` for points ``(..., J, 3)`` in mm; ``R`` is (3, 3), ``t`` is (3,)."""
     return np.einsum("ij,...j->...i", np.asarray(R, np.float64), np.asarray(points_world, np.float64)) + np.asarray(

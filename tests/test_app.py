@@ -3,6 +3,7 @@ on a server bound to 127.0.0.1 and a free port; no browser."""
 
 from __future__ import annotations
 
+import re
 import urllib.request
 from pathlib import Path
 
@@ -1053,6 +1054,11 @@ def test_a_focal_so_short_the_pose_spans_too_wide_a_view_is_cautioned(view: Sess
     md = view.gui.readout.readout.content
     assert "**Caution** at 100 px this 2D pose spans 126° of view" in md and "own focal length is 800 px" in md, md
     assert "and bends" in md
+    # just beyond the limit, the angle reads beyond it (a trial at 112 px read "spans 120° ... more than 120°")
+    assert view.set_focal(112.0) is True
+    md = view.gui.readout.readout.content
+    assert re.search(r"spans 120\.\d+° of view", md) and "spans 120° of view" not in md, md
+    assert view.set_focal(100.0) is True
     # a pixel-space model lifts the same pose at every focal length: its caution does not say it bends (user trial)
     assert view.set_model("gt") is not False
     md = view.gui.readout.readout.content

@@ -229,3 +229,15 @@ def test_bone_lengths_follow_edges_and_check_shapes():
     assert bone_lengths(pose[..., :2]).shape == (4, 16)
     with pytest.raises(ValueError, match=r"bone_lengths: expected shape \(\.\.\., 17, 2 or 3\)"):
         bone_lengths(pose[:, :16])
+
+
+def test_an_angle_of_view_beyond_the_plausible_one_never_reads_as_within_it():
+    """A teacher's caution read "spans 120° of view (a whole person rarely spans more than 120°)": the angle is
+    written with the decimals it takes to read beyond the limit."""
+    from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, pose_view_deg, view_deg_text
+
+    assert MAX_PLAUSIBLE_VIEW_DEG == 120.0
+    assert [view_deg_text(v) for v in (126.2, 120.6, 120.3, 120.04, 120.0004)] == ["126", "121", "120.3", "120.04",
+                                                                                   "120.000"]
+    kp = np.array([[0.0, 0.0], [400.0, 300.0]] + [[200.0, 150.0]] * 15)  # (a 500 px diagonal)
+    assert float(pose_view_deg(kp, 250.0 / np.tan(np.radians(120.3) / 2))) == pytest.approx(120.3)
