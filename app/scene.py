@@ -126,10 +126,14 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
     cam = CameraNodes(
         floor=scene.add_grid("/floor", width=12.0, height=12.0, plane="xy", cell_size=0.5, section_size=1.0),
         frame=scene.add_frame("/cam", show_axes=True, axes_length=0.15, axes_radius=0.006),
-        frustum=scene.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=0.006),
+        # (in screen pixels: lines of a world width met the view's own camera near the frustum's apex and filled the
+        # view with black wedges, zoomed out of the head-on view: a user trial)
+        frustum=scene.add_line_segments("/cam/frustum", np.zeros((8, 2, 3)), FRUSTUM_RGB, thickness=1.5,
+                                        thickness_units="screen"),
         image=scene.add_image("/cam/image", np.zeros((4, 4, 3), np.uint8), 1.0, 1.0, format="jpeg",
                               cast_shadow=False, receive_shadow=False),
-        ray=scene.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=0.01),
+        ray=scene.add_line_segments("/cam/ray", np.concatenate([z, z]), RAY_RGB, thickness=2.0,
+                                    thickness_units="screen"),
         root=scene.add_icosphere("/cam/root", radius=0.05, color=RAY_RGB),
         root_label=scene.add_label("/cam/root/label", "root"),
         trail=scene.add_line_segments("/cam/trail", np.zeros((1, 2, 3)), RAY_RGB, thickness=0.02, visible=False),
