@@ -500,13 +500,9 @@ class Lifter:
         if clean_file := entry.get("clean_file"):
             clean = load_checkpoint(assets.read_bytes(clean_file), expected_sha256=entry.get("clean_sha256"),
                                     name=f"shipped model {entry['name']!r} ({clean_file})")
-        files, sums = entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])
-        if len(sums) != len(files):
-            raise PoseLifterError(f"shipped model {entry['name']!r}: ensemble_files and ensemble_sha256 differ in "
-                                  "length (reinstall poselifter)")
         members = [load_checkpoint(assets.read_bytes(f), expected_sha256=h,
                                    name=f"shipped model {entry['name']!r} ({f})")
-                   for f, h in zip(files, sums)]
+                   for f, h in assets.ensemble_members(entry)]
         if "trained_zoom" in entry:  # (shipped pixel models older than training configs in checkpoints)
             ck = dataclasses.replace(ck, meta={**ck.meta, "trained_zoom": entry["trained_zoom"]})
         if "misfit_limit" in entry:  # (measured on the shipped networks after they were written)
@@ -540,7 +536,9 @@ class Lifter:
     def provenance(self, *, source: Source = "detected", flip_test: bool | None = None) -> dict[str, Any]:
         """What lifted a result, as every written result's ``model_info`` gives it: the model's :attr:`name`, the
         poselifter version, and each network that 2D told ``source`` runs through (:meth:`network_for`, with its
-        :attr:`ensemble`), in the order of :meth:`networks`. Per network: its key in :meth:`networks`, ``sha256`` of
+        :attr:`ensemble`), in the order of :meth:`networks`. Per network: its key in :meth:`networks` (of this
+        lifter: one of them taken out, ``model.networks()["clean"]``, is a model of one network, ``"detected"``; its
+        ``sha256`` still names its file), ``sha256`` of
         its checkpoint file (:attr:`weights_sha256`; None when not loaded from a file), ``flip_test`` as
         :meth:`lift` applies it with this ``flip_test`` argument (False for a mirror-equivariant network, which needs
         no mirror pass: ``symmetry`` says so), and ``int8``. JSON-ready."""

@@ -89,10 +89,10 @@ def view_deg_text(view_deg: float) -> str:
     takes to read beyond it: 120.4 is "120.4", not "120" (a teacher's caution read "spans 120° ... rarely spans more
     than 120°")."""
     v = float(view_deg)
-    digits = 0
-    while digits < 3 and round(v, digits) <= MAX_PLAUSIBLE_VIEW_DEG:
-        digits += 1
-    return f"{v:.{digits}f}"
+    for digits in range(4):
+        if round(v, digits) > MAX_PLAUSIBLE_VIEW_DEG:
+            return f"{v:.{digits}f}"
+    return f"{math.ceil(v * 1000) / 1000:.3f}"  # (within a thousandth of a degree: rounded up, as it is beyond)
 
 
 def world_to_camera(points_world: np.ndarray, R: np.ndarray, t: np.ndarray) -> np.ndarray:

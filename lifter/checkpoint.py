@@ -53,7 +53,7 @@ class Checkpoint:
     meta: dict[str, Any]
     sha256: str | None = None
     """Hex sha256 of the file's bytes as read (what ``sha256sum FILE`` prints): the weights a result was lifted
-    with, in the records' ``model_info``. None for a checkpoint not read from bytes."""
+    with, in the records' ``model_info``. :func:`load_checkpoint` always sets it; None only for one built by hand."""
 
 
 def sha256_file(path: str | os.PathLike[str]) -> str:

@@ -383,9 +383,10 @@ def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, i
                                   "file's own \"image_size\"")
         notes.append(f"no image_size in the file: that of {name} ({W} x {H} px) is used")
         if len(poses) and _in_top_left_quarter(np.stack(poses), (W, H)):
-            notes.append(f"every pose lies in the top-left quarter of {name} ({W} x {H} px), as keypoints in the "
-                         "pixels of a smaller copy of it, or of another image, would: the root is then metres off; "
-                         "if so, add the file's own \"image_size\"")
+            which = "the pose lies" if len(poses) == 1 else "every pose lies"
+            notes.append(f"{which} in the top-left quarter of {name} ({W} x {H} px), as keypoints in the pixels of a "
+                         "smaller copy of it, or of another image, would (their root is then metres off): if they "
+                         "are, add the file's own \"image_size\"; a person who does stand there is lifted right")
     size, size_notes = given_image_size(image_size, file_size, where="image_size= (--image-size)")
     on_fallback = False
     if fallback is not None and size is not None:

@@ -157,15 +157,26 @@ class ShippedFile:
     (no sha256 to check against)."""
 
 
+def ensemble_members(entry: ModelEntry) -> list[tuple[str, str]]:
+    """``(file, sha256)`` of each further detected-2D network of a registry entry (``ensemble_files`` with
+    ``ensemble_sha256``), for the loader and :func:`check_model_files` alike; refused when the two lists differ in
+    length (a damaged registry)."""
+    files, sums = entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])
+    if len(sums) != len(files):
+        raise PoseLifterError(f"shipped model {entry['name']!r}: ensemble_files and ensemble_sha256 differ in length "
+                              "(reinstall poselifter)")
+    return list(zip(files, sums))
+
+
 def check_model_files(name: str) -> list[ShippedFile]:
     """Each weights file of the shipped model ``name`` (``"default"``: the default), in the order of
     :meth:`lifter.Lifter.networks`, hashed against the registry: what ``poselifter models`` reports. The loader checks
-    the same before it reads a file (:func:`lifter.checkpoint.load_checkpoint`)."""
+    the same before it reads a file (:func:`lifter.checkpoint.load_checkpoint`). A registry entry the loader refuses
+    is refused here too (:class:`PoseLifterError`, :func:`ensemble_members`)."""
     import hashlib
 
     entry = model_entry(name)
-    ensemble = list(zip(entry.get("ensemble_files", []), entry.get("ensemble_sha256", [])))
-    detected = [(entry["file"], entry.get("sha256")), *ensemble]
+    detected: list[tuple[str, str | None]] = [(entry["file"], entry.get("sha256")), *ensemble_members(entry)]
     keyed = [("detected" if len(detected) == 1 else f"detected {i + 1}", f, h) for i, (f, h) in enumerate(detected)]
     if "clean_file" in entry:
         keyed.append(("clean", entry["clean_file"], entry.get("clean_sha256")))

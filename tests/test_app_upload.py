@@ -356,7 +356,7 @@ def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) ->
         # keypoints of a half-size copy: drawn in its top-left corner, and said (a user trial's 26 m, unsaid)
         half = (s.keypoints_2d / 2).tolist()
         assert v.load_upload("half.json", json.dumps({"keypoints": half, "format": "h36m17"}).encode()) is True
-        assert ("every pose lies in the top-left quarter of the photo walking.jpg uploaded before (800 x 600 px)"
+        assert ("the pose lies in the top-left quarter of the photo walking.jpg uploaded before (800 x 600 px)"
                 in v.messages[-1]), v.messages[-1]
         assert any("top-left quarter" in w for w in v.state.sample.upload.warnings)  # (and in the download)
         # keypoints that do not fit the borrowed size: the refusal says where the size came from (user trial)

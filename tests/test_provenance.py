@@ -90,8 +90,8 @@ def test_records_carry_it_for_their_source_and_flip_test(tmp_path, default):
     seq = tmp_path / "seq.json"
     seq.write_text(json.dumps({"fps": 10, "image_size": [1000, 1000], "focal": 1145,
                                "frames": [{"keypoints": (KP + [3 * i, 0]).tolist()} for i in range(3)]}))
-    srec = lift_keypoint_sequence(seq, lifter=default, flip_test=True).to_json()
-    assert srec["model_info"] == default.provenance(flip_test=True)
+    srec = lift_keypoint_sequence(seq, lifter=default, flip_test=False).to_json()
+    assert srec["model_info"] == default.provenance(flip_test=False) != default.provenance()  # (the call's, passed on)
 
 
 def test_the_cli_writes_it_for_your_own_weights(tmp_path):
@@ -148,3 +148,46 @@ def test_poselifter_models_names_a_damaged_or_missing_file(tmp_path, monkeypatch
     out, err = capsys.readouterr()
     assert f"{entry['ensemble_files'][0]} is {harm}" in err and "reinstall poselifter" in err
     assert "CHECK THE FILES BELOW" in out and "gt: 1 network, 8.6 MB, files ok" in out
+
+
+@pytest.mark.parametrize("flip", [True, False])
+def test_photo_and_video_records_give_the_flip_test_of_the_call(tmp_path, flip):
+    """A network without a mirror of its own runs the flip test exactly when the call asks: the record says which
+    (a review: no photo or video record's model_info was pinned)."""
+    from conftest import ScriptedEstimator
+
+    from lifter.detect import image_from_array
+    from lifter.pipeline import lift_image
+    from lifter.video import lift_video
+
+    small = tiny_lifter(32)
+    H, W = 480, 640
+    kp = KP * 0.5 + [100, 40]
+    img = image_from_array(np.full((H, W, 3), 90, np.uint8))
+    rec = lift_image(img, lifter=small, estimator=ScriptedEstimator([[kp]]), focal=600.0, flip_test=flip).to_json()
+    assert [n["flip_test"] for n in rec["model_info"]["networks"]] == [flip]
+    cv2 = pytest.importorskip("cv2")
+    clip = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (W, H))
+    for i in range(3):
+        vw.write(np.full((H, W, 3), 40 + 20 * i, np.uint8))
+    vw.release()
+    seq = lift_video(clip, lifter=small, estimator=ScriptedEstimator([[kp]] * 3), focal=600.0, flip_test=flip)
+    assert seq.to_json()["model_info"] == small.provenance(flip_test=flip)
+    assert [n["flip_test"] for n in seq.to_json()["model_info"]["networks"]] == [flip]
+
+
+def test_poselifter_models_refuses_a_registry_entry_the_loader_refuses(tmp_path, monkeypatch, capsys):
+    """ensemble_files without their sha256: the loader refuses the model, so the listing does not say "files ok" (a
+    review: it dropped the unhashed file and said ok)."""
+    dst = _copied_assets(tmp_path)
+    reg = json.loads((dst / "models.json").read_text())
+    reg["models"][reg["default"]]["ensemble_sha256"] = []
+    (dst / "models.json").write_text(json.dumps(reg))
+    monkeypatch.setenv("POSELIFTER_ASSETS", str(dst))
+    with pytest.raises(lifter.PoseLifterError, match="ensemble_files and ensemble_sha256 differ"):
+        Lifter.from_pretrained()
+    assert cli_main(["models"]) == 1
+    out, err = capsys.readouterr()
+    assert "ensemble_files and ensemble_sha256 differ in length (reinstall poselifter)" in err
+    assert f"{reg['default']}  (default): 0 networks, 0.0 MB, REGISTRY ENTRY DAMAGED" in out

@@ -604,7 +604,8 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert "30 sequences, 4 cameras" in captured.out and "Discussion 1" not in captured.out  # (S9 is not tested)
     heads = next(line for line in captured.out.splitlines() if line.startswith("model") and "Avg" in line).split()
     assert len(heads) == len(set(heads)) == 17 and "SitDn" in heads  # (cut to 6, Sitting and SittingDown read alike)
-    assert all(r["flip_test"] is False for r in __import__("json").loads((tmp_path / "ev2.json").read_text()))
+    assert all(r["flip_test"] is False and not any(n["flip_test"] for n in r["model_info"]["networks"])
+               for r in __import__("json").loads((tmp_path / "ev2.json").read_text()))
     assert "lifting (" not in captured.err  # stderr is not a terminal here: no progress bar in logs (user trial)
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only

@@ -2,7 +2,8 @@
 
 Lists each model of the registry (:mod:`lifter.resources`) with its networks, their files, sizes and sha256, each
 file hashed against the registry (:func:`lifter.resources.check_model_files`). Exit code 1 when a file is damaged
-or missing (the fix: reinstall poselifter), 2 for an unknown name.
+or missing or a model's registry entry is one the loader refuses (the fix: reinstall poselifter); 2 for an unknown
+name, or a registry (``models.json``) that cannot be read at all.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 
 from .. import __version__
 from .. import resources as assets
+from .._checks import PoseLifterError
 from . import COMMANDS
 from ._help import HelpFormatter
 
@@ -43,11 +45,15 @@ def run_models(args: argparse.Namespace) -> int:
         assets.model_names(), key=lambda n: (n != default, n))  # (an unknown name: error, exit 2)
     names = list(dict.fromkeys(names))
     rows = []
+    broken: list[tuple[str, str]] = []  # (a registry entry the loader refuses: its files cannot be listed)
     for name in names:
         entry = assets.model_entry(name)
-        files = assets.check_model_files(name)
-        rows.append({"name": name, "default": name == default, "flip_test": entry.get("flip_test"),
-                     "description": entry.get("description", ""),
+        try:
+            files = assets.check_model_files(name)
+        except PoseLifterError as exc:
+            broken.append((name, str(exc)))
+            files = []
+        rows.append({"name": name, "default": name == default, "description": entry.get("description", ""),
                      "networks": [{"network": f.network, "file": f.file, "size_bytes": f.size_bytes,
                                    "sha256": f.sha256, "status": f.status} for f in files]})
     bad = [(r["name"], n) for r in rows for n in r["networks"] if n["status"] in ("damaged", "missing")]
@@ -58,7 +64,10 @@ def run_models(args: argparse.Namespace) -> int:
         print(f"poselifter {__version__}: shipped models in {assets.assets_root()} (default: {default})")
         for r in rows:
             size = sum(n["size_bytes"] or 0 for n in r["networks"]) / 1e6
-            state = "files ok" if all(n["status"] == "ok" for n in r["networks"]) else "CHECK THE FILES BELOW"
+            said = {n["status"] for n in r["networks"]}
+            state = ("REGISTRY ENTRY DAMAGED" if not said else "files ok" if said == {"ok"} else
+                     "files ok as far as checked (no sha256 in the registry for some)" if said <= {"ok", "unchecked"}
+                     else "CHECK THE FILES BELOW")
             count = len(r["networks"])
             print(f"\n{r['name']}{'  (default)' if r['default'] else ''}: {count} network{'s' * (count != 1)}, "
                   f"{size:.1f} MB, {state}")
@@ -75,9 +84,11 @@ def run_models(args: argparse.Namespace) -> int:
                             *entry.get("ensemble_train_commands", [])]
                 for c in (c for c in commands if c):
                     print(f"  trained with: {c}")
+    for _, why in broken:
+        print(f"poselifter models: error: {why}", file=sys.stderr)
     for name, n in bad:
         print(f"poselifter models: error: model {name!r}: {n['file']} is {n['status']}"
               + (" (its bytes do not hash to the registry's sha256)" if n["status"] == "damaged" else "")
               + ": reinstall poselifter (pip install --force-reinstall poselifter), or restore the file",
               file=sys.stderr)
-    return 1 if bad else 0
+    return 1 if bad or broken else 0
