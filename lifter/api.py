@@ -536,12 +536,11 @@ class Lifter:
     def provenance(self, *, source: Source = "detected", flip_test: bool | None = None) -> dict[str, Any]:
         """What lifted a result, as every written result's ``model_info`` gives it: the model's :attr:`name`, the
         poselifter version, and each network that 2D told ``source`` runs through (:meth:`network_for`, with its
-        :attr:`ensemble`), in the order of :meth:`networks`. Per network: its key in :meth:`networks` (of this
-        lifter: one of them taken out, ``model.networks()["clean"]``, is a model of one network, ``"detected"``; its
-        ``sha256`` still names its file), ``sha256`` of
-        its checkpoint file (:attr:`weights_sha256`; None when not loaded from a file), ``flip_test`` as
-        :meth:`lift` applies it with this ``flip_test`` argument (False for a mirror-equivariant network, which needs
-        no mirror pass: ``symmetry`` says so), and ``int8``. JSON-ready."""
+        :attr:`ensemble`), in the order of :meth:`networks`. Per network: ``network``, its key in :meth:`networks`
+        of this lifter (one network taken out, ``model.networks()["clean"]``, is a model of one: ``"detected"``);
+        ``sha256`` of its checkpoint file (:attr:`weights_sha256`; None when not loaded from a file); ``flip_test``
+        as :meth:`lift` applies it with this ``flip_test`` argument (False for a mirror-equivariant network, which
+        needs no mirror pass: ``symmetry`` says so); and ``int8``. JSON-ready."""
         from . import __version__
 
         used = self.network_for(source)

@@ -89,6 +89,6 @@ def run_models(args: argparse.Namespace) -> int:
     for name, n in bad:
         print(f"poselifter models: error: model {name!r}: {n['file']} is {n['status']}"
               + (" (its bytes do not hash to the registry's sha256)" if n["status"] == "damaged" else "")
-              + ": reinstall poselifter (pip install --force-reinstall poselifter), or restore the file",
+              + ": reinstall poselifter, or restore the file",
               file=sys.stderr)
     return 1 if bad or broken else 0
