@@ -376,13 +376,14 @@ def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, i
         image_size = given_image_size(wh, None, where=f"fallback_image ({name})")[0]
         assert image_size is not None
         W, H = image_size
-        if len(poses) and float(np.mean(mostly_outside(np.stack(poses), (W, H)))) > 0.5:
+        stacked = np.stack(poses) if len(poses) else None
+        if stacked is not None and float(np.mean(mostly_outside(stacked, (W, H)))) > 0.5:
             at = f"{where}: " if str(where) else ""
             raise PoseLifterError(f"{at}the {what} has no \"image_size\": [W, H] (nor a principal point), and its "
                                   f"poses lie mostly outside {name} ({W} x {H} px), whose size would be used: add the "
                                   "file's own \"image_size\"")
         notes.append(f"no image_size in the file: that of {name} ({W} x {H} px) is used")
-        if len(poses) and _in_top_left_quarter(np.stack(poses), (W, H)):
+        if stacked is not None and _in_top_left_quarter(stacked, (W, H)):
             which = "the pose lies" if len(poses) == 1 else "every pose lies"
             notes.append(f"{which} in the top-left quarter of {name} ({W} x {H} px), as keypoints in the pixels of a "
                          "smaller copy of it, or of another image, would (their root is then metres off): if they "

@@ -43,11 +43,10 @@ def run_models(args: argparse.Namespace) -> int:
     default = assets.default_model_name()
     names = [assets.model_entry(n)["name"] for n in args.names] or sorted(
         assets.model_names(), key=lambda n: (n != default, n))  # (an unknown name: error, exit 2)
-    names = list(dict.fromkeys(names))
+    entries = {name: assets.model_entry(name) for name in names}  # (once each; repeated names once)
     rows = []
     broken: list[tuple[str, str]] = []  # (a registry entry the loader refuses: its files cannot be listed)
-    for name in names:
-        entry = assets.model_entry(name)
+    for name, entry in entries.items():
         try:
             files = assets.check_model_files(name)
         except PoseLifterError as exc:
@@ -77,9 +76,9 @@ def run_models(args: argparse.Namespace) -> int:
                       f"{n['status']}")
             desc = r["description"]
             if desc:
-                print(f"  {desc if len(names) == 1 else _first_sentence(desc)}")
-            if len(names) == 1:
-                entry = assets.model_entry(r["name"])
+                print(f"  {desc if len(entries) == 1 else _first_sentence(desc)}")
+            if len(entries) == 1:
+                entry = entries[r["name"]]
                 commands = [entry.get("train_command"), entry.get("clean_train_command"),
                             *entry.get("ensemble_train_commands", [])]
                 for c in (c for c in commands if c):
