@@ -1686,9 +1686,9 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
                     capsys)
     assert code == 0 and json.loads((tmp_path / "c" / "video.json").read_text())["fps"] == 25, err
     code, err = run([str(d), "--out", str(tmp_path / "e"), "--fps", "0", *base], capsys)
-    assert code != 0 and "--fps must be a frame rate in (0, 1000] frames/s, got 0" in err
+    assert code != 0 and "--fps must be the frame rate, a number in (0, 1000] frames/s, got 0.0" in err
     code, err = run([str(d), "--out", str(tmp_path / "e"), "--video-fps", "-5", *base], capsys)
-    assert code != 0 and "--video-fps must be a frame rate in (0, 1000] frames/s, got -5" in err
+    assert code != 0 and "--video-fps must be the frame rate, a number in (0, 1000] frames/s, got -5.0" in err
     # a review: two files given of a video's seven were read as all seven; a subset stays files
     two = [str(d / f"video_{n:012d}_keypoints.json") for n in (0, 1)]
     code, err = run([*two, "--out", str(tmp_path / "f"), "--fps", "30", *base], capsys)

@@ -92,9 +92,9 @@ from ..io import (
     LiftRecord,
     _camera_field,
     _image_size_field,
+    check_frame_rate,
     frame_pattern_files,
     is_frame_pattern,
-    is_frame_rate,
     is_keypoint_sequence,
     openpose_frame_pattern,
     openpose_partial_videos,
@@ -406,8 +406,7 @@ def check_lift_options(args: argparse.Namespace) -> None:
     if not (math.isfinite(args.max_seconds) and args.max_seconds > 0):
         raise PoseLifterError(f"--max-seconds must be a duration > 0 s, got {args.max_seconds:g}")
     for option, rate in (("--fps", args.fps), ("--video-fps", args.video_fps)):
-        if rate is not None and not is_frame_rate(rate):
-            raise PoseLifterError(f"{option} must be a frame rate in (0, 1000] frames/s, got {rate:g}")
+        check_frame_rate(rate, name=option)
     if args.out.exists() and not args.out.is_dir():
         raise PoseLifterError(f"--out {args.out}: exists and is not a folder; --out names the output folder")
     if args.distortion is not None:
