@@ -805,8 +805,9 @@ class BlazePoseEstimator:
     agree (:data:`FLIP_AGREE`), else the one with the higher mean visibility; a person not found in the mirror
     image is kept as found. Every rule is symmetric in the two searches. It costs a second search and lowers the
     2D error on the Human3.6M demo photos (README, "Photos"); :meth:`detect_near` (video tracking between full
-    searches) stays one pass. For a person both searches find, :meth:`detect` on the mirrored image gives the
-    mirrored landmarks (a person only the mirror-image search finds is not added: not for them).
+    searches) searches each crop and its mirror image the same way. For a person both searches find, :meth:`detect`
+    on the mirrored image gives the mirrored landmarks, and so does :meth:`detect_near` with the mirrored boxes (a
+    person only the mirror-image search finds is not added: not for them).
     task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 
@@ -930,16 +931,20 @@ class BlazePoseEstimator:
                 break
         return sorted(kept, key=lambda d: d.area, reverse=True)
 
-    def _in_crop(self, img: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> list[Detection]:
-        """People found in ``img[y0:y1, x0:x1]`` that lie inside it, in full-image px."""
+    def _in_crop(self, img: np.ndarray, x0: int, y0: int, x1: int, y1: int, *, mirrored: bool = False
+                 ) -> list[Detection]:
+        """People found in ``img[y0:y1, x0:x1]`` that lie inside it, in full-image px. ``mirrored``: search that
+        crop mirrored instead, which is the crop at columns ``W - x1 .. W - x0`` of the mirror image
+        ``img[:, ::-1]``: the people come in that image's px."""
         out = []
         W, H = img.shape[1], img.shape[0]
-        for d in self._run(np.ascontiguousarray(img[y0:y1, x0:x1])):
+        crop = img[y0:y1, x0:x1]
+        for d in self._run(np.ascontiguousarray(crop[:, ::-1] if mirrored else crop)):
             k = d.keypoints
             inside = float(np.mean((k[:, 0] >= 0) & (k[:, 0] < x1 - x0) & (k[:, 1] >= 0) & (k[:, 1] < y1 - y0)))
             if inside < WINDOW_MIN_INSIDE and (x1 - x0, y1 - y0) != (W, H):
                 continue
-            k = k + [x0, y0]
+            k = k + [W - x1 if mirrored else x0, y0]
             out.append(Detection(keypoints=k, scores=d.scores, bbox_xywh=bbox_of(np.clip(k, 0.0, [W, H])),
                                  keypoint_format=d.keypoint_format))
         return out
@@ -948,11 +953,17 @@ class BlazePoseEstimator:
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
         if img.ndim != 3 or img.shape[-1] != 3:
             raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
-        found = self._search(img)
+        return self._flip_tested(img.shape[1], img.shape[0], lambda mirrored: self._search(
+            np.ascontiguousarray(img[:, ::-1]) if mirrored else img))
+
+    def _flip_tested(self, W: int, H: int, search: Callable[[bool], list[Detection]]) -> list[Detection]:
+        """The people ``search(False)`` finds in a ``W x H`` image, and with :attr:`flip_test` each combined with
+        their detection by ``search(True)`` in its mirror image ``img[:, ::-1]`` (flipped back; class docstring),
+        largest first."""
+        found = search(False)
         if not self.flip_test or not found:
             return found
-        W, H = img.shape[1], img.shape[0]
-        mirrored = [self._flipped_back(d, W, H) for d in self._search(np.ascontiguousarray(img[:, ::-1]))]
+        mirrored = [self._flipped_back(d, W, H) for d in search(True)]
         # pairs by median landmark distance, closest first, each detection in one pair: every rule below is
         # symmetric in the two searches, so the mirrored image pairs and combines the same people
         dist = {(i, j): float(np.median(np.linalg.norm(d.keypoints - e.keypoints, axis=-1)))
@@ -1044,20 +1055,29 @@ class BlazePoseEstimator:
 
     def detect_near(self, image: np.ndarray, boxes: list[np.ndarray], *, grow: float = 0.3) -> list[Detection]:
         """People near the given ``(x, y, w, h)`` boxes only (e.g. where tracked people were in the previous video
-        frame): one landmarker pass on a crop around each box (grown by ``grow`` per side, at least as wide as it
-        is tall). Cheaper than :meth:`detect` for a few people; finds nobody new."""
+        frame): a landmarker pass on a crop around each box (grown by ``grow`` per side, at least as wide as it
+        is tall), and with :attr:`flip_test` a second on its mirror image, combined as :meth:`detect` combines
+        them. Cheaper than :meth:`detect` for a few people; finds nobody new."""
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
+        if img.ndim != 3 or img.shape[-1] != 3:
+            raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
         H, W = img.shape[:2]
-        cands: list[Detection] = []
-        for b in boxes:
-            x, y, w, h = (float(v) for v in b)
-            side_w = max(w, h) * (1 + 2 * grow)
-            cx, cy = x + w / 2, y + h / 2
-            x0, x1 = int(max(0, cx - side_w / 2)), int(min(W, cx + side_w / 2))
-            y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
-            if x1 - x0 >= 8 and y1 - y0 >= 8:
-                cands += self._in_crop(img, x0, y0, x1, y1)
-        return self._select(cands, W, H)
+
+        def search(mirrored: bool) -> list[Detection]:
+            cands: list[Detection] = []
+            for b in boxes:
+                x, y, w, h = (float(v) for v in b)
+                side_w = max(w, h) * (1 + 2 * grow)
+                cx, cy = x + w / 2, y + h / 2
+                # (outwards to whole columns: the mirror image's box gives the mirrored crop, column for column)
+                x0, x1 = max(0, math.floor(cx - side_w / 2)), min(W, math.ceil(cx + side_w / 2))
+                y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
+                if x1 - x0 >= 8 and y1 - y0 >= 8:
+                    # the mirror image's crop is this crop mirrored, at columns W - x1 .. W - x0 of that image
+                    cands += self._in_crop(img, x0, y0, x1, y1, mirrored=mirrored)
+            return self._select(cands, W, H)
+
+        return self._flip_tested(W, H, search)
 
     def close(self) -> None:
         """Release the MediaPipe landmarker now (also on ``with`` exit, on garbage collection, and at exit)."""
