@@ -1204,7 +1204,7 @@ def frame_indices(frames: list[Any], where: Path, fps: float) -> tuple[list[int]
     back as 3 and 4, their times 0.2 s early."""
     pairs = [(fr.get("index"), fr.get("time_s")) if isinstance(fr, dict) else (None, None) for fr in frames]
     if not all(i is not None and t is not None for i, t in pairs):
-        return None, []
+        return _frame_id_indices(frames, where)
     whole = [int(i) for i, _ in pairs if isinstance(i, int) and not isinstance(i, bool) and i >= 0]
     times = [float(t) for _, t in pairs if isinstance(t, (int, float)) and not isinstance(t, bool)]
     timed = len(whole) == len(times) == len(pairs) and all(
@@ -1214,6 +1214,23 @@ def frame_indices(frames: list[Any], where: Path, fps: float) -> tuple[list[int]
     return None, [f"{where}: the frames' 'index' and 'time_s' are not read as a poselifter record's (each frame's "
                   "index a whole number >= 0, increasing, its time_s index / fps): the frames are taken as consecutive "
                   "from 0"]
+
+
+def _frame_id_indices(frames: list[Any], where: Path) -> tuple[list[int] | None, list[str]]:
+    """The frames' indices from MMPose's ``frame_id`` (whole numbers, increasing; MMPose's demo counts from 1), the
+    first frame given as frame 0: frames a tracker left out keep their place and time (a user trial's frame_id 20,
+    after 10 missing, came out as frame 10 at 10 s of a 1-fps clip). None (consecutive from 0) where any frame
+    has none, or they are consecutive; a note when the first is above 1 (an offset the output does not keep)."""
+    got = [fr.get("frame_id") if isinstance(fr, dict) else None for fr in frames]
+    if not got or not all(isinstance(i, int) and not isinstance(i, bool) and i >= 0 for i in got):
+        return None, []
+    ids = [int(i) for i in got]
+    if not all(b > a for a, b in zip(ids, ids[1:])):
+        return None, [f"{where}: the frames' 'frame_id' do not increase: the frames are taken as consecutive from 0"]
+    notes = [] if ids[0] <= 1 else [f"{where}: the first frame's 'frame_id' is {ids[0]}: it is the output's frame 0 "
+                                    f"(each frame's index is its frame_id - {ids[0]}, its time_s index / fps)"]
+    indices = [i - ids[0] for i in ids]
+    return (None if indices == list(range(len(ids))) else indices), notes
 
 
 OPENPOSE_FRAME_FILE: Final = re.compile(r"(?P<video>.+)_(?P<frame>\d{12})_keypoints\.json")

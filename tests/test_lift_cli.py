@@ -1525,6 +1525,40 @@ def test_a_file_of_a_layout_that_holds_a_format_s_17_joints_says_which(tmp_path,
     np.testing.assert_allclose(parse_keypoint_json(p).keypoints, kp17)
 
 
+def test_mmpose_frame_ids_keep_the_frames_a_tracker_left_out(tmp_path, weights, kp17, capsys):
+    """A user trial: MMPose frames with frame_id 10-19 missing (a tracker lost the person) came out numbered 0..29,
+    frame_id 20 as index 10 at 10 s of a 1-fps clip, and MMPose's demo (frame_id from 1) one frame early. Each frame's
+    index is its frame_id less the first one's, its time_s index / fps; a first frame_id above 1 is noted."""
+    from lifter.io import parse_keypoint_sequence
+
+    coco = coco_from_h36m(kp17)
+    inst = {"keypoints": coco.tolist(), "keypoint_scores": [0.9] * 17}
+    kept = [i for i in range(30) if not 10 <= i < 20]
+    p = tmp_path / "gap.json"
+    for first in (0, 1):  # MMPoseInferencer from 0, MMPose's demo from 1
+        p.write_text(json.dumps({"meta_info": {}, "fps": 1, "image_size": [1280, 720],
+                                 "instance_info": [{"frame_id": i + first, "instances": [inst]} for i in kept]}))
+        ks = parse_keypoint_sequence(p)
+        assert ks.frame_indices == kept and not any("frame_id" in w for w in ks.warnings)
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights)], capsys)
+    assert code == 0, err
+    rec = json.loads((tmp_path / "o" / "gap.json").read_text())
+    assert [(f["index"], f["time_s"]) for f in rec["frames"]] == [(i, float(i)) for i in kept]
+    # in poselifter's own sequence layout too; a later start is said, consecutive ids are consecutive frames
+    p.write_text(json.dumps({"fps": 2, "format": "coco17", "frames": [{"frame_id": i + 7, "instances": [inst]}
+                                                                      for i in kept]}))
+    ks = parse_keypoint_sequence(p)
+    assert ks.frame_indices == kept
+    assert any("first frame's 'frame_id' is 7: it is the output's frame 0" in w for w in ks.warnings)
+    p.write_text(json.dumps({"fps": 2, "format": "coco17", "frames": [{"frame_id": i + 1, "instances": [inst]}
+                                                                      for i in range(5)]}))
+    assert parse_keypoint_sequence(p).frame_indices is None
+    p.write_text(json.dumps({"fps": 2, "format": "coco17", "frames": [{"frame_id": i, "instances": [inst]}
+                                                                      for i in (3, 2, 5)]}))
+    ks = parse_keypoint_sequence(p)
+    assert ks.frame_indices is None and any("'frame_id' do not increase" in w for w in ks.warnings)
+
+
 def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
     """A user trial: MMPoseInferencer's result saved as it comes (``{"predictions": [[instance, ...]],
     "visualization": []}``) was "expected an object with 'keypoints'". One is a frame (COCO-17, its scores read), a
