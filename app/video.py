@@ -412,17 +412,11 @@ def sequence_glb_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[f
                        corrected: dict[int, dict[int, tuple[np.ndarray, frozenset[int]]]] | None = None) -> bytes:
     """The whole lifted sequence as the animated binary glTF of ``poselifter lift clip.mp4 --glb`` (every track;
     metres, y-up), for ``lifter`` at ``focal`` (None: the upload's), with the joints ``corrected`` in the app."""
-    from lifter.export import write_glb_animation
-
     rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal, corrected=corrected)
-    tracks = rec.tracks()
-    if not tracks:
+    if not rec.tracks():
         raise UploadError(f"{seq.info.name}: nobody in any frame; nothing to export")
     with tempfile.TemporaryDirectory(prefix="poselifter-download-") as d:
-        path = Path(d) / "sequence.glb"
-        write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
-                             for tid, seen in tracks.items()}, path, fps=seq.fps)
-        return path.read_bytes()
+        return rec.write_glb(Path(d) / "sequence.glb").read_bytes()
 
 
 def video_message(seq: VideoSequence) -> str:

@@ -146,9 +146,13 @@ def _quat_z_to(d: np.ndarray) -> np.ndarray:
 
 
 def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathLike[str], *, fps: float,
-                        joint_radius_mm: float = 25.0, bone_radius_mm: float = 12.0) -> Path:
+                        span: tuple[int, int] | None = None, joint_radius_mm: float = 25.0,
+                        bone_radius_mm: float = 12.0) -> Path:
     """An animated binary glTF of several tracked people: ``tracks[track_id] = (frame_indices (n,), poses
     (n, 17, 3) mm camera frame)``; frame ``i`` is at ``i / fps`` s. Metres, y-up, like :func:`write_glb`.
+    ``span``: the first and last frame the clip covers (a video's ``(0, last frame)``, so that it plays in step with
+    the video, everyone hidden where nobody is seen), widened to the tracks' frames; None: from the first frame
+    anyone is seen in to the last.
 
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
@@ -174,6 +178,12 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
         clean[int(tid)] = (ii, to_y_up(P) / 1000.0)
     first = min(int(i[0]) for i, _ in clean.values())
     last = max(int(i[-1]) for i, _ in clean.values())
+    if span is not None:
+        lo, hi = (int(v) for v in span)
+        if not 0 <= lo <= hi:
+            raise PoseLifterError(f"write_glb_animation: span must be (first, last) frames, 0 <= first <= last, got "
+                                  f"{tuple(span)}")
+        first, last = min(first, lo), max(last, hi)
     frames = np.arange(first, last + 1)
     T = len(frames)
     scene = trimesh.Scene()

@@ -1222,9 +1222,9 @@ def _frame_id_indices(frames: list[Any], where: Path) -> tuple[list[int] | None,
     after 10 missing, came out as frame 10 at 10 s of a 1-fps clip). None (consecutive from 0) where any frame
     has none, or they are consecutive; a note when the first is above 1 (an offset the output does not keep)."""
     got = [fr.get("frame_id") if isinstance(fr, dict) else None for fr in frames]
-    if not got or not all(isinstance(i, int) and not isinstance(i, bool) and i >= 0 for i in got):
+    ids = [i for i in got if isinstance(i, int) and not isinstance(i, bool) and i >= 0]
+    if not ids or len(ids) != len(got):
         return None, []
-    ids = [int(i) for i in got]
     if not all(b > a for a, b in zip(ids, ids[1:])):
         return None, [f"{where}: the frames' 'frame_id' do not increase: the frames are taken as consecutive from 0"]
     notes = [] if ids[0] <= 1 else [f"{where}: the first frame's 'frame_id' is {ids[0]}: it is the output's frame 0 "

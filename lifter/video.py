@@ -390,6 +390,20 @@ class SequenceRecord:
         shared = _shared_person_ids(self.frames)
         return {tid: _track_person_id(seen, shared) for tid, seen in sorted(tracks.items())}
 
+    def write_glb(self, path: str | Path) -> Path:
+        """Every track as one animated binary glTF (:func:`lifter.export.write_glb_animation`; metres, y-up) on the
+        input's frame clock, from frame 0 to its last frame, everyone hidden in the frames they are not seen in (a
+        user trial's clip started at the first person's first frame, which glTF viewers then showed from frame 0).
+        Raises :class:`PoseLifterError` when nobody is in any frame."""
+        from .export import write_glb_animation
+
+        tracks = self.tracks()
+        if not tracks:
+            raise PoseLifterError(f"{self.input}: nobody in any frame; nothing to animate")
+        return write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
+                                    for tid, seen in tracks.items()}, path, fps=self.fps,
+                                   span=(0, max(fr.index for fr in self.frames)))
+
     @property
     def metric_depth(self) -> bool:
         """Whether the absolute depths (mm) rest on the camera's own focal length

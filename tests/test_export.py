@@ -125,3 +125,11 @@ def test_glb_animation_round_trip(tmp_path):
     assert len(scene.geometry) == 2 * (17 + 16)
     with pytest.raises(PoseLifterError, match="increasing frame indices"):
         write_glb_animation({1: (np.array([2, 1]), a[:2])}, tmp_path / "x.glb", fps=25.0)
+    # a span: the clip's own frames 0-15, everyone hidden where unseen (a user trial's clip began at frame 3's time)
+    p = write_glb_animation({4: (np.array([3, 4, 5, 9, 10]), b)}, tmp_path / "span.glb", fps=25.0, span=(0, 15))
+    times, joints = read_glb_animation(p)
+    np.testing.assert_allclose(times, np.arange(16) / 25.0, atol=1e-6)
+    np.testing.assert_allclose(joints[4][[3, 4, 5, 9, 10]], b, atol=0.05)
+    assert np.isnan(joints[4][[0, 1, 2, 6, 7, 8, 11, 12, 13, 14, 15]]).all()
+    with pytest.raises(PoseLifterError, match=r"span must be \(first, last\) frames"):
+        write_glb_animation({4: (np.array([3, 4]), b[:2])}, tmp_path / "x.glb", fps=25.0, span=(5, 2))

@@ -767,6 +767,17 @@ def test_cli_video_and_sequence(tmp_path, lifter, capsys):
     times, joints = read_glb_animation(out / "clip.glb")
     assert len(times) == 15 and set(joints) == {1, 2} and np.isnan(joints[1][2]).all()
     np.testing.assert_allclose(joints[2][0], d["frames"][0]["people"][1]["absolute"], atol=0.2)
+    # nobody in the first and last frames: the GLB still spans the whole clip, from its frame 0 (a user trial's
+    # began at the first person's first frame, which glTF viewers hold from time 0, and ended early)
+    doc = json.loads(seq.read_text())
+    doc["frames"][:2] = [{"people": []}] * 2
+    doc["frames"][-1] = {"people": []}
+    (tmp_path / "late.json").write_text(json.dumps(doc))
+    assert main(["lift", "--no-progress", str(tmp_path / "late.json"), "--out", str(out), "--weights", str(weights),
+                 "--glb"]) == 0
+    times, joints = read_glb_animation(out / "late.glb")
+    np.testing.assert_allclose(times, np.arange(len(doc["frames"])) / doc["fps"], atol=1e-6)
+    assert np.isnan(joints[1][[0, 1, -1]]).all() and not np.isnan(joints[1][2]).any()
     code = main(["lift", "--no-progress", str(seq), "--out", str(out), "--smoothing", "-1"])
     assert code == 2 and "--smoothing must be from 0 to 10 (0 = off" in capsys.readouterr().err
     # (a user trial: 1e9 froze every frame at the first pose, with exit 0)

@@ -659,12 +659,8 @@ def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bo
         if not tracks:
             say(f"{seq.input}: note: nobody in any frame; no BVH written")
     if glb:
-        from ..export import write_glb_animation
-
         if tracks:
-            write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
-                                 for tid, seen in tracks.items()}, out / f"{name}.glb", fps=seq.fps)
-            written.append(out / f"{name}.glb")
+            written.append(seq.write_glb(out / f"{name}.glb"))
         else:
             say(f"{seq.input}: note: nobody in any frame; no GLB written")
     return written
