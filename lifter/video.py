@@ -25,6 +25,7 @@ import math
 import os
 import re
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +33,7 @@ from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
-from ._checks import PoseLifterError, as_pair, collect_output_notes
+from ._checks import PoseLifterError, PoseLifterWarning, as_pair, collect_output_notes
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -161,6 +162,10 @@ frames."""
 
 MIN_FRAMES_FOR_TRACK_FILTER: Final[int] = 10
 
+CLOCK_MISMATCH: Final[float] = 10.0
+""":meth:`SequenceTracker.step` warns once when the time between two steps is more than this many times, or less
+than its inverse times, what their frame numbers and ``fps`` say (times in ms rather than s, or the wrong fps)."""
+
 
 class VideoError(PoseLifterError):
     """A video file cannot be opened or decoded, or has no frames."""
@@ -223,6 +228,7 @@ class SequenceTracker:
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
         self._last: tuple[int, float] | None = None  # (frame, t) of the last step
+        self._clock_warned = False
 
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
              focal: np.ndarray, scores: np.ndarray | None = None,
@@ -260,6 +266,15 @@ class SequenceTracker:
         if self._last is not None and not (frame > self._last[0] and t > self._last[1]):
             raise PoseLifterError(f"SequenceTracker.step: frame {frame} at {t:g} s comes after frame {self._last[0]} "
                                   f"at {self._last[1]:g} s: frames and times must increase (nothing was updated)")
+        if self._last is not None and not self._clock_warned:
+            said, by_frames = t - self._last[1], (frame - self._last[0]) / self.fps
+            if not 1 / CLOCK_MISMATCH <= said / by_frames <= CLOCK_MISMATCH:
+                self._clock_warned = True  # (once: a whole clip in ms would say it every frame)
+                warnings.warn(PoseLifterWarning(
+                    f"SequenceTracker.step: frame {frame} comes {said:g} s after frame {self._last[0]}, where fps="
+                    f"{self.fps:g} puts it {by_frames:g} s after: t must be in seconds on the frames' own clock (a "
+                    "time in ms divided by 1000), or fps the frame rate; smoothing follows t, and in ms is off"),
+                    stacklevel=2)
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         self._last = (int(frame), float(t))  # (once the tracker took it: a refused frame may be given again)
         for tid in list(self._smoothers):
