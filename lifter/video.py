@@ -39,6 +39,7 @@ from .detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
     PoseEstimator2D,
+    _StderrSilenced,
     bbox_of,
     box_iou,
     check_max_side,
@@ -889,7 +890,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         raise VideoError(f"{p}: no such file")
     if p.stat().st_size == 0:
         raise VideoError(f"{p}: empty file (zero-length video)")
-    cap = cv2.VideoCapture(str(p))
+    with _StderrSilenced():  # (OpenCV's own parser prints raw bytes of a damaged file; the error below says it)
+        cap = cv2.VideoCapture(str(p))
     try:
         if not cap.isOpened():
             raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")

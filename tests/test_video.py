@@ -587,6 +587,17 @@ def test_video_errors(tmp_path, lifter):
         lift_video(tmp_path / "nope.mp4", lifter=lifter, estimator=est)
 
 
+def test_a_damaged_video_is_said_without_opencvs_raw_bytes(tmp_path, lifter, capfd):
+    """A user trial: a truncated AVI printed OpenCV's own 'Unexpected element. Expected: LIST. Got: ...' with raw bytes
+    of the file in it (grep then calls the log binary) before poselifter's error, which says it."""
+    whole = _write_clip(tmp_path / "whole.avi", 5).read_bytes()
+    (tmp_path / "cut.avi").write_bytes(whole[:300])
+    capfd.readouterr()
+    with pytest.raises(VideoError, match="cannot open as a video"):
+        lift_video(tmp_path / "cut.avi", lifter=lifter, estimator=ScriptedEstimator([]))
+    assert "Unexpected element" not in capfd.readouterr().err
+
+
 def test_a_frame_dropped_mid_video_is_not_said_to_be_lost_at_the_end(tmp_path, lifter):
     """A user trial: OpenCV skipped a damaged frame in the middle of an MJPG clip without a word (its frame position
     and time do not show the gap either), and the record said "decoding stopped after frame 18 ...; the rest could
