@@ -35,6 +35,7 @@ from lifter.skeleton import JOINT_NAMES
 from lifter.video import (
     MEDIA_HEAD_BYTES,
     OUTPUT_NOTE_LINE,
+    ROOT_STEP_NOTE,
     VIDEO_SUFFIXES,
     SequenceRecord,
     input_kind,
@@ -42,6 +43,7 @@ from lifter.video import (
     lift_video,
     output_note_lines,
     track_lifted,
+    track_root_step_notes,
     tracked_output_notes,
 )
 
@@ -264,8 +266,9 @@ class VideoSequence:
                                             only=noted, focal=np.asarray(f, np.float64)) if noted else {}
         # (the upload's lift's notes on its output are replaced; and at another focal, the upload's assumed one is
         # no longer what was used: a user trial's download said both "assumed ... 555.0 px" and "at 572.2 px")
-        kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w)
+        kept = [w for w in rec.warnings if not OUTPUT_NOTE_LINE.match(w) and not ROOT_STEP_NOTE.match(w)
                 and (same_focal or not w.startswith(ASSUMED_FOCAL_NOTE))]
+        kept += track_root_step_notes(frames, fps=rec.fps)  # (of this lift's roots)
         fixed = [f"2D joints corrected in the app: frame {i} (track {tid}): "
                  + ", ".join(JOINT_NAMES[j] for j in sorted(joints))
                  for i, people in sorted(corrected.items()) for tid, (_, joints) in sorted(people.items())]

@@ -791,6 +791,67 @@ def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
     return notes
 
 
+ROOT_STEP_MM: Final[float] = 800.0
+"""A track's root steps when the median of its unsmoothed roots over the :data:`ROOT_STEP_WINDOW_S` after a frame lies
+this far from the median over the same time before it (consecutive frames, so a transient error does not count):
+two people under one track (an id given to another, tracks swapped where people cross), or 2D that is wrong for a
+while. On the real Stacked-Hourglass detections of S9 and S11 (one person each), lifted by the default, the root steps
+so about once every 2 minutes at 50 and at 25 frames/s; a user trial's sequence, one id given to a second person
+0.96 m deeper, stepped without a word."""
+
+ROOT_STEP_NOTE: Final[re.Pattern[str]] = re.compile(r"track \d+: its root moves ")
+"""How a note of :func:`track_root_step_notes` starts: it is about the lift (another model or focal steps otherwise)."""
+
+ROOT_STEP_WINDOW_S: Final[float] = 0.1
+"""The time either side of a frame over which :data:`ROOT_STEP_MM` takes its medians (at least 2 frames each)."""
+
+
+def _root_step_window(fps: float) -> int:
+    """Frames either side in :func:`track_root_steps`: :data:`ROOT_STEP_WINDOW_S`, rounded up, at least 2."""
+    return max(2, math.ceil(ROOT_STEP_WINDOW_S * fps - 1e-9))
+
+
+def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list[tuple[int, int, float]]]:
+    """Per track, where its unsmoothed root steps by more than :data:`ROOT_STEP_MM` (:data:`ROOT_STEP_WINDOW_S`
+    medians either side, over consecutive frames only): ``(frame before, frame after, step mm)`` at the largest step
+    of each run of such frames, in frame order; tracks without any are left out."""
+    w = _root_step_window(fps)
+    out: dict[int, list[tuple[int, int, float]]] = {}
+    for tid, seen in sorted(_tracks(frames).items()):
+        idx = np.array([i for i, _ in seen])
+        root = np.stack([np.asarray(q.root_raw, np.float64) for _, q in seen]) if seen else np.zeros((0, 3))
+        hits: list[tuple[int, int, float]] = []
+        run: list[tuple[int, float]] = []  # (sighting, step) of the current run of steps
+        for n in range(w - 1, len(seen) - w + 1):
+            step = 0.0
+            if n < len(seen) - w and idx[n + w] - idx[n - w + 1] == 2 * w - 1:  # (no gap: one back may be elsewhere)
+                step = float(np.linalg.norm(np.median(root[n + 1:n + 1 + w], 0) - np.median(root[n - w + 1:n + 1], 0)))
+            if step > ROOT_STEP_MM:
+                run.append((n, step))
+            elif run:  # (a clean step shows in the w - 1 frames either side too: the run's middle is where it is)
+                m = run[len(run) // 2][0]
+                hits.append((int(idx[m]), int(idx[m + 1]), max(q for _, q in run)))
+                run = []
+        if hits:
+            out[tid] = hits
+    return out
+
+
+def track_root_step_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
+    """One note per track with steps of :func:`track_root_steps`."""
+    notes = []
+    w = _root_step_window(fps)
+    for tid, hits in track_root_steps(frames, fps=fps).items():
+        a, b, step = hits[0]
+        more = (f", and in {len(hits) - 1} more place(s): {_frames_summary([q[1] for q in hits[1:]])}"
+                if len(hits) > 1 else "")
+        notes.append(f"track {tid}: its root moves {step / 1000:.2f} m between frames {a} and {b} and stays there "
+                     f"(the median of the {w} frames either side){more}: two people under one track (an id given to "
+                     "someone else, or two tracks swapped where people cross), or 2D wrong from there on; check "
+                     "those frames")
+    return notes
+
+
 def _frames_summary(idx: list[int], n: int = 8) -> str:
     return ", ".join(map(str, idx[:n])) + (f", ... ({len(idx)} in all)" if len(idx) > n else "")
 
@@ -1049,6 +1110,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
     warnings.extend(track_gap_notes(frames))
     warnings.extend(track_jump_notes(frames, fps=fps))
+    warnings.extend(track_root_step_notes(frames, fps=fps))
     warnings.extend(track_doubt_notes(frames))
     if noted:
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for("detected"), frames, pp,
@@ -1198,6 +1260,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))
     warnings.extend(track_gap_notes(out))
     warnings.extend(track_jump_notes(out, fps=ks.fps))
+    warnings.extend(track_root_step_notes(out, fps=ks.fps))
     given = [sc for *_, sc in lifted if sc is not None]
     if given and float(max(np.nanmax(sc) for sc in given)) <= 1.0:  # (above 1: another scale, no threshold to read)
         warnings.extend(track_doubt_notes(out))
@@ -1210,9 +1273,11 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                           source_format=ks.format, tracking_names=kept_names)
 
 
-__all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "FrameResult", "PersonState",
+__all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "ROOT_STEP_NOTE", "FrameResult",
+           "PersonState",
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "input_kind", "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines",
            "TrackJump", "track_doubt_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
-           "track_lifted", "tracked_output_notes"]
+           "track_lifted", "tracked_output_notes", "ROOT_STEP_MM", "ROOT_STEP_WINDOW_S", "track_root_steps",
+           "track_root_step_notes"]

@@ -1272,6 +1272,72 @@ def test_sequence_tracker_warns_once_of_times_off_its_frame_rate():
         seq.step(1, 0.01, kp, root, rel, F)
 
 
+def _root_track(roots: np.ndarray, fps: float, frames: list[int] | None = None) -> list:
+    from lifter.video import FrameResult, PersonState
+
+    z2, z3 = np.zeros((17, 2)), np.zeros((17, 3))
+    at = list(range(len(roots))) if frames is None else frames
+    return [FrameResult(index=i, time_s=i / fps, people=[PersonState(
+        track_id=1, keypoints_2d=z2, root=r, relative=z3, root_raw=r, relative_raw=z3, canonical_depth=float(r[2]))])
+        for i, r in zip(at, roots)]
+
+
+def test_a_track_whose_root_steps_and_stays_is_named():
+    """A user trial gave one person_id to a second person 0.96 m deeper from frame 250 of a 50-fps sequence: the track
+    kept the name, as documented, and its root stepped without a word. A step of the medians either side (0.1 s) over
+    ROOT_STEP_MM is named, once per run of frames; a one-frame spike, steady jitter, a step across a gap in the
+    track, and a step too slow to be one are not."""
+    from lifter.video import ROOT_STEP_MM, track_root_step_notes, track_root_steps
+
+    rng = np.random.default_rng(3)
+    base = np.array([-1000.0, -400.0, 4500.0])
+    steady = base + rng.normal(0, 60, (300, 3))
+    assert track_root_steps(_root_track(steady, 50.0), fps=50.0) == {}
+    spiked = steady.copy()
+    spiked[100] += [0, 0, 2500]  # (a transient detector error)
+    assert track_root_steps(_root_track(spiked, 50.0), fps=50.0) == {}
+    stepped = steady.copy()
+    stepped[250:] += [120.0, -130.0, 950.0]
+    (hit,) = track_root_steps(_root_track(stepped, 50.0), fps=50.0)[1]
+    assert hit[:2] == (249, 250) and ROOT_STEP_MM < hit[2] < 1300
+    (note,) = track_root_step_notes(_root_track(stepped, 50.0), fps=50.0)
+    assert note.startswith("track 1: its root moves 0.9") and "between frames 249 and 250 and stays there" in note
+    assert "two people under one track" in note
+    frames = list(range(250)) + list(range(300, 350))  # (gone 1 s, back elsewhere: not a step)
+    assert track_root_steps(_root_track(stepped[:300], 50.0, frames), fps=50.0) == {}
+    slow = base + np.linspace(0, 1, 300)[:, None] * [0, 0, 1500.0]  # (1.5 m in 6 s: walking away)
+    assert track_root_steps(_root_track(slow, 50.0), fps=50.0) == {}
+
+
+def test_a_keypoint_sequence_whose_named_person_changes_is_noted(tmp_path, lifter, monkeypatch):
+    """The user trial's case end to end: one person_id on a second, smaller-looking person from frame 30 on. The tiny
+    test lifter's root does not follow the 2D size, so here its root is placed by it (as a trained lifter's is)."""
+    from dataclasses import replace
+
+    real = lifter.lift
+
+    def by_size(kp, **kw):
+        res = real(kp, **kw)
+        k = np.asarray(kp, np.float64)
+        far = 90.0 / np.ptp(k[..., 1], axis=-1)[..., None]  # (1 at 90 px tall)
+        root = np.asarray(res.root) * far
+        return replace(res, root=root, absolute=np.asarray(res.relative) + root[..., None, :])
+
+    monkeypatch.setattr(lifter, "lift", by_size)
+    kp = _person(np.random.default_rng(1), 120)
+    small = (kp - kp.mean(0)) * 0.7 + kp.mean(0)
+    frames = [{"people": [{"keypoints": (kp if i < 30 else small).tolist(), "person_id": "a"}]} for i in range(60)]
+    p = tmp_path / "a.json"
+    p.write_text(json.dumps({"fps": 50, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}))
+    rec = lift_keypoint_sequence(p, lifter=lifter, smoothing=1.0)
+    assert [t for t in rec.tracks()] == [1]
+    said = [w for w in rec.warnings if "its root moves" in w]
+    assert len(said) == 1 and "between frames 29 and 30 and stays there" in said[0], rec.warnings
+    frames = [{"people": [{"keypoints": kp.tolist(), "person_id": "a"}]} for _ in range(60)]
+    p.write_text(json.dumps({"fps": 50, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}))
+    assert not any("its root moves" in w for w in lift_keypoint_sequence(p, lifter=lifter).warnings)
+
+
 def test_video_max_seconds_shorter_than_a_frame_is_named(tmp_path, lifter):
     clip = _write_clip(tmp_path / "slow.avi", 5, fps=1.0)
     with pytest.raises(VideoError, match="shorter than one frame"):
