@@ -85,6 +85,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--model", default="blazepose")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--detector-flip-test", action=argparse.BooleanOptionalAction, default=True,
+                    help="BlazePose's flip test in full and crop searches (the default; off: one pass each)")
     args = ap.parse_args()
     import torch
 
@@ -96,9 +98,10 @@ def main() -> int:
     lifter = Lifter.load(args.model)
     clips = build_clips(demo, ann, ROOT / "runs" / "cache" / "clips")
     fast = dict(build_clips(demo, ann, ROOT / "runs" / "cache" / "clips", fps=25.0))
-    report: dict[str, Any] = {"model": lifter.name, "fps": FPS, "cpu_count": os.cpu_count(),
+    report: dict[str, Any] = {"model": lifter.name, "detector_flip_test": args.detector_flip_test, "fps": FPS,
+                              "cpu_count": os.cpu_count(),
                               "load_average": os.getloadavg(), "clips": {}}
-    with BlazePoseEstimator(max_people=3) as est:
+    with BlazePoseEstimator(max_people=3, flip_test=args.detector_flip_test) as est:
         est.detect(np.zeros((64, 64, 3), np.uint8))
         for path, idx in clips:
             cam = data.camera(9, str(ann["camera"][idx[0]]))
@@ -142,7 +145,8 @@ def main() -> int:
                 rows[label] = dict(metrics(root, rel, gt), ms_per_frame=1e3 * dt / len(idx),
                                    tracks=len(vrec.tracks()))
             report["clips"][path.name] = rows
-            print(f"{path.name}: {len(idx)} frames at {FPS:g} frame/s, lifter {lifter.name}")
+            print(f"{path.name}: {len(idx)} frames at {FPS:g} frame/s, lifter {lifter.name}, detector flip test "
+                  f"{'on' if args.detector_flip_test else 'off'}")
             print("| run | frames found | MPJPE | MRPE | accel. error root | accel. error joints | ms/frame |")
             print("|---|---|---|---|---|---|---|")
             for k, m in rows.items():

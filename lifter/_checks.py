@@ -324,7 +324,7 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
     at = where_in_batch(mostly) if name_pose else ""
     # (the others with a joint outside too: a user trial read "4 of 40" as marginal where all 40 had)
     partly = int(np.sum(outside.any(-1) & ~mostly))
-    more = f" (and {partly} more partly)" if partly else ""
+    more = f", and {partly} more with some joints outside it" if partly else ""
     return [f"the detector placed most joints of {n} outside the {W} x {H} px image (a person cut off by the frame, "
             "or half-invented): their 3D is uncertain" if detected else
             f"{n} lie mostly outside the {W} x {H} px image{at}{more}: are the keypoints in this image's pixels?"]

@@ -49,6 +49,7 @@ from __future__ import annotations
 import atexit
 import math
 import os
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -668,26 +669,48 @@ def ensure_pose_task(*, build: bool = True, log: Callable[[str], None] | None = 
     return build_pose_task(p, log=log)
 
 
+_STDERR_LOCK = threading.Lock()
+_stderr_quiet: list[int] = []  # the saved fd 2 while silenced, once per process however deeply nested
+
+
 class _StderrSilenced:
     """Redirect file descriptor 2 to /dev/null for the duration (MediaPipe's C++ code logs through absl / glog
-    and TFLite straight to fd 2, not through Python)."""
+    and TFLite straight to fd 2, not through Python; so does OpenCV's video parser). Nested and concurrent uses
+    share one redirection, undone when the last ends (a review: two threads each saving fd 2 could leave it
+    silenced for good); with fd 2 closed (a daemon) it does nothing. Other threads' writes to stderr meanwhile are
+    lost too, for the short time it lasts."""
+
+    _depth = 0
 
     def __enter__(self) -> _StderrSilenced:
         import sys
 
-        try:
-            sys.stderr.flush()
-        except (OSError, ValueError, AttributeError):
-            pass
-        self._saved = os.dup(2)
-        null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(null, 2)
-        os.close(null)
+        with _STDERR_LOCK:
+            if _StderrSilenced._depth == 0:
+                try:
+                    sys.stderr.flush()
+                except (OSError, ValueError, AttributeError):
+                    pass
+                try:
+                    saved = os.dup(2)
+                except OSError:  # (fd 2 closed: nothing to silence)
+                    saved = -1
+                if saved >= 0:
+                    null = os.open(os.devnull, os.O_WRONLY)
+                    os.dup2(null, 2)
+                    os.close(null)
+                _stderr_quiet.append(saved)
+            _StderrSilenced._depth += 1
         return self
 
     def __exit__(self, *exc: Any) -> None:
-        os.dup2(self._saved, 2)
-        os.close(self._saved)
+        with _STDERR_LOCK:
+            _StderrSilenced._depth -= 1
+            if _StderrSilenced._depth == 0:
+                saved = _stderr_quiet.pop()
+                if saved >= 0:
+                    os.dup2(saved, 2)
+                    os.close(saved)
 
 
 def _import_mediapipe() -> Any:
@@ -1062,6 +1085,9 @@ class BlazePoseEstimator:
         if img.ndim != 3 or img.shape[-1] != 3:
             raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
         H, W = img.shape[:2]
+        bad = [np.asarray(b).tolist() for b in boxes if np.shape(b) != (4,) or not np.all(np.isfinite(b))]
+        if bad:
+            raise PoseLifterError(f"detect_near: each box must be 4 finite numbers (x, y, w, h) px, got {bad[0]}")
 
         def search(mirrored: bool) -> list[Detection]:
             cands: list[Detection] = []
@@ -1069,7 +1095,8 @@ class BlazePoseEstimator:
                 x, y, w, h = (float(v) for v in b)
                 side_w = max(w, h) * (1 + 2 * grow)
                 cx, cy = x + w / 2, y + h / 2
-                # (outwards to whole columns: the mirror image's box gives the mirrored crop, column for column)
+                # (columns outwards to whole pixels: the mirror image's box gives the mirrored crop, column for
+                # column; rows as before, the same either way)
                 x0, x1 = max(0, math.floor(cx - side_w / 2)), min(W, math.ceil(cx + side_w / 2))
                 y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
                 if x1 - x0 >= 8 and y1 - y0 >= 8:

@@ -1192,13 +1192,14 @@ class KeypointSequence:
     None where they have none; None when no frame has any."""
     frame_indices: list[int] | None = None
     """Each frame's index in its video (:func:`frame_indices`: a frame's ``index``, as poselifter's own records
-    write it, where frames were left out), or None: the frames are consecutive from 0."""
+    write it, or MMPose's ``frame_id``, where frames were left out), or None: the frames are consecutive from 0."""
 
 
 def frame_indices(frames: list[Any], where: Path, fps: float) -> tuple[list[int] | None, list[str]]:
     """The frames' own indices in their video, for poselifter's own records (every frame an object with a
     whole-number ``index`` and its ``time_s`` = index / ``fps``; a video's undecodable frames are left out of them),
-    increasing; else None: the frames are consecutive from 0 (another tool's ``index`` may count from 1, or from
+    increasing; else from MMPose's ``frame_id`` (:func:`_frame_id_indices`); else None: the frames are consecutive
+    from 0 (another tool's ``index`` may count from 1, or from
     where a clip was cut out of a longer video: a review's clip of frames 18000-18029 was lost so). A note when the
     frames look like a record's but their indices cannot be read so. A review saw a record's frames 5 and 6 read
     back as 3 and 4, their times 0.2 s early."""
@@ -1225,10 +1226,14 @@ def _frame_id_indices(frames: list[Any], where: Path) -> tuple[list[int] | None,
     ids = [i for i in got if isinstance(i, int) and not isinstance(i, bool) and i >= 0]
     if not ids or len(ids) != len(got):
         return None, []
-    if not all(b > a for a, b in zip(ids, ids[1:])):
-        return None, [f"{where}: the frames' 'frame_id' do not increase: the frames are taken as consecutive from 0"]
+    back = next((k for k in range(1, len(ids)) if ids[k] <= ids[k - 1]), None)
+    if back is not None:
+        return None, [f"{where}: the frames' 'frame_id' do not increase (frame {back} of the file has {ids[back]} "
+                      f"after {ids[back - 1]}): the frames are taken as consecutive from 0"]
     notes = [] if ids[0] <= 1 else [f"{where}: the first frame's 'frame_id' is {ids[0]}: it is the output's frame 0 "
-                                    f"(each frame's index is its frame_id - {ids[0]}, its time_s index / fps)"]
+                                    f"(each frame's index is its frame_id - {ids[0]}, its time_s index / fps), so the "
+                                    "output runs that many frames ahead of the video if frames before it were left "
+                                    "out: give those frames too, with no instances"]
     indices = [i - ids[0] for i in ids]
     return (None if indices == list(range(len(ids))) else indices), notes
 

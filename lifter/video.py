@@ -164,8 +164,9 @@ frames."""
 MIN_FRAMES_FOR_TRACK_FILTER: Final[int] = 10
 
 CLOCK_MISMATCH: Final[float] = 10.0
-""":meth:`SequenceTracker.step` warns once when the time between two steps is more than this many times, or less
-than its inverse times, what their frame numbers and ``fps`` say (times in ms rather than s, or the wrong fps)."""
+""":meth:`SequenceTracker.step` warns once when the time between steps is more than this many times, or less than its
+inverse times, what their frame numbers and ``fps`` say, three steps in a row (times in ms rather than s, or the wrong
+fps; one late frame, a camera warming up, is not)."""
 
 
 class VideoError(PoseLifterError):
@@ -229,7 +230,7 @@ class SequenceTracker:
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
         self._last: tuple[int, float] | None = None  # (frame, t) of the last step
-        self._clock_warned = False
+        self._clock_off = 0  # steps in a row whose time is CLOCK_MISMATCH off their frames' (-1: warned)
 
     def step(self, frame: int, t: float, keypoints_2d: np.ndarray, root: np.ndarray, relative: np.ndarray,
              focal: np.ndarray, scores: np.ndarray | None = None,
@@ -267,17 +268,23 @@ class SequenceTracker:
         if self._last is not None and not (frame > self._last[0] and t > self._last[1]):
             raise PoseLifterError(f"SequenceTracker.step: frame {frame} at {t:g} s comes after frame {self._last[0]} "
                                   f"at {self._last[1]:g} s: frames and times must increase (nothing was updated)")
-        if self._last is not None and not self._clock_warned:
+        clock = self._clock_off
+        if self._last is not None and clock >= 0:
             said, by_frames = t - self._last[1], (frame - self._last[0]) / self.fps
-            if not 1 / CLOCK_MISMATCH <= said / by_frames <= CLOCK_MISMATCH:
-                self._clock_warned = True  # (once: a whole clip in ms would say it every frame)
+            ratio = said / by_frames
+            clock = clock + 1 if not 1 / CLOCK_MISMATCH <= ratio <= CLOCK_MISMATCH else 0
+            if clock == 3:  # (once: a whole clip in ms would say it every frame)
+                clock = -1
+                unit = ("t looks like milliseconds: pass seconds (ms / 1000)" if ratio > 100 else
+                        "pass t in seconds" if ratio > 1 else "pass t in seconds on the frames' own clock")
+                times = f"{ratio:.0f}" if ratio >= 10 else f"{ratio:.2g}"
                 warnings.warn(PoseLifterWarning(
                     f"SequenceTracker.step: frame {frame} comes {said:g} s after frame {self._last[0]}, where fps="
-                    f"{self.fps:g} puts it {by_frames:g} s after: t must be in seconds on the frames' own clock (a "
-                    "time in ms divided by 1000), or fps the frame rate; smoothing follows t, and in ms is off"),
-                    stacklevel=2)
+                    f"{self.fps:g} puts it {by_frames:g} s after ({times} times), three steps in a row: {unit}, or "
+                    "give the frames' true fps; the smoothing follows t"), stacklevel=2)
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         self._last = (int(frame), float(t))  # (once the tracker took it: a refused frame may be given again)
+        self._clock_off = clock
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks or tid in self.tracker.resumed:
                 del self._smoothers[tid]  # ended tracks, and those a name took up again after the timeout
@@ -408,9 +415,9 @@ class SequenceRecord:
 
     def write_glb(self, path: str | Path) -> Path:
         """Every track as one animated binary glTF (:func:`lifter.export.write_glb_animation`; metres, y-up) on the
-        input's frame clock, from frame 0 to its last frame, everyone hidden in the frames they are not seen in (a
-        user trial's clip started at the first person's first frame, which glTF viewers then showed from frame 0).
-        Raises :class:`PoseLifterError` when nobody is in any frame."""
+        input's frame clock, from frame 0 to its last frame (one it could not read too), everyone hidden in the frames
+        they are not seen in (a user trial's clip started at the first person's first frame, which glTF viewers
+        then showed from frame 0). Raises :class:`PoseLifterError` when nobody is in any frame."""
         from .export import write_glb_animation
 
         tracks = self.tracks()
@@ -418,7 +425,8 @@ class SequenceRecord:
             raise PoseLifterError(f"{self.input}: nobody in any frame; nothing to animate")
         return write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
                                     for tid, seen in tracks.items()}, path, fps=self.fps,
-                                   span=(0, max(fr.index for fr in self.frames)))
+                                   span=(0, max([fr.index for fr in self.frames]
+                                                + [int(b["index"]) for b in self.bad_frames if "index" in b])))
 
     @property
     def metric_depth(self) -> bool:
@@ -793,11 +801,17 @@ def track_jump_notes(frames: list[FrameResult], *, fps: float) -> list[str]:
 
 ROOT_STEP_MM: Final[float] = 800.0
 """A track's root steps when the median of its unsmoothed roots over the :data:`ROOT_STEP_WINDOW_S` after a frame lies
-this far from the median over the same time before it (consecutive frames, so a transient error does not count):
-two people under one track (an id given to another, tracks swapped where people cross), or 2D that is wrong for a
-while. On the real Stacked-Hourglass detections of S9 and S11 (one person each), lifted by the default, the root steps
-so about once every 2 minutes at 50 and at 25 frames/s; a user trial's sequence, one id given to a second person
-0.96 m deeper, stepped without a word."""
+this far from the median over the same time before it (consecutive frames, so an error in a frame or two does not
+count): two people under one track (an id given to another, tracks swapped where people cross), or 2D that is wrong
+for a while. On the real Stacked-Hourglass detections of S9 and S11 (one person each, so every step named is 2D
+wrong for a while or the lift's own error, never two people), lifted by the default, a step is named about once every
+2 minutes at 50 and at 25 frames/s (``python scripts/root_steps.py``); a user trial's sequence, one id given to a second
+person 0.96 m deeper, stepped without a word."""
+
+ROOT_STEP_MAX_SPAN_S: Final[float] = 0.2
+"""Steps are judged only where the frames either side (:func:`_root_step_window`) span at most this (10 frames/s and
+faster): at 5 frames/s the two medians are 0.4 s apart, over which a runner moves as far; at 1 frame/s a walker
+would be named (a review)."""
 
 ROOT_STEP_NOTE: Final[re.Pattern[str]] = re.compile(r"track \d+: its root moves ")
 """How a note of :func:`track_root_step_notes` starts: it is about the lift (another model or focal steps otherwise)."""
@@ -813,10 +827,14 @@ def _root_step_window(fps: float) -> int:
 
 def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list[tuple[int, int, float]]]:
     """Per track, where its unsmoothed root steps by more than :data:`ROOT_STEP_MM` (:data:`ROOT_STEP_WINDOW_S`
-    medians either side, over consecutive frames only): ``(frame before, frame after, step mm)`` at the largest step
-    of each run of such frames, in frame order; tracks without any are left out."""
+    medians either side, over consecutive frames only): for each run of such frames ``(frame before, frame after,
+    step mm)``, the two frames of the run's largest move from one frame to the next, and its largest step between
+    the medians; in frame order; tracks without any are left out. Nothing below 10 frames/s
+    (:data:`ROOT_STEP_MAX_SPAN_S`)."""
     w = _root_step_window(fps)
     out: dict[int, list[tuple[int, int, float]]] = {}
+    if w / fps > ROOT_STEP_MAX_SPAN_S + 1e-9:
+        return out
     for tid, seen in sorted(_tracks(frames).items()):
         idx = np.array([i for i, _ in seen])
         root = np.stack([np.asarray(q.root_raw, np.float64) for _, q in seen]) if seen else np.zeros((0, 3))
@@ -828,8 +846,9 @@ def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list
                 step = float(np.linalg.norm(np.median(root[n + 1:n + 1 + w], 0) - np.median(root[n - w + 1:n + 1], 0)))
             if step > ROOT_STEP_MM:
                 run.append((n, step))
-            elif run:  # (a clean step shows in the w - 1 frames either side too: the run's middle is where it is)
-                m = run[len(run) // 2][0]
+            elif run:  # (a step shows from the frames either side too: where the root moves most is where it is)
+                lo, hi = run[0][0], run[-1][0]
+                m = lo + int(np.argmax(np.linalg.norm(root[lo + 1:hi + 2] - root[lo:hi + 1], axis=-1)))
                 hits.append((int(idx[m]), int(idx[m + 1]), max(q for _, q in run)))
                 run = []
         if hits:
@@ -845,10 +864,10 @@ def track_root_step_notes(frames: list[FrameResult], *, fps: float) -> list[str]
         a, b, step = hits[0]
         more = (f", and in {len(hits) - 1} more place(s): {_frames_summary([q[1] for q in hits[1:]])}"
                 if len(hits) > 1 else "")
-        notes.append(f"track {tid}: its root moves {step / 1000:.2f} m between frames {a} and {b} and stays there "
+        notes.append(f"track {tid}: its root moves {step / 1000:.2f} m between frames {a} and {b}, and stays moved "
                      f"(the median of the {w} frames either side){more}: two people under one track (an id given to "
-                     "someone else, or two tracks swapped where people cross), or 2D wrong from there on; check "
-                     "those frames")
+                     "someone else, or two tracks swapped where people cross), or 2D wrong for a while; check those "
+                     "frames, and give each person their own id (a keypoint sequence's person_id) where they are two")
     return notes
 
 

@@ -986,7 +986,8 @@ def test_lift_warns_of_keypoints_outside_the_image_size_given_as_records_do():
     part = kp.copy()
     part[16] = [810.0, 300.0]  # (one wrist past the right edge)
     with pytest.warns(PoseLifterWarning, match=r"1 of 3 2D pose\(s\) lie mostly outside the 800 x 600 px image "
-                                               r"\(pose at index \(2,\), 1 such pose\(s\)\) \(and 1 more partly\): "):
+                                               r"\(pose at index \(2,\), 1 such pose\(s\)\), and 1 more with some "
+                                               r"joints outside it: "):
         lf.lift(np.stack([kp, part, big]), focal=1145.0, image_size=(800, 600))
     with warnings.catch_warnings():
         warnings.simplefilter("error", PoseLifterWarning)

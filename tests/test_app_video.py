@@ -155,6 +155,24 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     assert wait_for(lambda: v.state.sample.key == shown)
 
 
+def test_a_sequence_lifted_again_says_its_own_root_steps(server) -> None:
+    """A review: the app's lift at another focal dropped the upload's root-step note but nothing tested that it says
+    its own. One name on the person 4 m away, then on the one 6 m away: both lifts name the step, each its own."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": people[0 if i < 30 else 1].tolist(), "person_id": "ann"}]}
+              for i, people in enumerate(_script(60))]
+    doc = {"fps": 50, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames, "source": "clean"}
+    assert v.load_upload("steps.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    seq = v.sequence()
+    assert seq is not None
+    own = [w for w in seq.record.warnings if w.startswith("track 1: its root moves ")]
+    assert len(own) == 1 and "between frames 29 and 30" in own[0], seq.record.warnings
+    again = seq.record_at(app.pool.get(v.state.model), (2 * F, 2 * F))
+    new = [w for w in again.warnings if w.startswith("track 1: its root moves ")]
+    assert len(new) == 1 and "between frames 29 and 30" in new[0] and new != own, (own, new)
+
+
 def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
     est = ScriptedEstimator(_script(4), full_width=W)
     app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)

@@ -594,3 +594,53 @@ def test_window_search_drops_a_second_reading_on_someone_s_shoulders():
     beside = _det(body(179 + 45, 135, 55, 165, shoulders=person.keypoints[[11, 12]] + [45.0, 0.0]), 0.8)
     assert not est._on_shoulders(beside, person)  # (side by side, shoulder to shoulder: boxes barely overlap)
     assert len(est._select([person, beside], 1000, 500)) == 2
+
+
+def test_stderr_silencing_nests_across_threads_and_bears_a_closed_fd2():
+    """A review: each use saved and restored fd 2 on its own, so two threads (videos lifted in a pool) could leave
+    stderr silenced for good, and with fd 2 closed (a daemon) os.dup raised an OSError out of lift_video."""
+    import os
+    import subprocess
+    import sys
+    import threading
+
+    from lifter.detect import _StderrSilenced
+
+    before = os.fstat(2)
+    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+
+    def first() -> None:
+        with _StderrSilenced():
+            a_in.set()
+            b_in.wait(5)
+        a_out.set()
+
+    def second() -> None:
+        a_in.wait(5)
+        with _StderrSilenced():
+            b_in.set()
+            a_out.wait(5)  # (the first ends while the second is still inside)
+            assert os.fstat(2).st_ino != before.st_ino  # (still silenced)
+
+    threads = [threading.Thread(target=first), threading.Thread(target=second)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(10)
+    after = os.fstat(2)
+    assert (after.st_dev, after.st_ino) == (before.st_dev, before.st_ino)
+    code = ("from lifter.detect import _StderrSilenced\nwith _StderrSilenced():\n    pass\nprint('ok')")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=False, stdout=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: os.close(2), timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "ok"
+
+
+def test_crop_search_refuses_a_box_that_is_not_four_finite_numbers():
+    """A review: a NaN box raised math's ValueError out of detect_near (int() had made it the whole width)."""
+    from lifter.detect import BlazePoseEstimator
+
+    est = object.__new__(BlazePoseEstimator)
+    img = np.zeros((40, 60, 3), np.uint8)
+    for box in (np.array([1.0, np.nan, 10.0, 20.0]), np.array([1.0, 2.0, 3.0])):
+        with pytest.raises(PoseLifterError, match=r"detect_near: each box must be 4 finite numbers \(x, y, w, h\)"):
+            est.detect_near(img, [box])

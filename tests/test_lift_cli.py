@@ -634,6 +634,29 @@ def test_lift_image_with_stub_detector(tmp_path, weights, kp17, capsys):
     assert "downscaled" in err and "65 deg" in err
 
 
+def test_detector_flip_test_option_reaches_blazepose(tmp_path, weights, kp17, capsys, monkeypatch):
+    """--no-detector-flip-test builds BlazePose without its flip test (videos about twice as fast); the default
+    leaves BlazePose's own (on); another detector is refused the option, naming the one that has it."""
+    import lifter.detect as detect_module
+
+    made: list[dict] = []
+
+    def fake(name: str = "blazepose", **kw):
+        made.append({"name": name, **kw})
+        return _StubEstimator([kp17 * 0.5])
+
+    monkeypatch.setattr(detect_module, "get_estimator", fake)
+    p = tmp_path / "photo.png"
+    Image.new("RGB", (1280, 720), (50, 60, 70)).save(p)
+    for extra, want in (([], None), (["--no-detector-flip-test"], False), (["--detector-flip-test"], True)):
+        code, err = run([str(p), "--out", str(tmp_path / "o"), "--weights", str(weights), *extra], capsys)
+        assert code == 0, err
+        assert made[-1]["name"] == "blazepose" and made[-1].get("flip_test") == want
+    code, err = run([str(p), "--out", str(tmp_path / "o"), "--detector", "_stub_test", "--no-detector-flip-test"],
+                    capsys)
+    assert code != 0 and "--no-detector-flip-test: the detector '_stub_test' has no flip test" in err, err
+
+
 def test_a_calibration_given_for_a_turned_photo_is_said_to_be_the_upright_image_s(tmp_path, weights, kp17, capsys):
     """A user trial: --principal-point (or fx != fy, or a lens) given for a photo turned upright by its EXIF
     orientation was taken in the upright image's pixels, and only "rotated upright" was said; a calibration in the

@@ -593,6 +593,9 @@ def test_a_damaged_video_is_said_without_opencvs_raw_bytes(tmp_path, lifter, cap
     whole = _write_clip(tmp_path / "whole.avi", 5).read_bytes()
     (tmp_path / "cut.avi").write_bytes(whole[:300])
     capfd.readouterr()
+    cv2.VideoCapture(str(tmp_path / "cut.avi")).release()
+    if "Unexpected element" not in capfd.readouterr().err:
+        pytest.skip("this OpenCV build prints nothing for this file: nothing to check")
     with pytest.raises(VideoError, match="cannot open as a video"):
         lift_video(tmp_path / "cut.avi", lifter=lifter, estimator=ScriptedEstimator([]))
     assert "Unexpected element" not in capfd.readouterr().err
@@ -1261,15 +1264,21 @@ def test_sequence_tracker_warns_once_of_times_off_its_frame_rate():
         for frame in (0, 1, 2, 5, 6):  # (frames 3 and 4 skipped: their time passes too)
             seq.step(frame, frame / 50, kp, root, rel, F)
     seq = SequenceTracker(fps=50)
-    with pytest.warns(PoseLifterWarning, match=r"frame 1 comes 20 s after frame 0, where fps=50 puts it 0.02 s "
-                                               r"after: t must be in seconds") as caught:
-        for frame in range(5):
+    with pytest.warns(PoseLifterWarning, match=r"frame 3 comes 20 s after frame 2, where fps=50 puts it 0.02 s "
+                                               r"after \(1000 times\), three steps in a row: t looks like "
+                                               r"milliseconds: pass seconds \(ms / 1000\)") as caught:
+        for frame in range(8):
             seq.step(frame, frame * 20.0, kp, root, rel, F)
     assert len([w for w in caught if issubclass(w.category, PoseLifterWarning)]) == 1
     with pytest.warns(PoseLifterWarning, match="where fps=1 puts it 1 s after"):  # (the wrong fps: 100 frames/s)
         seq = SequenceTracker(fps=1)
-        seq.step(0, 0.0, kp, root, rel, F)
-        seq.step(1, 0.01, kp, root, rel, F)
+        for frame in range(4):
+            seq.step(frame, frame / 100, kp, root, rel, F)
+    with warnings.catch_warnings():  # (one late frame, a camera warming up: 2 s at 30 frames/s, then on time)
+        warnings.simplefilter("error")
+        seq = SequenceTracker(fps=30)
+        for frame, t in enumerate([0.0, 2.0, 2.0 + 1 / 30, 2.0 + 2 / 30, 2.0 + 3 / 30, 2.0 + 4 / 30]):
+            seq.step(frame, t, kp, root, rel, F)
 
 
 def _root_track(roots: np.ndarray, fps: float, frames: list[int] | None = None) -> list:
@@ -1301,12 +1310,23 @@ def test_a_track_whose_root_steps_and_stays_is_named():
     (hit,) = track_root_steps(_root_track(stepped, 50.0), fps=50.0)[1]
     assert hit[:2] == (249, 250) and ROOT_STEP_MM < hit[2] < 1300
     (note,) = track_root_step_notes(_root_track(stepped, 50.0), fps=50.0)
-    assert note.startswith("track 1: its root moves 0.9") and "between frames 249 and 250 and stays there" in note
-    assert "two people under one track" in note
+    assert note.startswith("track 1: its root moves 0.9") and "between frames 249 and 250, and stays moved" in note
+    assert "two people under one track" in note and "give each person their own id" in note
     frames = list(range(250)) + list(range(300, 350))  # (gone 1 s, back elsewhere: not a step)
     assert track_root_steps(_root_track(stepped[:300], 50.0, frames), fps=50.0) == {}
     slow = base + np.linspace(0, 1, 300)[:, None] * [0, 0, 1500.0]  # (1.5 m in 6 s: walking away)
     assert track_root_steps(_root_track(slow, 50.0), fps=50.0) == {}
+    # a review: at low frame rates a walk (1.4 m/s) was named, the medians being seconds apart; below 10 frames/s
+    # nothing is judged, and at 10 a walk is not named
+    for fps in (1.0, 2.0, 5.0, 10.0):
+        walk = base + np.arange(40)[:, None] * [1400.0 / fps, 0, 0]
+        assert track_root_steps(_root_track(walk, fps), fps=fps) == {}, fps
+    assert track_root_steps(_root_track(stepped[::10], 5.0), fps=5.0) == {}  # (not judged)
+    assert track_root_steps(_root_track(stepped[::5], 10.0), fps=10.0)[1][0][:2] == (49, 50)
+    # a 2D error lasting 3 frames (60 ms): named where it starts and where it ends, each at its own frames
+    pulse = steady.copy()
+    pulse[100:103] += [0, 0, 1500.0]
+    assert [h[:2] for h in track_root_steps(_root_track(pulse, 50.0), fps=50.0)[1]] == [(99, 100), (102, 103)]
 
 
 def test_a_keypoint_sequence_whose_named_person_changes_is_noted(tmp_path, lifter, monkeypatch):
@@ -1332,10 +1352,24 @@ def test_a_keypoint_sequence_whose_named_person_changes_is_noted(tmp_path, lifte
     rec = lift_keypoint_sequence(p, lifter=lifter, smoothing=1.0)
     assert [t for t in rec.tracks()] == [1]
     said = [w for w in rec.warnings if "its root moves" in w]
-    assert len(said) == 1 and "between frames 29 and 30 and stays there" in said[0], rec.warnings
+    assert len(said) == 1 and "between frames 29 and 30, and stays moved" in said[0], rec.warnings
     frames = [{"people": [{"keypoints": kp.tolist(), "person_id": "a"}]} for _ in range(60)]
     p.write_text(json.dumps({"fps": 50, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}))
     assert not any("its root moves" in w for w in lift_keypoint_sequence(p, lifter=lifter).warnings)
+
+
+def test_glb_spans_to_a_last_frame_that_could_not_be_read(tmp_path, lifter):
+    """A review: a video ending in frames it could not decode (kept in bad_frames, not frames) ended its GLB early."""
+    from dataclasses import replace
+
+    from lifter.export import read_glb_animation
+
+    rec = lift_keypoint_sequence(_sequence_json(tmp_path / "s.json"), lifter=lifter)
+    times, _ = read_glb_animation(rec.write_glb(tmp_path / "a.glb"))
+    assert len(times) == 12
+    cut = replace(rec, bad_frames=[{"index": 14, "error": "frame size 10 x 10 px differs; skipped"}])
+    times, _ = read_glb_animation(cut.write_glb(tmp_path / "b.glb"))
+    np.testing.assert_allclose(times, np.arange(15) / rec.fps, atol=1e-6)
 
 
 def test_video_max_seconds_shorter_than_a_frame_is_named(tmp_path, lifter):
