@@ -475,9 +475,9 @@ def test_flip_test_rules_are_symmetric_in_the_two_searches():
     assert near >= 5, near  # the threshold's asymmetric band was exercised
 
 
-def test_blazepose_flip_test_is_mirror_equivariant():
-    """With the flip test, detecting the mirror image gives the mirrored detection (both passes are the same
-    two searches); one pass alone does not."""
+def _mirror_gaps(search) -> dict[bool, float]:
+    """With and without the flip test (``max_people=1``), the largest landmark gap (px) between what ``search(est,
+    image, mirrored)`` finds in the walking demo photo and, flipped back, in its mirror image."""
     _bundle_or_skip()
     from PIL import Image
 
@@ -489,13 +489,20 @@ def test_blazepose_flip_test_is_mirror_equivariant():
     gaps = {}
     for flip in (True, False):
         with BlazePoseEstimator(max_people=1, flip_test=flip) as est:
-            (d,) = est.detect(img)
-            (m,) = est.detect(np.ascontiguousarray(img[:, ::-1]))
+            d = search(est, img, False)
+            m = search(est, np.ascontiguousarray(img[:, ::-1]), True)
         back = m.keypoints[swap].copy()
         back[:, 0] = W - back[:, 0]
         gaps[flip] = float(np.abs(back - d.keypoints).max())
         if flip:
             np.testing.assert_allclose(m.scores[swap], d.scores, atol=1e-6)
+    return gaps
+
+
+def test_blazepose_flip_test_is_mirror_equivariant():
+    """With the flip test, detecting the mirror image gives the mirrored detection (both passes are the same
+    two searches); one pass alone does not."""
+    gaps = _mirror_gaps(lambda est, image, mirrored: est.detect(image)[0])
     assert gaps[True] < 1e-3, gaps
     assert gaps[False] > 0.05, gaps  # BlazePose alone is not mirror-equivariant: the test above is not vacuous
 
@@ -505,25 +512,17 @@ def test_blazepose_crop_search_has_the_flip_test_too():
     still clip was lifted 70 mm off (MPJPE) on full-search frames and 130-145 mm on the crop-search frames between
     them, one pass each. With it, the mirror image with the mirrored box gives the mirrored detection, as detect
     does; one pass alone does not. The box is fractional, so the crop is rounded alike both ways."""
-    _bundle_or_skip()
-    from PIL import Image
 
-    from lifter.detect import BlazePoseEstimator
+    def near(est, image: np.ndarray, mirrored: bool):
+        W = image.shape[1]
+        (full,) = est.detect(image[:, ::-1] if mirrored else image)  # (the box found in the photo itself)
+        box = full.bbox_xywh + [0.3, 0.6, 0.2, 0.1]
+        if mirrored:
+            box = box * [-1, 1, 1, 1] + [W - box[2], 0, 0, 0]
+        (d,) = est.detect_near(image, [box])
+        return d
 
-    img = np.asarray(Image.open(ROOT / "assets" / "demo" / "walking.jpg").convert("RGB"))
-    W = img.shape[1]
-    swap = mirror_permutation("blazepose33")
-    gaps = {}
-    for flip in (True, False):
-        with BlazePoseEstimator(max_people=1, flip_test=flip) as est:
-            (full,) = est.detect(img)
-            box = full.bbox_xywh + [0.3, 0.6, 0.2, 0.1]
-            (d,) = est.detect_near(img, [box])
-            (m,) = est.detect_near(np.ascontiguousarray(img[:, ::-1]), [box * [-1, 1, 1, 1] + [W - box[2], 0, 0, 0]])
-        back = m.keypoints[swap].copy()
-        back[:, 0] = W - back[:, 0]
-        gaps[flip] = float(np.abs(back - d.keypoints).max())
-        assert np.median(np.linalg.norm(d.keypoints - full.keypoints, axis=-1)) < 20
+    gaps = _mirror_gaps(near)
     assert gaps[True] < 1e-3, gaps
     assert gaps[False] > 0.05, gaps
 
