@@ -803,6 +803,13 @@ def _cells(box: np.ndarray, shape: tuple[int, ...]) -> tuple[int, int, int, int]
             int(np.clip(math.ceil(x + w), 0, shape[1])), int(np.clip(math.ceil(y + h), 0, shape[0])))
 
 
+NEAR_CENTRE_GROW: Final[float] = 0.5
+""":meth:`BlazePoseEstimator.detect_near`: a person found in a crop is the one searched for when their box centre lies
+within the given box grown by this fraction of its width and height on each side. A user trial's clip of two people
+crossing: the crop around the first, holding the second as they parted, found the second in one pass (the first in the
+other), and the first person's track jumped to them and was lost."""
+
+
 class BlazePoseEstimator:
     """MediaPipe BlazePose (full model, 33 landmarks, ``"blazepose33"``) through the Tasks API's
     ``PoseLandmarker``, from the bundle of :func:`ensure_pose_task` (built once from the 0.10.21 wheel's models).
@@ -830,7 +837,8 @@ class BlazePoseEstimator:
     2D error on the Human3.6M demo photos (README, "Photos"); :meth:`detect_near` (video tracking between full
     searches) searches each crop and its mirror image the same way. For a person both searches find, :meth:`detect`
     on the mirrored image gives the mirrored landmarks, and so does :meth:`detect_near` with the mirrored boxes (a
-    person only the mirror-image search finds is not added: not for them).
+    person only the mirror-image search finds is not added by :meth:`detect`: not for them; :meth:`detect_near`
+    takes them where the first pass found nobody in the box).
     task_path: a ``.task`` bundle (default: :func:`ensure_pose_task`). Close it (or use ``with``) to free the graph.
     """
 
@@ -979,14 +987,18 @@ class BlazePoseEstimator:
         return self._flip_tested(img.shape[1], img.shape[0], lambda mirrored: self._search(
             np.ascontiguousarray(img[:, ::-1]) if mirrored else img))
 
-    def _flip_tested(self, W: int, H: int, search: Callable[[bool], list[Detection]]) -> list[Detection]:
+    def _flip_tested(self, W: int, H: int, search: Callable[[bool], list[Detection]], *,
+                     mirror_alone: bool = False) -> list[Detection]:
         """The people ``search(False)`` finds in a ``W x H`` image, and with :attr:`flip_test` each combined with
         their detection by ``search(True)`` in its mirror image ``img[:, ::-1]`` (flipped back; class docstring),
-        largest first."""
+        largest first. ``mirror_alone``: where ``search(False)`` finds nobody, those ``search(True)`` finds (a crop
+        search, which looks for someone known to be there)."""
         found = search(False)
-        if not self.flip_test or not found:
+        if not self.flip_test or (not found and not mirror_alone):
             return found
         mirrored = [self._flipped_back(d, W, H) for d in search(True)]
+        if not found:
+            return sorted(mirrored, key=lambda d: d.area, reverse=True)
         # pairs by median landmark distance, closest first, each detection in one pair: every rule below is
         # symmetric in the two searches, so the mirrored image pairs and combines the same people
         dist = {(i, j): float(np.median(np.linalg.norm(d.keypoints - e.keypoints, axis=-1)))
@@ -1080,7 +1092,9 @@ class BlazePoseEstimator:
         """People near the given ``(x, y, w, h)`` boxes only (e.g. where tracked people were in the previous video
         frame): a landmarker pass on a crop around each box (grown by ``grow`` per side, at least as wide as it
         is tall), and with :attr:`flip_test` a second on its mirror image, combined as :meth:`detect` combines
-        them. Cheaper than :meth:`detect` for a few people; finds nobody new."""
+        them. A person found in a crop counts only with their box centre within the box it was searched for, grown
+        by :data:`NEAR_CENTRE_GROW` per side: a crop that holds someone else too is searched for the one in the box.
+        Cheaper than :meth:`detect` for a few people; finds nobody new."""
         img = np.ascontiguousarray(np.asarray(image, np.uint8))
         if img.ndim != 3 or img.shape[-1] != 3:
             raise ImageError(f"image: expected (H, W, 3) uint8 RGB, got shape {tuple(img.shape)}")
@@ -1101,10 +1115,15 @@ class BlazePoseEstimator:
                 y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
                 if x1 - x0 >= 8 and y1 - y0 >= 8:
                     # the mirror image's crop is this crop mirrored, at columns W - x1 .. W - x0 of that image
-                    cands += self._in_crop(img, x0, y0, x1, y1, mirrored=mirrored)
+                    bx = W - x - w if mirrored else x  # (the box in that image's px)
+                    lo = np.array([bx - NEAR_CENTRE_GROW * w, y - NEAR_CENTRE_GROW * h])
+                    hi = np.array([bx + (1 + NEAR_CENTRE_GROW) * w, y + (1 + NEAR_CENTRE_GROW) * h])
+                    cands += [d for d in self._in_crop(img, x0, y0, x1, y1, mirrored=mirrored)
+                              if np.all((d.bbox_xywh[:2] + d.bbox_xywh[2:] / 2 >= lo)
+                                        & (d.bbox_xywh[:2] + d.bbox_xywh[2:] / 2 <= hi))]
             return self._select(cands, W, H)
 
-        return self._flip_tested(W, H, search)
+        return self._flip_tested(W, H, search, mirror_alone=True)
 
     def close(self) -> None:
         """Release the MediaPipe landmarker now (also on ``with`` exit, on garbage collection, and at exit)."""

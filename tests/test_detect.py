@@ -643,3 +643,35 @@ def test_crop_search_refuses_a_box_that_is_not_four_finite_numbers():
     for box in (np.array([1.0, np.nan, 10.0, 20.0]), np.array([1.0, 2.0, 3.0])):
         with pytest.raises(PoseLifterError, match=r"detect_near: each box must be 4 finite numbers \(x, y, w, h\)"):
             est.detect_near(img, [box])
+
+
+def test_crop_search_keeps_only_the_person_in_the_box(monkeypatch):
+    """A user trial's clip of two people crossing: the crop around the first also held the second as they parted;
+    one pass found the second, the other the first, and the first person's track jumped to the second and was lost.
+    A person found in a crop counts only with their box centre near the box searched for (NEAR_CENTRE_GROW). No
+    mediapipe: the landmarker's finds are scripted, in the px of the image searched (the mirror image's too)."""
+    from lifter.detect import BlazePoseEstimator, Detection, bbox_of
+
+    W, H = 800, 600
+    rng = np.random.default_rng(4)
+
+    def body(x0: float) -> np.ndarray:
+        return np.column_stack([rng.uniform(x0, x0 + 100, 33), rng.uniform(150, 480, 33)])
+
+    me, other = body(200), body(420)
+    est = object.__new__(BlazePoseEstimator)
+    est.max_people, est.flip_test = 3, True
+
+    def in_crop(img, x0, y0, x1, y1, *, mirrored=False):  # (someone else first, as the trial's pass found)
+        out = []
+        for k in (other, me):
+            k = k.copy()
+            if mirrored:
+                k[:, 0] = W - k[:, 0]
+            out.append(Detection(keypoints=k, scores=np.full(33, 0.9), bbox_xywh=bbox_of(k),
+                                 keypoint_format="blazepose33"))
+        return out[:1] if not mirrored else out[1:]  # (one pass finds the other, the mirror pass finds me)
+
+    monkeypatch.setattr(est, "_in_crop", in_crop)
+    found = est.detect_near(np.zeros((H, W, 3), np.uint8), [bbox_of(me) + [5.0, 0.0, 0.0, 0.0]])
+    assert len(found) == 1 and abs(float(found[0].keypoints[:, 0].mean()) - float(me[:, 0].mean())) < 1.0
