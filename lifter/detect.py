@@ -670,7 +670,6 @@ def ensure_pose_task(*, build: bool = True, log: Callable[[str], None] | None = 
 
 
 _STDERR_LOCK = threading.Lock()
-_stderr_quiet: list[int] = []  # the saved fd 2 while silenced, once per process however deeply nested
 
 
 class _StderrSilenced:
@@ -680,7 +679,8 @@ class _StderrSilenced:
     silenced for good); with fd 2 closed (a daemon) it does nothing. Other threads' writes to stderr meanwhile are
     lost too, for the short time it lasts."""
 
-    _depth = 0
+    _depth = 0  # uses open now, process-wide
+    _saved = -1  # fd 2 as it was, while silenced (-1: fd 2 was closed)
 
     def __enter__(self) -> _StderrSilenced:
         import sys
@@ -692,25 +692,23 @@ class _StderrSilenced:
                 except (OSError, ValueError, AttributeError):
                     pass
                 try:
-                    saved = os.dup(2)
+                    _StderrSilenced._saved = os.dup(2)
                 except OSError:  # (fd 2 closed: nothing to silence)
-                    saved = -1
-                if saved >= 0:
+                    _StderrSilenced._saved = -1
+                else:
                     null = os.open(os.devnull, os.O_WRONLY)
                     os.dup2(null, 2)
                     os.close(null)
-                _stderr_quiet.append(saved)
             _StderrSilenced._depth += 1
         return self
 
     def __exit__(self, *exc: Any) -> None:
         with _STDERR_LOCK:
             _StderrSilenced._depth -= 1
-            if _StderrSilenced._depth == 0:
-                saved = _stderr_quiet.pop()
-                if saved >= 0:
-                    os.dup2(saved, 2)
-                    os.close(saved)
+            if _StderrSilenced._depth == 0 and _StderrSilenced._saved >= 0:
+                os.dup2(_StderrSilenced._saved, 2)
+                os.close(_StderrSilenced._saved)
+                _StderrSilenced._saved = -1
 
 
 def _import_mediapipe() -> Any:
@@ -1103,24 +1101,30 @@ class BlazePoseEstimator:
         if bad:
             raise PoseLifterError(f"detect_near: each box must be 4 finite numbers (x, y, w, h) px, got {bad[0]}")
 
+        crops = []  # (crop (x0, y0, x1, y1) px, box (x, y, w, h) px) once, for both passes
+        for b in boxes:
+            x, y, w, h = (float(v) for v in b)
+            side_w = max(w, h) * (1 + 2 * grow)
+            cx, cy = x + w / 2, y + h / 2
+            # (columns outwards to whole pixels: the mirror image's box gives the mirrored crop, column for
+            # column; rows as before, the same either way)
+            x0, x1 = max(0, math.floor(cx - side_w / 2)), min(W, math.ceil(cx + side_w / 2))
+            y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
+            if x1 - x0 >= 8 and y1 - y0 >= 8:
+                crops.append(((x0, y0, x1, y1), (x, y, w, h)))
+
         def search(mirrored: bool) -> list[Detection]:
             cands: list[Detection] = []
-            for b in boxes:
-                x, y, w, h = (float(v) for v in b)
-                side_w = max(w, h) * (1 + 2 * grow)
-                cx, cy = x + w / 2, y + h / 2
-                # (columns outwards to whole pixels: the mirror image's box gives the mirrored crop, column for
-                # column; rows as before, the same either way)
-                x0, x1 = max(0, math.floor(cx - side_w / 2)), min(W, math.ceil(cx + side_w / 2))
-                y0, y1 = int(max(0, cy - h * (0.5 + grow))), int(min(H, cy + h * (0.5 + grow)))
-                if x1 - x0 >= 8 and y1 - y0 >= 8:
-                    # the mirror image's crop is this crop mirrored, at columns W - x1 .. W - x0 of that image
-                    bx = W - x - w if mirrored else x  # (the box in that image's px)
-                    lo = np.array([bx - NEAR_CENTRE_GROW * w, y - NEAR_CENTRE_GROW * h])
-                    hi = np.array([bx + (1 + NEAR_CENTRE_GROW) * w, y + (1 + NEAR_CENTRE_GROW) * h])
-                    cands += [d for d in self._in_crop(img, x0, y0, x1, y1, mirrored=mirrored)
-                              if np.all((d.bbox_xywh[:2] + d.bbox_xywh[2:] / 2 >= lo)
-                                        & (d.bbox_xywh[:2] + d.bbox_xywh[2:] / 2 <= hi))]
+            for crop, (x, y, w, h) in crops:
+                # the mirror image's crop is this crop mirrored, at columns W - x1 .. W - x0 of that image, and the
+                # people come in that image's px: so does the box their centre must lie near
+                bx = W - x - w if mirrored else x
+                lo = np.array([bx - NEAR_CENTRE_GROW * w, y - NEAR_CENTRE_GROW * h])
+                hi = np.array([bx + (1 + NEAR_CENTRE_GROW) * w, y + (1 + NEAR_CENTRE_GROW) * h])
+                for d in self._in_crop(img, *crop, mirrored=mirrored):
+                    centre = d.bbox_xywh[:2] + d.bbox_xywh[2:] / 2
+                    if np.all((centre >= lo) & (centre <= hi)):
+                        cands.append(d)
             return self._select(cands, W, H)
 
         return self._flip_tested(W, H, search, mirror_alone=True)

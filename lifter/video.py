@@ -838,19 +838,16 @@ def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list
     for tid, seen in sorted(_tracks(frames).items()):
         idx = np.array([i for i, _ in seen])
         root = np.stack([np.asarray(q.root_raw, np.float64) for _, q in seen]) if seen else np.zeros((0, 3))
-        hits: list[tuple[int, int, float]] = []
-        run: list[tuple[int, float]] = []  # (sighting, step) of the current run of steps
-        for n in range(w - 1, len(seen) - w + 1):
-            step = 0.0
-            if n < len(seen) - w and idx[n + w] - idx[n - w + 1] == 2 * w - 1:  # (no gap: one back may be elsewhere)
-                step = float(np.linalg.norm(np.median(root[n + 1:n + 1 + w], 0) - np.median(root[n - w + 1:n + 1], 0)))
-            if step > ROOT_STEP_MM:
-                run.append((n, step))
-            elif run:  # (a step shows from the frames either side too: where the root moves most is where it is)
-                lo, hi = run[0][0], run[-1][0]
-                m = lo + int(np.argmax(np.linalg.norm(root[lo + 1:hi + 2] - root[lo:hi + 1], axis=-1)))
-                hits.append((int(idx[m]), int(idx[m + 1]), max(q for _, q in run)))
-                run = []
+        steps = np.zeros(max(len(seen) - 1, 0))  # (between sightings n and n + 1)
+        for n in range(w - 1, len(seen) - w):
+            if idx[n + w] - idx[n - w + 1] == 2 * w - 1:  # (no gap: one back after a gap may be elsewhere)
+                steps[n] = np.linalg.norm(np.median(root[n + 1:n + 1 + w], 0) - np.median(root[n - w + 1:n + 1], 0))
+        edges = np.diff(np.concatenate([[0], (steps > ROOT_STEP_MM).astype(np.int8), [0]]))
+        hits = []
+        for lo, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+            # (a step shows from the frames either side too: where the root moves most in the run is where it is)
+            m = lo + int(np.argmax(np.linalg.norm(root[lo + 1:end + 1] - root[lo:end], axis=-1)))
+            hits.append((int(idx[m]), int(idx[m + 1]), float(steps[lo:end].max())))
         if hits:
             out[tid] = hits
     return out
