@@ -163,6 +163,14 @@ frames."""
 
 MIN_FRAMES_FOR_TRACK_FILTER: Final[int] = 10
 
+SPARSE_TRACK_FRAMES: Final[int] = 3
+SPARSE_TRACK_SHARE: Final[float] = 0.25
+"""Videos of at least :data:`MIN_FRAMES_FOR_TRACK_FILTER` frames: a track seen in fewer than
+:data:`SPARSE_TRACK_FRAMES` frames that fill less than this share of the video's frames from its first sighting to
+its last is left out too, with a warning naming the frames (a user trial: a "person" on an empty wall, seen in frames 2
+and 19 of a 25-fps clip and nowhere between, was kept as a track and lifted). Two sightings in a row, or a person
+seen in two frames of a 1-frame/s clip, are kept."""
+
 CLOCK_MISMATCH: Final[float] = 10.0
 """:meth:`SequenceTracker.step` warns once when the time between steps is more than this many times, or less than its
 inverse times, what their frame numbers and ``fps`` say, three steps in a row (times in ms rather than s, or the wrong
@@ -613,6 +621,19 @@ def _tracks(frames: list[FrameResult]) -> dict[int, list[tuple[int, PersonState]
     for fr in frames:
         for q in fr.people:
             out.setdefault(q.track_id, []).append((fr.index, q))
+    return out
+
+
+def _sparse_tracks(frames: list[FrameResult], seen: dict[int, list[tuple[int, PersonState]]]) -> list[int]:
+    """The tracks of ``seen`` (:func:`_tracks` of ``frames``) with fewer than :data:`SPARSE_TRACK_FRAMES` sightings
+    that fill less than :data:`SPARSE_TRACK_SHARE` of the frames from their first to their last (counted in
+    ``frames``, so that a video read at a lower rate counts the frames read)."""
+    pos = {fr.index: k for k, fr in enumerate(frames)}
+    out = []
+    for tid, at in seen.items():
+        span = pos[at[-1][0]] - pos[at[0][0]] + 1
+        if len(at) < SPARSE_TRACK_FRAMES and len(at) < SPARSE_TRACK_SHARE * span:
+            out.append(tid)
     return out
 
 
@@ -1100,19 +1121,29 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                         "(OpenCV does not say where); then the frame numbers and times after that point run up to "
                         f"{short} frame(s) early (re-encoding the file, e.g. ffmpeg -i IN -c:v libx264 OUT.mp4, says "
                         "whether it is damaged)")
+    dropped: list[str] = []  # (the notes of tracks left out as false detections)
     if len(frames) >= MIN_FRAMES_FOR_TRACK_FILTER:
         seen = _tracks(frames)
         flashes = {tid for tid, at in seen.items() if len(at) < MIN_TRACK_FRAMES}
+        sparse = set(_sparse_tracks(frames, seen)) - flashes
+        if flashes or sparse:
+            for fr in frames:
+                fr.people = [q for q in fr.people if q.track_id not in flashes | sparse]
+            nobody = [fr.index for fr in frames if not fr.people]
         if flashes:
             where = sorted(i for tid in flashes for i, _ in seen[tid])
-            for fr in frames:
-                fr.people = [q for q in fr.people if q.track_id not in flashes]
-            nobody = [fr.index for fr in frames if not fr.people]
-            warnings.append(f"{len(flashes)} detection(s) seen in fewer than {MIN_TRACK_FRAMES} frames left out as "
+            dropped.append(f"{len(flashes)} detection(s) seen in fewer than {MIN_TRACK_FRAMES} frames left out as "
                             f"likely false detections (frames {_frames_summary(where)})")
+        if sparse:
+            where = sorted(i for tid in sparse for i, _ in seen[tid])
+            dropped.append(f"{len(sparse)} track(s) seen in fewer than {SPARSE_TRACK_FRAMES} frames far apart, missing "
+                            f"from most frames between them, left out as likely false detections (frames "
+                            f"{_frames_summary(where)})")
+        warnings += dropped
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
-                              f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else ""))
+                              f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else "")
+                              + "".join(f"; {w}" for w in dropped))
     if nobody:
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if crowded:

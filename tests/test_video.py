@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 from pathlib import Path
 
@@ -1123,6 +1124,34 @@ def test_video_person_seen_in_one_frame_only_is_left_out(tmp_path, lifter):
     est2 = ScriptedEstimator([*script[:6], script[6]])
     short = lift_video(_write_clip(tmp_path / "short.avi", 7), lifter=lifter, estimator=est2, focal=F)
     assert len(short.frames[6].people) == 3
+
+
+def test_video_track_seen_twice_far_apart_is_left_out(tmp_path, lifter):
+    """A "person" on an empty wall seen in two frames ten frames apart and nowhere between (a user trial's phantom,
+    frames 2 and 19 of a 25-fps clip) is dropped as a false detection, said in a warning; one seen in two frames in a
+    row is kept (a person passing a 1-frame/s camera)."""
+    script = _script(14)
+    ghost = _person(np.random.default_rng(5), 160.0) * 0.5 + [80.0, 60.0]
+    for k in (2, 12):
+        script[k] = [*script[k], ghost]
+    rec = lift_video(_write_clip(tmp_path / "wall.avi", 14), lifter=lifter, estimator=ScriptedEstimator(script),
+                     focal=F)
+    assert list(rec.tracks()) == [1, 2] and all(len(fr.people) == 2 for fr in rec.frames)
+    note = ("1 track(s) seen in fewer than 3 frames far apart, missing from most frames between them, left out as "
+            "likely false detections (frames 2, 12)")
+    assert any(note in w for w in rec.warnings), rec.warnings
+    # an empty wall with that phantom alone: nobody found, and the error says what was left out
+    alone = [[ghost] if k in (2, 12) else [] for k in range(14)]
+    with pytest.raises(PoseLifterError, match=r"no person found by the scripted 2D detector in any of the 14 frames; "
+                       + re.escape(note)):
+        lift_video(_write_clip(tmp_path / "empty.avi", 14), lifter=lifter, estimator=ScriptedEstimator(alone), focal=F)
+    kept = _script(14)
+    for k in (5, 6):
+        kept[k] = [*kept[k], ghost]
+    rec2 = lift_video(_write_clip(tmp_path / "passing.avi", 14), lifter=lifter, estimator=ScriptedEstimator(kept),
+                      focal=F)
+    assert len(rec2.tracks()) == 3 and [len(fr.people) for fr in rec2.frames[4:8]] == [2, 3, 3, 2]
+    assert not any("likely false" in w for w in rec2.warnings), rec2.warnings
 
 
 def test_sequence_tracker_step_checks_its_shapes():
