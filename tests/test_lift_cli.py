@@ -250,6 +250,11 @@ def test_cli_matches_api(tmp_path, weights, kp17, capsys):
     np.testing.assert_allclose(got["absolute"], ref.absolute, atol=0.01)
     assert got["canonical_depth"] == pytest.approx(float(ref.canonical_depth), abs=0.01)
     assert got["focal"] == [900.0, 950.0] and got["focal_source"] == "user"
+    # -o is --out (a user trial typed -o and was told --out was missing)
+    code, err = run([str(tmp_path / "k.json"), "-o", str(tmp_path / "o2"), "--focal", "900", "950",
+                     "--principal-point", "600", "300", "--weights", str(weights)], capsys)
+    assert code == 0, err
+    assert json.loads((tmp_path / "o2" / "k.json").read_text())["absolute"] == got["absolute"]
 
 
 def test_threads_sets_the_lifts_torch_threads_and_bad_counts_are_refused(tmp_path, weights, kp17, capsys,

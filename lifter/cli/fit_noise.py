@@ -33,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                        formatter_class=HelpFormatter)
     p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
     p.add_argument("--protocol", type=int, default=1, choices=(1, 2), help="fit on this protocol's training subjects")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("-o", "--out", type=Path, default=None,
                    help=f"JSON to write (default {DEFAULT_JSON}, relative to the current folder: run from a checkout's "
                    "root, that replaces the shipped fit, which is how it is reproduced; elsewhere, give --out)")
     p.add_argument("--plots", type=Path, default=DEFAULT_PLOT_DIR,

@@ -308,7 +308,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="images, videos, folders of them, keypoint .json files (one frame, or 'frames'), or a "
                         "frame pattern of keypoint files (DIR/video_%%012d_keypoints.json: one file per frame)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("-o", "--out", type=Path, required=True, help="output folder")
     p.add_argument("--strict", action="store_true",
                    help="exit code 1 when any input fails, not only when all do (for pipelines; the inputs that "
                         "could be lifted are still written)")

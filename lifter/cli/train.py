@@ -37,7 +37,7 @@ from ._help import h36m_help, plain_text
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("train", help=COMMANDS["train"][1],
                        description=plain_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
+    p.add_argument("-o", "--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
     p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
     p.add_argument("--print-config", action="store_true", help="print the resolved config as JSON and exit")
     p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
