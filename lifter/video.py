@@ -666,6 +666,31 @@ def track_doubt_notes(frames: list[FrameResult], *, max_joints: int = 4) -> list
     return notes
 
 
+def track_edge_notes(frames: list[FrameResult], image_size: tuple[int, int]) -> list[str]:
+    """One note per track of a video whose detected 2D puts joints outside the ``image_size`` ``(W, H)`` px frame
+    in some of its frames (a person cut off by the frame's edge; the detector's guess at the joints it cannot see):
+    the frames, and the joints most often outside (a user trial: a person leaving at the edge was lifted 0.9
+    and 2.4 m farther in its last two frames than before, with no word of why). Frames with most joints outside are the plausibility note's
+    (:func:`lifter._checks.outside_image_notes`); this names the tracks and frames."""
+    from ._checks import _joints_outside
+
+    notes: list[str] = []
+    for tid, seen in sorted(_tracks(frames).items()):
+        out = _joints_outside(np.stack([q.keypoints_2d for _, q in seen]), image_size)  # (frames, 17)
+        rows = np.flatnonzero(out.any(-1))
+        if not len(rows):
+            continue
+        counts = out.sum(0)
+        joints = sorted(np.flatnonzero(counts), key=lambda j: (-int(counts[j]), int(j)))
+        named = ", ".join(JOINT_NAMES[j] for j in joints[:3]) + (f" and {len(joints) - 3} more" if len(joints) > 3
+                                                                 else "")
+        notes.append(f"track {tid}: cut off by the image's edge in {len(rows)} of its {len(seen)} frames "
+                     f"({_frames_summary([seen[r][0] for r in rows])}; {named} placed outside the image): the "
+                     "detector guesses the joints it cannot see, so the 2D there, and the lift, its depth most of "
+                     "all, are less sure")
+    return notes
+
+
 def track_gap_notes(frames: list[FrameResult]) -> list[str]:
     """One note per track that is missing from some of the frames between its first and last sighting: those frames
     have no pose for it (the detector missed the person there, or the file leaves them out), and a viewer that follows
@@ -1156,6 +1181,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
     warnings.extend(track_gap_notes(frames))
+    warnings.extend(track_edge_notes(frames, size))
     warnings.extend(track_jump_notes(frames, fps=fps))
     warnings.extend(track_root_step_notes(frames, fps=fps))
     warnings.extend(track_doubt_notes(frames))
@@ -1325,6 +1351,6 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "ROO
            "track_animation", "tracking_names",
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "input_kind", "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines",
-           "TrackJump", "track_doubt_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
+           "TrackJump", "track_doubt_notes", "track_edge_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
            "track_lifted", "tracked_output_notes", "ROOT_STEP_MM", "ROOT_STEP_WINDOW_S", "track_root_steps",
            "track_root_step_notes"]

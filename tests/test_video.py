@@ -1154,6 +1154,25 @@ def test_video_track_seen_twice_far_apart_is_left_out(tmp_path, lifter):
     assert not any("likely false" in w for w in rec2.warnings), rec2.warnings
 
 
+def test_video_person_cut_off_by_the_frame_is_named_with_its_frames(tmp_path, lifter):
+    """A person leaving at the image's left edge, whose last two frames have the detector's joints outside the image
+    (a user trial: a person leaving was lifted 1-2 m too far there, without a word): a note names the track, the
+    frames and the joints outside; a clip where everyone stays inside has none."""
+    script = _script(12)
+    for k, past in ((10, 12.0), (11, 30.0)):  # (its leftmost joint that far past the left edge, x = 0)
+        script[k] = [script[k][0] - [script[k][0][:, 0].min() + past, 0.0], script[k][1]]
+    rec = lift_video(_write_clip(tmp_path / "leave.avi", 12), lifter=lifter, estimator=ScriptedEstimator(script),
+                     focal=F)
+    tid = rec.frames[11].people[0].track_id if rec.frames[11].people[0].keypoints_2d[:, 0].min() < 0 else \
+        rec.frames[11].people[1].track_id
+    notes = [w for w in rec.warnings if "cut off by the image's edge" in w]
+    assert len(notes) == 1 and notes[0].startswith(f"track {tid}: cut off by the image's edge in 2 of its 12 frames "
+                                                   "(10, 11; "), rec.warnings
+    clean = lift_video(_write_clip(tmp_path / "inside.avi", 12), lifter=lifter,
+                       estimator=ScriptedEstimator(_script(12)), focal=F)
+    assert not any("cut off" in w for w in clean.warnings), clean.warnings
+
+
 def test_sequence_tracker_step_checks_its_shapes():
     """A LiftResult's arrays go in as they come (focal (n, 2) of one frame); one person without the n axis, or a
     focal per person that differs, is refused with the shapes expected."""
