@@ -300,6 +300,23 @@ def _joints_outside(keypoints: np.ndarray, image_size: Any) -> np.ndarray:
     return np.any((k < 0) | (k > wh[..., None, :]), axis=-1)
 
 
+CUT_OFF_TAIL = ("the detector guesses the joints it cannot see, so the 2D there, and the lift, its depth most of all, "
+                "are less sure")
+"""How the notes on detected people cut off by the image's edge end (photos:
+:func:`lifter.pipeline.detected_edge_notes`; videos: :func:`lifter.video.track_edge_notes`)."""
+
+
+def joints_outside_text(outside: np.ndarray, *, most: int = 3) -> str:
+    """The joints most often outside the image in ``outside`` ``(..., 17)`` bool (:func:`_joints_outside` of one or
+    more 2D poses), at most ``most`` named: ``"r_knee, r_ankle and 2 more placed outside the image"``."""
+    from .skeleton import JOINT_NAMES
+
+    counts = np.asarray(outside).reshape(-1, len(JOINT_NAMES)).sum(0)
+    joints = sorted(np.flatnonzero(counts), key=lambda j: (-int(counts[j]), int(j)))
+    more = f" and {len(joints) - most} more" if len(joints) > most else ""
+    return ", ".join(JOINT_NAMES[j] for j in joints[:most]) + more + " placed outside the image"
+
+
 def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: bool = False,
                         name_pose: bool = False) -> list[str]:
     """A note when 2D poses ``(..., 17, 2)`` px lie mostly (more than half their joints) outside their image

@@ -200,6 +200,23 @@ def detected_upside_down_notes(kp17: np.ndarray) -> list[str]:
             "(the others' lifts do not depend on it)"]
 
 
+def detected_edge_notes(kp17: np.ndarray, image_size: tuple[int, int]) -> list[str]:
+    """A note naming each detected person (``(n, 17, 2)`` px, the output's order) with some joints outside the
+    ``image_size`` ``(W, H)`` px image, but not most (those are :func:`lifter._checks.outside_image_notes`'): a person
+    cut off by the photo's edge, whose hidden joints the detector guesses (the video form is
+    :func:`lifter.video.track_edge_notes`)."""
+    from ._checks import CUT_OFF_TAIL, _joints_outside, joints_outside_text
+
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    out = _joints_outside(k, image_size)  # (n, 17)
+    cut = np.flatnonzero(out.any(-1) & (out.mean(-1) <= 0.5))
+    if not len(cut):
+        return []
+    who = ("the person found is" if len(k) == 1 else
+           f"{_people_list([int(i) + 1 for i in cut])} of the output's people {'is' if len(cut) == 1 else 'are'}")
+    return [f"{who} cut off by the image's edge ({joints_outside_text(out[cut])}): {CUT_OFF_TAIL}"]
+
+
 def _people_list(numbers: list[int]) -> str:
     """``person 3`` / ``people 2 and 3`` / ``people 1, 2 and 4``."""
     if len(numbers) == 1:
@@ -505,6 +522,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                                       distortion=distortion)
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detected_upside_down_notes(kp_people)
+    notes += detected_edge_notes(kp_people, img.size)
     notes += detector_doubt_notes([float(np.mean(d.scores)) for d in dets])  # (the 17 joints lifted)
     notes += small_person_notes([float(np.ptp(d.keypoints_2d, axis=0).max()) * img.scale for d in dets],
                                 downscaled=img.scale < 1.0)  # (the box's longer side: lying people too)

@@ -669,25 +669,20 @@ def track_doubt_notes(frames: list[FrameResult], *, max_joints: int = 4) -> list
 def track_edge_notes(frames: list[FrameResult], image_size: tuple[int, int]) -> list[str]:
     """One note per track of a video whose detected 2D puts joints outside the ``image_size`` ``(W, H)`` px frame
     in some of its frames (a person cut off by the frame's edge; the detector's guess at the joints it cannot see):
-    the frames, and the joints most often outside (a user trial: a person leaving at the edge was lifted 0.9
-    and 2.4 m farther in its last two frames than before, with no word of why). Frames with most joints outside are the plausibility note's
-    (:func:`lifter._checks.outside_image_notes`); this names the tracks and frames."""
-    from ._checks import _joints_outside
+    the frames, and the joints most often outside (a user trial: a person leaving at the edge was lifted 0.9 and
+    2.4 m farther in its last two frames than before, with no word of why). Frames with most joints outside have
+    the plausibility note too (:func:`lifter._checks.outside_image_notes`); this one names the tracks and frames.
+    Photos: :func:`lifter.pipeline.detected_edge_notes`."""
+    from ._checks import CUT_OFF_TAIL, _joints_outside, joints_outside_text
 
     notes: list[str] = []
     for tid, seen in sorted(_tracks(frames).items()):
         out = _joints_outside(np.stack([q.keypoints_2d for _, q in seen]), image_size)  # (frames, 17)
         rows = np.flatnonzero(out.any(-1))
-        if not len(rows):
-            continue
-        counts = out.sum(0)
-        joints = sorted(np.flatnonzero(counts), key=lambda j: (-int(counts[j]), int(j)))
-        named = ", ".join(JOINT_NAMES[j] for j in joints[:3]) + (f" and {len(joints) - 3} more" if len(joints) > 3
-                                                                 else "")
-        notes.append(f"track {tid}: cut off by the image's edge in {len(rows)} of its {len(seen)} frames "
-                     f"({_frames_summary([seen[r][0] for r in rows])}; {named} placed outside the image): the "
-                     "detector guesses the joints it cannot see, so the 2D there, and the lift, its depth most of "
-                     "all, are less sure")
+        if len(rows):
+            notes.append(f"track {tid}: cut off by the image's edge in {len(rows)} of its {len(seen)} frames "
+                         f"({_frames_summary([seen[r][0] for r in rows])}; {joints_outside_text(out)}): "
+                         f"{CUT_OFF_TAIL}")
     return notes
 
 

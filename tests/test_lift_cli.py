@@ -903,6 +903,35 @@ def test_a_detection_the_detector_doubts_or_off_the_image_is_noted(tmp_path, wei
         load_image(p, max_side=10)
 
 
+def test_a_person_cut_off_by_the_photos_edge_is_named(tmp_path, weights):
+    """A person whose feet the detector places below the photo's bottom edge (a half-body photo; in a user trial's
+    video such frames were lifted metres too far) is named in a note with the joints outside; one wholly inside is
+    not, and one mostly outside keeps the plausibility note alone."""
+    from lifter.detect import load_image
+    from lifter.pipeline import detected_edge_notes, lift_image
+
+    demo = np.load(Path(__file__).resolve().parents[1] / "assets" / "demo" / "samples.npz")
+    standing = demo["keypoints_2d"][list(demo["names"]).index("standing")]
+    p = tmp_path / "half.png"
+    Image.new("RGB", (1000, 800), (50, 60, 70)).save(p)
+    body = standing - standing[0]
+    cut = body * 0.8 + [300.0, 800.0 - body[[3, 6], 1].max() * 0.8 + 40.0]  # (ankles 40 px below the bottom)
+    whole = body * 0.8 + [700.0, 400.0]
+    lifter = Lifter.from_checkpoint(weights)
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([cut, whole], visibility=0.9),
+                     focal=1000.0)
+    n = 1 + int(np.argmin([np.abs(q.keypoints_2d - cut).max() for q in rec.people]))
+    said = [w for w in rec.warnings if "cut off" in w]
+    assert len(said) == 1 and said[0].startswith(f"person {n} of the output's people is cut off by the image's edge ("
+                                                 ) and "r_ankle" in said[0] and "l_ankle" in said[0], rec.warnings
+    assert said[0].endswith("the detector guesses the joints it cannot see, so the 2D there, and the lift, its depth "
+                            "most of all, are less sure")
+    rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([whole], visibility=0.9), focal=1000.0)
+    assert not any("cut off" in w for w in rec.warnings), rec.warnings
+    assert detected_edge_notes(cut[None], (1000, 800))[0].startswith("the person found is cut off by the image's edge")
+    assert detected_edge_notes((whole + [900.0, 0.0])[None], (1000, 800)) == []  # (mostly outside: the other note)
+
+
 def test_an_upside_down_detection_is_named(tmp_path, weights):
     """A user trial: BlazePose found a third, upside-down 'person' on the wall beside one of two people (scored 0.86)
     and it was lifted without a word. Each detected person upside down in the image is now named in a note (the
