@@ -183,7 +183,9 @@ class OptimConfig:
                                               "(the paper's); 'joint' sums the 16 joints' Euclidean errors (what "
                                               "MPJPE measures)", default="l1")
     ema_decay: float | None = _help("keep an exponential moving average of the weights (e.g. 0.999); validation "
-                                    "and the saved network use it", default=None)
+                                    "and the saved network use it. Its decay warms up as (1 + n) / (10 + n) over "
+                                    "the first updates, so a short run does not keep the starting weights",
+                                    default=None)
     precision: Literal["fp32", "bf16"] = _help("matmul precision of the residual blocks in training (bf16 "
                                                "autocast; stem, head and loss stay float32; on a CPU without "
                                                "native bf16, float32, with a note)", default="fp32")

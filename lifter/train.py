@@ -284,23 +284,36 @@ def load_noise(cfg: TrainConfig) -> ErrorModel | None:
 
 
 class WeightAverage:
-    """Exponential moving average of a network's state: ``avg <- decay * avg + (1 - decay) * current`` for
-    every floating-point parameter and buffer (BatchNorm statistics included); integer buffers are copied.
-    ``module`` is the averaged copy (starts equal to the network)."""
+    """Exponential moving average of a network's state: ``avg <- d * avg + (1 - d) * current`` for every
+    floating-point parameter and buffer (BatchNorm statistics included); integer buffers are copied. ``module`` is
+    the averaged copy (starts equal to the network).
+
+    The decay warms up: at the n-th update (from 0) ``d = min(decay, (1 + n) / (10 + n))`` (TensorFlow's
+    ``ExponentialMovingAverage`` with ``num_updates``), so the starting weights do not linger in a run shorter than
+    about ``1 / (1 - decay)`` steps (a researcher trial: 684 steps at decay 0.999 without it kept half the random
+    initial weights, 242.5 mm MPJPE against 62.4 for the live network); ``d`` reaches 0.999 after about 9,000
+    updates."""
 
     def __init__(self, net: torch.nn.Module, *, decay: float) -> None:
         if not 0.0 <= decay < 1.0:
             raise ValueError(f"EMA decay must be in [0, 1); got {decay}")
         self.decay = float(decay)
         self.module = copy.deepcopy(net)
+        self.updates = 0
+
+    def current_decay(self) -> float:
+        """The decay the next :meth:`update` uses (the warm-up's, until it reaches :attr:`decay`)."""
+        return min(self.decay, (1.0 + self.updates) / (10.0 + self.updates))
 
     @torch.no_grad()
     def update(self, net: torch.nn.Module) -> None:
+        d = self.current_decay()
         for avg, cur in zip(self.module.state_dict().values(), net.state_dict().values()):
             if avg.is_floating_point():
-                avg.lerp_(cur, 1.0 - self.decay)
+                avg.lerp_(cur, 1.0 - d)
             else:
                 avg.copy_(cur)
+        self.updates += 1
 
 
 def lr_factor(progress: float, cfg: TrainConfig) -> float:
