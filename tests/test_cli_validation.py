@@ -73,6 +73,30 @@ def test_train_rejects_bad_config_values(capsys, tmp_path):
         assert expected in capsys.readouterr().err
 
 
+def test_train_init_keeps_the_networks_config_and_lens_and_refuses_options_that_ask_for_another(capsys, tmp_path):
+    """A researcher trial: ``--init universal_far --input-space pixel`` dropped the option given with a vague note,
+    and the fine-tune of the pinhole network trained on distorted 2D (the CLI's default lens) without a word. Now a
+    model option that asks for another config than the network's is refused naming it; the network's lens is kept
+    unless --lens says otherwise (then said); --print-config prints what the fine-tune runs with. No data is read."""
+    lf = tiny_lifter(32)
+    ck = save_checkpoint(tmp_path / "pin.pt", lf.net, lf.codec, train_config={"data": {"lens": "pinhole"}})
+    assert main(["train", "--init", str(ck), "--input-space", "pixel", "--print-config"]) == 2
+    err = capsys.readouterr().err
+    assert (f"--init {ck}: a fine-tune keeps the network's model config, and --input-space 'pixel' (the network's: "
+            "'camera') asks for another; drop that option, or train a new network without --init") in err, err
+    assert main(["train", "--init", str(ck), "--width", "64", "--dropout", "0.1", "--print-config"]) == 2
+    assert "--width 64 (the network's: 32), --dropout 0.1" in capsys.readouterr().err
+    assert main(["train", "--init", str(ck), "--width", "32", "--print-config"]) == 0  # (the network's own: fine)
+    got = capsys.readouterr()
+    cfg = json.loads(got.out)
+    assert cfg["data"]["lens"] == "pinhole" and cfg["model"] == lf.net.config.to_dict()
+    assert f"--init {ck} learned 'pinhole' 2D: training on it too (--lens pinhole" in got.err, got.err
+    assert main(["train", "--init", str(ck), "--lens", "h36m", "--print-config"]) == 0
+    got = capsys.readouterr()
+    assert json.loads(got.out)["data"]["lens"] == "h36m"
+    assert f"--init {ck} learned 'pinhole' 2D, and this run trains it on 'h36m' (--lens)" in got.err, got.err
+
+
 @pytest.mark.parametrize(
     "argv, expected",
     [

@@ -15,6 +15,7 @@ import argparse
 import hashlib
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import torch
@@ -55,7 +56,15 @@ def run(args: argparse.Namespace) -> int:
     if getattr(args, "cfg__optim__distill_weight", None) is not None and cfg.teacher is None:
         raise PoseLifterError("--distill-weight weighs the loss against a teacher's outputs, and no --teacher is "
                               "given: add --teacher MODEL (a shipped name or checkpoint), or drop --distill-weight")
+    init, init_sha, init_notes, init_name = None, None, [], ""
+    if cfg.init is not None:  # (before --print-config: it prints the config the fine-tune runs with)
+        lifter = load_option("--init", cfg.init, args)
+        init, init_name = (lifter.net, lifter.codec), lifter.name
+        init_sha = weights_sha256(cfg.init)
+        cfg, init_notes = fine_tune_config(cfg, lifter, args)
     if args.print_config:
+        for line in init_notes:
+            print(f"note: {line}", file=sys.stderr)
         print(cfg.to_json())
         return 0
     if args.out is None:
@@ -67,15 +76,10 @@ def run(args: argparse.Namespace) -> int:
     ctx = init_distributed()
     if args.threads:
         torch.set_num_threads(args.threads)
-    init, init_sha = None, None
-    if cfg.init is not None:
-        lifter = load_option("--init", cfg.init, args)
-        init = (lifter.net, lifter.codec)
-        init_sha = weights_sha256(cfg.init)
-        if ctx.main:
-            print(f"fine-tuning from --init {cfg.init} (sha256 {init_sha[:12]}; {lifter.name})", file=sys.stderr)
-            if lifter.config != cfg.model:
-                print(f"note: --init {cfg.init}: keeping its model config {lifter.config}", file=sys.stderr)
+    if init_sha is not None and ctx.main:
+        print(f"fine-tuning from --init {cfg.init} (sha256 {init_sha[:12]}; {init_name})", file=sys.stderr)
+        for line in init_notes:
+            print(f"note: {line}", file=sys.stderr)
     teacher, teacher_sha = None, None
     if cfg.teacher is not None:  # (refused before the data is read)
         teacher = load_option("--teacher", cfg.teacher, args)
@@ -109,6 +113,35 @@ def run(args: argparse.Namespace) -> int:
         dist.barrier()
         dist.destroy_process_group()
     return 0
+
+
+def fine_tune_config(cfg: TrainConfig, init: Lifter, args: argparse.Namespace) -> tuple[TrainConfig, list[str]]:
+    """``cfg`` as a fine-tune from ``init`` (``--init``) runs it, and notes saying what changed: the network's own
+    model config (a fine-tune keeps it; a model option given on the command line that asks for another is refused,
+    naming it), and the 2D it learned (``data.lens``) unless ``--lens`` or a ``--config`` run says which (a researcher
+    trial: fine-tuning the pinhole default without ``--lens`` trained it on distorted 2D without a word, where
+    ``--teacher`` refuses the same mismatch)."""
+    notes: list[str] = []
+    given = {k.split("__", 2)[2]: v for k, v in vars(args).items() if k.startswith("cfg__model__") and v is not None}
+    clash = [f"--{k.replace('_', '-')} {v!r} (the network's: {getattr(init.config, k)!r})" for k, v in given.items()
+             if getattr(init.config, k) != v]
+    if clash:
+        which = "that option" if len(clash) == 1 else "those options"
+        raise PoseLifterError(f"--init {cfg.init}: a fine-tune keeps the network's model config, and "
+                              f"{', '.join(clash)} asks for another; drop {which}, or train a new network without "
+                              "--init")
+    if init.config != cfg.model:
+        notes.append(f"--init {cfg.init}: keeping its model config {init.config}")
+    lens = cfg.data.lens
+    if init.lens != lens:
+        if getattr(args, "cfg__data__lens", None) is None and args.config is None:
+            lens = init.lens
+            notes.append(f"--init {cfg.init} learned {init.lens!r} 2D: training on it too (--lens {init.lens}; give "
+                         "--lens to train it on the other)")
+        else:
+            notes.append(f"--init {cfg.init} learned {init.lens!r} 2D, and this run trains it on {lens!r} (--lens"
+                         f"{'' if getattr(args, 'cfg__data__lens', None) is not None else ', from --config'})")
+    return replace(cfg, model=init.config, data=replace(cfg.data, lens=lens)), notes
 
 
 def load_option(option: str, ref: str, args: argparse.Namespace) -> Lifter:
