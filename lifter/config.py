@@ -75,7 +75,8 @@ class DataConfig:
                                "learn SH's size bias", default=False)
     noise: Literal["mixture", "gaussian"] = _help("synthetic noise: the fitted mixture or its single-Gaussian "
                                                   "baseline", default="mixture")
-    error_model: str = _help("error-model fit: a shipped name (sh_mixture) or a JSON path", default="sh_mixture")
+    error_model: str = _help("error-model fit: a shipped name (sh_mixture), a JSON path, or a training checkpoint "
+                             "(.pt) whose noise fit it stored", default="sh_mixture")
     noise_level_min: float = _help("lowest noise level (0 clean, 1 as fitted)", default=1.0)
     noise_level_max: float = _help("highest noise level", default=1.0)
     noise_outliers: bool = _help("sample the mixture's uniform outliers (False: the authors' code)", default=False)

@@ -291,7 +291,16 @@ class ErrorModel:
 
     @classmethod
     def resolve(cls, ref: str) -> ErrorModel:
-        """A shipped fit name or a JSON file path."""
+        """A shipped fit name, a JSON file path, or a training checkpoint (``.pt``) that stores the fit it trained
+        with (``meta["error_model"]``, :func:`lifter.train.save_training_outputs`)."""
+        if ref.endswith(".pt"):
+            from .checkpoint import load_checkpoint
+
+            stored = load_checkpoint(ref).meta.get("error_model")
+            if not isinstance(stored, dict):
+                raise PoseLifterError(f"error model {ref}: this checkpoint stores no error-model fit (a run without "
+                                      "synthetic noise, or from before runs stored theirs): give the fit's JSON")
+            return cls.from_dict(stored)
         if ref.endswith(".json") or Path(ref).is_file():
             return cls.load(ref)
         return cls.shipped(ref)
@@ -345,12 +354,26 @@ class ErrorModel:
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=1)
 
+    def sha256(self) -> str:
+        """The sha256 of the fit's parameters as :meth:`to_json` writes them: the same fit from a shipped name, a
+        JSON file or a checkpoint gives the same digest (training checkpoints record it, ``--config`` compares)."""
+        import hashlib
+
+        return hashlib.sha256(self.to_json().encode()).hexdigest()
+
     @classmethod
     def from_json(cls, text: str) -> ErrorModel:
         try:
             d = json.loads(text)
         except json.JSONDecodeError as exc:
             raise PoseLifterError(f"error model JSON: not valid JSON ({exc})") from None
+        if not isinstance(d, dict):
+            raise PoseLifterError(f"error model JSON: expected an object, got {type(d).__name__}")
+        return cls.from_dict(d)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ErrorModel:
+        """The fit :meth:`to_dict` wrote."""
         if d.get("format") != FORMAT_TAG:
             raise PoseLifterError(f"error model JSON: expected format {FORMAT_TAG!r}, got {d.get('format')!r}")
         m, g = d["mixture"], d.get("gaussian", {})

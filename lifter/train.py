@@ -73,6 +73,8 @@ class TrainResult:
     steps: int
     samples_seen: int
     minutes: float
+    error_model: ErrorModel | None = None
+    """The fit the synthetic 2D noise was drawn from (None: no sample had it)."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -688,15 +690,21 @@ def train(
             f"{f'{minutes:.1f} min' if minutes >= 1 else f'{60 * minutes:.1f} s'} "
             f"({step * gbs / max(minutes * 60, 1e-9):.0f} samples/s)")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
-                       minutes=minutes)
+                       minutes=minutes, error_model=noise if cfg.data.noise_prob > 0 else None)
 
 
 def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = True,
                           extra_meta: dict[str, Any] | None = None) -> Path:
-    """Write ``out`` (checkpoint, with the config), ``out`` with ``.curve.json`` and a learning-curve PNG beside it."""
+    """Write ``out`` (checkpoint, with the config), ``out`` with ``.curve.json`` and a learning-curve PNG beside it.
+    The checkpoint's meta keeps the error-model fit the noise was drawn from, and its sha256 (``error_model``,
+    ``error_model_sha256``): the config names it only by a name or path, whose file can change (a researcher trial
+    repeated a run with ``--config`` from another folder, whose ``em/fit.json`` was another fit, without a word)."""
     out = Path(out)
-    meta = {"steps": result.steps, "samples_seen": result.samples_seen, "minutes": result.minutes,
-            "final_val": result.curve[-1] if result.curve else {}}
+    meta: dict[str, Any] = {"steps": result.steps, "samples_seen": result.samples_seen, "minutes": result.minutes,
+                            "final_val": result.curve[-1] if result.curve else {}}
+    if result.error_model is not None:
+        meta["error_model"] = result.error_model.to_dict()
+        meta["error_model_sha256"] = result.error_model.sha256()
     meta.update(extra_meta or {})
     save_checkpoint(out, result.net, result.codec, train_config=result.config.to_dict(), meta=meta, half=half)
     curve_path = out.with_suffix(".curve.json")

@@ -330,6 +330,41 @@ def test_bf16_on_a_cpu_without_native_bf16_trains_in_float32_and_says_so(monkeyp
     assert isinstance(lt.cpu_has_native_bf16(), bool)
 
 
+def test_a_run_stores_its_error_model_fit_and_a_repeat_with_another_fit_says_so(tmp_path):
+    """A researcher trial: the checkpoint named its fit only by the path "em/fit.json", so ``--config`` from another
+    folder, whose em/fit.json was another fit, trained on it without a word. The fit and its sha256 are in the meta;
+    ``--error-model RUN.pt`` takes it back; another fit is said by the repeat notes."""
+    from lifter.checkpoint import load_checkpoint
+    from lifter.cli.train import repeat_notes
+    from lifter.noise import ErrorModel
+    from lifter.train import save_training_outputs
+
+    train_s = synthetic_samples(200, seed=3)
+    noisy = replace(tiny_config(), data=DataConfig(clean_prob=0.0))  # (every sample with mixture noise)
+    res = train(noisy, train_samples=train_s, val_sets=validation_sets(synthetic_samples(20, seed=4), None),
+                progress=False, log=lambda s: None, ctx=Dist())
+    shipped = ErrorModel.shipped("sh_mixture")
+    assert res.error_model is not None and res.error_model.sha256() == shipped.sha256()
+    out = save_training_outputs(res, tmp_path / "run.pt")
+    meta = load_checkpoint(out).meta
+    assert meta["error_model_sha256"] == shipped.sha256() and meta["error_model"]["format"] == "poselifter-error-model"
+    back = ErrorModel.resolve(str(out))
+    assert back.sha256() == shipped.sha256()
+    np.testing.assert_allclose(back.sigma, shipped.sigma, atol=1e-6)
+    other = replace(shipped, sigma=3 * shipped.sigma)
+    assert repeat_notes(out, error_model=("em/fit.json", other.sha256())) == [
+        f"the error model em/fit.json (sha256 {other.sha256()[:12]}) is not the fit {out} drew its noise from "
+        f"({shipped.sha256()[:12]}): this does not repeat that run (--error-model {out} takes the fit it stored)"]
+    assert repeat_notes(out, error_model=("sh_mixture", shipped.sha256())) == []
+    plain = train(tiny_config(), train_samples=train_s, val_sets=validation_sets(synthetic_samples(20, seed=4), None),
+                  progress=False, log=lambda s: None, ctx=Dist())  # (the default: exact 2D only)
+    assert plain.error_model is None
+    bare = save_training_outputs(plain, tmp_path / "clean.pt")
+    assert "error_model" not in load_checkpoint(bare).meta
+    with pytest.raises(PoseLifterError, match="this checkpoint stores no error-model fit"):
+        ErrorModel.resolve(str(bare))
+
+
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
     train_s, val_s = synthetic_samples(400, seed=3), synthetic_samples(50, seed=4)
     vs = validation_sets(val_s, None)

@@ -30,7 +30,14 @@ from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
-from ..train import check_teacher, init_distributed, save_training_outputs, train, validation_sets
+from ..train import (
+    check_teacher,
+    init_distributed,
+    load_noise,
+    save_training_outputs,
+    train,
+    validation_sets,
+)
 from . import COMMANDS
 from ._help import h36m_help, plain_text
 
@@ -85,9 +92,11 @@ def run(args: argparse.Namespace) -> int:
         teacher = load_option("--teacher", cfg.teacher, args)
         check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model), lens=cfg.data.lens)
         teacher_sha = weights_sha256(cfg.teacher, every_network=True)
+    noise = load_noise(cfg)  # (before the data is read: a fit that cannot be read is refused at once)
     if ctx.main:
         for line in repeat_notes(args.config, init=None if init_sha is None else (str(cfg.init), init_sha),
-                                 teacher=None if teacher_sha is None else (str(cfg.teacher), teacher_sha)):
+                                 teacher=None if teacher_sha is None else (str(cfg.teacher), teacher_sha),
+                                 error_model=None if noise is None else (cfg.data.error_model, noise.sha256())):
             print(f"note: {line}", file=sys.stderr)
     data = H36M(args.h36m)
     d = cfg.data
@@ -100,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
                else None)
     result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
                    val_sets=validation_sets(val, val_det), init=init, teacher=teacher, progress=not args.no_progress,
-                   ctx=ctx)
+                   ctx=ctx, noise=noise)
     if ctx.main:
         meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
         if init_sha is not None:
@@ -171,11 +180,12 @@ def weights_sha256(ref: str, *, every_network: bool = False) -> str:
 
 
 def repeat_notes(config: Path | None, *, init: tuple[str, str] | None = None,
-                 teacher: tuple[str, str] | None = None) -> list[str]:
-    """Why ``--config RUN.pt`` with this ``init`` / ``teacher`` (``(ref, sha256)``) would not repeat that run: the
-    init weights are that run's own result, or not the weights it started from (``meta["init_sha256"]``); the
-    teacher is not the one it distilled (``meta["teacher_sha256"]``). The checkpoint is read once."""
-    if config is None or config.suffix != ".pt" or (init is None and teacher is None):
+                 teacher: tuple[str, str] | None = None, error_model: tuple[str, str] | None = None) -> list[str]:
+    """Why ``--config RUN.pt`` with this ``init`` / ``teacher`` / ``error_model`` (``(ref, sha256)``) would not repeat
+    that run: the init weights are that run's own result, or not the weights it started from
+    (``meta["init_sha256"]``); the teacher is not the one it distilled (``meta["teacher_sha256"]``); the error-model
+    fit is not the one its noise was drawn from (``meta["error_model_sha256"]``). The checkpoint is read once."""
+    if config is None or config.suffix != ".pt" or (init is None and teacher is None and error_model is None):
         return []
     notes: list[str] = []
     meta = load_checkpoint(config).meta
@@ -194,4 +204,11 @@ def repeat_notes(config: Path | None, *, init: tuple[str, str] | None = None,
         if isinstance(stored, str) and stored != sha:
             notes.append(f"--teacher {ref} (sha256 {sha[:12]}) is not what {config} distilled ({stored[:12]}): this "
                          "does not repeat that run")
+    if error_model is not None:
+        ref, sha = error_model
+        stored = meta.get("error_model_sha256")
+        if isinstance(stored, str) and stored != sha:
+            notes.append(f"the error model {ref} (sha256 {sha[:12]}) is not the fit {config} drew its noise from "
+                         f"({stored[:12]}): this does not repeat that run (--error-model {config} takes the fit it "
+                         "stored)")
     return notes
