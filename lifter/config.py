@@ -275,9 +275,12 @@ class TrainConfig:
             raise PoseLifterError(f"--config {p}: no such file")
         if p.suffix == ".pt":
             ck = load_checkpoint(p)
-            if ck.train_config is None:
+            if ck.train_config is not None:
+                return cls.from_dict(ck.train_config)
+            legacy = ck.meta.get("train_config")
+            if not isinstance(legacy, dict):
                 raise PoseLifterError(f"--config {p}: this checkpoint stores no training config (an older file)")
-            return cls.from_dict(ck.train_config)
+            return cls.from_dict(legacy_train_config(legacy, ck.meta, ck.net.config.to_dict()))
         try:
             d = json.loads(p.read_text())
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -285,6 +288,34 @@ class TrainConfig:
         if isinstance(d, dict) and "train_config" in d and isinstance(d["train_config"], dict):
             d = d["train_config"]  # a .curve.json written by training
         return cls.from_dict(d)
+
+
+def legacy_train_config(old: dict[str, Any], meta: dict[str, Any], model: dict[str, Any]) -> dict[str, Any]:
+    """The config of a run from before the nested :class:`TrainConfig` (the paper-table checkpoints ``gt``,
+    ``mixture``, ``sh_mix``, ``blazepose``: a flat ``meta["train_config"]``, the 2D inputs and noise in ``meta``), as
+    today's options say it, so that ``--config`` repeats it (a researcher trial: their stored command,
+    ``poselifter train --epochs 25 ...``, now trains a reference-camera network conditioned on ``source``, and
+    ``--config gt.pt`` was refused). ``model``: the network's model config (pixel space, no conditioning). Those
+    runs drew noise for every sample they did not give a real detection (``inputs`` ``"gt"`` or ``"mix"`` with
+    ``real_2d_prob``), or none (no ``noise`` in ``meta``: exact 2D), on Human3.6M's distorted 2D."""
+    noise = meta.get("noise")
+    real = float(old.get("real_2d_prob", 0.0)) if meta.get("inputs") == "mix" else 0.0
+    em = meta.get("error_model")
+    data: dict[str, Any] = {k: old[k] for k in ("protocol", "train_stride", "val_stride", "max_frames_per_sequence")
+                            if k in old}
+    data.update(lens="h36m", real_prob=real, clean_prob=1.0 if noise is None else 0.0)
+    if noise is not None:
+        level = float(meta.get("noise_level", 1.0))
+        data.update(noise=noise, noise_level_min=level, noise_level_max=level,
+                    noise_outliers=bool(meta.get("noise_outliers", False)),
+                    error_model="sh_mixture" if em in (None, "default") else str(em))
+    augment = {"flip_prob": old.get("flip_prob", 0.5), "zoom": bool(old.get("zoom_aug", False))}
+    augment.update({k: old[k] for k in ("zoom_sigma", "zoom_clip") if k in old})
+    optim = {k: old[k] for k in ("batch_size", "lr", "weight_decay", "depth_weight", "ema_decay") if k in old}
+    schedule = {k: old[k] for k in ("epochs", "max_minutes", "warmup_fraction", "final_lr_fraction", "eval_every",
+                                    "seed") if k in old}
+    return {"model": dict(model), "data": data, "augment": augment, "optim": optim, "schedule": schedule,
+            "init": meta.get("init")}
 
 
 SECTIONS: tuple[tuple[str, type], ...] = (("model", ModelConfig), ("data", DataConfig), ("augment", AugmentConfig),

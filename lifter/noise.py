@@ -292,7 +292,9 @@ class ErrorModel:
     @classmethod
     def resolve(cls, ref: str) -> ErrorModel:
         """A shipped fit name, a JSON file path, or a training checkpoint (``.pt``) that stores the fit it trained
-        with (``meta["error_model"]``, :func:`lifter.train.save_training_outputs`)."""
+        with (``meta["error_model"]``, :func:`lifter.train.save_training_outputs`). A checkout's path to a shipped
+        fit (``assets/error_model/NAME.json``, as the shipped networks' configs say) that is not there, as from
+        another folder or an installed package, is that shipped fit."""
         if ref.endswith(".pt"):
             from .checkpoint import load_checkpoint
 
@@ -301,7 +303,11 @@ class ErrorModel:
                 raise PoseLifterError(f"error model {ref}: this checkpoint stores no error-model fit (a run without "
                                       "synthetic noise, or from before runs stored theirs): give the fit's JSON")
             return cls.from_dict(stored)
-        if ref.endswith(".json") or Path(ref).is_file():
+        path = Path(ref)
+        if not path.is_file() and path.parent.parts[-2:] == ("assets", "error_model") and path.suffix == ".json" \
+                and path.stem in shipped_error_models():
+            return cls.shipped(path.stem)  # (a checkout's path to a shipped fit, in a config run elsewhere)
+        if ref.endswith(".json") or path.is_file():
             return cls.load(ref)
         return cls.shipped(ref)
 

@@ -132,6 +132,40 @@ def test_poselifter_models_lists_the_default_first_with_the_files_sha256(capsys,
     assert cli_main(["models", "nope"]) == 2 and "unknown model 'nope'" in capsys.readouterr().err
 
 
+def test_poselifter_models_says_which_training_commands_repeat_and_how_to_repeat_the_others(capsys, tmp_path):
+    """A researcher trial: `poselifter models gt` printed its training command, which today trains a
+    reference-camera network conditioned on `source` (the defaults changed), and `mixture`'s, which today's options
+    refuse; `--config gt.pt` was refused. The paper models' stored configs are read in today's options
+    (`legacy_train_config`), each command is said to repeat its network or not, and a `--config` command is given."""
+    from lifter.cli.models import command_matches
+    from lifter.config import TrainConfig
+
+    gt = assets.asset("weights/gt.pt")
+    cfg = TrainConfig.load(Path(gt))  # (the paper's pixel-space network on exact 2D)
+    assert (cfg.model.input_space, cfg.model.conditioning, cfg.data.clean_prob, cfg.schedule.epochs) == (
+        "pixel", "none", 1.0, 25.0)
+    mix = TrainConfig.load(Path(assets.asset("weights/sh_mix.pt")))
+    assert (mix.data.real_prob, mix.data.clean_prob, mix.augment.zoom, mix.augment.zoom_clip, mix.optim.ema_decay) == (
+        0.5, 0.0, True, 1.0, 0.999)
+    bp = TrainConfig.load(Path(assets.asset("weights/blazepose.pt")))
+    assert bp.init == "mixture" and bp.data.error_model.endswith("blazepose_demo_train.json") and bp.optim.lr == 3e-4
+    assert command_matches(assets.model_entry("gt")["train_command"], gt) == "differs"
+    assert command_matches(assets.model_entry("mixture")["train_command"], assets.asset("weights/mixture.pt")) == \
+        "differs"  # (--zoom-aug: renamed)
+    assert command_matches(cfg_command := "poselifter train --out x.pt --input-space pixel --depth-target canonical "
+                           "--conditioning none --epochs 25", gt) == "same", cfg_command
+    far = assets.model_entry("universal_far")
+    assert command_matches(far["train_command"], assets.asset(far["file"])) == "same"
+    assert command_matches("python train.py", gt) == "unknown"
+    assert command_matches("poselifter train --out x.pt --config no/such.pt", gt) == "unknown"
+    assert cli_main(["models", "gt"]) == 0
+    out = capsys.readouterr().out
+    assert "trained with (as run then; today these options train another network: repeat it from its stored " \
+           "config, below): poselifter train --out runs/gt_main.pt" in out
+    assert f"repeat: poselifter train --config {gt} --out runs/gt_again.pt" in out
+    assert "  any 2D      weights/gt.pt" in out
+
+
 @pytest.mark.parametrize("harm", ["damaged", "missing"])
 def test_poselifter_models_names_a_damaged_or_missing_file(tmp_path, monkeypatch, capsys, harm):
     dst = _copied_assets(tmp_path)

@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
+from typing import Any
 
 from .. import __version__
 from .. import resources as assets
@@ -37,6 +39,37 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def _first_sentence(text: str) -> str:
     head = text.split(". ")[0].strip()
     return head if head.endswith(".") else head + "."
+
+
+def command_matches(command: str, weights: Any) -> str:
+    """Whether the ``poselifter train`` ``command`` a network was trained with, read with today's options, gives the
+    config its weights file ``weights`` stores (``"same"``), another (``"differs"``: options renamed or defaults
+    changed since), or cannot be told (``"unknown"``: not a ``poselifter train`` command, or one starting from a
+    ``--config`` file that is not here). Times and paths (``--max-minutes``, ``--out``, ``--h36m``) do not count."""
+    import contextlib
+    import io
+    import shlex
+    from dataclasses import replace
+
+    from ..config import TrainConfig, config_from_args
+    from . import build_parser
+
+    words = shlex.split(command)
+    if words[:2] != ["poselifter", "train"]:
+        return "unknown"
+    try:
+        with contextlib.redirect_stderr(io.StringIO()):  # (argparse's refusal of an option renamed since)
+            args = build_parser("train").parse_args(words[1:])
+    except SystemExit:
+        return "differs"
+    try:
+        base = TrainConfig.load(args.config) if args.config is not None else None
+        stored = TrainConfig.load(Path(weights))
+        given = config_from_args(args, base)
+    except (PoseLifterError, OSError):
+        return "unknown" if args.config is not None else "differs"
+    untimed = lambda c: replace(c, schedule=replace(c.schedule, max_minutes=None))  # noqa: E731
+    return "same" if untimed(given) == untimed(stored) else "differs"
 
 
 def run_models(args: argparse.Namespace) -> int:
@@ -72,17 +105,28 @@ def run_models(args: argparse.Namespace) -> int:
                   f"{size:.1f} MB, {state}")
             for n in r["networks"]:
                 mb = "-" if n["size_bytes"] is None else f"{n['size_bytes'] / 1e6:.1f} MB"
-                print(f"  {n['network']:<11} {n['file']:<36} {mb:>8}  sha256 {n['sha256'] or '(none)'}  "
+                key = "any 2D" if count == 1 else n["network"]  # (one network lifts clean and detected 2D alike)
+                print(f"  {key:<11} {n['file']:<36} {mb:>8}  sha256 {n['sha256'] or '(none)'}  "
                       f"{n['status']}")
             desc = r["description"]
             if desc:
                 print(f"  {desc if len(entries) == 1 else _first_sentence(desc)}")
             if len(entries) == 1:
                 entry = entries[r["name"]]
-                commands = [entry.get("train_command"), entry.get("clean_train_command"),
-                            *entry.get("ensemble_train_commands", [])]
-                for c in (c for c in commands if c):
-                    print(f"  trained with: {c}")
+                commands = {entry["file"]: entry.get("train_command"),
+                            **dict(zip(entry.get("ensemble_files", []), entry.get("ensemble_train_commands", []))),
+                            entry.get("clean_file", ""): entry.get("clean_train_command")}
+                for n in r["networks"]:
+                    key = "" if count == 1 else f" ({n['network']})"
+                    c = commands.get(n["file"])
+                    if c:
+                        said = {"same": "", "differs": " (as run then; today these options train another network: "
+                                "repeat it from its stored config, below)", "unknown": " (as run then)"}
+                        print(f"  trained with{key}{said[command_matches(c, assets.asset(n['file']))]}: {c}")
+                    # (a researcher trial ran the stored command of `gt`, which now trains another kind of
+                    # network, and `mixture`'s, which today's options refuse)
+                    print(f"  repeat{key}: poselifter train --config {assets.asset(n['file'])} --out "
+                          f"runs/{Path(n['file']).stem}_again.pt")
     for _, why in broken:
         print(f"poselifter models: error: {why}", file=sys.stderr)
     for name, n in bad:
