@@ -472,6 +472,15 @@ def normalized_errors(detections: np.ndarray, ground_truth: np.ndarray, *,
     return (det - gt) * (ref / scale)[:, None, None], scale, ref
 
 
+def em_not_converged(model: ErrorModel) -> list[str]:
+    """The joints whose EM stopped at ``max_iter`` before its log-likelihood settled (``meta["em"]["converged"]``
+    of :func:`fit_error_model`; a fit that does not say: none)."""
+    flags = (model.meta.get("em") or {}).get("converged")
+    if not isinstance(flags, list) or len(flags) != NUM_JOINTS:
+        return []
+    return [JOINT_NAMES[j] for j, ok in enumerate(flags) if not ok]
+
+
 def fit_error_model(detections: np.ndarray, ground_truth: np.ndarray, *, source: str = "",
                     tol: float = 1e-7, max_iter: int = 1000, progress: bool = True,
                     meta: dict[str, Any] | None = None) -> ErrorModel:
@@ -482,12 +491,17 @@ def fit_error_model(detections: np.ndarray, ground_truth: np.ndarray, *, source:
     gamma, iters = np.zeros(J), np.zeros(J, int)
     mu, sigma, gmu, gsig = (np.zeros((J, 2)) for _ in range(4))
     nll_m, nll_g = np.zeros(J), np.zeros(J)
+    converged = [False] * J
     for j in tqdm(range(J), desc="EM per joint", unit="joint", disable=None if progress else True):
         gmu[j], gsig[j], nll_g[j] = fit_gaussian(e[:, j])
         f = fit_mixture(e[:, j], tol=tol, max_iter=max_iter)
         gamma[j], mu[j], sigma[j], nll_m[j], iters[j] = f.gamma, f.mu, f.sigma, f.nll, f.iterations
+        converged[j] = f.converged
     m = dict(meta or {})
-    m.update({"em": {"init": "single-Gaussian ML fit, gamma = 0.9", "tol_nats_per_sample": tol, "max_iter": max_iter}})
+    # (whether each joint's EM met tol before max_iter: a researcher trial's --max-iter 2 fit said "iters 2" for
+    # every joint and nothing more; em_not_converged names them)
+    m.update({"em": {"init": "single-Gaussian ML fit, gamma = 0.9", "tol_nats_per_sample": tol, "max_iter": max_iter,
+                     "converged": converged}})
     return ErrorModel(gamma=gamma, mu=mu, sigma=sigma, v=OUTLIER_VOLUME_PX2, reference_scale=ref,
                       nll_mixture=nll_m, nll_gaussian=nll_g, gaussian_mu=gmu, gaussian_sigma=gsig,
                       iterations=iters, n_samples=int(e.shape[0]), source=source, meta=m)

@@ -17,6 +17,7 @@ from lifter.noise import (
     outlier_probability,
 )
 from lifter.normalization import pose_scale
+from lifter.skeleton import JOINT_NAMES
 
 
 def synthetic_errors(rng: np.random.Generator, n: int, gamma: float, mu, sigma, box: float = 100.0) -> np.ndarray:
@@ -272,6 +273,14 @@ def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     assert "r_wrist" in table and "mean" in table
     e = (det - gt) * (m.reference_scale / pose_scale(gt))[:, None, None]
     assert plot_error_histograms(e, m, tmp_path / "h.png", bins=21, dpi=20).stat().st_size > 1000
+    # a fit cut at --max-iter says which joints had not converged (a researcher trial: "iters 2" and nothing more);
+    # the meta keeps it through the JSON
+    from lifter.noise import ErrorModel, em_not_converged
+
+    assert em_not_converged(m) == [] and m.meta["em"]["converged"] == [True] * 17
+    cut = ErrorModel.from_json(fit_error_model(det, gt, progress=False, max_iter=2).to_json())
+    assert em_not_converged(cut) == list(JOINT_NAMES)
+    assert em_not_converged(ErrorModel.shipped("sh_mixture")) == []  # (a fit from before: does not say)
 
 
 def test_converter_report_recovers_the_sh16_rules_and_describe_fit_reports():

@@ -7,11 +7,13 @@ and the figures and prints what was measured.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import torch
 
 from ..data import H36M
+from ..noise import em_not_converged
 from ..noise_fit import (
     SkipFigure,
     describe_fit,
@@ -60,6 +62,11 @@ def run_fit_noise(args: argparse.Namespace) -> int:
     fit.model.save(out)
     print(f"reference 2D scale {fit.model.reference_scale:.1f} px; wrote {out}")
     print(format_error_table(fit.model))
+    stuck = em_not_converged(fit.model)
+    if stuck:
+        print(f"WARNING: EM stopped at --max-iter {args.max_iter} before converging (--tol {args.tol:g}) for "
+              f"{len(stuck)} of 17 joints ({', '.join(stuck)}): their parameters are not the maximum-likelihood fit "
+              "(the JSON's meta.em.converged says which); raise --max-iter", file=sys.stderr)
     print(f"wrote {plot_error_histograms(fit.errors, fit.model, Path(args.plots) / 'error_histograms.png')}")
     try:
         test = data.load_protocol(args.protocol, "test", stride=args.depth_stride)
