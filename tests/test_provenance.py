@@ -132,6 +132,16 @@ def test_poselifter_models_lists_the_default_first_with_the_files_sha256(capsys,
     assert cli_main(["models", "nope"]) == 2 and "unknown model 'nope'" in capsys.readouterr().err
 
 
+def test_evaluate_json_flip_test_is_a_bool_with_each_networks_way_beside_it(default):
+    """A researcher trial: the results JSON's flip_test was a bool for one network and a string for the default."""
+    from lifter.cli.evaluate import flip_test_used
+
+    name = default.name
+    assert flip_test_used(default, None, "detected") == (True, f"on ({name}), built in ({name} (member 2))")
+    assert flip_test_used(default, False, "detected") == (False, f"off ({name}), built in ({name} (member 2))")
+    assert flip_test_used(default, None, "clean") == (True, f"on ({name} (clean 2D))")
+
+
 def test_poselifter_models_says_which_training_commands_repeat_and_how_to_repeat_the_others(capsys, tmp_path):
     """A researcher trial: `poselifter models gt` printed its training command, which today trains a
     reference-camera network conditioned on `source` (the defaults changed), and `mixture`'s, which today's options

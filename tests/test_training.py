@@ -671,6 +671,13 @@ def test_cli_train_evaluate_and_repeat_from_the_stored_config(tmp_path, capsys):
     assert all(r["flip_test"] is False and not any(n["flip_test"] for n in r["model_info"]["networks"])
                for r in __import__("json").loads((tmp_path / "ev2.json").read_text()))
     assert "lifting (" not in captured.err  # stderr is not a terminal here: no progress bar in logs (user trial)
+    # the focal sweep's JSON: rows as above, each with its model and numeric factor (a researcher trial met a dict
+    # keyed by model, the factor only in the label "x0.5")
+    assert main(["evaluate", f"tiny={out}", "--focal-scales", "0.5,2", "--stride", "400", "--max-frames-per-sequence",
+                 "2", "--json", str(tmp_path / "ev3.json")]) == 0
+    sweep = __import__("json").loads((tmp_path / "ev3.json").read_text())
+    assert [(r["model"], r["focal_scale"], r["label"]) for r in sweep] == [("tiny", 0.5, "x0.5"), ("tiny", 2.0, "x2")]
+    assert all(isinstance(r["flip_test"], bool) and r["flip_test_detail"].endswith("(tiny)") for r in sweep)
     assert main(["train", "--out", str(out), "--clean-prob", "0", "--real-prob", "0.5", "--train-stride", "7"]) == 2
     assert "multiple of 5" in capsys.readouterr().err  # detections exist every 5th frame only
     # a fine-tune records the weights it started from; repeating it from its own result, or from other weights, says so

@@ -139,11 +139,12 @@ def split_label(spec: str) -> tuple[str, str]:
     return label or ref, ref
 
 
-def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool | str:
+def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> tuple[bool, str]:
     """Whether ``lifter`` averaged each pose with its mirror image's lift for 2D told ``source`` (``flip_test``: the
-    command's ``--flip-test`` / ``--no-flip-test``, None for each network's own setting); for networks that differ
-    (or a mirror-equivariant one, whose single pass is that average), a string naming each ("on (NAME), built in
-    (NAME)")."""
+    command's ``--flip-test`` / ``--no-flip-test``, None for each network's own setting): True when every network
+    did (a mirror-equivariant one's single pass is that average), and each network's way, named ("on (NAME), built
+    in (NAME)"). The results JSON keeps both, ``flip_test`` (always a bool: a researcher trial's scripts met a bool
+    for one model and this string for the default) and ``flip_test_detail``."""
     net = lifter.network_for(source)  # type: ignore[arg-type]
     members = [net, *net.ensemble]
 
@@ -151,9 +152,7 @@ def flip_test_used(lifter: Lifter, flip_test: bool | None, source: str) -> bool 
         return "built in" if m.config.symmetry == "mirror" else "on" if m.network_rows(flip_test) == 2 else "off"
 
     said = [one(m) for m in members]
-    if len(set(said)) == 1 and said[0] != "built in":
-        return said[0] == "on"
-    return ", ".join(f"{w} ({m.name})" for w, m in zip(said, members))
+    return all(w != "off" for w in said), ", ".join(f"{w} ({m.name})" for w, m in zip(said, members))
 
 
 def training_subject_notes(label: str, lifter: Lifter, protocol: int) -> list[str]:
@@ -239,17 +238,20 @@ def _run(args: argparse.Namespace) -> int:
                                    source=source)
                  for label, lifter in lifters}
         print(format_focal_table(sweep, principal_shift=shift))
-        if args.json:
-            write_json_atomic(args.json, {k: [{**r.to_dict(), **how, "flip_test": flip_used[k],
-                                               "principal_shift_px": list(shift), "model_info": info[k]} for r in v]
-                                          for k, v in sweep.items()})
+        if args.json:  # (rows as without --focal-scales, each with its model and factor: a researcher trial's
+            # scripts met a dict keyed by model here, and the factor only as the label "x0.5")
+            write_json_atomic(args.json, [{**r.to_dict(), **how, "model": k, "focal_scale": f,
+                                           "flip_test": flip_used[k][0], "flip_test_detail": flip_used[k][1],
+                                           "principal_shift_px": list(shift), "model_info": info[k]}
+                                          for k, v in sweep.items() for f, r in zip(factors, v)])
         return 0
     rows, row_how = [], []
     for label, lifter in lifters:
         got = evaluate_lifter(lifter, samples, label=label, flip_test=args.flip_test,
                               analytic_root=args.analytic_root, source=source)
         rows.extend(got)
-        row_how += [{**how, "flip_test": flip_used[label], "model_info": info[label]}] * len(got)
+        row_how += [{**how, "model": label, "flip_test": flip_used[label][0], "flip_test_detail": flip_used[label][1],
+                     "model_info": info[label]}] * len(got)
     print(format_table(rows))
     if args.per_action:
         print(format_per_action(rows))
