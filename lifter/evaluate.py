@@ -119,14 +119,21 @@ def evaluate_lifter(lifter: Lifter, samples: PoseSamples, *, label: str | None =
     return rows
 
 
+def _label_width(labels: Sequence[str]) -> int:
+    """The model column's width: 28, or the longest label and a space (a researcher trial's checkpoint path, longer
+    than 28 characters, pushed every number of its row out of its column)."""
+    return max([28, *(len(x) + 1 for x in labels)])
+
+
 def format_table(rows: Sequence[EvalRow]) -> str:
     """The results table: errors in mm, PCK150 and AUC in % (the JSON gives them as fractions)."""
-    head = (f"{'model':<28} {'root':<9} {'MPJPE':>7} {'PA-MPJPE':>9} {'MRPE':>7} {'MRPE-X':>7} {'MRPE-Y':>7} "
+    w = _label_width([r.label for r in rows])
+    head = (f"{'model':<{w}} {'root':<9} {'MPJPE':>7} {'PA-MPJPE':>9} {'MRPE':>7} {'MRPE-X':>7} {'MRPE-Y':>7} "
             f"{'MRPE-Z':>7} {'Z-BIAS':>7} {'PCK150':>7} {'AUC':>6}")
     lines = ["errors in mm; Z-BIAS: the mean signed root depth error (below 0: nearer than true); PCK150 (joints "
              "within 150 mm) and AUC (over 0-150 mm) in %", head, "-" * len(head)]
     for r in rows:
-        lines.append(f"{r.label:<28} {r.root:<9} {r.mpjpe:7.1f} {r.pa_mpjpe:9.1f} {r.mrpe:7.1f} {r.mrpe_x:7.1f} "
+        lines.append(f"{r.label:<{w}} {r.root:<9} {r.mpjpe:7.1f} {r.pa_mpjpe:9.1f} {r.mrpe:7.1f} {r.mrpe_x:7.1f} "
                      f"{r.mrpe_y:7.1f} {r.mrpe_z:7.1f} {r.depth_bias:7.1f} {100 * r.pck150:7.1f} {100 * r.auc:6.1f}")
     return "\n".join(lines)
 
@@ -140,12 +147,14 @@ ACTION_COLUMNS: dict[str, str] = {
 
 def format_per_action(rows: Sequence[EvalRow], metric: str = "mpjpe") -> str:
     short = [ACTION_COLUMNS[a] for a in ACTIONS]
+    names = [r.label + ("" if r.root == "learned" else " (an.)") for r in rows]
+    w = _label_width(names)
     lines = [f"per-action {metric} (mm; Avg: the mean over all samples, not over the actions; "
              + ", ".join(f"{ACTION_COLUMNS[a]} = {a}" for a in ACTIONS if ACTION_COLUMNS[a] != a) + ")",
-             f"{'model':<28} " + " ".join(f"{s:>6}" for s in short) + "    Avg"]
-    for r in rows:
+             f"{'model':<{w}} " + " ".join(f"{s:>6}" for s in short) + "    Avg"]
+    for name, r in zip(names, rows):
         vals = " ".join(f"{r.per_action[a][metric]:6.1f}" if a in r.per_action else f"{'-':>6}" for a in ACTIONS)
-        lines.append(f"{r.label + ('' if r.root == 'learned' else ' (an.)'):<28} {vals} {getattr(r, metric):6.1f}")
+        lines.append(f"{name:<{w}} {vals} {getattr(r, metric):6.1f}")
     return "\n".join(lines)
 
 
@@ -203,13 +212,14 @@ def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float
 def format_focal_table(sweep: dict[str, list[EvalRow]], *, principal_shift: tuple[float, float] = (0.0, 0.0)) -> str:
     """MRPE (mm) per model and focal factor, with the ratio to the x1 factor."""
     first = next(iter(sweep.values()))
-    head = f"{'model':<28} " + " ".join(f"{r.label:>15}" for r in first)
+    w = _label_width(list(sweep))
+    head = f"{'model':<{w}} " + " ".join(f"{r.label:>15}" for r in first)
     lines = ["MRPE (mm) and ratio to x1 on virtual cameras (focal x factor, principal point shifted by "
              f"{principal_shift} px)", head, "-" * len(head)]
     for label, rows in sweep.items():
         ref = next((r.mrpe for r in rows if r.label == "x1"), None)
         cells = [f"{r.mrpe:7.1f} ({r.mrpe / ref:4.2f})" if ref else f"{r.mrpe:15.1f}" for r in rows]
-        lines.append(f"{label:<28} " + " ".join(f"{c:>15}" for c in cells))
+        lines.append(f"{label:<{w}} " + " ".join(f"{c:>15}" for c in cells))
     return "\n".join(lines)
 
 

@@ -112,3 +112,21 @@ def test_auc_of_a_perfect_prediction_is_30_of_31():
     """The 0 mm threshold is one of the 31 and counts nothing (strict <), as in the 3DHP evaluation."""
     a = np.random.default_rng(1).normal(size=(3, 17, 3)) * 100
     assert auc(a, a) == pytest.approx(30 / 31)
+
+
+def test_results_tables_keep_their_columns_for_long_model_labels():
+    """A researcher trial: a checkpoint path longer than 28 characters as the label pushed its row's numbers out of
+    their columns. Every table's model column is as wide as its longest label."""
+    from lifter.evaluate import EvalRow, format_focal_table, format_per_action, format_table
+
+    def row(label: str, mrpe: float = 90.0) -> EvalRow:
+        return EvalRow(label=label, root="learned", num_samples=1, mpjpe=40.0, pa_mpjpe=30.0, mrpe=mrpe, mrpe_x=1.0,
+                       mrpe_y=1.0, mrpe_z=1.0, pck150=0.9, auc=0.5, per_action={"Walking": {"mpjpe": 40.0}})
+
+    long = "/work/main/assets/weights/universal_far_clean.pt"
+    for text in (format_table([row("gt"), row(long)]), format_per_action([row("gt"), row(long)])):
+        lines = [ln for ln in text.splitlines() if ln.startswith(("gt ", long, "model"))]
+        assert len(lines) == 3 and len({len(ln) for ln in lines}) == 1, text  # (every row as wide as the head)
+    sweep = format_focal_table({"gt": [row("x1")], long: [row("x1", 95.0)]})
+    lines = sweep.splitlines()[1:]
+    assert len({len(ln) for ln in lines if not ln.startswith("-")}) == 1, sweep
