@@ -237,12 +237,23 @@ def plot_depth_vs_scale(samples: PoseSamples, path: Path, *, weights: str = "def
     axes[0].set_ylabel("canonical depth (m, at f = 1000 px)")
     axes[0].legend(markerscale=6)
     inv = 1.0 / sigma
-    axes[1].scatter(inv * 1e3, pred, s=2, alpha=0.15, color="C3", rasterized=True)
-    k = float(np.sum(inv * pred) / np.sum(inv * inv))
-    axes[1].plot(np.sort(inv) * 1e3, k * np.sort(inv), color="k", lw=1, label=f"depth = {k:.0f} m·px / σ")
+    # Under weak perspective sigma = f s / Z, with s the 3D pose's own size across the view (the RMS radius of its
+    # X, Y about their mean, mm), so the canonical depth (f = 1000 px) is s / sigma: a ray through the origin per
+    # body size and posture. Points coloured by s, with the rays of its 10th and 90th percentiles (a researcher
+    # trial read one least-squares line through all points as a misfit: sitting people, small in 2D for their
+    # depth, make a second branch).
+    size = pose_scale(samples.pose_3d[..., :2].astype(np.float64))
+    dots = axes[1].scatter(inv * 1e3, pred, s=2, alpha=0.3, c=size, cmap="viridis", rasterized=True)
+    fig.colorbar(dots, ax=axes[1], label="3D pose size s (mm, RMS radius across the view)")
+    x = np.percentile(inv, [0.5, 99.5])
+    for q in (10, 90):
+        s_q = float(np.percentile(size, q))
+        axes[1].plot(x * 1e3, s_q * x, color="k", lw=1, ls="--" if q == 10 else "-",
+                     label=f"depth = s / σ, s = {s_q:.0f} mm ({q}th percentile)")
+    axes[1].set_ylim(*np.percentile(pred, [0.1, 99.9]) + np.array([-0.3, 0.3]))
     axes[1].set_xlabel("1000 / σ (1/px)")
     axes[1].set_ylabel("predicted canonical depth (m)")
-    axes[1].legend()
+    axes[1].legend(loc="upper left", fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
     corr = float(np.corrcoef(inv, pred)[0, 1])
