@@ -75,6 +75,8 @@ class TrainResult:
     minutes: float
     error_model: ErrorModel | None = None
     """The fit the synthetic 2D noise was drawn from (None: no sample had it)."""
+    interrupted: bool = False
+    """The run was stopped with Ctrl-C (one process) before its schedule ended: the weights are those so far."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -643,44 +645,50 @@ def train(
         if bar.disable:  # (--no-progress, or stderr not a terminal: the curve goes to the log instead)
             log(f"step {step}: " + ", ".join(f"{k} {v:.4g}" for k, v in rec.items() if k != "step"))
 
-    while True:
-        elapsed = (time.perf_counter() - t0) / 60.0
-        if ctx.active:  # every rank follows the slowest clock, so all stop at the same step
-            clock.fill_(elapsed)
-            dist.all_reduce(clock, op=dist.ReduceOp.MAX)
-            elapsed = float(clock.item())
-        prog = step / steps
-        if cfg.schedule.max_minutes is not None:
-            prog = max(prog, elapsed / cfg.schedule.max_minutes)
-        if prog >= 1.0:
-            break
-        for g in opt.param_groups:
-            g["lr"] = cfg.optim.lr * lr_factor(prog, cfg)
-        if pos + gbs > n:
-            perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
-            pos = 0
-        idx = perm[pos + ctx.rank * lbs: pos + (ctx.rank + 1) * lbs]
-        pos += gbs
-        batch = make_batch(T, idx, cfg, gen, noise=noise)
-        loss = batch_loss(model, codec, batch, cfg, teacher=teacher)
-        opt.zero_grad(set_to_none=True)
-        loss.backward()
-        opt.step()
+    interrupted = False
+    try:
+        while True:
+            elapsed = (time.perf_counter() - t0) / 60.0
+            if ctx.active:  # every rank follows the slowest clock, so all stop at the same step
+                clock.fill_(elapsed)
+                dist.all_reduce(clock, op=dist.ReduceOp.MAX)
+                elapsed = float(clock.item())
+            prog = step / steps
+            if cfg.schedule.max_minutes is not None:
+                prog = max(prog, elapsed / cfg.schedule.max_minutes)
+            if prog >= 1.0:
+                break
+            for g in opt.param_groups:
+                g["lr"] = cfg.optim.lr * lr_factor(prog, cfg)
+            if pos + gbs > n:
+                perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
+                pos = 0
+            idx = perm[pos + ctx.rank * lbs: pos + (ctx.rank + 1) * lbs]
+            pos += gbs
+            batch = make_batch(T, idx, cfg, gen, noise=noise)
+            loss = batch_loss(model, codec, batch, cfg, teacher=teacher)
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+            if ctx.active:
+                _sync_buffers(net)
+            if ema is not None:
+                ema.update(net)
+            step += 1
+            running = loss.detach() if running is None else 0.98 * running + 0.02 * loss.detach()
+            if step % FINITE_CHECK_EVERY == 0:
+                _check_finite(running, step, ctx)
+            if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
+                record()
+            bar.update(1)
+    except KeyboardInterrupt:  # (one process: the weights so far are kept, :func:`save_interrupted`)
         if ctx.active:
-            _sync_buffers(net)
-        if ema is not None:
-            ema.update(net)
-        step += 1
-        running = loss.detach() if running is None else 0.98 * running + 0.02 * loss.detach()
-        if step % FINITE_CHECK_EVERY == 0:
-            _check_finite(running, step, ctx)
-        if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
-            record()
-        bar.update(1)
+            raise  # (the other ranks stop at their own points: no collective can be trusted to finish)
+        interrupted = True
     if running is not None:
         _check_finite(running, step, ctx)
     if ctx.main and (not curve or curve[-1]["step"] != step):
-        record()
+        record()  # (an interrupted run too: the curve's last point is the weights it keeps)
     bar.close()
     minutes = (time.perf_counter() - t0) / 60.0
     eval_net.eval()
@@ -689,8 +697,11 @@ def train(
         log(f"done: {step} steps, {step * gbs} samples in "
             f"{f'{minutes:.1f} min' if minutes >= 1 else f'{60 * minutes:.1f} s'} "
             f"({step * gbs / max(minutes * 60, 1e-9):.0f} samples/s)")
+    if interrupted:
+        log(f"interrupted at step {step} of {steps} ({minutes:.1f} min)")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
-                       minutes=minutes, error_model=noise if cfg.data.noise_prob > 0 else None)
+                       minutes=minutes, error_model=noise if cfg.data.noise_prob > 0 else None,
+                       interrupted=interrupted)
 
 
 def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = True,

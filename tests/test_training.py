@@ -365,6 +365,56 @@ def test_a_run_stores_its_error_model_fit_and_a_repeat_with_another_fit_says_so(
         ErrorModel.resolve(str(bare))
 
 
+def _interrupt_at(monkeypatch, call: int) -> None:
+    """Make the training loop's ``call``-th batch raise KeyboardInterrupt (Ctrl-C in the middle of a run)."""
+    import lifter.train as lt
+
+    real, calls = lt.make_batch, []
+
+    def stopping(*a, **kw):
+        calls.append(1)
+        if len(calls) == call:
+            raise KeyboardInterrupt
+        return real(*a, **kw)
+
+    monkeypatch.setattr(lt, "make_batch", stopping)
+
+
+def test_a_run_stopped_with_ctrl_c_keeps_its_weights_so_far(monkeypatch):
+    """A researcher trial: Ctrl-C in a long CPU run wrote nothing. One process returns the weights so far, said
+    interrupted, with a validation point for them; under DDP it re-raises (not tested here: one process)."""
+    _interrupt_at(monkeypatch, 4)
+    res = train(replace(tiny_config(), schedule=ScheduleConfig(epochs=3, eval_every=1000)),
+                train_samples=synthetic_samples(400, seed=3), progress=False, log=lambda s: None, ctx=Dist(),
+                val_sets=validation_sets(synthetic_samples(20, seed=4), None))
+    assert res.interrupted and res.steps == 3 and res.curve[-1]["step"] == 3
+    assert all(torch.isfinite(p).all() for p in res.net.parameters())
+
+
+@requires_h36m
+def test_cli_train_stopped_with_ctrl_c_writes_beside_out_not_over_it(tmp_path, monkeypatch, capsys):
+    from lifter.checkpoint import load_checkpoint
+    from lifter.cli import main
+
+    out = tmp_path / "run.pt"
+    out.write_bytes(b"an earlier run")  # (Ctrl-C also stops a run started with a wrong option: never over --out)
+    _interrupt_at(monkeypatch, 3)
+    quick = ["--width", "32", "--max-frames-per-sequence", "4", "--val-stride", "400", "--threads", "1",
+             "--no-progress"]
+    assert main(["train", "--out", str(out), *quick]) == 130
+    err = capsys.readouterr().err
+    partial = tmp_path / "run.interrupted.pt"
+    assert ("poselifter train: interrupted at step 2 (" in err and f"the weights so far are in {partial} (meta "
+            f"'interrupted'; not {out}); --init {partial} trains on from them" in err), err
+    assert out.read_bytes() == b"an earlier run"
+    ck = load_checkpoint(partial)
+    assert ck.meta["interrupted"] is True and ck.meta["steps"] == 2 and partial.with_suffix(".curve.json").is_file()
+    _interrupt_at(monkeypatch, 1)
+    assert main(["train", "--out", str(tmp_path / "none.pt"), *quick]) == 130
+    assert "interrupted before the first step: nothing written" in capsys.readouterr().err
+    assert not list(tmp_path.glob("none*"))
+
+
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():
     train_s, val_s = synthetic_samples(400, seed=3), synthetic_samples(50, seed=4)
     vs = validation_sets(val_s, None)
@@ -762,8 +812,7 @@ def test_cli_output_paths_are_checked_before_the_work_and_ctrl_c_says_nothing_wa
 
     monkeypatch.setattr(cli_train, "H36M", interrupt)
     assert main(["train", "--out", str(tmp_path / "r.pt"), *nodata]) == 130
-    assert capsys.readouterr().err.strip() == ("poselifter train: interrupted (no checkpoint was written: a run saves "
-                                               "at its end)")
+    assert capsys.readouterr().err.strip() == "poselifter train: interrupted (no checkpoint was written)"
     assert not (tmp_path / "r.pt").exists()
 
 

@@ -97,6 +97,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())  # (else Python's exit flush of stdout fails again, with a message)
         return 141  # (128 + SIGPIPE, what a shell reports for a command that died of a closed pipe)
     except KeyboardInterrupt:  # (Ctrl-C: one line, not a traceback through the libraries' threads)
-        lost = " (no checkpoint was written: a run saves at its end)" if args.command == "train" else ""
+        lost = " (no checkpoint was written)" if args.command == "train" else ""  # (before or after the loop)
         print(f"poselifter {args.command}: interrupted{lost}", file=sys.stderr)
         return 130

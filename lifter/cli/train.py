@@ -116,12 +116,32 @@ def run(args: argparse.Namespace) -> int:
             meta["init_sha256"] = init_sha
         if teacher_sha is not None:
             meta["teacher_sha256"] = teacher_sha
+        if result.interrupted:
+            if ctx.active:  # (not reached: train() re-raises under torchrun)
+                raise KeyboardInterrupt
+            if result.steps == 0:
+                print("poselifter train: interrupted before the first step: nothing written", file=sys.stderr)
+                return 130
+            # (a researcher trial: a run stopped with Ctrl-C wrote nothing, an hour's CPU run lost; the weights so
+            # far go beside --out, never over it: Ctrl-C is also how a run started with a wrong option is stopped)
+            partial = interrupted_path(args.out)
+            meta["interrupted"] = True
+            save_training_outputs(result, partial, half=not args.fp32_weights, extra_meta=meta)
+            print(f"poselifter train: interrupted at step {result.steps} ({result.minutes:.1f} min): the weights so "
+                  f"far are in {partial} (meta 'interrupted'; not {args.out}); --init {partial} trains on from them",
+                  file=sys.stderr)
+            return 130
         out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     if ctx.active:
         dist.barrier()
         dist.destroy_process_group()
     return 0
+
+
+def interrupted_path(out: Path) -> Path:
+    """Where a run stopped with Ctrl-C writes its weights so far: beside ``out``, ``NAME.interrupted.pt``."""
+    return out.with_name(f"{out.stem}.interrupted{out.suffix or '.pt'}")
 
 
 def fine_tune_config(cfg: TrainConfig, init: Lifter, args: argparse.Namespace) -> tuple[TrainConfig, list[str]]:
