@@ -185,8 +185,10 @@ class OptimConfig:
                                               "MPJPE measures)", default="l1")
     ema_decay: float | None = _help("keep an exponential moving average of the weights (e.g. 0.999); validation "
                                     "and the saved network use it. Its decay warms up as (1 + n) / (10 + n) over "
-                                    "the first updates, so a short run does not keep the starting weights",
-                                    default=None)
+                                    "the first updates, so a short run does not keep the starting weights "
+                                    "(--no-ema-warmup: not)", default=None)
+    ema_warmup: bool = _help("warm the EMA's decay up over its first updates (runs stored before this option "
+                             "averaged without it, and --config of them keeps that)", default=True)
     precision: Literal["fp32", "bf16"] = _help("matmul precision of the residual blocks in training (bf16 "
                                                "autocast; stem, head and loss stay float32; on a CPU without "
                                                "native bf16, float32, with a note)", default="fp32")
@@ -203,6 +205,7 @@ class OptimConfig:
         _check(self.precision in ("fp32", "bf16"), f"precision must be 'fp32' or 'bf16', got {self.precision!r}")
         _check(self.pose_loss in ("l1", "joint"), f"pose_loss must be 'l1' or 'joint', got {self.pose_loss!r}")
         _prob("distill_weight", self.distill_weight)
+        _booleans(self)
 
 
 @dataclass(frozen=True)
@@ -276,7 +279,7 @@ class TrainConfig:
         if p.suffix == ".pt":
             ck = load_checkpoint(p)
             if ck.train_config is not None:
-                return cls.from_dict(ck.train_config)
+                return cls.from_dict(_as_stored(ck.train_config))
             legacy = ck.meta.get("train_config")
             if not isinstance(legacy, dict):
                 raise PoseLifterError(f"--config {p}: this checkpoint stores no training config (an older file)")
@@ -287,7 +290,16 @@ class TrainConfig:
             raise PoseLifterError(f"--config {p}: not a readable JSON file ({exc})") from None
         if isinstance(d, dict) and "train_config" in d and isinstance(d["train_config"], dict):
             d = d["train_config"]  # a .curve.json written by training
-        return cls.from_dict(d)
+        return cls.from_dict(_as_stored(d))
+
+
+def _as_stored(d: Any) -> Any:
+    """A stored config ``d`` as the run that wrote it trained: options added since take the value that repeats it,
+    not today's default (``optim.ema_warmup``: False where the run kept an EMA, which had no warm-up then)."""
+    if isinstance(d, dict) and isinstance(d.get("optim"), dict) and "ema_warmup" not in d["optim"] \
+            and d["optim"].get("ema_decay") is not None:
+        d = {**d, "optim": {**d["optim"], "ema_warmup": False}}
+    return d
 
 
 def legacy_train_config(old: dict[str, Any], meta: dict[str, Any], model: dict[str, Any]) -> dict[str, Any]:
@@ -312,6 +324,8 @@ def legacy_train_config(old: dict[str, Any], meta: dict[str, Any], model: dict[s
     augment = {"flip_prob": old.get("flip_prob", 0.5), "zoom": bool(old.get("zoom_aug", False))}
     augment.update({k: old[k] for k in ("zoom_sigma", "zoom_clip") if k in old})
     optim = {k: old[k] for k in ("batch_size", "lr", "weight_decay", "depth_weight", "ema_decay") if k in old}
+    if optim.get("ema_decay") is not None:
+        optim["ema_warmup"] = False  # (those runs' EMA had none)
     schedule = {k: old[k] for k in ("epochs", "max_minutes", "warmup_fraction", "final_lr_fraction", "eval_every",
                                     "seed") if k in old}
     return {"model": dict(model), "data": data, "augment": augment, "optim": optim, "schedule": schedule,

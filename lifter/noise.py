@@ -306,7 +306,14 @@ class ErrorModel:
         path = Path(ref)
         if not path.is_file() and path.parent.parts[-2:] == ("assets", "error_model") and path.suffix == ".json" \
                 and path.stem in shipped_error_models():
-            return cls.shipped(path.stem)  # (a checkout's path to a shipped fit, in a config run elsewhere)
+            import warnings
+
+            from ._checks import PoseLifterWarning
+
+            warnings.warn(PoseLifterWarning(
+                f"error model {ref}: no such file here; taken as the shipped fit {path.stem!r} that this path names in "
+                "a checkout (a config written there; give the file itself if it was another)"), stacklevel=2)
+            return cls.shipped(path.stem)
         if ref.endswith(".json") or path.is_file():
             return cls.load(ref)
         return cls.shipped(ref)
@@ -361,11 +368,17 @@ class ErrorModel:
         return json.dumps(self.to_dict(), indent=1)
 
     def sha256(self) -> str:
-        """The sha256 of the fit's parameters as :meth:`to_json` writes them: the same fit from a shipped name, a
-        JSON file or a checkpoint gives the same digest (training checkpoints record it, ``--config`` compares)."""
+        """The sha256 of the parameters noise is drawn with (gamma, mu, sigma, v, the reference scale and the
+        single-Gaussian baseline's mu and sigma, rounded as :meth:`to_json` writes them), not of its description,
+        NLLs or meta: the same fit from a shipped name, a JSON file or a checkpoint gives the same digest
+        (training checkpoints record it, ``--config`` compares)."""
         import hashlib
 
-        return hashlib.sha256(self.to_json().encode()).hexdigest()
+        d = self.to_dict()
+        keep = {"v": d["v"], "reference_scale": d["reference_scale"],
+                "mixture": {k: d["mixture"][k] for k in ("gamma", "mu", "sigma")},
+                "gaussian": {k: (d.get("gaussian") or {}).get(k) for k in ("mu", "sigma")}}
+        return hashlib.sha256(json.dumps(keep, sort_keys=True).encode()).hexdigest()
 
     @classmethod
     def from_json(cls, text: str) -> ErrorModel:

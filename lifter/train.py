@@ -74,7 +74,8 @@ class TrainResult:
     samples_seen: int
     minutes: float
     error_model: ErrorModel | None = None
-    """The fit the synthetic 2D noise was drawn from (None: no sample had it)."""
+    """The fit the synthetic 2D noise was drawn from, whole (``data.noise`` "gaussian" draws from its single-Gaussian
+    baseline); the noise model the caller passed to :func:`train`, as given; None: no sample had synthetic noise."""
     interrupted: bool = False
     """The run was stopped with Ctrl-C (one process) before its schedule ended: the weights are those so far."""
 
@@ -274,12 +275,19 @@ def target_statistics(codec: PoseCodec, T: Batch) -> tuple[np.ndarray, np.ndarra
     return y.mean(0).numpy(), y.std(0).numpy()
 
 
-def load_noise(cfg: TrainConfig) -> ErrorModel | None:
-    """The error model of ``cfg.data`` when some samples get synthetic noise, else None."""
-    if cfg.data.noise_prob <= 0:
+def load_fit(cfg: TrainConfig) -> ErrorModel | None:
+    """The error-model fit ``cfg.data.error_model`` names when some samples get synthetic noise, else None: what a
+    checkpoint stores (``meta["error_model"]``), whichever of its parts ``data.noise`` draws from."""
+    return ErrorModel.resolve(cfg.data.error_model) if cfg.data.noise_prob > 0 else None
+
+
+def load_noise(cfg: TrainConfig, fit: ErrorModel | None = None) -> ErrorModel | None:
+    """The error model noise is drawn from for ``cfg.data`` (the fit, or its single-Gaussian baseline for
+    ``noise="gaussian"``) when some samples get synthetic noise, else None. ``fit``: :func:`load_fit`'s, if read."""
+    fit = fit if fit is not None else load_fit(cfg)
+    if fit is None:
         return None
-    em = ErrorModel.resolve(cfg.data.error_model)
-    return em.baseline() if cfg.data.noise == "gaussian" else em
+    return fit.baseline() if cfg.data.noise == "gaussian" else fit
 
 
 # ------------------------------------------------------------------------------------------------
@@ -296,17 +304,21 @@ class WeightAverage:
     ``ExponentialMovingAverage`` with ``num_updates``), so the starting weights do not linger in a run shorter than
     about ``1 / (1 - decay)`` steps (a researcher trial: 684 steps at decay 0.999 without it kept half the random
     initial weights, 242.5 mm MPJPE against 62.4 for the live network); ``d`` reaches 0.999 after about 9,000
-    updates."""
+    updates. ``warmup=False`` (``--no-ema-warmup``; a config stored before the option) averages as before it."""
 
-    def __init__(self, net: torch.nn.Module, *, decay: float) -> None:
+    def __init__(self, net: torch.nn.Module, *, decay: float, warmup: bool = True) -> None:
         if not 0.0 <= decay < 1.0:
             raise ValueError(f"EMA decay must be in [0, 1); got {decay}")
         self.decay = float(decay)
+        self.warmup = bool(warmup)
         self.module = copy.deepcopy(net)
         self.updates = 0
 
     def current_decay(self) -> float:
-        """The decay the next :meth:`update` uses (the warm-up's, until it reaches :attr:`decay`)."""
+        """The decay the next :meth:`update` uses (the warm-up's, until it reaches :attr:`decay`; without
+        ``warmup``, as the runs from before it: :attr:`decay` from the first update)."""
+        if not self.warmup:
+            return self.decay
         return min(self.decay, (1.0 + self.updates) / (10.0 + self.updates))
 
     @torch.no_grad()
@@ -318,6 +330,34 @@ class WeightAverage:
             else:
                 avg.copy_(cur)
         self.updates += 1
+
+
+class _StopAsked:
+    """Ctrl-C during a one-process run's loop: the first one is noted (:attr:`flag`) and the loop stops at the next
+    step's start, so the weights kept are those of whole steps (a review: stopped inside the optimizer's update, some
+    tensors had moved and others not); a second one stops at once. Only in the main thread (where Python delivers
+    signals) and not under torchrun (``enabled``); :meth:`restore` puts the previous handler back."""
+
+    def __init__(self, *, enabled: bool) -> None:
+        import signal
+        import threading
+
+        self.flag = False
+        self._previous: Any = None
+        if enabled and threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._on_sigint)
+
+    def _on_sigint(self, signum: int, frame: Any) -> None:
+        if self.flag:
+            raise KeyboardInterrupt
+        self.flag = True
+
+    def restore(self) -> None:
+        if self._previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
 
 
 def lr_factor(progress: float, cfg: TrainConfig) -> float:
@@ -579,7 +619,8 @@ def train(
             log(f"real detections rescaled by 1/{ratio:.4f} about their 2D mean (their median 2D scale was "
                 f"{100 * ratio:.2f} % of the GT 2D's)")
     T = samples_to_tensors(train_samples, real_keypoints_2d if cfg.data.real_prob > 0 else None)
-    noise = noise if noise is not None else load_noise(cfg)
+    fit = None if noise is not None else load_fit(cfg)  # (a caller's own noise model is stored as given)
+    noise = noise if noise is not None else load_noise(cfg, fit)
     if cfg.data.noise_prob > 0 and noise is None:
         raise PoseLifterError("some samples need synthetic noise (clean_prob + real_prob < 1) but no error model")
 
@@ -608,7 +649,8 @@ def train(
         model = torch.nn.parallel.DistributedDataParallel(
             net, device_ids=[ctx.device.index] if ctx.device.type == "cuda" else None)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
-    ema = WeightAverage(net, decay=cfg.optim.ema_decay) if cfg.optim.ema_decay is not None else None
+    ema = (WeightAverage(net, decay=cfg.optim.ema_decay, warmup=cfg.optim.ema_warmup)
+           if cfg.optim.ema_decay is not None else None)
     eval_net: PoseLifterNet = ema.module if ema is not None else net  # type: ignore[assignment]
     val_dev = {k: {n: t.to(ctx.device) for n, t in v.items()} for k, v in val_sets.items()}
 
@@ -646,8 +688,11 @@ def train(
             log(f"step {step}: " + ", ".join(f"{k} {v:.4g}" for k, v in rec.items() if k != "step"))
 
     interrupted = False
+    asked = _StopAsked(enabled=not ctx.active)
     try:
         while True:
+            if asked.flag:
+                raise KeyboardInterrupt  # (Ctrl-C came during the step before: it ended whole)
             elapsed = (time.perf_counter() - t0) / 60.0
             if ctx.active:  # every rank follows the slowest clock, so all stop at the same step
                 clock.fill_(elapsed)
@@ -681,10 +726,12 @@ def train(
             if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
                 record()
             bar.update(1)
-    except KeyboardInterrupt:  # (one process: the weights so far are kept, :func:`save_interrupted`)
+    except KeyboardInterrupt:  # (one process: the weights so far are kept, written beside --out by the CLI)
         if ctx.active:
             raise  # (the other ranks stop at their own points: no collective can be trusted to finish)
         interrupted = True
+    finally:
+        asked.restore()
     if running is not None:
         _check_finite(running, step, ctx)
     if ctx.main and (not curve or curve[-1]["step"] != step):
@@ -700,7 +747,7 @@ def train(
     if interrupted:
         log(f"interrupted at step {step} of {steps} ({minutes:.1f} min)")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
-                       minutes=minutes, error_model=noise if cfg.data.noise_prob > 0 else None,
+                       minutes=minutes, error_model=(fit or noise) if cfg.data.noise_prob > 0 else None,
                        interrupted=interrupted)
 
 

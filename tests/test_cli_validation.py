@@ -95,6 +95,18 @@ def test_train_init_keeps_the_networks_config_and_lens_and_refuses_options_that_
     got = capsys.readouterr()
     assert json.loads(got.out)["data"]["lens"] == "h36m"
     assert f"--init {ck} learned 'pinhole' 2D, and this run trains it on 'h36m' (--lens)" in got.err, got.err
+    # a stored fine-tune whose --init is not here still prints its config, said (a review: `universal` stores an
+    # --init that is not shipped, and printing its config failed)
+    from lifter.config import TrainConfig
+
+    ft = save_checkpoint(tmp_path / "ft.pt", lf.net, lf.codec,
+                         train_config={**TrainConfig().to_dict(), "init": "no/such/start.pt"})
+    assert main(["train", "--config", str(ft), "--print-config"]) == 0
+    got = capsys.readouterr()
+    assert json.loads(got.out)["init"] == "no/such/start.pt"
+    assert "weights file not found: no/such/start.pt" in got.err and "the config is printed as stored" in got.err
+    assert main(["train", "--config", str(ft), "--out", str(tmp_path / "x.pt")]) == 2  # (training needs it)
+    assert "weights file not found" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -161,19 +161,38 @@ def test_poselifter_models_says_which_training_commands_repeat_and_how_to_repeat
     assert bp.init == "mixture" and bp.data.error_model.endswith("blazepose_demo_train.json") and bp.optim.lr == 3e-4
     assert command_matches(assets.model_entry("gt")["train_command"], gt) == "differs"
     assert command_matches(assets.model_entry("mixture")["train_command"], assets.asset("weights/mixture.pt")) == \
-        "differs"  # (--zoom-aug: renamed)
+        "refused"  # (--zoom-aug: renamed)
     assert command_matches(cfg_command := "poselifter train --out x.pt --input-space pixel --depth-target canonical "
                            "--conditioning none --epochs 25", gt) == "same", cfg_command
-    far = assets.model_entry("universal_far")
-    assert command_matches(far["train_command"], assets.asset(far["file"])) == "same"
+    far = assets.model_entry("universal_far")  # (trained before the EMA's warm-up: its command today has one)
+    assert command_matches(far["train_command"], assets.asset(far["file"])) == "differs"
+    assert command_matches(far["train_command"] + " --no-ema-warmup", assets.asset(far["file"])) == "same"
+    assert TrainConfig.load(Path(assets.asset(far["file"]))).optim.ema_warmup is False
     assert command_matches("python train.py", gt) == "unknown"
     assert command_matches("poselifter train --out x.pt --config no/such.pt", gt) == "unknown"
     assert cli_main(["models", "gt"]) == 0
     out = capsys.readouterr().out
-    assert "trained with (as run then; today these options train another network: repeat it from its stored " \
-           "config, below): poselifter train --out runs/gt_main.pt" in out
+    assert "trained with (as run then; with today's options and defaults it gives another config: repeat it from " \
+           "its stored config, below): poselifter train --out runs/gt_main.pt" in out
     assert f"repeat: poselifter train --config {gt} --out runs/gt_again.pt" in out
     assert "  any 2D      weights/gt.pt" in out
+    assert cli_main(["models", "universal"]) == 0  # (its detected networks' stored --init is not shipped: said)
+    assert "(needs its --init runs/pinhole/init_universal.pt, which is not shipped)" in capsys.readouterr().out
+    # (a fine-tune's command resolves its --init's config as train does)
+    ft = tmp_path / "ft.pt"
+    lf = Lifter.load("universal_far")
+    from lifter.checkpoint import save_checkpoint
+
+    cfg_ft = TrainConfig.load(Path(assets.asset(far["file"])))
+    from dataclasses import replace as dc_replace
+
+    stored = dc_replace(cfg_ft, init="universal_far", optim=dc_replace(cfg_ft.optim, lr=3e-4, ema_warmup=True),
+                        data=dc_replace(cfg_ft.data, error_model="sh_mixture"))
+    save_checkpoint(ft, lf.net, lf.codec, train_config=stored.to_dict())
+    cmd = ("poselifter train --out x.pt --init universal_far --lr 3e-4 --clean-prob 0 --real-prob 0.5 --real-rescale "
+           "--noise-level-min 0.25 --noise-level-max 1.5 --ema-decay 0.999 --precision bf16 --epochs 300 "
+           "--batch-size 2048 --eval-every 1000 --rotate-deg 20 --distance-prob 0.25 --lens pinhole")
+    assert command_matches(cmd, ft) == "same"
 
 
 @pytest.mark.parametrize("harm", ["damaged", "missing"])

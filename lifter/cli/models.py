@@ -43,9 +43,11 @@ def _first_sentence(text: str) -> str:
 
 def command_matches(command: str, weights: Any) -> str:
     """Whether the ``poselifter train`` ``command`` a network was trained with, read with today's options, gives the
-    config its weights file ``weights`` stores (``"same"``), another (``"differs"``: options renamed or defaults
-    changed since), or cannot be told (``"unknown"``: not a ``poselifter train`` command, or one starting from a
-    ``--config`` file that is not here). Times and paths (``--max-minutes``, ``--out``, ``--h36m``) do not count."""
+    config its weights file ``weights`` stores (``"same"``), another (``"differs"``: defaults changed or options
+    added since), or is refused by them (``"refused"``: an option renamed since), or cannot be told (``"unknown"``:
+    not a ``poselifter train`` command, or one whose ``--config`` or ``--init`` file is not here). A fine-tune's
+    config is resolved as ``train`` resolves it (:func:`lifter.cli.train.fine_tune_config`). Times and paths
+    (``--max-minutes``, ``--out``, ``--h36m``) do not count; nor does what the code does with the same config."""
     import contextlib
     import io
     import shlex
@@ -53,6 +55,7 @@ def command_matches(command: str, weights: Any) -> str:
 
     from ..config import TrainConfig, config_from_args
     from . import build_parser
+    from .train import fine_tune_config, load_option
 
     words = shlex.split(command)
     if words[:2] != ["poselifter", "train"]:
@@ -61,15 +64,30 @@ def command_matches(command: str, weights: Any) -> str:
         with contextlib.redirect_stderr(io.StringIO()):  # (argparse's refusal of an option renamed since)
             args = build_parser("train").parse_args(words[1:])
     except SystemExit:
-        return "differs"
+        return "refused"
     try:
         base = TrainConfig.load(args.config) if args.config is not None else None
         stored = TrainConfig.load(Path(weights))
         given = config_from_args(args, base)
+        if given.init is not None:
+            given = fine_tune_config(given, load_option("--init", given.init, args), args)[0]
     except (PoseLifterError, OSError):
-        return "unknown" if args.config is not None else "differs"
+        return "unknown"
     untimed = lambda c: replace(c, schedule=replace(c.schedule, max_minutes=None))  # noqa: E731
     return "same" if untimed(given) == untimed(stored) else "differs"
+
+
+def _missing_init(weights: Any) -> str:
+    """For a repeat line: what the stored config's ``--init`` needs when it is neither shipped nor a file here."""
+    from ..config import TrainConfig
+
+    try:
+        init = TrainConfig.load(Path(weights)).init
+    except PoseLifterError:
+        return ""
+    if init is None or init in assets.model_names() or init == "default" or Path(init).is_file():
+        return ""
+    return f" (needs its --init {init}, which is not shipped)"
 
 
 def run_models(args: argparse.Namespace) -> int:
@@ -120,13 +138,15 @@ def run_models(args: argparse.Namespace) -> int:
                     key = "" if count == 1 else f" ({n['network']})"
                     c = commands.get(n["file"])
                     if c:
-                        said = {"same": "", "differs": " (as run then; today these options train another network: "
-                                "repeat it from its stored config, below)", "unknown": " (as run then)"}
+                        said = {"same": "", "differs": " (as run then; with today's options and defaults it gives "
+                                "another config: repeat it from its stored config, below)",
+                                "refused": " (as run then; today's options refuse it: repeat it from its stored "
+                                "config, below)", "unknown": " (as run then)"}
                         print(f"  trained with{key}{said[command_matches(c, assets.asset(n['file']))]}: {c}")
                     # (a researcher trial ran the stored command of `gt`, which now trains another kind of
                     # network, and `mixture`'s, which today's options refuse)
                     print(f"  repeat{key}: poselifter train --config {assets.asset(n['file'])} --out "
-                          f"runs/{Path(n['file']).stem}_again.pt")
+                          f"runs/{Path(n['file']).stem}_again.pt{_missing_init(assets.asset(n['file']))}")
     for _, why in broken:
         print(f"poselifter models: error: {why}", file=sys.stderr)
     for name, n in bad:
