@@ -283,6 +283,42 @@ def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     assert em_not_converged(ErrorModel.shipped("sh_mixture")) == []  # (a fit from before: does not say)
 
 
+def test_fit_noise_warns_naming_the_joints_cut_at_max_iter(tmp_path, monkeypatch, capsys):
+    """`poselifter fit-noise --max-iter 2` (a researcher trial) printed "iters 2" for every joint and nothing more:
+    it now warns, naming the joints and the fix. The fit itself is scripted here (no Human3.6M needed)."""
+    import lifter.cli.fit_noise as cli_fit
+    from lifter.cli import main
+    from lifter.noise import fit_error_model
+    from lifter.noise_fit import SHNoiseFit, SkipFigure
+
+    rng = np.random.default_rng(0)
+    gt = rng.normal(500, 60, (300, 17, 2))
+    det = gt + synthetic_errors(rng, 300 * 17, 0.9, (0, 0), (4, 4)).reshape(300, 17, 2)
+
+    def scripted(data, *, max_iter, **kw):
+        m = fit_error_model(det, gt, progress=False, max_iter=max_iter)
+        return SHNoiseFit(model=m, errors=det - gt, scale=np.full(300, 95.0), subjects=(1,), skipped=0,
+                          alignment={}, converter={}, scale_dependence=[])
+
+    def no_figure(*a, **kw):
+        raise SkipFigure("not drawn in this test")
+
+    import types
+
+    monkeypatch.setattr(cli_fit, "H36M", lambda root=None: types.SimpleNamespace(load_protocol=lambda *a, **kw: None))
+    monkeypatch.setattr(cli_fit, "fit_sh_error_model", scripted)
+    monkeypatch.setattr(cli_fit, "describe_fit", lambda fit: [])
+    monkeypatch.setattr(cli_fit, "plot_error_histograms", lambda *a, **kw: tmp_path / "h.png")
+    monkeypatch.setattr(cli_fit, "plot_depth_vs_scale", no_figure)
+    argv = ["fit-noise", "--out", str(tmp_path / "m.json"), "--plots", str(tmp_path), "--threads", "1"]
+    assert main([*argv, "--max-iter", "2"]) == 0
+    err = capsys.readouterr().err
+    assert "WARNING: EM stopped at --max-iter 2 before converging (--tol 1e-07) for 17 of 17 joints (pelvis, " in err
+    assert "raise --max-iter" in err
+    assert main(argv) == 0
+    assert "WARNING" not in capsys.readouterr().err
+
+
 def test_converter_report_recovers_the_sh16_rules_and_describe_fit_reports():
     """sh16 joints made from GT by the inverse rules: the report measures zero error for spine and head top and
     re-fits the shipped weights; describe_fit names the alignment, the converter and the scale dependence."""
