@@ -309,25 +309,40 @@ class LoadedImage:
         return np.array([self.rgb.shape[1] / self.size[0], self.rgb.shape[0] / self.size[1]], np.float64)
 
 
-def _to_rgb8(img: Any) -> Any:
-    """An 8-bit RGB copy of a PIL image. 16- and 32-bit greyscale (``I;16``, ``I``, ``F``) are rescaled from their
-    value range (Pillow's own ``convert("RGB")`` clips them, so a 16-bit PNG turns all white); alpha is
-    composited on white; palette, CMYK and the rest go through Pillow's conversion."""
+def _to_rgb8(img: Any, *, max_side: int | None = None) -> Any:
+    """An 8-bit RGB copy of a PIL image, at most ``max_side`` px on its longer side when given (downscaled before
+    the RGB copy is made). 16- and 32-bit greyscale (``I;16``, ``I``, ``F``) are rescaled from their value range
+    (Pillow's own ``convert("RGB")`` clips them, so a 16-bit PNG turns all white), a strip of rows at a time; alpha
+    is composited on white; palette, CMYK and the rest go through Pillow's conversion. (A security trial: a 778 KB
+    16-bit PNG declaring 20000 x 19999 px took 10.4 GB here, in float64 copies of the whole image.)"""
     from PIL import Image
 
+    def fit(im: Any) -> Any:
+        w, h = im.size
+        if max_side is None or max(w, h) <= max_side:
+            return im
+        s = max_side / max(w, h)
+        return im.resize((max(1, round(w * s)), max(1, round(h * s))), Image.Resampling.BOX)
+
     if img.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
-        a = np.asarray(img, np.float64)
-        lo, hi = float(np.nanmin(a)), float(np.nanmax(a))
+        lo, hi = (float(v) for v in img.getextrema())
         full = 65535.0 if img.mode.startswith("I;16") else (hi if hi > 255 else 255.0)
         scale = 255.0 / full if hi <= full else 255.0 / max(hi - lo, 1e-9)
         base = 0.0 if hi <= full else lo
-        g = np.clip((a - base) * scale, 0, 255).astype(np.uint8)
-        return Image.fromarray(np.stack([g, g, g], axis=-1), "RGB")
+        w, h = img.size
+        g = np.empty((h, w), np.uint8)
+        rows = max(1, (1 << 19) // max(w, 1))  # (about 4 MB of float64 per strip; float64 as before the strips)
+        for y in range(0, h, rows):
+            a = np.asarray(img.crop((0, y, w, min(h, y + rows))), np.float64)
+            a -= base
+            a *= scale
+            g[y:y + len(a)] = np.clip(a, 0, 255, out=a)
+        return fit(Image.fromarray(g, "L")).convert("RGB")
     if img.mode in ("RGBA", "LA", "PA") or (img.mode == "P" and "transparency" in img.info):
-        rgba = img.convert("RGBA")
+        rgba = fit(img if img.mode == "RGBA" else img.convert("RGBA"))
         bg = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
         return Image.alpha_composite(bg, rgba).convert("RGB")
-    return img if img.mode == "RGB" else img.convert("RGB")
+    return fit(img) if img.mode == "RGB" else fit(img.convert("RGB"))
 
 
 def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE_PX,
@@ -378,10 +393,10 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
         raise ImageError(f"{p}: unreadable or truncated image ({exc})") from None
     if orientation in (5, 6, 7, 8):
         W0, H0 = H0, W0
-    if orientation != 1:
+    if 2 <= orientation <= 8:  # (1: upright; others are not orientations: an EXIF value of 99 was "noted" as done)
         img = ImageOps.exif_transpose(img)
         notes.append(f"rotated upright per EXIF orientation {orientation}")
-    img = _to_rgb8(img)
+    img = _to_rgb8(img, max_side=max_side)
     w, h = img.size
     if max(w, h) > max_side:
         s = max_side / max(w, h)

@@ -1225,6 +1225,31 @@ def test_16_bit_greyscale_png_decodes_with_its_contrast(tmp_path):
     assert 100 < img.rgb.mean() < 155  # a ramp, not all white
 
 
+def test_a_large_16_bit_png_is_converted_a_strip_at_a_time_and_downscaled_before_its_rgb_copy(tmp_path):
+    """A security trial: a 778 KB 16-bit PNG declaring 20000 x 19999 px took 10.4 GB in float64 copies of the whole
+    image. The conversion now goes a strip of rows at a time and downscales before the RGB copy: numpy's peak for a
+    3000 x 3000 16-bit image stays under 30 MB (the whole-image float64 copy alone was 72 MB), with the same
+    result as converting it whole; an EXIF orientation that is not one (99) is not said to rotate."""
+    import tracemalloc
+
+    rng = np.random.default_rng(0)
+    big = np.repeat(np.repeat(rng.integers(0, 65535, (30, 30)), 100, 0), 100, 1).astype(np.uint16)
+    Image.fromarray(big).save(tmp_path / "big16.png")
+    tracemalloc.start()
+    img = load_image(tmp_path / "big16.png", max_side=1000)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 30e6, peak
+    assert img.rgb.shape == (1000, 1000, 3) and img.size == (3000, 3000)
+    whole = Image.fromarray((big.astype(np.float64) * (255.0 / 65535.0)).astype(np.uint8), "L")  # (converted whole)
+    np.testing.assert_array_equal(img.rgb[..., 0], np.asarray(whole.resize((1000, 1000), Image.Resampling.BOX)))
+    odd = Image.fromarray(big[:40, :40])
+    exif = Image.Exif()
+    exif[0x0112] = 99
+    odd.convert("RGB").save(tmp_path / "odd.jpg", exif=exif)
+    assert not any("rotated" in n for n in load_image(tmp_path / "odd.jpg").notes)
+
+
 def test_output_folder_that_is_also_the_input_folder_is_not_lifted_again(tmp_path, weights, kp17, capsys):
     d = tmp_path / "work"
     d.mkdir()
