@@ -93,6 +93,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     started: list[viser.ViserServer] = []
     failed: list[BaseException] = []
+    from .viser_hooks import guard_requests
+
+    guard_requests()  # (before the server starts: a page of another site may not drive the app)
 
     def start() -> None:
         try:

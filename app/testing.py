@@ -22,7 +22,11 @@ from websockets.sync.client import ClientConnection, connect
 
 
 def local_server() -> viser.ViserServer:
-    """A quiet viser server on 127.0.0.1 and an OS-assigned free port."""
+    """A quiet viser server on 127.0.0.1 and an OS-assigned free port, guarded as the app's
+    (:func:`~poselifter_app.viser_hooks.guard_requests`)."""
+    from .viser_hooks import guard_requests
+
+    guard_requests()
     return viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
 
 

@@ -13,7 +13,10 @@ place. Each hook is best effort: when viser's internals change it does nothing (
   callbacks run) without telling the tab, and told later; meanwhile its box is empty. A value that arrives in a
   number box while it is being typed in mixes with the keys (playback's frames landed between a typed frame's keys:
   "200" became 146, then 0146);
-* :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly).
+* :func:`drag_callback`: the registered drag callback of a scene node (tests and benchmarks call it directly);
+* :func:`guard_requests`: the server answers only requests addressed to it by a loopback name when it is bound to
+  a loopback address (DNS rebinding), and opens websockets only for pages of its own origin (viser accepts any
+  Origin: a web page open in the same browser could drive the app and upload to it).
 """
 
 from __future__ import annotations
@@ -212,3 +215,68 @@ def clear_box(handle: Any) -> None:
 def drag_callback(node: Any) -> Callable[[Any], None]:
     """The first drag callback registered on a scene node (``node.on_drag``)."""
     return node._impl.drag_cb[0].callback
+
+
+LOOPBACK_NAMES: frozenset[str] = frozenset({"127.0.0.1", "localhost", "::1"})
+"""Host names a server bound to a loopback address answers to (:func:`guard_requests`)."""
+
+
+def _host_name(value: str) -> str:
+    """The host of a ``Host`` header value: ``"127.0.0.1:8080"`` -> ``"127.0.0.1"``, ``"[::1]:80"`` -> ``"::1"``."""
+    v = value.strip().lower()
+    if v.startswith("["):
+        return v[1:v.index("]")] if "]" in v else v
+    return v.rsplit(":", 1)[0] if v.count(":") == 1 else v
+
+
+def request_refusal(headers: Any, *, loopback: bool) -> str | None:
+    """Why a request with these HTTP ``headers`` is refused (None: it is not): on a server bound to a loopback
+    address, a ``Host`` that is not a loopback name (a page of another site whose name resolves here: DNS
+    rebinding); for a websocket, an ``Origin`` other than the page's own, ``http(s)://`` + its ``Host`` (a page of
+    another site open in the same browser). A request without ``Origin`` (not from a browser page) is let through."""
+    from urllib.parse import urlsplit
+
+    host = headers.get("Host", "") or ""
+    if loopback and _host_name(host) not in LOOPBACK_NAMES:
+        return f"Host {host!r} is not this machine's loopback name (open the app at http://127.0.0.1:PORT)"
+    if (headers.get("Upgrade", "") or "").lower() == "websocket":
+        origin = headers.get("Origin")
+        if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+            return f"a page of {origin!r} may not connect to the app at {host!r}"
+    return None
+
+
+def guard_requests() -> bool:
+    """Make every server viser starts from now on refuse the requests :func:`request_refusal` names (HTTP 403, with
+    the reason), whatever viser itself answers; idempotent. The bind address each server gets decides whether its
+    ``Host`` must be a loopback name. Returns False (and logs why) when websockets' server API is not the one this
+    wraps."""
+    import http
+
+    try:
+        import websockets.asyncio.server as wss
+    except ImportError as exc:  # (best effort, as every hook here)
+        log.warning("request guard not installed: %s", exc)
+        return False
+    if getattr(wss.serve, "_poselifter_guard", False):
+        return True
+    if not hasattr(wss.ServerConnection, "respond"):
+        log.warning("request guard not installed: websockets' ServerConnection has no respond()")
+        return False
+    original = wss.serve
+
+    def serve(handler: Any, host: Any = None, port: Any = None, *args: Any, process_request: Any = None,
+              **kwargs: Any) -> Any:
+        loopback = str(host).strip("[]").lower() in LOOPBACK_NAMES
+
+        def check(connection: Any, request: Any) -> Any:
+            why = request_refusal(request.headers, loopback=loopback)
+            if why is not None:
+                return connection.respond(http.HTTPStatus.FORBIDDEN, f"poselifter: refused: {why}\n")
+            return process_request(connection, request) if process_request is not None else None
+
+        return original(handler, host, port, *args, process_request=check, **kwargs)
+
+    serve._poselifter_guard = True  # type: ignore[attr-defined]
+    wss.serve = serve  # type: ignore[assignment,misc]  # (viser looks it up on the module at each start)
+    return True

@@ -1136,3 +1136,41 @@ def test_people_whose_ids_read_alike_are_each_picked(app: PoseLifterApp) -> None
         assert v.state.person == 1, (ids, labels)
         v.gui.joints.person.value = labels[0]
         assert v.state.person == 0, (ids, labels)
+
+
+def test_the_server_refuses_pages_of_other_sites_and_other_host_names():
+    """A security trial: the app's websocket accepted a connection with `Origin: http://evil.example.com` (a page of
+    another site open in the same browser could drive the app and upload to it), and HTTP answered any Host (DNS
+    rebinding). The guard answers 403 naming why; the app's own page, other tools (no Origin) and the loopback
+    names keep working."""
+    import urllib.error
+    import urllib.request
+
+    from poselifter_app.viser_hooks import request_refusal
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    server = local_server()
+    try:
+        port = server.get_port()
+        with pytest.raises(InvalidStatus) as exc:
+            connect(f"ws://127.0.0.1:{port}", origin="http://evil.example.com", open_timeout=10)  # type: ignore[arg-type]
+        assert exc.value.response.status_code == 403
+        assert b"a page of 'http://evil.example.com' may not connect" in exc.value.response.body
+        for origin in (f"http://127.0.0.1:{port}", None):  # (the app's own page; a tool without an Origin)
+            connect(f"ws://127.0.0.1:{port}", origin=origin, open_timeout=10).close()  # type: ignore[arg-type]
+        with pytest.raises(urllib.error.HTTPError) as http_exc:
+            urllib.request.urlopen(urllib.request.Request(f"http://127.0.0.1:{port}/",
+                                                          headers={"Host": f"evil.example.com:{port}"}), timeout=10)
+        assert http_exc.value.code == 403
+        for name in ("127.0.0.1", "localhost"):
+            req = urllib.request.Request(f"http://127.0.0.1:{port}/", headers={"Host": f"{name}:{port}"})
+            assert urllib.request.urlopen(req, timeout=10).status == 200
+    finally:
+        server.stop()
+    # bound to every interface (--host 0.0.0.0), any Host name, but still only the page's own origin
+    ws = {"Upgrade": "websocket", "Host": "lab-pc:8080"}
+    assert request_refusal({"Host": "lab-pc:8080"}, loopback=False) is None
+    assert request_refusal({**ws, "Origin": "http://lab-pc:8080"}, loopback=False) is None
+    assert request_refusal({**ws, "Origin": "http://evil.example.com"}, loopback=False) is not None
+    assert request_refusal({"Host": "[::1]:8080"}, loopback=True) is None
