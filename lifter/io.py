@@ -1528,7 +1528,9 @@ def write_atomic(path: str | Path, data: bytes | memoryview | str) -> Path:
                               "choose another output folder)")
     raw = data.encode("utf-8") if isinstance(data, str) else data
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        # (the name cut to 64 characters: a 250-character output name that fits was refused as too long once
+        # mkstemp's own characters were added; a security trial)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:64]}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
         hint = " (the folder does not exist: create it first)" if not path.parent.is_dir() else ""
         raise PoseLifterError(f"{path}: could not write ({exc.strerror or exc}){hint}") from None

@@ -327,10 +327,11 @@ class ErrorModel:
         return cls.from_json(text)
 
     def save(self, path: str | Path) -> Path:
+        from .io import write_atomic  # (a security trial: it wrote through a symbolic link, and not atomically)
+
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.to_json())
-        return path
+        return write_atomic(path, self.to_json())
 
     def baseline(self) -> ErrorModel:
         """The single-Gaussian baseline as an :class:`ErrorModel` (gamma = 1: every joint gets

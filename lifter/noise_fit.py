@@ -210,10 +210,9 @@ def plot_error_histograms(errors: np.ndarray, model: ErrorModel, path: Path, *, 
     fig.suptitle(f"2D errors of the Stacked-Hourglass detections (px at 2D scale {model.reference_scale:.0f} px; "
                  f"|e| > {lim:.0f} px shown at the edges); n = {model.n_samples} per joint", fontsize=12)
     fig.subplots_adjust(left=0.03, right=0.99, bottom=0.03, top=0.94, wspace=0.3, hspace=0.45)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    from .plots import save_figure
+
+    return save_figure(fig, path, dpi=dpi)
 
 
 def plot_depth_vs_scale(samples: PoseSamples, path: Path, *, weights: str = "default") -> Path:
@@ -260,7 +259,6 @@ def plot_depth_vs_scale(samples: PoseSamples, path: Path, *, weights: str = "def
     fig.suptitle(f"Predicted canonical depth vs 2D scale, H36M test set, GT 2D inputs (n = {len(kp)}; "
                  f"corr(depth, 1/σ) = {corr:.3f})", fontsize=10)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    from .plots import save_figure
+
+    return save_figure(fig, path, dpi=100)

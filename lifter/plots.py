@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -13,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ._checks import PoseLifterError, plot_format  # noqa: E402
+from ._checks import plot_format  # noqa: E402
 
 
 def curve_y_range(series: Sequence[Sequence[float]]) -> tuple[float, float]:
@@ -50,22 +49,26 @@ def plot_learning_curve(curve: Sequence[dict[str, float]], path: str | Path, *, 
         ax.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-def _save(fig: Any, path: Path) -> Path:
-    """Save a figure in the format of its suffix (:func:`plot_format`) through a temporary file and a rename."""
+def save_figure(fig: Any, path: Path, *, dpi: int = 110) -> Path:
+    """Save a figure in the format of its suffix (:func:`plot_format`) with :func:`lifter.io.write_atomic` (a
+    temporary file of its own, fsync, a rename; never through a symbolic link: a security trial's link at the fixed
+    temporary name ``.NAME.tmp`` redirected the write) and close it."""
+    import io
+
+    from .io import write_atomic
+
     try:
         fmt = plot_format(path)
-    except PoseLifterError:
+        buf = io.BytesIO()
+        fig.savefig(buf, dpi=dpi, format=fmt)
+    finally:
         plt.close(fig)
-        raise
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, dpi=110, format=fmt)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+    return write_atomic(path, buf.getbuffer())
+
 
 
 def plot_pck_curves(curves: dict[str, tuple[np.ndarray, np.ndarray]], path: str | Path) -> Path:
@@ -79,4 +82,4 @@ def plot_pck_curves(curves: dict[str, tuple[np.ndarray, np.ndarray]], path: str 
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)

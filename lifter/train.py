@@ -765,10 +765,10 @@ def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = 
         meta["error_model_sha256"] = result.error_model.sha256()
     meta.update(extra_meta or {})
     save_checkpoint(out, result.net, result.codec, train_config=result.config.to_dict(), meta=meta, half=half)
-    curve_path = out.with_suffix(".curve.json")
-    tmp = curve_path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps({"train_config": result.config.to_dict(), "curve": result.curve}, indent=1))
-    os.replace(tmp, curve_path)
+    from .io import write_atomic  # (not through a link at its name; its own temporary file: a security trial)
+
+    write_atomic(out.with_suffix(".curve.json"),
+                 json.dumps({"train_config": result.config.to_dict(), "curve": result.curve}, indent=1))
     # matplotlib only when a curve is drawn: `import lifter.train` (every `poselifter` command) stays ~0.5 s faster
     from .plots import plot_learning_curve
 

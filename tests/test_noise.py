@@ -344,3 +344,24 @@ def test_converter_report_recovers_the_sh16_rules_and_describe_fit_reports():
     text = "\n".join(describe_fit(fit))
     assert "best offset +0" in text and "WARNING" not in text and "2 training samples" in text
     assert "neck_nose = thorax + 0.222" in text and "scale dependence" in text
+
+
+def test_fits_and_figures_are_written_atomically_never_through_a_link(tmp_path):
+    """A security trial: ErrorModel.save (fit-noise --out) wrote through a symbolic link at its path, and the figures
+    and a run's .curve.json through one at their fixed temporary names. They now go through write_atomic (a
+    temporary name of its own, refusing a link at the path); a 250-character name that fits is written."""
+    from lifter.noise import ErrorModel
+    from lifter.plots import plot_learning_curve
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep")
+    (tmp_path / "fit.json").symlink_to(victim)
+    m = ErrorModel.shipped("sh_mixture")
+    with pytest.raises(PoseLifterError, match="symbolic link; refusing to write through it"):
+        m.save(tmp_path / "fit.json")
+    (tmp_path / ".curve.png.tmp").symlink_to(victim)  # (the figures' old fixed temporary name)
+    curve = [{"step": 1, "samples": 10, "minutes": 0.1, "lr": 1e-3, "train_loss": 1.0, "val_mpjpe_clean": 50.0}]
+    assert plot_learning_curve(curve, tmp_path / "curve.png", title="t").stat().st_size > 1000
+    assert victim.read_text() == "keep"
+    long = tmp_path / ("L" * 245 + ".json")  # (255 characters: the longest name most file systems take)
+    assert m.save(long).is_file() and ErrorModel.load(long).sha256() == m.sha256()
