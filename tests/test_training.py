@@ -468,6 +468,21 @@ def test_cli_train_stopped_with_ctrl_c_writes_beside_out_not_over_it(tmp_path, m
     assert main(["train", "--out", str(tmp_path / "none.pt"), *quick]) == 130
     assert "interrupted before the first step: nothing written" in capsys.readouterr().err
     assert not list(tmp_path.glob("none*"))
+    # Ctrl-C while the outputs are written says which are written whole (a security trial was told "no checkpoint
+    # was written" with the new checkpoint on disk)
+    monkeypatch.undo()
+    import lifter.plots
+
+    def stop(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(lifter.plots, "plot_learning_curve", stop)
+    done = tmp_path / "done.pt"
+    with pytest.raises(SystemExit) as exc:
+        main(["train", "--out", str(done), "--max-minutes", "0.01", *quick])
+    err = capsys.readouterr().err
+    assert exc.value.code == 130 and (f"interrupted while writing the run's outputs; written whole: {done}, "
+                                      f"{done.with_suffix('.curve.json')} (the others were not written)") in err, err
 
 
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():

@@ -452,6 +452,11 @@ def run_lift(args: argparse.Namespace) -> int:
 
         torch.set_num_threads(args.threads)
     lifter = Lifter.load(args.weights)  # bad weights fail before any input
+    if args.glb:
+        # (trimesh's first import runs its optional imports inside `except BaseException`, which swallows a Ctrl-C
+        # landing there: a security trial's SIGINT was ignored in 2 of 10 batches, mid-way through; imported before
+        # the batch starts, nothing of it runs between inputs)
+        import trimesh  # noqa: F401
     lifter_for = {"keypoints": lifter, "image": lifter}
     try:
         args.out.mkdir(parents=True, exist_ok=True)

@@ -17,6 +17,7 @@ import json
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import torch
 import torch.distributed as dist
@@ -135,18 +136,36 @@ def run(args: argparse.Namespace) -> int:
             # far go beside --out, never over it: Ctrl-C is also how a run started with a wrong option is stopped)
             partial = interrupted_path(args.out)
             meta["interrupted"] = True
-            save_training_outputs(result, partial, half=not args.fp32_weights, extra_meta=meta)
+            _save_outputs(result, partial, half=not args.fp32_weights, meta=meta)
             print(f"poselifter train: interrupted at step {result.steps} ({result.minutes:.1f} min): the weights so "
                   f"far are in {partial} (meta 'interrupted'; not {args.out}); --init {partial} starts a new run "
                   "from them (its schedule and EMA start again)",
                   file=sys.stderr)
             return 130
-        out = save_training_outputs(result, args.out, half=not args.fp32_weights, extra_meta=meta)
+        out = _save_outputs(result, args.out, half=not args.fp32_weights, meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
     if ctx.active:
         dist.barrier()
         dist.destroy_process_group()
     return 0
+
+
+def _save_outputs(result: Any, out: Path, *, half: bool, meta: dict[str, Any]) -> Path:
+    """:func:`save_training_outputs`; a Ctrl-C while it writes says which of its files are written whole (each is
+    written atomically: a security trial's interrupt there was told "no checkpoint was written" while the new
+    checkpoint was on disk, replacing the one before)."""
+    import time
+
+    t0 = time.time()
+    try:
+        return save_training_outputs(result, out, half=half, extra_meta=meta)
+    except KeyboardInterrupt:
+        new = [p for p in (out, out.with_suffix(".curve.json"), out.with_suffix(".curve.png"))
+               if p.is_file() and p.stat().st_mtime >= t0 - 1.0]
+        done = ", ".join(str(p) for p in new) if new else "none"
+        print(f"poselifter train: interrupted while writing the run's outputs; written whole: {done} (the others "
+              "were not written)", file=sys.stderr)
+        raise SystemExit(130) from None
 
 
 def interrupted_path(out: Path) -> Path:
