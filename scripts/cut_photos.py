@@ -29,10 +29,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from eval_cascade import demo_cameras, demo_intrinsics  # noqa: E402
+from eval_cascade import demo_frames  # noqa: E402
 
 from lifter.api import Lifter  # noqa: E402
-from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import NoPersonError, get_estimator, image_from_array  # noqa: E402
 from lifter.metrics import mpjpe, root_errors  # noqa: E402
 from lifter.pipeline import lift_image  # noqa: E402
@@ -56,10 +55,7 @@ def main() -> int:
     from PIL import Image
 
     torch.set_num_threads(1)
-    h36m = args.h36m or default_h36m_dir()
-    demo = h36m / "demo"
-    ann = np.load(demo / "annotations.npz")
-    focal, pp, dist = demo_intrinsics(demo_cameras(H36M(h36m), ann))
+    demo, ann, focal, pp, dist = demo_frames(args.h36m)
     gt2d, gt3d = ann["p2d_gt"].astype(np.float64), ann["p3d_cam"].astype(np.float64)
     lifter = Lifter.load(args.model)
     n = len(ann["image"])

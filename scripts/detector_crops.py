@@ -25,10 +25,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from eval_cascade import demo_cameras, demo_intrinsics  # noqa: E402
+from eval_cascade import demo_frames  # noqa: E402
 
 from lifter.api import Lifter  # noqa: E402
-from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.detect import get_estimator, load_image  # noqa: E402
 from lifter.keypoints import convert  # noqa: E402
 from lifter.metrics import mpjpe, root_errors  # noqa: E402
@@ -53,11 +52,7 @@ def main() -> int:
     import torch
 
     torch.set_num_threads(1)
-    h36m = args.h36m or default_h36m_dir()
-    demo = h36m / "demo"
-    ann = np.load(demo / "annotations.npz")
-    data = H36M(h36m)
-    focal, pp, dist = demo_intrinsics(demo_cameras(data, ann))
+    demo, ann, focal, pp, dist = demo_frames(args.h36m)
     gt2d, gt3d = ann["p2d_gt"].astype(np.float64), ann["p3d_cam"].astype(np.float64)
     n = len(ann["image"])
     names = ["first pass"] + [f"crop grown {g:g}" for g in args.grows]

@@ -191,6 +191,15 @@ def demo_cameras(data: H36M, ann: Any) -> list[Any]:
     return [data.camera(int(str(s).lstrip("S")), str(c)) for s, c in zip(ann["subject"], ann["camera"])]
 
 
+def demo_frames(h36m_dir: Path | None) -> tuple[Path, Any, np.ndarray, np.ndarray, np.ndarray]:
+    """The demo photos of the Human3.6M folder ``h36m_dir`` (None: the default): their folder, annotations and
+    :func:`demo_intrinsics` (the setup the scripts measuring on these photos share)."""
+    h36m = h36m_dir or default_h36m_dir()
+    demo = h36m / "demo"
+    ann = np.load(demo / "annotations.npz")
+    return (demo, ann, *demo_intrinsics(demo_cameras(H36M(h36m), ann)))
+
+
 def demo_intrinsics(cams: list[Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(focal (N, 2), principal point (N, 2), distortion (N, 5))`` px of :func:`demo_cameras`: the photos' 2D is
     seen through Human3.6M's lenses, so each camera's distortion ``(k1, k2, k3, p1, p2)`` comes with it."""

@@ -22,10 +22,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from eval_cascade import blazepose_as, demo_cameras, demo_intrinsics, detect_demo, pose_metrics  # noqa: E402
+from eval_cascade import blazepose_as, demo_frames, detect_demo, pose_metrics  # noqa: E402
 
 from lifter.api import Lifter  # noqa: E402
-from lifter.data import H36M, default_h36m_dir  # noqa: E402
 from lifter.keypoints import convert, get_format, stand_in_missing  # noqa: E402
 from lifter.skeleton import JOINT_NAMES  # noqa: E402
 
@@ -47,10 +46,7 @@ def main() -> int:
     import torch
 
     torch.set_num_threads(1)
-    h36m_dir = args.h36m or default_h36m_dir()
-    demo = h36m_dir / "demo"
-    ann = np.load(demo / "annotations.npz")
-    focal, pp, dist = demo_intrinsics(demo_cameras(H36M(h36m_dir), ann))
+    demo, ann, focal, pp, dist = demo_frames(args.h36m)
     det = detect_demo(demo, ann["image"])
     ok = det["people"] > 0
     kp33 = det["kp33"][ok]
