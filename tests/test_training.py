@@ -914,6 +914,10 @@ DDP_SCRIPT = textwrap.dedent('''
                 progress=False, log=lambda m: None, ctx=ctx)
     torch.save({"state": res.net.state_dict(), "steps": res.steps, "world": ctx.world, "rank": ctx.rank,
                 "curve": len(res.curve)}, f"{sys.argv[1]}/rank{ctx.rank}.pt")
+    # (the process group ended before the interpreter: a CI run's rank 1 aborted at exit once, "terminate called
+    # without an active exception", with gloo's threads still up; poselifter train ends it the same way)
+    torch.distributed.barrier()
+    torch.distributed.destroy_process_group()
 ''')
 
 
