@@ -73,6 +73,16 @@ def test_train_rejects_bad_config_values(capsys, tmp_path):
         assert expected in capsys.readouterr().err
 
 
+def test_train_says_an_error_model_that_no_sample_uses_is_not_read(capsys, tmp_path):
+    """A security trial: --error-model naming a file that is not a fit was accepted without a word with every sample
+    clean (the default), and failed only in a later --config repeat with noise on."""
+    assert main(["train", "--error-model", str(tmp_path / "junk.pt"), "--print-config"]) == 0
+    assert (f"note: --error-model {tmp_path / 'junk.pt'} is not read: no sample gets synthetic noise (--clean-prob 1 "
+            "+ --real-prob 0 = 1)") in capsys.readouterr().err
+    assert main(["train", "--clean-prob", "0.5", "--print-config"]) == 0
+    assert "is not read" not in capsys.readouterr().err
+
+
 def test_train_init_keeps_the_networks_config_and_lens_and_refuses_options_that_ask_for_another(capsys, tmp_path):
     """A researcher trial: ``--init universal_far --input-space pixel`` dropped the option given with a vague note,
     and the fine-tune of the pinhole network trained on distorted 2D (the CLI's default lens) without a word. Now a

@@ -64,6 +64,10 @@ def run(args: argparse.Namespace) -> int:
     if getattr(args, "cfg__optim__distill_weight", None) is not None and cfg.teacher is None:
         raise PoseLifterError("--distill-weight weighs the loss against a teacher's outputs, and no --teacher is "
                               "given: add --teacher MODEL (a shipped name or checkpoint), or drop --distill-weight")
+    if getattr(args, "cfg__data__error_model", None) is not None and cfg.data.noise_prob <= 0:
+        # (a security trial: a file that is not a fit was accepted unread, and failed later in a --config repeat)
+        print(f"note: --error-model {cfg.data.error_model} is not read: no sample gets synthetic noise "
+              f"(--clean-prob {cfg.data.clean_prob:g} + --real-prob {cfg.data.real_prob:g} = 1)", file=sys.stderr)
     init, init_sha, init_notes, init_name = None, None, [], ""
     if cfg.init is not None:  # (before --print-config: it prints the config the fine-tune runs with)
         try:
