@@ -289,10 +289,10 @@ MAX_PLAUSIBLE_IMAGE_VIEW_DEG: float = 150.0
 def mostly_outside(keypoints: np.ndarray, image_size: Any) -> np.ndarray:
     """Which 2D poses ``(..., J, 2)`` px lie mostly (more than half their joints) outside their image ``image_size``
     (``(W, H)`` px, one for all or ``(..., 2)`` one per pose; a joint on the border is inside): ``(...)`` bool."""
-    return _joints_outside(keypoints, image_size).mean(-1) > 0.5
+    return joints_outside(keypoints, image_size).mean(-1) > 0.5
 
 
-def _joints_outside(keypoints: np.ndarray, image_size: Any) -> np.ndarray:
+def joints_outside(keypoints: np.ndarray, image_size: Any) -> np.ndarray:
     """Which joints of 2D poses ``(..., J, 2)`` px lie outside their image ``image_size`` (:func:`mostly_outside`):
     ``(..., J)`` bool."""
     k = np.asarray(keypoints, np.float64)
@@ -307,7 +307,7 @@ CUT_OFF_TAIL = ("the detector guesses the joints it cannot see, so the 2D there,
 
 
 def joints_outside_text(outside: np.ndarray, *, most: int = 3) -> str:
-    """The joints most often outside the image in ``outside`` ``(..., 17)`` bool (:func:`_joints_outside` of one or
+    """The joints most often outside the image in ``outside`` ``(..., 17)`` bool (:func:`joints_outside` of one or
     more 2D poses), at most ``most`` named: ``"r_knee, r_ankle and 2 more placed outside the image"``."""
     from .skeleton import JOINT_NAMES
 
@@ -331,7 +331,7 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
     if k.size == 0:
         return []
     wh = np.broadcast_to(np.asarray(image_size, np.float64), k.shape[:-2] + (2,))
-    outside = _joints_outside(k, wh)
+    outside = joints_outside(k, wh)
     mostly = outside.mean(-1) > 0.5
     if not np.any(mostly):
         return []

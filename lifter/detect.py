@@ -309,6 +309,17 @@ class LoadedImage:
         return np.array([self.rgb.shape[1] / self.size[0], self.rgb.shape[0] / self.size[1]], np.float64)
 
 
+def _fit_side(img: Any, max_side: int) -> Any:
+    """A PIL image at most ``max_side`` px on its longer side (box-filtered), or the image itself when it is."""
+    from PIL import Image
+
+    w, h = img.size
+    if max(w, h) <= max_side:
+        return img
+    s = max_side / max(w, h)
+    return img.resize((max(1, round(w * s)), max(1, round(h * s))), Image.Resampling.BOX)
+
+
 def _to_rgb8(img: Any, *, max_side: int | None = None) -> Any:
     """An 8-bit RGB copy of a PIL image, at most ``max_side`` px on its longer side when given (downscaled before
     the RGB copy is made). 16- and 32-bit greyscale (``I;16``, ``I``, ``F``) are rescaled from their value range
@@ -318,11 +329,7 @@ def _to_rgb8(img: Any, *, max_side: int | None = None) -> Any:
     from PIL import Image
 
     def fit(im: Any) -> Any:
-        w, h = im.size
-        if max_side is None or max(w, h) <= max_side:
-            return im
-        s = max_side / max(w, h)
-        return im.resize((max(1, round(w * s)), max(1, round(h * s))), Image.Resampling.BOX)
+        return im if max_side is None else _fit_side(im, max_side)
 
     if img.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
         lo, hi = (float(v) for v in img.getextrema())
@@ -396,11 +403,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
     if 2 <= orientation <= 8:  # (1: upright; others are not orientations: an EXIF value of 99 was "noted" as done)
         img = ImageOps.exif_transpose(img)
         notes.append(f"rotated upright per EXIF orientation {orientation}")
-    img = _to_rgb8(img, max_side=max_side)
-    w, h = img.size
-    if max(w, h) > max_side:
-        s = max_side / max(w, h)
-        img = img.resize((max(1, round(w * s)), max(1, round(h * s))), Image.Resampling.BOX)
+    img = _to_rgb8(img, max_side=max_side)  # (downscaled there, before the RGB copy)
     w, h = img.size
     scale = w / W0
     if scale < 1.0:
@@ -429,9 +432,7 @@ def image_from_array(rgb: Any, *, max_side: int = DEFAULT_MAX_SIDE_PX) -> Loaded
     if max(W, H) > max_side:
         from PIL import Image
 
-        scale = max_side / max(W, H)
-        a = np.asarray(Image.fromarray(a).resize((max(1, round(W * scale)), max(1, round(H * scale))),
-                                                 Image.Resampling.BOX))
+        a = np.asarray(_fit_side(Image.fromarray(a), max_side))
         scale = a.shape[1] / W
         notes = (f"downscaled {W} x {H} -> {a.shape[1]} x {a.shape[0]} px for detection",)
     return LoadedImage(rgb=a, size=(W, H), scale=scale, notes=notes)

@@ -205,10 +205,10 @@ def detected_edge_notes(kp17: np.ndarray, image_size: tuple[int, int]) -> list[s
     ``image_size`` ``(W, H)`` px image, but not most (those are :func:`lifter._checks.outside_image_notes`'): a person
     cut off by the photo's edge, whose hidden joints the detector guesses (the video form is
     :func:`lifter.video.track_edge_notes`)."""
-    from ._checks import CUT_OFF_TAIL, _joints_outside, joints_outside_text
+    from ._checks import CUT_OFF_TAIL, joints_outside, joints_outside_text
 
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
-    out = _joints_outside(k, image_size)  # (n, 17)
+    out = joints_outside(k, image_size)  # (n, 17)
     cut = np.flatnonzero(out.any(-1) & (out.mean(-1) <= 0.5))
     if not len(cut):
         return []

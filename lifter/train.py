@@ -31,6 +31,8 @@ import copy
 import json
 import math
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable
 from contextlib import nullcontext
@@ -339,9 +341,6 @@ class _StopAsked:
     signals) and not under torchrun (``enabled``); :meth:`restore` puts the previous handler back."""
 
     def __init__(self, *, enabled: bool) -> None:
-        import signal
-        import threading
-
         self.flag = False
         self._previous: Any = None
         if enabled and threading.current_thread() is threading.main_thread():
@@ -354,8 +353,6 @@ class _StopAsked:
 
     def restore(self) -> None:
         if self._previous is not None:
-            import signal
-
             signal.signal(signal.SIGINT, self._previous)
             self._previous = None
 
@@ -691,8 +688,9 @@ def train(
     asked = _StopAsked(enabled=not ctx.active)
     try:
         while True:
-            if asked.flag:
-                raise KeyboardInterrupt  # (Ctrl-C came during the step before: it ended whole)
+            if asked.flag:  # (Ctrl-C came during the step before: it ended whole)
+                interrupted = True
+                break
             elapsed = (time.perf_counter() - t0) / 60.0
             if ctx.active:  # every rank follows the slowest clock, so all stop at the same step
                 clock.fill_(elapsed)

@@ -673,11 +673,11 @@ def track_edge_notes(frames: list[FrameResult], image_size: tuple[int, int]) -> 
     2.4 m farther in its last two frames than before, with no word of why). Frames with most joints outside have
     the plausibility note too (:func:`lifter._checks.outside_image_notes`); this one names the tracks and frames.
     Photos: :func:`lifter.pipeline.detected_edge_notes`."""
-    from ._checks import CUT_OFF_TAIL, _joints_outside, joints_outside_text
+    from ._checks import CUT_OFF_TAIL, joints_outside, joints_outside_text
 
     notes: list[str] = []
     for tid, seen in sorted(_tracks(frames).items()):
-        out = _joints_outside(np.stack([q.keypoints_2d for _, q in seen]), image_size)  # (frames, 17)
+        out = joints_outside(np.stack([q.keypoints_2d for _, q in seen]), image_size)  # (frames, 17)
         rows = np.flatnonzero(out.any(-1))
         if len(rows):
             notes.append(f"track {tid}: cut off by the image's edge in {len(rows)} of its {len(seen)} frames "

@@ -41,7 +41,7 @@ def _first_sentence(text: str) -> str:
     return head if head.endswith(".") else head + "."
 
 
-def command_matches(command: str, weights: Any) -> str:
+def command_matches(command: str, weights: Any, *, stored: Any = None) -> str:
     """Whether the ``poselifter train`` ``command`` a network was trained with, read with today's options, gives the
     config its weights file ``weights`` stores (``"same"``), another (``"differs"``: defaults changed or options
     added since), or is refused by them (``"refused"``: an option renamed since), or cannot be told (``"unknown"``:
@@ -67,7 +67,7 @@ def command_matches(command: str, weights: Any) -> str:
         return "refused"
     try:
         base = TrainConfig.load(args.config) if args.config is not None else None
-        stored = TrainConfig.load(Path(weights))
+        stored = stored if stored is not None else TrainConfig.load(Path(weights))
         given = config_from_args(args, base)
         if given.init is not None:
             given = fine_tune_config(given, load_option("--init", given.init, args), args)[0]
@@ -77,14 +77,8 @@ def command_matches(command: str, weights: Any) -> str:
     return "same" if untimed(given) == untimed(stored) else "differs"
 
 
-def _missing_init(weights: Any) -> str:
-    """For a repeat line: what the stored config's ``--init`` needs when it is neither shipped nor a file here."""
-    from ..config import TrainConfig
-
-    try:
-        init = TrainConfig.load(Path(weights)).init
-    except PoseLifterError:
-        return ""
+def _missing_init(init: str | None) -> str:
+    """For a repeat line: what a stored config's ``--init`` needs when it is neither shipped nor a file here."""
     if init is None or init in assets.model_names() or init == "default" or Path(init).is_file():
         return ""
     return f" (needs its --init {init}, which is not shipped)"
@@ -136,17 +130,23 @@ def run_models(args: argparse.Namespace) -> int:
                             entry.get("clean_file", ""): entry.get("clean_train_command")}
                 for n in r["networks"]:
                     key = "" if count == 1 else f" ({n['network']})"
-                    c = commands.get(n["file"])
+                    c, path = commands.get(n["file"]), assets.asset(n["file"])
+                    try:  # (read once, for both lines)
+                        from ..config import TrainConfig
+
+                        stored = TrainConfig.load(Path(str(path)))
+                    except PoseLifterError:
+                        stored = None
                     if c:
                         said = {"same": "", "differs": " (as run then; with today's options and defaults it gives "
                                 "another config: repeat it from its stored config, below)",
                                 "refused": " (as run then; today's options refuse it: repeat it from its stored "
                                 "config, below)", "unknown": " (as run then)"}
-                        print(f"  trained with{key}{said[command_matches(c, assets.asset(n['file']))]}: {c}")
+                        print(f"  trained with{key}{said[command_matches(c, path, stored=stored)]}: {c}")
                     # (a researcher trial ran the stored command of `gt`, which now trains another kind of
                     # network, and `mixture`'s, which today's options refuse)
-                    print(f"  repeat{key}: poselifter train --config {assets.asset(n['file'])} --out "
-                          f"runs/{Path(n['file']).stem}_again.pt{_missing_init(assets.asset(n['file']))}")
+                    print(f"  repeat{key}: poselifter train --config {path} --out runs/{Path(n['file']).stem}_again.pt"
+                          f"{_missing_init(None if stored is None else stored.init)}")
     for _, why in broken:
         print(f"poselifter models: error: {why}", file=sys.stderr)
     for name, n in bad:
