@@ -9,15 +9,17 @@ Format ``"poselifter-checkpoint"``, version 2::
      "train_config": dict or None,            # lifter.config.TrainConfig.to_dict(): reruns with --config
      "meta": dict,                            # provenance and metrics; primitives only
      "tensors_sha256": str}                   # the tensors' checksum (tensor_checksum); files written before
-                                              # 2026-11-27, the shipped ones among them, have none
+                                              # 2026-11-27, the shipped ones among them, have none: they load
+                                              # with a PoseLifterWarning unless their file sha256 is a shipped one
 
 Version 1 files (network and target statistics in one state dict, the paper's pixel-space model) are
 migrated on load. Weights may be stored in float16 to halve the file size; they are cast to float32 on
 load. Loading checks, in this order and before the network is allocated: the file's sha256 when one is
-expected (shipped weights), the format and version, the tensors' own checksum when the file has one (a byte
-changed after it was written: torch's zip reader does not check its CRCs), the model config's values and bounds
-(:class:`~lifter.model.ModelConfig`), and every tensor's name and shape against the config; then that
-all values are finite. Each failure raises :class:`~lifter._checks.CheckpointError` naming the problem.
+expected (shipped weights), that the file starts like a torch file (before the rest is read), the format
+and version, the tensors' own checksum when the file has one (a byte changed after it was written: torch's
+zip reader does not check its CRCs), the model config's values and bounds (:class:`~lifter.model.ModelConfig`),
+and every tensor's name and shape against the config; then that all values are finite. Each failure raises
+:class:`~lifter._checks.CheckpointError` naming the problem.
 """
 
 from __future__ import annotations
@@ -26,13 +28,15 @@ import hashlib
 import io
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import torch
 
-from ._checks import CheckpointError, PoseLifterError
+from . import resources as assets
+from ._checks import CheckpointError, PoseLifterError, PoseLifterWarning
 from .codec import PoseCodec
 from .io import write_atomic
 from .model import ModelConfig, PoseLifterNet
@@ -115,6 +119,16 @@ def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:
             "codec": codec, "state_dict": state, "train_config": None}
 
 
+def _not_torch_file(head: bytes) -> str:
+    """Why bytes starting with ``head`` cannot be a torch file, or "" when they may be one (a zip archive, what
+    ``torch.save`` writes, or a legacy pickle)."""
+    if head.lstrip()[:1] in (b"{", b"["):
+        return "it is a text file, JSON?"
+    if head and not head.startswith((b"PK", b"\x80")):
+        return "it is not a torch file (torch.save writes a zip archive, which starts 'PK')"
+    return ""
+
+
 def _load_failure(exc: Exception) -> str:
     """A short reason why ``torch.load(weights_only=True)`` refused some bytes, without torch's advice to load them
     with ``weights_only=False`` (which can run code from the file: never for a file of unknown origin)."""
@@ -148,7 +162,12 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         if path.stat().st_size > MAX_CHECKPOINT_BYTES:
             raise CheckpointError(f"weights file {where} is {path.stat().st_size / 1e9:.1f} GB; checkpoints larger "
                                   f"than {MAX_CHECKPOINT_BYTES / 1e9:.1f} GB are refused")
-        data = path.read_bytes()
+        with open(path, "rb") as f:  # (a file that is not a torch file is refused before the rest is read)
+            head = f.read(64)
+            if expected_sha256 is None and _not_torch_file(head):
+                data = head
+            else:
+                data = head + f.read()
     file_sha256 = hashlib.sha256(data).hexdigest()
     if expected_sha256 is not None:
         got = file_sha256
@@ -157,11 +176,11 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
                                   f"the registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore "
                                   "the file)")
     try:
+        if _not_torch_file(data):
+            raise ValueError("not a torch file")
         payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
-        why = ("it is a text file, JSON?" if data.lstrip()[:1] in (b"{", b"[") else
-               "it is not a torch file (torch.save writes a zip archive, which starts 'PK')"
-               if data and not data.startswith((b"PK", b"\x80")) else _load_failure(exc))
+        why = _not_torch_file(data) or _load_failure(exc)
         raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
                               "give a .pt file written by poselifter train or a shipped model name") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
@@ -188,6 +207,10 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
             raise CheckpointError(f"weights file {where} is damaged: its tensors no longer match the checksum "
                                   f"written with them (sha256 {got[:12]}..., written {stored[:12]}...), so it was "
                                   "changed after poselifter wrote it; restore it from a copy or train it again")
+    if stored is None and expected_sha256 is None and file_sha256 not in assets.shipped_sha256s():
+        warnings.warn(PoseLifterWarning(
+            f"{where} has no checksum of its tensors (written before 2026-11-27), so a byte changed in it since "
+            "would go unnoticed; Lifter.from_checkpoint(path).save(path) writes it again with one"), stacklevel=2)
     if version == 1:
         payload = _migrate_v1(payload, where)
     try:

@@ -168,6 +168,16 @@ def ensemble_members(entry: ModelEntry) -> list[tuple[str, str]]:
     return list(zip(files, sums))
 
 
+def shipped_sha256s() -> frozenset[str]:
+    """The registry's sha256 of every shipped weights file (each model's own, clean and ensemble files)."""
+    out: set[str] = set()
+    for name, entry in registry()["models"].items():
+        e: ModelEntry = {**entry, "name": name}
+        out.update(h for h in (e.get("sha256"), e.get("clean_sha256")) if isinstance(h, str))
+        out.update(h for _, h in ensemble_members(e))
+    return frozenset(out)
+
+
 def check_model_files(name: str) -> list[ShippedFile]:
     """Each weights file of the shipped model ``name`` (``"default"``: the default), in the order of
     :meth:`lifter.Lifter.networks`, hashed against the registry: what ``poselifter models`` reports. The loader checks

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import tracemalloc
 import warnings
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import torch
 from conftest import random_pose_cam, tiny_lifter
 
 from lifter import Lifter, LiftResult, PoseLifterError, PoseLifterWarning, demo_sample
+from lifter import resources as assets
 from lifter._checks import CheckpointError
 from lifter.camera import focal_from_fov, project
 from lifter.checkpoint import load_checkpoint, save_checkpoint
@@ -453,7 +455,32 @@ def test_a_byte_changed_in_a_written_checkpoint_is_refused(tmp_path, camera_lift
     with pytest.raises(CheckpointError, match="changed after poselifter wrote it"):
         load_checkpoint(edited)
     old = _edited_checkpoint(tmp_path, camera_lifter, "old.pt", lambda p: p.pop("tensors_sha256"), checksum=False)
-    load_checkpoint(old)  # (files written before the checksum, the shipped ones among them, still load)
+    with pytest.warns(PoseLifterWarning, match=r"old.pt has no checksum of its tensors .* writes it again with one"):
+        load_checkpoint(old)  # (files written before the checksum still load, with a note)
+    with pytest.warns(PoseLifterWarning, match="no checksum"):
+        Lifter.from_checkpoint(old).save(tmp_path / "again.pt")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoseLifterWarning)
+        load_checkpoint(tmp_path / "again.pt")
+        shipped = assets.model_entry("gt")  # (a shipped file has none either, and is known by its sha256)
+        load_checkpoint(assets.asset(shipped["file"]).read_bytes(), name="gt.pt")
+
+
+def test_checkpoint_not_a_torch_file_is_refused_before_it_is_read(tmp_path):
+    big = tmp_path / "zeros.pt"
+    with open(big, "wb") as f:
+        f.truncate(200 * 1024**2)  # (sparse: no disk used)
+    tracemalloc.start()
+    try:
+        with pytest.raises(CheckpointError, match="it is not a torch file"):
+            load_checkpoint(big)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 10 * 1024**2, peak  # (it read the whole 200 MB before)
+    (tmp_path / "run.json").write_text('{"a": 1}')
+    with pytest.raises(CheckpointError, match="text file, JSON"):
+        load_checkpoint(tmp_path / "run.json")
 
 
 @pytest.mark.parametrize(
@@ -526,7 +553,8 @@ def test_version1_checkpoints_are_migrated(tmp_path, pixel_lifter, keypoints):
     cfg = {k: v for k, v in net.config.to_dict().items() if k not in ("input_space", "conditioning")}
     torch.save({"format": "poselifter-checkpoint", "version": 1, "model_config": cfg, "state_dict": state,
                 "meta": {"old": True}}, tmp_path / "v1.pt")
-    old = Lifter.from_checkpoint(tmp_path / "v1.pt")
+    with pytest.warns(PoseLifterWarning, match="v1.pt has no checksum of its tensors"):
+        old = Lifter.from_checkpoint(tmp_path / "v1.pt")
     assert old.config == net.config and old.meta == {"old": True} and old.train_config is None
     kw = dict(focal=1145.0, principal_point=(512.0, 515.0))
     np.testing.assert_allclose(old.lift(keypoints, **kw).absolute, pixel_lifter.lift(keypoints, **kw).absolute,
