@@ -1826,3 +1826,23 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
     # a pattern is for keypoint files: images named so are not a video
     code, err = run([str(coco / "frame_%04d.jpg"), "--out", str(tmp_path / "h"), *base], capsys)
     assert code == 1 and "a frame pattern is read for keypoint files only" in err
+
+
+def test_ctrl_c_while_a_sequence_is_written_names_what_of_it_is_whole(tmp_path, weights, kp17, capsys, monkeypatch):
+    """Ctrl-C after a sequence's JSON is written but before its GLB: the line says the JSON is whole and the rest
+    not (a security trial's run said "interrupted after 0 of 1 input(s) lifted" with clip.json on disk)."""
+    from lifter.video import SequenceRecord
+
+    def interrupted(self, path):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(SequenceRecord, "write_glb", interrupted)
+    seq = tmp_path / "clip.json"
+    seq.write_text(json.dumps({"fps": 25, "format": "h36m17", "image_size": [1280, 720], "focal": 1000.0,
+                               "frames": [kp17.tolist()] * 3}))
+    code = main(["lift", str(seq), "--out", str(tmp_path / "o"), "--glb", "--bvh", "--weights", str(weights)])
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert (f"interrupted after 0 of 1 input(s) lifted into {tmp_path / 'o'}; {seq}'s outputs were being written: "
+            "clip.json, clip_track1.bvh are whole, the rest of them not written") in err, err
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["clip.json", "clip_track1.bvh"]

@@ -472,7 +472,7 @@ def run_lift(args: argparse.Namespace) -> int:
     bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=quiet, file=sys.stderr, position=0)
 
     written: set[Path] = set()  # every file this run wrote (never tidied away as an earlier run's)
-    now: list[Path] = []
+    now: list[Path] = []  # the outputs of the input being lifted, each added once it is whole
 
     def say(msg: str) -> None:  # a message on its own line, never glued onto a progress bar
         tqdm.write(msg, file=sys.stderr)
@@ -500,8 +500,10 @@ def run_lift(args: argparse.Namespace) -> int:
     with limit_blas_threads(1):  # see lifter.video.lift_video: faster beside MediaPipe's threads
         seq_kw = {"smoothing": args.smoothing, "max_people": args.max_people, "max_seconds": args.max_seconds,
                   "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp}
+        current: Path | None = None
         try:
             for path, name in bar:
+                current, now = path, []
                 misnamed: str | None = None
                 try:
                     kind, misnamed = input_kind(path, _head(path))
@@ -551,14 +553,14 @@ def run_lift(args: argparse.Namespace) -> int:
                         say(f"{path}: note: replaces {args.out / f'{name}.json'}, the result of another input "
                             f"({earlier}) written before")
                     if seq is not None:
-                        now = write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say)
+                        write_sequence_outputs(seq, args.out, name, glb=args.glb, bvh=args.bvh, say=say, written=now)
                         for b in seq.bad_frames[:20]:
                             say(f"{path}: frame {b['index']}: {b['error']}")
                         for msg in seq.warnings:
                             say(f"{path}: note: {msg}")
                     elif rec is not None:
                         write_json_atomic(args.out / f"{name}.json", rec.to_json())
-                        now = [args.out / f"{name}.json"]
+                        now.append(args.out / f"{name}.json")
                         poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
                         if args.glb:
                             from ..export import write_glb
@@ -569,11 +571,12 @@ def run_lift(args: argparse.Namespace) -> int:
                             from ..export import write_bvh
 
                             for k, pose in enumerate(poses):
+                                write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
                                 now.append(args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
-                                write_bvh(pose, now[-1])
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
                     written.update(now)
+                    now = []
                     if again:  # (only this input's own earlier result: never another's, nor the user's files)
                         for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh,
                                                         sequence=seq is not None):
@@ -595,8 +598,10 @@ def run_lift(args: argparse.Namespace) -> int:
     bar.close()
     total = ok + failed
     if interrupted:
-        print(f"poselifter lift: interrupted after {ok} of {len(files)} input(s) lifted into {args.out} (the files "
-              "written are complete: each is written whole or not at all)", file=sys.stderr)
+        part = (f"; {current}'s outputs were being written: {', '.join(p.name for p in now)} "
+                f"{'is' if len(now) == 1 else 'are'} whole, the rest of them not written" if now else "")
+        print(f"poselifter lift: interrupted after {ok} of {len(files)} input(s) lifted into {args.out}{part} (the "
+              "files written are complete: each is written whole or not at all)", file=sys.stderr)
         return 130
     print(f"lifted {ok} of {total} input(s) into {args.out}"
           + (f"; {failed} failed (see the messages above)" if failed else "")
@@ -659,19 +664,21 @@ def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool,
 
 
 def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
-                           say: Any = print) -> list[Path]:
+                           say: Any = print, written: list[Path] | None = None) -> list[Path]:
     """``out/<name>.json`` for a lifted video or keypoint sequence; with ``bvh`` one animation per track
     (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``. Returns the
-    files written."""
+    files written: ``written`` (a new list when None), each appended once it is whole, so a caller interrupted
+    meanwhile knows which are."""
+    written = [] if written is None else written
     write_json_atomic(out / f"{name}.json", seq.to_json())
-    written = [out / f"{name}.json"]
+    written.append(out / f"{name}.json")
     tracks = seq.tracks()
     if bvh:
         from ..export import write_bvh_animation
 
         for tid, seen in sorted(tracks.items()):
+            write_bvh_animation(track_animation(seen), out / f"{name}_track{tid}.bvh", fps=seq.fps)
             written.append(out / f"{name}_track{tid}.bvh")
-            write_bvh_animation(track_animation(seen), written[-1], fps=seq.fps)
         if not tracks:
             say(f"{seq.input}: note: nobody in any frame; no BVH written")
     if glb:
