@@ -164,6 +164,7 @@ UPLOAD_REFUSED_TITLE: Final[str] = "Upload refused: the file arrived, but it can
 """The title of the notification of a refused upload, which stays until closed: the browser has just said "File
 uploaded successfully" about the transfer itself (a user trial read both as success)."""
 UPLOAD_TOO_LARGE_TITLE: Final[str] = "Upload refused: the file is too large"
+UPLOAD_BUSY_TITLE: Final[str] = "Upload refused: other uploads are still arriving"
 """The title of the notification of an upload stopped during its transfer for its size (:data:`UPLOAD_REFUSED_TITLE`
 said it had arrived, where its message said it was stopped: a user trial)."""
 
@@ -417,7 +418,10 @@ class SessionView:
         limit_uploads(target.gui, self.gui.files.upload, max_bytes=app.max_upload_bytes, client_id=client_id,
                       refuse=lambda name, size: self.show_message(
                           up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True,
-                          title=UPLOAD_TOO_LARGE_TITLE, sticky=True))
+                          title=UPLOAD_TOO_LARGE_TITLE, sticky=True),
+                      refuse_busy=lambda name, n: self.show_message(
+                          f"{name}: not uploaded: {n} uploads from this tab are still arriving; upload it again when "
+                          "they are done (what is shown is unchanged)", error=True, title=UPLOAD_BUSY_TITLE))
         report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
         note_typed_values(target.gui, self._typed_controls(), self._note_key, client_id=client_id)
 

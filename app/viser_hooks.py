@@ -2,7 +2,8 @@
 place. Each hook is best effort: when viser's internals change it does nothing (and logs why) rather than fail.
 
 * :func:`limit_uploads`: an upload is stopped as soon as the size the browser announces, or the bytes actually
-  received so far, exceed the app's limit (viser itself buffers uploads of any size);
+  received so far, exceed the app's limit (viser itself buffers uploads of any size), or when it starts while two
+  others from the same tab are still arriving;
 * :func:`report_rejected_values`: a GUI value that viser cannot cast to the control's type (e.g. text for a
   slider) is reported to the user and the control shows the value in use again (viser alone only logs an
   asyncio traceback);
@@ -34,11 +35,14 @@ log = logging.getLogger("poselifter.app")
 
 
 def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max_bytes: int,
-                  refuse: Callable[[str, int], None], client_id: int | None = None) -> bool:
+                  refuse: Callable[[str, int], None], client_id: int | None = None, max_in_flight: int = 2,
+                  refuse_busy: Callable[[str, int], None] | None = None) -> bool:
     """Refuse uploads through ``button`` larger than ``max_bytes``: on the announced size, and on the bytes
     received (checked before viser buffers each part). ``refuse(file name, bytes)`` is called once per refused
-    upload. ``client_id``: only that client's uploads (None: any). Returns False when the hook could not be
-    installed."""
+    upload. An upload that starts while ``max_in_flight`` others through the button are still arriving is refused
+    too, with ``refuse_busy(file name, max_in_flight)`` (viser buffers every transfer: a security trial's 60 open
+    transfers of 19 MiB held 1 GB). ``client_id``: only that client's uploads (None: any). Returns False when the
+    hook could not be installed."""
     try:
         from viser import _messages
 
@@ -52,11 +56,11 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
     received: dict[str, tuple[str, int]] = {}
     lock = threading.Lock()
 
-    def stop(transfer: str, name: str, size: int, total: int) -> None:
+    def stop(transfer: str, name: str, size: int, total: int, say: Callable[[str, int], None] = refuse) -> None:
         states.pop(transfer, None)  # later parts are ignored by viser
         iface.queue_message(_messages.FileTransferPartAck(  # ends the browser's progress bar
             source_component_uuid=uuid, transfer_uuid=transfer, transferred_bytes=total, total_bytes=total))
-        refuse(name, size)
+        say(name, size)
 
     def ours(cid: int, msg: Any) -> bool:
         return msg.source_component_uuid == uuid and (client_id is None or cid == client_id)
@@ -69,7 +73,13 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
                 stop(msg.transfer_uuid, msg.filename, msg.size_bytes, msg.size_bytes)
                 return
             with lock:
-                received[msg.transfer_uuid] = (msg.filename, 0)
+                for done in [t for t in received if t not in states]:  # (finished or dropped since)
+                    received.pop(done)
+                busy = len(received) >= max_in_flight
+                if not busy:
+                    received[msg.transfer_uuid] = (msg.filename, 0)
+            if busy:
+                stop(msg.transfer_uuid, msg.filename, max_in_flight, msg.size_bytes, refuse_busy or refuse)
         except Exception:  # noqa: BLE001 - never break viser's message loop
             log.exception("upload size check failed")
 

@@ -24,6 +24,7 @@ from poselifter_app.testing import FakeTab, local_server, wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp, SessionView  # noqa: E402
 from poselifter_app.viser_hooks import drag_callback  # noqa: E402
 
+from lifter import demo_sample  # noqa: E402
 from lifter.detect import Detection, MissingDependencyError, bbox_of, mediapipe_available  # noqa: E402
 from lifter.io import LiftRecord  # noqa: E402
 
@@ -328,6 +329,42 @@ def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
         _assert_unchanged(v, snap)
     finally:
         tab.close()
+
+
+def test_uploads_in_flight_from_one_tab_are_capped(app: PoseLifterApp) -> None:
+    """A third upload that starts while two from the same tab are still arriving is refused at once (viser buffers
+    every transfer: a security trial held 1 GB with 60 open 19-MiB transfers); another tab's are its own, and once
+    a tab's transfers are done it uploads again."""
+    from poselifter_app.viewer import UPLOAD_BUSY_TITLE
+
+    part = b"\xff\xd8" + b"\x00" * (512 * 1024)
+    tab, v = _open_tab(app)
+    tab2, v2 = _open_tab(app)
+    try:
+        snap = _snapshot(v)
+        states = v.target.gui._current_file_upload_states
+        for k in range(2):  # (announced 5 MiB, one part sent: still arriving)
+            tab.upload(v.gui.files.upload, f"slow{k}.jpg", part, declared_size=5 * 1024**2, max_parts=1)
+        assert wait_for(lambda: len(states) >= 2)
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "third.jpg", part, declared_size=5 * 1024**2, max_parts=1)
+        assert wait_for(lambda: len(v.messages) > n_msgs and "third.jpg" in v.messages[-1])
+        assert "2 uploads from this tab are still arriving" in v.messages[-1], v.messages[-1]
+        assert v.notices[-1][0] == UPLOAD_BUSY_TITLE
+        time.sleep(0.3)
+        assert sorted(s["filename"] for s in states.values()) == ["slow0.jpg", "slow1.jpg"]
+        _assert_unchanged(v, snap)
+        # the other tab uploads meanwhile: a keypoint file, whole
+        kp = json.dumps({"keypoints": demo_sample("walking").keypoints_2d.tolist(), "focal": 1145.0,
+                         "image_size": [1000, 1000]}).encode()
+        n2 = len(v2.messages)
+        for k in range(3):  # (each done before the next: never refused)
+            tab2.upload(v2.gui.files.upload, f"pose{k}.json", kp)
+            assert wait_for(lambda k=k: any(f"pose{k}.json" in m for m in v2.messages[n2:])), v2.messages[n2:]
+        assert not any("still arriving" in m for m in v2.messages[n2:]), v2.messages[n2:]
+    finally:
+        tab.close()
+        tab2.close()
 
 
 def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) -> None:
