@@ -219,7 +219,42 @@ class PersonState:
 
 
 TRACK_TIMEOUT_S: Final[float] = 1.0
-"""A track unseen this long (s) ends; a person coming back gets a new id (:class:`SequenceTracker`)."""
+"""A track unseen this long (s) ends; a person coming back gets a new id (:class:`SequenceTracker`), unless they
+are found again where their 3D root leads (:data:`REJOIN_MAX_S`)."""
+
+REJOIN_MAX_S: Final[float] = 4.0
+"""An unnamed person whose track ended (unseen for :data:`TRACK_TIMEOUT_S`) and who is found again within this long
+(s) of their last sighting keeps their track id when the new sighting's 3D root lies where theirs leads
+(:func:`rejoin_radius_mm`), and no one else fits there or them (a person hidden behind another, or behind a pillar,
+for more than 1 s got a new id)."""
+
+REJOIN_MIN_SIGHTINGS: Final[int] = 3
+"""A track seen fewer times than this is never taken up again (a false detection's)."""
+
+REJOIN_VELOCITY_SPAN_S: Final[float] = 0.5
+"""The 3D root velocity a track leaves with: over its last this many seconds (per-frame lifts, not smoothed)."""
+
+REJOIN_MAX_SPEED_MM_S: Final[float] = 3000.0
+"""The velocity a track leaves with is capped at this speed (mm/s: a run; a lift's jitter over few frames is not
+motion)."""
+
+
+def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
+    """How far (mm) from where a track's root leads (its last root moved on at its velocity for ``gap_s`` s) a new
+    sighting may lie to be that person: 0.5 m, plus 10 % of the last root depth ``depth_mm`` (a lift's root error
+    grows with the depth), plus 1.5 m per second of the gap (a person changes speed and direction)."""
+    return 500.0 + 0.1 * max(float(depth_mm), 0.0) + 1500.0 * max(float(gap_s), 0.0)
+
+
+@dataclass
+class _Gone:
+    """A track that ended, while it may be taken up again: its output id, last time (s), root (mm) and 3D velocity
+    (mm/s)."""
+
+    track_id: int
+    t: float
+    root: np.ndarray
+    velocity: np.ndarray
 
 
 class SequenceTracker:
@@ -229,12 +264,22 @@ class SequenceTracker:
     timeout ``max_missed_s`` (a track unseen that long ends; a person coming back gets a new id).
     """
 
-    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = TRACK_TIMEOUT_S) -> None:
+    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = TRACK_TIMEOUT_S,
+                 rejoin_s: float = REJOIN_MAX_S) -> None:
         if not (math.isfinite(fps) and fps > 0):
             raise PoseLifterError(f"fps must be > 0, got {fps}")
+        if not (math.isfinite(rejoin_s) and rejoin_s >= 0):
+            raise PoseLifterError(f"rejoin_s must be >= 0 s (0: never), got {rejoin_s}")
         PoseSmoother(smoothing)  # validates the strength
-        self.fps, self.smoothing = float(fps), float(smoothing)
+        self.fps, self.smoothing, self.rejoin_s = float(fps), float(smoothing), float(rejoin_s)
         self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
+        self._alias: dict[int, int] = {}  # tracker id -> the output id of the track it took up again
+        self._recent: dict[int, list[tuple[float, np.ndarray]]] = {}  # tracker id -> its last (t, raw root)s
+        self._seen: dict[int, int] = {}  # tracker id -> sightings
+        self._gone: dict[int, _Gone] = {}  # output id -> an ended track that may be taken up again
+        self.rejoined: list[tuple[int, int, float]] = []
+        """Each track taken up again after it ended: ``(track_id, frame, gap_s)``, the frame it was found again in
+        and how long it was unseen (:data:`REJOIN_MAX_S`)."""
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
         self._last: tuple[int, float] | None = None  # (frame, t) of the last step
@@ -296,17 +341,57 @@ class SequenceTracker:
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks or tid in self.tracker.resumed:
                 del self._smoothers[tid]  # ended tracks, and those a name took up again after the timeout
+        if not nobody:
+            self._rejoin(frame, float(t), ids, np.asarray(root, np.float64), person_ids)
         out = []
         for i, tid in enumerate(ids):
             sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))
             r, rel = sm(root[i], relative[i], t)
-            out.append(PersonState(track_id=tid, keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
+            out.append(PersonState(track_id=self._alias.get(tid, tid),
+                                   keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
                                    relative=rel, root_raw=np.asarray(root[i], np.float64),
                                    relative_raw=np.asarray(relative[i], np.float64),
                                    canonical_depth=float(canonical_depth_from_depth(r[2], focal=focal)),
                                    scores=None if scores is None else np.asarray(scores[i], np.float64),
                                    person_id=None if person_ids is None else person_ids[i]))
         return out
+
+    def _rejoin(self, frame: int, t: float, ids: list[int], root: np.ndarray,
+                person_ids: list[str | int | None] | None) -> None:
+        """Take up ended tracks again (:data:`REJOIN_MAX_S`): each person new to the tracker in this frame, unnamed,
+        whose root lies within :func:`rejoin_radius_mm` of where exactly one ended track leads, that track fitting
+        no one else new here, gets that track's id. Then records this frame's roots for the tracks' velocities."""
+        for tid in [k for k in self._recent if k not in self.tracker.tracks]:  # ended since the last frame
+            hist, seen = self._recent.pop(tid), self._seen.pop(tid, 0)
+            if seen >= REJOIN_MIN_SIGHTINGS and self.rejoin_s > 0:
+                t_end, r_end = hist[-1]
+                span = [(tt, r) for tt, r in hist if t_end - tt <= REJOIN_VELOCITY_SPAN_S]
+                v = np.zeros(3)
+                if len(span) >= 2 and span[-1][0] - span[0][0] > 0:
+                    v = (span[-1][1] - span[0][1]) / (span[-1][0] - span[0][0])
+                    speed = float(np.linalg.norm(v))
+                    v = v * min(1.0, REJOIN_MAX_SPEED_MM_S / speed) if speed > 0 else v
+                out_id = self._alias.get(tid, tid)
+                self._gone[out_id] = _Gone(out_id, t_end, r_end, v)
+        self._gone = {k: g for k, g in self._gone.items() if t - g.t <= self.rejoin_s}
+        fresh = [i for i, tid in enumerate(ids) if self._seen.get(tid, 0) == 0 and tid not in self._alias
+                 and tid not in self.tracker.resumed and (person_ids is None or person_ids[i] is None)]
+        if fresh and self._gone:
+            fits = {(i, k) for i in fresh for k, g in self._gone.items()
+                    if np.linalg.norm(root[i] - (g.root + g.velocity * (t - g.t)))
+                    <= rejoin_radius_mm(t - g.t, float(g.root[2]))}
+            for i in fresh:
+                mine = [k for j, k in fits if j == i]
+                if len(mine) == 1 and sum(1 for _, k in fits if k == mine[0]) == 1:
+                    g = self._gone.pop(mine[0])
+                    self._alias[ids[i]] = g.track_id
+                    self.rejoined.append((g.track_id, int(frame), t - g.t))
+        for i, tid in enumerate(ids):
+            hist = self._recent.setdefault(tid, [])
+            hist.append((t, root[i].copy()))
+            while len(hist) > 2 and t - hist[0][0] > REJOIN_VELOCITY_SPAN_S:
+                hist.pop(0)
+            self._seen[tid] = self._seen.get(tid, 0) + 1
 
 
 @dataclass
@@ -693,14 +778,23 @@ def track_gap_notes(frames: list[FrameResult]) -> list[str]:
     26, and the app's selection moved to track 2 without a word)."""
     notes: list[str] = []
     order = [fr.index for fr in frames]
+    time_of = {fr.index: fr.time_s for fr in frames}
     for tid, seen in sorted(_tracks(frames).items()):
         have = {i for i, _ in seen}
         first, last = seen[0][0], seen[-1][0]
         gaps = [i for i in order if first < i < last and i not in have]
         if gaps:
+            long = [(b, time_of[b] - time_of[a]) for (a, _), (b, _) in zip(seen, seen[1:])
+                    if time_of[b] - time_of[a] > TRACK_TIMEOUT_S + 1e-9]
+            named = _track_person_id(seen) is not None
+            again = "" if not long else (
+                "; found again after " + ", ".join(f"{dt:.1f} s unseen (frame {b})" for b, dt in long)
+                + f", longer than the tracker's {TRACK_TIMEOUT_S:g}-s timeout, "
+                + ("by its person_id" if named else "where its 3D root led, no one else fitting there: taken as the "
+                   "same person (someone else who came in just there would share this id)"))
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
-                         "no pose for it (the person was not found there)")
+                         f"no pose for it (the person was not found there){again}")
     return notes
 
 
@@ -940,8 +1034,11 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                blas_threads: int | None = 1,
                progress: Callable[[int, int | None], None] | None = None,
                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
-               fps: float | None = None, video_fps: float | None = None) -> SequenceRecord:
-    """Detect, lift, track and smooth everyone in a video file (module docstring). ``fps`` (``--fps``): the frame
+               fps: float | None = None, video_fps: float | None = None,
+               rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
+    """Detect, lift, track and smooth everyone in a video file (module docstring). ``rejoin_s``: how long (s) after
+    their last sighting a person found again where their 3D root leads keeps their track (:data:`REJOIN_MAX_S`; 0:
+    a track unseen for :data:`TRACK_TIMEOUT_S` ends for good). ``fps`` (``--fps``): the frame
     rate where the file gives no usable one (else :data:`lifter.io.ASSUMED_FPS`); the file's own wins, with a note
     where they differ (as for a keypoint sequence). ``video_fps`` (``--video-fps``): the frame rate used in place of
     the file's own, with a note where they differ (a header that is wrong, a slow-motion clip whose capture rate is
@@ -967,7 +1064,8 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
-                           on_frame=on_frame, cli_options=cli_options, given_fps=fps, video_fps=video_fps)
+                           on_frame=on_frame, cli_options=cli_options, given_fps=fps, video_fps=video_fps,
+                           rejoin_s=rejoin_s)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -997,7 +1095,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 max_seconds: float, max_side: int, flip_test: bool | None, search_every_s: float,
                 progress: Callable[[int, int | None], None] | None,
                 on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
-                given_fps: float | None = None, video_fps: float | None = None) -> SequenceRecord:
+                given_fps: float | None = None, video_fps: float | None = None,
+                rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
     import cv2
 
     from .pipeline import plausibility_notes, resolve_camera
@@ -1077,7 +1176,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                     fov_deg=fov_deg, where=str(p), cli_options=cli_options)
                 cam = (f, src, pp)
                 warnings.extend(notes)
-                seq = SequenceTracker(fps=fps, smoothing=smoothing)
+                seq = SequenceTracker(fps=fps, smoothing=smoothing, rejoin_s=rejoin_s)
             elif (W, H) != size:
                 bad.append({"index": index, "error": f"frame size {W} x {H} px differs from the first frame's "
                                                      f"{size[0]} x {size[1]} px; skipped"})
@@ -1195,21 +1294,21 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
 def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
                  fps: float, focal: np.ndarray, smoothing: float = 1.0,
                  person_ids: list[list[str | int | None]] | None = None,
-                 names: list[list[Any]] | None = None) -> list[FrameResult]:
+                 names: list[list[Any]] | None = None, rejoin_s: float = REJOIN_MAX_S) -> list[FrameResult]:
     """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
     relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place).
     ``person_ids``: per frame, the input's own id for each of its people (None: none), kept as each person's
     ``person_id``; those that recur from frame to frame are followed by the tracker (:func:`tracking_names`), or
     ``names``, per frame and person, when given: the names read from the whole input (a ``--max-people`` cut can
     leave a recurring name in one frame only, which would then be no name: a user trial saw another name take the
-    followed track so)."""
+    followed track so). ``rejoin_s``: as :func:`lift_video`'s."""
     if person_ids is not None and len(person_ids) != len(lifted):
         raise PoseLifterError(f"track_lifted: person_ids for {len(person_ids)} frames, {len(lifted)} frames lifted")
     if names is not None and len(names) != len(lifted):
         raise PoseLifterError(f"track_lifted: names for {len(names)} frames, {len(lifted)} frames lifted")
     names_by_frame = names if names is not None else (
         None if person_ids is None else tracking_names([list(fr) for fr in person_ids]))
-    seq = SequenceTracker(fps=fps, smoothing=smoothing)
+    seq = SequenceTracker(fps=fps, smoothing=smoothing, rejoin_s=rejoin_s)
     out = []
     for k, (index, t, kp, root, rel, sc) in enumerate(lifted):
         frame_names = None if names_by_frame is None else names_by_frame[k]
@@ -1235,7 +1334,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            flip_test: bool | None = None, cli_options: bool = True,
                            image_size: Any | None = None, fps: float | None = None,
                            assumed_fps: float | None = None,
-                           fallback_image: tuple[Any, ...] | None = None) -> SequenceRecord:
+                           fallback_image: tuple[Any, ...] | None = None,
+                           rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
     """Lift, track and smooth a keypoint sequence (:func:`lifter.io.parse_keypoint_sequence`: a JSON with ``frames``,
     MMPose's predictions of several frames, or a frame pattern naming OpenPose's per-frame files): every person of
     every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
@@ -1246,7 +1346,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     ``fallback_image``: ``(name, (W, H) px[, exif])`` of the image the keypoints were found in (the app: the photo
     uploaded before): its size where nobody gives an image size or a principal point, and its EXIF focal where
     neither ``focal`` nor the file gives one and the keypoints are in its pixels, by
-    :func:`lifter.pipeline.keypoints_image`'s rule (refused when most poses lie mostly outside it)."""
+    :func:`lifter.pipeline.keypoints_image`'s rule (refused when most poses lie mostly outside it). ``rejoin_s``: as
+    :func:`lift_video`'s."""
     from .camera import lens_notes
     from .pipeline import keypoints_image, plausibility_notes, resolve_camera
 
@@ -1322,7 +1423,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                        _frame_scores(kept_scores[i], ks.format)))
         lifted_2d[at[i]] = seen[k:k + c]
         k += c
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names)
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names,
+                       rejoin_s=rejoin_s)
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))

@@ -125,7 +125,69 @@ def test_tracker_ends_a_stale_track_without_empty_frames_between(gap):
     assert tr.update(gap, [kp]) == ([1] if gap <= 5 else [2])
 
 
+def _walkers(paths: list[tuple[np.ndarray, range]], fps: float = 25.0) -> list[tuple]:
+    """``track_lifted`` frames of people whose 3D root (mm) at frame ``i`` is ``path[0] + path[1] * i / fps``
+    (a start and a velocity in mm/s), seen in the frames of their range; each a fixed pose, its 2D projected."""
+    rng = np.random.default_rng(5)
+    n = max(max(r) for _, r in paths) + 1
+    rel = [random_pose_cam(rng, 1)[0] for _ in paths]
+    rel = [r - r[0] for r in rel]
+    out = []
+    for i in range(n):
+        roots = [p[0] + p[1] * i / fps for p, r in paths if i in r]
+        rels = [q for q, (_, r) in zip(rel, paths) if i in r]
+        kp = np.stack([project(rt + q, focal=1000.0, principal_point=(640.0, 360.0)) for rt, q in zip(roots, rels)]
+                      ) if roots else np.zeros((0, 17, 2))
+        out.append((i, i / fps, kp, np.array(roots).reshape(-1, 3), np.array(rels).reshape(-1, 17, 3), None))
+    return out
+
+
+def _ids(frames) -> list[list[int]]:
+    return [[q.track_id for q in fr.people] for fr in frames]
+
+
+def test_a_person_hidden_longer_than_the_timeout_keeps_their_track_where_their_root_leads():
+    """A person hidden for 2 s (behind another, a pillar) kept no id: a track unseen for 1 s ends. One found again
+    where their 3D root leads (their last root moved on at their velocity) keeps it, with a note; someone else
+    who came in elsewhere, one fitting two ended tracks, one seen in under three frames, or one back after more
+    than REJOIN_MAX_S does not."""
+    from lifter.video import REJOIN_MAX_S, SequenceTracker, track_gap_notes
+
+    focal = np.array([1000.0, 1000.0])
+    walk = (np.array([-1500.0, 0.0, 5000.0]), np.array([1000.0, 0.0, 0.0]))  # 1 m/s to the right, 5 m away
+    seen = [*range(0, 25), *range(75, 100)]  # hidden from 1 s to 3 s
+    out = track_lifted(_walkers([(walk, seen)]), fps=25.0, focal=focal)
+    assert {t for ids in _ids(out) for t in ids} == {1}
+    note = track_gap_notes(out)
+    assert len(note) == 1 and "found again after 2.0 s unseen (frame 75), longer than the tracker's 1-s timeout, " \
+        "where its 3D root led, no one else fitting there: taken as the same person" in note[0], note
+    seq = SequenceTracker(fps=25.0)  # (the record of it)
+    for index, t, kp, root, rel, _ in _walkers([(walk, seen)]):
+        if len(kp):
+            seq.step(index, t, kp, root, rel, focal)
+    assert seq.rejoined == [(1, 75, pytest.approx(2.04))]  # (last seen in frame 24)
+    # someone else, 3 m to the side of where the person's root leads: another person
+    other = (walk[0] + [-3000.0 - 1000.0 * 2.0, 0.0, 0.0], walk[1])
+    out = track_lifted(_walkers([(walk, range(0, 25)), (other, range(75, 100))]), fps=25.0, focal=focal)
+    assert _ids(out)[0] == [1] and _ids(out)[80] == [2]
+    assert "found again" not in " ".join(track_gap_notes(out))
+    # two people hidden together, found again where either could be: neither is guessed
+    side = (walk[0] + [0.0, 0.0, 600.0], walk[1])
+    out = track_lifted(_walkers([(walk, seen), (side, seen)]), fps=25.0, focal=focal)
+    assert sorted(_ids(out)[0]) == [1, 2] and sorted(_ids(out)[80]) == [3, 4]
+    # seen in two frames only before (a false detection's track): not taken up
+    out = track_lifted(_walkers([(walk, [23, 24, *range(75, 100)])]), fps=25.0, focal=focal)
+    assert _ids(out)[23] == [1] and _ids(out)[80] == [2]
+    # back after longer than REJOIN_MAX_S: a new id
+    late = [*range(0, 25), *range(25 + int(REJOIN_MAX_S * 25) + 1, 25 + int(REJOIN_MAX_S * 25) + 10)]
+    out = track_lifted(_walkers([(walk, late)]), fps=25.0, focal=focal)
+    assert _ids(out)[0] == [1] and _ids(out)[late[-1]] == [2]
+    with pytest.raises(PoseLifterError, match="rejoin_s must be >= 0"):
+        SequenceTracker(fps=25.0, rejoin_s=-1.0)
+
+
 def test_track_lifted_person_back_after_the_timeout_gets_a_new_id():
+    """Seen in one frame only before (never taken up again: REJOIN_MIN_SIGHTINGS), back 1 m farther after 4 s."""
     kp = _script(1)[0][0][None]
     root, rel = np.array([[0.0, 0.0, 4000.0]]), np.zeros((1, 17, 3))
     empty = (np.zeros((0, 17, 2)), np.zeros((0, 3)), np.zeros((0, 17, 3)), None)
