@@ -232,7 +232,8 @@ REJOIN_MIN_SIGHTINGS: Final[int] = 3
 """A track seen fewer times than this is never taken up again (a false detection's)."""
 
 REJOIN_VELOCITY_SPAN_S: Final[float] = 0.5
-"""The 3D root velocity a track leaves with: over its last this many seconds (per-frame lifts, not smoothed)."""
+"""The 3D root velocity a track leaves with: over its last this many seconds, at least its last three sightings
+(per-frame lifts, not smoothed; :func:`_end_of_track`)."""
 
 REJOIN_MAX_SPEED_MM_S: Final[float] = 3000.0
 """The velocity a track leaves with is capped at this speed (mm/s: a run; a lift's jitter over few frames is not
@@ -240,7 +241,7 @@ motion)."""
 
 
 def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
-    """How far (mm) from where a track's root leads (its last root moved on at its velocity for ``gap_s`` s) a new
+    """How far (mm) from where a track's root leads (its end root moved on at its velocity for ``gap_s`` s) a new
     sighting may lie to be that person: 0.5 m, plus 10 % of the last root depth ``depth_mm`` (a lift's root error
     grows with the depth), plus 1.5 m per second of the gap (a person changes speed and direction)."""
     return 500.0 + 0.1 * max(float(depth_mm), 0.0) + 1500.0 * max(float(gap_s), 0.0)
@@ -248,13 +249,32 @@ def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
 
 @dataclass
 class _Gone:
-    """A track that ended, while it may be taken up again: its output id, last time (s), root (mm) and 3D velocity
-    (mm/s)."""
+    """A track that ended, while it may be taken up again: its output id, the time (s) it was last seen, and where
+    it was at its end (``t_end`` s, ``root`` mm: the medians of its last three sightings, so that one wrong lift as
+    the person disappears does not lead astray) moving at ``velocity`` (mm/s)."""
 
     track_id: int
     t: float
+    t_end: float
     root: np.ndarray
     velocity: np.ndarray
+
+
+def _end_of_track(hist: list[tuple[float, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(t_end, root, velocity)`` of a track's last sightings ``[(t s, root (3,) mm), ...]`` (:class:`_Gone`): the
+    median time and root of the last three, and the Theil-Sen velocity (per axis, the median of the slopes between
+    every two sightings), at most :data:`REJOIN_MAX_SPEED_MM_S`."""
+    t = np.array([tt for tt, _ in hist])
+    r = np.stack([rr for _, rr in hist])
+    t_end, root = float(np.median(t[-3:])), np.median(r[-3:], axis=0)
+    i, j = np.triu_indices(len(t), 1)
+    ok = t[j] > t[i]
+    v = np.zeros(3)
+    if ok.any():
+        v = np.median((r[j[ok]] - r[i[ok]]) / (t[j[ok]] - t[i[ok]])[:, None], axis=0)
+        speed = float(np.linalg.norm(v))
+        v = v * min(1.0, REJOIN_MAX_SPEED_MM_S / speed) if speed > 0 else v
+    return t_end, root, v
 
 
 class SequenceTracker:
@@ -364,22 +384,15 @@ class SequenceTracker:
         for tid in [k for k in self._recent if k not in self.tracker.tracks]:  # ended since the last frame
             hist, seen = self._recent.pop(tid), self._seen.pop(tid, 0)
             if seen >= REJOIN_MIN_SIGHTINGS and self.rejoin_s > 0:
-                t_end, r_end = hist[-1]
-                span = [(tt, r) for tt, r in hist if t_end - tt <= REJOIN_VELOCITY_SPAN_S]
-                v = np.zeros(3)
-                if len(span) >= 2 and span[-1][0] - span[0][0] > 0:
-                    v = (span[-1][1] - span[0][1]) / (span[-1][0] - span[0][0])
-                    speed = float(np.linalg.norm(v))
-                    v = v * min(1.0, REJOIN_MAX_SPEED_MM_S / speed) if speed > 0 else v
                 out_id = self._alias.get(tid, tid)
-                self._gone[out_id] = _Gone(out_id, t_end, r_end, v)
+                self._gone[out_id] = _Gone(out_id, hist[-1][0], *_end_of_track(hist))
         self._gone = {k: g for k, g in self._gone.items() if t - g.t <= self.rejoin_s}
         fresh = [i for i, tid in enumerate(ids) if self._seen.get(tid, 0) == 0 and tid not in self._alias
                  and tid not in self.tracker.resumed and (person_ids is None or person_ids[i] is None)]
         if fresh and self._gone:
             fits = {(i, k) for i in fresh for k, g in self._gone.items()
-                    if np.linalg.norm(root[i] - (g.root + g.velocity * (t - g.t)))
-                    <= rejoin_radius_mm(t - g.t, float(g.root[2]))}
+                    if np.linalg.norm(root[i] - (g.root + g.velocity * (t - g.t_end)))
+                    <= rejoin_radius_mm(t - g.t_end, float(g.root[2]))}
             for i in fresh:
                 mine = [k for j, k in fits if j == i]
                 if len(mine) == 1 and sum(1 for _, k in fits if k == mine[0]) == 1:
@@ -389,7 +402,7 @@ class SequenceTracker:
         for i, tid in enumerate(ids):
             hist = self._recent.setdefault(tid, [])
             hist.append((t, root[i].copy()))
-            while len(hist) > 2 and t - hist[0][0] > REJOIN_VELOCITY_SPAN_S:
+            while len(hist) > 3 and t - hist[0][0] > REJOIN_VELOCITY_SPAN_S:
                 hist.pop(0)
             self._seen[tid] = self._seen.get(tid, 0) + 1
 

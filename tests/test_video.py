@@ -166,6 +166,10 @@ def test_a_person_hidden_longer_than_the_timeout_keeps_their_track_where_their_r
         if len(kp):
             seq.step(index, t, kp, root, rel, focal)
     assert seq.rejoined == [(1, 75, pytest.approx(2.04))]  # (last seen in frame 24)
+    # one wrong lift as the person disappears (1.3 m too far in their last frame, as in a trial clip) leads nowhere
+    frames = _walkers([(walk, seen)])
+    frames[24] = (*frames[24][:3], frames[24][3] + [0.0, 0.0, 1300.0], *frames[24][4:])
+    assert {t for ids in _ids(track_lifted(frames, fps=25.0, focal=focal)) for t in ids} == {1}
     # someone else, 3 m to the side of where the person's root leads: another person
     other = (walk[0] + [-3000.0 - 1000.0 * 2.0, 0.0, 0.0], walk[1])
     out = track_lifted(_walkers([(walk, range(0, 25)), (other, range(75, 100))]), fps=25.0, focal=focal)
