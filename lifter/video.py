@@ -258,6 +258,8 @@ class _Gone:
     t_end: float
     root: np.ndarray
     velocity: np.ndarray
+    seen: int = 0
+    """Its sightings (all of the output track's, across earlier gaps)."""
 
 
 def _end_of_track(hist: list[tuple[float, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
@@ -295,7 +297,8 @@ class SequenceTracker:
         self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
         self._alias: dict[int, int] = {}  # tracker id -> the output id of the track it took up again
         self._recent: dict[int, list[tuple[float, np.ndarray]]] = {}  # tracker id -> its last (t, raw root)s
-        self._seen: dict[int, int] = {}  # tracker id -> sightings
+        self._seen: dict[int, int] = {}  # tracker id -> sightings (of its output track, when it took one up again)
+        self._named: set[int] = set()  # tracker ids the input named (taken up again by their names, not here)
         self._gone: dict[int, _Gone] = {}  # output id -> an ended track that may be taken up again
         self.rejoined: list[tuple[int, int, float]] = []
         """Each track taken up again after it ended: ``(track_id, frame, gap_s)``, the frame it was found again in
@@ -383,9 +386,9 @@ class SequenceTracker:
         no one else new here, gets that track's id. Then records this frame's roots for the tracks' velocities."""
         for tid in [k for k in self._recent if k not in self.tracker.tracks]:  # ended since the last frame
             hist, seen = self._recent.pop(tid), self._seen.pop(tid, 0)
-            if seen >= REJOIN_MIN_SIGHTINGS and self.rejoin_s > 0:
+            if seen >= REJOIN_MIN_SIGHTINGS and self.rejoin_s > 0 and tid not in self._named:
                 out_id = self._alias.get(tid, tid)
-                self._gone[out_id] = _Gone(out_id, hist[-1][0], *_end_of_track(hist))
+                self._gone[out_id] = _Gone(out_id, hist[-1][0], *_end_of_track(hist), seen=seen)
         self._gone = {k: g for k, g in self._gone.items() if t - g.t <= self.rejoin_s}
         fresh = [i for i, tid in enumerate(ids) if self._seen.get(tid, 0) == 0 and tid not in self._alias
                  and tid not in self.tracker.resumed and (person_ids is None or person_ids[i] is None)]
@@ -398,6 +401,7 @@ class SequenceTracker:
                 if len(mine) == 1 and sum(1 for _, k in fits if k == mine[0]) == 1:
                     g = self._gone.pop(mine[0])
                     self._alias[ids[i]] = g.track_id
+                    self._seen[ids[i]] = g.seen
                     self.rejoined.append((g.track_id, int(frame), t - g.t))
         for i, tid in enumerate(ids):
             hist = self._recent.setdefault(tid, [])
@@ -405,6 +409,8 @@ class SequenceTracker:
             while len(hist) > 3 and t - hist[0][0] > REJOIN_VELOCITY_SPAN_S:
                 hist.pop(0)
             self._seen[tid] = self._seen.get(tid, 0) + 1
+            if person_ids is not None and person_ids[i] is not None:
+                self._named.add(tid)
 
 
 @dataclass

@@ -170,6 +170,9 @@ def test_a_person_hidden_longer_than_the_timeout_keeps_their_track_where_their_r
     frames = _walkers([(walk, seen)])
     frames[24] = (*frames[24][:3], frames[24][3] + [0.0, 0.0, 1300.0], *frames[24][4:])
     assert {t for ids in _ids(track_lifted(frames, fps=25.0, focal=focal)) for t in ids} == {1}
+    # seen twice between two long gaps: its sightings before count, and it is taken up again twice
+    twice = [*range(0, 25), 75, 76, *range(127, 140)]
+    assert {t for ids in _ids(track_lifted(_walkers([(walk, twice)]), fps=25.0, focal=focal)) for t in ids} == {1}
     # someone else, 3 m to the side of where the person's root leads: another person
     other = (walk[0] + [-3000.0 - 1000.0 * 2.0, 0.0, 0.0], walk[1])
     out = track_lifted(_walkers([(walk, range(0, 25)), (other, range(75, 100))]), fps=25.0, focal=focal)
