@@ -182,7 +182,7 @@ but the box keeps what was typed until :data:`TYPING_IDLE_S`: a write into a box
 the box at 100 beside a lift at 1500)."""
 SHRUNK_VIEW: float = 0.4
 """After a focal change, auto reframing zooms back in when what it keeps in view (the camera, its frustum, the
-skeleton) spans less than this share of the view's half-width from its centre."""
+skeleton) spans less than this share of the view's width and height, wherever it is in the view."""
 TYPING_IDLE_S: float = 10.0
 """A positive focal below the minimum, lifted at the minimum since :data:`TYPING_GROW_S`, is written back into its
 box once the tab has sent nothing for this long."""
@@ -1370,8 +1370,10 @@ class SessionView:
             return
         pts = self.framing_points()
         inside = framing.in_view(pts, vp, fov_y=fov, aspect=aspect, margin=0.98)
-        shrunk = zoom_in and inside and float(np.abs(framing.screen_coords(pts, vp, fov_y=fov, aspect=aspect)[:, :2])
-                                              .max()) < SHRUNK_VIEW
+        on_screen = framing.screen_coords(pts, vp, fov_y=fov, aspect=aspect)[:, :2]
+        # (their extent, wherever they are in the view: a trial's view, turned by a slider's arrow keys, kept them
+        # small and to one side, so they reached past SHRUNK_VIEW from its centre and it never zoomed back in)
+        shrunk = zoom_in and inside and float((on_screen.max(0) - on_screen.min(0)).max()) / 2 < SHRUNK_VIEW
         if not inside or shrunk:
             up_ = vp.up if np.linalg.norm(vp.up) > 0 else np.array([0.0, 0.0, 1.0])
             self.camera.set(framing.fit(pts, direction=vp.look_at - vp.eye, up=up_, fov_y=fov, aspect=aspect))

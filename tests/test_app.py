@@ -1383,6 +1383,26 @@ def test_auto_reframing_keeps_the_skeleton_in_view(view: SessionView, app: PoseL
     assert np.abs(s[:, :2]).max() > 0.5  # (0.21 before: everything in a fifth of the view)
     view.gui.lift.focal.value = 900.0  # (a small change leaves the view where it is)
     assert np.array_equal(np.asarray(app.server.initial_camera.position), np.asarray(ic.position))
+    # (a browser trial) a view turned aside (a slider's arrow keys turn it) at 6000 px, with everything small and to
+    # one side of it: back down to 130 px, it zooms in too
+    view.gui.lift.focal.value = 6000.0
+    vp, fov, aspect = view.camera.get()
+    back = 4.0 * (vp.eye - vp.look_at)  # (four times as far, and turned aside)
+    side = np.cross(vp.look_at - vp.eye, vp.up)
+    side = 0.5 * np.linalg.norm(back) * np.tan(fov / 2) * side / np.linalg.norm(side)
+    view.camera.set(framing.Viewpoint(eye=vp.look_at + back + side, look_at=vp.look_at + side, up=vp.up))
+    vp, fov, aspect = view.camera.get()
+
+    def extent() -> tuple[float, float]:
+        vp, fov, aspect = view.camera.get()
+        s = framing.screen_coords(view.framing_points(), vp, fov_y=fov, aspect=aspect)[:, :2]
+        assert framing.in_view(view.framing_points(), vp, fov_y=fov, aspect=aspect)
+        return float((s.max(0) - s.min(0)).max() / 2), float(np.abs(s).max())
+
+    half, reach = extent()
+    assert half < 0.4 < reach, (half, reach)  # (small, to one side: a trial's 0.21 and 0.71)
+    view.gui.lift.focal.value = 5000.0
+    assert extent()[0] > 0.5, extent()
     # a view zoomed out by hand stays so while a sequence plays: only a focal change zooms back in
     view.toggle_play()  # (the demo motion: its own camera, framed when it starts)
     try:
