@@ -107,6 +107,9 @@ class PoseNodes:
     gt: viser.LineSegmentsHandle
     analytic: viser.LineSegmentsHandle
     analytic_root: viser.IcosphereHandle
+    noisy2d: viser.LineSegmentsHandle
+    """At a noise level above 0, the noisy draw that is lifted, on the image plane in the inset's purple (a teacher
+    trial found it only in the small inset at the bottom of the Sample tab)."""
     others_bones2d: viser.LineSegmentsHandle
     others_bones: viser.LineSegmentsHandle
     others_joints: viser.PointCloudHandle
@@ -161,6 +164,8 @@ def build_scene(scene: viser.SceneApi, *, on_drag: Callable[[int, Any], None]) -
         analytic=scene.add_line_segments("/cam/analytic", np.zeros((16, 2, 3)), ANALYTIC_RGB,
                                          thickness=ANALYTIC_THICKNESS_M, visible=False),
         analytic_root=scene.add_icosphere("/cam/analytic_root", radius=0.06, color=ANALYTIC_RGB, visible=False),
+        noisy2d=scene.add_line_segments("/cam/noisy2d", np.zeros((16, 2, 3)), COLORS["noisy"], thickness=0.004,
+                                        visible=False),
         others_bones2d=scene.add_line_segments("/cam/others/bones2d", np.zeros((16, 2, 3)), OTHER_RGB,
                                                thickness=0.003, visible=False),
         others_bones=scene.add_line_segments("/cam/others/bones", np.zeros((16, 2, 3)), OTHER_RGB, thickness=0.02,
@@ -295,6 +300,15 @@ def draw_others(nodes: PoseNodes, fr: Frame, *, labels: bool = True) -> None:
             h.visible = True
         else:
             h.visible = False
+
+
+def draw_noisy_2d(nodes: PoseNodes, state: SessionState, noisy: np.ndarray | None) -> None:
+    """The noisy draw ``(17, 2)`` px that is lifted at a noise level above 0, on the image plane (None: hidden)."""
+    if noisy is None or state.noise_level <= 0:
+        nodes.noisy2d.visible = False
+        return
+    nodes.noisy2d.points = edges_points(image_plane(state, noisy))
+    nodes.noisy2d.visible = True
 
 
 def draw_others_2d(nodes: PoseNodes, state: SessionState, others: list[np.ndarray]) -> None:

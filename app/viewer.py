@@ -85,6 +85,7 @@ from .scene import (
     camera_world,
     draw_2d,
     draw_camera,
+    draw_noisy_2d,
     draw_others,
     draw_others_2d,
     draw_pose,
@@ -1280,6 +1281,7 @@ class SessionView:
         self.gui.sample.image.image = overlay(s.image, size=st.image_size, poses=poses, selected=self.selected,
                                               prescaled=self._base, others=others, zoom=True)
         self._last_plane = draw_2d(self.scene.pose, st, kp, self._last_plane)
+        draw_noisy_2d(self.scene.pose, st, noisy)
         draw_others_2d(self.scene.pose, st, [o for _, o in others])
 
     def _push(self, fr: Frame, *, new_sample: bool, focal_changed: bool) -> None:

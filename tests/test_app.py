@@ -17,6 +17,7 @@ viser = pytest.importorskip("viser")
 from conftest import require_shipped_models  # noqa: E402
 from poselifter_app.core import FOCAL_MIN_PX, focal_text  # noqa: E402
 from poselifter_app.demo_assets import DEMO_DIR  # noqa: E402
+from poselifter_app.drawing import COLORS  # noqa: E402
 from poselifter_app.samples import DemoCatalog, default_h36m_root, person_label  # noqa: E402
 from poselifter_app.scene import (  # noqa: E402
     ANALYTIC_THICKNESS_M,
@@ -24,6 +25,7 @@ from poselifter_app.scene import (  # noqa: E402
     IMAGE_PLANE_MAX_DEPTH_M,
     IMAGE_PLANE_SIDE_M,
     JOINT_RADIUS_M,
+    edges_points,
     frustum_corners,
     image_plane,
     image_plane_depth,
@@ -254,6 +256,11 @@ def test_noise_slider_cloud_seed_and_resample(view: SessionView) -> None:
     assert fr.cloud is not None and fr.cloud.shape == (64, 17, 3) and view.scene.pose.cloud.visible
     assert not np.allclose(fr.noisy_2d, fr.current_2d)
     assert not np.allclose(fr.lifted, clean)
+    # the noisy draw on the image plane too, not only in the inset (a teacher trial), in the inset's purple
+    noisy2d = view.scene.pose.noisy2d
+    assert noisy2d.visible
+    np.testing.assert_allclose(noisy2d.points, edges_points(image_plane(view.state, fr.noisy_2d)), atol=1e-6)
+    assert tuple(np.asarray(noisy2d.colors).reshape(-1, 3)[0]) == COLORS["noisy"]
     assert view.state.seed == 0
     view.set_noise(1.0 + 1e-9)
     np.testing.assert_allclose(view.frame.noisy_2d, fr.noisy_2d, rtol=0, atol=1e-6)  # fixed seed: reproducible
@@ -264,7 +271,7 @@ def test_noise_slider_cloud_seed_and_resample(view: SessionView) -> None:
     view.gui.noise.seed.value = 5
     assert view.state.seed == 5
     view.gui.noise.level.value = 0.0
-    assert view.frame.cloud is None and not view.scene.pose.cloud.visible
+    assert view.frame.cloud is None and not view.scene.pose.cloud.visible and not noisy2d.visible
     np.testing.assert_allclose(view.frame.lifted, clean, atol=1e-9)
 
 
