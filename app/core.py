@@ -517,6 +517,15 @@ def focal_text(alpha: float) -> str:
     return f"{alpha:.1f}" if abs(alpha - round(alpha)) >= 0.05 else f"{alpha:.0f}"
 
 
+def view_angles_text(focal: tuple[float, float], image_size: tuple[int, int]) -> str:
+    """The field of view of a ``(W, H)`` px image at focal ``(fx, fy)`` px (a pinhole: its width and height, and its
+    diagonal at their mean focal), e.g. ``"view 53° × 41° (diagonal 65°)"``."""
+    (fx, fy), (w, h) = focal, image_size
+    deg = lambda half, f: math.degrees(2.0 * math.atan(half / f))  # noqa: E731
+    return (f"view {deg(w / 2, fx):.0f}° × {deg(h / 2, fy):.0f}° (diagonal "
+            f"{deg(math.hypot(w, h) / 2, math.sqrt(fx * fy)):.0f}°)")
+
+
 def _focal_origin(state: SessionState) -> str:
     up = state.sample.upload
     if up is None:
@@ -632,7 +641,8 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
     X, Y, Z = frame.root
     alpha = frame.alpha
     lines = [
-        f"**Focal {focal_text(alpha)} px** ({_focal_origin(state)}: {focal_text(state.sample.camera.alpha)} px)",
+        f"**Focal {focal_text(alpha)} px** ({_focal_origin(state)}: {focal_text(state.sample.camera.alpha)} px) · "
+        + view_angles_text(frame.focal, state.image_size),
         f"**Root** X {X:.0f} · Y {Y:.0f} · **Z {Z:.0f}** mm" + (
             # (a user trial: the readout differed from the download's root by up to 66 mm, unexplained)
             " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "

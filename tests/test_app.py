@@ -3,6 +3,7 @@ on a server bound to 127.0.0.1 and a free port; no browser."""
 
 from __future__ import annotations
 
+import math
 import re
 import urllib.request
 from pathlib import Path
@@ -318,6 +319,21 @@ def test_focal_and_joint_boxes_take_a_decimal_and_step_by_1_px(view: SessionView
     assert wait_for(lambda: "**Focal 1144 px**" in view.gui.readout.readout.content, timeout=10)
     view.gui.lift.focal.value = 1144.6
     assert view.state.focal_px == 1144.6 and view.gui.lift.focal.value == 1144.6
+
+
+def test_readout_gives_the_field_of_view(view: SessionView) -> None:
+    """A teacher trial: no field-of-view number anywhere (only a caution at extreme focal lengths)."""
+    from poselifter_app.core import view_angles_text
+
+    assert view_angles_text((1000.0, 1000.0), (2000, 1000)) == "view 90° × 53° (diagonal 96°)"
+    assert view_angles_text((1000.0, 500.0), (1000, 1000)) == "view 53° × 90° (diagonal 90°)"
+    w, h = view.state.image_size
+    for f in (100.0, 1000.0, 6000.0):
+        view.gui.lift.focal.value = f
+        fx, fy = view.state.focal
+        md = view.gui.readout.readout.content
+        want = f"view {math.degrees(2 * math.atan(w / 2 / fx)):.0f}° × {math.degrees(2 * math.atan(h / 2 / fy)):.0f}°"
+        assert want in md.split("\n")[0], (want, md.split("\n")[0])
 
 
 def test_joint_nudge_via_gui(view: SessionView) -> None:
