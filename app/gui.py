@@ -74,10 +74,17 @@ class PlayGui:
     info: viser.GuiMarkdownHandle
 
 
+FOCAL_STEPS: tuple[str, str] = ("÷ 2", "× 2")
+"""The focal buttons' labels: halve, double (:class:`LiftGui`)."""
+
+
 @dataclass
 class LiftGui:
     model: viser.GuiDropdownHandle[str]
     focal: viser.GuiSliderHandle[float]
+    focal_steps: viser.GuiButtonGroupHandle
+    """Halve or double the focal length (a teacher trial: the slider is linear, 100-500 px about 15 screen pixels of
+    its track)."""
     focal_reset: viser.GuiButtonHandle
     auto_frame: viser.GuiCheckboxHandle
     analytic: viser.GuiCheckboxHandle
@@ -161,6 +168,9 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                  hint="f in px (sqrt(fx fy)): the person slides along its viewing rays (the root's in "
                                       "yellow), farther as f grows. A paper model (gt) keeps Z = f * Z/f exactly; the "
                                       "default reads the rays too, so its Z/f shifts (readout)"),
+            focal_steps=gui.add_button_group("focal", FOCAL_STEPS,
+                                             hint="halve or double the focal length (within the slider's range): "
+                                                  "the person twice as near or far, Z = f * Z/f"),
             focal_reset=gui.add_button("reset focal to camera", hint="back to the sample camera's focal length"),
             auto_frame=gui.add_checkbox("keep skeleton in view", True,
                                         hint="reframe the 3D view when the lifted skeleton leaves it"),

@@ -60,7 +60,7 @@ from .core import (
     spread_details,
 )
 from .drawing import overlay, response_image, scaled_base
-from .gui import SOURCE_LABELS, SPEED_MAX, SPEED_MIN, Gui, build_gui
+from .gui import FOCAL_STEPS, SOURCE_LABELS, SPEED_MAX, SPEED_MIN, Gui, build_gui
 from .keys import (
     NO_PHOTO,
     SEQUENCE_SOURCES,
@@ -530,6 +530,8 @@ class SessionView:
         g.lift.gt.on_update(self._on(self._request_redraw))
         g.play.trail.on_update(self._on(self._request_redraw))
         g.lift.focal_reset.on_click(self._on(self.reset_focal))
+        g.lift.focal_steps.on_click(lambda event: self._do(self.scale_focal, 0.5 if event.target.value == FOCAL_STEPS[0]
+                                                           else 2.0))
         g.noise.resample.on_click(self._on(self.resample))
         g.joints.joint.on_update(self._on(self._on_joint_selected))
         g.joints.uv.on_update(self._on_uv_event)
@@ -1507,6 +1509,12 @@ class SessionView:
     @control
     def reset_focal(self) -> None:
         self.set_focal(self.state.sample.camera.alpha)
+
+    @control
+    def scale_focal(self, factor: float) -> None:
+        """The focal length times ``factor`` (the focal buttons: 0.5, 2), kept within the slider's range."""
+        f = self.gui.lift.focal
+        self.set_focal(min(max(float(self.state.focal_px) * float(factor), float(f.min)), float(f.max)))
 
     @control
     def resample(self) -> None:

@@ -205,6 +205,18 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     assert marks >= {(1000.0, "1k"), (2000.0, "2k")}, marks
     view.gui.lift.focal_reset.value = True  # button click
     assert view.state.focal_px == pytest.approx(f0)
+    # halve and double (a teacher trial: the linear slider gives 100-500 px about 15 screen pixels)
+    z0 = view.frame.root[2]
+    view.gui.lift.focal_steps.value = "× 2"
+    assert view.state.focal_px == pytest.approx(2 * f0) and view.gui.lift.focal.value == pytest.approx(2 * f0)
+    assert 1.5 * z0 < view.frame.root[2] < 2.5 * z0
+    for _ in range(2):
+        view.gui.lift.focal_steps.value = "÷ 2"
+    assert view.state.focal_px == pytest.approx(f0 / 2)
+    view.gui.lift.focal.value = 5000.0
+    view.gui.lift.focal_steps.value = "× 2"  # (kept within the slider's range)
+    assert view.state.focal_px == pytest.approx(view.gui.lift.focal.max)
+    view.gui.lift.focal_reset.value = True
 
 
 def test_the_image_plane_stays_in_front_of_the_person_at_any_focal(view: SessionView) -> None:
