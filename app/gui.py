@@ -107,6 +107,8 @@ class JointGui:
     joint: viser.GuiDropdownHandle[str]
     uv: viser.GuiVector2Handle
     head_on: viser.GuiButtonHandle
+    undo: viser.GuiButtonHandle
+    """Undo the last drag (a mouse drag from press to release, a typed position, or a reset) of the pose shown."""
     reset: viser.GuiButtonHandle
 
 
@@ -237,6 +239,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
             uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0,
                                hint="type a position to move the joint (applied when the typing pauses)"),
+            undo=gui.add_button("undo last drag", hint="the joints as they were before the last drag, typed position "
+                                "or reset of this pose"),
             reset=gui.add_button("reset dragged joints"),
         )
     with tabs.add_tab("File", viser.Icon.FILE):

@@ -181,6 +181,8 @@ the minimum with the cursor in front, and "6", "000" became "000100"). After it 
 but the box keeps what was typed until :data:`TYPING_IDLE_S`: a write into a box being typed mangles the next keys
 (a user trial's "1", a 3.3 s pause, "500" became 150000) or is overtaken by them (a pause of 2.8 s while playing left
 the box at 100 beside a lift at 1500)."""
+UNDO_DEPTH: int = 50
+"""How many drags a tab can undo (each pose's, together)."""
 SHRUNK_VIEW: float = 0.4
 """After a focal change, auto reframing zooms back in when what it keeps in view (the camera, its frustum, the
 skeleton) spans less than this share of the view's width and height, wherever it is in the view."""
@@ -328,6 +330,11 @@ class SessionView:
         self.selected = 0
         self._input_pref = "gt"
         self._drags: dict[int, np.ndarray] = {}
+        self._gesture = 0  # one per mouse drag (press to release), typed joint position or reset
+        self._drags_gesture = 0  # the gesture of the drags queued
+        self._undo: list[tuple[tuple[Any, ...], np.ndarray, frozenset[int], int]] = []
+        """Undo snapshots, the last on top: (the pose's :meth:`_undo_key`, its joints and dragged set before a
+        gesture changed them, that gesture)."""
         self._reset_request = False
         self._redraw_request = False
         self._flags = threading.Lock()
@@ -536,6 +543,7 @@ class SessionView:
         g.joints.joint.on_update(self._on(self._on_joint_selected))
         g.joints.uv.on_update(self._on_uv_event)
         g.joints.reset.on_click(self._on(self.reset_joints))
+        g.joints.undo.on_click(self._on(self.undo_drag))
         g.joints.head_on.on_click(self._on(self.head_on_view))
         g.lift.overview.on_click(self._on(self.overview))
         g.lift.auto_frame.on_update(self._on(self._auto_frame))
@@ -717,6 +725,7 @@ class SessionView:
             drags, self._drags = self._drags, {}
             by_mouse, self._drags_by_mouse = self._drags_by_mouse, False
             reset, self._reset_request = self._reset_request, False
+            gesture = self._drags_gesture
             redraw, self._redraw_request = self._redraw_request, False
         # (refused values are errors; clamped ones notes, which stay a while: a user trial saw "focal length 9000 px
         # is outside ...; clamped" vanish within a second, when the settle timer's pass cleared it as an error)
@@ -728,8 +737,11 @@ class SessionView:
              and isinstance(r.value, (int, float)) else None) for r in rejected if r not in said_before]
         notes += [(text, False, None) for text in input_notes]  # (last: the status line then says it, and goes
         # once a frame with a detection is shown, as when a frame without one is opened: _show_sample)
+        before = st
         if reset:
             st = ss.reset_joints(st)
+            if before.dragged:
+                self._push_undo(before, gesture=-1)
         refused_drag = False
         for j, uv in drags.items():
             try:
@@ -739,6 +751,8 @@ class SessionView:
                     notes.append((str(exc), True, None))
                 self._drag_refusal_said = by_mouse
                 refused_drag = True
+        if drags and not np.array_equal(st.keypoints, before.keypoints):
+            self._push_undo(before, gesture=gesture)  # (once per gesture: a mouse drag's 20 moves a second are one)
         for r in rejected:
             if r not in held:
                 self._set_control(r.control, r.value)
@@ -1522,6 +1536,32 @@ class SessionView:
         with self.lock:
             self.gui.noise.seed.value = int(self.state.seed) + 1
 
+    @staticmethod
+    def _undo_key(st: SessionState) -> tuple[Any, ...]:
+        """Which pose an undo snapshot belongs to: the sample, person and 2D input."""
+        return (st.sample.key, st.person, st.input_kind)
+
+    def _push_undo(self, st: SessionState, *, gesture: int) -> None:
+        """Keep ``st``'s joints to undo to, unless the gesture on top already kept its start (-1: always)."""
+        top = self._undo[-1] if self._undo else None
+        if gesture >= 0 and top is not None and top[3] == gesture and top[0] == self._undo_key(st):
+            return
+        self._undo.append((self._undo_key(st), st.keypoints.copy(), frozenset(st.dragged), gesture))
+        del self._undo[:-UNDO_DEPTH]
+
+    @control
+    def undo_drag(self) -> None:
+        """The joints of the pose shown as they were before its last drag (a mouse drag from press to release, a
+        typed position, :meth:`move_joint`) or reset; said when there is none."""
+        with self._runner.holding(), self.lock:
+            key = self._undo_key(self.state)
+            k = next((i for i in range(len(self._undo) - 1, -1, -1) if self._undo[i][0] == key), None)
+            if k is None:
+                self.show_message("no drag of this pose to undo")
+                return
+            _, kp, dragged, _ = self._undo.pop(k)
+            self._apply(self.state.evolve(keypoints=kp.copy(), dragged=set(dragged)))
+
     @control
     def reset_joints(self) -> None:
         """Undo all joint drags."""
@@ -1551,6 +1591,9 @@ class SessionView:
         with self._flags:
             self._drags[joint] = np.asarray(uv, dtype=np.float64).reshape(2) if _is_numeric_pair(uv) else uv
             self._drags_by_mouse = mouse
+            if not mouse:  # (a mouse drag's gesture begins at its "start" event: on_joint_drag)
+                self._gesture += 1
+            self._drags_gesture = self._gesture
         if self.selected != joint:
             self.selected = joint
             if self.gui.joints.joint.value != JOINT_NAMES[joint]:
@@ -1652,6 +1695,8 @@ class SessionView:
             if phase == "start":
                 self._drag_gen = self._sample_gen
                 self._drag_refusal_said = False  # (one refusal per drag, not one per pointer move: a trial's 10)
+                with self._flags:
+                    self._gesture += 1  # (one undo step per drag)
             elif self._drag_gen is not None and self._drag_gen != self._sample_gen:
                 return
             if self.playing:  # each frame brings its own 2D: said once per drag, nothing moved

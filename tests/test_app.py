@@ -317,6 +317,42 @@ def test_joint_drag_callback_relifts(view: SessionView) -> None:
     np.testing.assert_allclose(view.frame.lifted, before, atol=1e-9)
 
 
+def test_undo_last_drag_steps_back_one_gesture_at_a_time(view: SessionView, app: PoseLifterApp) -> None:
+    """A joint-dragging trial: the only undo was "reset dragged joints", every drag at once. "undo last drag" goes
+    back one gesture (a mouse drag from press to release, however many moves; a typed position; a reset), per pose."""
+    view.select_demo(app.demo.names[0])
+    base = view.state.keypoints.copy()
+    base_lift = view.frame.lifted.copy()
+    view.gui.joints.undo.value = True  # nothing to undo
+    assert view.messages[-1] == "no drag of this pose to undo"
+    cb = drag_callback(view.scene.pose.joints2d[13])
+    for k, phase in enumerate(("start", "update", "update", "end")):  # one mouse drag of l_wrist
+        cb(_drag_event(view, 13, base[13] + [10.0 * (k + 1), 5.0], phase=phase))
+    after_mouse = view.state.keypoints.copy()
+    view.move_joint(16, base[16] + [-20.0, 8.0])  # then r_wrist, by hand
+    view.move_joint(16, base[16] + [-30.0, 8.0])  # and again
+    view.gui.joints.undo.value = True
+    np.testing.assert_allclose(view.state.keypoints[16], base[16] + [-20.0, 8.0])
+    view.gui.joints.undo.value = True
+    np.testing.assert_allclose(view.state.keypoints, after_mouse)
+    assert view.state.dragged == {13}
+    view.gui.joints.reset.value = True  # a reset is undone too
+    assert not view.state.dragged
+    view.gui.joints.undo.value = True
+    np.testing.assert_allclose(view.state.keypoints, after_mouse)
+    view.gui.joints.undo.value = True  # the whole mouse drag in one step
+    np.testing.assert_allclose(view.state.keypoints, base)
+    assert not view.state.dragged
+    np.testing.assert_allclose(view.frame.lifted, base_lift, atol=1e-9)
+    # another pose's drags are its own
+    view.move_joint(13, base[13] + [15.0, 0.0])
+    view.select_demo(app.demo.names[1])
+    view.gui.joints.undo.value = True
+    assert view.messages[-1] == "no drag of this pose to undo"
+    view.select_demo(app.demo.names[0])
+    view.reset_joints()
+
+
 def test_focal_and_joint_boxes_take_a_decimal_and_step_by_1_px(view: SessionView) -> None:
     """viser's boxes keep as many typed decimals as their precision, which it derives from the step: with step 1 the
     box dropped the point and "1144.5" arrived as 11445 px (browser trial). One decimal, steps of 1 px (arrow keys);
