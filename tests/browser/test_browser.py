@@ -274,6 +274,10 @@ def test_drag_playback_upload_download() -> None:
             _close_notifications(page)
             time.sleep(2.0)
             page.screenshot(path=str(DOCS / "app_drag.png"))
+        # one mouse drag (ten pointer moves) is one undo step
+        page.get_by_role("button", name="undo last drag").click()
+        assert _wait(lambda: not view.state.dragged, 30), view.state.dragged
+        np.testing.assert_allclose(view.state.keypoints, before)
         view.reset_joints()
         view.overview()
 
