@@ -119,6 +119,15 @@ def _migrate_v1(payload: dict[str, Any], where: str) -> dict[str, Any]:
             "codec": codec, "state_dict": state, "train_config": None}
 
 
+def _shipped_sha256s() -> frozenset[str]:
+    """:func:`lifter.resources.shipped_sha256s`, or none where the registry cannot be read (a user's own checkpoint
+    loads without it: a review's empty ``$POSELIFTER_ASSETS`` refused it)."""
+    try:
+        return assets.shipped_sha256s()
+    except (PoseLifterError, OSError, ValueError):
+        return frozenset()
+
+
 def _not_torch_file(head: bytes) -> str:
     """Why bytes starting with ``head`` cannot be a torch file, or "" when they may be one (a zip archive, what
     ``torch.save`` writes, or a legacy pickle)."""
@@ -207,7 +216,7 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
             raise CheckpointError(f"weights file {where} is damaged: its tensors no longer match the checksum "
                                   f"written with them (sha256 {got[:12]}..., written {stored[:12]}...), so it was "
                                   "changed after poselifter wrote it; restore it from a copy or train it again")
-    if stored is None and expected_sha256 is None and file_sha256 not in assets.shipped_sha256s():
+    if stored is None and expected_sha256 is None and file_sha256 not in _shipped_sha256s():
         warnings.warn(PoseLifterWarning(
             f"{where} has no checksum of its tensors (written before 2026-11-27), so a byte changed in it since "
             "would go unnoticed; Lifter.from_checkpoint(path).save(path) writes it again with one"), stacklevel=2)

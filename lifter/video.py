@@ -247,36 +247,92 @@ def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
     return 500.0 + 0.1 * max(float(depth_mm), 0.0) + 1500.0 * max(float(gap_s), 0.0)
 
 
-@dataclass
-class _Gone:
-    """A track that ended, while it may be taken up again: its output id, the time (s) it was last seen, and where
-    it was at its end (``t_end`` s, ``root`` mm: the medians of its last three sightings, so that one wrong lift as
-    the person disappears does not lead astray) moving at ``velocity`` (mm/s)."""
-
-    track_id: int
-    t: float
-    t_end: float
-    root: np.ndarray
-    velocity: np.ndarray
-    seen: int = 0
-    """Its sightings (all of the output track's, across earlier gaps)."""
-
-
 def _end_of_track(hist: list[tuple[float, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
-    """``(t_end, root, velocity)`` of a track's last sightings ``[(t s, root (3,) mm), ...]`` (:class:`_Gone`): the
-    median time and root of the last three, and the Theil-Sen velocity (per axis, the median of the slopes between
-    every two sightings), at most :data:`REJOIN_MAX_SPEED_MM_S`."""
+    """``(t, root, velocity)`` of a track's end or start, from sightings ``[(t s, root (3,) mm), ...]`` in time
+    order: the median time and root of the three nearest the end (the last three; pass a track's start reversed for
+    its first three), so that one wrong lift as the person disappears does not lead astray, and the Theil-Sen
+    velocity (per axis, the median of the slopes between every two sightings), at most
+    :data:`REJOIN_MAX_SPEED_MM_S`."""
     t = np.array([tt for tt, _ in hist])
     r = np.stack([rr for _, rr in hist])
     t_end, root = float(np.median(t[-3:])), np.median(r[-3:], axis=0)
     i, j = np.triu_indices(len(t), 1)
-    ok = t[j] > t[i]
+    ok = t[j] != t[i]
     v = np.zeros(3)
     if ok.any():
         v = np.median((r[j[ok]] - r[i[ok]]) / (t[j[ok]] - t[i[ok]])[:, None], axis=0)
         speed = float(np.linalg.norm(v))
         v = v * min(1.0, REJOIN_MAX_SPEED_MM_S / speed) if speed > 0 else v
     return t_end, root, v
+
+
+class Rejoin(NamedTuple):
+    """A track taken up again by :func:`rejoin_tracks`: ``track_id`` (kept), ``gone`` (the id the later part had,
+    now ``track_id``), the frame it was found again in, and how long (s) it was unseen."""
+
+    track_id: int
+    gone: int
+    frame: int
+    gap_s: float
+
+
+def check_rejoin_s(rejoin_s: float) -> None:
+    if not (math.isfinite(rejoin_s) and (rejoin_s == 0 or rejoin_s > TRACK_TIMEOUT_S)):
+        raise PoseLifterError(f"rejoin_s must be 0 (never) or more than the {TRACK_TIMEOUT_S:g}-s track timeout, "
+                              f"got {rejoin_s}")
+
+
+def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = REJOIN_MAX_S) -> list[Rejoin]:
+    """Take up ended tracks again (:data:`REJOIN_MAX_S`), in place: a track that starts more than the tracker's
+    timeout (:data:`TRACK_TIMEOUT_S`, in frames at ``fps``) and at most ``rejoin_s`` s after another ended, whose start
+    (the median of its first three per-frame roots) lies within :func:`rejoin_radius_mm` of where that one's end
+    leads (its end moved on at its velocity, :func:`_end_of_track`), gets that track's id, when neither fits any
+    other such track. Both must be seen :data:`REJOIN_MIN_SIGHTINGS` times or more and be unnamed (the input's own
+    ``person_id`` takes named people up again: :class:`lifter.tracking.Tracker`). Run it after false detections are
+    left out. Returns what it joined, by frame."""
+    check_rejoin_s(rejoin_s)
+    if rejoin_s == 0:
+        return []
+    shared = _shared_person_ids(frames)
+    time_of = {fr.index: fr.time_s for fr in frames}
+    timeout = max(1, round(TRACK_TIMEOUT_S * fps))  # (SequenceTracker's: a gap of more frames ends a track)
+    ends, starts = {}, {}
+    for tid, at in _tracks(frames).items():
+        if len(at) < REJOIN_MIN_SIGHTINGS or _track_person_id(at, shared) is not None:
+            continue
+        hist = [(time_of[i], np.asarray(q.root_raw, np.float64)) for i, q in at]
+        span = [h for h in hist if hist[-1][0] - h[0] <= REJOIN_VELOCITY_SPAN_S] or hist
+        ends[tid] = (at[0][0], at[-1][0], *_end_of_track(span if len(span) >= 3 else hist[-3:]))
+        head = [h for h in hist if h[0] - hist[0][0] <= REJOIN_VELOCITY_SPAN_S]
+        starts[tid] = _end_of_track(list(reversed(head if len(head) >= 3 else hist[:3])))[:2]
+    fits: set[tuple[int, int]] = set()
+    for a, (_, last_a, t_a, root_a, v_a) in ends.items():
+        for b, (t_b, root_b) in starts.items():
+            first_b = ends[b][0]
+            gap_s = time_of[first_b] - time_of[last_a]
+            if a == b or first_b - last_a <= timeout or gap_s > rejoin_s:
+                continue
+            if np.linalg.norm(root_b - (root_a + v_a * (t_b - t_a))) <= rejoin_radius_mm(t_b - t_a, float(root_a[2])):
+                fits.add((a, b))
+    joined: list[Rejoin] = []
+    new_id: dict[int, int] = {}
+    for a, b in sorted(fits, key=lambda ab: ends[ab[1]][0]):
+        if sum(1 for x, _ in fits if x == a) == 1 and sum(1 for _, y in fits if y == b) == 1:
+            keep = new_id.get(a, a)
+            new_id[b] = keep
+            joined.append(Rejoin(keep, b, ends[b][0], time_of[ends[b][0]] - time_of[ends[a][1]]))
+    for fr in frames:
+        for q in fr.people:
+            q.track_id = new_id.get(q.track_id, q.track_id)
+    return joined
+
+
+def rejoin_notes(joined: list[Rejoin]) -> list[str]:
+    """One note per track :func:`rejoin_tracks` took up again."""
+    return [f"track {r.track_id}: found again at frame {r.frame} after {r.gap_s:.2f} s unseen (longer than the "
+            f"tracker's {TRACK_TIMEOUT_S:g}-s timeout), where its 3D root led and no one else fitted: taken as the "
+            f"same person (someone else who came in just there would share this id; between the two, the BVH and GLB "
+            f"animations are interpolated)" for r in joined]
 
 
 class SequenceTracker:
@@ -286,23 +342,12 @@ class SequenceTracker:
     timeout ``max_missed_s`` (a track unseen that long ends; a person coming back gets a new id).
     """
 
-    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = TRACK_TIMEOUT_S,
-                 rejoin_s: float = REJOIN_MAX_S) -> None:
+    def __init__(self, *, fps: float, smoothing: float = 1.0, max_missed_s: float = TRACK_TIMEOUT_S) -> None:
         if not (math.isfinite(fps) and fps > 0):
             raise PoseLifterError(f"fps must be > 0, got {fps}")
-        if not (math.isfinite(rejoin_s) and rejoin_s >= 0):
-            raise PoseLifterError(f"rejoin_s must be >= 0 s (0: never), got {rejoin_s}")
         PoseSmoother(smoothing)  # validates the strength
-        self.fps, self.smoothing, self.rejoin_s = float(fps), float(smoothing), float(rejoin_s)
+        self.fps, self.smoothing = float(fps), float(smoothing)
         self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
-        self._alias: dict[int, int] = {}  # tracker id -> the output id of the track it took up again
-        self._recent: dict[int, list[tuple[float, np.ndarray]]] = {}  # tracker id -> its last (t, raw root)s
-        self._seen: dict[int, int] = {}  # tracker id -> sightings (of its output track, when it took one up again)
-        self._named: set[int] = set()  # tracker ids the input named (taken up again by their names, not here)
-        self._gone: dict[int, _Gone] = {}  # output id -> an ended track that may be taken up again
-        self.rejoined: list[tuple[int, int, float]] = []
-        """Each track taken up again after it ended: ``(track_id, frame, gap_s)``, the frame it was found again in
-        and how long it was unseen (:data:`REJOIN_MAX_S`)."""
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
         self._last: tuple[int, float] | None = None  # (frame, t) of the last step
@@ -364,53 +409,17 @@ class SequenceTracker:
         for tid in list(self._smoothers):
             if tid not in self.tracker.tracks or tid in self.tracker.resumed:
                 del self._smoothers[tid]  # ended tracks, and those a name took up again after the timeout
-        if not nobody:
-            self._rejoin(frame, float(t), ids, np.asarray(root, np.float64), person_ids)
         out = []
         for i, tid in enumerate(ids):
             sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))
             r, rel = sm(root[i], relative[i], t)
-            out.append(PersonState(track_id=self._alias.get(tid, tid),
-                                   keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
+            out.append(PersonState(track_id=tid, keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
                                    relative=rel, root_raw=np.asarray(root[i], np.float64),
                                    relative_raw=np.asarray(relative[i], np.float64),
                                    canonical_depth=float(canonical_depth_from_depth(r[2], focal=focal)),
                                    scores=None if scores is None else np.asarray(scores[i], np.float64),
                                    person_id=None if person_ids is None else person_ids[i]))
         return out
-
-    def _rejoin(self, frame: int, t: float, ids: list[int], root: np.ndarray,
-                person_ids: list[str | int | None] | None) -> None:
-        """Take up ended tracks again (:data:`REJOIN_MAX_S`): each person new to the tracker in this frame, unnamed,
-        whose root lies within :func:`rejoin_radius_mm` of where exactly one ended track leads, that track fitting
-        no one else new here, gets that track's id. Then records this frame's roots for the tracks' velocities."""
-        for tid in [k for k in self._recent if k not in self.tracker.tracks]:  # ended since the last frame
-            hist, seen = self._recent.pop(tid), self._seen.pop(tid, 0)
-            if seen >= REJOIN_MIN_SIGHTINGS and self.rejoin_s > 0 and tid not in self._named:
-                out_id = self._alias.get(tid, tid)
-                self._gone[out_id] = _Gone(out_id, hist[-1][0], *_end_of_track(hist), seen=seen)
-        self._gone = {k: g for k, g in self._gone.items() if t - g.t <= self.rejoin_s}
-        fresh = [i for i, tid in enumerate(ids) if self._seen.get(tid, 0) == 0 and tid not in self._alias
-                 and tid not in self.tracker.resumed and (person_ids is None or person_ids[i] is None)]
-        if fresh and self._gone:
-            fits = {(i, k) for i in fresh for k, g in self._gone.items()
-                    if np.linalg.norm(root[i] - (g.root + g.velocity * (t - g.t_end)))
-                    <= rejoin_radius_mm(t - g.t_end, float(g.root[2]))}
-            for i in fresh:
-                mine = [k for j, k in fits if j == i]
-                if len(mine) == 1 and sum(1 for _, k in fits if k == mine[0]) == 1:
-                    g = self._gone.pop(mine[0])
-                    self._alias[ids[i]] = g.track_id
-                    self._seen[ids[i]] = g.seen
-                    self.rejoined.append((g.track_id, int(frame), t - g.t))
-        for i, tid in enumerate(ids):
-            hist = self._recent.setdefault(tid, [])
-            hist.append((t, root[i].copy()))
-            while len(hist) > 3 and t - hist[0][0] > REJOIN_VELOCITY_SPAN_S:
-                hist.pop(0)
-            self._seen[tid] = self._seen.get(tid, 0) + 1
-            if person_ids is not None and person_ids[i] is not None:
-                self._named.add(tid)
 
 
 @dataclass
@@ -797,23 +806,14 @@ def track_gap_notes(frames: list[FrameResult]) -> list[str]:
     26, and the app's selection moved to track 2 without a word)."""
     notes: list[str] = []
     order = [fr.index for fr in frames]
-    time_of = {fr.index: fr.time_s for fr in frames}
     for tid, seen in sorted(_tracks(frames).items()):
         have = {i for i, _ in seen}
         first, last = seen[0][0], seen[-1][0]
         gaps = [i for i in order if first < i < last and i not in have]
         if gaps:
-            long = [(b, time_of[b] - time_of[a]) for (a, _), (b, _) in zip(seen, seen[1:])
-                    if time_of[b] - time_of[a] > TRACK_TIMEOUT_S + 1e-9]
-            named = _track_person_id(seen) is not None
-            again = "" if not long else (
-                "; found again after " + ", ".join(f"{dt:.1f} s unseen (frame {b})" for b, dt in long)
-                + f", longer than the tracker's {TRACK_TIMEOUT_S:g}-s timeout, "
-                + ("by its person_id" if named else "where its 3D root led, no one else fitting there: taken as the "
-                   "same person (someone else who came in just there would share this id)"))
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
-                         f"no pose for it (the person was not found there){again}")
+                         "no pose for it (the person was not found there)")
     return notes
 
 
@@ -1077,6 +1077,7 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     spin beside MediaPipe's own threads cost more than they give (see the README's timings).
     """
     check_max_side(max_side)  # (up front: not as the same error for every frame)
+    check_rejoin_s(rejoin_s)
     check_frame_rate(fps, name="fps (--fps)")
     check_frame_rate(video_fps, name="video_fps (--video-fps)")
     with limit_blas_threads(blas_threads):
@@ -1195,7 +1196,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                     fov_deg=fov_deg, where=str(p), cli_options=cli_options)
                 cam = (f, src, pp)
                 warnings.extend(notes)
-                seq = SequenceTracker(fps=fps, smoothing=smoothing, rejoin_s=rejoin_s)
+                seq = SequenceTracker(fps=fps, smoothing=smoothing)
             elif (W, H) != size:
                 bad.append({"index": index, "error": f"frame size {W} x {H} px differs from the first frame's "
                                                      f"{size[0]} x {size[1]} px; skipped"})
@@ -1278,6 +1279,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                             f"from most frames between them, left out as likely false detections (frames "
                             f"{_frames_summary(where)})")
         warnings += dropped
+    warnings.extend(rejoin_notes(rejoin_tracks(frames, fps=fps, rejoin_s=rejoin_s)))  # (after false detections)
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
                               f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else "")
@@ -1313,21 +1315,21 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
 def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]], *,
                  fps: float, focal: np.ndarray, smoothing: float = 1.0,
                  person_ids: list[list[str | int | None]] | None = None,
-                 names: list[list[Any]] | None = None, rejoin_s: float = REJOIN_MAX_S) -> list[FrameResult]:
+                 names: list[list[Any]] | None = None) -> list[FrameResult]:
     """Track and smooth already lifted frames ``[(index, time_s, keypoints_2d (n, 17, 2), root (n, 3),
     relative (n, 17, 3), scores (n, 17) or None), ...]`` (an empty ``n = 0`` frame keeps its place).
     ``person_ids``: per frame, the input's own id for each of its people (None: none), kept as each person's
     ``person_id``; those that recur from frame to frame are followed by the tracker (:func:`tracking_names`), or
     ``names``, per frame and person, when given: the names read from the whole input (a ``--max-people`` cut can
     leave a recurring name in one frame only, which would then be no name: a user trial saw another name take the
-    followed track so). ``rejoin_s``: as :func:`lift_video`'s."""
+    followed track so). Tracks are not taken up again here (:func:`rejoin_tracks`)."""
     if person_ids is not None and len(person_ids) != len(lifted):
         raise PoseLifterError(f"track_lifted: person_ids for {len(person_ids)} frames, {len(lifted)} frames lifted")
     if names is not None and len(names) != len(lifted):
         raise PoseLifterError(f"track_lifted: names for {len(names)} frames, {len(lifted)} frames lifted")
     names_by_frame = names if names is not None else (
         None if person_ids is None else tracking_names([list(fr) for fr in person_ids]))
-    seq = SequenceTracker(fps=fps, smoothing=smoothing, rejoin_s=rejoin_s)
+    seq = SequenceTracker(fps=fps, smoothing=smoothing)
     out = []
     for k, (index, t, kp, root, rel, sc) in enumerate(lifted):
         frame_names = None if names_by_frame is None else names_by_frame[k]
@@ -1442,8 +1444,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                        _frame_scores(kept_scores[i], ks.format)))
         lifted_2d[at[i]] = seen[k:k + c]
         k += c
-    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names,
-                       rejoin_s=rejoin_s)
+    out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names)
+    warnings.extend(rejoin_notes(rejoin_tracks(out, fps=ks.fps, rejoin_s=rejoin_s)))
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))

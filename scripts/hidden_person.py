@@ -95,7 +95,7 @@ def main() -> None:
                 print(f"  track {tid}: frames {', '.join(runs)} ({len(idx)} frames; root depth {min(z):.0f}-"
                       f"{max(z):.0f} mm)")
             for w in rec.warnings:
-                if "missing from" in w:
+                if "found again" in w or "missing from" in w:
                     print(f"  note: {w}")
     if hasattr(est, "close"):
         est.close()

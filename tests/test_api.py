@@ -466,6 +466,18 @@ def test_a_byte_changed_in_a_written_checkpoint_is_refused(tmp_path, camera_lift
         load_checkpoint(assets.asset(shipped["file"]).read_bytes(), name="gt.pt")
 
 
+def test_an_old_checkpoint_loads_without_a_readable_registry(tmp_path, camera_lifter, monkeypatch):
+    """Its no-checksum note looks for the file among the shipped ones; a registry that cannot be read (an empty
+    $POSELIFTER_ASSETS, a review) must not refuse the user's own file."""
+    old = _edited_checkpoint(tmp_path, camera_lifter, "old.pt", lambda p: p.pop("tensors_sha256"), checksum=False)
+    (tmp_path / "assets").mkdir()
+    monkeypatch.setenv("POSELIFTER_ASSETS", str(tmp_path / "assets"))
+    with pytest.raises(PoseLifterError):
+        assets.registry()  # (the registry really is unreadable here)
+    with pytest.warns(PoseLifterWarning, match="no checksum of its tensors"):
+        load_checkpoint(old)
+
+
 def test_checkpoint_not_a_torch_file_is_refused_before_it_is_read(tmp_path):
     big = tmp_path / "zeros.pt"
     with open(big, "wb") as f:

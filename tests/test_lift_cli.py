@@ -1846,3 +1846,24 @@ def test_ctrl_c_while_a_sequence_is_written_names_what_of_it_is_whole(tmp_path, 
     assert (f"interrupted after 0 of 1 input(s) lifted into {tmp_path / 'o'}; {seq}'s outputs were being written: "
             "clip.json, clip_track1.bvh are whole, the rest of them not written") in err, err
     assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["clip.json", "clip_track1.bvh"]
+
+
+def test_ctrl_c_while_an_earlier_run_s_outputs_are_tidied_counts_the_input(tmp_path, weights, kp17, capsys,
+                                                                             monkeypatch):
+    """Ctrl-C after an input's outputs are whole, while an earlier run's of it are tidied away: that input counts as
+    lifted (a review: "interrupted after 0 of 1" with every output whole)."""
+    import lifter.cli.lift as lift_cli
+
+    (tmp_path / "a.json").write_text(json.dumps({"keypoints": kp17.tolist(), "focal": 1000.0,
+                                                 "image_size": [1280, 720]}))
+    argv = ["lift", str(tmp_path / "a.json"), "--out", str(tmp_path / "o"), "--weights", str(weights)]
+    assert main(argv) == 0
+
+    def interrupted(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(lift_cli, "tidy_earlier_outputs", interrupted)
+    capsys.readouterr()
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert "interrupted after 1 of 1 input(s) lifted" in err and "were being written" not in err, err

@@ -576,12 +576,12 @@ def run_lift(args: argparse.Namespace) -> int:
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
                     written.update(now)
+                    ok += 1  # (its outputs are whole: counted before an earlier run's are tidied away)
                     now = []
                     if again:  # (only this input's own earlier result: never another's, nor the user's files)
                         for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh,
                                                         sequence=seq is not None):
                             say(f"{path}: note: {msg}")
-                    ok += 1
                 except PoseLifterError as exc:
                     msg = str(exc)
                     if misnamed is not None:  # (what it was read as, which the error may not say)
