@@ -740,8 +740,6 @@ class SessionView:
         before = st
         if reset:
             st = ss.reset_joints(st)
-            if before.dragged:
-                self._push_undo(before, gesture=-1)
         refused_drag = False
         for j, uv in drags.items():
             try:
@@ -751,8 +749,11 @@ class SessionView:
                     notes.append((str(exc), True, None))
                 self._drag_refusal_said = by_mouse
                 refused_drag = True
-        if drags and not np.array_equal(st.keypoints, before.keypoints):
-            self._push_undo(before, gesture=gesture)  # (once per gesture: a mouse drag's 20 moves a second are one)
+        # one undo step per gesture (a mouse drag's 20 moves a second are one; a reset and a drag in one pass are
+        # one), kept once the pass's state is applied
+        undo = None if not (drags or reset) or (np.array_equal(st.keypoints, before.keypoints)
+                                                 and st.dragged == before.dragged) else (
+            before, gesture if drags and not reset else -1)
         for r in rejected:
             if r not in held:
                 self._set_control(r.control, r.value)
@@ -768,6 +769,8 @@ class SessionView:
             return
         try:
             self._apply(st)
+            if undo is not None:
+                self._push_undo(undo[0], gesture=undo[1])
             if picked is not None:
                 self._followed = picked
             if st.person != old.person and self._close_up:  # the head-on view follows to the person now draggable
@@ -775,7 +778,7 @@ class SessionView:
         except PoseLifterError as exc:  # e.g. a degenerate pose: everything back to the previous state
             notes.append((str(exc), True, None))
             self._show_controls(old)
-            self._draw_2d(old.keypoints)
+            self._draw_2d(old.keypoints, self.frame.noisy_2d if self.frame is not None else None)
         self._say_pass_notes(notes, fallback=input_notes)
 
     def _say_pass_notes(self, notes: list[tuple[str, bool, float | None]], *, fallback: list[str]) -> None:
@@ -880,6 +883,9 @@ class SessionView:
                     log.error("drawing the previous state again failed:\n%s", traceback.format_exc())
             raise
         t2 = time.perf_counter()
+        if st.sample.key != old_state.sample.key:  # (drags of the sample left are dropped, or kept as they are:
+            # undoing to a snapshot of an earlier visit brought back half of them, a review)
+            self._undo = [u for u in self._undo if u[0][0] == st.sample.key]
         self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
         self.update_count += 1
 
@@ -1528,7 +1534,12 @@ class SessionView:
     def scale_focal(self, factor: float) -> None:
         """The focal length times ``factor`` (the focal buttons: 0.5, 2), kept within the slider's range."""
         f = self.gui.lift.focal
-        self.set_focal(min(max(float(self.state.focal_px) * float(factor), float(f.min)), float(f.max)))
+        target = min(max(float(self.state.focal_px) * float(factor), float(f.min)), float(f.max))
+        if abs(target - float(self.state.focal_px)) < 0.05:
+            self.show_message(f"the focal length is at the slider's {'end' if factor > 1 else 'start'} already "
+                              f"({focal_text(target)} px)")
+            return
+        self.set_focal(target)
 
     @control
     def resample(self) -> None:

@@ -35,8 +35,8 @@ log = logging.getLogger("poselifter.app")
 
 
 def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max_bytes: int,
-                  refuse: Callable[[str, int], None], client_id: int | None = None, max_in_flight: int = 2,
-                  refuse_busy: Callable[[str, int], None] | None = None) -> bool:
+                  refuse: Callable[[str, int], None], refuse_busy: Callable[[str, int], None],
+                  client_id: int | None = None, max_in_flight: int = 2) -> bool:
     """Refuse uploads through ``button`` larger than ``max_bytes``: on the announced size, and on the bytes
     received (checked before viser buffers each part). ``refuse(file name, bytes)`` is called once per refused
     upload. An upload that starts while ``max_in_flight`` others through the button are still arriving is refused
@@ -79,7 +79,7 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
                 if not busy:
                     received[msg.transfer_uuid] = (msg.filename, 0)
             if busy:
-                stop(msg.transfer_uuid, msg.filename, max_in_flight, msg.size_bytes, refuse_busy or refuse)
+                stop(msg.transfer_uuid, msg.filename, max_in_flight, msg.size_bytes, refuse_busy)
         except Exception:  # noqa: BLE001 - never break viser's message loop
             log.exception("upload size check failed")
 

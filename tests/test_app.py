@@ -216,6 +216,8 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     view.gui.lift.focal.value = 5000.0
     view.gui.lift.focal_steps.value = "× 2"  # (kept within the slider's range)
     assert view.state.focal_px == pytest.approx(view.gui.lift.focal.max)
+    view.gui.lift.focal_steps.value = "× 2"  # (at the end: said)
+    assert view.messages[-1].startswith("the focal length is at the slider's end already")
     view.gui.lift.focal_reset.value = True
 
 
@@ -344,12 +346,17 @@ def test_undo_last_drag_steps_back_one_gesture_at_a_time(view: SessionView, app:
     np.testing.assert_allclose(view.state.keypoints, base)
     assert not view.state.dragged
     np.testing.assert_allclose(view.frame.lifted, base_lift, atol=1e-9)
-    # another pose's drags are its own
+    # another pose's drags are its own, and a sample left takes its undo steps along (its drags are dropped: a
+    # review's undo after coming back brought back half of an earlier visit's)
     view.move_joint(13, base[13] + [15.0, 0.0])
+    view.move_joint(16, base[16] + [15.0, 0.0])
     view.select_demo(app.demo.names[1])
     view.gui.joints.undo.value = True
     assert view.messages[-1] == "no drag of this pose to undo"
     view.select_demo(app.demo.names[0])
+    assert not view.state.dragged
+    view.gui.joints.undo.value = True
+    assert view.messages[-1] == "no drag of this pose to undo" and not view.state.dragged
     view.reset_joints()
 
 
