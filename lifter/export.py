@@ -147,7 +147,7 @@ def _quat_z_to(d: np.ndarray) -> np.ndarray:
 
 def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathLike[str], *, fps: float,
                         span: tuple[int, int] | None = None, joint_radius_mm: float = 25.0,
-                        bone_radius_mm: float = 12.0) -> Path:
+                        bone_radius_mm: float = 12.0, recorded: Any = None) -> Path:
     """An animated binary glTF of several tracked people: ``tracks[track_id] = (frame_indices (n,), poses
     (n, 17, 3) mm camera frame)``; frame ``i`` is at ``i / fps`` s. Metres, y-up, like :func:`write_glb`.
     ``span``: the first and last frame the clip covers (a video's ``(0, last frame)``, so that it plays in step with
@@ -157,7 +157,11 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
     gets translation / rotation / scale channels sampled at every frame of the clip (LINEAR); in a frame
-    without the person, their nodes are scaled to zero (hidden). :func:`read_glb_animation` reads it back.
+    without the person, their nodes are scaled to zero (hidden). ``recorded``: the frame indices the input holds
+    (None: every frame): a frame it does not hold (a sequence that gives every other frame, a video frame that could
+    not be read) is no frame without the person, and a person seen before and after it is interpolated there, as a
+    BVH is (a developer trial's sequence of every other frame blinked at half its frame rate).
+    :func:`read_glb_animation` reads it back.
     """
     import json
     import struct
@@ -196,6 +200,13 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
         seen = np.flatnonzero(present)
         nearest = seen[np.clip(np.searchsorted(seen, np.arange(T)), 0, len(seen) - 1)]
         full[~present] = full[nearest[~present]]
+        if recorded is not None:  # frames the input does not hold, between two sightings: interpolated, shown
+            between = ~present & (frames > ii[0]) & (frames < ii[-1]) & ~np.isin(frames, np.asarray(recorded))
+            if between.any():
+                flat = p.reshape(len(ii), -1)
+                full[between] = np.stack([np.interp(frames[between], ii, flat[:, c]) for c in range(flat.shape[1])],
+                                         axis=-1).reshape(-1, NUM_JOINTS, 3)
+                present = present | between
         vis = present.astype(np.float64)[:, None]
         pre = f"track{tid}_"
         for j, name in enumerate(JOINT_NAMES):

@@ -231,9 +231,11 @@ for more than 1 s got a new id)."""
 REJOIN_MIN_SIGHTINGS: Final[int] = 3
 """A track seen fewer times than this is never taken up again (a false detection's)."""
 
-REJOIN_VELOCITY_SPAN_S: Final[float] = 0.5
-"""The 3D root velocity a track leaves with: over its last this many seconds, at least its last three sightings
-(per-frame lifts, not smoothed; :func:`_end_of_track`)."""
+REJOIN_WINDOW_S: Final[float] = 1.0
+"""Where a track ends and how fast it moves there, and where a track starts, are read over its last (first) this many
+seconds, at least three sightings (per-frame lifts, not smoothed; :func:`_end_of_track`): a person being hidden by a
+pillar is lifted deeper and deeper in their last frames (a developer trial: 7.4 to 10.5 m in four frames, which over
+the last three and 0.5 s put them at 17 m after 2.4 s)."""
 
 REJOIN_MAX_SPEED_MM_S: Final[float] = 3000.0
 """The velocity a track leaves with is capped at this speed (mm/s: a run; a lift's jitter over few frames is not
@@ -248,14 +250,13 @@ def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
 
 
 def _end_of_track(hist: list[tuple[float, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
-    """``(t, root, velocity)`` of a track's end or start, from sightings ``[(t s, root (3,) mm), ...]`` in time
-    order: the median time and root of the three nearest the end (the last three; pass a track's start reversed for
-    its first three), so that one wrong lift as the person disappears does not lead astray, and the Theil-Sen
-    velocity (per axis, the median of the slopes between every two sightings), at most
-    :data:`REJOIN_MAX_SPEED_MM_S`."""
+    """``(t, root, velocity)`` of a track's end or start window (:data:`REJOIN_WINDOW_S`), from its sightings
+    ``[(t s, root (3,) mm), ...]``: the median time and root, so that wrong lifts as the person disappears (or
+    appears) do not lead astray while they are under half of the window, and the Theil-Sen velocity (per axis, the
+    median of the slopes between every two sightings), at most :data:`REJOIN_MAX_SPEED_MM_S`."""
     t = np.array([tt for tt, _ in hist])
     r = np.stack([rr for _, rr in hist])
-    t_end, root = float(np.median(t[-3:])), np.median(r[-3:], axis=0)
+    t_end, root = float(np.median(t)), np.median(r, axis=0)
     i, j = np.triu_indices(len(t), 1)
     ok = t[j] != t[i]
     v = np.zeros(3)
@@ -284,12 +285,13 @@ def check_rejoin_s(rejoin_s: float) -> None:
 
 def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = REJOIN_MAX_S) -> list[Rejoin]:
     """Take up ended tracks again (:data:`REJOIN_MAX_S`), in place: a track that starts more than the tracker's
-    timeout (:data:`TRACK_TIMEOUT_S`, in frames at ``fps``) and at most ``rejoin_s`` s after another ended, whose start
-    (the median of its first three per-frame roots) lies within :func:`rejoin_radius_mm` of where that one's end
-    leads (its end moved on at its velocity, :func:`_end_of_track`), gets that track's id, when neither fits any
-    other such track. Both must be seen :data:`REJOIN_MIN_SIGHTINGS` times or more and be unnamed (the input's own
-    ``person_id`` takes named people up again: :class:`lifter.tracking.Tracker`). Run it after false detections are
-    left out. Returns what it joined, by frame."""
+    timeout (:data:`TRACK_TIMEOUT_S`, in frames at ``fps``) and at most ``rejoin_s`` s after another ended, whose
+    start (the median of its first :data:`REJOIN_WINDOW_S` of per-frame roots) lies within :func:`rejoin_radius_mm`
+    of where that one's end leads (the median of its last, moved on at its velocity: :func:`_end_of_track`), gets
+    that track's id, when neither fits any other such track. Both must be seen :data:`REJOIN_MIN_SIGHTINGS` times or
+    more and be unnamed (the input's own ``person_id`` takes named people up again:
+    :class:`lifter.tracking.Tracker`). Run it after false detections are left out. Returns what it joined, by
+    frame."""
     check_rejoin_s(rejoin_s)
     if rejoin_s == 0:
         return []
@@ -301,10 +303,10 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
         if len(at) < REJOIN_MIN_SIGHTINGS or _track_person_id(at, shared) is not None:
             continue
         hist = [(time_of[i], np.asarray(q.root_raw, np.float64)) for i, q in at]
-        span = [h for h in hist if hist[-1][0] - h[0] <= REJOIN_VELOCITY_SPAN_S] or hist
-        ends[tid] = (at[0][0], at[-1][0], *_end_of_track(span if len(span) >= 3 else hist[-3:]))
-        head = [h for h in hist if h[0] - hist[0][0] <= REJOIN_VELOCITY_SPAN_S]
-        starts[tid] = _end_of_track(list(reversed(head if len(head) >= 3 else hist[:3])))[:2]
+        tail = [h for h in hist if hist[-1][0] - h[0] <= REJOIN_WINDOW_S]
+        ends[tid] = (at[0][0], at[-1][0], *_end_of_track(tail if len(tail) >= 3 else hist[-3:]))
+        head = [h for h in hist if h[0] - hist[0][0] <= REJOIN_WINDOW_S]
+        starts[tid] = _end_of_track(head if len(head) >= 3 else hist[:3])[:2]
     fits: set[tuple[int, int]] = set()
     for a, (_, last_a, t_a, root_a, v_a) in ends.items():
         for b, (t_b, root_b) in starts.items():
@@ -312,7 +314,8 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
             gap_s = time_of[first_b] - time_of[last_a]
             if a == b or first_b - last_a <= timeout or gap_s > rejoin_s:
                 continue
-            if np.linalg.norm(root_b - (root_a + v_a * (t_b - t_a))) <= rejoin_radius_mm(t_b - t_a, float(root_a[2])):
+            # (the prediction runs between the windows' middles; the uncertainty grows with the time unseen)
+            if np.linalg.norm(root_b - (root_a + v_a * (t_b - t_a))) <= rejoin_radius_mm(gap_s, float(root_a[2])):
                 fits.add((a, b))
     joined: list[Rejoin] = []
     new_id: dict[int, int] = {}
@@ -331,8 +334,8 @@ def rejoin_notes(joined: list[Rejoin]) -> list[str]:
     """One note per track :func:`rejoin_tracks` took up again."""
     return [f"track {r.track_id}: found again at frame {r.frame} after {r.gap_s:.2f} s unseen (longer than the "
             f"tracker's {TRACK_TIMEOUT_S:g}-s timeout), where its 3D root led and no one else fitted: taken as the "
-            f"same person (someone else who came in just there would share this id; between the two, the BVH and GLB "
-            f"animations are interpolated)" for r in joined]
+            f"same person (someone else who came in just there would share this id; between the two, the BVH "
+            f"animation is interpolated and the GLB hides them)" for r in joined]
 
 
 class SequenceTracker:
@@ -538,7 +541,8 @@ class SequenceRecord:
         """Every track as one animated binary glTF (:func:`lifter.export.write_glb_animation`; metres, y-up) on the
         input's frame clock, from frame 0 to its last frame (one it could not read too), everyone hidden in the frames
         they are not seen in (a user trial's clip started at the first person's first frame, which glTF viewers
-        then showed from frame 0). Raises :class:`PoseLifterError` when nobody is in any frame."""
+        then showed from frame 0), and interpolated in frames the record does not hold. Raises
+        :class:`PoseLifterError` when nobody is in any frame."""
         from .export import write_glb_animation
 
         tracks = self.tracks()
@@ -547,7 +551,8 @@ class SequenceRecord:
         return write_glb_animation({tid: ([i for i, _ in seen], np.stack([p.absolute for _, p in seen]))
                                     for tid, seen in tracks.items()}, path, fps=self.fps,
                                    span=(0, max([fr.index for fr in self.frames]
-                                                + [int(b["index"]) for b in self.bad_frames if "index" in b])))
+                                                + [int(b["index"]) for b in self.bad_frames if "index" in b])),
+                                   recorded=[fr.index for fr in self.frames])
 
     @property
     def metric_depth(self) -> bool:

@@ -133,3 +133,11 @@ def test_glb_animation_round_trip(tmp_path):
     assert np.isnan(joints[4][[0, 1, 2, 6, 7, 8, 11, 12, 13, 14, 15]]).all()
     with pytest.raises(PoseLifterError, match=r"span must be \(first, last\) frames"):
         write_glb_animation({4: (np.array([3, 4]), b[:2])}, tmp_path / "x.glb", fps=25.0, span=(5, 2))
+    # frames the input does not hold (a sequence of every other frame, a developer trial: everyone blinked at half
+    # its rate): a person seen either side is interpolated there and shown; a frame it holds without them hides them
+    p = write_glb_animation({4: (np.array([3, 4, 5, 9, 10]), b)}, tmp_path / "rec.glb", fps=25.0, span=(0, 15),
+                            recorded=[0, 1, 2, 3, 4, 5, 6, 9, 10, 11, 12, 13, 14, 15])
+    times, joints = read_glb_animation(p)
+    np.testing.assert_allclose(joints[4][[7, 8]], b[2] + (b[3] - b[2]) * np.array([2 / 4, 3 / 4])[:, None, None],
+                               atol=0.05)
+    assert np.isnan(joints[4][[0, 1, 2, 6, 11, 12, 13, 14, 15]]).all()

@@ -168,11 +168,17 @@ def test_a_person_hidden_longer_than_the_timeout_keeps_their_track_where_their_r
     assert rejoin_notes(joined) == [
         "track 1: found again at frame 75 after 2.04 s unseen (longer than the tracker's 1-s timeout), where its 3D "
         "root led and no one else fitted: taken as the same person (someone else who came in just there would share "
-        "this id; between the two, the BVH and GLB animations are interpolated)"]
+        "this id; between the two, the BVH animation is interpolated and the GLB hides them)"]
     assert _rejoined(_walkers([(walk, seen)]), rejoin_s=0)[1] == []  # (off)
     # one wrong lift as the person disappears (1.3 m too far in their last frame, as in a trial clip) leads nowhere
     frames = _walkers([(walk, seen)])
     frames[24] = (*frames[24][:3], frames[24][3] + [0.0, 0.0, 1300.0], *frames[24][4:])
+    assert {t for ids in _ids(_rejoined(frames)[0]) for t in ids} == {1}
+    # a person lifted deeper and deeper as a pillar hides them (a developer trial: 7.4 to 10.5 m in their last four
+    # frames, which over the last three and 0.5 s led 10 m astray), and again as they come out
+    frames = _walkers([(walk, seen)])
+    for k, dz in zip((21, 22, 23, 24, 75, 76, 77), (800.0, 1600.0, 2400.0, 3100.0, 2400.0, 1600.0, 800.0)):
+        frames[k] = (*frames[k][:3], frames[k][3] + [0.0, 0.0, dz], *frames[k][4:])
     assert {t for ids in _ids(_rejoined(frames)[0]) for t in ids} == {1}
     # seen three times between two long gaps: taken up again twice
     thrice = [*range(0, 25), 75, 76, 77, *range(128, 140)]
