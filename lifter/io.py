@@ -1417,7 +1417,10 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         raise PoseLifterError(f"{p}: one file per frame carries no frame rate: give it, e.g. --fps 30 on the command "
                               "line (fps= in lifter.video.lift_keypoint_sequence; frames/s, in (0, 1000])")
     else:
-        raise PoseLifterError(f"{p}: 'fps' is missing: a keypoint sequence needs its frame rate in frames/s, in "
+        other = [k for k in d if isinstance(k, str) and k != "fps" and ("rate" in k.lower() or "fps" in k.lower())]
+        named = (f" (the file's {', '.join(repr(k) for k in other[:3])} {'is' if len(other) == 1 else 'are'} not "
+                 "read: poselifter reads 'fps')") if other else ""
+        raise PoseLifterError(f"{p}: 'fps' is missing{named}: a keypoint sequence needs its frame rate in frames/s, in "
                               "(0, 1000]: \"fps\": 30 at the file's top level (a list of frames becomes "
                               "{\"frames\": [...], \"fps\": 30})" + (", or --fps 30 on the command line" if cli_options
                                                                         else ""))

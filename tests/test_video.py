@@ -828,6 +828,9 @@ def test_visibility_flags_are_decided_once_per_sequence(tmp_path, lifter):
 @pytest.mark.parametrize(("body", "match"), [
     ({"frames": [], "fps": 30}, "zero-length sequence"),
     ({"frames": [[[0, 0]] * 17]}, "'fps' is missing: a keypoint sequence needs its frame rate"),
+    # (a developer trial's file named its rate otherwise, and the message did not say it was not read)
+    ({"frames": [[[0, 0]] * 17], "frame_rate": 25}, "'fps' is missing \\(the file's 'frame_rate' is not read: "
+     "poselifter reads 'fps'\\): a keypoint sequence"),
     ({"frames": [[[0, 0]] * 17], "fps": None}, "'fps' must be the frame rate"),
     ({"frames": 3, "fps": 30}, "'frames' must be a list"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}, {"keypoints": [[1, 1]] * 16}], "fps": 30,
