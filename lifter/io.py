@@ -849,8 +849,11 @@ def _nobody_detail(d: Any) -> str:
             return f": the 'keypoints' of its {len(d)} object(s) are empty or null"
         if not any("keypoints" in q for q in d):
             keys = sorted({str(k) for q in d for k in q})
+            frames = (" (a list of frames, each with its 'people', is a keypoint sequence: give it as {\"frames\": "
+                      "[...], \"fps\": 30})") if all("people" in q for q in d) else ""
             return (f": none of its {len(d)} object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] "
-                    f"rows); they have {', '.join(repr(k) for k in keys[:8])}" + (", ..." if len(keys) > 8 else ""))
+                    f"rows); they have {', '.join(repr(k) for k in keys[:8])}" + (", ..." if len(keys) > 8 else "")
+                    + frames)
     return ""
 
 

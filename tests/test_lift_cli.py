@@ -1677,6 +1677,9 @@ def test_mmpose_inferencer_results_saved_as_they_come_are_read(tmp_path, kp17):
     ([{"bogus": 1}], ": none of its 1 object(s) has 'keypoints' (a list of [x, y] or [x, y, confidence] rows); they "
                      "have 'bogus'"),
     ({"people": []}, "no person in the keypoint file"),
+    # (a developer trial's bare list of frames: said to be a sequence missing its wrapper)
+    ([{"people": [{"keypoints": [[1, 2]] * 17}]}], "they have 'people' (a list of frames, each with its 'people', is "
+                                                   "a keypoint sequence: give it as {\"frames\": [...], \"fps\": 30})"),
     ([{"image_id": 1, "keypoints": []}], ": the 'keypoints' of its 1 object(s) are empty or null"),
     # (a frame where the detector found nobody: no more to say; a review read "none has 'keypoints'" for these)
     ([{"frame_id": 0, "instances": []}], "no person in the keypoint file"),
