@@ -15,7 +15,7 @@ from typing import Any, Final, Literal
 import numpy as np
 
 from lifter import Lifter, PoseLifterError, analytic_root, available_models
-from lifter.camera import MIN_FOCAL_PX
+from lifter.camera import MIN_FOCAL_PX, pose_view_deg
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 
@@ -521,9 +521,9 @@ def view_angles_text(focal: tuple[float, float], image_size: tuple[int, int]) ->
     """The field of view of a ``(W, H)`` px image at focal ``(fx, fy)`` px (a pinhole: its width and height, and its
     diagonal at their mean focal), e.g. ``"view 53° × 41° (diagonal 65°)"``."""
     (fx, fy), (w, h) = focal, image_size
-    deg = lambda half, f: math.degrees(2.0 * math.atan(half / f))  # noqa: E731
-    return (f"view {deg(w / 2, fx):.0f}° × {deg(h / 2, fy):.0f}° (diagonal "
-            f"{deg(math.hypot(w, h) / 2, math.sqrt(fx * fy)):.0f}°)")
+    diagonal = float(pose_view_deg(np.array([[0.0, 0.0], [w, h]]), focal))  # (the image's box, as a pose's)
+    return (f"view {math.degrees(2.0 * math.atan(w / 2 / fx)):.0f}° × {math.degrees(2.0 * math.atan(h / 2 / fy)):.0f}° "
+            f"(diagonal {diagonal:.0f}°)")
 
 
 def _focal_origin(state: SessionState) -> str:

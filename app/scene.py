@@ -304,7 +304,7 @@ def draw_others(nodes: PoseNodes, fr: Frame, *, labels: bool = True) -> None:
 
 def draw_noisy_2d(nodes: PoseNodes, state: SessionState, noisy: np.ndarray | None) -> None:
     """The noisy draw ``(17, 2)`` px that is lifted at a noise level above 0, on the image plane (None: hidden)."""
-    if noisy is None or state.noise_level <= 0:
+    if noisy is None:
         nodes.noisy2d.visible = False
         return
     nodes.noisy2d.points = edges_points(image_plane(state, noisy))

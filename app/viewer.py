@@ -35,7 +35,7 @@ import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 import viser
@@ -165,9 +165,11 @@ UPLOAD_REFUSED_TITLE: Final[str] = "Upload refused: the file arrived, but it can
 """The title of the notification of a refused upload, which stays until closed: the browser has just said "File
 uploaded successfully" about the transfer itself (a user trial read both as success)."""
 UPLOAD_TOO_LARGE_TITLE: Final[str] = "Upload refused: the file is too large"
-UPLOAD_BUSY_TITLE: Final[str] = "Upload refused: other uploads are still arriving"
 """The title of the notification of an upload stopped during its transfer for its size (:data:`UPLOAD_REFUSED_TITLE`
 said it had arrived, where its message said it was stopped: a user trial)."""
+UPLOAD_BUSY_TITLE: Final[str] = "Upload refused: other uploads are still arriving"
+"""The title of the notification of an upload refused as it starts, while two others from the tab are still
+arriving (:func:`poselifter_app.viser_hooks.limit_uploads`)."""
 
 TYPING_SETTLE_S: float = 1.0
 """A value typed into the focal or noise box arrives keystroke by keystroke ("2", "20", "200", "2000"): one out of
@@ -183,6 +185,18 @@ but the box keeps what was typed until :data:`TYPING_IDLE_S`: a write into a box
 the box at 100 beside a lift at 1500)."""
 UNDO_DEPTH: int = 50
 """How many drags a tab can undo (each pose's, together)."""
+
+
+class _UndoStep(NamedTuple):
+    """An undo snapshot: the pose's (sample key, person, 2D input), its joints ``(17, 2)`` px and dragged joints
+    before a gesture changed them, and that gesture (-1: a reset)."""
+
+    key: tuple[Any, ...]
+    keypoints: np.ndarray
+    dragged: frozenset[int]
+    gesture: int
+
+
 SHRUNK_VIEW: float = 0.4
 """After a focal change, auto reframing zooms back in when what it keeps in view (the camera, its frustum, the
 skeleton) spans less than this share of the view's width and height, wherever it is in the view."""
@@ -332,9 +346,8 @@ class SessionView:
         self._drags: dict[int, np.ndarray] = {}
         self._gesture = 0  # one per mouse drag (press to release), typed joint position or reset
         self._drags_gesture = 0  # the gesture of the drags queued
-        self._undo: list[tuple[tuple[Any, ...], np.ndarray, frozenset[int], int]] = []
-        """Undo snapshots, the last on top: (the pose's :meth:`_undo_key`, its joints and dragged set before a
-        gesture changed them, that gesture)."""
+        self._undo: list[_UndoStep] = []
+        """Undo snapshots, the last on top."""
         self._reset_request = False
         self._redraw_request = False
         self._flags = threading.Lock()
@@ -751,9 +764,8 @@ class SessionView:
                 refused_drag = True
         # one undo step per gesture (a mouse drag's 20 moves a second are one; a reset and a drag in one pass are
         # one), kept once the pass's state is applied
-        undo = None if not (drags or reset) or (np.array_equal(st.keypoints, before.keypoints)
-                                                 and st.dragged == before.dragged) else (
-            before, gesture if drags and not reset else -1)
+        undoable = bool(drags or reset) and not (np.array_equal(st.keypoints, before.keypoints)
+                                                 and st.dragged == before.dragged)
         for r in rejected:
             if r not in held:
                 self._set_control(r.control, r.value)
@@ -769,8 +781,8 @@ class SessionView:
             return
         try:
             self._apply(st)
-            if undo is not None:
-                self._push_undo(undo[0], gesture=undo[1])
+            if undoable:
+                self._push_undo(before, gesture=gesture if drags and not reset else -1)
             if picked is not None:
                 self._followed = picked
             if st.person != old.person and self._close_up:  # the head-on view follows to the person now draggable
@@ -885,7 +897,7 @@ class SessionView:
         t2 = time.perf_counter()
         if st.sample.key != old_state.sample.key:  # (drags of the sample left are dropped, or kept as they are:
             # undoing to a snapshot of an earlier visit brought back half of them, a review)
-            self._undo = [u for u in self._undo if u[0][0] == st.sample.key]
+            self._undo = [u for u in self._undo if u.key[0] == st.sample.key]
         self.timing = Timing(compute_ms=1e3 * (t1 - t0), scene_ms=1e3 * (t2 - t1), total_ms=1e3 * (t2 - t0))
         self.update_count += 1
 
@@ -1293,8 +1305,9 @@ class SessionView:
             typing = self._typed_uv is not None  # (a position being typed is left in its box until applied)
         if not typing and tuple(float(v) for v in self.gui.joints.uv.value) != uv:
             self.gui.joints.uv.value = uv
+        noisy = noisy if st.noise_level > 0 else None  # (what is lifted at a noise level above 0)
         poses = {"gt": s.keypoints_2d if (self.gui.lift.gt.value and s.has_gt_2d) else None,
-                 "detected": s.detected_2d, "noisy": noisy if st.noise_level > 0 else None, "current": kp}
+                 "detected": s.detected_2d, "noisy": noisy, "current": kp}
         base_key = (id(s.image) if s.image is not None else None, st.image_size)  # (sequence frames share a canvas)
         if self._base_key != base_key:
             self._base = scaled_base(s.image, size=st.image_size)
@@ -1554,10 +1567,10 @@ class SessionView:
 
     def _push_undo(self, st: SessionState, *, gesture: int) -> None:
         """Keep ``st``'s joints to undo to, unless the gesture on top already kept its start (-1: always)."""
-        top = self._undo[-1] if self._undo else None
-        if gesture >= 0 and top is not None and top[3] == gesture and top[0] == self._undo_key(st):
+        key = self._undo_key(st)
+        if gesture >= 0 and self._undo and self._undo[-1].gesture == gesture and self._undo[-1].key == key:
             return
-        self._undo.append((self._undo_key(st), st.keypoints.copy(), frozenset(st.dragged), gesture))
+        self._undo.append(_UndoStep(key, st.keypoints.copy(), frozenset(st.dragged), gesture))
         del self._undo[:-UNDO_DEPTH]
 
     @control
@@ -1566,12 +1579,12 @@ class SessionView:
         typed position, :meth:`move_joint`) or reset; said when there is none."""
         with self._runner.holding(), self.lock:
             key = self._undo_key(self.state)
-            k = next((i for i in range(len(self._undo) - 1, -1, -1) if self._undo[i][0] == key), None)
+            k = next((i for i in range(len(self._undo) - 1, -1, -1) if self._undo[i].key == key), None)
             if k is None:
                 self.show_message("no drag of this pose to undo")
                 return
-            _, kp, dragged, _ = self._undo.pop(k)
-            self._apply(self.state.evolve(keypoints=kp.copy(), dragged=set(dragged)))
+            step = self._undo.pop(k)
+            self._apply(self.state.evolve(keypoints=step.keypoints.copy(), dragged=set(step.dragged)))
 
     @control
     def reset_joints(self) -> None:

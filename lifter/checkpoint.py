@@ -184,14 +184,15 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
             raise CheckpointError(f"weights file {where} is damaged or was replaced: its sha256 is {got[:16]}..., "
                                   f"the registry expects {expected_sha256[:16]}...; reinstall poselifter (or restore "
                                   "the file)")
-    try:
-        if _not_torch_file(data):
-            raise ValueError("not a torch file")
-        payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...) for bad bytes
-        why = _not_torch_file(data) or _load_failure(exc)
+    why, payload = _not_torch_file(data), None
+    if not why:
+        try:
+            payload = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+        except Exception as exc:  # noqa: BLE001 - torch raises many types (struct.error, UnpicklingError, ...)
+            why = _load_failure(exc)
+    if why:
         raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
-                              "give a .pt file written by poselifter train or a shipped model name") from None
+                              "give a .pt file written by poselifter train or a shipped model name")
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"{where} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
     version = payload.get("version")

@@ -192,6 +192,7 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     T = len(frames)
     scene = trimesh.Scene()
     channels: list[tuple[str, str, np.ndarray]] = []  # node name, path, (T, 3|4) values
+    not_held = np.zeros(T, bool) if recorded is None else ~np.isin(frames, np.asarray(recorded))
     for tid, (ii, p) in sorted(clean.items()):
         present = np.isin(frames, ii)
         full = np.zeros((T, NUM_JOINTS, 3))
@@ -200,8 +201,8 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
         seen = np.flatnonzero(present)
         nearest = seen[np.clip(np.searchsorted(seen, np.arange(T)), 0, len(seen) - 1)]
         full[~present] = full[nearest[~present]]
-        if recorded is not None:  # frames the input does not hold, between two sightings: interpolated, shown
-            between = ~present & (frames > ii[0]) & (frames < ii[-1]) & ~np.isin(frames, np.asarray(recorded))
+        if not_held.any():  # frames the input does not hold, between two sightings: interpolated, shown
+            between = ~present & (frames > ii[0]) & (frames < ii[-1]) & not_held
             if between.any():
                 flat = p.reshape(len(ii), -1)
                 full[between] = np.stack([np.interp(frames[between], ii, flat[:, c]) for c in range(flat.shape[1])],

@@ -26,6 +26,7 @@ import os
 import re
 import time
 import warnings
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -243,6 +244,12 @@ REJOIN_MAX_SPEED_MM_S: Final[float] = 3000.0
 motion)."""
 
 
+def timeout_frames(seconds: float, fps: float) -> int:
+    """A track timeout of ``seconds`` in frames at ``fps`` (at least 1): a track unseen for more frames ends
+    (:class:`SequenceTracker`, :func:`rejoin_tracks`)."""
+    return max(1, round(seconds * fps))
+
+
 def rejoin_radius_mm(gap_s: float, depth_mm: float) -> float:
     """How far (mm) from where a track's root leads (its end root moved on at its velocity for ``gap_s`` s) a new
     sighting may lie to be that person: 0.5 m, plus 10 % of the last root depth ``depth_mm`` (a lift's root error
@@ -298,7 +305,7 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
         return []
     shared = _shared_person_ids(frames)
     time_of = {fr.index: fr.time_s for fr in frames}
-    timeout = max(1, round(TRACK_TIMEOUT_S * fps))  # (SequenceTracker's: a gap of more frames ends a track)
+    timeout = timeout_frames(TRACK_TIMEOUT_S, fps)
     ends, starts = {}, {}
     for tid, at in _tracks(frames).items():
         if len(at) < REJOIN_MIN_SIGHTINGS or _track_person_id(at, shared) is not None:
@@ -308,7 +315,7 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
         ends[tid] = (at[0][0], at[-1][0], *_end_of_track(tail if len(tail) >= 3 else hist[-3:]))
         head = [h for h in hist if h[0] - hist[0][0] <= REJOIN_WINDOW_S]
         starts[tid] = _end_of_track(head if len(head) >= 3 else hist[:3])[:2]
-    fits: set[tuple[int, int]] = set()
+    fits: dict[tuple[int, int], float] = {}  # (ended track, later track) -> seconds unseen between them
     for a, (_, last_a, t_a, root_a, v_a) in ends.items():
         for b, (t_b, root_b) in starts.items():
             first_b = ends[b][0]
@@ -317,14 +324,14 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
                 continue
             # (the prediction runs between the windows' middles; the uncertainty grows with the time unseen)
             if np.linalg.norm(root_b - (root_a + v_a * (t_b - t_a))) <= rejoin_radius_mm(gap_s, float(root_a[2])):
-                fits.add((a, b))
+                fits[a, b] = gap_s
+    per_ended, per_later = Counter(a for a, _ in fits), Counter(b for _, b in fits)
     joined: list[Rejoin] = []
     new_id: dict[int, int] = {}
-    for a, b in sorted(fits, key=lambda ab: ends[ab[1]][0]):
-        if sum(1 for x, _ in fits if x == a) == 1 and sum(1 for _, y in fits if y == b) == 1:
-            keep = new_id.get(a, a)
-            new_id[b] = keep
-            joined.append(Rejoin(keep, b, ends[b][0], time_of[ends[b][0]] - time_of[ends[a][1]]))
+    for (a, b), gap_s in sorted(fits.items(), key=lambda f: ends[f[0][1]][0]):
+        if per_ended[a] == 1 and per_later[b] == 1:
+            new_id[b] = new_id.get(a, a)
+            joined.append(Rejoin(new_id[b], b, ends[b][0], gap_s))
     for fr in frames:
         for q in fr.people:
             q.track_id = new_id.get(q.track_id, q.track_id)
@@ -351,7 +358,7 @@ class SequenceTracker:
             raise PoseLifterError(f"fps must be > 0, got {fps}")
         PoseSmoother(smoothing)  # validates the strength
         self.fps, self.smoothing = float(fps), float(smoothing)
-        self.tracker = Tracker(max_missed=max(1, round(max_missed_s * fps)))
+        self.tracker = Tracker(max_missed=timeout_frames(max_missed_s, fps))
         self._smoothers: dict[int, PoseSmoother] = {}
         self._focal_geo: float | None = None
         self._last: tuple[int, float] | None = None  # (frame, t) of the last step
@@ -1377,6 +1384,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     :func:`lift_video`'s."""
     from .camera import lens_notes
     from .pipeline import keypoints_image, plausibility_notes, resolve_camera
+
+    check_rejoin_s(rejoin_s)  # (before the lift, not after it)
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options,

@@ -571,8 +571,9 @@ def run_lift(args: argparse.Namespace) -> int:
                             from ..export import write_bvh
 
                             for k, pose in enumerate(poses):
-                                write_bvh(pose, args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
-                                now.append(args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh"))
+                                bvh = args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh")
+                                write_bvh(pose, bvh)
+                                now.append(bvh)
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
                     written.update(now)
