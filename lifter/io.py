@@ -930,12 +930,14 @@ def _score_note(top: float) -> str:
 
 
 def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt: str | None, notes: list[str],
-                   *, layout_format: bool = False, frame: int | None = None, score_note: bool = True) -> _People:
+                   *, layout_format: bool = False, frame: int | None = None, score_note: bool = True,
+                   frames_before: int = 0) -> _People:
     """Each person of :func:`_people_of` as ``(J, 2)`` px, largest (box area) first, checked against the format,
     with a missing face or mid-body joint stood in for where the format allows (:data:`lifter.keypoints.STAND_INS`);
     the people still missing a joint the lifter needs (confidence 0 or below or null, or null / NaN coordinates) are
     left out. layout_format: ``fmt`` is only what the file's layout implies (:func:`_people_of`), for the messages.
-    frame: the sequence's frame these people are of (None: a single-frame file), for the messages (:func:`_who`)."""
+    frame: the sequence's frame these people are of (None: a single-frame file), for the messages (:func:`_who`);
+    frames_before: how many of the sequence's frames before it have people, each in ``fmt`` (for the messages)."""
     parsed = []
     top = -math.inf
     for _, q, _ in people:
@@ -984,12 +986,8 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
     out, kept, dropped, scores, stood_in = [], [], [], [], []
     for (xy, missing, conf), (pos, pid) in zip(parsed, identity):
         if len(xy) != f.num_joints:
-            same = [n for n in keypoint_formats() if get_format(n).num_joints == len(xy)]
-            raise PoseLifterError(
-                f"{p}: format {fmt!r} has {f.num_joints} joints, the file has {len(xy)}"
-                + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
-                + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
-                   if same else _no_format_with(len(xy))))
+            raise PoseLifterError(_count_message(p, fmt, [len(q[0]) for q in parsed], len(xy), who=_who(
+                pos, pid, len(people), frame=frame), layout_format=layout_format, frames_before=frames_before))
         if missing.any():
             xy, conf, said, bad = fill_missing(xy, missing, src=fmt, scores=conf)  # (bad: needed, still missing)
             if bad:
@@ -1001,6 +999,32 @@ def _people_arrays(people: list[tuple[int, Any, str | int | None]], p: Path, fmt
         kept.append((pos, pid))
         scores.append(conf)
     return _People(out, fmt, kept, dropped, scores, stood_in)
+
+
+def _count_message(p: Path, fmt: str, counts: list[int], count: int, *, who: str, layout_format: bool,
+                   frames_before: int) -> str:
+    """The message for a person ``who`` of ``count`` joints where the format ``fmt`` has another count (``counts``:
+    every person's of the frame). Where the frame's other people or the sequence's earlier frames have the format's
+    count, it names what differs (a developer trial: one person cut to 16 rows was told to give format 'sh16', and
+    a file switching to OpenPose's layout at frame 10 to give 'openpose25' for the whole file)."""
+    n = get_format(fmt).num_joints
+    same = [k for k in keypoint_formats() if get_format(k).num_joints == count]
+    said = (f"{p}: format {fmt!r} has {n} joints, the file has {count}"
+            + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else ""))
+    fitting = sum(c == n for c in counts)
+    if fitting:
+        return (f"{p}: {who} has {count} joints, where format {fmt!r} has {n}, as {fitting} other "
+                f"{'person' if fitting == 1 else 'people'} of the frame {'has' if fitting == 1 else 'have'}: that "
+                f"person's rows are cut short or padded; give all {n} joints (null for any not known) or leave "
+                "them out")
+    if frames_before:
+        layout = f" ({count} joints: {_one_of(same)})" if same else ""
+        return (f"{p}: {count} joints per person, where format {fmt!r} has {n}, as the {frames_before} frame(s) "
+                f"with people before it have: the file changes keypoint layout at this frame{layout}; give every "
+                "frame in one format (lifter.keypoints.convert converts between them), or lift each part as a file of "
+                "its own")
+    return said + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
+                   if same else _no_format_with(count))
 
 
 def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
@@ -1456,7 +1480,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         # (the format's note from the first frame with people, which settles it; the scores' note over every frame:
         # a review saw both lost after a leading empty frame, or for scores above 2 past the first frame)
         found = _people_arrays(people, where, f_fmt, notes if fmt is None else [], layout_format=layout_format,
-                               frame=i, score_note=False)
+                               frame=i, score_note=False, frames_before=sum(map(bool, frames)))
         arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
         for _, said in found.stood_in:
             for phrase in said:

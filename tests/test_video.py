@@ -834,7 +834,22 @@ def test_visibility_flags_are_decided_once_per_sequence(tmp_path, lifter):
     ({"frames": [[[0, 0]] * 17], "fps": None}, "'fps' must be the frame rate"),
     ({"frames": 3, "fps": 30}, "'frames' must be a list"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}, {"keypoints": [[1, 1]] * 16}], "fps": 30,
-      "format": "h36m17"}, "frame 1: format 'h36m17' has 17 joints, the file has 16"),
+      "format": "h36m17"}, "frame 1: 16 joints per person, where format 'h36m17' has 17, as the 1 frame\\(s\\) with "
+     "people before it have: the file changes keypoint layout at this frame \\(16 joints: 'sh16'\\); give every frame "
+     "in one format"),
+    # (a developer trial: one person of a frame cut to 16 rows was told to give the whole file format 'sh16', and a
+    # file switching to OpenPose's layout at frame 10 to give 'openpose25')
+    ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]},
+                 {"people": [{"keypoints": [[5, 5]] * 16, "person_id": "b"},
+                             {"keypoints": [[0, 0], [9, 9]] * 8 + [[0, 0]]}]}],
+      "fps": 30, "format": "h36m17"},
+     "frame 1: person 1 of frame 1 \\(input_index 0, id 'b'\\) has 16 joints, where format 'h36m17' has 17, as 1 "
+     "other person of the frame has: that person's rows are cut short or padded; give all 17 joints"),
+    ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}] * 2 + [{"people": [{"pose_keypoints_2d": [1.0] * 75}]}],
+      "fps": 30}, "frame 2: 25 joints per person, where format 'h36m17' has 17, as the 2 frame\\(s\\) with people "
+     "before it have: the file changes keypoint layout at this frame \\(25 joints: 'openpose25'\\)"),
+    ({"frames": [{"people": [{"keypoints": [[0, 0]] * 16}]}], "fps": 30, "format": "h36m17"},
+     "frame 0: format 'h36m17' has 17 joints, the file has 16: give the file's format, 'sh16'"),
 ])
 def test_keypoint_sequence_errors(tmp_path, lifter, body, match):
     p = tmp_path / "bad.json"
