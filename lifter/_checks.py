@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -22,6 +23,21 @@ class CheckpointError(PoseLifterError):
 class PoseLifterWarning(UserWarning):
     """Input the lifter takes but that looks wrong (a focal length in mm, a missing joint placed at (0, 0)); the
     message names the problem. Turn into errors with ``warnings.simplefilter("error", PoseLifterWarning)``."""
+
+
+_PACKAGE_DIR = os.path.dirname(__file__) + os.sep  # (as the package's code objects name their files)
+
+
+def warn_user(message: str) -> None:
+    """Warn :class:`PoseLifterWarning` ``message`` at the first frame outside the ``lifter`` package: the caller's
+    own line, however deep inside the package the warning arises (a review: a checkpoint's warning named a line of
+    ``lifter/api.py``; Python 3.12's ``skip_file_prefixes`` does this, 3.11 does not have it)."""
+    import warnings
+
+    level, frame = 2, sys._getframe(1)  # (stacklevel 1 is this function, 2 its caller)
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(PoseLifterWarning(message), stacklevel=level)
 
 
 def where_in_batch(mask: Any, *, whose: str | None = None, names: Sequence[str] | None = None) -> str:

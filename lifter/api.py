@@ -30,7 +30,6 @@ from ._checks import (
     CheckpointError,
     OutputNote,
     PoseLifterError,
-    PoseLifterWarning,
     as_pair,
     as_points,
     collect_output_notes,  # noqa: F401 -- (re-exported: it lived here, lifter.api.collect_output_notes)
@@ -41,6 +40,7 @@ from ._checks import (
     sideways_notes,
     upside_down_notes,
     view_angle_notes,
+    warn_user,
     where_in_batch,
 )
 from .camera import (
@@ -735,7 +735,7 @@ class Lifter:
         in_notes = tuple(in_list)
         if warn:
             for message in in_notes:
-                warnings.warn(PoseLifterWarning(message), stacklevel=3)
+                warn_user(message)
 
         flat_kp = kp.reshape(-1, NUM_JOINTS, 2)
         flat_pp = pp.reshape(-1, 2)
@@ -762,7 +762,7 @@ class Lifter:
         notes = self.output_notes(kp, pp, root, source=source, whose=whose, relative=rel, focal=f)
         if warn:
             for message in notes:
-                warnings.warn(PoseLifterWarning(message), stacklevel=3)
+                warn_user(message)
         return LiftResult(absolute=absolute, root=root, relative=rel, canonical_depth=canonical.reshape(lead),
                           keypoints_2d=np.array(kp), principal_point=np.array(pp), focal=np.array(f),
                           focal_source=focal_source,

@@ -28,7 +28,6 @@ import hashlib
 import io
 import os
 import re
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +35,7 @@ from typing import Any
 import torch
 
 from . import resources as assets
-from ._checks import CheckpointError, PoseLifterError, PoseLifterWarning
+from ._checks import CheckpointError, PoseLifterError, warn_user
 from .codec import PoseCodec
 from .io import write_atomic
 from .model import ModelConfig, PoseLifterNet
@@ -131,7 +130,7 @@ def _shipped_sha256s() -> frozenset[str]:
 def _not_torch_file(head: bytes) -> str:
     """Why bytes starting with ``head`` cannot be a torch file, or "" when they may be one (a zip archive, what
     ``torch.save`` writes, or a legacy pickle)."""
-    if head.lstrip()[:1] in (b"{", b"["):
+    if head.lstrip()[:1] in (b"{", b"[") or (head and head.isspace()):  # (JSON indented past the bytes read)
         return "it is a text file, JSON?"
     if head and not head.startswith((b"PK", b"\x80")):
         return "it is not a torch file (torch.save writes a zip archive, which starts 'PK')"
@@ -218,9 +217,8 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
                                   f"written with them (sha256 {got[:12]}..., written {stored[:12]}...), so it was "
                                   "changed after poselifter wrote it; restore it from a copy or train it again")
     if stored is None and expected_sha256 is None and file_sha256 not in _shipped_sha256s():
-        warnings.warn(PoseLifterWarning(
-            f"{where} has no checksum of its tensors (written before 2026-11-27), so a byte changed in it since "
-            "would go unnoticed; Lifter.from_checkpoint(path).save(path) writes it again with one"), stacklevel=2)
+        warn_user(f"{where} has no checksum of its tensors (written before 2026-11-27), so a byte changed in it since "
+                  "would go unnoticed; Lifter.from_checkpoint(path).save(path) writes it again with one")
     if version == 1:
         payload = _migrate_v1(payload, where)
     try:

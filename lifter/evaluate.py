@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from tqdm.auto import tqdm
 
-from ._checks import PoseLifterWarning, collect_output_notes
+from ._checks import PoseLifterWarning, collect_output_notes, warn_user
 from .analytic import analytic_root
 from .api import Lifter
 from .camera import camera_turn, project, turn_pixels
@@ -84,7 +84,7 @@ def predict(lifter: Lifter, samples: PoseSamples, *, flip_test: bool | None = No
     for first, count, text in notes.values():
         where = (f"samples {first}-{min(n, first + batch_size) - 1}" if batches > 1 else "")
         more = f"; so in {count} of {batches} batches of up to {batch_size} samples" if batches > 1 else ""
-        warnings.warn(PoseLifterWarning(f"{where + ': ' if where else ''}{text}{more}"), stacklevel=2)
+        warn_user(f"{where + ': ' if where else ''}{text}{more}")
     return Predictions(np.concatenate(rel), np.concatenate(root), np.concatenate(aroot) if analytic else None)
 
 
@@ -203,7 +203,7 @@ def focal_sweep(lifter: Lifter, samples: PoseSamples, *, factors: Sequence[float
                                         source=source)[0])
         for w in said:
             if issubclass(w.category, PoseLifterWarning):
-                warnings.warn(PoseLifterWarning(f"focal x{k:g}: {w.message}"), stacklevel=2)
+                warn_user(f"focal x{k:g}: {w.message}")
             else:
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return rows

@@ -92,7 +92,6 @@ a little differently, so treat its errors as indicative. The 84 frames are 5 sub
 from __future__ import annotations
 
 import functools
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -102,10 +101,10 @@ from numpy.typing import ArrayLike
 
 from ._checks import (
     PoseLifterError,
-    PoseLifterWarning,
     _joint_labels,
     _real_array,
     not_face_first_message,
+    warn_user,
     where_in_batch,
     zero_placeholders,
 )
@@ -567,20 +566,20 @@ def convert(keypoints: ArrayLike, *, src: str, dst: str = H36M17, warn: bool = T
         ext = xy.max(-2) - xy.min(-2)  # (..., 2) each pose's box
         span = float(np.hypot(ext[..., 0], ext[..., 1]).max())
         if float(third.min()) >= 0.0 and float(third.max()) <= 2.0 and span > 20.0:
-            warnings.warn(PoseLifterWarning(
+            warn_user(
                 f"keypoints: the third column is all within [0, 2] while the first two span up to {span:.0f} units "
                 "(box diagonal): detector confidences or COCO visibility flags, not a z in mm? They are converted "
-                "as a coordinate; for 2D pass keypoints[..., :2]"), stacklevel=2)
+                "as a coordinate; for 2D pass keypoints[..., :2]")
     if src == dst:
         return arr.copy()
     if warn:  # (with scores: the joints given, a missing one is stood in for or not read by the rules)
         for message in placeholder_notes(arr, src=src):
-            warnings.warn(PoseLifterWarning(message), stacklevel=2)
+            warn_user(message)
         said = (not_face_first_message(arr.reshape(-1, 17, 2)) if src == "coco17" and arr.size and arr.shape[-1] == 2
                 else None)
         if said is not None:
-            warnings.warn(PoseLifterWarning(f"keypoints: {said} They are converted as COCO-17 (scrambled if they are "
-                                            "H36M's); lift takes H36M-17 order as it is"), stacklevel=2)
+            warn_user(f"keypoints: {said} They are converted as COCO-17 (scrambled if they are "
+                      "H36M's); lift takes H36M-17 order as it is")
     h36m = arr if src == H36M17 else np.einsum("jk,...kd->...jd", f_src.matrix, arr)
     if dst == H36M17:
         return h36m
@@ -621,9 +620,9 @@ def _stood_in(arr: np.ndarray, scores: ArrayLike, *, src: str, warn: bool) -> np
             f"that nothing stands in for: {'; '.join(lacking[:5])}{'; ...' if len(lacking) > 5 else ''}. Give those "
             "joints (placed by hand, or interpolated from neighbouring frames), or leave the pose out")
     if warn and said_all:
-        warnings.warn(PoseLifterWarning(
+        warn_user(
             f"keypoints: stood in for missing joint(s): {', '.join(said_all[:6])}{', ...' if len(said_all) > 6 else ''}"
-            " (lifter.keypoints.STAND_INS)"), stacklevel=3)
+            " (lifter.keypoints.STAND_INS)")
     return flat.reshape(arr.shape)
 
 

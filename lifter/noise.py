@@ -68,7 +68,7 @@ from tqdm.auto import tqdm
 
 from . import resources as assets
 from ._array import ArrayT
-from ._checks import PoseLifterError, as_points
+from ._checks import PoseLifterError, as_points, warn_user
 from .normalization import pose_scale
 from .skeleton import JOINT_NAMES, NUM_JOINTS
 
@@ -306,13 +306,9 @@ class ErrorModel:
         path = Path(ref)
         if not path.is_file() and path.parent.parts[-2:] == ("assets", "error_model") and path.suffix == ".json" \
                 and path.stem in shipped_error_models():
-            import warnings
-
-            from ._checks import PoseLifterWarning
-
-            warnings.warn(PoseLifterWarning(
+            warn_user(
                 f"error model {ref}: no such file here; taken as the shipped fit {path.stem!r} that this path names in "
-                "a checkout (a config written there; give the file itself if it was another)"), stacklevel=2)
+                "a checkout (a config written there; give the file itself if it was another)")
             return cls.shipped(path.stem)
         if ref.endswith(".json") or path.is_file():
             return cls.load(ref)
