@@ -25,7 +25,6 @@ import math
 import os
 import re
 import time
-import warnings
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -34,7 +33,7 @@ from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
-from ._checks import PoseLifterError, PoseLifterWarning, as_pair, collect_output_notes
+from ._checks import PoseLifterError, as_pair, collect_output_notes, warn_user
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -410,10 +409,10 @@ class SequenceTracker:
                 unit = ("t looks like milliseconds: pass seconds (ms / 1000)" if ratio > 100 else
                         "pass t in seconds" if ratio > 1 else "pass t in seconds on the frames' own clock")
                 times = f"{ratio:.0f}" if ratio >= 10 else f"{ratio:.2g}"
-                warnings.warn(PoseLifterWarning(
+                warn_user(
                     f"SequenceTracker.step: frame {frame} comes {said:g} s after frame {self._last[0]}, where fps="
                     f"{self.fps:g} puts it {by_frames:g} s after ({times} times), three steps in a row: {unit}, or "
-                    "give the frames' true fps; the smoothing follows t"), stacklevel=2)
+                    "give the frames' true fps; the smoothing follows t")
         ids = self.tracker.update(frame, [] if nobody else list(kp), None if nobody else person_ids)
         self._last = (int(frame), float(t))  # (once the tracker took it: a refused frame may be given again)
         self._clock_off = clock
@@ -975,6 +974,14 @@ wrong for a while or the lift's own error, never two people), lifted by the defa
 2 minutes at 50 and at 25 frames/s (``python scripts/root_steps.py``); a user trial's sequence, one id given to a second
 person 0.96 m deeper, stepped without a word."""
 
+ROOT_STEP_DEPTH_SHARE: Final[float] = 0.15
+"""A step must also exceed this share of the nearer median's depth (from 5.3 m on, :data:`ROOT_STEP_MM` is the
+larger below it): a monocular root's error grows with its depth. A developer trial's still people 20 m away were named
+over and over; on the real Stacked-Hourglass detections of S9 and S11 moved along their rays to 2 and 4 times their
+depth (10 and 21 m; the detector's error shrunk with the person), 800 mm alone names a step every 7 s and every 0.8 s
+at 50 frames/s, with this share once every 1.3 min at both (at their own depth, 5 m: every 2.7 min, against 2.4 with
+800 mm alone; ``python scripts/root_steps.py --farther 1,2,4``, ``docs/results/root_steps.txt``)."""
+
 ROOT_STEP_MAX_SPAN_S: Final[float] = 0.2
 """Steps are judged only where the frames either side (:func:`_root_step_window`) span at most this (10 frames/s and
 faster): at 5 frames/s the two medians are 0.4 s apart, over which a runner moves as far; at 1 frame/s a walker
@@ -992,11 +999,13 @@ def _root_step_window(fps: float) -> int:
     return max(2, math.ceil(ROOT_STEP_WINDOW_S * fps - 1e-9))
 
 
-def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list[tuple[int, int, float]]]:
-    """Per track, where its unsmoothed root steps by more than :data:`ROOT_STEP_MM` (:data:`ROOT_STEP_WINDOW_S`
-    medians either side, over consecutive frames only): for each run of such frames ``(frame before, frame after,
-    step mm)``, the two frames of the run's largest move from one frame to the next, and its largest step between
-    the medians; in frame order; tracks without any are left out. Nothing below 10 frames/s
+def track_root_steps(frames: list[FrameResult], *, fps: float, depth_share: float = ROOT_STEP_DEPTH_SHARE,
+                     ) -> dict[int, list[tuple[int, int, float]]]:
+    """Per track, where its unsmoothed root steps by more than :data:`ROOT_STEP_MM` and ``depth_share`` (default
+    :data:`ROOT_STEP_DEPTH_SHARE`; 0: the millimetres alone) of the nearer median's depth (:data:`ROOT_STEP_WINDOW_S`
+    medians either side, over consecutive frames only; camera frame, mm): for each run of such frames ``(frame
+    before, frame after, step mm)``, the two frames of the run's largest move from one frame to the next, and its
+    largest step between the medians; in frame order; tracks without any are left out. Nothing below 10 frames/s
     (:data:`ROOT_STEP_MAX_SPAN_S`)."""
     w = _root_step_window(fps)
     out: dict[int, list[tuple[int, int, float]]] = {}
@@ -1006,10 +1015,13 @@ def track_root_steps(frames: list[FrameResult], *, fps: float) -> dict[int, list
         idx = np.array([i for i, _ in seen])
         root = np.stack([np.asarray(q.root_raw, np.float64) for _, q in seen]) if seen else np.zeros((0, 3))
         steps = np.zeros(max(len(seen) - 1, 0))  # (between sightings n and n + 1)
+        limit = np.full(steps.shape, ROOT_STEP_MM)
         for n in range(w - 1, len(seen) - w):
             if idx[n + w] - idx[n - w + 1] == 2 * w - 1:  # (no gap: one back after a gap may be elsewhere)
-                steps[n] = np.linalg.norm(np.median(root[n + 1:n + 1 + w], 0) - np.median(root[n - w + 1:n + 1], 0))
-        edges = np.diff(np.concatenate([[0], (steps > ROOT_STEP_MM).astype(np.int8), [0]]))
+                after, before = np.median(root[n + 1:n + 1 + w], 0), np.median(root[n - w + 1:n + 1], 0)
+                steps[n] = np.linalg.norm(after - before)
+                limit[n] = max(ROOT_STEP_MM, depth_share * min(after[2], before[2]))
+        edges = np.diff(np.concatenate([[0], (steps > limit).astype(np.int8), [0]]))
         hits = []
         for lo, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
             # (a step shows from the frames either side too: where the root moves most in the run is where it is)
@@ -1485,5 +1497,5 @@ __all__ = ["DEFAULT_MAX_PEOPLE", "DEFAULT_MAX_SECONDS", "OUTPUT_NOTE_LINE", "ROO
            "SequenceRecord", "SequenceTracker", "VIDEO_SUFFIXES", "VideoError", "collect_output_notes",
            "input_kind", "lift_keypoint_sequence", "lift_video", "limit_blas_threads", "output_note_lines",
            "TrackJump", "track_doubt_notes", "track_edge_notes", "track_gap_notes", "track_jump_notes", "track_jumps",
-           "track_lifted", "tracked_output_notes", "ROOT_STEP_MM", "ROOT_STEP_WINDOW_S", "track_root_steps",
-           "track_root_step_notes"]
+           "track_lifted", "tracked_output_notes", "ROOT_STEP_MM", "ROOT_STEP_DEPTH_SHARE", "ROOT_STEP_WINDOW_S",
+           "track_root_steps", "track_root_step_notes"]

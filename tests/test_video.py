@@ -1509,6 +1509,25 @@ def test_a_track_whose_root_steps_and_stays_is_named():
     assert [h[:2] for h in track_root_steps(_root_track(pulse, 50.0), fps=50.0)[1]] == [(99, 100), (102, 103)]
 
 
+def test_root_steps_grow_with_depth():
+    """A developer trial: still people 20 m away were named as stepping over and over, a monocular root's error
+    growing with its depth. A step must also exceed ROOT_STEP_DEPTH_SHARE of the nearer median's depth; near, the
+    millimetres rule; a swap far away is still named, and depth_share=0 is the millimetres alone."""
+    from lifter.video import ROOT_STEP_DEPTH_SHARE, ROOT_STEP_MM, track_root_steps
+
+    rng = np.random.default_rng(5)
+    far = np.array([2000.0, -1500.0, 20000.0]) + rng.normal(0, 1, (3000, 3)) * [150.0, 150.0, 900.0]  # (60 s)
+    assert track_root_steps(_root_track(far, 50.0), fps=50.0) == {}
+    assert len(track_root_steps(_root_track(far, 50.0), fps=50.0, depth_share=0.0)[1]) > 10  # (as before)
+    swapped = far.copy()
+    swapped[1500:] += [0, 0, 6000.0]  # (someone else, 6 m deeper)
+    (hit,) = track_root_steps(_root_track(swapped, 50.0), fps=50.0)[1]
+    assert hit[:2] == (1499, 1500) and ROOT_STEP_DEPTH_SHARE * 20000 < hit[2]
+    near = np.array([0.0, 0.0, 3000.0]) + rng.normal(0, 40, (300, 3))
+    near[150:] += [0, 0, ROOT_STEP_MM + 100]  # (the share of 3 m is under ROOT_STEP_MM: the millimetres decide)
+    assert [h[:2] for h in track_root_steps(_root_track(near, 50.0), fps=50.0)[1]] == [(149, 150)]
+
+
 def test_a_keypoint_sequence_whose_named_person_changes_is_noted(tmp_path, lifter, monkeypatch):
     """The user trial's case end to end: one person_id on a second, smaller-looking person from frame 30 on. The tiny
     test lifter's root does not follow the 2D size, so here its root is placed by it (as a trained lifter's is)."""
