@@ -141,6 +141,17 @@ def mixture_loglik(errors: np.ndarray, gamma: float, mu: np.ndarray, sigma: np.n
     return np.logaddexp(lg, lo)
 
 
+def check_em_settings(tol: float, max_iter: int) -> None:
+    """Refuse EM settings that are no fit: ``tol`` (nats/sample) must be a number >= 0 (0: every iteration up to
+    ``max_iter``) and ``max_iter`` >= 1 (a researcher trial: --tol -1 was taken, and --max-iter 0 wrote the
+    initialisation as a fit)."""
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol >= 0):
+        raise PoseLifterError(f"EM tol (--tol) must be a number >= 0 (nats per sample; default 1e-7; 0 runs every "
+                              f"iteration up to --max-iter), got {tol!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise PoseLifterError(f"EM max_iter (--max-iter) must be an integer >= 1 (default 1000), got {max_iter!r}")
+
+
 def fit_mixture(
     errors: ArrayLike,
     *,
@@ -155,6 +166,7 @@ def fit_mixture(
     Initialised from :func:`fit_gaussian` with ``gamma = init_gamma``; stops when the mean
     log-likelihood improves by less than ``tol`` nats per sample, or after ``max_iter`` iterations.
     """
+    check_em_settings(tol, max_iter)
     e = _check_errors(errors)
     mu, sigma, _ = fit_gaussian(e)
     gamma = float(init_gamma)
@@ -298,7 +310,8 @@ class ErrorModel:
         if ref.endswith(".pt"):
             from .checkpoint import load_checkpoint
 
-            stored = load_checkpoint(ref).meta.get("error_model")
+            with torch.random.fork_rng(devices=[]):  # (its network's initialisation draws; a researcher trial: a
+                stored = load_checkpoint(ref).meta.get("error_model")  # repeat with RUN.pt trained other weights)
             if not isinstance(stored, dict):
                 raise PoseLifterError(f"error model {ref}: this checkpoint stores no error-model fit (a run without "
                                       "synthetic noise, or from before runs stored theirs): give the fit's JSON")

@@ -73,12 +73,36 @@ def test_train_rejects_bad_config_values(capsys, tmp_path):
         assert expected in capsys.readouterr().err
 
 
+def test_train_out_must_be_a_checkpoint_name_and_not_a_file_the_run_reads(capsys, tmp_path):
+    """A researcher trial: --out x.curve.json wrote a checkpoint over run x's learning curve, and --config a.pt
+    --out a.pt replaced the run it was configured from; both are refused before any data is read."""
+    assert main(["train", "--out", str(tmp_path / "x.curve.json")]) == 2
+    assert "a checkpoint's name ends in .pt (the learning curve is written beside it as NAME.curve.json)" in (
+        capsys.readouterr().err)
+    from lifter.checkpoint import save_checkpoint
+    from lifter.codec import PoseCodec
+    from lifter.config import TrainConfig
+    from lifter.model import ModelConfig, PoseLifterNet
+
+    cfg = ModelConfig(width=16, num_blocks=1)
+    run = save_checkpoint(tmp_path / "a.pt", PoseLifterNet(cfg), PoseCodec(cfg), meta={"name": "a"},
+                          train_config=TrainConfig(model=cfg).to_dict())
+    for option in ("--config", "--init"):
+        assert main(["train", option, str(run), "--out", str(tmp_path / "." / "a.pt")]) == 2
+        assert f"is this run's {option}: the finished run would replace it; give another --out" in (
+            capsys.readouterr().err)
+
+
 def test_train_says_an_error_model_that_no_sample_uses_is_not_read(capsys, tmp_path):
     """A security trial: --error-model naming a file that is not a fit was accepted without a word with every sample
-    clean (the default), and failed only in a later --config repeat with noise on."""
-    assert main(["train", "--error-model", str(tmp_path / "junk.pt"), "--print-config"]) == 0
-    assert (f"note: --error-model {tmp_path / 'junk.pt'} is not read: no sample gets synthetic noise (--clean-prob 1 "
+    clean (the default), and failed only in a later --config repeat with noise on. A researcher trial: the name was
+    still stored in the run's config; one that is no fit is now refused, naming the fix."""
+    assert main(["train", "--error-model", "sh_mixture", "--print-config"]) == 0
+    assert ("note: --error-model sh_mixture is not read: no sample gets synthetic noise (--clean-prob 1 "
             "+ --real-prob 0 = 1)") in capsys.readouterr().err
+    assert main(["train", "--error-model", str(tmp_path / "junk.pt"), "--print-config"]) == 2
+    err = capsys.readouterr().err
+    assert "junk.pt" in err and "would not read it either (no sample gets synthetic noise): drop --error-model" in err
     assert main(["train", "--clean-prob", "0.5", "--print-config"]) == 0
     assert "is not read" not in capsys.readouterr().err
 
@@ -343,3 +367,26 @@ def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, suffix):
     with pytest.raises(PoseLifterError, match=r"the plot: p.jpg is not a name a plot can be written under"):
         plot_pck_curves({"a": (np.linspace(0, 150, 31), np.linspace(0, 1, 31))}, tmp_path / "p.jpg")
     assert not (tmp_path / "p.jpg").exists()
+
+
+def test_commands_print_the_lifters_warnings_as_note_lines(monkeypatch, capsys):
+    """A researcher trial: a warning read ``.venv/bin/poselifter:6: PoseLifterWarning: ... sys.exit(main())``. Every
+    command prints a PoseLifterWarning as a ``note:`` line, as evaluate did."""
+    import warnings
+
+    import lifter.cli.models as models
+    from lifter._checks import PoseLifterWarning, warn_user
+
+    monkeypatch.setattr(models, "run_models", lambda args: warn_user("something to say") or 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", PoseLifterWarning)  # (shown, whatever the test run's own filter)
+        assert main(["models"]) == 0
+    err = capsys.readouterr().err
+    assert err == "note: something to say\n"
+
+
+def test_evaluate_refuses_two_rows_of_one_label(capsys):
+    """A researcher trial: ``x=runs/a.pt x=runs/b.pt`` printed two rows "x" whose JSON objects could not be told
+    apart (and one's provenance was lost, kept by label); refused before any weights are read."""
+    assert main(["evaluate", "x=runs/none_a.pt", "x=runs/none_b.pt"]) == 2
+    assert "two models are labelled 'x': give each row its own label (LABEL=MODEL" in capsys.readouterr().err

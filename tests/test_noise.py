@@ -53,6 +53,14 @@ def test_em_monotone_from_bad_start_and_iteration_cap():
     assert f.iterations == 25 and not f.converged
     assert np.all(np.diff(f.history) >= -1e-12)
     assert len(f.history) == 26
+    # (a researcher trial: --tol -1 was taken, and --max-iter 0 wrote the initialisation as a fit)
+    with pytest.raises(PoseLifterError, match=r"EM tol \(--tol\) must be a number >= 0"):
+        fit_mixture(e, tol=-1.0)
+    with pytest.raises(PoseLifterError, match=r"EM max_iter \(--max-iter\) must be an integer >= 1"):
+        fit_mixture(e, max_iter=0)
+    from lifter.cli import main
+
+    assert main(["fit-noise", "--max-iter", "0", "--h36m", "/nonexistent"]) == 2  # (before the data is read)
 
 
 def test_gaussian_fit():

@@ -368,6 +368,13 @@ def test_a_run_stores_its_error_model_fit_and_a_repeat_with_another_fit_says_so(
     assert meta["error_model_sha256"] == shipped.sha256() and meta["error_model"]["format"] == "poselifter-error-model"
     back = ErrorModel.resolve(str(out))
     assert back.sha256() == shipped.sha256()
+    # (a researcher trial: reading the fit from the run drew its network's initialisation from the global generator
+    # after the seed, so a repeat with --error-model RUN.pt trained other weights than the run)
+    again = train(replace(noisy, data=replace(noisy.data, error_model=str(out))), train_samples=train_s,
+                  val_sets=validation_sets(synthetic_samples(20, seed=4), None), progress=False, log=lambda s: None,
+                  ctx=Dist())
+    for k, v in res.net.state_dict().items():
+        assert torch.equal(v, again.net.state_dict()[k]), k
     np.testing.assert_allclose(back.sigma, shipped.sigma, atol=1e-6)
     other = replace(shipped, sigma=3 * shipped.sigma)
     assert repeat_notes(out, error_model=("em/fit.json", other.sha256())) == [
@@ -396,6 +403,28 @@ def test_a_run_stores_its_error_model_fit_and_a_repeat_with_another_fit_says_so(
     assert far.sha256() == shipped.sha256()
     with pytest.raises(PoseLifterError, match="cannot read"):
         ErrorModel.resolve(str(tmp_path / "assets" / "error_model" / "no_such_fit.json"))
+
+
+def test_a_run_whose_fit_path_is_not_found_names_the_fit_it_stores(tmp_path, monkeypatch, capsys):
+    """A researcher trial: a run's config keeps --error-model em/fit.json as typed, and ``--config RUN.pt`` from
+    another folder failed with "cannot read" only; the run stores the fit, and the message now says to take it."""
+    from lifter.cli import main
+    from lifter.noise import ErrorModel
+    from lifter.train import save_training_outputs
+
+    (tmp_path / "em").mkdir()
+    (tmp_path / "em" / "fit.json").write_text(ErrorModel.shipped("sh_mixture").to_json())
+    monkeypatch.chdir(tmp_path)
+    cfg = replace(tiny_config(), data=DataConfig(clean_prob=0.0, error_model="em/fit.json"))
+    res = train(cfg, train_samples=synthetic_samples(100, seed=3), progress=False, log=lambda s: None, ctx=Dist(),
+                val_sets=validation_sets(synthetic_samples(20, seed=4), None))
+    run = save_training_outputs(res, tmp_path / "run.pt")
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    assert main(["train", "--config", str(run), "--out", "again.pt"]) == 2
+    err = capsys.readouterr().err
+    assert "error model em/fit.json: cannot read" in err
+    assert f"{run} stores the fit it trained with: add --error-model {run}" in err
 
 
 def _interrupt_at(monkeypatch, call: int) -> None:

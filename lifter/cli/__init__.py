@@ -10,10 +10,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from collections.abc import Sequence
 
 from .. import __version__
-from .._checks import PoseLifterError
+from .._checks import PoseLifterError, PoseLifterWarning
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "train": ("train", "train a lifter on Human3.6M (also under torchrun)"),
@@ -80,11 +81,23 @@ def _stdout_reader_gone() -> bool:
         return True
 
 
+def _note(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+    """``warnings.showwarning`` for the commands: a :class:`PoseLifterWarning` as a ``note:`` line on stderr (a
+    researcher trial read ``.venv/bin/poselifter:6: PoseLifterWarning: ... sys.exit(main())``); others as Python
+    shows them."""
+    if issubclass(category, PoseLifterWarning):
+        print(f"note: {message}", file=sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, *_), end="", file=sys.stderr)  # type: ignore[arg-type]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser(_command(argv))
     args = _parse(parser, argv)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():  # the lifter's notes as note: lines, not Python's file:line form
+            warnings.showwarning = _note
+            return int(args.func(args) or 0)
     except (PoseLifterError, FileNotFoundError) as exc:
         print(f"poselifter {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from .._checks import PoseLifterError, PoseLifterWarning, plot_format
+from .._checks import PoseLifterError, plot_format
 from ..api import Lifter, ensemble_parts
 from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS, trained_protocol
 from ..detections import with_sh_detections
@@ -175,23 +174,14 @@ def training_subject_notes(label: str, lifter: Lifter, protocol: int) -> list[st
 
 
 def run(args: argparse.Namespace) -> int:
-    with warnings.catch_warnings():  # the lifter's notes as the other commands print them, not Python's form
-        warnings.showwarning = _note
-        return _run(args)
-
-
-def _note(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
-    """``warnings.showwarning`` for this command: a :class:`PoseLifterWarning` as a ``note:`` line on stderr."""
-    if issubclass(category, PoseLifterWarning):
-        print(f"note: {message}", file=sys.stderr)
-    else:
-        print(warnings.formatwarning(message, category, *_), end="", file=sys.stderr)  # type: ignore[arg-type]
-
-
-def _run(args: argparse.Namespace) -> int:
     check_evaluate_options(args)
     torch.set_num_threads(args.threads)
     lifters = []
+    labels = [split_label(spec)[0] for spec in args.weights]
+    twice = [la for la in dict.fromkeys(labels) if labels.count(la) > 1]
+    if twice:  # (a researcher trial: two rows "x", their JSON objects not told apart, one's provenance lost)
+        raise PoseLifterError(f"two models are labelled {twice[0]!r}: give each row its own label (LABEL=MODEL, e.g. "
+                              f"a={twice[0]} b=runs/other.pt)")
     for spec in args.weights:
         label, ref = split_label(spec)
         lifter = Lifter.load(ref)

@@ -13,7 +13,7 @@ from pathlib import Path
 import torch
 
 from ..data import H36M
-from ..noise import em_not_converged
+from ..noise import check_em_settings, em_not_converged
 from ..noise_fit import (
     SkipFigure,
     describe_fit,
@@ -52,6 +52,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run_fit_noise(args: argparse.Namespace) -> int:
+    check_em_settings(args.tol, args.max_iter)  # (before the data is read)
     torch.set_num_threads(args.threads)
     data = H36M(args.h36m)
     fit = fit_sh_error_model(data, protocol=args.protocol, tol=args.tol, max_iter=args.max_iter,

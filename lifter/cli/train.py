@@ -31,6 +31,7 @@ from ..config import TrainConfig, add_config_arguments, config_from_args
 from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
+from ..noise import ErrorModel
 from ..train import (
     check_teacher,
     init_distributed,
@@ -65,7 +66,13 @@ def run(args: argparse.Namespace) -> int:
         raise PoseLifterError("--distill-weight weighs the loss against a teacher's outputs, and no --teacher is "
                               "given: add --teacher MODEL (a shipped name or checkpoint), or drop --distill-weight")
     if getattr(args, "cfg__data__error_model", None) is not None and cfg.data.noise_prob <= 0:
-        # (a security trial: a file that is not a fit was accepted unread, and failed later in a --config repeat)
+        # (a security trial: a file that is not a fit was accepted unread, and failed later in a --config repeat; a
+        # researcher trial: a name that is no fit was stored in the run's config all the same)
+        try:
+            ErrorModel.resolve(cfg.data.error_model)
+        except PoseLifterError as exc:
+            raise PoseLifterError(f"{exc}; this run would not read it either (no sample gets synthetic noise): drop "
+                                  "--error-model") from None
         print(f"note: --error-model {cfg.data.error_model} is not read: no sample gets synthetic noise "
               f"(--clean-prob {cfg.data.clean_prob:g} + --real-prob {cfg.data.real_prob:g} = 1)", file=sys.stderr)
     init, init_sha, init_notes, init_name = None, None, [], ""
@@ -91,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is None:
         raise PoseLifterError("--out is required: the checkpoint path to write")
     check_writable(args.out, option="--out")  # before training, not after it: a run not saved is lost
+    _check_out(Path(args.out), cfg, args.config)
     if args.threads is not None and args.threads < 1:
         raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
 
@@ -106,7 +114,10 @@ def run(args: argparse.Namespace) -> int:
         teacher = load_option("--teacher", cfg.teacher, args)
         check_teacher(teacher, init[1] if init is not None else PoseCodec(cfg.model), lens=cfg.data.lens)
         teacher_sha = weights_sha256(cfg.teacher, every_network=True)
-    fit = load_fit(cfg)  # (before the data is read: a fit that cannot be read is refused at once)
+    try:
+        fit = load_fit(cfg)  # (before the data is read: a fit that cannot be read is refused at once)
+    except PoseLifterError as exc:
+        raise PoseLifterError(f"{exc}{_stored_fit_hint(args)}") from None
     if ctx.main:
         for line in repeat_notes(args.config, init=None if init_sha is None else (str(cfg.init), init_sha),
                                  teacher=None if teacher_sha is None else (str(cfg.teacher), teacher_sha),
@@ -230,6 +241,35 @@ def weights_sha256(ref: str, *, every_network: bool = False) -> str:
         return str(entry.get("sha256", ""))
     sums = [entry.get("sha256", ""), *entry.get("ensemble_sha256", []), entry.get("clean_sha256", "")]
     return hashlib.sha256(" ".join(str(x) for x in sums).encode()).hexdigest()
+
+
+def _check_out(out: Path, cfg: TrainConfig, config: str | None) -> None:
+    """Refuse an ``--out`` that is not a ``.pt`` file (a run's learning curve is written beside it as
+    ``<name>.curve.json``: a researcher trial's ``--out x.curve.json`` wrote a checkpoint over run x's curve) or that
+    is a file this run reads: its ``--config``, ``--init`` or ``--teacher`` (which a finished run replaced)."""
+    if out.suffix != ".pt":
+        raise PoseLifterError(f"--out {out}: a checkpoint's name ends in .pt (the learning curve is written beside it "
+                              "as NAME.curve.json): e.g. --out runs/my.pt")
+    for option, ref in (("--config", config), ("--init", cfg.init), ("--teacher", cfg.teacher)):
+        if ref is not None and Path(ref).is_file() and Path(ref).resolve() == out.resolve():
+            raise PoseLifterError(f"--out {out} is this run's {option}: the finished run would replace it; give "
+                                  "another --out")
+
+
+def _stored_fit_hint(args: argparse.Namespace) -> str:
+    """For a fit that cannot be read: where ``--config RUN.pt`` names it (not ``--error-model``) and the run stores
+    the fit it trained with, how to take that (a researcher trial: a run's relative path to its fit, stored as typed,
+    failed from another folder)."""
+    config = getattr(args, "config", None)
+    if config is None or Path(config).suffix != ".pt" or getattr(args, "cfg__data__error_model", None) is not None:
+        return ""
+    try:
+        with torch.random.fork_rng(devices=[]):
+            stored = load_checkpoint(config).meta.get("error_model")
+    except PoseLifterError:
+        return ""
+    return (f"; {config} stores the fit it trained with: add --error-model {config}" if isinstance(stored, dict)
+            else "")
 
 
 def repeat_notes(config: Path | None, *, init: tuple[str, str] | None = None,
