@@ -1,5 +1,6 @@
 """A what-if for the photos line of issue 11 (MRPE <= 160 mm): the root of detector 2D taken partly from the clean
-network, by how well the two networks agree. Not shipped: the weight's width was only ever looked at on test data.
+network, by how well the two networks agree. Not shipped: the training subjects' detections, the only data a width
+could be chosen on, do not favour it (docs/results/root_agreement.txt).
 
     python scripts/root_agreement.py [--stride 50] [--model default] [--out docs/results/root_agreement.txt]
 
@@ -8,8 +9,9 @@ larger, is placed too near: "Known limits"); its clean network leans on it less 
 detector (``docs/results/source_clean_detections.txt``). Where the two roots agree, the 2D is likely precise. The
 root here is ``(1 - w) * detected + w * clean`` with ``w = exp(-(dz / tau)^2)``, ``dz`` the two roots' depth
 difference over the detected root's depth, for a few ``tau``; camera frame, mm. Measured on the real SH detections
-of S9 and S11 (Protocol 1, every ``stride``-th frame, each camera's intrinsics and lens) and on the 84 demo photos
-through BlazePose (``scripts/eval_cascade.py``'s cached detections, true intrinsics): MRPE (mm) and mean signed
+of S9 and S11 (Protocol 1, every ``stride``-th frame, each camera's intrinsics and lens), on those of the training
+subjects (which the detected networks were trained on, partly), and on the 84 demo photos through BlazePose
+(``scripts/eval_cascade.py``'s cached detections, true intrinsics): MRPE (mm) and mean signed
 root-depth error. The pose (root-relative) is the detected networks' and does not change.
 """
 
@@ -32,19 +34,22 @@ from lifter.detections import SH_DETECTIONS_FILE  # noqa: E402
 from lifter.keypoints import convert  # noqa: E402
 
 TAUS = (0.02, 0.03, 0.05, 0.08, 0.12)
+TRAINING = ("S1", "S5", "S6", "S7", "S8")
 
 
-def _sh_samples(data: H36M, stride: int) -> dict[str, tuple[np.ndarray, ...]]:
-    """Per test subject: SH 2D (H36M-17 px), true 3D (camera frame, mm), focal, principal point, lens."""
+def _sh_samples(data: H36M, stride: int, subjects: tuple[str, ...]) -> dict[str, tuple[np.ndarray, ...]]:
+    """Per subject: SH 2D (H36M-17 px), true 3D (camera frame, mm), focal, principal point, lens; every ``stride``-th
+    frame (a multiple of 5: the training subjects' detections are of every 5th frame)."""
     out: dict[str, list[list[np.ndarray]]] = {}
     with np.load(Path(data.root) / SH_DETECTIONS_FILE) as d:
         for key in sorted(d.files):
             s, seq, cam_id = key.split("/")
-            if s not in ("S9", "S11") or f"{s}/{seq}" not in data.sequences:
+            if s not in subjects or f"{s}/{seq}" not in data.sequences:
                 continue
+            rows = 1 if s in ("S9", "S11") else 5  # (frames per row of the detections file)
             cam = data.camera(int(s[1:]), cam_id)
             X = world_to_camera(data.poses_world(f"{s}/{seq}")[::stride], cam.R, cam.t)
-            kp = convert(d[key][::stride].astype(np.float64), src="sh16", warn=False)[:len(X)]
+            kp = convert(d[key][::stride // rows].astype(np.float64), src="sh16", warn=False)[:len(X)]
             ok = np.isfinite(kp).all(axis=(1, 2))
             n = int(ok.sum())
             rows = out.setdefault(s, [[], [], [], [], []])
@@ -72,19 +77,29 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument("--model", default="default")
-    ap.add_argument("--stride", type=int, default=50)
+    ap.add_argument("--stride", type=int, default=50, help="every n-th frame, a multiple of 5 (default 50)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
+    if args.stride < 5 or args.stride % 5:
+        ap.error(f"--stride must be a multiple of 5 (the training subjects' detections are of every 5th frame), "
+                 f"got {args.stride}")
     h36m = args.h36m or default_h36m_dir()
     data = H36M(h36m)
     lifter = Lifter.load(args.model)
     rows = []
     everyone: list[tuple[np.ndarray, ...]] = []
-    for s, (kp, X, f, pp, lens) in sorted(_sh_samples(data, args.stride).items()):
+    for s, (kp, X, f, pp, lens) in sorted(_sh_samples(data, args.stride, ("S9", "S11")).items()):
         det, clean = _roots(lifter, kp, f, pp, lens)
         everyone.append((det, clean, X[:, 0]))
         rows.append(_row(f"SH detections, {s}", det, clean, X[:, 0]))
     rows.insert(0, _row("SH detections, S9 + S11", *(np.concatenate(v) for v in zip(*everyone))))
+    trained = []
+    by_subject = sorted(_sh_samples(data, args.stride, TRAINING).items(), key=lambda v: int(v[0][1:]))
+    for s, (kp, X, f, pp, lens) in by_subject:
+        det, clean = _roots(lifter, kp, f, pp, lens)
+        trained.append((det, clean, X[:, 0]))
+        rows.append(_row(f"SH detections, {s} (trained on)", det, clean, X[:, 0]))
+    rows.append(_row("SH detections, S1-S8 (trained on)", *(np.concatenate(v) for v in zip(*trained))))
     demo = h36m / "demo"
     ann = np.load(demo / "annotations.npz")
     focal, pp, lens = cascade.demo_intrinsics(cascade.demo_cameras(data, ann))
