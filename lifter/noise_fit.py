@@ -160,7 +160,7 @@ def format_error_table(model: ErrorModel) -> str:
                     f"{nm[j]:8.3f} {ng[j]:8.3f} {int(it[j]):5d}")
     rows.append(f"{'mean':<11} {model.gamma.mean():6.3f} {'':6} {'':6} {model.sigma[:, 0].mean():6.2f} "
                 f"{model.sigma[:, 1].mean():6.2f} {gs[:, 0].mean():7.2f} {gs[:, 1].mean():7.2f} {nm.mean():8.3f} "
-                f"{ng.mean():8.3f} {int(it.max()):5d}")
+                f"{ng.mean():8.3f} {it.mean():5.1f}")
     rows.append(f"(px at reference 2D scale {model.reference_scale:.1f} px; NLL nats per 2D error; "
                 f"n = {model.n_samples} per joint)")
     return "\n".join(rows)

@@ -279,6 +279,8 @@ def test_fit_noise_cli_parser_table_and_histograms(tmp_path):
     assert m.n_samples == 400 and np.all(m.nll_mixture <= m.nll_gaussian + 1e-9)
     table = format_error_table(m)
     assert "r_wrist" in table and "mean" in table
+    mean_row = next(r for r in table.splitlines() if r.startswith("mean"))  # (a researcher trial: it gave the max)
+    assert mean_row.split()[-1] == f"{np.mean(m.iterations):.1f}"
     e = (det - gt) * (m.reference_scale / pose_scale(gt))[:, None, None]
     assert plot_error_histograms(e, m, tmp_path / "h.png", bins=21, dpi=20).stat().st_size > 1000
     # a fit cut at --max-iter says which joints had not converged (a researcher trial: "iters 2" and nothing more);
