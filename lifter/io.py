@@ -1019,10 +1019,13 @@ def _count_message(p: Path, fmt: str, counts: list[int], count: int, *, who: str
                 "them out")
     if frames_before:
         layout = f" ({count} joints: {_one_of(same)})" if same else ""
-        return (f"{p}: {count} joints per person, where format {fmt!r} has {n}, as the {frames_before} frame(s) "
-                f"with people before it have: the file changes keypoint layout at this frame{layout}; give every "
-                "frame in one format (lifter.keypoints.convert converts between them), or lift each part as a file of "
-                "its own")
+        whose = f"{count} joints per person" if len(set(counts)) == 1 else f"{who} has {count} joints"
+        cut = "that person's rows are cut short or padded" if len(counts) == 1 or len(set(counts)) > 1 else (
+            "their rows are cut short or padded")
+        return (f"{p}: {whose}, where format {fmt!r} has {n}, as the {frames_before} frame(s) with people before it "
+                f"have: {cut}, or the file changes keypoint layout at this frame{layout}; give every person all {n} "
+                "joints (null for any not known), in one format for the whole file (lifter.keypoints.convert converts "
+                "between formats), or lift each part as a file of its own")
     return said + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
                    if same else _no_format_with(count))
 

@@ -691,6 +691,17 @@ class _Followed:
     recent: int = 0
     people: list[tuple[int, np.ndarray, Any]] = field(default_factory=list)
     set_aside: int = 0
+    aside_frames: list[int] = field(default_factory=list)
+
+    def aside_note(self) -> list[str]:
+        """The note on the frames where someone was set aside (else they read only as frames the followed people
+        are missing from: a review)."""
+        if not self.aside_frames:
+            return []
+        return [f"someone else was found while the people followed were missing, and not lifted, in "
+                f"{len(self.aside_frames)} frame(s) ({_frames_summary(self.aside_frames)}): within "
+                f"{FOLLOWED_RECENT_S:g} s of a followed person's last sighting, one whose box overlaps none of theirs "
+                "is not taken for them (--max-people)"]
 
     def keep(self, frame: int, boxes: list[np.ndarray], names: list[Any]) -> list[int]:
         """Which of the frame's people (largest first) to lift (:func:`keep_tracked` when there are too many). While
@@ -706,12 +717,18 @@ class _Followed:
                                 tracked_ids=[n for *_, n in self.people])
         else:
             keep = list(range(len(boxes)))
+        self.set_aside = 0
         if full:  # (a person named otherwise than each followed one is lifted: the tracker keeps names apart)
-            them = [j for j in keep if all(n is not None and names[j] is not None for *_, n in self.people) or any(
-                box_iou(b, boxes[j]) > 0 for _, b, n in self.people if n is None or names[j] is None)]
-            self.set_aside, keep = len(keep) - len(them), them
-        else:
-            self.set_aside = 0
+            def them(j: int) -> bool:
+                if names[j] is not None and all(n is not None for *_, n in self.people):
+                    return True
+                return any(n == names[j] if n is not None and names[j] is not None else box_iou(b, boxes[j]) > 0
+                           for _, b, n in self.people)
+
+            kept = [j for j in keep if them(j)]
+            self.set_aside, keep = len(keep) - len(kept), kept
+            if self.set_aside:
+                self.aside_frames.append(frame)
         taken: set[int] = set()
         for j in keep:
             same = [k for k, (_, b, n) in enumerate(self.people) if k not in taken and (
@@ -1335,6 +1352,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if crowded:
         warnings.append(_crowd_note(max_people, crowded,
                                     searched=None if full_searches >= len(frames) else (full_searches, len(frames))))
+    warnings.extend(followed.aside_note())
     if bad:
         warnings.append(f"{len(bad)} bad frame(s) skipped: {_frames_summary([b['index'] for b in bad])}")
     f, src, pp = cam
@@ -1472,6 +1490,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         if kept_names is not None:
             kept_names.append([names[j] for j in keep])
     frames, ids = kept_frames, kept_ids
+    warnings.extend(followed.aside_note())
     counts = [len(fr) for fr in frames]
     nobody = [at[i] for i, c in enumerate(counts) if c == 0]
     if nobody:

@@ -87,10 +87,12 @@ def test_train_out_must_be_a_checkpoint_name_and_not_a_file_the_run_reads(capsys
     cfg = ModelConfig(width=16, num_blocks=1)
     run = save_checkpoint(tmp_path / "a.pt", PoseLifterNet(cfg), PoseCodec(cfg), meta={"name": "a"},
                           train_config=TrainConfig(model=cfg).to_dict())
-    for option in ("--config", "--init"):
-        assert main(["train", option, str(run), "--out", str(tmp_path / "." / "a.pt")]) == 2
+    for option in ("--config", "--init", "--error-model"):
+        assert main(["train", option, str(run), "--clean-prob", "0.5", "--out", str(tmp_path / "." / "a.pt")]) == 2
         assert f"is this run's {option}: the finished run would replace it; give another --out" in (
             capsys.readouterr().err)
+    assert main(["train", "--out", str(tmp_path / "new" / "sub" / "x.json")]) == 2  # (a review: refused, and the
+    assert not (tmp_path / "new").exists()  # folders were made all the same)
 
 
 def test_train_says_an_error_model_that_no_sample_uses_is_not_read(capsys, tmp_path):
@@ -383,10 +385,18 @@ def test_commands_print_the_lifters_warnings_as_note_lines(monkeypatch, capsys):
         assert main(["models"]) == 0
     err = capsys.readouterr().err
     assert err == "note: something to say\n"
+    # (a review: any other warning ended the command with a TypeError, showwarning being called with 6 arguments)
+    monkeypatch.setattr(models, "run_models",
+                        lambda args: warnings.warn("numpy says", RuntimeWarning, stacklevel=1) or 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", RuntimeWarning)
+        assert main(["models"]) == 0
+    assert "RuntimeWarning: numpy says" in capsys.readouterr().err
 
 
 def test_evaluate_refuses_two_rows_of_one_label(capsys):
     """A researcher trial: ``x=runs/a.pt x=runs/b.pt`` printed two rows "x" whose JSON objects could not be told
     apart (and one's provenance was lost, kept by label); refused before any weights are read."""
     assert main(["evaluate", "x=runs/none_a.pt", "x=runs/none_b.pt"]) == 2
-    assert "two models are labelled 'x': give each row its own label (LABEL=MODEL" in capsys.readouterr().err
+    assert ("two models are labelled 'x': give each row its own label (LABEL=MODEL, e.g. a=runs/none_a.pt "
+            "b=runs/none_b.pt)") in capsys.readouterr().err

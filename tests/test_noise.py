@@ -47,7 +47,7 @@ def test_em_recovers_known_mixture(gamma, mu, sigma):
     assert f.nll < nll_g
 
 
-def test_em_monotone_from_bad_start_and_iteration_cap():
+def test_em_monotone_from_bad_start_and_iteration_cap(capsys):
     e = synthetic_errors(np.random.default_rng(2), 5000, 0.7, (10.0, -10.0), (2.0, 15.0))
     f = fit_mixture(e, init_gamma=0.999, tol=0.0, max_iter=25)
     assert f.iterations == 25 and not f.converged
@@ -60,7 +60,8 @@ def test_em_monotone_from_bad_start_and_iteration_cap():
         fit_mixture(e, max_iter=0)
     from lifter.cli import main
 
-    assert main(["fit-noise", "--max-iter", "0", "--h36m", "/nonexistent"]) == 2  # (before the data is read)
+    assert main(["fit-noise", "--max-iter", "0", "--h36m", "/nonexistent"]) == 2
+    assert "EM max_iter (--max-iter) must be an integer >= 1" in capsys.readouterr().err  # (before the data is read)
 
 
 def test_gaussian_fit():

@@ -470,12 +470,22 @@ def test_max_people_does_not_give_a_followed_track_to_someone_beside_them(tmp_pa
     rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(script), focal=F, max_people=1, rejoin_s=0)
     assert [len(fr.people) for fr in rec.frames] == [0 if i == 10 else 1 for i in range(20)]
     assert {p.track_id for fr in rec.frames for p in fr.people} == {1}
+    assert any(w.startswith("someone else was found while the people followed were missing, and not lifted, in 1 "
+                            "frame(s) (10)") for w in rec.warnings), rec.warnings
     path = tmp_path / "beside.json"
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": [
         {"people": [{"keypoints": k.tolist()} for k in people]} for people in script]}))
     rec = lift_keypoint_sequence(path, lifter=lifter, max_people=1, rejoin_s=0)
     assert [len(fr.people) for fr in rec.frames] == [0 if i == 10 else 1 for i in range(20)]
     assert {p.track_id for fr in rec.frames for p in fr.people} == {1}
+    assert sum(w.startswith("someone else was found while") for w in rec.warnings) == 1
+    # (a review: with two people followed, one named and one not, the named one was set aside in most frames)
+    two = [{"people": [{"keypoints": (a + [i, 0]).tolist(), "person_id": "a"},
+                       {"keypoints": (a + [i + 120, 0]).tolist()}]} for i in range(20)]
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": two}))
+    rec = lift_keypoint_sequence(path, lifter=lifter, max_people=2)
+    assert [len(fr.people) for fr in rec.frames] == [2] * 20
+    assert not any(w.startswith("someone else was found while") for w in rec.warnings)
 
 
 def test_keypoint_sequence_max_people_follows_one_person(tmp_path, lifter):
@@ -865,8 +875,8 @@ def test_visibility_flags_are_decided_once_per_sequence(tmp_path, lifter):
     ({"frames": 3, "fps": 30}, "'frames' must be a list"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}, {"keypoints": [[1, 1]] * 16}], "fps": 30,
       "format": "h36m17"}, "frame 1: 16 joints per person, where format 'h36m17' has 17, as the 1 frame\\(s\\) with "
-     "people before it have: the file changes keypoint layout at this frame \\(16 joints: 'sh16'\\); give every frame "
-     "in one format"),
+     "people before it have: that person's rows are cut short or padded, or the file changes keypoint layout at this "
+     "frame \\(16 joints: 'sh16'\\); give every person all 17 joints \\(null for any not known\\), in one format"),
     # (a developer trial: one person of a frame cut to 16 rows was told to give the whole file format 'sh16', and a
     # file switching to OpenPose's layout at frame 10 to give 'openpose25')
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]},
@@ -877,7 +887,8 @@ def test_visibility_flags_are_decided_once_per_sequence(tmp_path, lifter):
      "other person of the frame has: that person's rows are cut short or padded; give all 17 joints"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 17}]}] * 2 + [{"people": [{"pose_keypoints_2d": [1.0] * 75}]}],
       "fps": 30}, "frame 2: 25 joints per person, where format 'h36m17' has 17, as the 2 frame\\(s\\) with people "
-     "before it have: the file changes keypoint layout at this frame \\(25 joints: 'openpose25'\\)"),
+     "before it have: that person's rows are cut short or padded, or the file changes keypoint layout at this frame "
+     "\\(25 joints: 'openpose25'\\)"),
     ({"frames": [{"people": [{"keypoints": [[0, 0]] * 16}]}], "fps": 30, "format": "h36m17"},
      "frame 0: format 'h36m17' has 17 joints, the file has 16: give the file's format, 'sh16'"),
 ])

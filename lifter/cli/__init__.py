@@ -81,14 +81,15 @@ def _stdout_reader_gone() -> bool:
         return True
 
 
-def _note(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+def _note(message: Warning | str, category: type[Warning], filename: str, lineno: int, file: object = None,
+          line: str | None = None) -> None:
     """``warnings.showwarning`` for the commands: a :class:`PoseLifterWarning` as a ``note:`` line on stderr (a
     researcher trial read ``.venv/bin/poselifter:6: PoseLifterWarning: ... sys.exit(main())``); others as Python
     shows them."""
     if issubclass(category, PoseLifterWarning):
         print(f"note: {message}", file=sys.stderr)
     else:
-        print(warnings.formatwarning(message, category, *_), end="", file=sys.stderr)  # type: ignore[arg-type]
+        print(warnings.formatwarning(message, category, filename, lineno, line), end="", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -180,8 +180,9 @@ def run(args: argparse.Namespace) -> int:
     labels = [split_label(spec)[0] for spec in args.weights]
     twice = [la for la in dict.fromkeys(labels) if labels.count(la) > 1]
     if twice:  # (a researcher trial: two rows "x", their JSON objects not told apart, one's provenance lost)
+        refs = [split_label(spec)[1] for spec, la in zip(args.weights, labels) if la == twice[0]]
         raise PoseLifterError(f"two models are labelled {twice[0]!r}: give each row its own label (LABEL=MODEL, e.g. "
-                              f"a={twice[0]} b=runs/other.pt)")
+                              + " ".join(f"{chr(ord('a') + k)}={ref}" for k, ref in enumerate(refs[:3])) + ")")
     for spec in args.weights:
         label, ref = split_label(spec)
         lifter = Lifter.load(ref)

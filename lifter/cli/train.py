@@ -97,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.out is None:
         raise PoseLifterError("--out is required: the checkpoint path to write")
+    _check_out(Path(args.out), cfg, args.config)  # (first: check_writable creates --out's folder)
     check_writable(args.out, option="--out")  # before training, not after it: a run not saved is lost
-    _check_out(Path(args.out), cfg, args.config)
     if args.threads is not None and args.threads < 1:
         raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
 
@@ -246,11 +246,13 @@ def weights_sha256(ref: str, *, every_network: bool = False) -> str:
 def _check_out(out: Path, cfg: TrainConfig, config: str | None) -> None:
     """Refuse an ``--out`` that is not a ``.pt`` file (a run's learning curve is written beside it as
     ``<name>.curve.json``: a researcher trial's ``--out x.curve.json`` wrote a checkpoint over run x's curve) or that
-    is a file this run reads: its ``--config``, ``--init`` or ``--teacher`` (which a finished run replaced)."""
-    if out.suffix != ".pt":
+    is a file this run reads: its ``--config``, ``--init``, ``--teacher`` or ``--error-model`` (which a finished run
+    replaced)."""
+    if out.suffix.lower() != ".pt":
         raise PoseLifterError(f"--out {out}: a checkpoint's name ends in .pt (the learning curve is written beside it "
                               "as NAME.curve.json): e.g. --out runs/my.pt")
-    for option, ref in (("--config", config), ("--init", cfg.init), ("--teacher", cfg.teacher)):
+    for option, ref in (("--config", config), ("--init", cfg.init), ("--teacher", cfg.teacher),
+                        ("--error-model", cfg.data.error_model)):
         if ref is not None and Path(ref).is_file() and Path(ref).resolve() == out.resolve():
             raise PoseLifterError(f"--out {out} is this run's {option}: the finished run would replace it; give "
                                   "another --out")
