@@ -179,10 +179,11 @@ def check_finite(arr: np.ndarray, *, name: str) -> None:
         raise PoseLifterError(f"{name}: contains {bad} NaN/inf value(s); all values must be finite")
 
 
-def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) -> np.ndarray:
+def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False,
+            lead: tuple[int, ...] | None = None) -> np.ndarray:
     """Return a 2-vector (optionally batched, shape ``(..., 2)``) as float64 ``(..., 2)``. scalar: a scalar (or a
     last axis of 1) means the same value twice (a focal length ``fx = fy``); otherwise it is refused (a principal
-    point or image size needs both coordinates)."""
+    point or image size needs both coordinates). lead: the keypoints' leading shape, for the messages."""
     arr = _real_array(x, name=name, what="a number or pair" if scalar else "a pair")
     if scalar and arr.ndim == 0:
         arr = np.stack([arr, arr])
@@ -194,8 +195,16 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False) 
     if arr.ndim == 0 or arr.shape[-1] != 2:
         pair = "(width, height)" if "size" in name else "(x, y)"
         expected = "a scalar or shape (..., 2)" if scalar else f"a pair {pair} or shape (..., 2)"
-        hint = (f" (one value per pose: give shape {tuple(arr.shape) + (1,)}, e.g. {name}[:, None]; a bare (2,) "
+        hint = (f" (one value per pose: give shape {tuple(arr.shape) + (1,)}, e.g. {name}[..., None]; a bare (2,) "
                 "always means (fx, fy))" if scalar and arr.ndim >= 1 and arr.shape[-1] > 2 else "")
+        if hint and lead is not None and len(lead) >= 2 and arr.ndim == 1 and arr.shape[0] in (lead[0], lead[-1]):
+            # (a developer trial: for poses (B, T, 17, 2) the hint's focal[:, None] was taken per frame, silently
+            # so where B == T)
+            ways = ([f"one per index of the first axis (each sequence) is shape {lead[:1] + (1,) * len(lead)}, e.g. "
+                     f"{name}[:{', None' * len(lead)}]"] if arr.shape[0] == lead[0] else []) + (
+                [f"one per index of the last axis is shape ({lead[-1]}, 1), e.g. {name}[:, None]"]
+                if arr.shape[0] == lead[-1] else [])
+            hint = f" (the keypoints' leading shape is {lead}: {'; '.join(ways)}; a bare (2,) always means (fx, fy))"
         raise PoseLifterError(f"{name}: expected {expected}, got "
                               f"{arr.tolist() if arr.size <= 4 else tuple(arr.shape)}{hint}")
     check_finite(arr, name=name)

@@ -681,7 +681,8 @@ class Lifter:
                 focal_source = "default-fov"
             else:
                 focal, focal_source = CANONICAL_FOCAL, "reference"
-        f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True), lead, name="focal", given=focal)
+        f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True, lead=lead), lead, name="focal",
+                       given=focal)
         for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
             if arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
                 raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "

@@ -543,8 +543,22 @@ def project(
     applied (this is how H36M's own 2D annotations are made); without them it is a pinhole.
     """
     X = np.asarray(points_cam, np.float64)
-    if X.shape[-1] != 3:
+    if X.shape[-1] != 3 or X.ndim < 2:
         raise PoseLifterError(f"points_cam: expected shape (..., J, 3), got {X.shape}")
+    lead = X.shape[:-2]
+    for label, v in (("focal", focal), ("principal_point", principal_point), ("k", k), ("p", p)):
+        # (a developer trial: focal[:, None] for points (N, J, 3) projected every set through every camera,
+        # (N, N, J, 2), without a word; a parameter's leading axes must be the points' own, or broadcast to them)
+        if v is None or np.ndim(v) < 1:
+            continue
+        own, last = np.shape(v)[:-1], np.shape(v)[-1:]
+        try:
+            fits = np.broadcast_shapes(own, lead) == lead
+        except ValueError:
+            fits = False
+        if not fits:
+            raise PoseLifterError(f"{label}: leading shape {own} does not match the points' {lead} (points_cam "
+                                  f"{X.shape}): give one per point set, shape {lead + last}, or one for all")
     z = X[..., 2:3]
     if np.any(z <= 0):
         raise PoseLifterError("points_cam: all points must be in front of the camera (z > 0)")

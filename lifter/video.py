@@ -33,7 +33,7 @@ from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
-from ._checks import PoseLifterError, as_pair, collect_output_notes, warn_user
+from ._checks import PoseLifterError, _real_array, as_pair, collect_output_notes, warn_user
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -372,7 +372,11 @@ class SequenceTracker:
         or lists) is a frame with nobody. A single person's arrays without the leading ``n`` axis are refused with
         the shapes expected. ``person_ids``: the input's own name for each person (a keypoint sequence's
         ``person_id``, None: unnamed), which the tracker follows over the boxes (:class:`lifter.tracking.Tracker`)."""
-        kp = np.asarray(keypoints_2d, np.float64)
+        # (torch tensors and lists as lift takes them: a developer trial's tensors met a raw torch TypeError)
+        kp = _real_array(keypoints_2d, name="keypoints_2d", what="an array of 2D keypoints")
+        root = _real_array(root, name="root", what="an array of roots")
+        relative = _real_array(relative, name="relative", what="an array of relative poses")
+        scores = None if scores is None else _real_array(scores, name="scores", what="an array of scores")
         nobody = kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0
         if not nobody:
             n = kp.shape[0] if kp.ndim == 3 else -1

@@ -293,10 +293,18 @@ def test_batched_focal_and_broadcast_errors(small_lifter, keypoints):
                        r"give one \(2,\) focal, e\.g\. focal\[0\]"):
         small_lifter.lift(keypoints[3], focal=per_pose[3:4], principal_point=(512.0, 515.0))
     # one scalar focal per pose as (N,): refused (a (2,) would be ambiguous), with the shape that works
-    with pytest.raises(PoseLifterError, match=r"one value per pose: give shape \(6, 1\), e\.g\. focal\[:, None\]"):
+    with pytest.raises(PoseLifterError, match=r"one value per pose: give shape \(6, 1\), e\.g\. focal\[\.\.\., None\]"):
         small_lifter.lift(keypoints, focal=per_pose[:, 1], principal_point=(512.0, 515.0))
     res = small_lifter.lift(keypoints, focal=per_pose[:, 1][:, None], principal_point=(512.0, 515.0))
     np.testing.assert_allclose(res.focal, per_pose[:, [1, 1]])
+    # (a developer trial: for (B, T) poses the hint's focal[:, None] gave one focal per frame, silently where B == T)
+    seqs = np.broadcast_to(keypoints[:1], (3, 3, 17, 2))
+    with pytest.raises(PoseLifterError, match=r"leading shape is \(3, 3\): one per index of the first axis \(each "
+                       r"sequence\) is shape \(3, 1, 1\), e\.g\. focal\[:, None, None\]; one per index of the last "
+                       r"axis is shape \(3, 1\)"):
+        small_lifter.lift(seqs, focal=per_pose[:3, 1], principal_point=(512.0, 515.0))
+    res = small_lifter.lift(seqs, focal=per_pose[:3, 1][:, None, None], principal_point=(512.0, 515.0))
+    np.testing.assert_allclose(res.focal[:, 2, 0], per_pose[:3, 1])
 
 
 def test_absolute_depth_model_path():

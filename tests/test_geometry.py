@@ -241,3 +241,21 @@ def test_an_angle_of_view_beyond_the_plausible_one_never_reads_as_within_it():
                                                                                    "120.001"]
     kp = np.array([[0.0, 0.0], [400.0, 300.0]] + [[200.0, 150.0]] * 15)  # (a 500 px diagonal)
     assert float(pose_view_deg(kp, 250.0 / np.tan(np.radians(120.3) / 2))) == pytest.approx(120.3)
+
+
+def test_project_refuses_parameters_whose_leading_axes_are_not_the_points():
+    """A developer trial: ``project(P (N, J, 3), focal=F[:, None], principal_point=C[:, None])`` broadcast every point
+    set through every camera, (N, N, J, 2), without a word; each parameter's leading axes must be the points' own
+    (or broadcast to them), else an error names the shape that works."""
+    from lifter import PoseLifterError
+    from lifter.camera import project
+
+    P = np.random.default_rng(0).normal(0, 300, (4, 17, 3)) + [0, 0, 4000]
+    F, C = np.linspace(900, 1200, 4), np.full((4, 2), 500.0)
+    assert project(P, focal=F[:, None], principal_point=C).shape == (4, 17, 2)  # (a scalar focal per set)
+    assert project(P, focal=1000.0, principal_point=(500, 500), k=np.zeros(3), p=np.zeros(2)).shape == (4, 17, 2)
+    with pytest.raises(PoseLifterError, match=r"principal_point: leading shape \(4, 1\) does not match the points' "
+                       r"\(4,\) \(points_cam \(4, 17, 3\)\): give one per point set, shape \(4, 2\), or one for all"):
+        project(P, focal=F[:, None], principal_point=C[:, None])
+    with pytest.raises(PoseLifterError, match=r"k: leading shape \(3,\) does not match the points' \(4,\)"):
+        project(P, focal=1000.0, principal_point=(500, 500), k=np.zeros((3, 3)))

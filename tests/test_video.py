@@ -1714,3 +1714,20 @@ def test_people_s_own_motion_does_not_jump(h36m, stride):
         cam = h36m.camera(int(seq.split("/")[0][1:]), "54138969")
         kp = cam.project(cam.world_to_camera(h36m.poses_world(seq)[::stride]))
         assert track_jump_notes(_track_of(kp, fps=50 / stride), fps=50 / stride) == [], seq
+
+
+def test_sequence_tracker_takes_torch_tensors_as_lift_does():
+    """A developer trial: SequenceTracker.step given torch tensors (as Lifter.lift takes them) met a raw torch
+    TypeError; it reads them as arrays, to the same states as numpy."""
+    import torch
+
+    from lifter.video import SequenceTracker
+
+    kp = _person(np.random.default_rng(2), 160)[None]
+    root, rel = np.array([[100.0, -50.0, 4000.0]]), np.zeros((1, 17, 3))
+    a, b = SequenceTracker(fps=25), SequenceTracker(fps=25)
+    for i in range(3):
+        sa = a.step(i, i / 25, kp + i, root + i, rel, F)
+        sb = b.step(i, i / 25, torch.tensor(kp + i), torch.tensor(root + i), torch.tensor(rel), F)
+    np.testing.assert_allclose(sa[0].root, sb[0].root)
+    assert sa[0].track_id == sb[0].track_id == 1
