@@ -539,8 +539,10 @@ def project(
     """Project camera-frame points ``(..., J, 3)`` (mm, z > 0) to pixels ``(..., J, 2)``.
 
     ``focal`` (px) is a scalar or a pair ``(fx, fy)``, ``principal_point`` (px) a pair ``(cx, cy)``; either may be
-    batched as ``(..., 2)`` over the leading dimensions. With ``k`` and ``p`` the H36M lens distortion is
-    applied (this is how H36M's own 2D annotations are made); without them it is a pinhole.
+    batched as ``(..., 2)`` over the points' leading dimensions (refused when they would widen them: a set of
+    poses projected through a batch of cameras of another shape; one pose ``(J, 3)`` goes through any batch). With
+    ``k`` and ``p`` the H36M lens distortion is applied (this is how H36M's own 2D annotations are made); without
+    them it is a pinhole.
     """
     X = np.asarray(points_cam, np.float64)
     if X.shape[-1] != 3 or X.ndim < 2:
@@ -549,11 +551,17 @@ def project(
     for label, v in (("focal", focal), ("principal_point", principal_point), ("k", k), ("p", p)):
         # (a developer trial: focal[:, None] for points (N, J, 3) projected every set through every camera,
         # (N, N, J, 2), without a word; a parameter's leading axes must be the points' own, or broadcast to them)
-        if v is None or np.ndim(v) < 1:
+        if v is None:
             continue
-        own, last = np.shape(v)[:-1], np.shape(v)[-1:]
         try:
-            fits = np.broadcast_shapes(own, lead) == lead
+            shape = np.shape(v)
+        except ValueError:  # (ragged: refused below, by name)
+            continue
+        if len(shape) < 1:
+            continue
+        own, last = shape[:-1], shape[-1:]
+        try:
+            fits = np.broadcast_shapes(own, lead) == lead or not lead  # (one point set through many cameras: fine)
         except ValueError:
             fits = False
         if not fits:

@@ -33,7 +33,7 @@ from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
-from ._checks import PoseLifterError, _real_array, as_pair, collect_output_notes, warn_user
+from ._checks import PoseLifterError, _real_array, _untorch, as_pair, collect_output_notes, warn_user
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -376,7 +376,7 @@ class SequenceTracker:
         kp = _real_array(keypoints_2d, name="keypoints_2d", what="an array of 2D keypoints")
         root = _real_array(root, name="root", what="an array of roots")
         relative = _real_array(relative, name="relative", what="an array of relative poses")
-        scores = None if scores is None else _real_array(scores, name="scores", what="an array of scores")
+        scores = None if scores is None else np.asarray(_untorch(scores), np.float64)
         nobody = kp.size == 0 and np.size(root) == 0 and np.size(relative) == 0
         if not nobody:
             n = kp.shape[0] if kp.ndim == 3 else -1
@@ -427,7 +427,7 @@ class SequenceTracker:
         for i, tid in enumerate(ids):
             sm = self._smoothers.setdefault(tid, PoseSmoother(self.smoothing))
             r, rel = sm(root[i], relative[i], t)
-            out.append(PersonState(track_id=tid, keypoints_2d=np.asarray(keypoints_2d[i], np.float64), root=r,
+            out.append(PersonState(track_id=tid, keypoints_2d=kp[i].copy(), root=r,
                                    relative=rel, root_raw=np.asarray(root[i], np.float64),
                                    relative_raw=np.asarray(relative[i], np.float64),
                                    canonical_depth=float(canonical_depth_from_depth(r[2], focal=focal)),

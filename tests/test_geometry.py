@@ -259,3 +259,7 @@ def test_project_refuses_parameters_whose_leading_axes_are_not_the_points():
         project(P, focal=F[:, None], principal_point=C[:, None])
     with pytest.raises(PoseLifterError, match=r"k: leading shape \(3,\) does not match the points' \(4,\)"):
         project(P, focal=1000.0, principal_point=(500, 500), k=np.zeros((3, 3)))
+    # (a review: one point set through several cameras is a broadcast that stays; a ragged focal is named)
+    assert project(P[0], focal=np.full((3, 2), 1000.0), principal_point=(500, 500)).shape == (3, 17, 2)
+    with pytest.raises(PoseLifterError, match="focal"):
+        project(P, focal=[1000.0, [1, 2]], principal_point=(500, 500))

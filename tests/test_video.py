@@ -1728,6 +1728,8 @@ def test_sequence_tracker_takes_torch_tensors_as_lift_does():
     a, b = SequenceTracker(fps=25), SequenceTracker(fps=25)
     for i in range(3):
         sa = a.step(i, i / 25, kp + i, root + i, rel, F)
-        sb = b.step(i, i / 25, torch.tensor(kp + i), torch.tensor(root + i), torch.tensor(rel), F)
+        sb = b.step(i, i / 25, torch.tensor(kp + i, requires_grad=True), torch.tensor(root + i), torch.tensor(rel), F,
+                    scores=np.ones((1, 17), bool))
     np.testing.assert_allclose(sa[0].root, sb[0].root)
-    assert sa[0].track_id == sb[0].track_id == 1
+    np.testing.assert_allclose(sa[0].keypoints_2d, sb[0].keypoints_2d)
+    assert sa[0].track_id == sb[0].track_id == 1 and sb[0].scores is not None and sb[0].scores.dtype == np.float64
