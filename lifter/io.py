@@ -1009,8 +1009,6 @@ def _count_message(p: Path, fmt: str, counts: list[int], count: int, *, who: str
     a file switching to OpenPose's layout at frame 10 to give 'openpose25' for the whole file)."""
     n = get_format(fmt).num_joints
     same = [k for k in keypoint_formats() if get_format(k).num_joints == count]
-    said = (f"{p}: format {fmt!r} has {n} joints, the file has {count}"
-            + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else ""))
     fitting = sum(c == n for c in counts)
     if fitting:
         return (f"{p}: {who} has {count} joints, where format {fmt!r} has {n}, as {fitting} other "
@@ -1019,15 +1017,17 @@ def _count_message(p: Path, fmt: str, counts: list[int], count: int, *, who: str
                 "them out")
     if frames_before:
         layout = f" ({count} joints: {_one_of(same)})" if same else ""
-        whose = f"{count} joints per person" if len(set(counts)) == 1 else f"{who} has {count} joints"
-        cut = "that person's rows are cut short or padded" if len(counts) == 1 or len(set(counts)) > 1 else (
-            "their rows are cut short or padded")
+        alike = len(set(counts)) == 1
+        whose = f"{count} joints per person" if alike else f"{who} has {count} joints"
+        rows = "their rows are" if alike and len(counts) > 1 else "that person's rows are"
         return (f"{p}: {whose}, where format {fmt!r} has {n}, as the {frames_before} frame(s) with people before it "
-                f"have: {cut}, or the file changes keypoint layout at this frame{layout}; give every person all {n} "
-                "joints (null for any not known), in one format for the whole file (lifter.keypoints.convert converts "
-                "between formats), or lift each part as a file of its own")
-    return said + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
-                   if same else _no_format_with(count))
+                f"have: {rows} cut short or padded, or the file changes keypoint layout at this frame{layout}; give "
+                f"every person all {n} joints (null for any not known), in one format for the whole file "
+                "(lifter.keypoints.convert converts between formats), or lift each part as a file of its own")
+    return (f"{p}: format {fmt!r} has {n} joints, the file has {count}"
+            + (f" ({LAYOUT_FORMATS[fmt]} implies {fmt!r} when the file has no 'format')" if layout_format else "")
+            + (f": give the file's format, {_one_of(same)} ('format' in the file, or --format with poselifter lift)"
+               if same else _no_format_with(count)))
 
 
 def _missing_message(fmt: str, dropped: list[tuple[str, list[str]]], *, nobody_left: bool) -> str:
@@ -1465,6 +1465,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
     if given_fps is not None and "fps" in d and not pattern and float(d["fps"]) != float(given_fps):
         notes.append(own_fps_note(d["fps"], given_fps))
     frames: list[list[np.ndarray]] = []
+    with_people = 0  # (frames so far with people kept: for the messages)
     ids: list[list[str | int | None]] = []
     scores: list[list[np.ndarray | None]] = []
     dropped: list[tuple[int, tuple[str, list[str]]]] = []  # (frame, (who, joints))
@@ -1483,7 +1484,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         # (the format's note from the first frame with people, which settles it; the scores' note over every frame:
         # a review saw both lost after a leading empty frame, or for scores above 2 past the first frame)
         found = _people_arrays(people, where, f_fmt, notes if fmt is None else [], layout_format=layout_format,
-                               frame=i, score_note=False, frames_before=sum(map(bool, frames)))
+                               frame=i, score_note=False, frames_before=with_people)
         arrays, f_fmt, identity, gone = found.arrays, found.format, found.identity, found.dropped
         for _, said in found.stood_in:
             for phrase in said:
@@ -1495,6 +1496,7 @@ def parse_keypoint_sequence(path: str | Path, *, default_format: str | None = No
         elif f_fmt != fmt:
             raise PoseLifterError(f"{where}: format {f_fmt!r} differs from the sequence's {fmt!r}")
         frames.append(arrays)
+        with_people += bool(arrays)
         ids.append([pid for _, pid in identity])
         scores.append(list(found.scores))
         dropped += [(i, g) for g in gone]

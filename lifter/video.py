@@ -697,6 +697,13 @@ class _Followed:
     set_aside: int = 0
     aside_frames: list[int] = field(default_factory=list)
 
+    @classmethod
+    def at_fps(cls, *, max_people: int, fps: float) -> _Followed:
+        """Followed people let go after the track timeout (:data:`TRACK_TIMEOUT_S`), recent within
+        :data:`FOLLOWED_RECENT_S`, in frames at ``fps``."""
+        return cls(max_people=max_people, horizon=timeout_frames(TRACK_TIMEOUT_S, fps),
+                   recent=round(fps * FOLLOWED_RECENT_S))
+
     def aside_note(self) -> list[str]:
         """The note on the frames where someone was set aside (else they read only as frames the followed people
         are missing from: a review)."""
@@ -1237,8 +1244,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         last_search = -(10**9)
         search_every = max(1, round(search_every_s * fps)) if search_every_s > 0 else 1
         can_track = callable(getattr(estimator, "detect_near", None))
-        followed = _Followed(max_people=max_people, horizon=max(1, round(fps * TRACK_TIMEOUT_S)),  # (--max-people)
-                             recent=round(fps * FOLLOWED_RECENT_S))
+        followed = _Followed.at_fps(max_people=max_people, fps=fps)  # (--max-people)
         while index + 1 < limit:
             t0 = time.perf_counter()
             ok, bgr = cap.read()
@@ -1474,8 +1480,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     kept_ids: list[list[Any]] | None = None if ids is None else []
     kept_scores: list[list[np.ndarray | None]] = []
     kept_names: list[list[Any]] | None = None if ids is None else []
-    followed = _Followed(max_people=max_people, horizon=max(1, round(ks.fps * TRACK_TIMEOUT_S)),
-                         recent=round(ks.fps * FOLLOWED_RECENT_S))
+    followed = _Followed.at_fps(max_people=max_people, fps=ks.fps)
     names_by_frame = None if ids is None else tracking_names(ids)
     if ids is not None:  # (ids a frame gives to several people: said, as tracking_names leaves them out)
         twice = [(at[i], t) for i, frame in enumerate(ids) for t in repeated_ids(frame)]

@@ -28,38 +28,22 @@ import eval_cascade as cascade  # noqa: E402  (scripts/eval_cascade.py)
 from _report import emit  # noqa: E402  (scripts/_report.py)
 
 from lifter import Lifter  # noqa: E402
-from lifter.camera import world_to_camera  # noqa: E402
-from lifter.data import H36M, default_h36m_dir  # noqa: E402
-from lifter.detections import SH_DETECTIONS_FILE  # noqa: E402
+from lifter.data import H36M, PoseSamples, default_h36m_dir  # noqa: E402
+from lifter.detections import with_sh_detections  # noqa: E402
 from lifter.keypoints import convert  # noqa: E402
 
 TAUS = (0.02, 0.03, 0.05, 0.08, 0.12)
-TRAINING = ("S1", "S5", "S6", "S7", "S8")
+TRAINING = (1, 5, 6, 7, 8)
 
 
-def _sh_samples(data: H36M, stride: int, subjects: tuple[str, ...]) -> dict[str, tuple[np.ndarray, ...]]:
-    """Per subject: SH 2D (H36M-17 px), true 3D (camera frame, mm), focal, principal point, lens; every ``stride``-th
-    frame (a multiple of 5: the training subjects' detections are of every 5th frame)."""
-    out: dict[str, list[list[np.ndarray]]] = {}
-    with np.load(Path(data.root) / SH_DETECTIONS_FILE) as d:
-        for key in sorted(d.files):
-            s, seq, cam_id = key.split("/")
-            if s not in subjects or f"{s}/{seq}" not in data.sequences:
-                continue
-            rows = 1 if s in ("S9", "S11") else 5  # (frames per row of the detections file)
-            cam = data.camera(int(s[1:]), cam_id)
-            X = world_to_camera(data.poses_world(f"{s}/{seq}")[::stride], cam.R, cam.t)
-            kp = convert(d[key][::stride // rows].astype(np.float64), src="sh16", warn=False)[:len(X)]
-            ok = np.isfinite(kp).all(axis=(1, 2))
-            n = int(ok.sum())
-            rows = out.setdefault(s, [[], [], [], [], []])
-            for i, v in enumerate((kp[ok], X[:len(kp)][ok], np.tile(cam.focal, (n, 1)),
-                                   np.tile(cam.principal_point, (n, 1)), np.tile([*cam.k, *cam.p], (n, 1)))):
-                rows[i].append(v)
-    return {s: tuple(np.concatenate(v) for v in rows) for s, rows in out.items()}
+def _sh_samples(data: H36M, stride: int, subjects: tuple[int, ...]) -> dict[str, PoseSamples]:
+    """Per subject, its samples (every ``stride``-th frame, each camera) with the real SH detections as their 2D
+    (:func:`lifter.detections.with_sh_detections`; a stride that is a multiple of 5 for the training subjects)."""
+    sh, _ = with_sh_detections(data.load(list(subjects), stride=stride), data=data)
+    return {f"S{s}": sh.subset(np.flatnonzero(sh.subject == s)) for s in subjects}
 
 
-def _roots(lifter: Lifter, kp: np.ndarray, focal: np.ndarray, pp: np.ndarray, lens: np.ndarray,
+def _roots(lifter: Lifter, kp: np.ndarray, focal: np.ndarray, pp: np.ndarray, lens: np.ndarray | None,
            ) -> tuple[np.ndarray, np.ndarray]:
     return tuple(np.asarray(lifter.lift(kp, focal=focal, principal_point=pp, distortion=lens, source=src,  # type: ignore[return-value]
                                         warn=False).root) for src in ("detected", "clean"))
@@ -88,17 +72,16 @@ def main() -> int:
     lifter = Lifter.load(args.model)
     rows = []
     everyone: list[tuple[np.ndarray, ...]] = []
-    for s, (kp, X, f, pp, lens) in sorted(_sh_samples(data, args.stride, ("S9", "S11")).items()):
-        det, clean = _roots(lifter, kp, f, pp, lens)
-        everyone.append((det, clean, X[:, 0]))
-        rows.append(_row(f"SH detections, {s}", det, clean, X[:, 0]))
+    for s, sh in sorted(_sh_samples(data, args.stride, (9, 11)).items()):
+        det, clean = _roots(lifter, sh.keypoints_2d, sh.focal, sh.principal_point, sh.distortion)
+        everyone.append((det, clean, sh.pose_3d[:, 0]))
+        rows.append(_row(f"SH detections, {s}", det, clean, sh.pose_3d[:, 0]))
     rows.insert(0, _row("SH detections, S9 + S11", *(np.concatenate(v) for v in zip(*everyone))))
     trained = []
-    by_subject = sorted(_sh_samples(data, args.stride, TRAINING).items(), key=lambda v: int(v[0][1:]))
-    for s, (kp, X, f, pp, lens) in by_subject:
-        det, clean = _roots(lifter, kp, f, pp, lens)
-        trained.append((det, clean, X[:, 0]))
-        rows.append(_row(f"SH detections, {s} (trained on)", det, clean, X[:, 0]))
+    for s, sh in _sh_samples(data, args.stride, TRAINING).items():
+        det, clean = _roots(lifter, sh.keypoints_2d, sh.focal, sh.principal_point, sh.distortion)
+        trained.append((det, clean, sh.pose_3d[:, 0]))
+        rows.append(_row(f"SH detections, {s} (trained on)", det, clean, sh.pose_3d[:, 0]))
     rows.append(_row("SH detections, S1-S8 (trained on)", *(np.concatenate(v) for v in zip(*trained))))
     demo = h36m / "demo"
     ann = np.load(demo / "annotations.npz")

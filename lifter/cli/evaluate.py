@@ -177,14 +177,14 @@ def run(args: argparse.Namespace) -> int:
     check_evaluate_options(args)
     torch.set_num_threads(args.threads)
     lifters = []
-    labels = [split_label(spec)[0] for spec in args.weights]
+    specs = [split_label(spec) for spec in args.weights]
+    labels = [label for label, _ in specs]
     twice = [la for la in dict.fromkeys(labels) if labels.count(la) > 1]
     if twice:  # (a researcher trial: two rows "x", their JSON objects not told apart, one's provenance lost)
-        refs = [split_label(spec)[1] for spec, la in zip(args.weights, labels) if la == twice[0]]
+        refs = [ref for label, ref in specs if label == twice[0]]
         raise PoseLifterError(f"two models are labelled {twice[0]!r}: give each row its own label (LABEL=MODEL, e.g. "
                               + " ".join(f"{chr(ord('a') + k)}={ref}" for k, ref in enumerate(refs[:3])) + ")")
-    for spec in args.weights:
-        label, ref = split_label(spec)
+    for label, ref in specs:
         lifter = Lifter.load(ref)
         lifters.append((label, lifter))
         if args.quantize:
