@@ -310,8 +310,7 @@ class ErrorModel:
         if ref.endswith(".pt"):
             from .checkpoint import load_checkpoint
 
-            with torch.random.fork_rng(devices=[]):  # (its network's initialisation draws; a researcher trial: a
-                stored = load_checkpoint(ref).meta.get("error_model")  # repeat with RUN.pt trained other weights)
+            stored = load_checkpoint(ref).meta.get("error_model")  # (draws nothing from the global generator)
             if not isinstance(stored, dict):
                 raise PoseLifterError(f"error model {ref}: this checkpoint stores no error-model fit (a run without "
                                       "synthetic noise, or from before runs stored theirs): give the fit's JSON")

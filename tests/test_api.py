@@ -359,6 +359,20 @@ def test_checkpoint_round_trip_and_errors(tmp_path, small_lifter, keypoints):
         load_checkpoint(foreign)
 
 
+def test_loading_never_draws_from_the_global_generator(tmp_path, small_lifter):
+    """A seeded script draws the same numbers with or without loading a model first (a load built its network from
+    the global generator: a seeded run's batches and dropout changed with its --error-model or teacher)."""
+    path = save_checkpoint(tmp_path / "m.pt", small_lifter.net, small_lifter.codec)
+    torch.manual_seed(7)
+    expected = torch.rand(4)
+    torch.manual_seed(7)
+    load_checkpoint(path)
+    assert torch.equal(torch.rand(4), expected)
+    torch.manual_seed(7)
+    Lifter.from_pretrained()
+    assert torch.equal(torch.rand(4), expected)
+
+
 def test_checkpoint_sha256(tmp_path, small_lifter):
     from lifter.checkpoint import sha256_file
 
