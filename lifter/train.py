@@ -56,6 +56,7 @@ from .loss import poselifter_loss
 from .model import PoseLifterNet, forward_folded
 from .noise import ErrorModel
 from .normalization import pose_scale
+from .resume import ResumeState, data_fingerprint
 from .skeleton import mirror
 
 if TYPE_CHECKING:
@@ -80,6 +81,9 @@ class TrainResult:
     baseline); the noise model the caller passed to :func:`train`, as given; None: no sample had synthetic noise."""
     interrupted: bool = False
     """The run was stopped with Ctrl-C (one process) before its schedule ended: the weights are those so far."""
+    resume: ResumeState | None = None
+    """An interrupted run's whole state at the step it stopped after, for :func:`train`'s ``resume`` (None: not
+    interrupted, or stopped inside a step by a second Ctrl-C, where the weights may be half updated)."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -571,14 +575,20 @@ def train(
     progress: bool = True,
     log: Callable[[str], None] = print,
     ctx: Dist | None = None,
+    resume: ResumeState | None = None,
 ) -> TrainResult:
     """Train a network (module docstring). Data: ``train_samples`` (default: the protocol's training subjects
     from ``data``), ``real_keypoints_2d`` aligned with them (needed when ``cfg.data.real_prob > 0``),
     ``val_sets`` for the learning curve (default: the test subjects at ``val_stride``, GT 2D only).
     ``init``: fine-tune a copy of this network and codec (``cfg.model`` is replaced by its config).
     ``noise``: the error model (default: :func:`load_noise`). ``teacher``: the model to distil (default: ``cfg.teacher``
-    loaded, if set; :func:`teacher_targets`). ``ctx``: the distributed context (default: :func:`init_distributed`)."""
+    loaded, if set; :func:`teacher_targets`). ``ctx``: the distributed context (default: :func:`init_distributed`).
+    ``resume``: go on with a run stopped with Ctrl-C (:attr:`TrainResult.resume`, :class:`lifter.resume.ResumeState`)
+    where it stopped; ``cfg`` must be its config, the data its data, and ``init`` and ``noise`` are not given (its
+    weights, codec and error-model fit are in the state). One process only."""
     ctx = ctx or init_distributed()
+    if resume is not None:
+        _check_resume(resume, cfg, init=init, noise=noise, ctx=ctx)
     torch.manual_seed(cfg.schedule.seed)
     # this rank's augmentation draws, made where the batches are made: on the training device
     gen = torch.Generator(device=ctx.device).manual_seed(cfg.schedule.seed + 1000 * ctx.rank)
@@ -616,12 +626,25 @@ def train(
             log(f"real detections rescaled by 1/{ratio:.4f} about their 2D mean (their median 2D scale was "
                 f"{100 * ratio:.2f} % of the GT 2D's)")
     T = samples_to_tensors(train_samples, real_keypoints_2d if cfg.data.real_prob > 0 else None)
-    fit = None if noise is not None else load_fit(cfg)  # (a caller's own noise model is stored as given)
+    if resume is not None and (resume.samples != len(train_samples) or resume.data_sha256 != data_fingerprint(T)):
+        raise PoseLifterError(f"the training data is not the stopped run's ({len(train_samples)} samples, the run had "
+                              f"{resume.samples}, or their values differ): resume it with the same Human3.6M data "
+                              "(--h36m) and detections")
+    if resume is not None:  # (the model it drew from, whatever the config's path now holds)
+        fit = None if resume.error_model is None else ErrorModel.from_dict(resume.error_model)
+        noise = None if resume.noise is None else ErrorModel.from_dict(resume.noise)
+    else:
+        fit = None if noise is not None else load_fit(cfg)  # (a caller's own noise model is stored as given)
     noise = noise if noise is not None else load_noise(cfg, fit)
     if cfg.data.noise_prob > 0 and noise is None:
         raise PoseLifterError("some samples need synthetic noise (clean_prob + real_prob < 1) but no error model")
 
-    if init is not None:
+    if resume is not None:
+        codec = PoseCodec.from_state_dict(cfg.model, {k: v.numpy() for k, v in resume.codec.items()})
+        net = PoseLifterNet(cfg.model)
+        net.set_target_statistics(codec.target_mean, codec.target_std)
+        net.load_state_dict(resume.network)
+    elif init is not None:
         net, codec = copy.deepcopy(init[0]), init[1]
         net.set_target_statistics(codec.target_mean, codec.target_std)
     else:
@@ -648,6 +671,11 @@ def train(
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
     ema = (WeightAverage(net, decay=cfg.optim.ema_decay, warmup=cfg.optim.ema_warmup)
            if cfg.optim.ema_decay is not None else None)
+    if resume is not None:
+        opt.load_state_dict(resume.optimizer)
+        if ema is not None and resume.average is not None:
+            ema.module.load_state_dict(resume.average)
+            ema.updates = resume.average_updates
     eval_net: PoseLifterNet = ema.module if ema is not None else net  # type: ignore[assignment]
     val_dev = {k: {n: t.to(ctx.device) for n, t in v.items()} for k, v in val_sets.items()}
 
@@ -670,9 +698,21 @@ def train(
     pos = 0
     t0 = time.perf_counter()
     running: torch.Tensor | None = None  # on the device: read back only every FINITE_CHECK_EVERY steps
-    bar = tqdm(total=steps, disable=None if progress and ctx.main else True, unit="step", dynamic_ncols=True,
-               mininterval=2.0)
     step = 0
+    if resume is not None:  # (last: everything above that draws from the generators has drawn)
+        step, pos, curve = resume.step, resume.position, list(resume.curve)
+        perm = resume.permutation.to(ctx.device)
+        t0 -= 60.0 * resume.minutes
+        running = None if resume.running_loss is None else torch.tensor(resume.running_loss, device=ctx.device)
+        perm_gen.set_state(resume.rng["permutation"])
+        gen.set_state(resume.rng["batches"])
+        torch.set_rng_state(resume.rng["torch"])
+        if ctx.device.type == "cuda" and "cuda" in resume.rng:
+            torch.cuda.set_rng_state(resume.rng["cuda"], ctx.device)
+        if ctx.main:
+            log(f"resuming at step {step} of {steps} ({resume.minutes:.1f} min trained)")
+    bar = tqdm(total=steps, initial=step, disable=None if progress and ctx.main else True, unit="step",
+               dynamic_ncols=True, mininterval=2.0)
     clock = torch.zeros(1, device=ctx.device)
 
     def record() -> None:
@@ -685,6 +725,7 @@ def train(
             log(f"step {step}: " + ", ".join(f"{k} {v:.4g}" for k, v in rec.items() if k != "step"))
 
     interrupted = False
+    whole = True  # every step begun has ended: the state is a step boundary's (a resume can start from it)
     asked = _StopAsked(enabled=not ctx.active)
     try:
         while True:
@@ -703,6 +744,7 @@ def train(
                 break
             for g in opt.param_groups:
                 g["lr"] = cfg.optim.lr * lr_factor(prog, cfg)
+            whole = False
             if pos + gbs > n:
                 perm = torch.randperm(n, generator=perm_gen).to(ctx.device)
                 pos = 0
@@ -719,6 +761,7 @@ def train(
                 ema.update(net)
             step += 1
             running = loss.detach() if running is None else 0.98 * running + 0.02 * loss.detach()
+            whole = True
             if step % FINITE_CHECK_EVERY == 0:
                 _check_finite(running, step, ctx)
             if ctx.main and (step % cfg.schedule.eval_every == 0 or step == steps):
@@ -732,6 +775,13 @@ def train(
         asked.restore()
     if running is not None:
         _check_finite(running, step, ctx)
+    state = None
+    if interrupted and whole and step > 0:  # (the live weights, before the curve's last point is taken)
+        state = _resume_state(cfg, step=step, minutes=(time.perf_counter() - t0) / 60.0, T=T, pos=pos, perm=perm,
+                              gens={"permutation": perm_gen, "batches": gen}, net=net, opt=opt, ema=ema, codec=codec,
+                              running=running, curve=curve,
+                              fit=(fit or noise) if cfg.data.noise_prob > 0 else None,
+                              noise=noise if cfg.data.noise_prob > 0 else None, device=ctx.device)
     if ctx.main and (not curve or curve[-1]["step"] != step):
         record()  # (an interrupted run too: the curve's last point is the weights it keeps)
     bar.close()
@@ -746,7 +796,60 @@ def train(
         log(f"interrupted at step {step} of {steps} ({minutes:.1f} min)")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
                        minutes=minutes, error_model=(fit or noise) if cfg.data.noise_prob > 0 else None,
-                       interrupted=interrupted)
+                       interrupted=interrupted, resume=state)
+
+
+def _check_resume(state: ResumeState, cfg: TrainConfig, *, init: Any, noise: Any, ctx: Dist) -> None:
+    """Refuse a resume that could not go on as the stopped run would have, naming why."""
+    if ctx.active:
+        raise PoseLifterError("a run is resumed on one process (its state is one process's): start it without "
+                              "torchrun")
+    if init is not None or noise is not None:
+        raise PoseLifterError("a resumed run takes its weights and error model from its state: give neither init "
+                              "nor noise")
+    if cfg.to_dict() != state.train_config:
+        stored = TrainConfig.from_dict(state.train_config).to_dict()
+        diff = sorted(k for k in set(_flat(stored)) | set(_flat(cfg.to_dict()))
+                      if _flat(stored).get(k) != _flat(cfg.to_dict()).get(k))
+        raise PoseLifterError(f"a resumed run goes on with its own config; this one differs in {', '.join(diff[:6])}: "
+                              "resume with the state's config (TrainConfig.from_dict(state.train_config)), or start "
+                              "a new run (--init NAME.interrupted.pt)")
+
+
+def _flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(_flat(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def _resume_state(cfg: TrainConfig, *, step: int, minutes: float, T: Batch, pos: int, perm: torch.Tensor,
+                  gens: dict[str, torch.Generator], net: PoseLifterNet, opt: torch.optim.Optimizer,
+                  ema: WeightAverage | None, codec: PoseCodec, running: torch.Tensor | None,
+                  curve: list[dict[str, float]], fit: ErrorModel | None, noise: ErrorModel | None,
+                  device: torch.device) -> ResumeState:
+    """The whole state of a run at a step boundary (:class:`lifter.resume.ResumeState`), on the CPU."""
+    def cpu(sd: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        return {k: v.detach().float().cpu().clone() if v.is_floating_point() else v.detach().cpu().clone()
+                for k, v in sd.items()}
+
+    rng = {name: g.get_state() for name, g in gens.items()}
+    rng["torch"] = torch.get_rng_state()
+    if device.type == "cuda":
+        rng["cuda"] = torch.cuda.get_rng_state(device)
+    return ResumeState(
+        train_config=cfg.to_dict(), step=step, minutes=minutes, samples=int(T["kp"].shape[0]),
+        data_sha256=data_fingerprint(T), position=pos, permutation=perm.cpu().clone(), rng=rng,
+        network=cpu(net.state_dict()), optimizer=copy.deepcopy(opt.state_dict()),
+        average=None if ema is None else cpu(ema.module.state_dict()),
+        average_updates=0 if ema is None else ema.updates,
+        codec={k: v.clone() for k, v in codec.state_dict().items()},
+        running_loss=None if running is None else float(running), curve=[dict(c) for c in curve],
+        error_model=None if fit is None else fit.to_dict(), noise=None if noise is None else noise.to_dict(),
+        meta={})
 
 
 def save_training_outputs(result: TrainResult, out: str | Path, *, half: bool = True,

@@ -281,7 +281,7 @@ def test_weight_average_forgets_the_starting_weights_in_a_short_run():
         net.weight.fill_(1.0)  # (the live network jumps away from the start at once and stays there)
     for _ in range(684):
         avg.update(net)
-    share_of_start = 1.0 - float(avg.module.weight.mean())
+    share_of_start = 1.0 - float(avg.module.weight.detach().mean())
     assert abs(share_of_start) < 1e-12
     assert 0.98 < avg.current_decay() < 0.999
 
@@ -475,6 +475,104 @@ def test_a_run_stopped_with_ctrl_c_keeps_its_weights_so_far(monkeypatch):
     assert signal.getsignal(signal.SIGINT) is before
 
 
+def _sigint_at(monkeypatch, call: int) -> None:
+    """A real Ctrl-C (SIGINT) during the training loop's ``call``-th batch: that step ends whole, then the run stops."""
+    import signal
+
+    import lifter.train as lt
+
+    real, calls = lt.make_batch, []
+
+    def signalling(*a, **kw):
+        calls.append(1)
+        if len(calls) == call:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(*a, **kw)
+
+    monkeypatch.setattr(lt, "make_batch", signalling)
+
+
+def _resumable_config() -> TrainConfig:
+    """Every part of the state a resume must carry is used: dropout, weight average, synthetic noise, real
+    detections, flips, a schedule that wraps the sample order twice."""
+    c = tiny_config()
+    return replace(c, data=replace(c.data, clean_prob=0.3, real_prob=0.3),
+                   optim=replace(c.optim, ema_decay=0.99, batch_size=48),
+                   schedule=ScheduleConfig(epochs=2.5, eval_every=4))
+
+
+def test_a_run_stopped_with_ctrl_c_resumes_to_the_weights_of_the_run_never_stopped(monkeypatch, tmp_path):
+    """A researcher trial: a run stopped with Ctrl-C could only restart its schedule (--init). Its resume state,
+    written and read back, goes on to the same weights, average and curve as the run never stopped, bit for bit."""
+    from lifter.resume import ResumeState
+
+    samples, vs = synthetic_samples(300, seed=3), validation_sets(synthetic_samples(20, seed=4), None)
+    real = samples.keypoints_2d + np.random.default_rng(5).normal(0, 4, samples.keypoints_2d.shape)
+    cfg = _resumable_config()
+    quiet = dict(train_samples=samples, real_keypoints_2d=real, val_sets=vs, progress=False, log=lambda s: None,
+                 ctx=Dist())
+    whole = train(cfg, **quiet)
+    assert not whole.interrupted and whole.resume is None and whole.steps == 16
+    _sigint_at(monkeypatch, 7)
+    stopped = train(cfg, **quiet)
+    monkeypatch.undo()
+    assert stopped.interrupted and stopped.steps == 7 and stopped.resume is not None
+    path = stopped.resume.save(tmp_path / "run.resume.pt")
+    state = ResumeState.load(path)
+    assert state.step == 7 and state.position == 7 * 48 - 288  # (the sample order wrapped after 6 steps)
+    logs: list[str] = []
+    resumed = train(TrainConfig.from_dict(state.train_config), **{**quiet, "log": logs.append}, resume=state)
+    assert any(line.startswith("resuming at step 7 of 16") for line in logs), logs
+    assert resumed.steps == 16 and not resumed.interrupted
+    for (k, a), b in zip(whole.net.state_dict().items(), resumed.net.state_dict().values()):
+        assert torch.equal(a, b), k
+    strip = [{k: v for k, v in c.items() if k != "minutes"} for c in whole.curve]
+    assert [{k: v for k, v in c.items() if k != "minutes"} for c in resumed.curve] == strip
+    assert resumed.error_model is not None and resumed.error_model.to_dict() == whole.error_model.to_dict()
+    # stopped again after resuming: the curve's minutes go on from the first part's
+    _sigint_at(monkeypatch, 3)
+    again = train(TrainConfig.from_dict(state.train_config), **quiet, resume=state)
+    assert again.steps == 10 and again.resume is not None and again.resume.minutes >= state.minutes
+
+
+def test_a_resume_is_refused_where_it_could_not_go_on_as_the_run_would(monkeypatch, tmp_path):
+    from lifter.resume import ResumeState
+
+    samples, vs = synthetic_samples(300, seed=3), validation_sets(synthetic_samples(20, seed=4), None)
+    real = samples.keypoints_2d + 3.0
+    cfg = _resumable_config()
+    quiet = dict(real_keypoints_2d=real, val_sets=vs, progress=False, log=lambda s: None, ctx=Dist())
+    _sigint_at(monkeypatch, 3)
+    state = train(cfg, train_samples=samples, **quiet).resume
+    monkeypatch.undo()
+    assert state is not None
+    with pytest.raises(PoseLifterError, match=r"differs in optim\.lr: resume with the state's config"):
+        train(replace(cfg, optim=replace(cfg.optim, lr=1e-3)), train_samples=samples, **quiet, resume=state)
+    other = synthetic_samples(300, seed=9)
+    with pytest.raises(PoseLifterError, match="the training data is not the stopped run's"):
+        train(cfg, train_samples=other, **{**quiet, "real_keypoints_2d": other.keypoints_2d + 3.0}, resume=state)
+    with pytest.raises(PoseLifterError, match="resumed on one process"):
+        train(cfg, train_samples=samples, **{**quiet, "ctx": Dist(rank=0, world=2)}, resume=state)
+    # a second Ctrl-C inside a step leaves no resume state (the weights may be half updated)
+    _interrupt_at(monkeypatch, 3)
+    assert train(cfg, train_samples=samples, **quiet).resume is None
+    # files: damaged, a checkpoint given for one, another file
+    path = state.save(tmp_path / "run.resume.pt")
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    (tmp_path / "bad.resume.pt").write_bytes(bytes(data))
+    with pytest.raises(PoseLifterError, match="damaged|not a poselifter resume file"):
+        ResumeState.load(tmp_path / "bad.resume.pt")
+    ck = _tiny_lifter(seed=1).save(tmp_path / "weights.pt")
+    with pytest.raises(PoseLifterError, match="a checkpoint: --init starts a new run from its weights"):
+        ResumeState.load(ck)
+    (tmp_path / "notes.txt").write_text("hello")
+    with pytest.raises(PoseLifterError, match="not a poselifter resume file"):
+        ResumeState.load(tmp_path / "notes.txt")
+    with pytest.raises(PoseLifterError, match="no such file"):
+        ResumeState.load(tmp_path / "missing.resume.pt")
+
+
 @requires_h36m
 def test_cli_train_stopped_with_ctrl_c_writes_beside_out_not_over_it(tmp_path, monkeypatch, capsys):
     from lifter.checkpoint import load_checkpoint
@@ -512,6 +610,38 @@ def test_cli_train_stopped_with_ctrl_c_writes_beside_out_not_over_it(tmp_path, m
     err = capsys.readouterr().err
     assert exc.value.code == 130 and (f"interrupted while writing the run's outputs; written whole: {done}, "
                                       f"{done.with_suffix('.curve.json')} (the others were not written)") in err, err
+
+
+@requires_h36m
+def test_cli_train_resumes_a_run_stopped_with_ctrl_c_to_the_run_never_stopped(tmp_path, monkeypatch, capsys):
+    from lifter.checkpoint import load_checkpoint
+    from lifter.cli import main
+
+    quick = ["--width", "32", "--max-frames-per-sequence", "4", "--val-stride", "400", "--epochs", "1",
+             "--ema-decay", "0.9", "--clean-prob", "0.5", "--threads", "1", "--no-progress", "--fp32-weights"]
+    whole = tmp_path / "whole.pt"
+    assert main(["train", "--out", str(whole), *quick]) == 0
+    capsys.readouterr()
+    out = tmp_path / "run.pt"
+    _sigint_at(monkeypatch, 2)
+    assert main(["train", "--out", str(out), *quick]) == 130
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    state = tmp_path / "run.resume.pt"
+    assert ("interrupted at step 2 (" in err and f"poselifter train --resume {state} goes on where it stopped" in err
+            and not out.exists()), err
+    # options that would change the run are refused, by name; a checkpoint is not a resume file
+    assert main(["train", "--resume", str(state), "--lr", "0.1", "--config", str(whole)]) == 2
+    assert "--resume goes on with the stopped run's own config: drop --config, --lr (" in capsys.readouterr().err
+    assert main(["train", "--resume", str(tmp_path / "run.interrupted.pt")]) == 2
+    assert "(a checkpoint: --init starts a new run from its weights)" in capsys.readouterr().err
+    assert main(["train", "--resume", str(state), "--threads", "1", "--no-progress"]) == 0  # (--out: the run's own)
+    assert f"resuming {state} at step 2" in capsys.readouterr().err
+    a, b = load_checkpoint(whole), load_checkpoint(out)
+    assert b.meta["resumed"]["step"] == 2 and b.meta["steps"] == a.meta["steps"] > 2
+    assert b.train_config == a.train_config
+    for (k, x), y in zip(a.net.state_dict().items(), b.net.state_dict().values()):
+        assert torch.equal(x, y), k
 
 
 def test_fine_tuning_keeps_config_and_initial_network_and_ema_averages():

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -32,6 +33,7 @@ from ..data import H36M
 from ..detections import SH_DETECTIONS_FILE, load_sh_detections
 from ..io import check_writable
 from ..noise import ErrorModel
+from ..resume import ResumeState
 from ..train import (
     check_teacher,
     init_distributed,
@@ -49,6 +51,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                        description=plain_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--out", type=Path, help="checkpoint path to write (.pt); required unless --print-config")
     p.add_argument("--config", type=Path, default=None, help="start from this run's config (JSON, .curve.json or .pt)")
+    p.add_argument("--resume", type=Path, default=None, metavar="RUN.resume.pt",
+                   help="go on with a run stopped with Ctrl-C where it stopped (the NAME.resume.pt it wrote beside its "
+                        "--out): its config, weights, optimizer, schedule and random draws; --out defaults to the "
+                        "run's own")
     p.add_argument("--print-config", action="store_true", help="print the resolved config as JSON and exit")
     p.add_argument("--h36m", type=Path, default=None, help=h36m_help())
     p.add_argument("--threads", type=int, default=None, help="torch threads per process (default: torch's)")
@@ -60,6 +66,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.resume is not None:
+        return run_resume(args)
     base = TrainConfig.load(args.config) if args.config is not None else None
     cfg = config_from_args(args, base)
     if getattr(args, "cfg__optim__distill_weight", None) is not None and cfg.teacher is None:
@@ -123,6 +131,18 @@ def run(args: argparse.Namespace) -> int:
                                  teacher=None if teacher_sha is None else (str(cfg.teacher), teacher_sha),
                                  error_model=None if fit is None else (cfg.data.error_model, fit.sha256())):
             print(f"note: {line}", file=sys.stderr)
+    meta: dict[str, Any] = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
+    if init_sha is not None:
+        meta["init_sha256"] = init_sha
+    if teacher_sha is not None:
+        meta["teacher_sha256"] = teacher_sha
+    return _train_and_write(args, cfg, ctx=ctx, init=init, teacher=teacher, meta=meta)
+
+
+def _train_and_write(args: argparse.Namespace, cfg: TrainConfig, *, ctx: Any, init: tuple[Any, PoseCodec] | None,
+                     teacher: Lifter | None, meta: dict[str, Any], resume: ResumeState | None = None) -> int:
+    """Read the data, train, and write ``args.out`` (or, stopped with Ctrl-C, the weights so far and the run's
+    resume state beside it); ``meta`` goes into the checkpoint."""
     data = H36M(args.h36m)
     d = cfg.data
     samples = data.load_protocol(d.protocol, "train", stride=d.train_stride,
@@ -134,13 +154,8 @@ def run(args: argparse.Namespace) -> int:
                else None)
     result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
                    val_sets=validation_sets(val, val_det), init=init, teacher=teacher, progress=not args.no_progress,
-                   ctx=ctx)
+                   ctx=ctx, resume=resume)
     if ctx.main:
-        meta = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": ctx.world}
-        if init_sha is not None:
-            meta["init_sha256"] = init_sha
-        if teacher_sha is not None:
-            meta["teacher_sha256"] = teacher_sha
         if result.interrupted:
             if ctx.active:  # (not reached: train() re-raises under torchrun)
                 raise KeyboardInterrupt
@@ -152,9 +167,16 @@ def run(args: argparse.Namespace) -> int:
             partial = interrupted_path(args.out)
             meta["interrupted"] = True
             _save_outputs(result, partial, half=not args.fp32_weights, meta=meta)
+            go_on = ""
+            if result.resume is not None:  # (after the weights: a Ctrl-C while the state is written keeps them)
+                state_meta = {**{k: v for k, v in meta.items() if k in ("init_sha256", "teacher_sha256")},
+                              "out": str(args.out), "fp32_weights": bool(args.fp32_weights)}
+                written = replace(result.resume, meta=state_meta).save(resume_path(args.out))
+                go_on = (f"; poselifter train --resume {written} goes on where it stopped (its schedule, optimizer, "
+                         "weight average and random draws)")
             print(f"poselifter train: interrupted at step {result.steps} ({result.minutes:.1f} min): the weights so "
-                  f"far are in {partial} (meta 'interrupted'; not {args.out}); --init {partial} starts a new run "
-                  "from them (its schedule and EMA start again)",
+                  f"far are in {partial} (meta 'interrupted'; not {args.out}){go_on}; --init {partial} starts a new "
+                  "run from them (its schedule and EMA start again)",
                   file=sys.stderr)
             return 130
         out = _save_outputs(result, args.out, half=not args.fp32_weights, meta=meta)
@@ -181,6 +203,60 @@ def _save_outputs(result: Any, out: Path, *, half: bool, meta: dict[str, Any]) -
         print(f"poselifter train: interrupted while writing the run's outputs; written whole: {done} (the others "
               "were not written)", file=sys.stderr)
         raise SystemExit(130) from None
+
+
+def resume_path(out: Path) -> Path:
+    """Where a run stopped with Ctrl-C writes its whole state for ``--resume``: beside ``out``, ``NAME.resume.pt``."""
+    return out.with_name(f"{out.stem}.resume{out.suffix or '.pt'}")
+
+
+def run_resume(args: argparse.Namespace) -> int:
+    """``--resume RUN.resume.pt``: the stopped run goes on with its own config, weights and draws (refusing the
+    options that would change them), written to its own ``--out`` unless another is given."""
+    given = sorted("--" + k.split("__", 2)[2].replace("_", "-") for k, v in vars(args).items()
+                   if k.startswith("cfg__") and v is not None)
+    if args.config is not None:
+        given.insert(0, "--config")
+    if given:
+        raise PoseLifterError(f"--resume goes on with the stopped run's own config: drop {', '.join(given)} (or start "
+                              "a new run from its weights: --init NAME.interrupted.pt with the options)")
+    if int(os.environ.get("WORLD_SIZE", "1")) > 1:
+        raise PoseLifterError("--resume goes on with one process's run: start it without torchrun")
+    state = ResumeState.load(args.resume)
+    cfg = TrainConfig.from_dict(state.train_config)
+    if args.print_config:
+        print(cfg.to_json())
+        return 0
+    stored_out = state.meta.get("out")
+    if args.out is None:
+        if not isinstance(stored_out, str):
+            raise PoseLifterError(f"--resume {args.resume} names no --out: give --out")
+        args.out = Path(stored_out)
+    _check_out(Path(args.out), cfg, None)
+    if Path(args.out).resolve() == Path(args.resume).resolve():
+        raise PoseLifterError(f"--out {args.out} is the --resume file: give another --out")
+    check_writable(args.out, option="--out")
+    if args.threads is not None and args.threads < 1:
+        raise PoseLifterError(f"--threads must be >= 1, got {args.threads}")
+    if not args.fp32_weights and state.meta.get("fp32_weights") is True:
+        args.fp32_weights = True
+    ctx = init_distributed()
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    meta: dict[str, Any] = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": 1,
+                            "resumed": {"from": str(args.resume), "sha256": sha256_file(args.resume),
+                                        "step": state.step}}
+    meta.update({k: v for k, v in state.meta.items() if k in ("init_sha256", "teacher_sha256")})
+    teacher = None
+    if cfg.teacher is not None:
+        teacher = load_option("--teacher", cfg.teacher, args)
+        sha, stored = weights_sha256(cfg.teacher, every_network=True), state.meta.get("teacher_sha256")
+        if isinstance(stored, str) and sha != stored:
+            raise PoseLifterError(f"--resume {args.resume}: the run's teacher {cfg.teacher} is not the network it "
+                                  f"distilled (sha256 {sha[:12]}, the run's {stored[:12]}): put that teacher back")
+    print(f"resuming {args.resume} at step {state.step} ({state.minutes:.1f} min trained), writing {args.out}",
+          file=sys.stderr)
+    return _train_and_write(args, cfg, ctx=ctx, init=None, teacher=teacher, meta=meta, resume=state)
 
 
 def interrupted_path(out: Path) -> Path:
