@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 import trimesh
 
-from lifter.camera import image_centre, project, world_to_camera
+from lifter.camera import image_centre, project, project_generic, world_to_camera
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
 
 DEMO_DIR = Path(__file__).resolve().parent.parent / "assets" / "demo"
@@ -237,8 +237,8 @@ def render_mesh(
     def proj(pw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         pc = world_to_camera(pw, R, t)
         z = pc[..., 2]
-        uv = pc[..., :2] / np.maximum(z, 1e-6)[..., None] * f + c
-        return uv, z
+        return project_generic(np.concatenate([pc[..., :2], np.maximum(z, 1e-6)[..., None]], axis=-1), f, c,
+                               per_joint=True), z
 
     # Floor tiles (checkerboard, 500 mm), far to near, only tiles fully in front of the camera.
     tiles = []

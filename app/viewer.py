@@ -41,6 +41,7 @@ import numpy as np
 import viser
 
 from lifter import PoseLifterError
+from lifter.camera import project_generic
 from lifter.skeleton import JOINT_NAMES
 
 from . import framing
@@ -1708,8 +1709,8 @@ class SessionView:
             if end_c[2] <= 1e-6:
                 raise PoseLifterError("joint dragged behind the camera; ignored")
             p = end_c * (d / end_c[2])
-        f = np.asarray(self.state.focal)
-        return p[:2] / d * f + np.asarray(self.state.sample.camera.principal_point)
+        return project_generic(p[None], np.asarray(self.state.focal, np.float64),
+                               np.asarray(self.state.sample.camera.principal_point, np.float64))[0]
 
     def on_joint_drag(self, joint: int, event: Any) -> None:
         """Drag callback of 2D joint ``joint`` (a :class:`viser.SceneNodeDragEvent`). Events of a drag that began

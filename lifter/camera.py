@@ -64,8 +64,14 @@ def image_centre(image_size: ArrayLike) -> np.ndarray:
 
 def focal_alpha(focal: ArrayLike) -> np.ndarray:
     """``alpha = sqrt(fx * fy)`` for a scalar or ``(..., 2)`` focal length (px). Returns ``(...)``."""
-    f = as_pair(focal, name="focal", positive=True, scalar=True)
-    return np.sqrt(f[..., 0] * f[..., 1])
+    return alpha_generic(as_pair(focal, name="focal", positive=True, scalar=True))
+
+
+def alpha_generic(focal: ArrayT) -> ArrayT:
+    """``alpha = sqrt(fx * fy)`` px of focal lengths ``(..., 2)`` px, no validation, numpy or torch: the one
+    implementation behind :func:`focal_alpha` and :mod:`lifter.codec`."""
+    xp = array_namespace(focal)
+    return xp.sqrt(focal[..., 0] * focal[..., 1])
 
 
 MAX_PLAUSIBLE_VIEW_DEG: float = 120.0
@@ -570,13 +576,25 @@ def project(
     z = X[..., 2:3]
     if np.any(z <= 0):
         raise PoseLifterError("points_cam: all points must be in front of the camera (z > 0)")
-    xy = X[..., :2] / z
-    if k is not None or p is not None:
-        k_ = np.zeros(3) if k is None else np.asarray(k, np.float64)[..., None, :]
-        p_ = np.zeros(2) if p is None else np.asarray(p, np.float64)[..., None, :]
-        xy = distort(xy, k_, p_)
     f = _last2(focal, name="focal", positive=True, scalar=True)
-    return xy * f + _last2(principal_point, name="principal_point")
+    c = _last2(principal_point, name="principal_point")
+    if k is None and p is None:
+        return project_generic(X, f, c, per_joint=True)
+    k_ = np.zeros(3) if k is None else np.asarray(k, np.float64)[..., None, :]
+    p_ = np.zeros(2) if p is None else np.asarray(p, np.float64)[..., None, :]
+    return distort(X[..., :2] / z, k_, p_) * f + c
+
+
+def project_generic(points: ArrayT, focal: Any, principal_point: Any, *, per_joint: bool = False) -> ArrayT:
+    """Pinhole projection, no validation, numpy or torch: camera-frame points ``(..., J, 3)`` (mm, z > 0) ->
+    pixels ``(..., J, 2)``, ``u = X / Z * fx + cx``, ``v = Y / Z * fy + cy``. ``focal`` and ``principal_point``:
+    scalars or ``(2,)``, or one per point set ``(..., 2)`` (``per_joint``: already broadcast against the points,
+    ``(..., J, 2)`` or ``(2,)``). The one implementation behind :func:`project` (without lens distortion),
+    :func:`turn_pixels`, the training's moves along the viewing rays and the app's drag and renders."""
+    f, c = _pair(focal, points), _pair(principal_point, points)
+    if not per_joint:
+        f, c = f[..., None, :], c[..., None, :]
+    return points[..., :2] / points[..., 2:] * f + c
 
 
 def _pair(x: ArrayT, like: Any) -> ArrayT:
@@ -655,7 +673,7 @@ def turn_pixels(uv: ArrayT, rotation: Any, focal: Any, principal_point: Any) -> 
     f = _pair(focal, uv)[..., None, :]
     c = _pair(principal_point, uv)[..., None, :]
     ray = xp.concat([(uv - c) / f, xp.ones_like(uv[..., :1])], axis=-1) @ xp.matrix_transpose(rotation)
-    return c + f * ray[..., :2] / ray[..., 2:]
+    return project_generic(ray, f, c, per_joint=True)
 
 
 def backproject(uv: ArrayLike, depth: ArrayLike, *, focal: ArrayLike, principal_point: ArrayLike) -> np.ndarray:

@@ -42,7 +42,14 @@ import torch
 
 from ._array import namespace as array_namespace
 from ._checks import PoseLifterError
-from .camera import CANONICAL_FOCAL, backproject_generic, look_at_rotation, to_reference_camera, turn_pixels
+from .camera import (
+    CANONICAL_FOCAL,
+    alpha_generic,
+    backproject_generic,
+    look_at_rotation,
+    to_reference_camera,
+    turn_pixels,
+)
 from .model import NUM_OUTPUTS, ModelConfig
 from .normalization import location_and_scale, pose_features
 from .skeleton import NUM_JOINTS, mirror
@@ -141,7 +148,7 @@ class PoseCodec:
         focal ``alpha_in`` ``(...)`` and the real ``alpha`` ``(...)`` px."""
         xp = array_namespace(keypoints)
         f, c = _like(focal, keypoints), _like(principal_point, keypoints)
-        alpha = xp.sqrt(f[..., 0] * f[..., 1])  # type: ignore[index]
+        alpha = alpha_generic(f)
         if self.config.input_space == "camera":
             k = to_reference_camera(keypoints, focal=f, principal_point=c, reference_focal=self.reference_focal)
             alpha_in = xp.full_like(alpha, self.reference_focal)

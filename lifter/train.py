@@ -46,7 +46,7 @@ import torch.distributed as dist
 from tqdm.auto import tqdm
 
 from ._checks import PoseLifterError
-from .camera import backproject_generic, camera_turn, turn_pixels
+from .camera import backproject_generic, camera_turn, project_generic, turn_pixels
 from .checkpoint import save_checkpoint
 from .codec import PoseCodec
 from .config import TrainConfig
@@ -213,7 +213,7 @@ def move_batch(kp: torch.Tensor, gt: torch.Tensor, pp: torch.Tensor, f: torch.Te
     cos_off_axis = (points[..., 2] / points.norm(dim=-1)).amin(dim=-1)
     factor = torch.where(cos_off_axis > math.cos(math.radians(max_off_axis_deg)), factor, torch.ones_like(factor))
     points = place(factor)
-    moved = pp[:, None] + f[:, None] * points[..., :2] / points[..., 2:]
+    moved = project_generic(points, f, pp)
     ratio = pose_scale(moved) / pose_scale(gt)
     return moved + (kp - gt) * ratio[:, None, None], moved, depth * factor
 

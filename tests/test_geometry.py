@@ -44,6 +44,32 @@ def test_projection_convention_opencv():
         cam.project(np.array([[[0.0, 0.0, -1.0]]]), focal=1000.0, principal_point=(0, 0))
 
 
+def test_one_pinhole_projection_for_numpy_and_torch():
+    """project_generic is project without lens distortion, for numpy and torch (float32 and float64), per pose set
+    or per joint, and differentiable; turn_pixels by the identity leaves pixels where they are."""
+    import torch
+
+    pose = random_pose_cam(np.random.default_rng(3), 4)
+    f = np.array([[1145.0, 1144.0], [900.0, 950.0], [2000.0, 2000.0], [600.0, 610.0]])
+    c = np.array([[512.0, 515.0], [320.0, 240.0], [0.0, 0.0], [1000.0, -20.0]])
+    want = cam.project(pose, focal=f, principal_point=c)
+    np.testing.assert_array_equal(cam.project_generic(pose, f, c), want)
+    np.testing.assert_array_equal(cam.project_generic(pose, f[:, None], c[:, None], per_joint=True), want)
+    for dtype, tol in ((torch.float64, 1e-9), (torch.float32, 1e-3)):
+        got = cam.project_generic(torch.as_tensor(pose, dtype=dtype), torch.as_tensor(f, dtype=dtype),
+                                  torch.as_tensor(c, dtype=dtype))
+        assert got.dtype == dtype and got.shape == (4, 17, 2)
+        np.testing.assert_allclose(got.numpy(), want, atol=tol)
+    X = torch.as_tensor(pose[:1, :3], dtype=torch.float64).requires_grad_()
+    F = torch.tensor([1145.0, 1144.0], dtype=torch.float64, requires_grad=True)
+    torch.autograd.gradcheck(lambda X, F: cam.project_generic(X, F, torch.tensor([512.0, 515.0],
+                                                                                 dtype=torch.float64)), (X, F))
+    uv = torch.as_tensor(want, dtype=torch.float64)
+    turned = cam.turn_pixels(uv, torch.eye(3, dtype=torch.float64), torch.as_tensor(f), torch.as_tensor(c))
+    np.testing.assert_allclose(turned.numpy(), want, atol=1e-9)
+    np.testing.assert_allclose(cam.alpha_generic(torch.as_tensor(f)).numpy(), cam.focal_alpha(f))
+
+
 @settings(max_examples=50, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), f1=st.floats(300, 4000, **finite), f2=st.floats(300, 4000, **finite),
        aspect=st.floats(0.8, 1.25, **finite))
