@@ -34,6 +34,10 @@ CLOUD_SAMPLES: int = 64
 MAX_CLOUD_SAMPLES: int = 256
 """The cloud-samples slider's end, and the most its box takes."""
 DEFAULT_SEED: int = 0
+MAX_SEED: int = 2**32 - 1
+"""The largest noise seed: numpy's classic seed range, held exactly by the browser's numbers and carried by viser's
+messages (an app trial typed 99999999999999999999: the box showed another number, and "resample noise" then sent
+seed + 1 past what a message can carry, which dropped the tab's connection and reset its session)."""
 JOINT_MARGIN: float = 0.25
 """A dragged or typed 2D joint must lie in the image grown by this fraction of its size on every side;
 farther out it is refused (the previous pose is kept), never clamped and lifted."""

@@ -17,7 +17,7 @@ import viser
 
 from lifter.skeleton import JOINT_NAMES
 
-from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, NOISE_MAX
+from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, MAX_SEED, NOISE_MAX
 from .keys import NO_PHOTO, H36MKey
 from .video import VIDEO_MAX_SECONDS
 
@@ -188,7 +188,7 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
             cloud=gui.add_slider("cloud samples", 0, MAX_CLOUD_SAMPLES, 1, CLOUD_SAMPLES,
                                  marks=((0, "0"), (MAX_CLOUD_SAMPLES, f"{MAX_CLOUD_SAMPLES}")),
                                  hint="noisy 2D draws lifted for the per-joint uncertainty clouds"),
-            seed=gui.add_number("seed", DEFAULT_SEED, step=1, min=0),
+            seed=gui.add_number("seed", DEFAULT_SEED, step=1, min=0, max=MAX_SEED),
             resample=gui.add_button("resample noise", hint="seed + 1"),
         )
         gui.add_markdown(f"<small>error model: {error_model_name}</small>")

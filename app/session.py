@@ -21,6 +21,7 @@ from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 
 from .core import (
     MAX_CLOUD_SAMPLES,
+    MAX_SEED,
     NOISE_MAX,
     SessionState,
     check_joint,
@@ -180,6 +181,8 @@ def with_seed(state: SessionState, seed: object) -> SessionState:
     s = _integer(seed, "seed")
     if s < 0:
         raise PoseLifterError(f"seed must be >= 0, got {s}")
+    if s > MAX_SEED:
+        raise PoseLifterError(f"seed must be at most {MAX_SEED} (2^32 - 1), got {s}")
     return state if s == state.seed else state.evolve(seed=s)
 
 

@@ -48,7 +48,7 @@ from lifter.detect import (
     guess_focal,
     load_image,
 )
-from lifter.io import LiftRecord, json_text, model_info, parse_keypoint_json
+from lifter.io import MAX_KEYPOINT_FILE_BYTES, LiftRecord, json_text, model_info, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import (
     keypoint_file_scores,
@@ -159,12 +159,27 @@ def check_upload(name: str, content: bytes, *, max_bytes: int = MAX_UPLOAD_BYTES
         raise UploadError(f"{safe_name(name)}: empty file")
     if n > max_bytes:
         raise UploadError(f"{safe_name(name)}: file is {n / 2**20:.1f} MiB, more than the {max_bytes / 2**20:.0f} MiB "
-                          "the app accepts; downscale or re-encode the photo (e.g. JPEG) first")
+                          f"the app accepts; {_smaller_advice(name, bytes(content[:MEDIA_HEAD_BYTES]))}")
 
 
 def oversize_message(name: str, size_bytes: int, *, max_bytes: int = MAX_UPLOAD_BYTES) -> str:
     return (f"{safe_name(name)}: file is {size_bytes / 2**20:.1f} MiB, more than the {max_bytes / 2**20:.0f} MiB the "
-            "app accepts; the upload was stopped. Downscale or re-encode the photo (e.g. JPEG) first")
+            f"app accepts; the upload was stopped. {_smaller_advice(name, capital=True)}")
+
+
+def _smaller_advice(name: str, head: bytes = b"", *, capital: bool = False) -> str:
+    """What to do with a file too large to upload, by the kind its name says (an app trial: a keypoint file was told
+    to re-encode "the photo")."""
+    kind = input_kind(safe_name(name), head)[0]
+    if kind == "keypoints":
+        advice = (f"lift a keypoint file this large with `poselifter lift FILE` (up to "
+                  f"{MAX_KEYPOINT_FILE_BYTES // 2**20} MiB), or split it")
+    elif kind == "video":
+        advice = ("cut the video shorter or re-encode it at a lower resolution first, or lift it with `poselifter lift "
+                  "FILE`")
+    else:
+        advice = "downscale or re-encode the photo (e.g. JPEG) first"
+    return advice[:1].upper() + advice[1:] if capital else advice
 
 
 def is_json_upload(name: str, content: bytes) -> bool:

@@ -49,6 +49,7 @@ from . import session as ss
 from . import upload as up
 from . import video as vid
 from .core import (
+    MAX_SEED,
     Frame,
     LifterPool,
     SessionState,
@@ -1557,9 +1558,9 @@ class SessionView:
 
     @control
     def resample(self) -> None:
-        """New noise draws (seed + 1)."""
+        """New noise draws (seed + 1; after the largest seed, 0)."""
         with self.lock:
-            self.gui.noise.seed.value = int(self.state.seed) + 1
+            self.gui.noise.seed.value = (int(self.state.seed) + 1) % (MAX_SEED + 1)
 
     @staticmethod
     def _undo_key(st: SessionState) -> tuple[Any, ...]:

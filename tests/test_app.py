@@ -650,6 +650,14 @@ def test_rejected_seed_puts_the_box_back(view: SessionView) -> None:
     view.gui.noise.seed.value = -5
     assert view.state.seed == 3 and view.gui.noise.seed.value == 3 and "seed must be >= 0" in view.messages[-1]
     assert view.set_seed("abc") is False and view.gui.noise.seed.value == 3
+    # (an app trial: a 20-digit seed was taken, and "resample noise" then sent seed + 1 past what viser's messages
+    # carry, dropping the tab's connection and its session)
+    view.gui.noise.seed.value = 99999999999999999999
+    assert view.state.seed == 3 and view.gui.noise.seed.value == 3 and "seed must be at most 4294967295" in \
+        view.messages[-1]
+    view.gui.noise.seed.value = 2**32 - 1
+    view.resample()
+    assert view.state.seed == 0 and view.gui.noise.seed.value == 0
     view.gui.noise.seed.value = 0
 
 

@@ -309,7 +309,14 @@ def test_oversize_upload_is_refused(app: PoseLifterApp) -> None:
         snap = _snapshot(v)
         # checked on the bytes themselves
         assert v.load_upload("huge.jpg", big) is False and "more than the 20 MiB" in v.messages[-1]
+        assert "downscale or re-encode the photo" in v.messages[-1]
         _assert_unchanged(v, snap)
+        # the advice follows the file's kind (an app trial: a keypoint file was told to re-encode "the photo")
+        assert v.load_upload("people.json", b"[" + b" " * (up.MAX_UPLOAD_BYTES + 10)) is False
+        assert "lift a keypoint file this large with `poselifter lift FILE` (up to 64 MiB)" in v.messages[-1]
+        assert "photo" not in v.messages[-1]
+        assert "stopped. Cut the video shorter" in up.oversize_message("clip.mp4", 30 * 2**20)
+        assert "the upload was stopped. Lift a keypoint file" in up.oversize_message("k.json", 30 * 2**20)
         # and refused as soon as the browser announces the size: viser does not buffer the rest
         states = v.target.gui._current_file_upload_states
         tab.upload(v.gui.files.upload, "huge2.jpg", big[: 3 * 512 * 1024], declared_size=len(big), max_parts=3)
