@@ -600,7 +600,10 @@ def project_generic(points: ArrayT, focal: Any, principal_point: Any, *, per_joi
 def _pair(x: ArrayT, like: Any) -> ArrayT:
     """A scalar / ``(..., 2)`` focal or principal point as a ``(..., 2)`` array of ``like``'s type."""
     xp = array_namespace(like)
-    a = xp.asarray(x, dtype=like.dtype, device=getattr(like, "device", None)) if not hasattr(x, "shape") else x
+    # (scalars, lists and the other library's arrays take the points' type: a review found a numpy float64 focal
+    # with torch points a TypeError, and a numpy (2,) focal turning float32 torch points into float64)
+    foreign = not hasattr(x, "shape") or array_namespace(x) is not xp
+    a = xp.asarray(x, dtype=like.dtype, device=getattr(like, "device", None)) if foreign else x
     if a.ndim == 0:
         a = xp.stack([a, a])
     return a

@@ -192,6 +192,10 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     if why:
         raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
                               "give a .pt file written by poselifter train or a shipped model name")
+    if isinstance(payload, dict) and payload.get("format") == "poselifter-resume":  # (lifter.resume.RESUME_FORMAT)
+        raise CheckpointError(f"{where} is a stopped training run's resume state, not a checkpoint: poselifter train "
+                              f"--resume {where} goes on with that run; its weights so far are in the "
+                              "NAME.interrupted.pt beside it")
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"{where} is not a poselifter checkpoint (missing format tag {FORMAT!r})")
     version = payload.get("version")

@@ -58,6 +58,8 @@ class ResumeState:
     """The live network's state (float32), not the weight average."""
     optimizer: dict[str, Any]
     """``torch.optim.AdamW.state_dict()``."""
+    device: str
+    """The device type the run trained on (``"cpu"``, ``"cuda"``): a resume goes on there."""
     average: dict[str, torch.Tensor] | None
     """The weight average's state (float32), or None without ``--ema-decay``."""
     average_updates: int

@@ -588,7 +588,7 @@ def train(
     weights, codec and error-model fit are in the state). One process only."""
     ctx = ctx or init_distributed()
     if resume is not None:
-        _check_resume(resume, cfg, init=init, noise=noise, ctx=ctx)
+        check_resume(resume, cfg, init=init, noise=noise, ctx=ctx)
     torch.manual_seed(cfg.schedule.seed)
     # this rank's augmentation draws, made where the batches are made: on the training device
     gen = torch.Generator(device=ctx.device).manual_seed(cfg.schedule.seed + 1000 * ctx.rank)
@@ -672,7 +672,7 @@ def train(
     ema = (WeightAverage(net, decay=cfg.optim.ema_decay, warmup=cfg.optim.ema_warmup)
            if cfg.optim.ema_decay is not None else None)
     if resume is not None:
-        opt.load_state_dict(resume.optimizer)
+        opt.load_state_dict(copy.deepcopy(resume.optimizer))  # (it would take the state's own tensors and step them)
         if ema is not None and resume.average is not None:
             ema.module.load_state_dict(resume.average)
             ema.updates = resume.average_updates
@@ -710,7 +710,7 @@ def train(
         if ctx.device.type == "cuda" and "cuda" in resume.rng:
             torch.cuda.set_rng_state(resume.rng["cuda"], ctx.device)
         if ctx.main:
-            log(f"resuming at step {step} of {steps} ({resume.minutes:.1f} min trained)")
+            log(f"resuming at step {step} of {steps} ({minutes_text(resume.minutes)} trained)")
     bar = tqdm(total=steps, initial=step, disable=None if progress and ctx.main else True, unit="step",
                dynamic_ncols=True, mininterval=2.0)
     clock = torch.zeros(1, device=ctx.device)
@@ -777,11 +777,14 @@ def train(
         _check_finite(running, step, ctx)
     state = None
     if interrupted and whole and step > 0:  # (the live weights, before the curve's last point is taken)
-        state = _resume_state(cfg, step=step, minutes=(time.perf_counter() - t0) / 60.0, T=T, pos=pos, perm=perm,
-                              gens={"permutation": perm_gen, "batches": gen}, net=net, opt=opt, ema=ema, codec=codec,
-                              running=running, curve=curve,
-                              fit=(fit or noise) if cfg.data.noise_prob > 0 else None,
-                              noise=noise if cfg.data.noise_prob > 0 else None, device=ctx.device)
+        try:
+            state = _resume_state(cfg, step=step, minutes=(time.perf_counter() - t0) / 60.0, T=T, pos=pos,
+                                  perm=perm, gens={"permutation": perm_gen, "batches": gen}, net=net, opt=opt,
+                                  ema=ema, codec=codec, running=running, curve=curve,
+                                  fit=(fit or noise) if cfg.data.noise_prob > 0 else None,
+                                  noise=noise if cfg.data.noise_prob > 0 else None, device=ctx.device)
+        except KeyboardInterrupt:  # (a second Ctrl-C while it was taken, ~0.1 s: the weights so far are still kept;
+            log("a second Ctrl-C while the run's state was taken: no resume state, the weights so far are kept")
     if ctx.main and (not curve or curve[-1]["step"] != step):
         record()  # (an interrupted run too: the curve's last point is the weights it keeps)
     bar.close()
@@ -789,17 +792,21 @@ def train(
     eval_net.eval()
     eval_net.cpu()
     if ctx.main:
-        log(f"done: {step} steps, {step * gbs} samples in "
-            f"{f'{minutes:.1f} min' if minutes >= 1 else f'{60 * minutes:.1f} s'} "
+        log(f"done: {step} steps, {step * gbs} samples in {minutes_text(minutes)} "
             f"({step * gbs / max(minutes * 60, 1e-9):.0f} samples/s)")
     if interrupted:
-        log(f"interrupted at step {step} of {steps} ({minutes:.1f} min)")
+        log(f"interrupted at step {step} of {steps} ({minutes_text(minutes)})")
     return TrainResult(net=eval_net, codec=codec, config=cfg, curve=curve, steps=step, samples_seen=step * gbs,
                        minutes=minutes, error_model=(fit or noise) if cfg.data.noise_prob > 0 else None,
                        interrupted=interrupted, resume=state)
 
 
-def _check_resume(state: ResumeState, cfg: TrainConfig, *, init: Any, noise: Any, ctx: Dist) -> None:
+def minutes_text(minutes: float) -> str:
+    """A duration for logs: ``"12.3 min"``, or seconds below a minute (``"0.0 min"`` said nothing)."""
+    return f"{minutes:.1f} min" if minutes >= 1 else f"{60 * minutes:.1f} s"
+
+
+def check_resume(state: ResumeState, cfg: TrainConfig, *, ctx: Dist, init: Any = None, noise: Any = None) -> None:
     """Refuse a resume that could not go on as the stopped run would have, naming why."""
     if ctx.active:
         raise PoseLifterError("a run is resumed on one process (its state is one process's): start it without "
@@ -807,13 +814,29 @@ def _check_resume(state: ResumeState, cfg: TrainConfig, *, init: Any, noise: Any
     if init is not None or noise is not None:
         raise PoseLifterError("a resumed run takes its weights and error model from its state: give neither init "
                               "nor noise")
-    if cfg.to_dict() != state.train_config:
-        stored = TrainConfig.from_dict(state.train_config).to_dict()
+    if state.device != ctx.device.type:
+        raise PoseLifterError(f"the run was stopped training on the {state.device.upper()}, and this process trains "
+                              f"on the {ctx.device.type.upper()}: resume it where it ran (its random generators' "
+                              "states are that device's), or start a new run from its weights (--init "
+                              "NAME.interrupted.pt)")
+    stored = TrainConfig.from_dict(state.train_config).to_dict()  # (a field added since: its default)
+    if cfg.to_dict() != stored:
         diff = sorted(k for k in set(_flat(stored)) | set(_flat(cfg.to_dict()))
                       if _flat(stored).get(k) != _flat(cfg.to_dict()).get(k))
         raise PoseLifterError(f"a resumed run goes on with its own config; this one differs in {', '.join(diff[:6])}: "
                               "resume with the state's config (TrainConfig.from_dict(state.train_config)), or start "
                               "a new run (--init NAME.interrupted.pt)")
+
+
+def _to_cpu(obj: Any) -> Any:
+    """``obj`` (nested dicts, lists and tuples) with every tensor copied to the CPU."""
+    if isinstance(obj, torch.Tensor):
+        return obj.detach().cpu().clone()
+    if isinstance(obj, dict):
+        return {k: _to_cpu(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return type(obj)(_to_cpu(v) for v in obj)
+    return obj
 
 
 def _flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
@@ -843,7 +866,7 @@ def _resume_state(cfg: TrainConfig, *, step: int, minutes: float, T: Batch, pos:
     return ResumeState(
         train_config=cfg.to_dict(), step=step, minutes=minutes, samples=int(T["kp"].shape[0]),
         data_sha256=data_fingerprint(T), position=pos, permutation=perm.cpu().clone(), rng=rng,
-        network=cpu(net.state_dict()), optimizer=copy.deepcopy(opt.state_dict()),
+        network=cpu(net.state_dict()), optimizer=_to_cpu(opt.state_dict()), device=device.type,
         average=None if ema is None else cpu(ema.module.state_dict()),
         average_updates=0 if ema is None else ema.updates,
         codec={k: v.clone() for k, v in codec.state_dict().items()},

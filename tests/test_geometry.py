@@ -52,7 +52,8 @@ def test_one_pinhole_projection_for_numpy_and_torch():
     pose = random_pose_cam(np.random.default_rng(3), 4)
     f = np.array([[1145.0, 1144.0], [900.0, 950.0], [2000.0, 2000.0], [600.0, 610.0]])
     c = np.array([[512.0, 515.0], [320.0, 240.0], [0.0, 0.0], [1000.0, -20.0]])
-    want = cam.project(pose, focal=f, principal_point=c)
+    want = pose[..., :2] / pose[..., 2:] * f[:, None] + c[:, None]  # (written out: project calls project_generic)
+    np.testing.assert_array_equal(cam.project(pose, focal=f, principal_point=c), want)
     np.testing.assert_array_equal(cam.project_generic(pose, f, c), want)
     np.testing.assert_array_equal(cam.project_generic(pose, f[:, None], c[:, None], per_joint=True), want)
     for dtype, tol in ((torch.float64, 1e-9), (torch.float32, 1e-3)):
@@ -68,6 +69,13 @@ def test_one_pinhole_projection_for_numpy_and_torch():
     turned = cam.turn_pixels(uv, torch.eye(3, dtype=torch.float64), torch.as_tensor(f), torch.as_tensor(c))
     np.testing.assert_allclose(turned.numpy(), want, atol=1e-9)
     np.testing.assert_allclose(cam.alpha_generic(torch.as_tensor(f)).numpy(), cam.focal_alpha(f))
+    # parameters of another type take the points' (a review: a numpy float64 focal with torch points was a
+    # TypeError, and a numpy (2,) focal made float32 torch points float64)
+    pts = torch.as_tensor(pose, dtype=torch.float32)
+    for focal in (np.float64(1000.0), np.array([1000.0, 990.0]), 1000.0, [1000.0, 990.0]):
+        got = cam.project_generic(pts, focal, np.array([512.0, 515.0]))
+        assert isinstance(got, torch.Tensor) and got.dtype == torch.float32
+    assert isinstance(cam.project_generic(pose, torch.tensor([1000.0, 990.0]), 0.0), np.ndarray)
 
 
 @settings(max_examples=50, deadline=None)

@@ -35,9 +35,11 @@ from ..io import check_writable
 from ..noise import ErrorModel
 from ..resume import ResumeState
 from ..train import (
+    check_resume,
     check_teacher,
     init_distributed,
     load_fit,
+    minutes_text,
     save_training_outputs,
     train,
     validation_sets,
@@ -152,6 +154,7 @@ def _train_and_write(args: argparse.Namespace, cfg: TrainConfig, *, ctx: Any, in
                              lens=d.lens)
     val_det = (load_sh_detections(val, data=data, lens=d.lens)[0] if (Path(data.root) / SH_DETECTIONS_FILE).is_file()
                else None)
+    data_root = data.root
     result = train(cfg, data=data, train_samples=samples, real_keypoints_2d=real,
                    val_sets=validation_sets(val, val_det), init=init, teacher=teacher, progress=not args.no_progress,
                    ctx=ctx, resume=resume)
@@ -168,19 +171,34 @@ def _train_and_write(args: argparse.Namespace, cfg: TrainConfig, *, ctx: Any, in
             meta["interrupted"] = True
             _save_outputs(result, partial, half=not args.fp32_weights, meta=meta)
             go_on = ""
+            state_file = resume_path(args.out)
             if result.resume is not None:  # (after the weights: a Ctrl-C while the state is written keeps them)
-                state_meta = {**{k: v for k, v in meta.items() if k in ("init_sha256", "teacher_sha256")},
-                              "out": str(args.out), "fp32_weights": bool(args.fp32_weights)}
-                written = replace(result.resume, meta=state_meta).save(resume_path(args.out))
+                run_meta = meta.get("resumed", {}).get("run") or {
+                    k: v for k, v in meta.items() if k in ("command", "init_sha256", "teacher_sha256")}
+                state_meta = {**run_meta, "out": str(Path(args.out).resolve()), "fp32_weights": bool(args.fp32_weights),
+                              "threads": torch.get_num_threads(), "h36m": str(Path(data_root).resolve())}
+                try:
+                    written = replace(result.resume, meta=state_meta).save(state_file)
+                except KeyboardInterrupt:
+                    print(f"poselifter train: interrupted at step {result.steps} while its resume state was written: "
+                          f"the weights so far are in {partial} (not {args.out}); no resume state was written; "
+                          f"--init {partial} starts a new run from them", file=sys.stderr)
+                    raise SystemExit(130) from None
                 go_on = (f"; poselifter train --resume {written} goes on where it stopped (its schedule, optimizer, "
                          "weight average and random draws)")
-            print(f"poselifter train: interrupted at step {result.steps} ({result.minutes:.1f} min): the weights so "
-                  f"far are in {partial} (meta 'interrupted'; not {args.out}){go_on}; --init {partial} starts a new "
+            elif state_file.is_file():  # (a state left by an earlier run would go on with that run, not this one)
+                go_on = (f"; {state_file} beside it is an earlier stop's state (this stop, a second Ctrl-C inside a "
+                         "step, left none): --resume it only to go on with that earlier run")
+            print(f"poselifter train: interrupted at step {result.steps} ({minutes_text(result.minutes)}): the weights "
+                  f"so far are in {partial} (meta 'interrupted'; not {args.out}){go_on}; --init {partial} starts a new "
                   "run from them (its schedule and EMA start again)",
                   file=sys.stderr)
             return 130
         out = _save_outputs(result, args.out, half=not args.fp32_weights, meta=meta)
         print(f"wrote {out} (+ .curve.json, .curve.png); final {json.dumps(result.curve[-1])}")
+        if resume is not None and resume_path(args.out).is_file():
+            print(f"note: {resume_path(args.out)} is the state the run went on from; not needed now that it has "
+                  "finished", file=sys.stderr)
     if ctx.active:
         dist.barrier()
         dist.destroy_process_group()
@@ -241,11 +259,24 @@ def run_resume(args: argparse.Namespace) -> int:
     if not args.fp32_weights and state.meta.get("fp32_weights") is True:
         args.fp32_weights = True
     ctx = init_distributed()
+    check_resume(state, cfg, ctx=ctx)  # (before the data is read)
+    threads = state.meta.get("threads")
+    if args.threads is None and isinstance(threads, int) and threads >= 1:
+        args.threads = threads  # (another count sums in another order: other weights)
+        print(f"note: {threads} torch thread(s), as the run had (--threads to change it)", file=sys.stderr)
+    elif isinstance(threads, int) and args.threads != threads:
+        print(f"note: the run trained with {threads} torch thread(s), this goes on with {args.threads}: the weights "
+              "will differ slightly from those of the run never stopped", file=sys.stderr)
+    stored_h36m = state.meta.get("h36m")
+    if args.h36m is None and isinstance(stored_h36m, str) and Path(stored_h36m).is_dir():
+        args.h36m = Path(stored_h36m)
     if args.threads:
         torch.set_num_threads(args.threads)
     meta: dict[str, Any] = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": 1,
-                            "resumed": {"from": str(args.resume), "sha256": sha256_file(args.resume),
-                                        "step": state.step}}
+                            "resumed": {"from": str(Path(args.resume).resolve()), "sha256": sha256_file(args.resume),
+                                        "step": state.step,
+                                        "run": {k: v for k, v in state.meta.items()
+                                                if k in ("command", "init_sha256", "teacher_sha256")}}}
     meta.update({k: v for k, v in state.meta.items() if k in ("init_sha256", "teacher_sha256")})
     teacher = None
     if cfg.teacher is not None:
@@ -254,7 +285,7 @@ def run_resume(args: argparse.Namespace) -> int:
         if isinstance(stored, str) and sha != stored:
             raise PoseLifterError(f"--resume {args.resume}: the run's teacher {cfg.teacher} is not the network it "
                                   f"distilled (sha256 {sha[:12]}, the run's {stored[:12]}): put that teacher back")
-    print(f"resuming {args.resume} at step {state.step} ({state.minutes:.1f} min trained), writing {args.out}",
+    print(f"resuming {args.resume} at step {state.step} ({minutes_text(state.minutes)} trained), writing {args.out}",
           file=sys.stderr)
     return _train_and_write(args, cfg, ctx=ctx, init=None, teacher=teacher, meta=meta, resume=state)
 
