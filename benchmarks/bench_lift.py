@@ -33,6 +33,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 import lifter.api as api  # noqa: E402
+import lifter.model as lifter_model  # noqa: E402
 from lifter import Lifter  # noqa: E402
 from lifter.camera import project  # noqa: E402
 from lifter.cli._help import positive_int  # noqa: E402
@@ -152,15 +153,21 @@ def main() -> None:
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (float32, default path): median {p50:.3f} ms, p95 {p95:.3f} ms "
           f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
-    default_max = api.NUMPY_MAX_BATCH
+    default_max, packed_max = api.NUMPY_MAX_BATCH, lifter_model.PACKED_MAX_ROWS
+    packed_runs = all(lifter_model.forward_packed(m.net, np.zeros((1, m.net.stem.in_features), np.float32)) is not None
+                      for m, *_ in parts)
 
-    def lift_with(max_batch: int, kp_: np.ndarray) -> float:
+    def lift_with(max_batch: int, kp_: np.ndarray, *, packed: bool = False) -> float:
+        """Median ms of lift(kp_) with up to ``max_batch`` rows through float32 numpy and, with ``packed``, the
+        float16-packed matrices first (the default path)."""
         api.NUMPY_MAX_BATCH = max_batch
+        lifter_model.PACKED_MAX_ROWS = packed_max if packed else 0  # type: ignore[misc]
         try:
             return float(np.median(time_calls(lambda: lifter.lift(kp_, focal=1145.0, principal_point=(512.0, 515.0)),
                                               args.single_calls))) * 1e3
         finally:
             api.NUMPY_MAX_BATCH = default_max
+            lifter_model.PACKED_MAX_ROWS = packed_max  # type: ignore[misc]
 
     # Everything but the networks' arithmetic (input checks, codec, decode, ensemble averaging): each network call
     # replays its output for this pose instead of computing it
@@ -182,10 +189,16 @@ def main() -> None:
     print(f"single pose, all but the networks' arithmetic (their outputs replayed): median {rest50:.3f} ms; the "
           f"networks: {p50 - rest50:.3f} ms")
     u50, n50 = lift_with(0, kp[0]), lift_with(1 << 30, kp[0])
-    print(f"single pose, network rows all through torch (forward_folded): median {u50:.3f} ms; all through numpy: "
-          f"{n50:.3f} ms (the default sends up to NUMPY_MAX_BATCH = {default_max} row(s) to numpy)")
+    print(f"single pose, float32 network rows all through torch (forward_folded): median {u50:.3f} ms; all through "
+          f"numpy: {n50:.3f} ms (without float16 packing the default sends up to NUMPY_MAX_BATCH = {default_max} "
+          "row(s) to numpy)")
+    used = "used" if packed_runs else "NOT used (not float16-exact, or no fbgemm)"
+    print(f"single pose, float16-packed matrices {used} by the default path: {p50:.3f} ms against float32 numpy's "
+          f"{n50:.3f} ms -> {n50 / p50:.2f}x")
     two_torch, two_numpy = lift_with(0, kp[:2]), lift_with(1 << 30, kp[:2])
-    print(f"two poses: torch {two_torch:.3f} ms, numpy {two_numpy:.3f} ms")
+    two_packed = lift_with(default_max, kp[:2], packed=True)
+    print(f"two poses: torch {two_torch:.3f} ms, numpy {two_numpy:.3f} ms, float16-packed (default) "
+          f"{two_packed:.3f} ms")
     q = lifter.quantized()
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
@@ -196,7 +209,8 @@ def main() -> None:
                "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95,
                "single_without_network_arithmetic_median_ms": rest50,
                "single_torch_module_median_ms": u50, "single_numpy_median_ms": n50,
-               "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy,
+               "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy, "two_poses_packed_ms": two_packed,
+               "single_uses_packed_fp16": packed_runs,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
     # Each batch size against the FLOP limit measured in the same rounds: a shared machine's matmul rate drifts by

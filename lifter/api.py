@@ -67,8 +67,10 @@ from .model import (
     ModelConfig,
     PoseLifterNet,
     QuantizedCoupledLinear,
+    drop_packed,
     forward_folded,
     forward_numpy,
+    forward_packed,
 )
 from .normalization import pose_scale
 from .skeleton import NUM_JOINTS
@@ -79,7 +81,8 @@ products, each block of a weight matrix used for every row while it is in cache)
 (:func:`~lifter.model.forward_folded`, in cache-sized slices; the module itself when a layer is not the plain
 float32 one). Two rows are one pose with flip-test averaging; a matrix-vector product in numpy's BLAS has less
 overhead than torch's kernels, and from a few rows on torch's matrix products win (``benchmarks/bench_lift.py``
-times both)."""
+times both). Before both, networks whose weight matrices are float16 numbers (every shipped one) run up to
+:data:`lifter.model.PACKED_MAX_ROWS` rows through float16-packed matrices (:func:`~lifter.model.forward_packed`)."""
 CHUNK_SIZE: Final[int] = 32768
 """Poses per network pass in :meth:`Lifter.lift`: larger batches are lifted in chunks of this size, so
 memory stays bounded (the result is the same as one pass)."""
@@ -570,6 +573,15 @@ class Lifter:
                                            "flip_test": self.flip_test}}
         return save_checkpoint(path, self.net, self.codec, train_config=self.train_config, meta=meta, half=half)
 
+    def refresh(self) -> Lifter:
+        """Drop the float16-packed copies of every network's weight matrices (:func:`lifter.model.forward_packed`):
+        needed only after changing a matrix through ``.data`` or a numpy view, which torch's version counters do not
+        see (changes through torch operations, ``load_state_dict`` or new tensors are seen without it). Returns
+        ``self``."""
+        for m in (self, *self.ensemble, *([] if self.clean is None else [self.clean])):
+            drop_packed(m.net)
+        return self
+
     def quantized(self) -> Lifter:
         """A copy whose residual-block Linear layers use int8 weights (dynamic quantization): a quarter of the
         block weight memory. It always runs the torch module. The stem and head stay float32. A mirror network's
@@ -813,6 +825,9 @@ class Lifter:
         if device.type != "cpu":
             raise PoseLifterError(f"model {self.name!r} is on {device}; Lifter.lift runs the network on the CPU "
                                   "(numpy in, numpy out): move it back with lifter.net.cpu()")
+        out = forward_packed(net, features)  # (a few rows, float16-exact matrices; else None)
+        if out is not None:
+            return out
         if len(features) <= NUMPY_MAX_BATCH:
             out = forward_numpy(net, features)
             if out is not None:

@@ -381,17 +381,118 @@ def forward_numpy(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None
     if found is None:
         return None
     tensors, eps = found
+    return _forward_chain(net, _numpy_views(net, tensors), eps, features)
+
+
+def _numpy_views(net: PoseLifterNet, tensors: list[torch.Tensor]) -> list[np.ndarray]:
+    """Numpy views of :func:`_numpy_tensors`'s tensors (shared memory), cached per network and rebuilt when a tensor
+    or its storage is replaced."""
     key = tuple((id(t), t.data_ptr()) for t in tensors)
     cached = _NUMPY_VIEWS.get(net)
     if cached is None or cached[0] != key:
         cached = (key, [t.detach().numpy() for t in tensors])
         _NUMPY_VIEWS[net] = cached  # one assignment: concurrent readers see the old or the new pair
-    v = cached[1]
+    return cached[1]
+
+
+def _forward_chain(net: PoseLifterNet, v: list[Any], eps: list[float], features: np.ndarray) -> np.ndarray:
+    """The numpy chain of :func:`forward_numpy` (or, with packed matrices in ``v``, :func:`forward_packed`)."""
     if net.config.symmetry == "mirror":
         if len(features) == 0:
             return np.zeros((0, NUM_OUTPUTS), np.float32)
         return _forward_numpy_mirror(v, eps, features)
     return _forward_numpy_rows(v, eps, features)
+
+
+# ------------------------------------------------------------------------------------------------
+# A few rows through float16-packed weight matrices (fbgemm)
+# ------------------------------------------------------------------------------------------------
+
+PACKED_MAX_ROWS: Final[int] = 128
+"""Batches up to this many network rows run through float16-packed copies of the weight matrices
+(:func:`forward_packed`), where the network's matrices are exactly float16 numbers (every shipped network: their
+files store float16). Measured on a 2-core AVX2 VM, one thread, the default's two networks (flip-test rows
+included): 0.75 ms for one pose against 1.9-2.4 ms through numpy's float32 BLAS, 4.5 against 6.7 ms for 16 poses,
+15.0 against 17.7 ms for 64 (``benchmarks/bench_lift.py``)."""
+
+_PACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""net -> (key, {index in :func:`_numpy_tensors`: packed matrix} or None: not float16-exact); the key holds every
+weight matrix's identity, storage address and version counter."""
+
+_PACKING: list[bool] = []
+"""Whether this torch build packs float16 matrices (fbgemm), probed once."""
+
+
+def fp16_packing_available() -> bool:
+    """Whether this torch build has fbgemm's float16-packed matrix products (``quantized::linear_prepack_fp16``;
+    x86 CPU builds do, some others not): probed once; without them :func:`forward_packed` steps aside."""
+    if not _PACKING:
+        try:
+            packed = torch.ops.quantized.linear_prepack_fp16(torch.ones(2, 2), None)
+            ok = bool(torch.equal(torch.ops.quantized.linear_dynamic_fp16(torch.ones(1, 2), packed),
+                                  torch.full((1, 2), 2.0)))
+        except (RuntimeError, AttributeError, NotImplementedError):
+            ok = False
+        _PACKING.append(ok)
+    return _PACKING[0]
+
+
+class _PackedMatrix:
+    """A weight matrix ``(out, in)`` as fbgemm's float16-packed copy: ``x (R, in) float32 -> x @ W.T (R, out)``
+    float32, the products summed in float32 (only the stored weights are float16: exact for float16 weights)."""
+
+    __slots__ = ("_packed",)
+
+    def __init__(self, w: torch.Tensor) -> None:
+        self._packed = torch.ops.quantized.linear_prepack_fp16(w.detach().contiguous(), None)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        t = torch.from_numpy(np.ascontiguousarray(x, dtype=np.float32))
+        return torch.ops.quantized.linear_dynamic_fp16(t, self._packed).numpy()
+
+
+def forward_packed(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | None:
+    """:func:`forward_numpy` with each weight matrix a float16-packed copy (fbgemm's matrix products read half the
+    bytes of float32, and one pose is bound by reading the weights): the same outputs up to float32 rounding, where
+    every matrix of the network is exactly float16 numbers. Features ``(R, F)`` float32, at most
+    :data:`PACKED_MAX_ROWS` rows.
+
+    The biases, BatchNorm statistics and epsilons are read live on every call, as :func:`forward_numpy` does; the
+    packed matrices are rebuilt when a matrix is replaced, gets new storage, or is changed by a torch operation (its
+    version counter: in place under ``torch.no_grad()``, ``load_state_dict``, an optimizer step). A change written
+    through ``.data`` or a numpy view bypasses the version counter and is not seen: :func:`drop_packed` (or
+    :meth:`lifter.Lifter.refresh`) then. Returns None (use :func:`forward_numpy` or the module) when the rows are too
+    many, the packing is not available, a layer is not a plain float32 layer of its config or in training mode, a
+    matrix is not float16-exact (a network trained and saved with ``--fp32-weights``) or is an inference tensor
+    (made under ``torch.inference_mode()``, which keeps no version counter)."""
+    if len(features) > PACKED_MAX_ROWS or not fp16_packing_available():
+        return None
+    found = _numpy_tensors(net)
+    if found is None:
+        return None
+    tensors, eps = found
+    matrices = [t for t in tensors if t.ndim == 2]
+    if any(t.is_inference() for t in matrices):
+        return None  # (made under torch.inference_mode(): no version counter to see changes by)
+    key = tuple((id(t), t.data_ptr(), t._version) for t in matrices)
+    cached = _PACKED.get(net)
+    if cached is None or cached[0] != key:
+        with torch.no_grad():
+            exact = all(t.ndim != 2 or torch.equal(t, t.to(torch.float16).to(torch.float32)) for t in tensors)
+            packs = {i: _PackedMatrix(t) for i, t in enumerate(tensors) if t.ndim == 2} if exact else None
+        cached = (key, packs)
+        _PACKED[net] = cached  # one assignment: concurrent readers see the old or the new pair
+    packs = cached[1]
+    if packs is None:
+        return None
+    views = _numpy_views(net, tensors)
+    return _forward_chain(net, [packs.get(i, a) for i, a in enumerate(views)], eps, features)
+
+
+def drop_packed(net: PoseLifterNet) -> None:
+    """Forget ``net``'s float16-packed matrices (:func:`forward_packed` packs them again from the live weights on its
+    next call): after changing a matrix through ``.data`` or a numpy view, which the version counters do not see."""
+    _PACKED.pop(net, None)
 
 
 def _bn_affine_np(bn: tuple) -> tuple[np.ndarray, np.ndarray]:
@@ -412,7 +513,9 @@ def _matvec_rows(w: np.ndarray, x: np.ndarray) -> np.ndarray:
     a general product that first packs the whole weight matrix (slower than two rows on their own). Two rows
     one after the other read the weights twice from memory; here each block of ``w``'s rows is read once and
     multiplied with every row of ``x`` while it is in cache (flip-test averaging sends two rows for one pose;
-    ``benchmarks/bench_lift.py`` times it)."""
+    ``benchmarks/bench_lift.py`` times it). A packed matrix (:func:`forward_packed`) multiplies all rows itself."""
+    if isinstance(w, _PackedMatrix):
+        return w(x)
     if len(x) == 1:
         return x @ w.T
     out = np.empty((len(x), w.shape[0]), np.result_type(x, w))
@@ -427,14 +530,19 @@ def _matvec_rows(w: np.ndarray, x: np.ndarray) -> np.ndarray:
 def _forward_numpy_rows(v: list[np.ndarray], eps: list[float], features: np.ndarray) -> np.ndarray:
     """The chain of :func:`forward_numpy` on ``features`` ``(B, F)`` (a few rows) with the weight views ``v``."""
     (w0, b0), blocks, (wh, bh), _ = _layout(v, eps, False)
-    h = features @ w0.T + b0
+    h = _product(w0, features) + b0
     for bn1, (w1, b1), bn2, (w2, b2) in blocks:
         s1, c1 = _bn_affine_np(bn1)
         s2, c2 = _bn_affine_np(bn2)
         y = np.maximum(h * s1 + c1, 0.0)
         y = np.maximum((_matvec_rows(w1, y) + b1) * s2 + c2, 0.0)
         h = h + (_matvec_rows(w2, y) + b2)
-    return h @ wh.T + bh
+    return _product(wh, h) + bh
+
+
+def _product(w: Any, x: np.ndarray) -> np.ndarray:
+    """``x @ w.T`` for the stem and head: numpy's product, or a packed matrix's (:func:`forward_packed`)."""
+    return w(x) if isinstance(w, _PackedMatrix) else x @ w.T
 
 
 # ------------------------------------------------------------------------------------------------
@@ -521,7 +629,7 @@ def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.nd
     (w0, b0), blocks, (wh, bh), (in_perm, in_sign, out_perm, out_scale, out_offset) = _layout(v, eps, True)
     r = len(features)
     x = np.concatenate([features, features[:, in_perm] * in_sign])
-    h = x @ w0.T + b0
+    h = _product(w0, x) + b0
 
     def coupled(y: np.ndarray, u: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
         y0, y1 = y[:r], y[r:]
@@ -535,5 +643,5 @@ def _forward_numpy_mirror(v: list[np.ndarray], eps: list[float], features: np.nd
         y = np.maximum(h * s1 + c1, 0.0)
         y = np.maximum(coupled(y, *lin1) * s2 + c2, 0.0)
         h = h + coupled(y, *lin2)
-    g = h @ wh.T + bh
+    g = _product(wh, h) + bh
     return 0.5 * (g[:r] + g[r:, out_perm] * out_scale + out_offset)

@@ -1,9 +1,10 @@
-"""The fast paths: ``Lifter.lift`` runs one pose through numpy and batches through torch in cache-sized
-slices, both on the live weights.
+"""The fast paths: ``Lifter.lift`` runs a few rows through float16-packed copies of float16-exact weight matrices,
+one pose otherwise through numpy and batches through torch in cache-sized slices, the last two on the live weights.
 
 ``lifter.model.forward_numpy`` and ``lifter.model.forward_folded`` must give the torch module's outputs,
 see every change to the weights (no cache to go stale) and step aside for layers they cannot run
-(quantized, training mode).
+(quantized, training mode). ``lifter.model.forward_packed`` must give the module's outputs, follow every change made
+through torch (version counters), read biases and BatchNorm statistics live, and step aside where it cannot run.
 """
 
 from __future__ import annotations
@@ -252,3 +253,75 @@ def test_shipped_default_single_pose_matches_module(kp):
     one = lifter.lift(kp[3], focal=1145.0, principal_point=PP, flip_test=True, warn=False)
     batch = lifter.lift(kp[3:6], focal=1145.0, principal_point=PP, flip_test=True, warn=False)
     np.testing.assert_allclose(one.absolute, batch.absolute[0], rtol=1e-5, atol=1e-2)
+
+
+def _half_exact(net: PoseLifterNet) -> PoseLifterNet:
+    """``net`` with its weight matrices rounded to float16 numbers, as every shipped network's are (stored float16)."""
+    with torch.no_grad():
+        for p in net.parameters():
+            if p.ndim == 2:
+                p.copy_(p.half().float())
+    return net
+
+
+@pytest.mark.parametrize("config", [{}, {"symmetry": "mirror"}, {"mode": "baseline"}])
+def test_packed_forward_matches_module_for_float16_weights(kp, config):
+    """forward_packed (float16-packed matrices, products summed in float32) gives the module's outputs for a network
+    whose matrices are float16 numbers, up to PACKED_MAX_ROWS rows; it steps aside otherwise."""
+    net = _half_exact(_net(seed=2, **config))
+    many = np.concatenate([kp] * 5)  # 160 poses
+    for rows in (1, 2, 5, lifter_model.PACKED_MAX_ROWS):
+        x = _features(net, many[:rows])
+        got = lifter_model.forward_packed(net, x)
+        assert got is not None and got.shape == (rows, 49) and got.dtype == np.float32
+        with torch.inference_mode():
+            want = net(torch.from_numpy(x)).numpy()
+        np.testing.assert_allclose(got, want, rtol=1e-5, atol=2e-5)
+    assert lifter_model.forward_packed(net, _features(net, many[:lifter_model.PACKED_MAX_ROWS + 1])) is None
+    assert lifter_model.forward_packed(_net(seed=2, **config), _features(net, kp[:1])) is None  # float32 weights
+    net.train()
+    assert lifter_model.forward_packed(net, _features(net, kp[:1])) is None
+    net.eval()
+    lifter = _lifter(net)
+    _assert_lift_matches_module(lifter, kp[0])
+    _assert_lift_matches_module(lifter, kp[:20])
+
+
+def test_packed_matrices_follow_torch_changes_and_refresh(kp, monkeypatch):
+    """The packed copies are rebuilt when a matrix changes through torch (its version counter) or is replaced;
+    biases and BatchNorm statistics are read live; a matrix changed through .data is not seen until
+    Lifter.refresh() (the documented limit); without fbgemm's packing the float32 paths run."""
+    net = _half_exact(_net(seed=0))
+    lifter = _lifter(net)
+    lift = lambda: lifter.lift(kp[0], focal=1145.0, principal_point=PP).relative  # noqa: E731
+    first = lift()
+    assert lifter_model.forward_packed(net, _features(net, kp[:1])) is not None
+    w = net.blocks[0].body[3].weight
+    with torch.no_grad():
+        w.mul_(2.0)  # (twice a float16 number is one)
+    changed = lift()
+    assert np.abs(changed - first).max() > 1.0
+    _assert_lift_matches_module(lifter, kp[0])
+    net.load_state_dict(_half_exact(_net(seed=3)).state_dict())
+    _assert_lift_matches_module(lifter, kp[0])
+    with torch.no_grad():
+        net.head.bias.data.add_(0.5)  # (read live)
+        net.blocks[0].body[0].running_mean.data.add_(0.5)
+    _assert_lift_matches_module(lifter, kp[0])
+    before = lift()
+    w.data.mul_(0.5)  # bypasses the version counter: the packed copy is the old matrix
+    np.testing.assert_array_equal(lift(), before)
+    lifter.refresh()
+    assert np.abs(lift() - before).max() > 1.0
+    _assert_lift_matches_module(lifter, kp[0])
+    monkeypatch.setattr(lifter_model, "_PACKING", [False])
+    assert lifter_model.forward_packed(net, _features(net, kp[:1])) is None
+    _assert_lift_matches_module(lifter, kp[0])
+
+
+def test_shipped_networks_run_packed():
+    """Every network of the default is float16-exact (its file stores float16), so one pose runs packed."""
+    lifter = Lifter.from_pretrained("default")
+    for part in (lifter, *lifter.ensemble, lifter.clean):
+        x = np.zeros((2, part.net.stem.in_features), np.float32)
+        assert lifter_model.forward_packed(part.net, x) is not None, part.name
