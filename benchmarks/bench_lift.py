@@ -151,20 +151,21 @@ def main() -> None:
 
     single = time_calls(lambda: lifter.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     p50, p95 = np.percentile(single, [50, 95]) * 1e3
-    print(f"single pose Lifter.lift (float32, default path): median {p50:.3f} ms, p95 {p95:.3f} ms "
+    print(f"single pose Lifter.lift (default path: float32 arithmetic; float16-packed matrices where the weights are "
+          f"float16 numbers): median {p50:.3f} ms, p95 {p95:.3f} ms "
           f"({args.single_calls} calls; {os.environ['OPENBLAS_NUM_THREADS']} BLAS threads)")
     default_max, packed_max = api.NUMPY_MAX_BATCH, lifter_model.PACKED_MAX_ROWS
     packed_runs = all(lifter_model.forward_packed(m.net, np.zeros((1, m.net.stem.in_features), np.float32)) is not None
                       for m, *_ in parts)
 
-    def lift_with(max_batch: int, kp_: np.ndarray, *, packed: bool = False) -> float:
+    def lift_with(max_batch: int, kp_: np.ndarray, *, packed: bool = False, calls: int | None = None) -> float:
         """Median ms of lift(kp_) with up to ``max_batch`` rows through float32 numpy and, with ``packed``, the
         float16-packed matrices first (the default path)."""
         api.NUMPY_MAX_BATCH = max_batch
         lifter_model.PACKED_MAX_ROWS = packed_max if packed else 0  # type: ignore[misc]
         try:
             return float(np.median(time_calls(lambda: lifter.lift(kp_, focal=1145.0, principal_point=(512.0, 515.0)),
-                                              args.single_calls))) * 1e3
+                                              calls or args.single_calls))) * 1e3
         finally:
             api.NUMPY_MAX_BATCH = default_max
             lifter_model.PACKED_MAX_ROWS = packed_max  # type: ignore[misc]
@@ -193,8 +194,14 @@ def main() -> None:
           f"numpy: {n50:.3f} ms (without float16 packing the default sends up to NUMPY_MAX_BATCH = {default_max} "
           "row(s) to numpy)")
     used = "used" if packed_runs else "NOT used (not float16-exact, or no fbgemm)"
-    print(f"single pose, float16-packed matrices {used} by the default path: {p50:.3f} ms against float32 numpy's "
-          f"{n50:.3f} ms -> {n50 / p50:.2f}x")
+    # the two paths alternately, round after round (a shared machine drifts within minutes: a review measured the
+    # ratio of the two medians above, taken minutes apart, 10 % off the alternating one)
+    pairs = [(lift_with(default_max, kp[0], packed=True, calls=max(100, args.single_calls // 5)),
+              lift_with(1 << 30, kp[0], calls=max(100, args.single_calls // 5))) for _ in range(5)]
+    alt_p, alt_n = (float(np.median([p[k] for p in pairs])) for k in (0, 1))
+    alt_ratio = float(np.median([n / p for p, n in pairs]))
+    print(f"single pose, float16-packed matrices {used} by the default path; alternately with float32 numpy, 5 "
+          f"rounds: {alt_p:.3f} ms against {alt_n:.3f} ms, median ratio {alt_ratio:.2f}x")
     two_torch, two_numpy = lift_with(0, kp[:2]), lift_with(1 << 30, kp[:2])
     two_packed = lift_with(default_max, kp[:2], packed=True)
     print(f"two poses: torch {two_torch:.3f} ms, numpy {two_numpy:.3f} ms, float16-packed (default) "
@@ -203,14 +210,15 @@ def main() -> None:
     single_q = time_calls(lambda: q.lift(kp[0], focal=1145.0, principal_point=(512.0, 515.0)), args.single_calls)
     q50, q95 = np.percentile(single_q, [50, 95]) * 1e3
     print(f"single pose Lifter.lift (quantize=True, int8 blocks): median {q50:.3f} ms, p95 {q95:.3f} ms "
-          f"-> {p50 / q50:.2f}x faster")
+          f"({q50 / p50:.2f}x the default path's time)")
     results = {"model": lifter.name, "flip_test": lifter.flip_test, "rows_per_pose": rows,
                "mflop_per_pose": fpp / 1e6, "matmul_gflops": gflops, "flop_limit_poses_per_s": limit,
                "single_calls": args.single_calls, "single_median_ms": p50, "single_p95_ms": p95,
                "single_without_network_arithmetic_median_ms": rest50,
                "single_torch_module_median_ms": u50, "single_numpy_median_ms": n50,
                "two_poses_torch_ms": two_torch, "two_poses_numpy_ms": two_numpy, "two_poses_packed_ms": two_packed,
-               "single_uses_packed_fp16": packed_runs,
+               "single_uses_packed_fp16": packed_runs, "single_packed_alternating_ms": alt_p,
+               "single_numpy_alternating_ms": alt_n, "single_numpy_over_packed_ratio": alt_ratio,
                "blas_threads": int(os.environ["OPENBLAS_NUM_THREADS"]), "single_int8_median_ms": q50,
                "single_int8_p95_ms": q95, "batched": []}
     # Each batch size against the FLOP limit measured in the same rounds: a shared machine's matmul rate drifts by

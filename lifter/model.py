@@ -411,30 +411,34 @@ def _forward_chain(net: PoseLifterNet, v: list[Any], eps: list[float], features:
 PACKED_MAX_ROWS: Final[int] = 128
 """Batches up to this many network rows run through float16-packed copies of the weight matrices
 (:func:`forward_packed`), where the network's matrices are exactly float16 numbers (every shipped network: their
-files store float16). Measured on a 2-core AVX2 VM, one thread, the default's two networks (flip-test rows
-included): 0.75 ms for one pose against 1.9-2.4 ms through numpy's float32 BLAS, 4.5 against 6.7 ms for 16 poses,
-15.0 against 17.7 ms for 64 (``benchmarks/bench_lift.py``)."""
+files store float16). ``benchmarks/bench_lift.py`` times the default both ways (``docs/results/bench_lift_far_*.txt``):
+on a 2-core AVX2 VM, one thread, one pose took about half the time of the float32 numpy path, and 16 poses reached
+59 % of the FLOP limit against 44 %."""
 
 _PACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-"""net -> (key, {index in :func:`_numpy_tensors`: packed matrix} or None: not float16-exact); the key holds every
-weight matrix's identity, storage address and version counter."""
+"""net -> (key, {index in :func:`_numpy_tensors`: packed matrix} or None: not float16-exact, probe rows); the key
+holds every weight matrix's identity, storage address and version counter, the probe rows each matrix's first and
+last row as packed."""
 
-_PACKING: list[bool] = []
-"""Whether this torch build packs float16 matrices (fbgemm), probed once."""
+_PACKING: dict[str, bool] = {}
+"""Whether this torch build packs float16 matrices (fbgemm) under each quantized engine, probed once per engine."""
 
 
 def fp16_packing_available() -> bool:
-    """Whether this torch build has fbgemm's float16-packed matrix products (``quantized::linear_prepack_fp16``;
-    x86 CPU builds do, some others not): probed once; without them :func:`forward_packed` steps aside."""
-    if not _PACKING:
+    """Whether this torch build, under its current quantized engine (``torch.backends.quantized.engine``), has
+    fbgemm's float16-packed matrix products (``quantized::linear_prepack_fp16``: x86 CPU builds do under the default
+    engine; "qnnpack" and "onednn" do not): probed once per engine; without them :func:`forward_packed` steps aside."""
+    engine = str(torch.backends.quantized.engine)
+    ok = _PACKING.get(engine)
+    if ok is None:
         try:
             packed = torch.ops.quantized.linear_prepack_fp16(torch.ones(2, 2), None)
             ok = bool(torch.equal(torch.ops.quantized.linear_dynamic_fp16(torch.ones(1, 2), packed),
                                   torch.full((1, 2), 2.0)))
         except (RuntimeError, AttributeError, NotImplementedError):
             ok = False
-        _PACKING.append(ok)
-    return _PACKING[0]
+        _PACKING[engine] = ok
+    return ok
 
 
 class _PackedMatrix:
@@ -455,43 +459,62 @@ def forward_packed(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | Non
     """:func:`forward_numpy` with each weight matrix a float16-packed copy (fbgemm's matrix products read half the
     bytes of float32, and one pose is bound by reading the weights): the same outputs up to float32 rounding, where
     every matrix of the network is exactly float16 numbers. Features ``(R, F)`` float32, at most
-    :data:`PACKED_MAX_ROWS` rows.
+    :data:`PACKED_MAX_ROWS` rows. The products run on one thread of the caller's (fbgemm would split these small
+    products over torch's threads: on a busy 2-core machine one pose then took 4-128 ms instead of 2).
 
-    The biases, BatchNorm statistics and epsilons are read live on every call, as :func:`forward_numpy` does; the
-    packed matrices are rebuilt when a matrix is replaced, gets new storage, or is changed by a torch operation (its
-    version counter: in place under ``torch.no_grad()``, ``load_state_dict``, an optimizer step). A change written
-    through ``.data`` or a numpy view bypasses the version counter and is not seen: :func:`drop_packed` (or
-    :meth:`lifter.Lifter.refresh`) then. Returns None (use :func:`forward_numpy` or the module) when the rows are too
-    many, the packing is not available, a layer is not a plain float32 layer of its config or in training mode, a
-    matrix is not float16-exact (a network trained and saved with ``--fp32-weights``) or is an inference tensor
-    (made under ``torch.inference_mode()``, which keeps no version counter)."""
+    The biases, BatchNorm statistics and epsilons are read live on every call, as :func:`forward_numpy` does. The
+    packed matrices are rebuilt when a matrix is replaced or gets new storage, when its version counter moves (a torch
+    operation on it: in place under ``torch.no_grad()``, ``load_state_dict``, a plain optimizer step), and when its
+    first or last row no longer holds what was packed (checked on every call, a few microseconds: this catches the
+    writes that bypass the version counter and touch every row, such as a fused optimizer step, ``.data.mul_``, a
+    numpy view or storage write of the whole matrix). A sparse change elsewhere written through ``.data``, a numpy
+    view or the storage is not seen: :func:`drop_packed` (or :meth:`lifter.Lifter.refresh`) then. Returns None (use
+    :func:`forward_numpy` or the module) when the rows are too many, the packing is not available, a layer is not a
+    plain float32 layer of its config or in training mode, a matrix is not finite float16 numbers (a network trained
+    and saved with ``--fp32-weights``) or is an inference tensor (made under ``torch.inference_mode()``, which keeps
+    no version counter)."""
     if len(features) > PACKED_MAX_ROWS or not fp16_packing_available():
         return None
     found = _numpy_tensors(net)
     if found is None:
         return None
     tensors, eps = found
-    matrices = [t for t in tensors if t.ndim == 2]
-    if any(t.is_inference() for t in matrices):
+    index = [i for i, t in enumerate(tensors) if t.ndim == 2]
+    if any(tensors[i].is_inference() for i in index):
         return None  # (made under torch.inference_mode(): no version counter to see changes by)
-    key = tuple((id(t), t.data_ptr(), t._version) for t in matrices)
+    views = _numpy_views(net, tensors)
+    key = tuple((id(tensors[i]), tensors[i].data_ptr(), tensors[i]._version) for i in index)
     cached = _PACKED.get(net)
-    if cached is None or cached[0] != key:
+    if cached is None or cached[0] != key or not all(  # (bytes: 0.2 us a row, np.array_equal 2.5)
+            views[i][0].tobytes() == first and views[i][-1].tobytes() == last
+            for i, (first, last) in zip(index, cached[2])):
+        packs = None
         with torch.no_grad():
-            exact = all(t.ndim != 2 or torch.equal(t, t.to(torch.float16).to(torch.float32)) for t in tensors)
-            packs = {i: _PackedMatrix(t) for i, t in enumerate(tensors) if t.ndim == 2} if exact else None
-        cached = (key, packs)
-        _PACKED[net] = cached  # one assignment: concurrent readers see the old or the new pair
+            if all(bool(torch.isfinite(tensors[i]).all()) and torch.equal(
+                    tensors[i], tensors[i].to(torch.float16).to(torch.float32)) for i in index):
+                try:
+                    packs = {i: _PackedMatrix(tensors[i]) for i in index}
+                except RuntimeError:  # (a quantized engine that cannot pack: the float32 paths)
+                    return None
+        cached = (key, packs, [(views[i][0].tobytes(), views[i][-1].tobytes()) for i in index])
+        _PACKED[net] = cached  # one assignment: concurrent readers see the old or the new triple
     packs = cached[1]
     if packs is None:
         return None
-    views = _numpy_views(net, tensors)
-    return _forward_chain(net, [packs.get(i, a) for i, a in enumerate(views)], eps, features)
+    threads = torch.get_num_threads()
+    if threads != 1:  # (the calling thread's own count: other threads' lifts are not touched)
+        torch.set_num_threads(1)
+    try:
+        return _forward_chain(net, [packs.get(i, a) for i, a in enumerate(views)], eps, features)
+    finally:
+        if threads != 1:
+            torch.set_num_threads(threads)
 
 
 def drop_packed(net: PoseLifterNet) -> None:
     """Forget ``net``'s float16-packed matrices (:func:`forward_packed` packs them again from the live weights on its
-    next call): after changing a matrix through ``.data`` or a numpy view, which the version counters do not see."""
+    next call): after a sparse change to a matrix through ``.data``, a numpy view or its storage, which neither the
+    version counters nor the first-and-last-row check see."""
     _PACKED.pop(net, None)
 
 
