@@ -400,3 +400,18 @@ def test_evaluate_refuses_two_rows_of_one_label(capsys):
     assert main(["evaluate", "x=runs/none_a.pt", "x=runs/none_b.pt"]) == 2
     assert ("two models are labelled 'x': give each row its own label (LABEL=MODEL, e.g. a=runs/none_a.pt "
             "b=runs/none_b.pt)") in capsys.readouterr().err
+
+
+def test_a_value_starting_with_a_minus_sign_is_read_as_the_options_value(capsys):
+    """argparse takes '-1' for a number but '-100,80' for an option ("expected one argument", a researcher trial's
+    --focal-scales -1,1): an option that takes one value is given it, and the value is then checked by name."""
+    from lifter.cli import _parse, build_parser
+
+    args = _parse(build_parser("evaluate"), ["evaluate", "--pp-shift", "-100,80", "--focal-scales", "0.5,1"])
+    assert tuple(args.pp_shift) == (-100.0, 80.0) and list(args.focal_scales) == [0.5, 1.0]
+    with pytest.raises(SystemExit):
+        main(["evaluate", "--focal-scales", "-1,1"])
+    assert "argument --focal-scales: focal factors must be > 0, got '-1,1'" in capsys.readouterr().err
+    # '--opt=-5,5' as typed still works
+    args = _parse(build_parser("evaluate"), ["evaluate", "--pp-shift=-5,5"])
+    assert tuple(args.pp_shift) == (-5.0, 5.0)

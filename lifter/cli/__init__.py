@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 import warnings
 from collections.abc import Sequence
@@ -54,7 +55,7 @@ def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
     takes a positional list once, so inputs after an option were "unrecognized"; an option taking several values,
     ``--focal F [F]``, still takes a number after it); anything else left over is an error from the sub-command's
     own parser, with its usage."""
-    args, extra = parser.parse_known_args(argv)
+    args, extra = parser.parse_known_args(_joined_negative_values(parser, argv))
     if not extra:
         return args
     subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))  # noqa: SLF001
@@ -64,6 +65,32 @@ def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
         return args
     own.error(f"unrecognized arguments: {' '.join(extra)}")
     raise AssertionError("unreachable")  # (error() exits)
+
+
+_NEGATIVE_VALUE = re.compile(r"^-\.?\d")
+
+
+def _joined_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> list[str]:
+    """``argv`` with an option that takes one value joined to a value that starts with a minus sign and a digit
+    (``--pp-shift -100,80`` -> ``--pp-shift=-100,80``): argparse takes ``-1`` for a number but ``-100,80`` for an
+    option, and said "expected one argument" (a researcher trial's ``--focal-scales -1,1``, refused by name now)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    subs = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)  # noqa: SLF001
+    own = subs.choices.get(args[0]) if subs is not None and args else None
+    if own is None:
+        return args
+    takes_one = {o for a in own._actions for o in a.option_strings  # noqa: SLF001
+                 if a.nargs is None and isinstance(a, argparse._StoreAction)}  # noqa: SLF001
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        if args[i] in takes_one and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
+            out.append(f"{args[i]}={args[i + 1]}")
+            i += 2
+        else:
+            out.append(args[i])
+            i += 1
+    return out
 
 
 def _stdout_reader_gone() -> bool:
