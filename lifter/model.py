@@ -459,8 +459,10 @@ def forward_packed(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | Non
     """:func:`forward_numpy` with each weight matrix a float16-packed copy (fbgemm's matrix products read half the
     bytes of float32, and one pose is bound by reading the weights): the same outputs up to float32 rounding, where
     every matrix of the network is exactly float16 numbers. Features ``(R, F)`` float32, at most
-    :data:`PACKED_MAX_ROWS` rows. The products run on one thread of the caller's (fbgemm would split these small
-    products over torch's threads: on a busy 2-core machine one pose then took 4-128 ms instead of 2).
+    :data:`PACKED_MAX_ROWS` rows, where torch runs on one thread (``torch.set_num_threads(1)``, as on a shared machine
+    anyway): fbgemm splits these small products over torch's threads, and on a busy 2-core machine one pose then took
+    4-128 ms instead of 2 (a review; setting one thread around the products is no cure: ``torch.set_num_threads``
+    also sets the count every thread that starts meanwhile takes). With more threads the float32 paths run.
 
     The biases, BatchNorm statistics and epsilons are read live on every call, as :func:`forward_numpy` does. The
     packed matrices are rebuilt when a matrix is replaced or gets new storage, when its version counter moves (a torch
@@ -469,11 +471,12 @@ def forward_packed(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | Non
     writes that bypass the version counter and touch every row, such as a fused optimizer step, ``.data.mul_``, a
     numpy view or storage write of the whole matrix). A sparse change elsewhere written through ``.data``, a numpy
     view or the storage is not seen: :func:`drop_packed` (or :meth:`lifter.Lifter.refresh`) then. Returns None (use
-    :func:`forward_numpy` or the module) when the rows are too many, the packing is not available, a layer is not a
+    :func:`forward_numpy` or the module) when the rows are too many, torch runs on more than one thread, the packing
+    is not available, a layer is not a
     plain float32 layer of its config or in training mode, a matrix is not finite float16 numbers (a network trained
     and saved with ``--fp32-weights``) or is an inference tensor (made under ``torch.inference_mode()``, which keeps
     no version counter)."""
-    if len(features) > PACKED_MAX_ROWS or not fp16_packing_available():
+    if len(features) > PACKED_MAX_ROWS or torch.get_num_threads() != 1 or not fp16_packing_available():
         return None
     found = _numpy_tensors(net)
     if found is None:
@@ -501,14 +504,7 @@ def forward_packed(net: PoseLifterNet, features: np.ndarray) -> np.ndarray | Non
     packs = cached[1]
     if packs is None:
         return None
-    threads = torch.get_num_threads()
-    if threads != 1:  # (the calling thread's own count: other threads' lifts are not touched)
-        torch.set_num_threads(1)
-    try:
-        return _forward_chain(net, [packs.get(i, a) for i, a in enumerate(views)], eps, features)
-    finally:
-        if threads != 1:
-            torch.set_num_threads(threads)
+    return _forward_chain(net, [packs.get(i, a) for i, a in enumerate(views)], eps, features)
 
 
 def drop_packed(net: PoseLifterNet) -> None:

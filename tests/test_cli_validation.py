@@ -412,6 +412,10 @@ def test_a_value_starting_with_a_minus_sign_is_read_as_the_options_value(capsys)
     with pytest.raises(SystemExit):
         main(["evaluate", "--focal-scales", "-1,1"])
     assert "argument --focal-scales: focal factors must be > 0, got '-1,1'" in capsys.readouterr().err
-    # '--opt=-5,5' as typed still works
+    # '--opt=-5,5' as typed and an abbreviation work; nothing after '--' is touched (a review: two inputs became one)
     args = _parse(build_parser("evaluate"), ["evaluate", "--pp-shift=-5,5"])
     assert tuple(args.pp_shift) == (-5.0, 5.0)
+    args = _parse(build_parser("evaluate"), ["evaluate", "--pp", "-5,5"])
+    assert tuple(args.pp_shift) == (-5.0, 5.0)
+    args = _parse(build_parser("lift"), ["lift", "-o", "out", "--", "--out", "-1.json"])
+    assert list(args.inputs) == ["--out", "-1.json"]

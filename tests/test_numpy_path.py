@@ -268,6 +268,15 @@ packing = pytest.mark.skipif(not lifter_model.fp16_packing_available(),
                              reason="this torch build has no fbgemm float16 packing (the float32 paths run)")
 
 
+@pytest.fixture(autouse=True)
+def _one_torch_thread():
+    """The packed path runs where torch runs on one thread (forward_packed): every test here starts there."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
 @packing
 @pytest.mark.parametrize("config", [{}, {"symmetry": "mirror"}, {"mode": "baseline"}])
 def test_packed_forward_matches_module_for_float16_weights(kp, config):
@@ -340,16 +349,26 @@ def test_packed_matrices_follow_weight_changes(kp):
 
 
 @packing
-def test_packed_path_keeps_the_callers_threads_and_steps_aside_without_packing(kp, monkeypatch):
-    """The packed products run on one thread of the caller's and give its thread count back (a review: fbgemm split
-    them over torch's threads, 4-128 ms for one pose on a busy 2-core machine); under a quantized engine that cannot
+def test_packed_path_runs_on_one_thread_only_and_steps_aside_without_packing(kp, monkeypatch):
+    """The packed path runs where torch runs on one thread, and steps aside otherwise, leaving the thread count alone
+    (a review: fbgemm split the small products over torch's threads, 4-128 ms for one pose on a busy 2-core machine;
+    setting one thread around them set it for every thread started meanwhile); under a quantized engine that cannot
     pack (qnnpack, onednn) or a build without fbgemm the float32 paths run (a review: lift raised)."""
+    import threading
+
     lifter = _lifter(_half_exact(_net(seed=0)))
     threads = torch.get_num_threads()
     try:
         torch.set_num_threads(2)
+        assert lifter_model.forward_packed(lifter.net, _features(lifter.net, kp[:1])) is None
         _assert_lift_matches_module(lifter, kp[0])
-        assert torch.get_num_threads() == 2
+        seen: list[int] = []
+        started = threading.Thread(target=lambda: seen.append(torch.get_num_threads()))
+        started.start()
+        started.join()
+        assert torch.get_num_threads() == 2 and seen == [2]
+        torch.set_num_threads(1)
+        assert lifter_model.forward_packed(lifter.net, _features(lifter.net, kp[:1])) is not None
     finally:
         torch.set_num_threads(threads)
     engine = torch.backends.quantized.engine

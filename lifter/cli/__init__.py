@@ -71,24 +71,31 @@ _NEGATIVE_VALUE = re.compile(r"^-\.?\d")
 
 
 def _joined_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> list[str]:
-    """``argv`` with an option that takes one value joined to a value that starts with a minus sign and a digit
-    (``--pp-shift -100,80`` -> ``--pp-shift=-100,80``): argparse takes ``-1`` for a number but ``-100,80`` for an
-    option, and said "expected one argument" (a researcher trial's ``--focal-scales -1,1``, refused by name now)."""
+    """``argv`` with a long option that takes one value (or an abbreviation of one) joined to a value that starts
+    with a minus sign and a digit (``--pp-shift -100,80`` -> ``--pp-shift=-100,80``): argparse takes ``-1`` for a
+    number but ``-100,80`` for an option, and said "expected one argument" (a researcher trial's ``--focal-scales
+    -1,1``, refused by name now). Nothing after a bare ``--`` is touched."""
     args = list(sys.argv[1:] if argv is None else argv)
     subs = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)  # noqa: SLF001
     own = subs.choices.get(args[0]) if subs is not None and args else None
     if own is None:
         return args
     takes_one = {o for a in own._actions for o in a.option_strings  # noqa: SLF001
-                 if a.nargs is None and isinstance(a, argparse._StoreAction)}  # noqa: SLF001
+                 if o.startswith("--") and a.nargs is None and isinstance(a, argparse._StoreAction)}  # noqa: SLF001
+    every = {o for a in own._actions for o in a.option_strings}  # noqa: SLF001
     out: list[str] = []
     i = 0
     while i < len(args):
-        if args[i] in takes_one and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
-            out.append(f"{args[i]}={args[i + 1]}")
+        if args[i] == "--":
+            return out + args[i:]
+        word = args[i]
+        named = [o for o in every if o.startswith(word)] if word.startswith("--") and len(word) > 2 else []
+        if (len(named) == 1 or word in every) and (word if word in every else named[0]) in takes_one \
+                and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
+            out.append(f"{word}={args[i + 1]}")
             i += 2
         else:
-            out.append(args[i])
+            out.append(word)
             i += 1
     return out
 
