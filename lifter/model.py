@@ -408,12 +408,14 @@ def _forward_chain(net: PoseLifterNet, v: list[Any], eps: list[float], features:
 # A few rows through float16-packed weight matrices (fbgemm)
 # ------------------------------------------------------------------------------------------------
 
-PACKED_MAX_ROWS: Final[int] = 128
+PACKED_MAX_ROWS: Final[int] = 192
 """Batches up to this many network rows run through float16-packed copies of the weight matrices
 (:func:`forward_packed`), where the network's matrices are exactly float16 numbers (every shipped network: their
-files store float16). ``benchmarks/bench_lift.py`` times the default both ways (``docs/results/bench_lift_far_*.txt``):
-on a 2-core AVX2 VM, one thread, one pose took about half the time of the float32 numpy path, and 16 poses reached
-59 % of the FLOP limit against 44 %."""
+files store float16). ``python benchmarks/bench_packed_rows.py`` times the default both ways, alternately
+(``docs/results/bench_packed_rows.txt``, a 2-core AVX2 VM, one thread): the float32 paths took 1.64x the packed time
+for one pose, 1.36x for 16 poses, 1.10-1.17x for 64-65 (the app's drag: a pose and its 64 noisy draws, 130 rows),
+1.07x for 96 poses (192 rows) and 1.02-1.04x beyond, where the gain ends (the batched benchmark's 256 poses, 512 and
+256 rows, stay on the float32 path it has always measured)."""
 
 _PACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """net -> (key, {index in :func:`_numpy_tensors`: packed matrix} or None: not float16-exact, probe rows); the key

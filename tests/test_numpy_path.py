@@ -283,7 +283,7 @@ def test_packed_forward_matches_module_for_float16_weights(kp, config):
     """forward_packed (float16-packed matrices, products summed in float32) gives the module's outputs for a network
     whose matrices are float16 numbers, up to PACKED_MAX_ROWS rows; it steps aside otherwise."""
     net = _half_exact(_net(seed=2, **config))
-    many = np.concatenate([kp] * 5)  # 160 poses
+    many = np.concatenate([kp] * 8)  # 256 poses
     for rows in (1, 2, 5, lifter_model.PACKED_MAX_ROWS):
         x = _features(net, many[:rows])
         got = lifter_model.forward_packed(net, x)
