@@ -39,6 +39,7 @@ from ._checks import CheckpointError, PoseLifterError, warn_user
 from .codec import PoseCodec
 from .io import write_atomic
 from .model import ModelConfig, PoseLifterNet
+from .resume import RESUME_FORMAT
 
 FORMAT = "poselifter-checkpoint"
 VERSION = 2
@@ -74,10 +75,16 @@ def tensor_checksum(state_dict: dict[str, Any], codec: dict[str, Any]) -> str:
     h = hashlib.sha256()
     for part, tensors in (("state_dict", state_dict), ("codec", codec)):
         for k in sorted(tensors):
-            t = torch.as_tensor(tensors[k]).detach().cpu().contiguous()
-            h.update(f"{part}/{k}:{t.dtype}:{tuple(t.shape)}:".encode())
-            h.update(t.reshape(-1).view(torch.uint8).numpy().tobytes())
+            hash_tensor(h, f"{part}/{k}", torch.as_tensor(tensors[k]))
     return h.hexdigest()
+
+
+def hash_tensor(h: Any, label: str, t: torch.Tensor) -> None:
+    """Feed ``label``, ``t``'s dtype, shape and bytes into the hash ``h`` (the form of every checksum of tensors:
+    :func:`tensor_checksum`, :mod:`lifter.resume`); the bytes are read in place, not copied."""
+    t = t.detach().cpu().contiguous()
+    h.update(f"{label}:{t.dtype}:{tuple(t.shape)}:".encode())
+    h.update(t.reshape(-1).view(torch.uint8).numpy())
 
 
 def save_checkpoint(path: str | os.PathLike[str], net: PoseLifterNet, codec: PoseCodec, *,
@@ -192,7 +199,7 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
     if why:
         raise CheckpointError(f"weights file {where} is corrupt or not a poselifter checkpoint ({why}); "
                               "give a .pt file written by poselifter train or a shipped model name")
-    if isinstance(payload, dict) and payload.get("format") == "poselifter-resume":  # (lifter.resume.RESUME_FORMAT)
+    if isinstance(payload, dict) and payload.get("format") == RESUME_FORMAT:
         raise CheckpointError(f"{where} is a stopped training run's resume state, not a checkpoint: poselifter train "
                               f"--resume {where} goes on with that run; its weights so far are in the "
                               "NAME.interrupted.pt beside it")

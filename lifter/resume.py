@@ -130,9 +130,7 @@ def _checksum(obj: Any) -> str:
 
     def walk(o: Any, where: str) -> None:
         if isinstance(o, torch.Tensor):
-            t = o.detach().cpu().contiguous()
-            h.update(f"{where}:{t.dtype}:{tuple(t.shape)}:".encode())
-            h.update(t.reshape(-1).view(torch.uint8).numpy().tobytes())
+            hash_tensor(h, where, o)
         elif isinstance(o, dict):
             for k in sorted(o, key=repr):
                 walk(o[k], f"{where}/{k!r}")
@@ -143,10 +141,12 @@ def _checksum(obj: Any) -> str:
         else:
             h.update(f"{where}={o!r};".encode())
 
+    from .checkpoint import hash_tensor  # (checkpoint imports this module's format tag)
+
     walk(obj, "")
     return h.hexdigest()
 
 
 def data_fingerprint(tensors: dict[str, torch.Tensor]) -> str:
     """sha256 of a run's training tensors (:func:`lifter.train.samples_to_tensors`), by name."""
-    return _checksum({k: v for k, v in tensors.items()})
+    return _checksum(tensors)

@@ -819,10 +819,10 @@ def check_resume(state: ResumeState, cfg: TrainConfig, *, ctx: Dist, init: Any =
                               f"on the {ctx.device.type.upper()}: resume it where it ran (its random generators' "
                               "states are that device's), or start a new run from its weights (--init "
                               "NAME.interrupted.pt)")
-    stored = TrainConfig.from_dict(state.train_config).to_dict()  # (a field added since: its default)
-    if cfg.to_dict() != stored:
-        diff = sorted(k for k in set(_flat(stored)) | set(_flat(cfg.to_dict()))
-                      if _flat(stored).get(k) != _flat(cfg.to_dict()).get(k))
+    stored = _flat(TrainConfig.from_dict(state.train_config).to_dict())  # (a field added since: its default)
+    given = _flat(cfg.to_dict())
+    if given != stored:
+        diff = sorted(k for k in set(stored) | set(given) if stored.get(k) != given.get(k))
         raise PoseLifterError(f"a resumed run goes on with its own config; this one differs in {', '.join(diff[:6])}: "
                               "resume with the state's config (TrainConfig.from_dict(state.train_config)), or start "
                               "a new run (--init NAME.interrupted.pt)")
@@ -854,11 +854,8 @@ def _resume_state(cfg: TrainConfig, *, step: int, minutes: float, T: Batch, pos:
                   ema: WeightAverage | None, codec: PoseCodec, running: torch.Tensor | None,
                   curve: list[dict[str, float]], fit: ErrorModel | None, noise: ErrorModel | None,
                   device: torch.device) -> ResumeState:
-    """The whole state of a run at a step boundary (:class:`lifter.resume.ResumeState`), on the CPU."""
-    def cpu(sd: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
-        return {k: v.detach().float().cpu().clone() if v.is_floating_point() else v.detach().cpu().clone()
-                for k, v in sd.items()}
-
+    """The whole state of a run at a step boundary (:class:`lifter.resume.ResumeState`), on the CPU (the weights are
+    float32 as trained: bf16 autocast keeps float32 parameters)."""
     rng = {name: g.get_state() for name, g in gens.items()}
     rng["torch"] = torch.get_rng_state()
     if device.type == "cuda":
@@ -866,8 +863,8 @@ def _resume_state(cfg: TrainConfig, *, step: int, minutes: float, T: Batch, pos:
     return ResumeState(
         train_config=cfg.to_dict(), step=step, minutes=minutes, samples=int(T["kp"].shape[0]),
         data_sha256=data_fingerprint(T), position=pos, permutation=perm.cpu().clone(), rng=rng,
-        network=cpu(net.state_dict()), optimizer=_to_cpu(opt.state_dict()), device=device.type,
-        average=None if ema is None else cpu(ema.module.state_dict()),
+        network=_to_cpu(net.state_dict()), optimizer=_to_cpu(opt.state_dict()), device=device.type,
+        average=None if ema is None else _to_cpu(ema.module.state_dict()),
         average_updates=0 if ema is None else ema.updates,
         codec={k: v.clone() for k, v in codec.state_dict().items()},
         running_loss=None if running is None else float(running), curve=[dict(c) for c in curve],

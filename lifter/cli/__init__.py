@@ -90,8 +90,8 @@ def _joined_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]
             return out + args[i:]
         word = args[i]
         named = [o for o in every if o.startswith(word)] if word.startswith("--") and len(word) > 2 else []
-        if (len(named) == 1 or word in every) and (word if word in every else named[0]) in takes_one \
-                and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
+        option = word if word in every else named[0] if len(named) == 1 else None  # (argparse takes abbreviations)
+        if option in takes_one and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
             out.append(f"{word}={args[i + 1]}")
             i += 2
         else:

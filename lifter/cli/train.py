@@ -173,8 +173,7 @@ def _train_and_write(args: argparse.Namespace, cfg: TrainConfig, *, ctx: Any, in
             go_on = ""
             state_file = resume_path(args.out)
             if result.resume is not None:  # (after the weights: a Ctrl-C while the state is written keeps them)
-                run_meta = meta.get("resumed", {}).get("run") or {
-                    k: v for k, v in meta.items() if k in ("command", "init_sha256", "teacher_sha256")}
+                run_meta = meta.get("resumed", {}).get("run") or {k: v for k, v in meta.items() if k in _RUN_KEYS}
                 state_meta = {**run_meta, "out": str(Path(args.out).resolve()), "fp32_weights": bool(args.fp32_weights),
                               "threads": torch.get_num_threads(), "h36m": str(Path(data_root).resolve())}
                 try:
@@ -221,6 +220,10 @@ def _save_outputs(result: Any, out: Path, *, half: bool, meta: dict[str, Any]) -
         print(f"poselifter train: interrupted while writing the run's outputs; written whole: {done} (the others "
               "were not written)", file=sys.stderr)
         raise SystemExit(130) from None
+
+
+_RUN_KEYS = ("command", "init_sha256", "teacher_sha256")
+"""A run's meta that its resume state keeps, and a resumed run's checkpoint carries on (``resumed.run``)."""
 
 
 def resume_path(out: Path) -> Path:
@@ -275,9 +278,8 @@ def run_resume(args: argparse.Namespace) -> int:
     meta: dict[str, Any] = {"command": "poselifter " + " ".join(sys.argv[1:]), "world_size": 1,
                             "resumed": {"from": str(Path(args.resume).resolve()), "sha256": sha256_file(args.resume),
                                         "step": state.step,
-                                        "run": {k: v for k, v in state.meta.items()
-                                                if k in ("command", "init_sha256", "teacher_sha256")}}}
-    meta.update({k: v for k, v in state.meta.items() if k in ("init_sha256", "teacher_sha256")})
+                                        "run": {k: v for k, v in state.meta.items() if k in _RUN_KEYS}}}
+    meta.update({k: v for k, v in state.meta.items() if k in _RUN_KEYS and k != "command"})
     teacher = None
     if cfg.teacher is not None:
         teacher = load_option("--teacher", cfg.teacher, args)
