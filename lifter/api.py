@@ -575,9 +575,9 @@ class Lifter:
 
     def refresh(self) -> Lifter:
         """Drop the float16-packed copies of every network's weight matrices (:func:`lifter.model.forward_packed`):
-        needed only after changing a matrix through ``.data`` or a numpy view, which torch's version counters do not
-        see (changes through torch operations, ``load_state_dict`` or new tensors are seen without it). Returns
-        ``self``."""
+        needed only after a sparse change to a matrix through ``.data``, a numpy view or its storage, which neither
+        torch's version counters nor the first-and-last-row check see (changes through torch operations,
+        ``load_state_dict``, new tensors or writes of whole matrices are seen without it). Returns ``self``."""
         for m in (self, *self.ensemble, *([] if self.clean is None else [self.clean])):
             drop_packed(m.net)
         return self
