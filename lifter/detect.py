@@ -98,6 +98,51 @@ DOUBTFUL_SCORE: Final[float] = 0.5
 """A person lifted from a photo whose mean score over the 17 joints lifted is below this gets a note that the
 detector is unsure (:func:`lifter.pipeline.detector_doubt_notes`)."""
 
+MIN_PERSON_SCORE: Final[float] = 0.3
+"""A detected person whose mean score over the 17 joints lifted (:attr:`DetectedPose.scores`, 0-1) is below this is
+left out, as no person (:func:`detect_people`, :func:`lifter.video.lift_video`; ``min_score=``, ``poselifter lift
+--min-score``; 0 keeps everyone): BlazePose gives 0.84-1.00 to the people of the 84 Human3.6M demo photos, and 12
+of the 31 'people' it invents in 240 crops of their empty walls score below 0.3, the others 0.5 or more (``python
+scripts/empty_crops.py``, ``docs/results/empty_crops.txt``). A developer trial's close-up of a wall was lifted as a
+person half a metre from the camera, scored 0.14, with exit code 0. Between this and :data:`DOUBTFUL_SCORE` a person
+is lifted with a note."""
+
+
+def check_min_score(min_score: float) -> float:
+    """``min_score`` as a float in [0, 1], or a :class:`PoseLifterError` naming the range."""
+    try:
+        v = float(min_score)
+    except (TypeError, ValueError):
+        raise PoseLifterError(f"min_score must be a number in [0, 1] (a mean joint score), got {min_score!r}") from None
+    if not 0.0 <= v <= 1.0:
+        raise PoseLifterError(f"min_score must be in [0, 1] (a mean joint score; 0 keeps everyone), got {v:g}")
+    return v
+
+
+def scored_people(people: list[DetectedPose], min_score: float) -> tuple[list[DetectedPose], list[float]]:
+    """``people`` split by :data:`MIN_PERSON_SCORE`'s rule at ``min_score``: those kept (order kept) and the mean
+    joint scores of those left out."""
+    kept, left = [], []
+    for q in people:
+        m = float(np.mean(q.scores))
+        if m >= min_score:
+            kept.append(q)
+        else:
+            left.append(m)
+    return kept, left
+
+
+def left_out_text(scores: list[float], min_score: float, *, what: str = "detection") -> str:
+    """What a note or error says of the detections (or a file's people: ``what="person"``) left out below
+    ``min_score``."""
+    n = len(scores)
+    vals = ", ".join(f"{v:.2f}" for v in sorted(scores, reverse=True)[:5]) + (", ..." if n > 5 else "")
+    kind = (what if n == 1 else "people" if what == "person" else what + "s")
+    seen = "BlazePose gives real people 0.84-1 in photos; " if what == "detection" else ""
+    return (f"{n} {kind} with a mean joint score below {min_score:g} ({vals}) left out as no person ({seen}"
+            "min_score=0, --min-score 0, keeps every one)")
+
+
 SMALL_PERSON_PX: Final[float] = 100.0
 """A person lifted from a photo who is smaller than this (px, the longer side of their 2D joints' box in the image
 the detector saw: a standing person's height) gets a note (:func:`lifter.pipeline.small_person_notes`): the 84 demo
@@ -1239,22 +1284,32 @@ SMALL_IMAGE_PX: Final[int] = 64
 
 
 def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseEstimator2D,
-                  max_side: int = DEFAULT_MAX_SIDE_PX, max_people: int | None = None) -> list[DetectedPose]:
+                  max_side: int = DEFAULT_MAX_SIDE_PX, max_people: int | None = None,
+                  min_score: float = MIN_PERSON_SCORE) -> list[DetectedPose]:
     """Everyone in an image (a path or a :class:`LoadedImage`), largest first, in H36M-17 (see
     :func:`people_h36m`); at most ``max_people`` (the largest), with a warning on the first person when more
-    were found. Raises :class:`ImageError` or :class:`NoPersonError`."""
+    were found. Detections whose mean joint score is below ``min_score`` (:data:`MIN_PERSON_SCORE`; 0 keeps every
+    one) are left out first, with a warning when someone else is kept. Raises :class:`ImageError` or
+    :class:`NoPersonError` (naming the detections left out, if any)."""
+    from dataclasses import replace
+
+    min_score = check_min_score(min_score)
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
-    people = people_h36m(img, estimator=estimator)
+    people, left = scored_people(people_h36m(img, estimator=estimator), min_score)
     if not people:
         where = f"{img.path}: " if img.path is not None else ""
         extra = f" (searched a copy downscaled by {img.scale:.3g})" if img.scale < 1.0 else ""
         w, h = img.size
         if min(w, h) < SMALL_IMAGE_PX:  # (the detector's own input is 256 px: a person needs some pixels of it)
             extra += f" in this {w} x {h} px image: a person needs to be tens of pixels tall to be found"
+        if left:
+            extra += f"; {left_out_text(left, min_score)}"
         raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
+    if left:  # (num_people: the people found, those left out not counted)
+        note = left_out_text(left, min_score)
+        people = [replace(q, num_people=len(people), warnings=q.warnings + ((note,) if i == 0 else ()))
+                  for i, q in enumerate(people)]
     if max_people is not None and len(people) > max_people:
-        from dataclasses import replace
-
         from ._text import largest_lifted
 
         note = (f"more than {max_people} {'person' if max_people == 1 else 'people'} found; "
@@ -1280,7 +1335,8 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 __all__ = ["ASSUMED_FOCAL_NOTE", "BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX",
            "DetectedPose", "Detection",
-           "MIN_MAX_SIDE_PX", "DOUBTFUL_SCORE", "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
+           "MIN_MAX_SIDE_PX", "MIN_PERSON_SCORE", "DOUBTFUL_SCORE", "check_min_score",
+           "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
            "ExifCamera", "FocalGuess", "ImageError",
            "LoadedImage", "MissingDependencyError", "NoPersonError",
            "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",

@@ -27,6 +27,7 @@ from ._checks import (
     outside_image_notes,
     principal_point_notes,
     sideways_notes,
+    sideways_people,
     upside_down_notes,
     upside_down_people,
     view_angle_notes,
@@ -43,11 +44,14 @@ from .camera import (
 )
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
+    MIN_PERSON_SCORE,
     LoadedImage,
     PoseEstimator2D,
+    check_min_score,
     detect_people,
     guess_focal,
     h36m_joint_scores,
+    left_out_text,
     load_image,
     people_scores,
 )
@@ -200,6 +204,29 @@ def detected_upside_down_notes(kp17: np.ndarray) -> list[str]:
             "(the others' lifts do not depend on it)"]
 
 
+def detected_sideways_notes(kp17: np.ndarray, *, video: bool = False) -> list[str]:
+    """A note naming each detected person (``(n, 17, 2)`` px, the output's order) who lies sideways in the image
+    (:func:`lifter._checks.sideways_people`; ``video``: one note when most of a video's poses do): a photo turned a
+    quarter without its EXIF orientation (a developer trial: such a photo was lifted 1.6 m off without a word, where
+    the same 2D given as keypoints got a note), a phone video whose rotation was not applied, a person lying down, or
+    a false detection along furniture."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    side = sideways_people(k)
+    if not ((len(k) > 0 and side.mean() > 0.5) if video else side.any()):
+        return []
+    if video:
+        who = f"most detected poses lie sideways in the frames ({int(side.sum())} of {len(k)})"
+    else:
+        idx = [int(i) + 1 for i in np.flatnonzero(side)]
+        who = ("the person found lies" if len(k) == 1 else
+               f"{_people_list(idx)} of the output's people {'lies' if len(idx) == 1 else 'lie'}") + " sideways"
+    medium = "video is turned a quarter (its rotation not applied)" if video else \
+        "photo is turned a quarter (its EXIF orientation lost)"
+    return [f"{who} (head and ankles apart along the image's x): if the {medium}, turn it upright first; a person "
+            "lying down is lifted as given, a pose rare in the training data (the detector also finds such 'people' "
+            "along furniture)"]
+
+
 def detected_edge_notes(kp17: np.ndarray, image_size: tuple[int, int]) -> list[str]:
     """A note naming each detected person (``(n, 17, 2)`` px, the output's order) with some joints outside the
     ``image_size`` ``(W, H)`` px image, but not most (those are :func:`lifter._checks.outside_image_notes`'): a person
@@ -320,6 +347,28 @@ def keypoint_file_scores(kf: Any, count: int) -> tuple[np.ndarray | None, list[s
     return scores, (joint_doubt_notes(scores) if float(np.nanmax(conf)) <= 1.0 else [])
 
 
+def scored_file_people(kf: Any, min_score: float, *, where: str) -> tuple[list[int], list[str]]:
+    """Which of a keypoint file's people (:class:`lifter.io.KeypointFile`, largest first) are lifted at
+    ``min_score`` (:data:`lifter.detect.MIN_PERSON_SCORE`): those whose mean H36M joint score
+    (:func:`h36m_joint_scores`) is at least ``min_score``, and the note on those left out. Everyone where the file
+    has no scores for each person or they are not 0-1 (another scale, with no threshold to read them by). A
+    :class:`PoseLifterError` naming the fix when nobody is left (a developer trial: a COCO results file's detections
+    scored 0.04 were lifted as people, and ``--max-people 1`` kept one of them, the largest, over the real person)."""
+    people = kf.people or (kf.keypoints,)
+    conf = people_scores(kf.people_scores[:len(people)]) if min_score > 0 else None
+    if conf is None or not np.all(np.isfinite(conf)) or float(conf.max()) > 1.0 or float(conf.min()) < 0.0:
+        return list(range(len(people))), []
+    mean = h36m_joint_scores(conf, kf.format).mean(-1)
+    keep = [i for i, v in enumerate(mean) if v >= min_score]
+    left = [float(v) for v in mean if v < min_score]
+    if not left:
+        return keep, []
+    text = left_out_text(left, min_score, what="person")
+    if not keep:
+        raise PoseLifterError(f"{where}: nobody to lift: {text}")
+    return keep, [f"of the file's {len(people)} people, {text}"]
+
+
 def given_image_size(image_size: Any | None, file_size: tuple[int, int] | None, *,
                      where: str) -> tuple[tuple[int, int] | None, list[str]]:
     """The image size (px) a keypoint file is lifted with: ``image_size`` ``(W, H)`` given by the user
@@ -419,22 +468,34 @@ def keypoints_image(file_size: tuple[int, int] | None, file_pp: Any | None, *, i
 def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = None, principal_point: Any | None = None,
                        default_format: str | None = None, fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG,
                        flip_test: bool | None = None, max_people: int | None = None,
-                       image_size: Any | None = None, fallback_image: tuple[Any, ...] | None = None) -> LiftRecord:
-    """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring).
+                       image_size: Any | None = None, fallback_image: tuple[Any, ...] | None = None,
+                       min_score: float = MIN_PERSON_SCORE) -> LiftRecord:
+    """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring), but those
+    whose mean joint score is below ``min_score`` (:func:`scored_file_people`; 0 keeps every one).
     ``image_size`` ``(W, H)`` px: for a file that gives none (a list layout cannot), or in place of its own
     (:func:`given_image_size`). ``fallback_image``: ``(name, (W, H) px[, exif])`` of the image the keypoints were
     found in, whose size (and EXIF focal) a file that gives no image size takes by :func:`keypoints_image`'s rule,
     as :func:`lifter.video.lift_keypoint_sequence` does."""
     kf = parse_keypoint_json(path, default_format=default_format)
+    in_file, min_score = len(kf.people), check_min_score(min_score)
+    keep, low = scored_file_people(kf, min_score, where=str(path))
+    if len(keep) < in_file:  # (before max_people: the largest of those kept are lifted)
+        kf = dataclasses.replace(kf, keypoints=kf.people[keep[0]], **{
+            k: tuple(getattr(kf, k)[i] for i in keep) for k in ("people", "people_index", "people_ids", "people_scores")
+            if len(getattr(kf, k)) == in_file})
     people = kf.people or (kf.keypoints,)
     img = keypoints_image(kf.image_size, kf.principal_point, image_size=image_size, principal_point=principal_point,
                           fallback_image=fallback_image, poses=people, where=str(path), what="keypoint file")
     size = img.size
     notes = list(kf.warnings) + img.notes
-    if max_people is not None and len(people) > max_people:
-        each = f"{len(people)} people in the file; each is lifted"  # (the reader's note, no longer true)
-        notes = [n for n in notes if not n.startswith(each)]
-        notes.append(f"{len(people)} people in the file; {largest_lifted(max_people)}")
+    cut = max_people is not None and len(people) > max_people
+    if low or cut:  # (the reader's note, no longer true)
+        notes = [n for n in notes if not n.startswith(f"{in_file} people in the file; each is lifted")]
+    notes += low
+    if cut:
+        assert max_people is not None
+        notes.append(f"{len(people)} people in the file{' scored at least ' + format(min_score, 'g') if low else ''}; "
+                     f"{largest_lifted(max_people)}")
         people = people[:max_people]
     raw = np.stack(people)
     kp17 = convert(raw, src=kf.format, warn=False)
@@ -491,12 +552,13 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                principal_point: Any | None = None, sensor_width_mm: float | None = None,
                fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_side: int = DEFAULT_MAX_SIDE_PX,
                flip_test: bool | None = None, max_people: int | None = None, distortion: ArrayLike | None = None,
-               distortion_model: DistortionModel = "h36m") -> LiftRecord:
+               distortion_model: DistortionModel = "h36m", min_score: float = MIN_PERSON_SCORE) -> LiftRecord:
     """Detect everyone in a photo (a path or a :class:`lifter.detect.LoadedImage`) and lift them all into one
     camera space, largest first (at most ``max_people``); the top-level fields are the largest person's
-    (module docstring). ``distortion``: the camera's lens in the form ``distortion_model``
-    (:meth:`lifter.Lifter.lift`), calibrated with ``focal`` and ``principal_point``, which it needs; the record keeps
-    the 2D as detected (distorted)."""
+    (module docstring). ``min_score``: detections whose mean joint score is below it are left out as no person
+    (:data:`lifter.detect.MIN_PERSON_SCORE`, :func:`lifter.detect.detect_people`; 0 keeps every one).
+    ``distortion``: the camera's lens in the form ``distortion_model`` (:meth:`lifter.Lifter.lift`), calibrated with
+    ``focal`` and ``principal_point``, which it needs; the record keeps the 2D as detected (distorted)."""
     if distortion is not None and focal is None:
         raise PoseLifterError("distortion needs the focal length it was calibrated with (lens coefficients act on "
                               "(x - c) / f): give focal= (--focal) and principal_point= (--principal-point) of the "
@@ -511,7 +573,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                               f"{type(image).__name__}")
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
     path = img.path if img.path is not None else "<image>"
-    dets = detect_people(img, estimator=estimator, max_people=max_people)
+    dets = detect_people(img, estimator=estimator, max_people=max_people, min_score=min_score)
     f, src, pp, notes = resolve_camera(
         user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),
         user_pp=None if principal_point is None else as_pair(principal_point, name="principal_point"),
@@ -522,6 +584,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
                                       distortion=distortion)
     notes += plausibility_notes(kp_people, f, img.size, focal_source=src, detected=True)
     notes += detected_upside_down_notes(kp_people)
+    notes += detected_sideways_notes(kp_people)
     notes += detected_edge_notes(kp_people, img.size)
     notes += detector_doubt_notes([float(np.mean(d.scores)) for d in dets])  # (the 17 joints lifted)
     notes += small_person_notes([float(np.ptp(d.keypoints_2d, axis=0).max()) * img.scale for d in dets],

@@ -38,15 +38,19 @@ from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_f
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
+    MIN_PERSON_SCORE,
     PoseEstimator2D,
     _StderrSilenced,
     bbox_of,
     box_iou,
     check_max_side,
+    check_min_score,
     h36m_joint_scores,
     image_from_array,
+    left_out_text,
     people_h36m,
     people_scores,
+    scored_people,
 )
 from .io import (
     ASSUMED_FPS,
@@ -1127,8 +1131,10 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                progress: Callable[[int, int | None], None] | None = None,
                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
                fps: float | None = None, video_fps: float | None = None,
-               rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
-    """Detect, lift, track and smooth everyone in a video file (module docstring). ``rejoin_s``: how long (s) after
+               rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE) -> SequenceRecord:
+    """Detect, lift, track and smooth everyone in a video file (module docstring). ``min_score``: detections whose
+    mean joint score is below it are left out, frame by frame, as no person (:data:`lifter.detect.MIN_PERSON_SCORE`,
+    :func:`lifter.detect.detect_people`; 0 keeps every one). ``rejoin_s``: how long (s) after
     their last sighting a person found again where their 3D root leads keeps their track (:data:`REJOIN_MAX_S`; 0:
     a track unseen for :data:`TRACK_TIMEOUT_S` ends for good). ``fps`` (``--fps``): the frame
     rate where the file gives no usable one (else :data:`lifter.io.ASSUMED_FPS`); the file's own wins, with a note
@@ -1153,12 +1159,13 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     check_rejoin_s(rejoin_s)
     check_frame_rate(fps, name="fps (--fps)")
     check_frame_rate(video_fps, name="video_fps (--video-fps)")
+    min_score = check_min_score(min_score)
     with limit_blas_threads(blas_threads):
         return _lift_video(path, lifter=lifter, estimator=estimator, focal=focal, principal_point=principal_point,
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
                            on_frame=on_frame, cli_options=cli_options, given_fps=fps, video_fps=video_fps,
-                           rejoin_s=rejoin_s)
+                           rejoin_s=rejoin_s, min_score=min_score)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -1189,10 +1196,10 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 progress: Callable[[int, int | None], None] | None,
                 on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
                 given_fps: float | None = None, video_fps: float | None = None,
-                rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
+                rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE) -> SequenceRecord:
     import cv2
 
-    from .pipeline import plausibility_notes, resolve_camera
+    from .pipeline import detected_sideways_notes, plausibility_notes, resolve_camera
 
     _check_common(smoothing, max_people, max_seconds)
     p = Path(path)
@@ -1232,6 +1239,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         bad: list[dict[str, Any]] = []
         nobody: list[int] = []
         crowded: list[int] = []
+        left_out: list[tuple[int, float]] = []  # (frame, mean joint score) of detections below min_score
         full_searches = 0  # (frames searched in full: _crowd_note)
         size: tuple[int, int] | None = None
         cam: tuple[np.ndarray, str, np.ndarray] | None = None
@@ -1279,14 +1287,16 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 img = image_from_array(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), max_side=max_side)
                 people = None
                 boxes = [b for seen, b in recent.values() if index - seen <= search_every]
+                left: list[float] = []
                 if can_track and boxes and index - last_search < search_every:
-                    people = people_h36m(img, estimator=estimator, near=boxes)
+                    people, left = scored_people(people_h36m(img, estimator=estimator, near=boxes), min_score)
                     if len(people) < prev_count:
                         people = None  # someone was lost: search the whole frame
                 if people is None:
-                    people = people_h36m(img, estimator=estimator)
+                    people, left = scored_people(people_h36m(img, estimator=estimator), min_score)
                     last_search = index
                     full_searches += 1
+                left_out += [(index, v) for v in left]
             except PoseLifterError as exc:
                 bad.append({"index": index, "error": f"{exc}; skipped"})
                 continue
@@ -1353,12 +1363,18 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                             f"{_frames_summary(where)})")
         warnings += dropped
     warnings.extend(rejoin_notes(rejoin_tracks(frames, fps=fps, rejoin_s=rejoin_s)))  # (after false detections)
+    low = []
+    if left_out:
+        at_frames = sorted({i for i, _ in left_out})
+        low.append(f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), "
+                   + left_out_text([v for _, v in left_out], min_score))
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
                               f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else "")
-                              + "".join(f"; {w}" for w in dropped))
+                              + "".join(f"; {w}" for w in dropped + low))
     if nobody:
         warnings.append(f"no person found in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
+    warnings += low
     if crowded:
         warnings.append(_crowd_note(max_people, crowded,
                                     searched=None if full_searches >= len(frames) else (full_searches, len(frames))))
@@ -1369,6 +1385,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
+        warnings.extend(detected_sideways_notes(np.stack(seen_2d), video=True))
     warnings.extend(track_gap_notes(frames))
     warnings.extend(track_edge_notes(frames, size))
     warnings.extend(track_jump_notes(frames, fps=fps))
@@ -1415,6 +1432,16 @@ def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarr
     return out
 
 
+def _mean_scores(people: list[np.ndarray | None], n: int, keypoint_format: str) -> np.ndarray:
+    """``(n,)``: each of a frame's ``n`` people's mean H36M joint score (:func:`lifter.detect.h36m_joint_scores`), NaN
+    for a person without scores."""
+    out = np.full(n, np.nan)
+    for j, c in enumerate(people[:n]):
+        if c is not None:
+            out[j] = float(np.mean(h36m_joint_scores(np.asarray(c, np.float64), keypoint_format)))
+    return out
+
+
 def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.ndarray | None:
     """One frame's confidences ``(n, 17)`` of the H36M joints (:func:`lifter.detect.h36m_joint_scores`, from each
     person's ``(J,)`` in ``keypoint_format``), or None unless every person of the frame has them."""
@@ -1430,7 +1457,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
                            image_size: Any | None = None, fps: float | None = None,
                            assumed_fps: float | None = None,
                            fallback_image: tuple[Any, ...] | None = None,
-                           rejoin_s: float = REJOIN_MAX_S) -> SequenceRecord:
+                           rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE) -> SequenceRecord:
     """Lift, track and smooth a keypoint sequence (:func:`lifter.io.parse_keypoint_sequence`: a JSON with ``frames``,
     MMPose's predictions of several frames, or a frame pattern naming OpenPose's per-frame files): every person of
     every frame is lifted in one batch, then tracked and smoothed frame by frame. ``cli_options``: as
@@ -1442,11 +1469,13 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     uploaded before): its size where nobody gives an image size or a principal point, and its EXIF focal where
     neither ``focal`` nor the file gives one and the keypoints are in its pixels, by
     :func:`lifter.pipeline.keypoints_image`'s rule (refused when most poses lie mostly outside it). ``rejoin_s``: as
-    :func:`lift_video`'s."""
+    :func:`lift_video`'s. ``min_score``: a person whose mean joint score (where the file gives 0-1 scores) is below it
+    is left out as no person (:func:`lifter.pipeline.scored_file_people`; 0 keeps every one)."""
     from .camera import lens_notes
     from .pipeline import keypoints_image, plausibility_notes, resolve_camera
 
     check_rejoin_s(rejoin_s)  # (before the lift, not after it)
+    min_score = check_min_score(min_score)
 
     _check_common(smoothing, max_people, max_seconds)
     ks = parse_keypoint_sequence(path, default_format=default_format, fps=fps, cli_options=cli_options,
@@ -1488,10 +1517,18 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
             names = list(dict.fromkeys(t for _, t in twice))
             warnings.append(f"person id(s) {', '.join(names[:5])} given to several people in one frame (first at frame "
                             f"{twice[0][0]}): not used to follow anyone, nor as a track's person_id")
+    left_out: list[tuple[int, float]] = []  # (frame, mean joint score) of people below min_score
+    given = [np.asarray(c, np.float64) for fr in (given_scores or []) for c in fr if c is not None]
+    unit_scores = min_score > 0 and bool(given) and all(  # (scores of another scale: no threshold to read them by)
+        np.all(np.isfinite(c)) and c.min() >= 0.0 and c.max() <= 1.0 for c in given)
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
         names = [None] * len(fr) if names_by_frame is None else list(names_by_frame[i])
-        keep = followed.keep(at[i], boxes, names)
+        scored = (_mean_scores(given_scores[i], len(fr), ks.format) if unit_scores and given_scores is not None
+                  else np.full(len(fr), np.nan))
+        ok = [j for j in range(len(fr)) if not scored[j] < min_score]  # (NaN: no score, kept)
+        left_out += [(at[i], float(scored[j])) for j in range(len(fr)) if scored[j] < min_score]
+        keep = [ok[j] for j in followed.keep(at[i], [boxes[j] for j in ok], [names[j] for j in ok])]
         kept_frames.append([fr[j] for j in keep])
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
         if kept_ids is not None and ids is not None:
@@ -1500,12 +1537,17 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
             kept_names.append([names[j] for j in keep])
     frames, ids = kept_frames, kept_ids
     warnings.extend(followed.aside_note())
+    if left_out:
+        at_frames = sorted({i for i, _ in left_out})
+        warnings.append(f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), "
+                        + left_out_text([v for _, v in left_out], min_score, what="person"))
     counts = [len(fr) for fr in frames]
     nobody = [at[i] for i, c in enumerate(counts) if c == 0]
     if nobody:
         warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if not sum(counts):
-        raise PoseLifterError(f"{path}: no person in any frame")
+        raise PoseLifterError(f"{path}: no person in any frame" + (
+            f"; {left_out_text([v for _, v in left_out], min_score, what='person')}" if left_out else ""))
     raw = np.stack([k for fr in frames for k in fr])  # every person of every frame, one batch
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))

@@ -1,7 +1,9 @@
 """Does the photo path say so when BlazePose invents a person? Crops of the 84 Human3.6M demo photos that leave the
 subject out (the wall, the mocap cameras, the floor), blown up to 800 x 800 px, lifted by ``lift_image`` as
 ``poselifter lift`` does; and the 84 photos themselves. The measurement behind :data:`lifter.detect.DOUBTFUL_SCORE`
-being read on the 17 joints lifted (:func:`lifter.pipeline.detector_doubt_notes`).
+being read on the 17 joints lifted (:func:`lifter.pipeline.detector_doubt_notes`), and behind
+:data:`lifter.detect.MIN_PERSON_SCORE`, below which a detection is left out as no person (everyone is kept here,
+``min_score=0``, to be counted).
 
     python scripts/empty_crops.py [--h36m ../shared/data/h36m] [--crops 240] [--seed 0]
                                   [--out docs/results/empty_crops.txt]
@@ -28,7 +30,14 @@ from _report import emit  # noqa: E402  (scripts/_report.py)
 
 from lifter import Lifter  # noqa: E402
 from lifter.data import default_h36m_dir  # noqa: E402
-from lifter.detect import DOUBTFUL_SCORE, BlazePoseEstimator, NoPersonError, detect_people, load_image  # noqa: E402
+from lifter.detect import (  # noqa: E402
+    DOUBTFUL_SCORE,
+    MIN_PERSON_SCORE,
+    BlazePoseEstimator,
+    NoPersonError,
+    detect_people,
+    load_image,
+)
 from lifter.pipeline import lift_image  # noqa: E402
 
 WHOLE_PERSON_NOTES = {"score": "mean joint score", "misfit": "do not fit their 2D",
@@ -63,6 +72,7 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp(prefix="empty_crops_"))
     fakes: list[tuple[float, float, list[str]]] = []  # (mean of 33 landmarks, mean of 17 joints, whole-person notes)
     real17: list[float] = []
+    per_crop: list[list[float]] = []  # (each crop's people: the mean score of their 17 joints)
     crops_with = 0
     try:
         with BlazePoseEstimator(max_people=3) as est:
@@ -83,17 +93,18 @@ def main() -> int:
                 path = tmp / "crop.jpg"
                 cv2.imwrite(str(path), crop)
                 try:
-                    rec = lift_image(path, lifter=lifter, estimator=est)
+                    rec = lift_image(path, lifter=lifter, estimator=est, min_score=0)
                 except NoPersonError:
                     continue
                 said = [k for k, text in WHOLE_PERSON_NOTES.items() if any(text in ww for ww in rec.warnings)]
-                dets = detect_people(load_image(path), estimator=est)  # (as lift_image found them: the scores)
+                dets = detect_people(load_image(path), estimator=est, min_score=0)  # (as lift_image found them)
                 crops_with += 1
+                per_crop.append([float(np.mean(d.scores)) for d in dets])
                 for d in dets:
                     fakes.append((float(np.mean(d.raw.scores)), float(np.mean(d.scores)), said))
             bar.close()
             for i in tqdm(range(len(ann["image"])), desc="demo photos", unit="photo"):
-                d = detect_people(load_image(_photo_path(demo, str(ann["image"][i]))), estimator=est)[0]
+                d = detect_people(load_image(_photo_path(demo, str(ann["image"][i]))), estimator=est, min_score=0)[0]
                 real17.append(float(np.mean(d.scores)))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -105,6 +116,9 @@ def main() -> int:
         f"  mean score of the 17 joints lifted: below {DOUBTFUL_SCORE:g} in {int((s17 < DOUBTFUL_SCORE).sum())}, "
         f"quartiles {np.percentile(s17, 25):.2f} / {np.median(s17):.2f} / {np.percentile(s17, 75):.2f}"
         if len(fakes) else "  (none)",
+        f"  below {MIN_PERSON_SCORE:g} (left out as no person by default, MIN_PERSON_SCORE): "
+        f"{int((s17 < MIN_PERSON_SCORE).sum())} of {len(fakes)}; crops with nobody left: "
+        f"{sum(all(v < MIN_PERSON_SCORE for v in c) for c in per_crop)} of {crops_with}",
         f"  mean of BlazePose's 33 landmarks (the rule before): below {DOUBTFUL_SCORE:g} in "
         f"{int((s33 < DOUBTFUL_SCORE).sum())}; one but not the other: 17 joints only "
         f"{int(((s17 < DOUBTFUL_SCORE) & (s33 >= DOUBTFUL_SCORE)).sum())}, 33 landmarks only "

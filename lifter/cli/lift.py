@@ -83,6 +83,7 @@ from ..detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
     MIN_MAX_SIDE_PX,
+    MIN_PERSON_SCORE,
     MissingDependencyError,
     check_max_side,
     load_image,
@@ -354,6 +355,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--max-people", type=int, default=DEFAULT_MAX_PEOPLE,
                    help="people lifted per image or frame at most (the largest; in a video those already tracked "
                    "first, so 1 follows one person; a crowd bound)")
+    p.add_argument("--min-score", type=float, default=MIN_PERSON_SCORE, metavar="S",
+                   help="leave out, as no person, each detected person (or a keypoint file's, where it gives 0-1 "
+                        "scores) whose mean joint score is below S (0 keeps everyone; BlazePose gives real people "
+                        "0.84-1 in photos, and 'people' on empty walls often less than 0.3)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="videos and keypoint sequences: strength of the causal One-Euro filter on root and pose "
                         "(0 = off, 2 = twice as smooth, at most 10)")
@@ -406,6 +411,9 @@ def check_lift_options(args: argparse.Namespace) -> None:
                               f"got {args.sensor_width:g}")
     if args.max_people < 1:
         raise PoseLifterError(f"--max-people must be >= 1, got {args.max_people}")
+    if not 0.0 <= args.min_score <= 1.0:
+        raise PoseLifterError(f"--min-score must be in [0, 1] (a mean joint score; 0 keeps everyone), got "
+                              f"{args.min_score:g}")
     if args.detector_flip_test is not None and args.detector != "blazepose":
         raise PoseLifterError(f"--{'' if args.detector_flip_test else 'no-'}detector-flip-test: the detector "
                               f"{args.detector!r} has no flip test of poselifter's (only 'blazepose')")
@@ -499,7 +507,8 @@ def run_lift(args: argparse.Namespace) -> int:
     interrupted = False
     with limit_blas_threads(1):  # see lifter.video.lift_video: faster beside MediaPipe's threads
         seq_kw = {"smoothing": args.smoothing, "max_people": args.max_people, "max_seconds": args.max_seconds,
-                  "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp}
+                  "fov_deg": args.fov, "flip_test": args.flip_test, "focal": focal, "principal_point": pp,
+                  "min_score": args.min_score}
         current: Path | None = None
         try:
             for path, name in bar:
@@ -524,7 +533,8 @@ def run_lift(args: argparse.Namespace) -> int:
                     elif kind == "keypoints":
                         rec = lift_keypoint_file(path, lifter=lifter_for["keypoints"], focal=focal, principal_point=pp,
                                                  default_format=args.format, fov_deg=args.fov, flip_test=args.flip_test,
-                                                 max_people=args.max_people, image_size=args.image_size)
+                                                 max_people=args.max_people, image_size=args.image_size,
+                                                 min_score=args.min_score)
                     elif kind == "video":
                         est = get_estimator_once(path)
                         with tqdm(desc=f"  {path.name}", unit="frame", disable=quiet, file=sys.stderr, position=1,
@@ -543,7 +553,7 @@ def run_lift(args: argparse.Namespace) -> int:
                                          focal=focal, principal_point=pp, sensor_width_mm=args.sensor_width,
                                          fov_deg=args.fov, max_side=args.max_side, flip_test=args.flip_test,
                                          max_people=args.max_people, distortion=args.distortion,
-                                         distortion_model=args.distortion_model)
+                                         distortion_model=args.distortion_model, min_score=args.min_score)
                     if misnamed is not None and seq is not None:
                         seq.warnings.insert(0, misnamed)
                     elif misnamed is not None and rec is not None:
