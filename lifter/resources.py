@@ -26,7 +26,7 @@ from typing import Any, Required, TypedDict, cast
 
 import numpy as np
 
-from ._checks import PoseLifterError
+from ._checks import CheckpointError, PoseLifterError
 
 ENV_VAR = "POSELIFTER_ASSETS"
 REGISTRY = "models.json"
@@ -52,10 +52,13 @@ def asset(relative: str) -> Traversable:
 
 
 def read_bytes(relative: str) -> bytes:
+    """A shipped file's bytes; a missing one raises :class:`PoseLifterError` naming the fix, a missing weights file
+    (``.pt``) :class:`lifter.CheckpointError` (as a damaged one does)."""
     node = asset(relative)
     if not node.is_file():
-        raise PoseLifterError(f"shipped file {relative!r} not found in {assets_root()} (a broken install? "
-                              f"reinstall poselifter, or set ${ENV_VAR} to an assets folder)")
+        kind = CheckpointError if relative.endswith(".pt") else PoseLifterError
+        raise kind(f"shipped file {relative!r} not found in {assets_root()} (a broken install? "
+                   f"reinstall poselifter, or set ${ENV_VAR} to an assets folder)")
     return node.read_bytes()
 
 

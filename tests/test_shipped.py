@@ -75,6 +75,26 @@ def test_a_damaged_shipped_file_is_refused(tmp_path, monkeypatch):
     assert "reinstall poselifter" in str(exc.value)
 
 
+def test_a_missing_shipped_weights_file_is_a_checkpoint_error(tmp_path, monkeypatch):
+    """The README: "a missing, corrupt or foreign weights file raises lifter.CheckpointError"; a shipped one missing
+    from a broken install raised its parent class, which ``except CheckpointError`` missed (a README audit). A
+    missing shipped file of another kind stays a PoseLifterError."""
+    import shutil
+
+    from lifter import PoseLifterError
+    from lifter.resources import read_bytes
+
+    src = Path(str(asset("models.json"))).parent
+    dst = tmp_path / "assets"
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns("*.png", "demo", "*.pt"))
+    monkeypatch.setenv("POSELIFTER_ASSETS", str(dst))
+    with pytest.raises(CheckpointError, match=r"shipped file '.*\.pt' not found in .*reinstall poselifter"):
+        Lifter.from_pretrained()
+    with pytest.raises(PoseLifterError, match="shipped file 'demo/samples.npz' not found") as exc:
+        read_bytes("demo/samples.npz")
+    assert not isinstance(exc.value, CheckpointError)
+
+
 @requires_h36m
 @pytest.mark.parametrize("name,key", _slices())
 def test_shipped_weights_reproduce_recorded_metrics(h36m, name, key):
