@@ -41,6 +41,7 @@ from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
     INSTALL_DETECT,
+    MIN_PERSON_SCORE,
     ExifCamera,
     LoadedImage,
     MissingDependencyError,
@@ -51,6 +52,7 @@ from lifter.detect import (
 from lifter.io import MAX_KEYPOINT_FILE_BYTES, LiftRecord, json_text, model_info, parse_keypoint_json
 from lifter.keypoints import H36M17, convert, placeholder_notes
 from lifter.pipeline import (
+    keep_scored_people,
     keypoint_file_scores,
     keypoints_image,
     lift_image,
@@ -320,9 +322,10 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                           "UTF-16 or UTF-32)") from None
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
+    kf, low = keep_scored_people(kf, MIN_PERSON_SCORE, where=nm)  # (people scored below the floor: as the CLI)
     kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)
     misnamed = input_kind(nm, content[:MEDIA_HEAD_BYTES])[1]  # (keypoint JSON named .mp4)
-    notes = [*([misnamed] if misnamed else []), *kf.warnings]
+    notes = [*([misnamed] if misnamed else []), *kf.warnings, *low]
     people = list(kf.people[1:])
     if len(people) + 1 > MAX_PEOPLE:
         notes.append(f"{len(people) + 1} people in the file; the {MAX_PEOPLE} largest are shown")

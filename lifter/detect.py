@@ -109,11 +109,11 @@ is lifted with a note."""
 
 
 def check_min_score(min_score: float) -> float:
-    """``min_score`` as a float in [0, 1], or a :class:`PoseLifterError` naming the range."""
-    try:
-        v = float(min_score)
-    except (TypeError, ValueError):
-        raise PoseLifterError(f"min_score must be a number in [0, 1] (a mean joint score), got {min_score!r}") from None
+    """``min_score`` (a real number in [0, 1]) as a float, or a :class:`PoseLifterError` naming the range."""
+    if isinstance(min_score, (bool, np.bool_)) or not isinstance(min_score, (int, float, np.integer, np.floating)):
+        raise PoseLifterError(f"min_score must be a number in [0, 1] (a mean joint score; 0 keeps everyone), got "
+                              f"{min_score!r}")
+    v = float(min_score)
     if not 0.0 <= v <= 1.0:
         raise PoseLifterError(f"min_score must be in [0, 1] (a mean joint score; 0 keeps everyone), got {v:g}")
     return v
@@ -121,26 +121,43 @@ def check_min_score(min_score: float) -> float:
 
 def scored_people(people: list[DetectedPose], min_score: float) -> tuple[list[DetectedPose], list[float]]:
     """``people`` split by :data:`MIN_PERSON_SCORE`'s rule at ``min_score``: those kept (order kept) and the mean
-    joint scores of those left out."""
+    joint scores of those left out. A person whose mean is not a number (a detector's NaN score) is kept."""
     kept, left = [], []
     for q in people:
         m = float(np.mean(q.scores))
-        if m >= min_score:
-            kept.append(q)
-        else:
+        if m < min_score:
             left.append(m)
+        else:
+            kept.append(q)
     return kept, left
 
 
-def left_out_text(scores: list[float], min_score: float, *, what: str = "detection") -> str:
+def mean_person_scores(rows: list[np.ndarray | None] | tuple[np.ndarray | None, ...], keypoint_format: str,
+                       n: int) -> np.ndarray:
+    """``(n,)``: the mean H36M joint score (:func:`h36m_joint_scores`) of each of ``n`` people given ``rows`` of
+    scores in their own ``keypoint_format`` (one per person; a missing row means none); NaN for a person without
+    scores or with scores that are not all in 0-1 (another scale, e.g. a heatmap's: no floor to read them by)."""
+    out = np.full(n, np.nan)
+    for j, c in enumerate(list(rows)[:n]):
+        if c is None:
+            continue
+        c = np.asarray(c, np.float64)
+        if np.all(np.isfinite(c)) and c.min() >= 0.0 and c.max() <= 1.0:
+            out[j] = float(np.mean(h36m_joint_scores(c, keypoint_format)))
+    return out
+
+
+def left_out_text(scores: list[float] | np.ndarray, min_score: float, *, what: str = "detection",
+                  detector: str | None = None) -> str:
     """What a note or error says of the detections (or a file's people: ``what="person"``) left out below
-    ``min_score``."""
-    n = len(scores)
-    vals = ", ".join(f"{v:.2f}" for v in sorted(scores, reverse=True)[:5]) + (", ..." if n > 5 else "")
+    ``min_score``; ``detector``: the estimator's name (BlazePose's real people's scores are then quoted)."""
+    vals = sorted((float(v) for v in scores), reverse=True)
+    n = len(vals)
+    shown = ", ".join(f"{math.floor(v * 100) / 100:.2f}" for v in vals[:5]) + (", ..." if n > 5 else "")
     kind = (what if n == 1 else "people" if what == "person" else what + "s")
-    seen = "BlazePose gives real people 0.84-1 in photos; " if what == "detection" else ""
-    return (f"{n} {kind} with a mean joint score below {min_score:g} ({vals}) left out as no person ({seen}"
-            "min_score=0, --min-score 0, keeps every one)")
+    seen = "BlazePose gives real people 0.84-1 in photos; " if detector == "blazepose" else ""
+    return (f"{n} {kind} with a mean joint score below {min_score:g} ({shown}) left out as no person ({seen}the "
+            "library's min_score=0 or poselifter lift --min-score 0 keeps every one)")
 
 
 SMALL_PERSON_PX: Final[float] = 100.0
@@ -1303,10 +1320,10 @@ def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: Pos
         if min(w, h) < SMALL_IMAGE_PX:  # (the detector's own input is 256 px: a person needs some pixels of it)
             extra += f" in this {w} x {h} px image: a person needs to be tens of pixels tall to be found"
         if left:
-            extra += f"; {left_out_text(left, min_score)}"
+            extra += f"; {left_out_text(left, min_score, detector=estimator.name)}"
         raise NoPersonError(f"{where}no person found by the {estimator.name} 2D detector{extra}")
     if left:  # (num_people: the people found, those left out not counted)
-        note = left_out_text(left, min_score)
+        note = left_out_text(left, min_score, detector=estimator.name)
         people = [replace(q, num_people=len(people), warnings=q.warnings + ((note,) if i == 0 else ()))
                   for i, q in enumerate(people)]
     if max_people is not None and len(people) > max_people:
@@ -1335,7 +1352,7 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
 
 __all__ = ["ASSUMED_FOCAL_NOTE", "BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG", "DEFAULT_MAX_SIDE_PX",
            "DetectedPose", "Detection",
-           "MIN_MAX_SIDE_PX", "MIN_PERSON_SCORE", "DOUBTFUL_SCORE", "check_min_score",
+           "MIN_MAX_SIDE_PX", "MIN_PERSON_SCORE", "DOUBTFUL_SCORE", "check_min_score", "mean_person_scores",
            "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
            "ExifCamera", "FocalGuess", "ImageError",
            "LoadedImage", "MissingDependencyError", "NoPersonError",

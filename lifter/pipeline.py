@@ -53,6 +53,7 @@ from .detect import (
     h36m_joint_scores,
     left_out_text,
     load_image,
+    mean_person_scores,
     people_scores,
 )
 from .io import (
@@ -347,26 +348,30 @@ def keypoint_file_scores(kf: Any, count: int) -> tuple[np.ndarray | None, list[s
     return scores, (joint_doubt_notes(scores) if float(np.nanmax(conf)) <= 1.0 else [])
 
 
-def scored_file_people(kf: Any, min_score: float, *, where: str) -> tuple[list[int], list[str]]:
-    """Which of a keypoint file's people (:class:`lifter.io.KeypointFile`, largest first) are lifted at
-    ``min_score`` (:data:`lifter.detect.MIN_PERSON_SCORE`): those whose mean H36M joint score
-    (:func:`h36m_joint_scores`) is at least ``min_score``, and the note on those left out. Everyone where the file
-    has no scores for each person or they are not 0-1 (another scale, with no threshold to read them by). A
+def keep_scored_people(kf: Any, min_score: float, *, where: str) -> tuple[Any, list[str]]:
+    """A keypoint file (:class:`lifter.io.KeypointFile`, largest first) without the people whose mean joint score
+    (:func:`lifter.detect.mean_person_scores`: scores in 0-1 only) is below ``min_score``
+    (:data:`lifter.detect.MIN_PERSON_SCORE`), and the note on them; the file as it is when nobody is. A
     :class:`PoseLifterError` naming the fix when nobody is left (a developer trial: a COCO results file's detections
-    scored 0.04 were lifted as people, and ``--max-people 1`` kept one of them, the largest, over the real person)."""
+    scored 0.04 were lifted as people, and ``--max-people 1`` kept one of them, the largest, over the real person).
+    ``poselifter lift`` and the app's keypoint upload read a file so."""
     people = kf.people or (kf.keypoints,)
-    conf = people_scores(kf.people_scores[:len(people)]) if min_score > 0 else None
-    if conf is None or not np.all(np.isfinite(conf)) or float(conf.max()) > 1.0 or float(conf.min()) < 0.0:
-        return list(range(len(people))), []
-    mean = h36m_joint_scores(conf, kf.format).mean(-1)
-    keep = [i for i, v in enumerate(mean) if v >= min_score]
-    left = [float(v) for v in mean if v < min_score]
-    if not left:
-        return keep, []
-    text = left_out_text(left, min_score, what="person")
-    if not keep:
+    mean = mean_person_scores(kf.people_scores, kf.format, len(people))
+    low = mean < min_score  # (NaN: no scores to read, kept)
+    if not low.any():
+        return kf, []
+    text = left_out_text(mean[low], min_score, what="person")
+    keep = np.flatnonzero(~low)
+    if not len(keep):
         raise PoseLifterError(f"{where}: nobody to lift: {text}")
-    return keep, [f"of the file's {len(people)} people, {text}"]
+    n = len(kf.people)
+    each = f"{n} people in the file; each is lifted"  # (the reader's note, no longer true: said of those kept)
+    notes = tuple(w.replace(each, f"{len(keep)} of the {n} people in the file are lifted", 1) for w in kf.warnings
+                  if len(keep) > 1 or not w.startswith(each))
+    kept = {k: tuple(getattr(kf, k)[i] for i in keep) for k in ("people", "people_index", "people_ids", "people_scores")
+            if len(getattr(kf, k)) == n}
+    return dataclasses.replace(kf, keypoints=kf.people[keep[0]], warnings=notes, **kept), [
+        f"of the file's {n} people, {text}"]
 
 
 def given_image_size(image_size: Any | None, file_size: tuple[int, int] | None, *,
@@ -478,19 +483,17 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
     as :func:`lifter.video.lift_keypoint_sequence` does."""
     kf = parse_keypoint_json(path, default_format=default_format)
     in_file, min_score = len(kf.people), check_min_score(min_score)
-    keep, low = scored_file_people(kf, min_score, where=str(path))
-    if len(keep) < in_file:  # (before max_people: the largest of those kept are lifted)
-        kf = dataclasses.replace(kf, keypoints=kf.people[keep[0]], **{
-            k: tuple(getattr(kf, k)[i] for i in keep) for k in ("people", "people_index", "people_ids", "people_scores")
-            if len(getattr(kf, k)) == in_file})
+    kf, low = keep_scored_people(kf, min_score, where=str(path))  # (before max_people: the largest of those kept)
     people = kf.people or (kf.keypoints,)
     img = keypoints_image(kf.image_size, kf.principal_point, image_size=image_size, principal_point=principal_point,
                           fallback_image=fallback_image, poses=people, where=str(path), what="keypoint file")
     size = img.size
     notes = list(kf.warnings) + img.notes
     cut = max_people is not None and len(people) > max_people
-    if low or cut:  # (the reader's note, no longer true)
-        notes = [n for n in notes if not n.startswith(f"{in_file} people in the file; each is lifted")]
+    if cut:  # (the reader's note, no longer true)
+        said = (f"{in_file} people in the file; each is lifted", f"{len(people)} of the {in_file} people in the file "
+                "are lifted")
+        notes = [n for n in notes if not n.startswith(said)]
     notes += low
     if cut:
         assert max_people is not None

@@ -48,6 +48,7 @@ from .detect import (
     h36m_joint_scores,
     image_from_array,
     left_out_text,
+    mean_person_scores,
     people_h36m,
     people_scores,
     scored_people,
@@ -1367,7 +1368,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if left_out:
         at_frames = sorted({i for i, _ in left_out})
         low.append(f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), "
-                   + left_out_text([v for _, v in left_out], min_score))
+                   + left_out_text([v for _, v in left_out], min_score, detector=estimator.name))
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
                               f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else "")
@@ -1432,16 +1433,6 @@ def track_lifted(lifted: list[tuple[int, float, np.ndarray, np.ndarray, np.ndarr
     return out
 
 
-def _mean_scores(people: list[np.ndarray | None], n: int, keypoint_format: str) -> np.ndarray:
-    """``(n,)``: each of a frame's ``n`` people's mean H36M joint score (:func:`lifter.detect.h36m_joint_scores`), NaN
-    for a person without scores."""
-    out = np.full(n, np.nan)
-    for j, c in enumerate(people[:n]):
-        if c is not None:
-            out[j] = float(np.mean(h36m_joint_scores(np.asarray(c, np.float64), keypoint_format)))
-    return out
-
-
 def _frame_scores(people: list[np.ndarray | None], keypoint_format: str) -> np.ndarray | None:
     """One frame's confidences ``(n, 17)`` of the H36M joints (:func:`lifter.detect.h36m_joint_scores`, from each
     person's ``(J,)`` in ``keypoint_format``), or None unless every person of the frame has them."""
@@ -1500,9 +1491,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         warnings.append(f"the sequence has {len(frames)} frames ({(at[-1] + 1) / ks.fps:.1f} s); only the first "
                         f"{max_seconds:g} s ({within} frames) are lifted (the duration bound, --max-seconds)")
         frames = frames[:within]
-    crowded = [at[i] for i, fr in enumerate(frames) if len(fr) > max_people]
-    if crowded:
-        warnings.append(_crowd_note(max_people, crowded))
+    crowded: list[int] = []  # (frames with more people than max_people, those left out below min_score not counted)
     ids = None if ks.people_ids is None else list(ks.people_ids[:len(frames)])
     given_scores = None if ks.people_scores is None else list(ks.people_scores[:len(frames)])
     kept_frames: list[list[np.ndarray]] = []
@@ -1518,16 +1507,14 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
             warnings.append(f"person id(s) {', '.join(names[:5])} given to several people in one frame (first at frame "
                             f"{twice[0][0]}): not used to follow anyone, nor as a track's person_id")
     left_out: list[tuple[int, float]] = []  # (frame, mean joint score) of people below min_score
-    given = [np.asarray(c, np.float64) for fr in (given_scores or []) for c in fr if c is not None]
-    unit_scores = min_score > 0 and bool(given) and all(  # (scores of another scale: no threshold to read them by)
-        np.all(np.isfinite(c)) and c.min() >= 0.0 and c.max() <= 1.0 for c in given)
     for i, fr in enumerate(frames):
         boxes = [bbox_of(k) for k in fr]
         names = [None] * len(fr) if names_by_frame is None else list(names_by_frame[i])
-        scored = (_mean_scores(given_scores[i], len(fr), ks.format) if unit_scores and given_scores is not None
-                  else np.full(len(fr), np.nan))
-        ok = [j for j in range(len(fr)) if not scored[j] < min_score]  # (NaN: no score, kept)
+        scored = mean_person_scores(given_scores[i] if given_scores is not None else [], ks.format, len(fr))
+        ok = [j for j in range(len(fr)) if not scored[j] < min_score]  # (NaN: no scores to read, kept)
         left_out += [(at[i], float(scored[j])) for j in range(len(fr)) if scored[j] < min_score]
+        if len(ok) > max_people:
+            crowded.append(at[i])
         keep = [ok[j] for j in followed.keep(at[i], [boxes[j] for j in ok], [names[j] for j in ok])]
         kept_frames.append([fr[j] for j in keep])
         kept_scores.append([None if given_scores is None else given_scores[i][j] for j in keep])
@@ -1536,6 +1523,8 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         if kept_names is not None:
             kept_names.append([names[j] for j in keep])
     frames, ids = kept_frames, kept_ids
+    if crowded:
+        warnings.append(_crowd_note(max_people, crowded))
     warnings.extend(followed.aside_note())
     if left_out:
         at_frames = sorted({i for i, _ in left_out})

@@ -72,17 +72,29 @@ def test_the_default_floor_lies_between_invented_and_real_people():
 def test_a_photos_only_detection_below_the_floor_is_no_person(photo, lifter, kp17):
     junk = _Scored([(kp17, 0.14)])
     with pytest.raises(NoPersonError, match=r"p\.png: no person found by the scored 2D detector; 1 detection with a "
-                                            r"mean joint score below 0\.3 \(0\.14\) left out as no person .*"
-                                            r"--min-score 0, keeps every one\)"):
+                                            r"mean joint score below 0\.3 \(0\.14\) left out as no person \(the "
+                                            r"library's min_score=0 or poselifter lift --min-score 0 keeps every "
+                                            r"one\)"):
         lift_image(load_image(photo), lifter=lifter, estimator=junk, focal=1000.0)
     rec = lift_image(load_image(photo), lifter=lifter, estimator=junk, focal=1000.0, min_score=0)
     assert rec.num_people == 1 and any("detector is unsure" in w for w in rec.warnings), rec.warnings
     # exactly at the floor: kept
     rec = lift_image(load_image(photo), lifter=lifter, estimator=_Scored([(kp17, MIN_PERSON_SCORE)]), focal=1000.0)
     assert rec.num_people == 1 and not any("left out" in w for w in rec.warnings)
-    for bad in (1.5, -0.1, float("nan"), "high"):
+    for bad in (1.5, -0.1, float("nan"), "high", "0.5", True, None):  # (a review: True and "0.5" were taken)
         with pytest.raises(PoseLifterError, match=r"min_score must be"):
             detect_people(load_image(photo), estimator=junk, min_score=bad)
+    assert len(detect_people(load_image(photo), estimator=junk, min_score=np.float32(0.1))) == 1
+    # a score just under the floor is not shown as the floor (a review: 0.2996 read "below 0.3 (0.30)")
+    with pytest.raises(NoPersonError, match=r"below 0\.3 \(0\.29\)"):
+        detect_people(load_image(photo), estimator=_Scored([(kp17, 0.2996)]))
+
+
+def test_a_detection_whose_scores_are_not_numbers_is_kept(photo, lifter, kp17):
+    """(a review) A detector's NaN scores made the mean NaN, which no floor compares above: the person was left out
+    even at min_score=0. Such a person is kept (there is no score to read)."""
+    for floor in (0.0, MIN_PERSON_SCORE):
+        assert len(detect_people(load_image(photo), estimator=_Scored([(kp17, float("nan"))]), min_score=floor)) == 1
 
 
 def test_a_larger_detection_below_the_floor_does_not_take_max_people(photo, lifter, kp17):
@@ -141,7 +153,7 @@ def test_a_keypoint_files_low_scored_people_are_left_out(tmp_path, weights, kp17
     assert code == 0 and d["num_people"] == 1 and [q["input_index"] for q in d["people"]] == [0], d
     assert any(w.startswith("of the file's 2 people, 1 person with a mean joint score below 0.3 (0.04) left out")
                for w in d["warnings"]), d["warnings"]
-    assert not any("each is lifted" in w or "largest is lifted" in w for w in d["warnings"]), d["warnings"]
+    assert not any("each is lifted" in w or "are lifted" in w for w in d["warnings"]), d["warnings"]
     capsys.readouterr()
     code = main([*base, str(results((big, 0.04), (real, 0.1), name="junk.json")), "--out", str(tmp_path / "o2")])
     err = capsys.readouterr().err
@@ -149,10 +161,21 @@ def test_a_keypoint_files_low_scored_people_are_left_out(tmp_path, weights, kp17
     assert "--min-score 0" in err
     code = main([*base, str(tmp_path / "junk.json"), "--out", str(tmp_path / "o3"), "--min-score", "0"])
     assert code == 0 and json.loads((tmp_path / "o3" / "junk.json").read_text())["num_people"] == 2
-    # scores of another scale (a heatmap's, 0-5): no threshold to read them by, everyone lifted
+    # scores of another scale (a heatmap's, 0-5) are not read: that person is kept; the other is read (a review: one
+    # score above 1 anywhere turned the floor off for the whole file)
     rec = lift_keypoint_file(results((real, 4.5), (big, 0.2), name="heat.json"), lifter=tiny_lifter(32),
                              image_size=(1280, 720))
-    assert rec.num_people == 2 and not any("left out" in w for w in rec.warnings)
+    assert rec.num_people == 1 and [q.input_index for q in rec.people] == [0]
+    # three people, one left out: the reader's "each is lifted" note now counts those lifted
+    rec = lift_keypoint_file(results((real, 0.9), (big, 0.04), (real + [300.0, 0.0], 0.8), name="three.json"),
+                             lifter=tiny_lifter(32), image_size=(1280, 720))
+    assert sorted(q.input_index for q in rec.people) == [0, 2]
+    assert any(w.startswith("2 of the 3 people in the file are lifted (largest first; 'input_index'")
+               for w in rec.warnings), rec.warnings
+    assert not any("3 people in the file; each is lifted" in w for w in rec.warnings)
+    rec = lift_keypoint_file(tmp_path / "three.json", lifter=tiny_lifter(32), image_size=(1280, 720), max_people=1)
+    assert any(w.startswith("2 people in the file scored at least 0.3; the largest is lifted") for w in rec.warnings)
+    assert not any("are lifted" in w for w in rec.warnings), rec.warnings
 
 
 def test_a_keypoint_sequences_low_scored_people_are_left_out_frame_by_frame(tmp_path, lifter, kp17):
@@ -170,6 +193,14 @@ def test_a_keypoint_sequences_low_scored_people_are_left_out_frame_by_frame(tmp_
                for w in rec.warnings), rec.warnings
     everyone = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0, min_score=0)
     assert [len(f.people) for f in everyone.frames] == [1, 1, 2, 2, 1, 1, 1, 1]
+    # (a review) max_people counts the people kept, not those left out; a score above 1 in another frame leaves the
+    # floor on for the rest
+    frames[-1]["people"][0]["keypoints"][0][2] = 1.01
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": 1000, "image_size": [1280, 720],
+                                "frames": frames}))
+    one = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0, max_people=1)
+    assert [len(f.people) for f in one.frames] == [1] * 8 and not any("more than 1" in w for w in one.warnings)
+    assert float(one.frames[2].people[0].keypoints_2d[:, 0].mean()) < 640.0  # (the real person, not the junk)
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": 1000, "image_size": [1280, 720],
                                 "frames": [{"people": [{"keypoints": rows(junk, 0.05)}]}] * 3}))
     with pytest.raises(PoseLifterError, match=r"seq\.json: no person in any frame; 3 people with a mean joint score "
@@ -262,3 +293,20 @@ def test_left_out_people_are_not_counted_in_num_people(photo, lifter, kp17):
     assert [d.num_people for d in dets] == [2, 2]
     assert dets[0].warnings[-1].startswith("1 detection with a mean joint score below 0.3 (0.10)")
     assert not any("left out" in w for w in dets[1].warnings)  # (said once, on the first person)
+
+
+def test_the_apps_keypoint_upload_leaves_out_low_scored_people(kp17):
+    """(a review) The app read a keypoint file itself and showed the people poselifter lift leaves out."""
+    pytest.importorskip("viser")
+    from poselifter_app import upload as up
+
+    real = 0.5 * (kp17 - kp17[0]) + [400.0, 360.0]
+    big = 1.2 * (kp17 - kp17[0]) + [900.0, 360.0]
+    doc = [{"image_id": 1, "category_id": 1, "keypoints": _coco_rows(k, v), "score": v} for k, v in ((real, 0.9),
+                                                                                                     (big, 0.04))]
+    doc_json = json.dumps({"format": "coco17", "image_size": [1280, 720], "people": [
+        {"keypoints": np.reshape(d["keypoints"], (17, 3)).tolist()} for d in doc]}).encode()
+    sample = up.keypoint_sample("res.json", doc_json, key="upload/t/res.json")
+    assert sample.num_people == 1
+    assert any("1 person with a mean joint score below 0.3 (0.04) left out" in w for w in sample.upload.warnings), \
+        sample.upload.warnings
