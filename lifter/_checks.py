@@ -477,6 +477,77 @@ def sideways_people(kp17: np.ndarray) -> np.ndarray:
     return side
 
 
+LEAN_NOTE_DEG: float = 35.0
+"""A pose whose legs and torso both lean more than this (deg) the same way from the image's vertical
+(:func:`body_lean_deg`) gets a note that the camera may be rolled (:func:`lean_notes`). ``python scripts/roll_lean.py``
+(``docs/results/roll_lean.txt``; the default, exact 2D lifted as detected, S9 + S11 every 50th frame): 0.1 % of the
+poses of upright cameras are named (people sitting on the floor), 3 % at a roll of 30 deg, 66 % at 45 deg and 58 % at
+60 deg (many others there get the sideways note), where the root is 0.49, 0.81 and 0.89 m off (0.17 upright); the
+poses named at 45 and 60 deg, turned upright by their own lean, bring it to 0.30 and 0.41 m."""
+
+
+LEAN_STRAIGHT_DEG: float = 20.0
+"""The legs and the torso of a pose the lean note names lie within this angle (deg) of each other: a straight body, as
+a standing or walking person turned by a rolled camera is (people bending or sitting are not: without this rule 0.4 %
+of Human3.6M's poses were named on upright cameras, against 0.1 %)."""
+
+
+def _lean_parts(k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The legs' and torso's angles (deg) from the image's +y of poses ``(n, 17, 2)``, and where both can be read:
+    their joints there, and each at least a tenth of the pose's size (box diagonal; a short one's angle says little)."""
+    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE]) - 0.5 * (k[:, _R_HIP] + k[:, _L_HIP])
+    torso = k[:, _PELVIS] - k[:, _THORAX]
+    used = [_PELVIS, _R_HIP, _L_HIP, _R_ANKLE, _L_ANKLE, _THORAX]
+    with np.errstate(invalid="ignore"):
+        size = np.linalg.norm(np.nanmax(k, 1) - np.nanmin(k, 1), axis=-1) if len(k) else np.zeros(0)
+        ok = (np.isfinite(k[:, used]).all((1, 2)) & ~zero_placeholders(k)[:, used].any(1)
+              & (np.linalg.norm(legs, axis=-1) >= 0.1 * size) & (np.linalg.norm(torso, axis=-1) >= 0.1 * size))
+    return np.degrees(np.arctan2(legs[:, 0], legs[:, 1])), np.degrees(np.arctan2(torso[:, 0], torso[:, 1])), ok
+
+
+def body_lean_deg(kp17: np.ndarray) -> np.ndarray:
+    """``(n,)`` deg: how far each pose ``(n, 17, 2)`` px (H36M order, image y down) leans from the image's vertical,
+    signed: the smaller of the legs' (hips' midpoint to ankles' midpoint) and the torso's (thorax to pelvis) angles
+    from +y, + where the lower end lies toward +x; 0 where the two lean opposite ways or a joint is missing (non-finite,
+    or at (0, 0): a detector's placeholder). A camera rolled by ``r`` (:func:`lifter.camera.camera_turn`'s third angle,
+    + clockwise seen from behind the camera) leans an upright body by about ``+r``."""
+    a, b, ok = _lean_parts(np.asarray(kp17, np.float64).reshape(-1, 17, 2))
+    with np.errstate(invalid="ignore"):
+        return np.where(ok & (np.sign(a) == np.sign(b)), np.sign(a) * np.minimum(np.abs(a), np.abs(b)), 0.0)
+
+
+def leaning_people(kp17: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which poses ``(n, 17, 2)`` px lean more than :data:`LEAN_NOTE_DEG` (:func:`body_lean_deg`) with
+    a straight body (legs and torso within :data:`LEAN_STRAIGHT_DEG`) and do not lie sideways
+    (:func:`sideways_people`, which has its own note)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    a, b, _ = _lean_parts(k)
+    lean = np.abs(body_lean_deg(k))
+    with np.errstate(invalid="ignore"):  # (beyond 90 deg the body is upside down: that note's)
+        return (lean > LEAN_NOTE_DEG) & (lean < 90.0) & (np.abs(a - b) < LEAN_STRAIGHT_DEG) & ~sideways_people(k)
+
+
+def lean_text(lean_deg: float) -> str:
+    """The advice of a lean note, for a lean of ``lean_deg`` (deg, :func:`body_lean_deg`)."""
+    return (f"if the camera was rolled (a slanted hand-held photo), the lift is off: the default is trained on upright "
+            f"cameras, and a roll of 45 deg puts the root about 0.8 m off; turn the 2D upright about the principal "
+            f"point first (the README's 'Camera roll' recipe), here by a roll of about {lean_deg:+.0f} deg, or by the "
+            "camera's own; a person sitting or lying on the floor is lifted as given")
+
+
+def lean_notes(kp17: np.ndarray) -> list[str]:
+    """A note when most of the poses ``(n, 17, 2)`` px lean as a rolled camera leans them (:func:`leaning_people`):
+    a developer trial's photos turned 30-60 deg were lifted a metre off without a word (the sideways note begins
+    near 65 deg)."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    lean = leaning_people(k)
+    if not _most(lean):
+        return []
+    deg = float(np.median(body_lean_deg(k)[lean]))
+    return [f"the body leans {abs(deg):.0f} deg from the image's vertical in {int(lean.sum())} of {len(k)} pose(s) "
+            f"(legs and torso alike): {lean_text(deg)}"]
+
+
 def upside_down_people(kp17: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: which of the poses ``(n, 17, 2)`` px (H36M order, image y down) are upright bodies upside down
     in the image: taller than wide, the head below both ankles by more than half the pose's height (a person lying
@@ -588,6 +659,8 @@ def face_first_notes(kp17: np.ndarray) -> list[str]:
 
 _HEAD_TOP, _R_ANKLE, _L_ANKLE = 10, 3, 6
 """H36M-17 indices of the head's top and the ankles (:data:`lifter.skeleton.JOINT_NAMES`; a test pins them)."""
+_PELVIS, _R_HIP, _L_HIP, _THORAX = 0, 1, 4, 8
+"""H36M-17 indices of the pelvis, the hips and the thorax (:data:`lifter.skeleton.JOINT_NAMES`; a test pins them)."""
 
 
 class OutputNote(str):

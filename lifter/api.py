@@ -35,6 +35,7 @@ from ._checks import (
     collect_output_notes,  # noqa: F401 -- (re-exported: it lived here, lifter.api.collect_output_notes)
     face_first_notes,
     input_warnings,
+    lean_notes,
     outside_image_notes,
     principal_point_notes,
     sideways_notes,
@@ -744,6 +745,7 @@ class Lifter:
                 in_list += view_angle_notes(flat_focal[0], (int(wh[0]), int(wh[1])))
         in_list += upside_down_notes(kp)
         in_list += sideways_notes(kp)
+        in_list += lean_notes(kp)
         in_list += face_first_notes(kp)
         in_notes = tuple(in_list)
         if warn:

@@ -33,7 +33,15 @@ from typing import Any, Final, Literal, NamedTuple
 
 import numpy as np
 
-from ._checks import PoseLifterError, _real_array, _untorch, as_pair, collect_output_notes, warn_user
+from ._checks import (
+    PoseLifterError,
+    _real_array,
+    _untorch,
+    as_pair,
+    collect_output_notes,
+    lean_notes,
+    warn_user,
+)
 from .camera import DEFAULT_DIAGONAL_FOV_DEG, DistortionModel, canonical_depth_from_depth
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
@@ -1387,6 +1395,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     if seen_2d:
         warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
         warnings.extend(detected_sideways_notes(np.stack(seen_2d), video=True))
+        warnings.extend(lean_notes(np.stack(seen_2d)))
     warnings.extend(track_gap_notes(frames))
     warnings.extend(track_edge_notes(frames, size))
     warnings.extend(track_jump_notes(frames, fps=fps))

@@ -820,10 +820,12 @@ def test_lift_warns_of_a_principal_point_at_the_image_size_and_of_y_up_keypoints
     as the principal point) and when every head is below the ankles (y up), but Lifter.lift said nothing (root
     3.3 m off, MPJPE 604 mm). lift now warns of both, with the records' messages; a centred principal point, an
     upright person and a principal point per pose from several images are not flagged."""
-    from lifter._checks import _HEAD_TOP, _L_ANKLE, _R_ANKLE
+    from lifter._checks import _HEAD_TOP, _L_ANKLE, _L_HIP, _PELVIS, _R_ANKLE, _R_HIP, _THORAX
     from lifter.skeleton import JOINT_NAMES
 
     assert (_HEAD_TOP, _R_ANKLE, _L_ANKLE) == tuple(JOINT_NAMES.index(n) for n in ("head_top", "r_ankle", "l_ankle"))
+    assert (_PELVIS, _R_HIP, _L_HIP, _THORAX) == tuple(JOINT_NAMES.index(n) for n in ("pelvis", "r_hip", "l_hip",
+                                                                                      "thorax"))
     lf = tiny_lifter()
     kp = demo_sample("walking").keypoints_2d
     kp = kp - kp.mean(0) + [500.0, 501.0]
