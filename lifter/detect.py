@@ -164,7 +164,7 @@ SMALL_PERSON_PX: Final[float] = 100.0
 """A person lifted from a photo who is smaller than this (px, the longer side of their 2D joints' box in the image
 the detector saw: a standing person's height) gets a note (:func:`lifter.pipeline.small_person_notes`): the 84 demo
 photos downscaled (``python scripts/small_people.py``, ``docs/results/small_people.txt``) lift at MPJPE 64 mm with
-people 340 px tall (median), 70 mm at 102 px, 114 mm at 68 px and 180 mm at 51 px."""
+people 340 px tall (median), 70 mm at 102 px, 114 mm at 68 px and 175 mm at 51 px."""
 
 UNSURE_JOINT_SCORE: Final[float] = 0.3
 """A joint of a person lifted from a photo whose H36M joint score (:func:`h36m_joint_scores`) is below this gets

@@ -4,11 +4,12 @@ lift`` does. The measurement behind :data:`lifter.detect.SMALL_PERSON_PX` (a per
 note: a browser trial's 300-px photo lifted 73 mm off the same photo at 1000 px, without a word).
 
     python scripts/small_people.py [--h36m ../shared/data/h36m] [--scales 1 0.6 0.4 0.3 0.2 0.15]
-                                   [--out docs/results/small_people.txt]
+                                   [--min-score 0.3] [--out docs/results/small_people.txt]
 
 Per scale: the person's size in the image (px, the longer side of the ground-truth 2D's box: their height here),
 the detector's 2D error (px of the full-size photo, median over joints and photos), MPJPE / MRPE (mm) against the
-ground truth, and the people found.
+ground truth, and the people found (detections scored below ``--min-score``, :data:`lifter.detect.MIN_PERSON_SCORE`
+by default, are no person, as in ``poselifter lift``).
 The downscaled photos are written to a temporary folder and deleted (Human3.6M-derived: never kept).
 """
 
@@ -30,7 +31,7 @@ from _report import emit  # noqa: E402  (scripts/_report.py)
 
 from lifter import Lifter  # noqa: E402
 from lifter.data import H36M, default_h36m_dir  # noqa: E402
-from lifter.detect import SMALL_PERSON_PX, BlazePoseEstimator, NoPersonError  # noqa: E402
+from lifter.detect import MIN_PERSON_SCORE, SMALL_PERSON_PX, BlazePoseEstimator, NoPersonError  # noqa: E402
 from lifter.metrics import mpjpe  # noqa: E402
 from lifter.pipeline import lift_image  # noqa: E402
 
@@ -39,6 +40,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--h36m", type=Path, default=None)
     ap.add_argument("--scales", type=float, nargs="+", default=[1.0, 0.6, 0.4, 0.3, 0.2, 0.15])
+    ap.add_argument("--min-score", type=float, default=MIN_PERSON_SCORE, help="the detections' score floor")
     ap.add_argument("--out", type=Path, default=None, help="also write the report here")
     args = ap.parse_args()
     root = args.h36m or default_h36m_dir()
@@ -49,7 +51,7 @@ def main() -> int:
     n = len(ann["image"])
     tmp = Path(tempfile.mkdtemp(prefix="small_people_"))
     lines = [f"84 demo photos downscaled, intrinsics scaled, lens kept; the default model {lifter.name}; the note "
-             f"below {SMALL_PERSON_PX:g} px",
+             f"below {SMALL_PERSON_PX:g} px; detections scored below {args.min_score:g} are no person",
              "| scale | person size px (median) | found | 2D error px at full size (median) | MPJPE mm | MRPE mm | "
              "noted small |", "|---|---|---|---|---|---|---|"]
     try:
@@ -68,7 +70,7 @@ def main() -> int:
                     gt2 = ann["p2d_gt"][i].astype(np.float64)
                     heights.append(s * float(np.ptp(gt2, axis=0).max()))  # (the box's longer side, as the note)
                     try:
-                        rec = lift_image(tmp_path, lifter=lifter, estimator=est,
+                        rec = lift_image(tmp_path, lifter=lifter, estimator=est, min_score=args.min_score,
                                          focal=s * np.asarray(cam.focal, np.float64),
                                          principal_point=s * np.asarray(cam.principal_point, np.float64),
                                          distortion=cam.distortion)
