@@ -392,7 +392,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                          *short_focal_caution(focal=f, camera_focal=cam.alpha,
                                                               input_space=used.input_space,
                                                               camera_focal_known=camera_focal_known(state)),
-                                         *bone_caution(res_rel[0], why=bone_cause(state))))
+                                         *bone_caution(res_rel[0], why=bone_cause(state)),
+                                         *tilt_caution(res.keypoints_2d[0])))
 
 
 BONE_RATIO_LIMITS: Final[tuple[float, float]] = (0.4, 2.0)
@@ -463,6 +464,28 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
     return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view_deg_text(view)}° of view (a whole person "
             f"rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the "
             f"camera's own focal length is {camera_focal:.0f} px"]
+
+
+def tilt_caution(keypoints: np.ndarray) -> list[str]:
+    """The readout's caution when the selected person's 2D ``(17, 2)`` px lies sideways in the image or leans as a
+    rolled camera leans people (:func:`lifter._checks.sideways_people`, :func:`lifter._checks.leaning_people`, the
+    photo notes' rules): the default is trained on upright cameras and people, and such a lift is metres off. A
+    browser trial: the note on a photo turned 45 deg was replaced by a later refused upload's message, leaving the
+    lift on screen without a word; a video's went as it played. This caution follows the 2D shown, frame by frame
+    and drag by drag."""
+    from lifter._checks import body_lean_deg, lean_text, leaning_people, sideways_people
+
+    k = np.asarray(keypoints, np.float64).reshape(1, NUM_JOINTS, 2)
+    if not np.all(np.isfinite(k)):
+        return []
+    if sideways_people(k)[0]:
+        return ["the body lies sideways in the image (head and ankles apart along x): a photo or video turned a "
+                "quarter (its orientation lost), or a person lying down, a pose rare in the training data; the lift "
+                "is likely off"]
+    if leaning_people(k)[0]:
+        lean = float(body_lean_deg(k)[0])
+        return [f"the body leans {abs(lean):.0f}° from the image's vertical (legs and torso alike): {lean_text(lean)}"]
+    return []
 
 
 SHORT_FOCAL_FACTOR: Final[float] = 0.5

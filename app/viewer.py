@@ -137,7 +137,10 @@ MAX_STATUS_NOTES: int = 3
 class StatusNote:
     """A message in the Readout's status line, with what clears it (:meth:`SessionView.show_message`): ``about`` a
     sequence no longer shown, a ``focal`` (px) no longer in use, a ``frame_key`` no longer shown, or (``fallback``)
-    a frame with a detection shown where it said there was none."""
+    a frame with a detection shown where it said there was none. ``keep``: an upload's own message (its notes), kept
+    while its sample or sequence is shown, beside later messages and errors, until ``about`` no longer holds (a
+    browser trial: a video's notes went for good as it played, and a refused upload's message replaced the notes of
+    the photo still shown)."""
 
     text: str
     error: bool = False
@@ -145,6 +148,7 @@ class StatusNote:
     focal: float | None = None
     frame_key: str | None = None
     fallback: bool = False
+    keep: bool = False
 
 
 def status_text(notes: list[StatusNote]) -> str:
@@ -471,21 +475,24 @@ class SessionView:
             return False
         with self._status_lock:
             if self._message_count == n and self.gui.readout.status.content and time.monotonic() >= self._note_until:
-                # (a note stays a while: the controls it changed call back at once)
-                self.gui.readout.status.content = ""
-                self._status_notes = []
+                # (a note stays a while: the controls it changed call back at once; an upload's own stays on)
+                kept = [q for q in self._status_notes if q.keep]
+                if len(kept) != len(self._status_notes):
+                    self._status_notes = kept
+                    self.gui.readout.status.content = status_text(kept)
         return True
 
     def show_message(self, text: str, *, error: bool = False, about: str | None = None,
                      focal: float | None = None, title: str | None = None, sticky: bool = False,
-                     frame_key: str | None = None, fallback: bool = False) -> None:
+                     frame_key: str | None = None, fallback: bool = False, keep: bool = False) -> None:
         """Show ``text`` in the readout panel (and as a browser notification in a real tab). ``about``: the sequence
         or sample (:func:`poselifter_app.keys.sequence_of`) it is about, when that is not the one shown now (a pass
         that shows another one clears the message). ``focal``: the focal length (px) the message says was set; a
         pass that finds another one in use clears it (a user trial: "set to 1148.6 px" stayed under a focal typed
         since). ``frame_key``: the one frame it is about; a pass that shows another clears it (a browser trial read
         "frame 99999 is past the end ...; showing frame 1967" under frame 391). ``fallback``: it says the frame
-        shown has no detection; a pass that shows one with it clears it.
+        shown has no detection; a pass that shows one with it clears it. ``keep``: an upload's own message
+        (:class:`StatusNote`).
         ``title``: the notification's (default: "Input problem" for an error, else "poselifter"); ``sticky``: it
         stays until closed. Every notification is also kept in :attr:`notices` ``(title, text, sticky)``.
         Notes shown within :data:`NOTES_TOGETHER_SECONDS` of each other (one change's) stay in the status line
@@ -496,11 +503,12 @@ class SessionView:
             # (every write of the status line sets _status_notes: empty after a clear or a progress line)
             together = (not error and not self._last_was_error and now - self._note_shown_at < NOTES_TOGETHER_SECONDS
                         and bool(self._status_notes))
-            note = StatusNote(text=text, error=error, focal=focal, frame_key=frame_key, fallback=fallback,
+            note = StatusNote(text=text, error=error, focal=focal, frame_key=frame_key, fallback=fallback, keep=keep,
                               about=about if about is not None else (
                                   sequence_of(self.state.sample.key) if hasattr(self, "state") else None))
-            kept = [q for q in self._status_notes if q.text != text][1 - MAX_STATUS_NOTES:] if together else []
-            self._status_notes = [*kept, note]
+            upload = [q for q in self._status_notes if q.keep and q.text != text and not keep]  # (a new one replaces)
+            kept = [q for q in self._status_notes if q.text != text and not q.keep] if together else []
+            self._status_notes = [*upload, *kept[len(upload) + 1 - MAX_STATUS_NOTES:], note]
             self._note_shown_at = now if not error else -math.inf
             self.messages.append(text)
             self.messages = self.messages[-20:]
@@ -1849,10 +1857,10 @@ class SessionView:
         """Close the notification of an upload refused before (it stays until closed), and clear an error the status
         line still shows (a refusal stays there a minute: :meth:`show_message`), once an upload is shown."""
         with self._status_lock:
-            if self._status_notes and all(q.error for q in self._status_notes):
-                self._status_notes = []
+            if self._status_notes and any(q.error for q in self._status_notes):
+                self._status_notes = [q for q in self._status_notes if not q.error]
                 self._note_until = 0.0
-                self.gui.readout.status.content = ""
+                self.gui.readout.status.content = status_text(self._status_notes)
         note, self._sticky_note = self._sticky_note, None
         if note is not None:
             try:
@@ -1906,7 +1914,7 @@ class SessionView:
                 raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
             self._photo = photo  # (only once shown: a later keypoint file is drawn on it)
             self._last_upload = sample
-        self.show_message(up.upload_message(sample))
+        self.show_message(up.upload_message(sample), keep=True)
 
     def _load_video(self, name: str, content: bytes, *, mine: int, since: float) -> None:
         """A video or keypoint sequence: lifted with a progress note (one notification, updated), then shown."""
@@ -1952,7 +1960,7 @@ class SessionView:
                 if isinstance(exc, PoseLifterError):
                     raise PoseLifterError(f"{up.safe_name(name)}: {exc}") from None
                 raise
-        self.show_message(vid.video_message(seq))
+        self.show_message(vid.video_message(seq), keep=True)
 
     def download_payload(self, fmt: str = "json") -> tuple[str, bytes]:
         """``(file name, bytes)`` of the current result: ``"json"`` (the fields of ``poselifter lift``: the current

@@ -2821,5 +2821,7 @@ def test_a_refused_upload_stays_in_the_readout_and_its_notification_goes_once_on
     assert note.removed and v._sticky_note is None
     assert "refused" not in v.gui.readout.status.content  # (the upload's own note replaces it)
     v.show_message("bad.json: refused", error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
-    v._close_refusal()  # (an upload shown without a note of its own: the refusal no longer holds)
-    assert v.gui.readout.status.content == ""
+    shown = v.gui.readout.status.content  # (the refusal beside the message of the upload still shown: kept)
+    assert shown.startswith("ℹ️ kp.json: h36m17 keypoints") and shown.endswith("⚠️ bad.json: refused"), shown
+    v._close_refusal()  # (an upload shown: the refusal no longer holds; the upload's own message stays)
+    assert v.gui.readout.status.content.startswith("ℹ️ kp.json") and "refused" not in v.gui.readout.status.content
