@@ -152,8 +152,10 @@ class StatusNote:
 
 
 def status_text(notes: list[StatusNote]) -> str:
-    """The status line's markdown for ``notes`` (each its own paragraph; "" for none)."""
-    return "\n\n".join(("⚠️ " if q.error else "ℹ️ ") + q.text for q in notes)
+    """The status line's markdown for ``notes`` (each its own paragraph; "" for none). An upload's own message
+    (``keep``) says it was so as uploaded: it stays while the focal length or the 2D change (a review read "Focal: focal
+    from the keypoint file" under a focal length since set)."""
+    return "\n\n".join(("⚠️ " if q.error else "ℹ️ As uploaded: " if q.keep else "ℹ️ ") + q.text for q in notes)
 
 
 INFO_MESSAGE_SECONDS: float = 8.0
@@ -1933,7 +1935,8 @@ class SessionView:
             text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
             with self._status_lock:
                 self.gui.readout.status.content = "⏳ " + text
-                self._status_notes = []  # (progress, not a message: no rule of theirs clears it)
+                # (progress, not a message: no rule of theirs clears it; the upload shown keeps its own, a review)
+                self._status_notes = [q for q in self._status_notes if q.keep]
                 self._note_until = 0.0  # (progress, not a note: the next success clears it)
             if note is not None:
                 note.body = text

@@ -483,7 +483,8 @@ LEAN_NOTE_DEG: float = 35.0
 (``docs/results/roll_lean.txt``; the default, exact 2D lifted as detected, S9 + S11 every 50th frame): 0.1 % of the
 poses of upright cameras are named (people sitting on the floor), 3 % at a roll of 30 deg, 66 % at 45 deg and 58 % at
 60 deg (many others there get the sideways note), where the root is 0.49, 0.81 and 0.89 m off (0.17 upright); the
-poses named at 45 and 60 deg, turned upright by their own lean, bring it to 0.30 and 0.41 m."""
+roots of the poses named at 30, 45 and 60 deg, 0.67, 0.93 and 0.99 m off as given, are 0.17, 0.16 and 0.17 m off
+turned upright by their own lean as the note says."""
 
 
 LEAN_STRAIGHT_DEG: float = 20.0
@@ -492,47 +493,77 @@ a standing or walking person turned by a rolled camera is (people bending or sit
 of Human3.6M's poses were named on upright cameras, against 0.1 %)."""
 
 
-def _lean_parts(k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The legs' and torso's angles (deg) from the image's +y of poses ``(n, 17, 2)``, and where both can be read:
-    their joints there, and each at least a tenth of the pose's size (box diagonal; a short one's angle says little)."""
-    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE]) - 0.5 * (k[:, _R_HIP] + k[:, _L_HIP])
+def _lean_angles(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The legs' (hips' midpoint to ankles' midpoint) and torso's (thorax to pelvis) angles (deg) from the image's +y
+    of poses ``(n, 17, 2)``, + toward +x (NaN where a joint is)."""
+    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP])
     torso = k[:, _PELVIS] - k[:, _THORAX]
+    return np.degrees(np.arctan2(legs[:, 0], legs[:, 1])), np.degrees(np.arctan2(torso[:, 0], torso[:, 1]))
+
+
+def _lean_readable(k: np.ndarray) -> np.ndarray:
+    """``(n,)``: where the lean of poses ``(n, 17, 2)`` can be read: its joints there (finite, not at (0, 0): a
+    detector's placeholder), and the legs and torso each at least a tenth of the pose's size (box diagonal; a short
+    one's angle says little)."""
     used = [_PELVIS, _R_HIP, _L_HIP, _R_ANKLE, _L_ANKLE, _THORAX]
+    if not len(k):
+        return np.zeros(0, bool)
+    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP])
+    torso = k[:, _PELVIS] - k[:, _THORAX]
     with np.errstate(invalid="ignore"):
-        size = np.linalg.norm(np.nanmax(k, 1) - np.nanmin(k, 1), axis=-1) if len(k) else np.zeros(0)
-        ok = (np.isfinite(k[:, used]).all((1, 2)) & ~zero_placeholders(k)[:, used].any(1)
-              & (np.linalg.norm(legs, axis=-1) >= 0.1 * size) & (np.linalg.norm(torso, axis=-1) >= 0.1 * size))
-    return np.degrees(np.arctan2(legs[:, 0], legs[:, 1])), np.degrees(np.arctan2(torso[:, 0], torso[:, 1])), ok
+        size = np.linalg.norm(np.nanmax(k, 1) - np.nanmin(k, 1), axis=-1)
+        return (np.isfinite(k[:, used]).all((1, 2)) & ~zero_placeholders(k)[:, used].any(1)
+                & (np.linalg.norm(legs, axis=-1) >= 0.1 * size) & (np.linalg.norm(torso, axis=-1) >= 0.1 * size))
 
 
 def body_lean_deg(kp17: np.ndarray) -> np.ndarray:
     """``(n,)`` deg: how far each pose ``(n, 17, 2)`` px (H36M order, image y down) leans from the image's vertical,
     signed: the smaller of the legs' (hips' midpoint to ankles' midpoint) and the torso's (thorax to pelvis) angles
-    from +y, + where the lower end lies toward +x; 0 where the two lean opposite ways or a joint is missing (non-finite,
-    or at (0, 0): a detector's placeholder). A camera rolled by ``r`` (:func:`lifter.camera.camera_turn`'s third angle,
-    + clockwise seen from behind the camera) leans an upright body by about ``+r``."""
-    a, b, ok = _lean_parts(np.asarray(kp17, np.float64).reshape(-1, 17, 2))
+    from +y, + where the lower end lies toward +x; 0 where the two lean opposite ways or the lean cannot be read (a
+    joint missing: non-finite, or at (0, 0), a detector's placeholder; a leg or torso shorter than a tenth of the
+    pose). A camera rolled by ``r`` (:func:`lifter.camera.camera_turn`'s third angle, + clockwise seen from behind the
+    camera) leans an upright body by about ``+r``."""
+    k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
+    a, b = _lean_angles(k)
     with np.errstate(invalid="ignore"):
-        return np.where(ok & (np.sign(a) == np.sign(b)), np.sign(a) * np.minimum(np.abs(a), np.abs(b)), 0.0)
+        return np.where(_lean_readable(k) & (np.sign(a) == np.sign(b)), np.sign(a) * np.minimum(np.abs(a), np.abs(b)),
+                        0.0)
 
 
 def leaning_people(kp17: np.ndarray) -> np.ndarray:
-    """``(n,)`` bool: which poses ``(n, 17, 2)`` px lean more than :data:`LEAN_NOTE_DEG` (:func:`body_lean_deg`) with
-    a straight body (legs and torso within :data:`LEAN_STRAIGHT_DEG`) and do not lie sideways
-    (:func:`sideways_people`, which has its own note)."""
+    """``(n,)`` bool: which poses ``(n, 17, 2)`` px lean more than :data:`LEAN_NOTE_DEG` (:func:`body_lean_deg`; less
+    than 90 deg: beyond, the body is upside down, that note's) with a straight body (legs and torso within
+    :data:`LEAN_STRAIGHT_DEG`) and do not lie sideways (:func:`sideways_people`, which has its own note)."""
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
-    a, b, _ = _lean_parts(k)
-    lean = np.abs(body_lean_deg(k))
-    with np.errstate(invalid="ignore"):  # (beyond 90 deg the body is upside down: that note's)
-        return (lean > LEAN_NOTE_DEG) & (lean < 90.0) & (np.abs(a - b) < LEAN_STRAIGHT_DEG) & ~sideways_people(k)
+    legs = k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP]  # (doubled; first, cheap: lift runs this
+    x, y = legs[:, 0], legs[:, 1]  # on every batch; NaN: False)
+    with np.errstate(invalid="ignore"):
+        out = (y > 0.0) & (x * x > math.sin(math.radians(LEAN_NOTE_DEG)) ** 2 * (x * x + y * y))
+    if not out.any():
+        return out
+    sub = k[out]  # (the rest only where it can matter)
+    a, b = _lean_angles(sub)
+    with np.errstate(invalid="ignore"):
+        lean = np.where(np.sign(a) == np.sign(b), np.minimum(np.abs(a), np.abs(b)), 0.0)
+        out[out] = ((lean > LEAN_NOTE_DEG) & (lean < 90.0) & (np.abs(a - b) < LEAN_STRAIGHT_DEG)
+                    & _lean_readable(sub) & ~sideways_people(sub))
+    return out
 
 
-def lean_text(lean_deg: float) -> str:
-    """The advice of a lean note, for a lean of ``lean_deg`` (deg, :func:`body_lean_deg`)."""
-    return (f"if the camera was rolled (a slanted hand-held photo), the lift is off: the default is trained on upright "
-            f"cameras, and a roll of 45 deg puts the root about 0.8 m off; turn the 2D upright about the principal "
-            f"point first (the README's 'Camera roll' recipe), here by a roll of about {lean_deg:+.0f} deg, or by the "
-            "camera's own; a person sitting or lying on the floor is lifted as given")
+def lean_text(leans_deg: Any) -> str:
+    """The advice of a lean note for the signed leans ``leans_deg`` (deg, :func:`body_lean_deg`) of the poses it
+    names: the roll to undo is named where they lean the same way (a review: opposite leans named "about -0 deg").
+    A camera tilted steeply down leans people near the image's sides too, and undoing a roll that was never there
+    makes their lift worse (a review: 289 -> 546 mm), hence the proviso."""
+    v = np.atleast_1d(np.asarray(leans_deg, np.float64))
+    same = bool(np.all(v > 0) or np.all(v < 0))
+    roll = f"by a roll of about {float(np.median(v)):+.0f} deg, or by the camera's own" if same else \
+        "by the camera's own roll"
+    return ("if the camera was rolled (a slanted hand-held photo), the lift is off: the default is trained on upright "
+            "cameras, and a roll of 45 deg puts the root about 0.8 m off; turn the 2D upright about the principal "
+            f"point first (the README's 'Camera roll' recipe), {roll}; but a camera tilted steeply down leans people "
+            "near the image's sides as well, with no roll to undo, and a person sitting or lying on the floor is "
+            "lifted as given")
 
 
 def lean_notes(kp17: np.ndarray) -> list[str]:
@@ -543,9 +574,9 @@ def lean_notes(kp17: np.ndarray) -> list[str]:
     lean = leaning_people(k)
     if not _most(lean):
         return []
-    deg = float(np.median(body_lean_deg(k)[lean]))
-    return [f"the body leans {abs(deg):.0f} deg from the image's vertical in {int(lean.sum())} of {len(k)} pose(s) "
-            f"(legs and torso alike): {lean_text(deg)}"]
+    deg = body_lean_deg(k[lean])
+    return [f"the body leans {float(np.median(np.abs(deg))):.0f} deg from the image's vertical in {int(lean.sum())} "
+            f"of {len(k)} pose(s) (legs and torso alike): {lean_text(deg)}"]
 
 
 def upside_down_people(kp17: np.ndarray) -> np.ndarray:

@@ -153,7 +153,7 @@ def left_out_text(scores: list[float] | np.ndarray, min_score: float, *, what: s
     ``min_score``; ``detector``: the estimator's name (BlazePose's real people's scores are then quoted)."""
     vals = sorted((float(v) for v in scores), reverse=True)
     n = len(vals)
-    shown = ", ".join(f"{math.floor(v * 100) / 100:.2f}" for v in vals[:5]) + (", ..." if n > 5 else "")
+    shown = ", ".join(f"{math.floor(v * 100 + 1e-9) / 100:.2f}" for v in vals[:5]) + (", ..." if n > 5 else "")
     kind = (what if n == 1 else "people" if what == "person" else what + "s")
     seen = "BlazePose gives real people 0.84-1 in photos; " if detector == "blazepose" else ""
     return (f"{n} {kind} with a mean joint score below {min_score:g} ({shown}) left out as no person ({seen}the "

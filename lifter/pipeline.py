@@ -244,11 +244,11 @@ def detected_lean_notes(kp17: np.ndarray) -> list[str]:
     deg = body_lean_deg(k)
     idx = np.flatnonzero(lean)
     if len(k) == 1:
-        who = f"the person found leans {abs(deg[0]):.0f} deg"
+        who = f"the person found leans {deg[0]:+.0f} deg"
     else:
-        people = ", ".join(f"person {int(i) + 1} ({abs(deg[i]):.0f} deg)" for i in idx)
+        people = ", ".join(f"person {int(i) + 1} ({deg[i]:+.0f} deg)" for i in idx)
         who = f"{people} of the output's people {'leans' if len(idx) == 1 else 'lean'}"
-    return [f"{who} from the image's vertical (legs and torso alike): {lean_text(float(np.median(deg[idx])))}"]
+    return [f"{who} from the image's vertical (legs and torso alike; + toward +x at the feet): {lean_text(deg[idx])}"]
 
 
 def detected_edge_notes(kp17: np.ndarray, image_size: tuple[int, int]) -> list[str]:

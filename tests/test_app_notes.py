@@ -73,13 +73,14 @@ def test_a_videos_message_stays_while_it_plays(server, tmp_path):
     v._note_shown_at = -1e9  # (a later note, not shown together with it)
     v.show_message("focal length set to 700 px")
     assert v.gui.readout.status.content == said + "\n\nℹ️ focal length set to 700 px"
+    assert said.startswith("ℹ️ As uploaded: walk.avi")  # (it stays while the focal length changes: as uploaded)
     # another sample shown: the video's message no longer holds
     assert v.select_demo(app.demo.names[0]) is True
     assert wait_for(lambda: "walk.avi" not in v.gui.readout.status.content)
 
 
-def test_a_refused_upload_sits_beside_the_notes_of_the_upload_still_shown(server):
-    app = PoseLifterApp(server, h36m_root=None)
+def test_a_refused_upload_sits_beside_the_notes_of_the_upload_still_shown(server, tmp_path):
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: ScriptedEstimator([[]] * 6, full_width=W))
     v = app.headless_view()
     turn = camera_turn(np.array(0.0), np.array(0.0), np.deg2rad(np.array(45.0)))
     kp = turn_pixels(demo_sample("standing").keypoints_2d, turn, 1145.0, (512.0, 515.0))
@@ -91,6 +92,10 @@ def test_a_refused_upload_sits_beside_the_notes_of_the_upload_still_shown(server
     assert both.startswith(said) and both.endswith("⚠️ wall.jpg: no person found"), both
     # and the readout's own Caution follows the 2D shown, whatever the status line says
     assert "**Caution** the body leans 45° from the image's vertical" in v.gui.readout.readout.content
+    # (a review) a video upload's progress, then its refusal, left the upload shown without its message
+    assert v.load_upload("empty.avi", _clip(tmp_path / "empty.avi", 6)) is False  # (nobody in any frame)
+    now = v.gui.readout.status.content
+    assert now.startswith(said) and "empty.avi: no person found" in now, now
 
 
 def test_the_tilt_caution_follows_the_2d_shown():

@@ -32,8 +32,8 @@ def test_a_rolled_camera_leans_a_standing_body_by_its_roll(deg):
     assert leaning_people(kp[None]).tolist() == [True]
     lean = body_lean_deg(kp[None])[0]
     with pytest.warns(PoseLifterWarning, match=rf"the body leans {abs(lean):.0f} deg from the image's vertical in 1 of "
-                                               rf"1 pose\(s\) .*here by a roll of about {re.escape(f'{lean:+.0f}')} "
-                                               "deg"):
+                                               rf"1 pose\(s\) .*first \(the README's 'Camera roll' recipe\), by a "
+                                               rf"roll of about {re.escape(f'{lean:+.0f}')} deg"):
         tiny_lifter(16).lift(kp, focal=F, principal_point=C)
 
 
@@ -67,9 +67,16 @@ def test_a_batch_is_noted_when_most_of_it_leans_and_each_detected_person_is_name
                                                                     "in 2 of 3 pose(s)")
     assert lean_notes(np.stack([rolled, up])) == []  # (one of two: not most)
     said = detected_lean_notes(np.stack([up, rolled]))
-    assert len(said) == 1 and said[0].startswith("person 2 (45 deg) of the output's people leans from the image's "
+    assert len(said) == 1 and said[0].startswith("person 2 (+45 deg) of the output's people leans from the image's "
                                                  "vertical"), said
-    assert detected_lean_notes(rolled[None])[0].startswith("the person found leans 45 deg")
+    assert detected_lean_notes(rolled[None])[0].startswith("the person found leans +45 deg")
+    # (a review) opposite leans name no roll: they named "about -0 deg"
+    other = _rolled("standing", -45.0)
+    both = detected_lean_notes(np.stack([rolled, other]))[0]
+    assert both.startswith("person 1 (+45 deg), person 2 (-45 deg) of the output's people lean") and \
+        "by the camera's own roll;" in both and "about" not in both.split("recipe")[1], both
+    batch = lean_notes(np.stack([rolled, other, rolled, other]))[0]
+    assert batch.startswith("the body leans 45 deg from the image's vertical in 4 of 4") and "-0 deg" not in batch
     assert detected_lean_notes(up[None]) == []
     # a keypoint file's records get the batch note, a photo's (detected) the per-person one only
     notes = plausibility_notes(rolled[None], np.array([F, F]), (1024, 1030))
