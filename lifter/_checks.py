@@ -510,8 +510,9 @@ def _lean_readable(k: np.ndarray) -> np.ndarray:
         return np.zeros(0, bool)
     legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP])
     torso = k[:, _PELVIS] - k[:, _THORAX]
-    with np.errstate(invalid="ignore"):
-        size = np.linalg.norm(np.nanmax(k, 1) - np.nanmin(k, 1), axis=-1)
+    finite = np.isfinite(k).all(-1, keepdims=True)
+    with np.errstate(invalid="ignore"):  # (np.nanmax of an all-NaN pose warns: a review)
+        size = np.linalg.norm(np.where(finite, k, -np.inf).max(1) - np.where(finite, k, np.inf).min(1), axis=-1)
         return (np.isfinite(k[:, used]).all((1, 2)) & ~zero_placeholders(k)[:, used].any(1)
                 & (np.linalg.norm(legs, axis=-1) >= 0.1 * size) & (np.linalg.norm(torso, axis=-1) >= 0.1 * size))
 

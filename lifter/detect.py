@@ -110,6 +110,8 @@ is lifted with a note."""
 
 def check_min_score(min_score: float) -> float:
     """``min_score`` (a real number in [0, 1]) as a float, or a :class:`PoseLifterError` naming the range."""
+    if isinstance(min_score, np.ndarray) and min_score.ndim == 0:  # (a 0-d array: its number)
+        min_score = cast(Any, min_score)[()]
     if isinstance(min_score, (bool, np.bool_)) or not isinstance(min_score, (int, float, np.integer, np.floating)):
         raise PoseLifterError(f"min_score must be a number in [0, 1] (a mean joint score; 0 keeps everyone), got "
                               f"{min_score!r}")

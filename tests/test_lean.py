@@ -94,3 +94,11 @@ def test_missing_joints_give_no_reading():
     zero = kp.copy()
     zero[3] = 0.0  # (a detector's placeholder at (0, 0))
     assert body_lean_deg(zero[None])[0] == 0.0
+
+
+def test_an_all_missing_pose_gives_no_reading_and_no_numpy_warning():
+    """(a review) np.nanmax over an all-NaN pose warned "All-NaN slice encountered", an error under -W error."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert body_lean_deg(np.full((1, 17, 2), np.nan)).tolist() == [0.0]
+        assert leaning_people(np.full((2, 17, 2), np.nan)).tolist() == [False, False]

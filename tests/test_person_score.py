@@ -85,6 +85,7 @@ def test_a_photos_only_detection_below_the_floor_is_no_person(photo, lifter, kp1
         with pytest.raises(PoseLifterError, match=r"min_score must be"):
             detect_people(load_image(photo), estimator=junk, min_score=bad)
     assert len(detect_people(load_image(photo), estimator=junk, min_score=np.float32(0.1))) == 1
+    assert len(detect_people(load_image(photo), estimator=junk, min_score=np.array(0.1))) == 1  # (a 0-d array)
     # a score just under the floor is not shown as the floor (a review: 0.2996 read "below 0.3 (0.30)")
     with pytest.raises(NoPersonError, match=r"below 0\.3 \(0\.29\)"):
         detect_people(load_image(photo), estimator=_Scored([(kp17, 0.2996)]))
