@@ -134,6 +134,18 @@ def app():
 
 
 @pytest.fixture()
+def server():
+    """A viser server bound to 127.0.0.1, any free port, for a test's own :class:`app.viewer.PoseLifterApp`."""
+    pytest.importorskip("viser")
+    from poselifter_app.testing import local_server
+
+    require_shipped_models()
+    s = local_server()
+    yield s
+    s.stop()
+
+
+@pytest.fixture()
 def view(app):
     """A headless per-tab view of :func:`app` (no browser)."""
     v = app.headless_view()

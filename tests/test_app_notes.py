@@ -14,24 +14,16 @@ import pytest
 
 pytest.importorskip("viser")
 
-from conftest import ScriptedEstimator, require_shipped_models  # noqa: E402
+from conftest import ScriptedEstimator  # noqa: E402
 from poselifter_app import video as vid  # noqa: E402
 from poselifter_app.core import tilt_caution  # noqa: E402
-from poselifter_app.testing import local_server, wait_for  # noqa: E402
+from poselifter_app.testing import wait_for  # noqa: E402
 from poselifter_app.viewer import UPLOAD_REFUSED_TITLE, PoseLifterApp  # noqa: E402
 
 from lifter import demo_sample, project  # noqa: E402
 from lifter.camera import camera_turn, turn_pixels  # noqa: E402
 
 W, H, F = 640, 480, 600.0
-
-
-@pytest.fixture()
-def server():
-    require_shipped_models()
-    s = local_server()
-    yield s
-    s.stop()
 
 
 def _walker(n: int) -> list[list[np.ndarray]]:

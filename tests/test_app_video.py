@@ -14,9 +14,9 @@ import pytest
 
 pytest.importorskip("viser")
 
-from conftest import ScriptedEstimator, fail_once, hold, require_shipped_models  # noqa: E402
+from conftest import ScriptedEstimator, fail_once, hold  # noqa: E402
 from poselifter_app import video as vid  # noqa: E402
-from poselifter_app.testing import local_server, wait_for  # noqa: E402
+from poselifter_app.testing import wait_for  # noqa: E402
 from poselifter_app.viewer import PoseLifterApp  # noqa: E402
 
 from lifter import project  # noqa: E402
@@ -73,14 +73,6 @@ def _held_upload(monkeypatch, v, name: str, doc: dict) -> Iterator[list[bool]]:
     finally:
         go.set()
         t.join(60)
-
-
-@pytest.fixture()
-def server():
-    require_shipped_models()
-    s = local_server()
-    yield s
-    s.stop()
 
 
 def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path: Path) -> None:
