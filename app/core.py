@@ -15,6 +15,7 @@ from typing import Any, Final, Literal
 import numpy as np
 
 from lifter import Lifter, PoseLifterError, analytic_root, available_models
+from lifter._checks import body_lean_deg, lean_text, leaning_people, sideways_people
 from lifter.camera import MIN_FOCAL_PX, pose_view_deg
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
@@ -473,8 +474,6 @@ def tilt_caution(keypoints: np.ndarray) -> list[str]:
     browser trial: the note on a photo turned 45 deg was replaced by a later refused upload's message, leaving the
     lift on screen without a word; a video's went as it played. This caution follows the 2D shown, frame by frame
     and drag by drag."""
-    from lifter._checks import body_lean_deg, lean_text, leaning_people, sideways_people
-
     k = np.asarray(keypoints, np.float64).reshape(1, NUM_JOINTS, 2)
     if not np.all(np.isfinite(k)):
         return []

@@ -493,12 +493,19 @@ a standing or walking person turned by a rolled camera is (people bending or sit
 of Human3.6M's poses were named on upright cameras, against 0.1 %)."""
 
 
-def _lean_angles(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The legs' (hips' midpoint to ankles' midpoint) and torso's (thorax to pelvis) angles (deg) from the image's +y
-    of poses ``(n, 17, 2)``, + toward +x (NaN where a joint is)."""
-    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP])
-    torso = k[:, _PELVIS] - k[:, _THORAX]
-    return np.degrees(np.arctan2(legs[:, 0], legs[:, 1])), np.degrees(np.arctan2(torso[:, 0], torso[:, 1]))
+def _lean_vectors(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The legs (hips' midpoint to ankles' midpoint) and the torso (thorax to pelvis) of poses ``(n, 17, 2)``,
+    ``(n, 2)`` each: the two axes the lean reads."""
+    return 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP]), k[:, _PELVIS] - k[:, _THORAX]
+
+
+def _lean_angles(k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The legs' and the torso's angles (deg) from the image's +y of poses ``(n, 17, 2)``, + toward +x (NaN where a
+    joint is), and the signed lean they give: the smaller of the two where they lean the same way, else 0."""
+    legs, torso = _lean_vectors(k)
+    a, b = np.degrees(np.arctan2(legs[:, 0], legs[:, 1])), np.degrees(np.arctan2(torso[:, 0], torso[:, 1]))
+    with np.errstate(invalid="ignore"):
+        return a, b, np.where(np.sign(a) == np.sign(b), np.sign(a) * np.minimum(np.abs(a), np.abs(b)), 0.0)
 
 
 def _lean_readable(k: np.ndarray) -> np.ndarray:
@@ -508,8 +515,7 @@ def _lean_readable(k: np.ndarray) -> np.ndarray:
     used = [_PELVIS, _R_HIP, _L_HIP, _R_ANKLE, _L_ANKLE, _THORAX]
     if not len(k):
         return np.zeros(0, bool)
-    legs = 0.5 * (k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP])
-    torso = k[:, _PELVIS] - k[:, _THORAX]
+    legs, torso = _lean_vectors(k)
     finite = np.isfinite(k).all(-1, keepdims=True)
     with np.errstate(invalid="ignore"):  # (np.nanmax of an all-NaN pose warns: a review)
         size = np.linalg.norm(np.where(finite, k, -np.inf).max(1) - np.where(finite, k, np.inf).min(1), axis=-1)
@@ -525,10 +531,7 @@ def body_lean_deg(kp17: np.ndarray) -> np.ndarray:
     pose). A camera rolled by ``r`` (:func:`lifter.camera.camera_turn`'s third angle, + clockwise seen from behind the
     camera) leans an upright body by about ``+r``."""
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
-    a, b = _lean_angles(k)
-    with np.errstate(invalid="ignore"):
-        return np.where(_lean_readable(k) & (np.sign(a) == np.sign(b)), np.sign(a) * np.minimum(np.abs(a), np.abs(b)),
-                        0.0)
+    return np.where(_lean_readable(k), _lean_angles(k)[2], 0.0)
 
 
 def leaning_people(kp17: np.ndarray) -> np.ndarray:
@@ -536,16 +539,15 @@ def leaning_people(kp17: np.ndarray) -> np.ndarray:
     than 90 deg: beyond, the body is upside down, that note's) with a straight body (legs and torso within
     :data:`LEAN_STRAIGHT_DEG`) and do not lie sideways (:func:`sideways_people`, which has its own note)."""
     k = np.asarray(kp17, np.float64).reshape(-1, 17, 2)
-    legs = k[:, _R_ANKLE] + k[:, _L_ANKLE] - k[:, _R_HIP] - k[:, _L_HIP]  # (doubled; first, cheap: lift runs this
-    x, y = legs[:, 0], legs[:, 1]  # on every batch; NaN: False)
+    x, y = _lean_vectors(k)[0].T  # (the legs first, cheap: lift runs this on every batch; NaN: False)
     with np.errstate(invalid="ignore"):
         out = (y > 0.0) & (x * x > math.sin(math.radians(LEAN_NOTE_DEG)) ** 2 * (x * x + y * y))
     if not out.any():
         return out
     sub = k[out]  # (the rest only where it can matter)
-    a, b = _lean_angles(sub)
+    a, b, lean = _lean_angles(sub)
+    lean = np.abs(lean)
     with np.errstate(invalid="ignore"):
-        lean = np.where(np.sign(a) == np.sign(b), np.minimum(np.abs(a), np.abs(b)), 0.0)
         out[out] = ((lean > LEAN_NOTE_DEG) & (lean < 90.0) & (np.abs(a - b) < LEAN_STRAIGHT_DEG)
                     & _lean_readable(sub) & ~sideways_people(sub))
     return out

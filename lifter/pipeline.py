@@ -499,7 +499,7 @@ def lift_keypoint_file(path: str | Path, *, lifter: Any, focal: Any | None = Non
                        image_size: Any | None = None, fallback_image: tuple[Any, ...] | None = None,
                        min_score: float = MIN_PERSON_SCORE) -> LiftRecord:
     """Lift everyone in one keypoint JSON file, largest first (at most ``max_people``; module docstring), but those
-    whose mean joint score is below ``min_score`` (:func:`scored_file_people`; 0 keeps every one).
+    whose mean joint score is below ``min_score`` (:func:`keep_scored_people`; 0 keeps every one).
     ``image_size`` ``(W, H)`` px: for a file that gives none (a list layout cannot), or in place of its own
     (:func:`given_image_size`). ``fallback_image``: ``(name, (W, H) px[, exif])`` of the image the keypoints were
     found in, whose size (and EXIF focal) a file that gives no image size takes by :func:`keypoints_image`'s rule,

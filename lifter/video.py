@@ -774,6 +774,13 @@ class _Followed:
         return keep
 
 
+def _left_out_note(left_out: list[tuple[int, float]], text: str) -> str:
+    """The note on the detections (or a sequence's people) left out below the score floor, ``(frame index, mean joint
+    score)`` each: the frames, then ``text`` (:func:`lifter.detect.left_out_text`)."""
+    at_frames = sorted({i for i, _ in left_out})
+    return f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), {text}"
+
+
 def _crowd_note(max_people: int, crowded: list[int], *, searched: tuple[int, int] | None = None) -> str:
     """The note on frames with more people than ``max_people``; ``searched``: a video's count of frames searched in
     full and of all its frames (between full searches only around the people followed, so a crowd can be missed
@@ -1372,11 +1379,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                             f"{_frames_summary(where)})")
         warnings += dropped
     warnings.extend(rejoin_notes(rejoin_tracks(frames, fps=fps, rejoin_s=rejoin_s)))  # (after false detections)
-    low = []
-    if left_out:
-        at_frames = sorted({i for i, _ in left_out})
-        low.append(f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), "
-                   + left_out_text([v for _, v in left_out], min_score, detector=estimator.name))
+    low = [_left_out_note(left_out, left_out_text([v for _, v in left_out], min_score, detector=estimator.name))
+           ] if left_out else []
     if frames and len(nobody) == len(frames):
         raise PoseLifterError(f"{p}: no person found by the {estimator.name} 2D detector in any of the "
                               f"{len(frames)} frames" + (f" ({len(bad)} more could not be decoded)" if bad else "")
@@ -1393,9 +1397,10 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     f, src, pp = cam
     seen_2d = [q.keypoints_2d for fr in frames for q in fr.people]
     if seen_2d:
-        warnings.extend(plausibility_notes(np.stack(seen_2d), f, size, focal_source=src, detected=True))
-        warnings.extend(detected_sideways_notes(np.stack(seen_2d), video=True))
-        warnings.extend(lean_notes(np.stack(seen_2d)))
+        everyone = np.stack(seen_2d)
+        warnings.extend(plausibility_notes(everyone, f, size, focal_source=src, detected=True))
+        warnings.extend(detected_sideways_notes(everyone, video=True))
+        warnings.extend(lean_notes(everyone))
     warnings.extend(track_gap_notes(frames))
     warnings.extend(track_edge_notes(frames, size))
     warnings.extend(track_jump_notes(frames, fps=fps))
@@ -1470,7 +1475,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     neither ``focal`` nor the file gives one and the keypoints are in its pixels, by
     :func:`lifter.pipeline.keypoints_image`'s rule (refused when most poses lie mostly outside it). ``rejoin_s``: as
     :func:`lift_video`'s. ``min_score``: a person whose mean joint score (where the file gives 0-1 scores) is below it
-    is left out as no person (:func:`lifter.pipeline.scored_file_people`; 0 keeps every one)."""
+    is left out as no person (:func:`lifter.detect.mean_person_scores`; 0 keeps every one)."""
     from .camera import lens_notes
     from .pipeline import keypoints_image, plausibility_notes, resolve_camera
 
@@ -1535,17 +1540,15 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if crowded:
         warnings.append(_crowd_note(max_people, crowded))
     warnings.extend(followed.aside_note())
+    text = left_out_text([v for _, v in left_out], min_score, what="person") if left_out else ""
     if left_out:
-        at_frames = sorted({i for i, _ in left_out})
-        warnings.append(f"in {len(at_frames)} frame(s) ({_frames_summary(at_frames)}), "
-                        + left_out_text([v for _, v in left_out], min_score, what="person"))
+        warnings.append(_left_out_note(left_out, text))
     counts = [len(fr) for fr in frames]
     nobody = [at[i] for i, c in enumerate(counts) if c == 0]
     if nobody:
         warnings.append(f"no person in {len(nobody)} of {len(frames)} frames: {_frames_summary(nobody)}")
     if not sum(counts):
-        raise PoseLifterError(f"{path}: no person in any frame" + (
-            f"; {left_out_text([v for _, v in left_out], min_score, what='person')}" if left_out else ""))
+        raise PoseLifterError(f"{path}: no person in any frame" + (f"; {text}" if text else ""))
     raw = np.stack([k for fr in frames for k in fr])  # every person of every frame, one batch
     kp17 = convert(raw, src=ks.format, warn=False)
     warnings.extend(placeholder_notes(raw, src=ks.format))
