@@ -26,7 +26,7 @@ import os
 import re
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final, Literal, NamedTuple
@@ -879,21 +879,29 @@ def track_edge_notes(frames: list[FrameResult], image_size: tuple[int, int]) -> 
     return notes
 
 
-def track_gap_notes(frames: list[FrameResult]) -> list[str]:
+def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = ()) -> list[str]:
     """One note per track that is missing from some of the frames between its first and last sighting: those frames
     have no pose for it (the detector missed the person there, or the file leaves them out), and a viewer that follows
     the person sees someone else or nobody there (a browser trial's two-person clip: track 1 missed in frames 16 and
-    26, and the app's selection moved to track 2 without a word)."""
+    26, and the app's selection moved to track 2 without a word). ``left_out``: the frame indices where a detection
+    (or a file's person) was left out below the score floor (:data:`lifter.detect.MIN_PERSON_SCORE`): a gap there is
+    said to be that, not "not found"."""
     notes: list[str] = []
     order = [fr.index for fr in frames]
+    low = set(left_out)
     for tid, seen in sorted(_tracks(frames).items()):
         have = {i for i, _ in seen}
         first, last = seen[0][0], seen[-1][0]
         gaps = [i for i in order if first < i < last and i not in have]
         if gaps:
+            floored = [i for i in gaps if i in low]
+            why = ("the person was not found there" if not floored else
+                   f"in {'those' if len(floored) == len(gaps) else _frames_summary(floored)} a person scored below "
+                   "the score floor was left out, maybe this one (min_score / --min-score)" +
+                   ("" if len(floored) == len(gaps) else "; in the others the person was not found"))
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
-                         "no pose for it (the person was not found there)")
+                         f"no pose for it ({why})")
     return notes
 
 
@@ -1401,7 +1409,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         warnings.extend(plausibility_notes(everyone, f, size, focal_source=src, detected=True))
         warnings.extend(detected_sideways_notes(everyone, video=True))
         warnings.extend(lean_notes(everyone))
-    warnings.extend(track_gap_notes(frames))
+    warnings.extend(track_gap_notes(frames, left_out=(i for i, _ in left_out)))
     warnings.extend(track_edge_notes(frames, size))
     warnings.extend(track_jump_notes(frames, fps=fps))
     warnings.extend(track_root_step_notes(frames, fps=fps))
@@ -1569,7 +1577,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))
-    warnings.extend(track_gap_notes(out))
+    warnings.extend(track_gap_notes(out, left_out=(i for i, _ in left_out)))
     warnings.extend(track_jump_notes(out, fps=ks.fps))
     warnings.extend(track_root_step_notes(out, fps=ks.fps))
     given = [sc for *_, sc in lifted if sc is not None]

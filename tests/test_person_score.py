@@ -211,6 +211,21 @@ def test_a_keypoint_sequences_low_scored_people_are_left_out_frame_by_frame(tmp_
         lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
 
 
+def test_a_track_missing_where_its_person_scored_below_the_floor_is_said_so(tmp_path, lifter, kp17):
+    """A user's sequence whose one person scores 0.1 in frames 3 and 4: the track's gap note said "the person was not
+    found there", where the person was found and left out below the score floor."""
+    real = 0.5 * (kp17 - kp17[0]) + [400.0, 360.0]
+    rows = lambda k, s: np.column_stack([k, np.full(17, s)]).tolist()  # noqa: E731
+    frames = [{"people": [{"keypoints": rows(real + i, 0.1 if i in (3, 4) else 0.9)}]} for i in range(8)]
+    path = tmp_path / "dip.json"
+    path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": 1000, "image_size": [1280, 720],
+                                "frames": frames}))
+    rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
+    gap = [w for w in rec.warnings if w.startswith("track 1: missing from 2 of the 8 frames")]
+    assert len(gap) == 1 and "scored below the score floor was left out" in gap[0], rec.warnings
+    assert "not found" not in gap[0], gap
+
+
 class _JunkInFrames(ScriptedEstimator):
     """The scripted people, with a large detection scored 0.1 added in frames 3-5."""
 
