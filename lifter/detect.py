@@ -512,7 +512,8 @@ class Detection:
     """One person found by a 2D estimator.
 
     keypoints: ``(J, 2)`` px in the estimator's ``keypoint_format``, in the coordinates of the image
-        passed to ``detect``. scores: ``(J,)`` per-joint confidence in [0, 1] (BlazePose: visibility).
+        passed to ``detect``. scores: ``(J,)`` per-joint confidence in [0, 1] (BlazePose: visibility; NaN: none),
+        checked when read (:func:`people_h36m`): the score floor and the notes on unsure people read this scale.
     bbox_xywh: ``(4,)`` px, the box of the keypoints (clipped to the image).
     keypoint_format: a :mod:`lifter.keypoints` name.
     """
@@ -1273,6 +1274,25 @@ def h36m_joint_scores(scores: np.ndarray, keypoint_format: str) -> np.ndarray:
     return np.stack([np.min(s[..., [k for k, _ in rule]], axis=-1) for rule in rules], axis=-1)
 
 
+def _check_detection_scores(det: Detection, estimator: str) -> None:
+    """A :class:`PoseLifterError` where an estimator's :attr:`Detection.scores` are not one confidence in [0, 1] per
+    keypoint (NaN allowed: no score, as :func:`scored_people` reads it): the score floor
+    (:data:`MIN_PERSON_SCORE`) and the notes on unsure people and joints read them on that scale, so scores on
+    another (a heatmap's maxima, logits) would leave out real people or keep invented ones without a word."""
+    k = get_format(det.keypoint_format).num_joints
+    s = np.asarray(det.scores, np.float64)
+    if s.shape != (k,):
+        raise PoseLifterError(f"the {estimator} 2D estimator returned {s.shape} scores for a person in "
+                              f"{det.keypoint_format} ({k} keypoints): Detection.scores must be ({k},), one a keypoint")
+    seen = s[np.isfinite(s)]
+    if np.isinf(s).any() or (seen.size and (seen.min() < 0.0 or seen.max() > 1.0)):
+        raise PoseLifterError(
+            f"the {estimator} 2D estimator returned scores from {np.nanmin(s):.3g} to {np.nanmax(s):.3g}: "
+            "Detection.scores must be confidences in [0, 1] (the score floor min_score and the notes on unsure "
+            "people and joints read them so); map the estimator's own scores into [0, 1] in its detect(), e.g. a "
+            "sigmoid of logits, or heatmap maxima divided by their largest possible value")
+
+
 def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
                 near: list[np.ndarray] | None = None) -> list[DetectedPose]:
     """Everyone ``estimator`` finds in a loaded image, largest (box area) first, each converted to H36M-17
@@ -1288,6 +1308,8 @@ def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
     else:
         found = estimator.detect(image.rgb)
     dt = time.perf_counter() - t0
+    for det in found:
+        _check_detection_scores(det, estimator.name)
     found = sorted(found, key=lambda d: d.area, reverse=True)
     out = []
     for det in found:

@@ -93,6 +93,28 @@ def test_a_photos_only_detection_below_the_floor_is_no_person(photo, lifter, kp1
         detect_people(load_image(photo), estimator=_Scored([(kp17, 0.29)]))
 
 
+def test_an_estimators_scores_off_the_0_1_scale_are_refused_by_name(photo, lifter, kp17):
+    """Detection.scores are confidences in [0, 1], which the floor and the notes read; an estimator that returns
+    another scale (heatmap maxima up to 4.5, logits below 0) or a score per keypoint of another count is refused,
+    naming the estimator and the fix. Before, scores of 4.5 kept any detection and logits dropped real people."""
+    for score, shown in ((4.5, "4.5 to 4.5"), (-2.0, "-2 to -2")):
+        with pytest.raises(PoseLifterError, match=rf"the scored 2D estimator returned scores from {shown}: "
+                                                  r"Detection\.scores must be confidences in \[0, 1\].*sigmoid"):
+            detect_people(load_image(photo), estimator=_Scored([(kp17, 0.9), (kp17 + 5.0, score)]))
+        with pytest.raises(PoseLifterError, match=r"in \[0, 1\]"):
+            lift_image(load_image(photo), lifter=lifter, estimator=_Scored([(kp17, score)]), focal=1000.0, min_score=0)
+
+    class _Short(_Scored):
+        def detect(self, image: np.ndarray) -> list[Detection]:
+            return [Detection(keypoints=kp17, scores=np.full(16, 0.9), bbox_xywh=bbox_of(kp17),
+                              keypoint_format="h36m17")]
+
+    with pytest.raises(PoseLifterError, match=r"returned \(16,\) scores for a person in h36m17 \(17 keypoints\)"):
+        detect_people(load_image(photo), estimator=_Short([]))
+    for edge in (0.0, 1.0):  # (the scale's ends are on it)
+        assert len(detect_people(load_image(photo), estimator=_Scored([(kp17, edge)]), min_score=0)) == 1
+
+
 def test_a_detection_whose_scores_are_not_numbers_is_kept(photo, lifter, kp17):
     """(a review) A detector's NaN scores made the mean NaN, which no floor compares above: the person was left out
     even at min_score=0. Such a person is kept (there is no score to read)."""
