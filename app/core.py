@@ -387,7 +387,7 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                  others=others, reads_rays=used.input_space == "camera", trained_subjects=trained_subjects(used),
                  two_networks=lifter.network_for("clean") is not lifter.network_for("detected"),
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
-                                                            relative=res.relative[0], focal=f),
+                                             relative=res.relative[0], focal=f, misfit_cause=misfit_cause(state)),
                                          *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
                                                             input_space=used.input_space),
                                          *short_focal_caution(focal=f, camera_focal=cam.alpha,
@@ -432,6 +432,18 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
     cause = f" ({why})" if why else ""
     return [f"the lifted pose has bones no body has: {said}{more}; the 2D{cause} is not one a body makes, so this lift "
             "is not a pose to trust"]
+
+
+def misfit_cause(state: SessionState) -> str | None:
+    """What the readout's caution on 2D that its lift does not fit (:meth:`lifter.Lifter.output_notes`) names as the
+    likely cause: the noise the app drew or a dragged joint, where there is one, not "a confident detector mistake" (a
+    teacher trial at noise level 3 read that with no detector in the app's demo); None: the detection's own (the
+    library's wording)."""
+    noise = (f"the noise drawn at level {state.noise_level:g}: the mixture's outliers put joints far off the body"
+             if state.noise_level > 0 else "")
+    if state.dragged:
+        return "a dragged joint?" + (f" or {noise}" if noise else "")
+    return noise or None
 
 
 def bone_cause(state: SessionState) -> str:
@@ -659,11 +671,19 @@ def training_subject_note(key: str, trained: tuple[int, ...]) -> str:
     return f" — {frame.subject_name} is one of this model's training subjects: these are errors on data it learned"
 
 
+Z_PER_F_DETAIL: Final[str] = (
+    "Z/f: a ray-reading model (the default) shifts it with f, within 3 % from ×0.5 to ×6 of the camera's focal "
+    "(median over Human3.6M's test frames), and more at shorter ones")
+"""The readout's small print on a ray-reading model's ``Z/f`` (``docs/results/wrong_focal.txt``)."""
+
+
 def readout_markdown(frame: Frame, state: SessionState) -> str:
-    """The readout panel (numbers without thousands separators): ``Focal N px`` (the focal length this frame
-    was lifted with, and the camera's; :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``,
-    which 2D was lifted (:func:`input_line`), the spread of the uncertainty cloud (:func:`spread_line`) and the
-    metrics."""
+    """The readout panel (numbers without thousands separators), the numbers first, so that they stay in the panel's
+    view whatever the notes under them (a teacher trial: with noise on, the 2D-input and Spread lines pushed MPJPE
+    below the panel): ``Focal N px`` (the focal length this frame was lifted with, and the camera's;
+    :func:`focal_text`), root X/Y/Z, canonical depth and the ambiguity ``Z / f``, the metrics and the analytic root,
+    the spread of the uncertainty cloud (:func:`spread_line`); then the cautions, which 2D was lifted
+    (:func:`input_line`), the upload and the people; last, in small print, how ``Z/f`` moves with f."""
     X, Y, Z = frame.root
     alpha = frame.alpha
     lines = [
@@ -674,21 +694,9 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
             " (this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track, as "
             "the drawn trajectory)" if source_of(state.sample.key) == "video" else ""),
         f"**Canonical depth** {frame.canonical_depth:.0f} mm (at f = 1000 px) · **Z/f** {Z / alpha:.3f} mm/px "
-        + ("(this model reads the rays: Z/f shifts with f, for the default within 3 % from ×0.5 to ×6 of the "
-           "camera's focal, median over Human3.6M's test frames, and more at shorter ones)" if frame.reads_rays else
+        + ("(this model reads the rays: Z/f shifts a little with f)" if frame.reads_rays else
            "(this pixel-space model: the same at any f)"),
     ]
-    lines += [f"**Caution** {note}" for note in frame.caution]
-    lines.append(" · ".join(p for p in (input_line(state), lifted_as(frame, state)) if p))
-    up = state.sample.upload
-    if up is not None:
-        what = {"image": f"photo, {up.detector}",
-                "video": f"video, {up.detector}"}.get(up.kind, f"keypoint file, {up.source_format}")
-        lines.append(f"**Input** {up.name} ({what})")
-    if frame.others:
-        lines.append(people_line(frame, state))
-    if frame.spread is not None:
-        lines.append(spread_line(frame.spread))
     if frame.metrics:
         m = frame.metrics
         above = (" _(above MPJPE: the Procrustes fit minimises the squared distances, not their mean)_"
@@ -703,6 +711,19 @@ def readout_markdown(frame: Frame, state: SessionState) -> str:
         err = frame.metrics.get("analytic root error")
         lines.append(f"**Analytic root** Z {a[2]:.0f} mm ({a[2] - Z:+.0f} mm from the lifted root)"
                      + (f" · error {err:.0f} mm" if err is not None else ""))
+    if frame.spread is not None:
+        lines.append(spread_line(frame.spread))
+    lines += [f"**Caution** {note}" for note in frame.caution]
+    lines.append(" · ".join(p for p in (input_line(state), lifted_as(frame, state)) if p))
+    up = state.sample.upload
+    if up is not None:
+        what = {"image": f"photo, {up.detector}",
+                "video": f"video, {up.detector}"}.get(up.kind, f"keypoint file, {up.source_format}")
+        lines.append(f"**Input** {up.name} ({what})")
+    if frame.others:
+        lines.append(people_line(frame, state))
+    if frame.reads_rays:
+        lines.append(f"<small>{Z_PER_F_DETAIL}</small>")
     return "  \n".join(lines)
 
 

@@ -374,7 +374,7 @@ class Lifter:
     def output_notes(self, keypoints: ArrayLike, principal_point: ArrayLike, root: ArrayLike, *,
                      source: Source | None = None, whose: str | None = None,
                      names: Sequence[str] | None = None, relative: ArrayLike | None = None,
-                     focal: ArrayLike | None = None) -> list[OutputNote]:
+                     focal: ArrayLike | None = None, misfit_cause: str | None = None) -> list[OutputNote]:
         """:attr:`LiftResult.warnings` for 2D keypoints ``(..., 17, 2)`` px with their principal point
         ``(..., 2)`` px that this lifter lifted to roots ``(..., 3)`` mm (camera frame): roots behind the camera,
         for a pixel-space network 2D poses outside :attr:`trained_pixel_range`, and (with ``source="detected"``, for
@@ -382,7 +382,8 @@ class Lifter:
         batch (the app), or that name the people of a batch (``whose``, or each one's label ``names`` such as a video's
         ``"track 3"``: :func:`lifter._checks.where_in_batch`). With the relative poses ``(..., 17, 3)`` mm and the
         ``focal`` length px, detected 2D that its lift does not fit (:data:`lifter.camera.MAX_DETECTED_MISFIT`:
-        most likely a detector's confident mistake) is noted too."""
+        most likely a detector's confident mistake) is noted too; ``misfit_cause``: what that note names as the likely
+        cause instead, where the caller knows better (the app: the noise it drew, a dragged joint)."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -428,8 +429,9 @@ class Lifter:
                     f"{int(off.sum())} of {off.size} lifted pose(s) do not fit their 2D"
                     f"{where_in_batch(off, whose=whose, names=names)}: projected back, the joints lie up to "
                     f"{worst:.0%} of the 2D pose's size from it (median joint), where a detector's usual errors leave "
-                    f"under {limit:.0%}: the 2D is probably wrong in places (a confident detector "
-                    "mistake: joints bunched together or on the wrong limb), and so is the lift; check the 2D",
+                    f"under {limit:.0%}: the 2D is probably wrong in places ("
+                    + (misfit_cause or "a confident detector mistake: joints bunched together or on the wrong limb")
+                    + "), and so is the lift; check the 2D",
                     kind="misfit"))
         behind = root[..., 2] <= 0
         if np.any(behind):

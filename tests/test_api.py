@@ -1014,6 +1014,11 @@ def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
     res = measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False)
     assert [w.kind for w in res.warnings] == ["misfit"]
     assert "6 of 6 lifted pose(s) do not fit their 2D" in res.warnings[0]
+    assert "(a confident detector mistake: joints bunched together or on the wrong limb)" in res.warnings[0]
+    told = measured.output_notes(res.keypoints_2d, res.principal_point, res.root, source="detected",
+                                 relative=res.relative, focal=res.focal, misfit_cause="a dragged joint?")
+    assert told == [res.warnings[0].replace("a confident detector mistake: joints bunched together or on the wrong "
+                                            "limb", "a dragged joint?")]
     assert not measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings
 
 

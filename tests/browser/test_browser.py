@@ -240,6 +240,9 @@ def test_drag_playback_upload_download() -> None:
         assert len(shot) > 10_000
         if WRITE:
             (DOCS / "app.png").write_bytes(shot)
+        # (a teacher trial: with noise on, the notes pushed MPJPE out of the Readout panel's view)
+        assert _wait(lambda: _on_screen(page, page.locator("strong", has_text="MPJPE").first), 30), \
+            "the MPJPE line is not on screen with noise on"
         view.gui.noise.level.value = 0.0
 
         # 3. head-on image view: drag a 2D joint with the mouse; the readout stays on screen
