@@ -434,6 +434,18 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
             "is not a pose to trust"]
 
 
+APP_KEEP_EVERY_ONE: Final[str] = "the File tab's min person score at 0 keeps every one (then upload the file again)"
+"""What the app's messages say in place of :data:`lifter.detect.KEEP_EVERY_ONE` (the library's and the CLI's option)."""
+
+
+def app_wording(text: str) -> str:
+    """A library message as the app says it: the score floor's off switch is the File tab's control, not the library's
+    ``min_score`` or ``poselifter lift --min-score`` (a trial: a refused photo named options the app does not have)."""
+    from lifter.detect import KEEP_EVERY_ONE
+
+    return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE)
+
+
 def misfit_cause(state: SessionState) -> str | None:
     """What the readout's caution on 2D that its lift does not fit (:meth:`lifter.Lifter.output_notes`) names as the
     likely cause: the noise the app drew or a dragged joint, where there is one, not "a confident detector mistake" (a

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 import viser
 
+from lifter.detect import MIN_PERSON_SCORE
 from lifter.skeleton import JOINT_NAMES
 
 from .core import CLOUD_SAMPLES, DEFAULT_SEED, FOCAL_MAX_PX, FOCAL_MIN_PX, MAX_CLOUD_SAMPLES, MAX_SEED, NOISE_MAX
@@ -115,6 +116,7 @@ class JointGui:
 @dataclass
 class FileGui:
     upload: viser.GuiUploadButtonHandle
+    min_score: viser.GuiSliderHandle[float]
     download_json: viser.GuiButtonHandle
     download_glb: viser.GuiButtonHandle
 
@@ -252,6 +254,11 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                      f"every person's skeleton and root trajectory; the first {VIDEO_MAX_SECONDS:g} s) or a 2D "
                      f"keypoint JSON (one pose, several people or 'frames') as `poselifter lift` reads it; at most "
                      f"{max_upload_mib} MiB"),
+            min_score=gui.add_slider("min person score", 0.0, 1.0, 0.05, MIN_PERSON_SCORE,
+                                     marks=((0.0, "0"), (MIN_PERSON_SCORE, f"{MIN_PERSON_SCORE:g}"), (1.0, "1")),
+                                     hint="for the next upload: a detected person (or a keypoint file's person with "
+                                          "0-1 scores) whose mean joint score is below this is left out as no person; "
+                                          "0 keeps every one (BlazePose gives real people 0.84-1 in photos)"),
             download_json=gui.add_button("download result (JSON)", icon=viser.Icon.DOWNLOAD,
                                          hint="the current lift with the fields `poselifter lift` writes (everyone "
                                               "in the image; for an uploaded video the whole sequence)"),

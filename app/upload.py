@@ -269,11 +269,13 @@ def decode_photo(name: str, content: bytes, *, max_side: int = DEFAULT_MAX_SIDE_
 
 
 def photo_sample(photo: Photo, img: LoadedImage, *, key: str, lifter: Any, estimator: PoseEstimator2D,
-                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_people: int = MAX_PEOPLE) -> Sample:
-    """Detect everyone on an uploaded photo (at most ``max_people``, largest first) and make it a sample: the
-    largest person's 2D, the others in ``others_2d`` (:func:`lifter.pipeline.lift_image`: raises
-    :class:`lifter.detect.NoPersonError` when nobody is found)."""
-    rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg, max_people=max_people)
+                 fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, max_people: int = MAX_PEOPLE,
+                 min_score: float = MIN_PERSON_SCORE) -> Sample:
+    """Detect everyone on an uploaded photo (at most ``max_people``, largest first, of those whose mean joint score
+    is at least ``min_score``) and make it a sample: the largest person's 2D, the others in ``others_2d``
+    (:func:`lifter.pipeline.lift_image`: raises :class:`lifter.detect.NoPersonError` when nobody is found)."""
+    rec = lift_image(img, lifter=lifter, estimator=estimator, fov_deg=fov_deg, max_people=max_people,
+                     min_score=min_score)
     kp = _check_2d(rec.keypoints_2d, photo.name)  # (detections may be extrapolated outside the image)
     others = tuple(_check_2d(p.keypoints_2d, f"{photo.name}, person {i + 2}") for i, p in enumerate(rec.people[1:]))
     detail = focal_note(rec.warnings, rec.focal_source)
@@ -300,7 +302,7 @@ def focal_note(notes: Sequence[str], fallback: str) -> str:
 
 
 def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None = None,
-                    fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG) -> Sample:
+                    fov_deg: float = DEFAULT_DIAGONAL_FOV_DEG, min_score: float = MIN_PERSON_SCORE) -> Sample:
     """A sample from an uploaded keypoint JSON (any layout ``poselifter lift`` accepts).
 
     Image size: the file's ``image_size``; else, when the file gives neither it nor a principal point, that of
@@ -322,7 +324,7 @@ def keypoint_sample(name: str, content: bytes, *, key: str, photo: Photo | None 
                           "UTF-16 or UTF-32)") from None
     # the keypoint-file reader parses it once and names what is wrong (not valid JSON, nested too deeply, ...)
     kf = _with_temp_file(name, content, ".json", parse_keypoint_json)
-    kf, low = keep_scored_people(kf, MIN_PERSON_SCORE, where=nm)  # (people scored below the floor: as the CLI)
+    kf, low = keep_scored_people(kf, min_score, where=nm)  # (people scored below the floor: as the CLI)
     kp = _check_2d(convert(kf.keypoints, src=kf.format, warn=False), nm)
     misnamed = input_kind(nm, content[:MEDIA_HEAD_BYTES])[1]  # (keypoint JSON named .mp4)
     notes = [*([misnamed] if misnamed else []), *kf.warnings, *low]
@@ -531,17 +533,19 @@ __all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOA
 
 
 def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, max_bytes: int,
-                  estimator: Callable[[], Any], lifter: Any, detect_lock: Any) -> tuple[Sample, Photo | None]:
+                  estimator: Callable[[], Any], lifter: Any, detect_lock: Any,
+                  min_score: float = MIN_PERSON_SCORE) -> tuple[Sample, Photo | None]:
     """The upload rules: ``(sample, photo)`` for an uploaded file — a keypoint JSON (drawn on ``photo``, the photo
     uploaded before, when the sizes agree) or a photo (the largest person by ``estimator()``'s detector, lifted by
     ``lifter`` for its focal; ``detect_lock`` serialises detection). ``photo`` comes back updated: a decodable photo
     is kept for a keypoint JSON uploaded next, even when detection then fails. Raises :class:`PoseLifterError`
-    with a message for the user (too large, not an image, nobody found, the detector extra missing, ...)."""
+    with a message for the user (too large, not an image, nobody found, the detector extra missing, ...).
+    ``min_score``: the score floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score")."""
     name = safe_name(name)
     content = bytes(content or b"")
     check_upload(name, content, max_bytes=max_bytes)
     if is_json_upload(name, content):
-        return keypoint_sample(name, content, key=key, photo=photo), photo
+        return keypoint_sample(name, content, key=key, photo=photo, min_score=min_score), photo
     new_photo, img = decode_photo(name, content)  # not-an-image / truncated / too many pixels raise here
     try:
         est = estimator()
@@ -551,7 +555,7 @@ def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, m
         raise UploadFailed(str(exc), photo=new_photo) from None
     with detect_lock:
         try:
-            return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est), new_photo
+            return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est, min_score=min_score), new_photo
         except PoseLifterError as exc:
             raise UploadFailed(str(exc), photo=new_photo) from None
 

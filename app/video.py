@@ -28,7 +28,7 @@ import numpy as np
 from lifter import PoseLifterError
 from lifter._text import sentence
 from lifter.camera import focal_alpha, undistort_pixels_opencv
-from lifter.detect import ASSUMED_FOCAL_NOTE, people_scores
+from lifter.detect import ASSUMED_FOCAL_NOTE, MIN_PERSON_SCORE, people_scores
 from lifter.io import ASSUMED_FPS, is_sequence_doc, json_text, model_info
 from lifter.keypoints import H36M17
 from lifter.skeleton import JOINT_NAMES
@@ -308,15 +308,16 @@ def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) ->
 
 def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
                    max_bytes: int, detect_lock: Any, max_seconds: float = VIDEO_MAX_SECONDS,
-                   progress: Callable[[int, int | None], None] | None = None, photo: Any | None = None
-                   ) -> VideoSequence:
+                   progress: Callable[[int, int | None], None] | None = None, photo: Any | None = None,
+                   min_score: float = MIN_PERSON_SCORE) -> VideoSequence:
     """Lift an uploaded video (``estimator()`` gives the 2D detector) or keypoint sequence JSON into a
     :class:`VideoSequence` (module docstring). Raises :class:`lifter.PoseLifterError` with a message for the user:
     too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ... A keypoint sequence
     without a frame rate gets :data:`lifter.io.ASSUMED_FPS` (the app has no --fps), and one without an image size or
     principal point the size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before) where its poses fit
     it, each with a note (``lift_keypoint_sequence``'s ``assumed_fps`` and ``fallback_image``); the photo's EXIF
-    focal length is then used where the sequence gives none, as for a single keypoint file."""
+    focal length is then used where the sequence gives none, as for a single keypoint file. ``min_score``: the score
+    floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score")."""
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
@@ -337,13 +338,13 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                 shown: dict[int, bytes] = {}  # display copies, made while the video is decoded for lifting
                 with detect_lock:
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
-                                     max_seconds=max_seconds, progress=progress, cli_options=False,
+                                     max_seconds=max_seconds, progress=progress, cli_options=False, min_score=min_score,
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
                 rec = lift_keypoint_sequence(
                     path, lifter=lifter, max_people=MAX_PEOPLE, max_seconds=max_seconds, cli_options=False,
-                    assumed_fps=ASSUMED_FPS,
+                    assumed_fps=ASSUMED_FPS, min_score=min_score,
                     fallback_image=None if photo is None else (f"the photo {photo.name} uploaded before", photo.size,
                                                                photo.exif))
                 jpegs = None

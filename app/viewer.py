@@ -42,6 +42,7 @@ import viser
 
 from lifter import PoseLifterError
 from lifter.camera import project_generic
+from lifter.detect import check_min_score
 from lifter.skeleton import JOINT_NAMES
 
 from . import framing
@@ -53,6 +54,7 @@ from .core import (
     Frame,
     LifterPool,
     SessionState,
+    app_wording,
     compute_frame,
     focal_max,
     focal_min,
@@ -500,6 +502,7 @@ class SessionView:
         Notes shown within :data:`NOTES_TOGETHER_SECONDS` of each other (one change's) stay in the status line
         together, each cleared by its own rules; an error replaces them."""
         title = title or ("Input problem" if error else "poselifter")
+        text = app_wording(text)
         with self._status_lock:
             now = time.monotonic()
             # (every write of the status line sets _status_notes: empty after a clear or a progress line)
@@ -1893,6 +1896,12 @@ class SessionView:
                 self._upload_shown = max(self._upload_shown, mine)
                 self._close_refusal()  # (a browser trial: "Upload refused" stayed up beside the same file shown)
 
+    def _min_score(self) -> float:
+        """The File tab's "min person score" (:data:`lifter.detect.MIN_PERSON_SCORE` by default), the score floor of
+        the next upload; a value the slider should not hold is refused by name
+        (:func:`lifter.detect.check_min_score`)."""
+        return check_min_score(self.gui.files.min_score.value)
+
     def _load_upload(self, name: str, content: bytes) -> None:
         content = bytes(content or b"")
         with self.lock:
@@ -1905,7 +1914,8 @@ class SessionView:
             sample, photo = up.upload_sample(
                 name, content, key=upload_key(self.app.next_upload_id(), up.safe_name(name)), photo=self._photo,
                 max_bytes=self.app.max_upload_bytes, estimator=self.app.estimator,
-                lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock)
+                lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock,
+                min_score=self._min_score())
         except up.UploadFailed as exc:
             with self.lock:
                 if self._uploads_begun == mine:  # (the photo a later keypoint file is drawn on: not a stale one's)
@@ -1950,7 +1960,7 @@ class SessionView:
             seq = vid.video_sequence(name, content, key=video_key(self.app.next_upload_id(), nm),
                                      lifter=self.app.pool.get(self.state.model), estimator=self.app.estimator,
                                      max_bytes=self.app.max_upload_bytes, detect_lock=self.app.detect_lock,
-                                     progress=progress, photo=self._photo)
+                                     progress=progress, photo=self._photo, min_score=self._min_score())
         finally:
             if note is not None:
                 note.remove()

@@ -149,6 +149,11 @@ def mean_person_scores(rows: list[np.ndarray | None] | tuple[np.ndarray | None, 
     return out
 
 
+KEEP_EVERY_ONE: Final[str] = "the library's min_score=0 or poselifter lift --min-score 0 keeps every one"
+"""How :func:`left_out_text` says the floor is turned off (the app, which has neither, names its own control
+instead)."""
+
+
 def left_out_text(scores: list[float] | np.ndarray, min_score: float, *, what: str = "detection",
                   detector: str | None = None) -> str:
     """What a note or error says of the detections (or a file's people: ``what="person"``) left out below
@@ -158,8 +163,8 @@ def left_out_text(scores: list[float] | np.ndarray, min_score: float, *, what: s
     shown = ", ".join(f"{math.floor(v * 100 + 1e-9) / 100:.2f}" for v in vals[:5]) + (", ..." if n > 5 else "")
     kind = (what if n == 1 else "people" if what == "person" else what + "s")
     seen = "BlazePose gives real people 0.84-1 in photos; " if detector == "blazepose" else ""
-    return (f"{n} {kind} with a mean joint score below {min_score:g} ({shown}) left out as no person ({seen}the "
-            "library's min_score=0 or poselifter lift --min-score 0 keeps every one)")
+    return (f"{n} {kind} with a mean joint score below {min_score:g} ({shown}) left out as no person "
+            f"({seen}{KEEP_EVERY_ONE})")
 
 
 SMALL_PERSON_PX: Final[float] = 100.0

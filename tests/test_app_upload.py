@@ -494,6 +494,52 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         server.stop()
 
 
+def test_the_file_tabs_min_person_score_sets_the_floor_of_the_next_upload(app: PoseLifterApp) -> None:
+    """A person scored below the floor is left out of a photo or keypoint file (as poselifter lift does); the refusal
+    named the library's min_score and the CLI's --min-score, which the app has neither of. The File tab's "min person
+    score" sets the floor for the next upload, and the app's messages name it."""
+    import json
+
+    from poselifter_app.core import APP_KEEP_EVERY_ONE
+
+    from lifter.detect import KEEP_EVERY_ONE, MIN_PERSON_SCORE
+
+    s = app.demo.get("standing")
+    server = local_server()
+    try:
+        est = FakeEstimator([s.keypoints_2d], full_width=800)
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+        v = a.headless_view()
+        assert v.gui.files.min_score.value == pytest.approx(MIN_PERSON_SCORE)
+        est.detect = lambda image: [Detection(keypoints=s.keypoints_2d * image.shape[1] / 800, scores=np.full(17, 0.14),
+                                              bbox_xywh=bbox_of(s.keypoints_2d), keypoint_format="h36m17")]
+        snap = _snapshot(v)
+        assert v.load_upload("dim.jpg", _jpeg(s.image)) is False
+        said = v.messages[-1]
+        assert "no person found" in said and "below 0.3 (0.14)" in said and APP_KEEP_EVERY_ONE in said, said
+        assert KEEP_EVERY_ONE not in said and "--min-score" not in said and "min_score=" not in said
+        _assert_unchanged(v, snap)
+        v.gui.files.min_score.value = 0.0
+        assert v.load_upload("dim.jpg", _jpeg(s.image)) is True and "found 1 person" in v.messages[-1]
+        # a keypoint file's person scored 0.1: lifted at floor 0, refused at 0.3, naming the control
+        rows = np.column_stack([s.keypoints_2d, np.full(17, 0.1)]).tolist()
+        doc = json.dumps({"format": "h36m17", "image_size": [800, 600], "focal": 1000,
+                          "people": [{"keypoints": rows}]}).encode()
+        assert v.load_upload("low.json", doc) is True
+        v.gui.files.min_score.value = 0.3
+        assert v.load_upload("low.json", doc) is False
+        assert "nobody to lift" in v.messages[-1] and APP_KEEP_EVERY_ONE in v.messages[-1], v.messages[-1]
+        # a keypoint sequence the same way (the video path)
+        seq = json.dumps({"format": "h36m17", "image_size": [800, 600], "focal": 1000, "fps": 10,
+                          "frames": [{"people": [{"keypoints": rows}]}] * 4}).encode()
+        assert v.load_upload("low_seq.json", seq) is False
+        assert "no person in any frame" in v.messages[-1] and APP_KEEP_EVERY_ONE in v.messages[-1], v.messages[-1]
+        v.gui.files.min_score.value = 0.0
+        assert v.load_upload("low_seq.json", seq) is True and v.sequence() is not None
+    finally:
+        server.stop()
+
+
 def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch) -> None:
     """One model for every input: a photo keeps the tab's model and is lifted with source "detected"; a keypoint
     file saying "source": "clean" is lifted as exact 2D."""
