@@ -394,7 +394,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                                               input_space=used.input_space,
                                                               camera_focal_known=camera_focal_known(state)),
                                          *bone_caution(res_rel[0], why=bone_cause(state)),
-                                         *tilt_caution(res.keypoints_2d[0])))
+                                         *tilt_caution(res.keypoints_2d[0]),
+                                         *edge_caution(state)))
 
 
 BONE_RATIO_LIMITS: Final[tuple[float, float]] = (0.4, 2.0)
@@ -448,14 +449,18 @@ def app_wording(text: str) -> str:
 
 def misfit_cause(state: SessionState) -> str | None:
     """What the readout's caution on 2D that its lift does not fit (:meth:`lifter.Lifter.output_notes`) names as the
-    likely cause: the noise the app drew or a dragged joint, where there is one, not "a confident detector mistake" (a
-    teacher trial at noise level 3 read that with no detector in the app's demo); None: the detection's own (the
+    likely cause: the noise the app drew and a dragged joint, where there is one, beside a detector's mistake for a
+    detection (a teacher trial at noise level 3 read "a confident detector mistake" with no detector in the app's
+    demo; a review: a joint dragged to mend a detection is not the only suspect); None: a detection alone (the
     library's wording)."""
-    noise = (f"the noise drawn at level {state.noise_level:g}: the mixture's outliers put joints far off the body"
-             if state.noise_level > 0 else "")
-    if state.dragged:
-        return "a dragged joint?" + (f" or {noise}" if noise else "")
-    return noise or None
+    detected = state.sample.upload is not None or state.input_kind == "detected"
+    parts = [*(["a dragged joint"] if state.dragged else []),
+             *([f"the noise drawn at level {state.noise_level:g}, whose outliers put joints far off the body"]
+               if state.noise_level > 0 else []),
+             *(["a detector's mistake"] if detected else [])]
+    if parts in ([], ["a detector's mistake"]):
+        return None
+    return " or ".join(parts) + "?"
 
 
 def bone_cause(state: SessionState) -> str:
@@ -489,6 +494,24 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
     return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view_deg_text(view)}° of view (a whole person "
             f"rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the "
             f"camera's own focal length is {camera_focal:.0f} px"]
+
+
+def edge_caution(state: SessionState) -> list[str]:
+    """The readout's caution when the selected person of an uploaded photo's or video's detection has joints outside
+    the image (not dragged there): the detector guessed them (the photo and video notes' rule,
+    :data:`lifter._checks.CUT_OFF_TAIL`). A video's note named the frames once, in the upload's message (a known gap:
+    per-frame notes were not flagged on the frames they name); this caution follows the frame shown."""
+    from lifter._checks import CUT_OFF_TAIL, joints_outside, joints_outside_text
+
+    up = state.sample.upload
+    if up is None or up.kind not in ("image", "video"):
+        return []
+    out = joints_outside(np.asarray(state.keypoints, np.float64), state.image_size)
+    out[sorted(state.dragged)] = False  # (a joint dragged outside: the user's own)
+    if not out.any():
+        return []
+    who = state.sample.person_name(state.person)
+    return [f"{who} is cut off by the image's edge here ({joints_outside_text(out)}): {CUT_OFF_TAIL}"]
 
 
 def tilt_caution(keypoints: np.ndarray) -> list[str]:

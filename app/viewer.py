@@ -1569,7 +1569,8 @@ class SessionView:
             self.show_message(f"the focal length is at the slider's {end} already ({focal_text(target)} px)")
             return
         self.set_focal(target)
-        if abs(target - exact) >= 0.05:  # (a teacher trial: 4000 x 2 gave 6000 and Z x 1.5 without a word)
+        if f"{target / now:.3g}" != f"{float(factor):.3g}":  # (a teacher trial: 4000 x 2 gave 6000, Z x 1.5, unsaid;
+            # a review: 3001 x 2 -> 6000 px read "2 times what it was, not 2")
             self.show_message(f"{FOCAL_STEPS[0 if factor < 1 else 1]} would be {focal_text(exact)} px, past the "
                               f"slider's {end}: the focal length is {focal_text(target)} px, {target / now:.3g} times "
                               f"what it was, not {float(factor):g}", focal=target)

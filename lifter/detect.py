@@ -244,6 +244,11 @@ class ImageError(PoseLifterError):
     """A file is not an image, is unreadable or truncated, or is too large."""
 
 
+class EstimatorError(PoseLifterError):
+    """A 2D estimator's output breaks :class:`Detection`'s rules (its scores not one per keypoint in [0, 1]): the
+    estimator's fault, not the image's, so a video stops on it rather than skipping the frame as a bad one."""
+
+
 class NoPersonError(PoseLifterError):
     """The 2D estimator found nobody in the image."""
 
@@ -1279,23 +1284,40 @@ def h36m_joint_scores(scores: np.ndarray, keypoint_format: str) -> np.ndarray:
     return np.stack([np.min(s[..., [k for k, _ in rule]], axis=-1) for rule in rules], axis=-1)
 
 
-def _check_detection_scores(det: Detection, estimator: str) -> None:
-    """A :class:`PoseLifterError` where an estimator's :attr:`Detection.scores` are not one confidence in [0, 1] per
-    keypoint (NaN allowed: no score, as :func:`scored_people` reads it): the score floor
-    (:data:`MIN_PERSON_SCORE`) and the notes on unsure people and joints read them on that scale, so scores on
-    another (a heatmap's maxima, logits) would leave out real people or keep invented ones without a word."""
+SCORE_TOLERANCE: Final[float] = 1e-6
+"""How far outside [0, 1] an estimator's score may lie by rounding (such scores are clipped into it)."""
+
+
+def _checked_scores(det: Detection, estimator: str) -> Detection:
+    """``det`` with its :attr:`Detection.scores` checked: one per keypoint, each in [0, 1] (within
+    :data:`SCORE_TOLERANCE`, clipped) or NaN (no score, as :func:`scored_people` reads it); otherwise an
+    :class:`EstimatorError` naming the estimator and the fix. The score floor (:data:`MIN_PERSON_SCORE`) and the
+    notes on unsure people and joints read that scale, so scores on another (a heatmap's maxima, logits) would leave
+    out real people or keep invented ones without a word."""
     k = get_format(det.keypoint_format).num_joints
-    s = np.asarray(det.scores, np.float64)
+    try:
+        s = np.asarray(det.scores, np.float64)
+    except (TypeError, ValueError):
+        dt = getattr(det.scores, "dtype", None)
+        raise EstimatorError(f"the {estimator} 2D estimator returned scores that are not numbers "
+                             f"({type(det.scores).__name__}{'' if dt is None else f' of {dt}'}): Detection.scores must "
+                             f"be ({k},) confidences in [0, 1], one per keypoint") from None
     if s.shape != (k,):
-        raise PoseLifterError(f"the {estimator} 2D estimator returned {s.shape} scores for a person in "
-                              f"{det.keypoint_format} ({k} keypoints): Detection.scores must be ({k},), one a keypoint")
+        raise EstimatorError(f"the {estimator} 2D estimator returned {s.shape} scores for a person in "
+                             f"{det.keypoint_format} ({k} keypoints): Detection.scores must be ({k},), one per "
+                             "keypoint")
     seen = s[np.isfinite(s)]
-    if np.isinf(s).any() or (seen.size and (seen.min() < 0.0 or seen.max() > 1.0)):
-        raise PoseLifterError(
-            f"the {estimator} 2D estimator returned scores from {np.nanmin(s):.3g} to {np.nanmax(s):.3g}: "
+    if np.isinf(s).any() or (seen.size and (seen.min() < -SCORE_TOLERANCE or seen.max() > 1.0 + SCORE_TOLERANCE)):
+        raise EstimatorError(
+            f"the {estimator} 2D estimator returned scores from {np.nanmin(s):.6g} to {np.nanmax(s):.6g}: "
             "Detection.scores must be confidences in [0, 1] (the score floor min_score and the notes on unsure "
             "people and joints read them so); map the estimator's own scores into [0, 1] in its detect(), e.g. a "
             "sigmoid of logits, or heatmap maxima divided by their largest possible value")
+    if seen.size and (seen.min() < 0.0 or seen.max() > 1.0):
+        from dataclasses import replace
+
+        return replace(det, scores=np.clip(s, 0.0, 1.0))
+    return det
 
 
 def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
@@ -1313,8 +1335,7 @@ def people_h36m(image: LoadedImage, *, estimator: PoseEstimator2D,
     else:
         found = estimator.detect(image.rgb)
     dt = time.perf_counter() - t0
-    for det in found:
-        _check_detection_scores(det, estimator.name)
+    found = [_checked_scores(det, estimator.name) for det in found]  # (a list: an iterator given is read once)
     found = sorted(found, key=lambda d: d.area, reverse=True)
     out = []
     for det in found:
@@ -1384,7 +1405,7 @@ __all__ = ["ASSUMED_FOCAL_NOTE", "BlazePoseEstimator", "DEFAULT_DIAGONAL_FOV_DEG
            "MIN_MAX_SIDE_PX", "MIN_PERSON_SCORE", "DOUBTFUL_SCORE", "check_min_score", "mean_person_scores",
            "UNSURE_JOINT_SCORE", "h36m_joint_scores", "check_max_side",
            "ExifCamera", "FocalGuess", "ImageError",
-           "LoadedImage", "MissingDependencyError", "NoPersonError",
+           "LoadedImage", "MissingDependencyError", "NoPersonError", "EstimatorError", "KEEP_EVERY_ONE",
            "PoseEstimator2D", "available_estimators", "build_pose_task", "detect_people", "detect_pose",
            "ensure_pose_task", "people_h36m", "focal_from_exif",
            "get_estimator", "image_from_array", "load_image", "mediapipe_available", "register_estimator"]

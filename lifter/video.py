@@ -47,6 +47,7 @@ from .detect import (
     DEFAULT_MAX_SIDE_PX,
     IMAGE_SUFFIXES,
     MIN_PERSON_SCORE,
+    EstimatorError,
     PoseEstimator2D,
     _StderrSilenced,
     bbox_of,
@@ -895,10 +896,12 @@ def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = ()) 
         gaps = [i for i in order if first < i < last and i not in have]
         if gaps:
             floored = [i for i in gaps if i in low]
+            rest = len(gaps) - len(floored)
             why = ("the person was not found there" if not floored else
-                   f"in {'those' if len(floored) == len(gaps) else _frames_summary(floored)} a person scored below "
-                   "the score floor was left out, maybe this one (min_score / --min-score)" +
-                   ("" if len(floored) == len(gaps) else "; in the others the person was not found"))
+                   ("in those" if not rest else f"in frame{'s' if len(floored) > 1 else ''} "
+                    f"{_frames_summary(floored)}") + " a person scored below the score floor was left out, maybe this "
+                   "one" + ("" if not rest else f"; in the other {'frame' if rest == 1 else f'{rest} frames'} the "
+                            "person was not found"))
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
                          f"no pose for it ({why})")
@@ -1321,6 +1324,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                     last_search = index
                     full_searches += 1
                 left_out += [(index, v) for v in left]
+            except EstimatorError:
+                raise  # (the estimator's fault, in every frame: not a bad frame; a review saw 12 frames skipped)
             except PoseLifterError as exc:
                 bad.append({"index": index, "error": f"{exc}; skipped"})
                 continue

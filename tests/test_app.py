@@ -200,9 +200,18 @@ def test_the_misfit_caution_names_the_apps_own_noise_not_a_detector(view: Sessio
         view.gui.noise.seed.value = seed
         seen += [c for c in view.frame.caution if "do not fit their 2D" in c]
     assert seen, "no draw at level 3 was cautioned"
-    assert all("(the noise drawn at level 3: the mixture's outliers put joints far off the body)" in c
+    assert all("(the noise drawn at level 3, whose outliers put joints far off the body?)" in c
                and "detector mistake" not in c for c in seen), seen
     assert "detector mistake" not in view.gui.readout.readout.content
+    # with a joint dragged too, both; on a detection, the detector beside them (a review)
+    from poselifter_app.core import misfit_cause
+
+    moved = view.state.evolve(dragged={3})
+    assert misfit_cause(moved) == ("a dragged joint or the noise drawn at level 3, whose outliers put joints far off "
+                                   "the body?")
+    assert misfit_cause(view.state.evolve(noise_level=0.0)) is None
+    assert misfit_cause(view.state.evolve(noise_level=0.0, dragged={3}, input_kind="detected")) == \
+        "a dragged joint or a detector's mistake?"
 
 
 def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
@@ -252,6 +261,9 @@ def test_focal_slider_moves_root_along_its_ray(view: SessionView) -> None:
     assert "would be" in view.gui.readout.status.content
     view.gui.lift.focal_steps.value = "× 2"  # (at the end: said)
     assert view.messages[-1].startswith("the focal length is at the slider's end already")
+    view.gui.lift.focal.value = 3001.0  # (a review: 6000 px is 2.00 times that; no "2 times what it was, not 2")
+    view.gui.lift.focal_steps.value = "× 2"
+    assert view.state.focal_px == pytest.approx(6000.0) and "would be" not in view.messages[-1], view.messages[-1]
     view.gui.lift.focal_reset.value = True
 
 

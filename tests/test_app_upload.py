@@ -540,6 +540,31 @@ def test_the_file_tabs_min_person_score_sets_the_floor_of_the_next_upload(app: P
         server.stop()
 
 
+def test_a_detected_person_cut_off_by_the_edge_is_cautioned_on_the_frame_shown(app: PoseLifterApp) -> None:
+    """The photo and video notes say when a detected person is cut off by the image's edge; a video's named the
+    frames only in the upload's message, not on the frames. The readout's caution follows the 2D shown: the person's
+    joints outside the image (not those dragged there)."""
+    s = app.demo.get("standing")
+    server = local_server()
+    try:
+        low = s.keypoints_2d + [0.0, 600.0 - float(s.keypoints_2d[:, 1].max()) + 30.0]  # (feet 30 px below the image)
+        est = FakeEstimator([low], full_width=800)
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+        v = a.headless_view()
+        assert v.load_upload("cut.jpg", _jpeg(s.image)) is True
+        cut = [c for c in v.frame.caution if "cut off by the image's edge here" in c]
+        assert len(cut) == 1 and "r_ankle" in cut[0] and "the detector guesses the joints" in cut[0], v.frame.caution
+        assert "cut off by the image's edge here" in v.gui.readout.readout.content
+        out = np.flatnonzero(v.state.keypoints[:, 1] > 600)
+        for j in out:  # dragged into the image: no caution
+            v.move_joint(int(j), (float(v.state.keypoints[j, 0]), 590.0))
+        assert not [c for c in v.frame.caution if "cut off" in c], v.frame.caution
+        v.gui.sample.source.value = "demo sample"  # (a demo, not a detection: never)
+        assert not [c for c in v.frame.caution if "cut off" in c]
+    finally:
+        server.stop()
+
+
 def test_photo_uploads_are_lifted_as_detections_with_the_tabs_model(monkeypatch) -> None:
     """One model for every input: a photo keeps the tab's model and is lifted with source "detected"; a keypoint
     file saying "source": "clean" is lifted as exact 2D."""

@@ -18,7 +18,15 @@ from lifter import PoseLifterError
 from lifter.camera import project
 from lifter.checkpoint import save_checkpoint
 from lifter.cli import main
-from lifter.detect import MIN_PERSON_SCORE, Detection, NoPersonError, bbox_of, detect_people, load_image
+from lifter.detect import (
+    MIN_PERSON_SCORE,
+    Detection,
+    EstimatorError,
+    NoPersonError,
+    bbox_of,
+    detect_people,
+    load_image,
+)
 from lifter.pipeline import detected_sideways_notes, lift_image, lift_keypoint_file
 from lifter.video import lift_keypoint_sequence, lift_video
 
@@ -109,10 +117,41 @@ def test_an_estimators_scores_off_the_0_1_scale_are_refused_by_name(photo, lifte
             return [Detection(keypoints=kp17, scores=np.full(16, 0.9), bbox_xywh=bbox_of(kp17),
                               keypoint_format="h36m17")]
 
-    with pytest.raises(PoseLifterError, match=r"returned \(16,\) scores for a person in h36m17 \(17 keypoints\)"):
+    with pytest.raises(EstimatorError, match=r"returned \(16,\) scores for a person in h36m17 \(17 keypoints\): "
+                                             r"Detection\.scores must be \(17,\), one per keypoint"):
         detect_people(load_image(photo), estimator=_Short([]))
-    for edge in (0.0, 1.0):  # (the scale's ends are on it)
-        assert len(detect_people(load_image(photo), estimator=_Scored([(kp17, edge)]), min_score=0)) == 1
+    for edge in (0.0, 1.0, 1.0000001, -1e-7):  # (the scale's ends are on it; rounding past them is clipped: a review)
+        found = detect_people(load_image(photo), estimator=_Scored([(kp17, edge)]), min_score=0)
+        assert len(found) == 1 and 0.0 <= found[0].scores.min() <= found[0].scores.max() <= 1.0
+    with pytest.raises(EstimatorError, match=r"returned scores from 1\.00001 to 1\.00001"):  # (not "1 to 1")
+        detect_people(load_image(photo), estimator=_Scored([(kp17, 1.00001)]))
+    with pytest.raises(EstimatorError, match=r"returned scores that are not numbers \(ndarray of <U4\)"):
+        detect_people(load_image(photo), estimator=_Scored([(kp17, "high")]))  # type: ignore[list-item]
+
+
+def test_an_estimator_that_returns_an_iterator_still_finds_its_people(photo, kp17):
+    """(a review) Checking the scores read an iterator the estimator returned, and sorting found nobody after it."""
+
+    class _Iter(_Scored):
+        def detect(self, image: np.ndarray):  # type: ignore[override]
+            return iter(super().detect(image))
+
+    assert len(detect_people(load_image(photo), estimator=_Iter([(kp17, 0.9), (kp17 + 5.0, 0.8)]))) == 2
+
+
+def test_a_video_whose_estimator_gives_scores_off_the_scale_stops_by_name(tmp_path, lifter, kp17):
+    """(a review) The check's error was caught as a bad frame: a clip came back with no frames and "12 bad frame(s)
+    skipped", exit code 0. The estimator's fault is every frame's: the video stops, naming it."""
+    real = 0.5 * (kp17 - kp17[0]) + [400.0, 360.0]
+
+    class _Heat(ScriptedEstimator):
+        def detect(self, image: np.ndarray) -> list:
+            return [replace(d, scores=np.full(17, 4.5)) for d in super().detect(image)]
+
+    from dataclasses import replace
+
+    with pytest.raises(EstimatorError, match=r"the scripted 2D estimator returned scores from 4\.5 to 4\.5"):
+        lift_video(_clip(tmp_path / "c.avi", 6), lifter=lifter, estimator=_Heat([[real]] * 6), focal=1000.0)
 
 
 def test_a_detection_whose_scores_are_not_numbers_is_kept(photo, lifter, kp17):

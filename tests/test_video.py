@@ -332,13 +332,13 @@ def test_track_gap_notes_name_the_frames_a_track_is_missing_from():
     # a gap where someone was left out below the score floor says so, not "not found" (frame 2 left out; frame 5 not)
     floored = track_gap_notes(frames, left_out=[2, 6])
     assert floored[0].endswith("2; those frames have no pose for it (in those a person scored below the score floor "
-                               "was left out, maybe this one (min_score / --min-score))"), floored
+                               "was left out, maybe this one)"), floored
     assert floored[1] == notes[1]
     without = [FrameResult(index=f.index, time_s=f.time_s, people=[q for q in f.people if q.track_id != 1])
                if f.index == 4 else f for f in frames]  # (track 1 missing in frames 2 and 4; left out in 2 only)
     both = track_gap_notes(without, left_out=[2])
-    assert both[0].endswith("no pose for it (in 2 a person scored below the score floor was left out, maybe this one "
-                            "(min_score / --min-score); in the others the person was not found)"), both
+    assert both[0].endswith("no pose for it (in frame 2 a person scored below the score floor was left out, maybe "
+                            "this one; in the other frame the person was not found)"), both
 
 
 def test_a_sequence_result_lifted_again_keeps_its_scores(tmp_path):
