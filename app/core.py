@@ -438,13 +438,20 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
 APP_KEEP_EVERY_ONE: Final[str] = "the File tab's min person score at 0 keeps every one (then upload the file again)"
 """What the app's messages say in place of :data:`lifter.detect.KEEP_EVERY_ONE` (the library's and the CLI's option)."""
 
+APP_ROLL_RECIPE: Final[str] = ("rotate the photo or video upright about its centre and upload it again (the README's "
+                               "'Camera roll' turns keypoints in Python)")
+"""What the app says in place of :data:`lifter._checks.ROLL_RECIPE`."""
+
 
 def app_wording(text: str) -> str:
-    """A library message as the app says it: the score floor's off switch is the File tab's control, not the library's
-    ``min_score`` or ``poselifter lift --min-score`` (a trial: a refused photo named options the app does not have)."""
+    """A library message as the app says it, naming what the app has: the score floor's off switch is the File tab's
+    control, not the library's ``min_score`` or ``poselifter lift --min-score`` (a trial: a refused photo named options
+    the app does not have); a roll is undone by rotating the photo and uploading it again (a trial: the lean caution
+    sent an app user to a Python recipe)."""
+    from lifter._checks import ROLL_RECIPE
     from lifter.detect import KEEP_EVERY_ONE
 
-    return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE)
+    return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE).replace(ROLL_RECIPE, APP_ROLL_RECIPE)
 
 
 def misfit_cause(state: SessionState) -> str | None:
@@ -530,7 +537,8 @@ def tilt_caution(keypoints: np.ndarray) -> list[str]:
                 "is likely off"]
     if leaning_people(k)[0]:
         lean = float(body_lean_deg(k)[0])
-        return [f"the body leans {abs(lean):.0f}° from the image's vertical (legs and torso alike): {lean_text(lean)}"]
+        return [app_wording(f"the body leans {abs(lean):.0f}° from the image's vertical (legs and torso alike): "
+                            f"{lean_text(lean)}")]
     return []
 
 

@@ -117,6 +117,7 @@ class JointGui:
 class FileGui:
     upload: viser.GuiUploadButtonHandle
     min_score: viser.GuiSliderHandle[float]
+    about: viser.GuiMarkdownHandle
     download_json: viser.GuiButtonHandle
     download_glb: viser.GuiButtonHandle
 
@@ -264,6 +265,11 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                               "in the image; for an uploaded video the whole sequence)"),
             download_glb=gui.add_button("download skeleton (GLB)", icon=viser.Icon.DOWNLOAD,
                                         hint="the lifted skeletons as meshes (metres, y-up; a video: animated)"),
+            # (viser's buttons show no hints: a trial saw neither the upload limits nor the GLB's frame)
+            about=gui.add_markdown(f"<small>Uploads: at most {max_upload_mib} MiB; a video's first "
+                                   f"{VIDEO_MAX_SECONDS:g} s. JSON: the fields of `poselifter lift` (mm, camera frame: "
+                                   "+x right, +y down, +z forward). GLB: metres, y-up, (x, -y, -z) of the JSON's "
+                                   "frame.</small>"),
         )
     # One decimal in the focal and joint boxes: with the precision viser derives from step 1 (0 digits) the box drops
     # a typed decimal point, so "1144.5" arrived as 11445 px. The step stays 1 px (arrow keys, slider).

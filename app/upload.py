@@ -35,10 +35,12 @@ import cv2
 import numpy as np
 
 from lifter import Camera, PoseLifterError
+from lifter._checks import OutputNote
 from lifter._text import sentence
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, lens_notes, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
+    DOUBTFUL_SCORE,
     IMAGE_SUFFIXES,
     INSTALL_DETECT,
     MIN_PERSON_SCORE,
@@ -473,7 +475,9 @@ def result_record(sample: Sample, keypoints: np.ndarray, *, lifter: Any, focal: 
     if info is not None and info.people_index and len(info.people_index) == len(lifted):  # who is who in the file
         lifted = tuple(dataclasses.replace(q, input_index=k, person_id=i)
                        for q, k, i in zip(lifted, info.people_index, info.people_ids))
-    warnings = (list(info.warnings) if info is not None else []) + output_notes
+    # (the upload's own notes, less those on its lift's output, which output_notes says of this lift: a trial's
+    # download listed the upload's misfit note twice, and a drag since can have made it untrue)
+    warnings = [w for w in (info.warnings if info is not None else ()) if not isinstance(w, OutputNote)] + output_notes
     for k, joints in sorted((people_dragged or {}).items()):
         if joints:
             who = f" (person {k + 1})" if len(people) > 1 else ""
@@ -552,12 +556,12 @@ def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, m
     except MissingDependencyError as exc:
         raise DetectorMissing(missing_detector_message(name, exc), photo=new_photo) from None
     except PoseLifterError as exc:
-        raise UploadFailed(str(exc), photo=new_photo) from None
+        raise UploadFailed(f"{exc}. {kept_photo_note(new_photo)}", photo=new_photo) from None
     with detect_lock:
         try:
             return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est, min_score=min_score), new_photo
         except PoseLifterError as exc:
-            raise UploadFailed(str(exc), photo=new_photo) from None
+            raise UploadFailed(f"{exc}. {kept_photo_note(new_photo)}", photo=new_photo) from None
 
 
 class UploadRefused(PoseLifterError):
@@ -566,11 +570,20 @@ class UploadRefused(PoseLifterError):
 
 class UploadFailed(PoseLifterError):
     """An upload that failed after its photo was decoded: ``photo`` is kept for a keypoint JSON uploaded next
-    (None: a video, which leaves the photo uploaded before as it was)."""
+    (None: a video, which leaves the photo uploaded before as it was); its message says so (:func:`kept_photo_note`)."""
 
     def __init__(self, message: str, *, photo: Photo | None) -> None:
         super().__init__(message)
         self.photo = photo
+
+
+def kept_photo_note(photo: Photo) -> str:
+    """Said of a photo whose detection failed: it stays the photo a keypoint JSON uploaded next is drawn on (a trial:
+    a keypoint file of the refused photo's size was drawn on it, unexpected, and would take its EXIF focal)."""
+    w, h = photo.size
+    return (f"The photo ({w} x {h} px) stays the one a keypoint JSON uploaded next is drawn on where its 2D is in the "
+            "photo's pixels (with the photo's EXIF focal length where the file gives none), for 2D of your own, until "
+            "another photo is uploaded")
 
 
 class DetectorMissing(UploadFailed):
@@ -585,6 +598,13 @@ def upload_message(sample: Sample) -> str:
     what = (f"{info.name}: {info.detector} found {n} {'person' if n == 1 else 'people'}"
             if info.kind == "image" else f"{info.name}: {info.source_format} keypoints"
             + (f" of {n} people" if n > 1 else ""))
+    # (a trial: the notification, cut at 240 characters, lost the note that there may be no person at all)
+    scored = [(i + 1, np.asarray(sc, np.float64)) for i, sc in enumerate(info.people_scores) if sc is not None]
+    unsure = [i for i, sc in scored if np.isfinite(sc).any() and float(np.nanmean(sc)) < DOUBTFUL_SCORE
+              ] if info.kind == "image" else []
+    if unsure:
+        who = "it" if n == 1 else "person " + ", ".join(str(i) for i in unsure)
+        what += f" (the detector is unsure of {who}: maybe no person at all, see the note)"
     if n > 1:
         what += ", all lifted into one camera space (the Drag tab's person picker selects whose joints to drag)"
     notes = [n for n in info.warnings if n != info.focal_detail]

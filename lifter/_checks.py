@@ -7,7 +7,7 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -553,6 +553,10 @@ def leaning_people(kp17: np.ndarray) -> np.ndarray:
     return out
 
 
+ROLL_RECIPE: Final[str] = "turn the 2D upright about the principal point first (the README's 'Camera roll' recipe)"
+"""How :func:`lean_text` says to undo a roll (the app, which has no such control, says to rotate the photo instead)."""
+
+
 def lean_text(leans_deg: Any) -> str:
     """The advice of a lean note for the signed leans ``leans_deg`` (deg, :func:`body_lean_deg`) of the poses it
     names: the roll to undo is named where they lean the same way (a review: opposite leans named "about -0 deg").
@@ -563,8 +567,8 @@ def lean_text(leans_deg: Any) -> str:
     roll = f"by a roll of about {float(np.median(v)):+.0f} deg, or by the camera's own" if same else \
         "by the camera's own roll"
     return ("if the camera was rolled (a slanted hand-held photo), the lift is off: the default is trained on upright "
-            "cameras, and a roll of 45 deg puts the root about 0.8 m off; turn the 2D upright about the principal "
-            f"point first (the README's 'Camera roll' recipe), {roll}; but a camera tilted steeply down leans people "
+            f"cameras, and a roll of 45 deg puts the root about 0.8 m off; {ROLL_RECIPE}, {roll}; but a camera tilted "
+            "steeply down leans people "
             "near the image's sides as well, with no roll to undo, and a person sitting or lying on the floor is "
             "lifted as given")
 

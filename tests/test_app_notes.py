@@ -78,7 +78,7 @@ def test_a_refused_upload_sits_beside_the_notes_of_the_upload_still_shown(server
     kp = turn_pixels(demo_sample("standing").keypoints_2d, turn, 1145.0, (512.0, 515.0))
     assert v.load_upload(*_keypoints(kp)) is True, v.messages[-3:]
     said = v.gui.readout.status.content
-    assert "leans 45 deg" in said, said
+    assert "leans 45 deg" in said and "upload it again (the README's 'Camera roll' turns keypoints" in said, said
     v.show_message("wall.jpg: no person found", error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
     both = v.gui.readout.status.content
     assert both.startswith(said) and both.endswith("⚠️ wall.jpg: no person found"), both
@@ -101,6 +101,9 @@ def test_the_tilt_caution_follows_the_2d_shown():
     lean = tilt_caution(rolled(-50.0))
     assert len(lean) == 1 and lean[0].startswith("the body leans 50° from the image's vertical (legs and torso "
                                                  "alike): if the camera was rolled") and "about -50 deg" in lean[0]
+    # (a trial) the app has no roll control: the caution says to rotate the photo, not to follow a Python recipe
+    assert "rotate the photo or video upright about its centre and upload it again" in lean[0], lean
+    assert "turn the 2D upright about the principal point first" not in lean[0]
     side = tilt_caution(rolled(90.0))
     assert len(side) == 1 and side[0].startswith("the body lies sideways in the image")
     nan = up.copy()
