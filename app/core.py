@@ -394,7 +394,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                                               input_space=used.input_space,
                                                               camera_focal_known=camera_focal_known(state)),
                                          *bone_caution(res_rel[0], why=bone_cause(state)),
-                                         *tilt_caution(res.keypoints_2d[0]),
+                                         *tilt_caution(res.keypoints_2d[0], kind=None if state.sample.upload is None
+                                                       else state.sample.upload.kind),
                                          *edge_caution(state)))
 
 
@@ -435,23 +436,40 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
             "is not a pose to trust"]
 
 
-APP_KEEP_EVERY_ONE: Final[str] = "the File tab's min person score at 0 keeps every one (then upload the file again)"
+APP_KEEP_EVERY_ONE: Final[str] = "the File tab's min person score at 0 keeps every one, for the file uploaded again"
 """What the app's messages say in place of :data:`lifter.detect.KEEP_EVERY_ONE` (the library's and the CLI's option)."""
 
-APP_ROLL_RECIPE: Final[str] = ("rotate the photo or video upright about its centre and upload it again (the README's "
-                               "'Camera roll' turns keypoints in Python)")
-"""What the app says in place of :data:`lifter._checks.ROLL_RECIPE`."""
+APP_ROLL_NOTE: Final[str] = "turn the 2D upright about the principal point first (the readout's Caution says how here)"
+"""What the app's messages say in place of :data:`lifter._checks.ROLL_RECIPE` (a Python recipe); the Caution says how
+for the sample shown (:func:`roll_recipe`)."""
 
 
 def app_wording(text: str) -> str:
     """A library message as the app says it, naming what the app has: the score floor's off switch is the File tab's
     control, not the library's ``min_score`` or ``poselifter lift --min-score`` (a trial: a refused photo named options
-    the app does not have); a roll is undone by rotating the photo and uploading it again (a trial: the lean caution
+    the app does not have); how to undo a roll is the readout Caution's (:func:`roll_recipe`; a trial: the lean note
     sent an app user to a Python recipe)."""
     from lifter._checks import ROLL_RECIPE
     from lifter.detect import KEEP_EVERY_ONE
 
-    return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE).replace(ROLL_RECIPE, APP_ROLL_RECIPE)
+    return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE).replace(ROLL_RECIPE, APP_ROLL_NOTE)
+
+
+def roll_recipe(lean_deg: float, kind: str | None) -> str | None:
+    """How the readout's lean caution says to undo a roll of the sample shown (``kind``: its upload's kind, None for
+    a demo or Human3.6M sample): an uploaded photo or video is rotated about its centre, the way named (a body whose
+    feet lie toward +x, ``lean_deg`` > 0, leans counter-clockwise on screen), keeping its size, which sets the
+    assumed focal length (a review: a 4000 x 3000 photo turned 45 deg on an enlarged canvas is assumed a 40 % longer
+    focal); a keypoint file: the library's recipe (None: :data:`lifter._checks.ROLL_RECIPE`, Python); a demo or
+    Human3.6M sample, whose camera is known and upright: nothing to undo."""
+    if kind in ("image", "video"):
+        turn = "clockwise" if lean_deg > 0 else "counter-clockwise"
+        return (f"rotate the {'photo' if kind == 'image' else 'video'} {turn} by about {abs(lean_deg):.0f}° about its "
+                "centre, keeping its size (crop: an enlarged canvas changes the focal length assumed), and upload it "
+                "again, unless the camera's own roll is known")
+    if kind is None:
+        return "this sample's camera is known and upright: the lean is the pose's own, or a drag's"
+    return None
 
 
 def misfit_cause(state: SessionState) -> str | None:
@@ -460,14 +478,14 @@ def misfit_cause(state: SessionState) -> str | None:
     detection (a teacher trial at noise level 3 read "a confident detector mistake" with no detector in the app's
     demo; a review: a joint dragged to mend a detection is not the only suspect); None: a detection alone (the
     library's wording)."""
-    detected = state.sample.upload is not None or state.input_kind == "detected"
+    detected = lift_source(state.evolve(noise_level=0.0)) == "detected"  # (a file's "clean" 2D: no detector)
     parts = [*(["a dragged joint"] if state.dragged else []),
-             *([f"the noise drawn at level {state.noise_level:g}, whose outliers put joints far off the body"]
+             *([f"the noise drawn at level {state.noise_level:g} with its far-off outliers"]
                if state.noise_level > 0 else []),
              *(["a detector's mistake"] if detected else [])]
     if parts in ([], ["a detector's mistake"]):
         return None
-    return " or ".join(parts) + "?"
+    return (parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + ", or " + parts[-1]) + "?"
 
 
 def bone_cause(state: SessionState) -> str:
@@ -521,13 +539,14 @@ def edge_caution(state: SessionState) -> list[str]:
     return [f"{who} is cut off by the image's edge here ({joints_outside_text(out)}): {CUT_OFF_TAIL}"]
 
 
-def tilt_caution(keypoints: np.ndarray) -> list[str]:
+def tilt_caution(keypoints: np.ndarray, *, kind: str | None = None) -> list[str]:
     """The readout's caution when the selected person's 2D ``(17, 2)`` px lies sideways in the image or leans as a
     rolled camera leans people (:func:`lifter._checks.sideways_people`, :func:`lifter._checks.leaning_people`, the
     photo notes' rules): the default is trained on upright cameras and people, and such a lift is metres off. A
     browser trial: the note on a photo turned 45 deg was replaced by a later refused upload's message, leaving the
     lift on screen without a word; a video's went as it played. This caution follows the 2D shown, frame by frame
-    and drag by drag."""
+    and drag by drag; ``kind``: the upload's kind (None: a demo or Human3.6M sample), for how to undo a roll
+    (:func:`roll_recipe`)."""
     k = np.asarray(keypoints, np.float64).reshape(1, NUM_JOINTS, 2)
     if not np.all(np.isfinite(k)):
         return []
@@ -537,8 +556,8 @@ def tilt_caution(keypoints: np.ndarray) -> list[str]:
                 "is likely off"]
     if leaning_people(k)[0]:
         lean = float(body_lean_deg(k)[0])
-        return [app_wording(f"the body leans {abs(lean):.0f}° from the image's vertical (legs and torso alike): "
-                            f"{lean_text(lean)}")]
+        return [f"the body leans {abs(lean):.0f}° from the image's vertical (legs and torso alike): "
+                f"{lean_text(lean, recipe=roll_recipe(lean, kind))}"]
     return []
 
 

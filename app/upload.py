@@ -556,12 +556,12 @@ def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, m
     except MissingDependencyError as exc:
         raise DetectorMissing(missing_detector_message(name, exc), photo=new_photo) from None
     except PoseLifterError as exc:
-        raise UploadFailed(f"{exc}. {kept_photo_note(new_photo)}", photo=new_photo) from None
+        raise UploadFailed(str(exc), photo=new_photo) from None
     with detect_lock:
         try:
             return photo_sample(new_photo, img, key=key, lifter=lifter, estimator=est, min_score=min_score), new_photo
         except PoseLifterError as exc:
-            raise UploadFailed(f"{exc}. {kept_photo_note(new_photo)}", photo=new_photo) from None
+            raise UploadFailed(str(exc), photo=new_photo) from None
 
 
 class UploadRefused(PoseLifterError):
@@ -599,14 +599,18 @@ def upload_message(sample: Sample) -> str:
             if info.kind == "image" else f"{info.name}: {info.source_format} keypoints"
             + (f" of {n} people" if n > 1 else ""))
     # (a trial: the notification, cut at 240 characters, lost the note that there may be no person at all)
+    # (the mean, as the library's floor and its note read it: a NaN score gives neither)
     scored = [(i + 1, np.asarray(sc, np.float64)) for i, sc in enumerate(info.people_scores) if sc is not None]
-    unsure = [i for i, sc in scored if np.isfinite(sc).any() and float(np.nanmean(sc)) < DOUBTFUL_SCORE
-              ] if info.kind == "image" else []
+    unsure = [i for i, sc in scored if np.size(sc) and float(np.mean(sc)) < DOUBTFUL_SCORE] if info.kind == "image" \
+        else []
     if unsure:
-        who = "it" if n == 1 else "person " + ", ".join(str(i) for i in unsure)
+        who = ("it" if n == 1 else f"person {unsure[0]}" if len(unsure) == 1 else
+               "people " + ", ".join(str(i) for i in unsure[:-1]) + f" and {unsure[-1]}")
         what += f" (the detector is unsure of {who}: maybe no person at all, see the note)"
     if n > 1:
         what += ", all lifted into one camera space (the Drag tab's person picker selects whose joints to drag)"
-    notes = [n for n in info.warnings if n != info.focal_detail]
+    # (the notes on the upload's lift's output are the readout's Cautions, for the lift shown: a review saw the
+    # upload's misfit note stale beside them after a drag)
+    notes = [n for n in info.warnings if n != info.focal_detail and not isinstance(n, OutputNote)]
     return (f"{what}; drag the 2D joints on the image plane to correct them. Focal: {info.focal_detail}."
             + "".join(f"\n\nNote: {sentence(n)}" for n in notes))  # (each its own paragraph)

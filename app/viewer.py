@@ -1919,8 +1919,11 @@ class SessionView:
                 min_score=self._min_score())
         except up.UploadFailed as exc:
             with self.lock:
-                if self._uploads_begun == mine:  # (the photo a later keypoint file is drawn on: not a stale one's)
+                kept = self._uploads_begun == mine  # (the photo a later keypoint file is drawn on: not a stale one's)
+                if kept:
                     self._photo = exc.photo
+            if kept and exc.photo is not None and not isinstance(exc, up.DetectorMissing):  # (that one says it)
+                raise up.UploadFailed(f"{exc}. {up.kept_photo_note(exc.photo)}", photo=exc.photo) from None
             raise
         said = f"{up.safe_name(name)}: read, but not shown: {{}} meanwhile (upload it again to see it)"
         with self._showing_upload(mine, since, said) as wanted:

@@ -557,18 +557,19 @@ ROLL_RECIPE: Final[str] = "turn the 2D upright about the principal point first (
 """How :func:`lean_text` says to undo a roll (the app, which has no such control, says to rotate the photo instead)."""
 
 
-def lean_text(leans_deg: Any) -> str:
+def lean_text(leans_deg: Any, *, recipe: str | None = None) -> str:
     """The advice of a lean note for the signed leans ``leans_deg`` (deg, :func:`body_lean_deg`) of the poses it
     names: the roll to undo is named where they lean the same way (a review: opposite leans named "about -0 deg").
     A camera tilted steeply down leans people near the image's sides too, and undoing a roll that was never there
-    makes their lift worse (a review: 289 -> 546 mm), hence the proviso."""
+    makes their lift worse (a review: 289 -> 546 mm), hence the proviso. ``recipe``: how to undo it, in place of
+    :data:`ROLL_RECIPE` and the roll (the app: rotate the photo)."""
     v = np.atleast_1d(np.asarray(leans_deg, np.float64))
     same = bool(np.all(v > 0) or np.all(v < 0))
     roll = f"by a roll of about {float(np.median(v)):+.0f} deg, or by the camera's own" if same else \
         "by the camera's own roll"
     return ("if the camera was rolled (a slanted hand-held photo), the lift is off: the default is trained on upright "
-            f"cameras, and a roll of 45 deg puts the root about 0.8 m off; {ROLL_RECIPE}, {roll}; but a camera tilted "
-            "steeply down leans people "
+            f"cameras, and a roll of 45 deg puts the root about 0.8 m off; {recipe or f'{ROLL_RECIPE}, {roll}'}; but a "
+            "camera tilted steeply down leans people "
             "near the image's sides as well, with no roll to undo, and a person sitting or lying on the floor is "
             "lifted as given")
 

@@ -78,7 +78,7 @@ def test_a_refused_upload_sits_beside_the_notes_of_the_upload_still_shown(server
     kp = turn_pixels(demo_sample("standing").keypoints_2d, turn, 1145.0, (512.0, 515.0))
     assert v.load_upload(*_keypoints(kp)) is True, v.messages[-3:]
     said = v.gui.readout.status.content
-    assert "leans 45 deg" in said and "upload it again (the README's 'Camera roll' turns keypoints" in said, said
+    assert "leans 45 deg" in said and "first (the readout's Caution says how here)" in said, said
     v.show_message("wall.jpg: no person found", error=True, title=UPLOAD_REFUSED_TITLE, sticky=True)
     both = v.gui.readout.status.content
     assert both.startswith(said) and both.endswith("⚠️ wall.jpg: no person found"), both
@@ -100,10 +100,16 @@ def test_the_tilt_caution_follows_the_2d_shown():
     assert tilt_caution(up) == [] and tilt_caution(rolled(15.0)) == []
     lean = tilt_caution(rolled(-50.0))
     assert len(lean) == 1 and lean[0].startswith("the body leans 50° from the image's vertical (legs and torso "
-                                                 "alike): if the camera was rolled") and "about -50 deg" in lean[0]
-    # (a trial) the app has no roll control: the caution says to rotate the photo, not to follow a Python recipe
-    assert "rotate the photo or video upright about its centre and upload it again" in lean[0], lean
-    assert "turn the 2D upright about the principal point first" not in lean[0]
+                                                 "alike): if the camera was rolled")
+    # (a trial) the app has no roll control: for an uploaded photo or video the caution says which way to rotate it
+    # and to keep its size (a review: an enlarged canvas changes the assumed focal); a keypoint file keeps the
+    # library's recipe; a demo or Human3.6M sample's camera is known and upright
+    assert "this sample's camera is known and upright" in lean[0] and "README" not in lean[0], lean
+    photo = tilt_caution(rolled(-50.0), kind="image")[0]
+    assert "rotate the photo counter-clockwise by about 50° about its centre, keeping its size" in photo, photo
+    assert "rotate the video clockwise by about 50°" in tilt_caution(rolled(50.0), kind="video")[0]
+    assert "(the README's 'Camera roll' recipe), by a roll of about -50 deg" in tilt_caution(rolled(-50.0),
+                                                                                             kind="keypoints")[0]
     side = tilt_caution(rolled(90.0))
     assert len(side) == 1 and side[0].startswith("the body lies sideways in the image")
     nan = up.copy()

@@ -1030,6 +1030,42 @@ def test_readout_cautions_when_a_pixel_model_extrapolates(view: SessionView, app
     assert any("reads pixels and was trained on 2D poses" in w for w in json.loads(payload)["warnings"])
 
 
+def test_the_upload_message_names_the_people_the_detector_is_unsure_of(app: PoseLifterApp) -> None:
+    """(a review) "unsure of person 2, 3" read as one person; and the mean is the library's (a NaN score: no flag, as
+    no note)."""
+    s = app.demo.get("standing")
+    server = local_server()
+    try:
+        big, mid, small = (c * (s.keypoints_2d - s.keypoints_2d.mean(0)) + [400.0, 300.0] for c in (1.0, 0.6, 0.4))
+        people = [(big, 0.9), (mid + [-200.0, 0.0], 0.2), (small + [200.0, 0.0], 0.2)]
+        est = FakeEstimator([], full_width=800)
+        est.detect = lambda image: [Detection(keypoints=k, scores=np.full(17, sc), bbox_xywh=bbox_of(k),
+                                              keypoint_format="h36m17") for k, sc in people]
+        v = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est).headless_view()
+        v.gui.files.min_score.value = 0.0
+        assert v.load_upload("three.jpg", _jpeg(s.image)) is True
+        assert "found 3 people (the detector is unsure of people 2 and 3: maybe no person at all" in v.messages[-1]
+        people[1] = (people[1][0], float("nan"))
+        assert v.load_upload("three.jpg", _jpeg(s.image)) is True
+        assert "unsure of person 3: maybe" in v.messages[-1], v.messages[-1]
+    finally:
+        server.stop()
+
+
+def test_the_upload_message_leaves_the_output_notes_to_the_readout() -> None:
+    """(a review) The "As uploaded" line kept the upload's misfit note, stale after a drag, beside the readout's own
+    Caution on the lift shown."""
+    from lifter._checks import OutputNote
+
+    s = demo_sample("walking")
+    doc = {"keypoints": s.keypoints_2d.tolist(), "focal": 1000.0, "image_size": [1000, 1000], "format": "h36m17"}
+    sample = up.keypoint_sample("k.json", json.dumps(doc).encode(), key="upload/t/k.json")
+    sample = dataclasses.replace(sample, upload=dataclasses.replace(sample.upload, warnings=(
+        "an input note", OutputNote("1 of 1 lifted pose(s) do not fit their 2D", kind="misfit"))))
+    said = up.upload_message(sample)
+    assert "an input note" in said and "do not fit" not in said, said
+
+
 def test_the_download_says_its_own_lifts_output_notes_once() -> None:
     """A trial's photo download listed the misfit note twice: once from the upload's lift (the upload's notes) and
     once from the download's own lift. The download keeps the upload's notes on the input and says the notes on the
