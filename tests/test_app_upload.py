@@ -722,6 +722,36 @@ def test_a_photo_read_after_a_later_upload_is_neither_shown_nor_drawn_on(monkeyp
         server.stop()
 
 
+def test_a_photo_refused_after_a_later_upload_does_not_say_it_is_kept(monkeypatch) -> None:
+    """(a review) A photo whose detection failed after a later upload had begun said it stays the photo a keypoint
+    JSON is drawn on, which it does not (the later upload's wins)."""
+    import threading
+
+    server = local_server()
+    try:
+        a = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: FakeEstimator([], full_width=800))
+        s = a.demo.get("standing")
+        v = a.headless_view()
+        reading, go = hold(monkeypatch, up, "upload_sample", when=lambda name, *args, **kwargs: name == "a.jpg")
+        done: list[bool] = []
+        t = threading.Thread(target=lambda: done.append(v.load_upload("a.jpg", _jpeg(s.image))))
+        t.start()
+        try:
+            assert reading.wait(30)
+            kp = {"keypoints": s.keypoints_2d.tolist(), "format": "h36m17", "image_size": [800, 600]}
+            assert v.load_upload("k.json", json.dumps(kp).encode()) is True
+        finally:
+            go.set()
+            t.join(60)
+        assert done == [False]
+        refused = [m for m in v.messages if m.startswith("a.jpg") and "no person found" in m]
+        assert refused and "stays the one a keypoint JSON" not in refused[-1], refused
+        assert v.load_upload("a.jpg", _jpeg(s.image)) is False  # (alone: it is kept, and says so)
+        assert "The photo (800 x 600 px) stays the one a keypoint JSON uploaded next is drawn on" in v.messages[-1]
+    finally:
+        server.stop()
+
+
 # ----------------------------------------------------------------------------------------------
 # Download
 # ----------------------------------------------------------------------------------------------
