@@ -554,7 +554,8 @@ def leaning_people(kp17: np.ndarray) -> np.ndarray:
 
 
 ROLL_RECIPE: Final[str] = "turn the 2D upright about the principal point first (the README's 'Camera roll' recipe)"
-"""How :func:`lean_text` says to undo a roll (the app, which has no such control, says to rotate the photo instead)."""
+"""How :func:`lean_text` says to undo a roll (the app names its readout's Caution, which says how for the sample shown:
+rotate an uploaded photo, for one)."""
 
 
 def lean_text(leans_deg: Any, *, recipe: str | None = None) -> str:
