@@ -522,21 +522,26 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
 
 
 def edge_caution(state: SessionState) -> list[str]:
-    """The readout's caution when the selected person of an uploaded photo's or video's detection has joints outside
-    the image (not dragged there): the detector guessed them (the photo and video notes' rule,
+    """The readout's caution when people of an uploaded photo's or video's detection have joints outside the image
+    (not dragged there): the detector guessed them (the photo and video notes' rule,
     :data:`lifter._checks.CUT_OFF_TAIL`). A video's note named the frames once, in the upload's message (a known gap:
-    per-frame notes were not flagged on the frames they name); this caution follows the frame shown."""
+    per-frame notes were not flagged on the frames they name); this caution follows the frame shown, for the
+    selected person first, then the others (each named)."""
     from lifter._checks import CUT_OFF_TAIL, joints_outside, joints_outside_text
 
     up = state.sample.upload
     if up is None or up.kind not in ("image", "video"):
         return []
-    out = joints_outside(np.asarray(state.keypoints, np.float64), state.image_size)
-    out[sorted(state.dragged)] = False  # (a joint dragged outside: the user's own)
-    if not out.any():
+    people, dragged = state.people_2d(), state.people_dragged()
+    cut = []
+    for k in [state.person, *(k for k in range(len(people)) if k != state.person)]:
+        out = joints_outside(np.asarray(people[k], np.float64), state.image_size)
+        out[sorted(dragged.get(k, ()))] = False  # (a joint dragged outside: the user's own)
+        if out.any():
+            cut.append(f"{state.sample.person_name(k)} ({joints_outside_text(out)})")
+    if not cut:
         return []
-    who = state.sample.person_name(state.person)
-    return [f"{who} is cut off by the image's edge here ({joints_outside_text(out)}): {CUT_OFF_TAIL}"]
+    return [f"{'; '.join(cut)}: cut off by the image's edge here; {CUT_OFF_TAIL}"]
 
 
 def tilt_caution(keypoints: np.ndarray, *, kind: str | None = None) -> list[str]:

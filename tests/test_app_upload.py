@@ -568,6 +568,15 @@ def test_a_detected_person_cut_off_by_the_edge_is_cautioned_on_the_frame_shown(a
         for j in out:  # dragged into the image: no caution
             v.move_joint(int(j), (float(v.state.keypoints[j, 0]), 590.0))
         assert not [c for c in v.frame.caution if "cut off" in c], v.frame.caution
+        # another person cut off is named too, the selected one first (a known gap: only the selected one was)
+        small = 0.5 * (s.keypoints_2d - s.keypoints_2d.mean(0)) + [790.0, 300.0]  # (half beyond the right edge)
+        est.people = [low, small]
+        assert v.load_upload("two.jpg", _jpeg(s.image)) is True
+        cut = [c for c in v.frame.caution if "cut off by the image's edge here" in c]
+        assert len(cut) == 1 and cut[0].startswith("person 1 (") and "; person 2 (" in cut[0], v.frame.caution
+        v.gui.joints.person.value = v.gui.joints.person.options[1]
+        cut = [c for c in v.frame.caution if "cut off by the image's edge here" in c]
+        assert len(cut) == 1 and cut[0].startswith("person 2 (") and "; person 1 (" in cut[0], v.frame.caution
         v.gui.sample.source.value = "demo sample"  # (a demo, not a detection: never)
         assert not [c for c in v.frame.caution if "cut off" in c]
     finally:
