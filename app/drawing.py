@@ -242,7 +242,8 @@ def response_image(lifted: np.ndarray, *, root: np.ndarray, gt: np.ndarray | Non
         if gt is not None:
             _mark_off_window(panel, to_px(np.asarray(gt, np.float64)[0]), depth_mm=float(gt[0][2] - r[2]),
                              centre=(cx, cy))
-        cv2.putText(panel, f"{title}  camera {r[2] / 1000:.1f} m <-", (5, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.36,
+        # (a trial read "side  camera 4.2 m <-" as cryptic: the camera is that far to the left, depth to the right)
+        cv2.putText(panel, f"{title} view, camera {r[2] / 1000:.1f} m left", (5, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.36,
                     (60, 60, 60), 1, cv2.LINE_AA)
         img[:, x0:x0 + half] = panel
     return img
