@@ -800,8 +800,9 @@ def people_line(frame: Frame, state: SessionState) -> str:
     n = state.sample.num_people
     me = np.asarray(frame.root, np.float64)
     me_name = state.sample.person_name(state.person)
+    video = source_of(state.sample.key) == "video"  # (a trial: only the selected person's root said it is unsmoothed)
     parts = [f"**People** {n} in one camera space · **{me_name}** selected (drag its joints; the person picker "
-             "selects another)"]
+             "selects another)" + (" · roots: this frame's own lifts, unsmoothed, as the Root line's" if video else "")]
     for o in frame.others:
         X, Y, Z = o.root
         parts.append(f"{o.name}: root X {X:.0f} · Y {Y:.0f} · Z {Z:.0f} mm, "

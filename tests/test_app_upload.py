@@ -464,6 +464,7 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         np.testing.assert_allclose(v.state.keypoints, s.keypoints_2d, atol=1e-6)  # the largest person
         assert "found 2 people" in v.messages[-1]
         assert "**People** 2 in one camera space" in v.gui.readout.readout.content
+        assert "unsmoothed" not in v.gui.readout.readout.content  # (a photo: nothing is smoothed)
         assert "person 2: root" in v.gui.readout.readout.content
         # nobody
         est.people = []

@@ -93,6 +93,8 @@ def test_video_upload_plays_with_every_person_and_trajectories(server, tmp_path:
     assert 3000 < v.frame.root[2] < 5000 and 5000 < v.frame.others[0].root[2] < 7500
     assert "**People** 2" in v.gui.readout.readout.content and "video, scripted" in v.gui.readout.readout.content
     assert "person 2 (track 2): root X" in v.gui.readout.readout.content  # (named as the person picker names them)
+    # (a trial: only the selected person's root line said it is this frame's own lift, unsmoothed)
+    assert "roots: this frame's own lifts, unsmoothed" in v.gui.readout.readout.content
     assert "(this frame's own lift: the download's `root_unsmoothed`; its `root` is smoothed along the track" in \
         v.gui.readout.readout.content  # (a user trial: the numbers differed from the download's root, unexplained)
     assert "press play" in v.messages[-1]
