@@ -15,8 +15,18 @@ from typing import Any, Final, Literal
 import numpy as np
 
 from lifter import Lifter, PoseLifterError, analytic_root, available_models
-from lifter._checks import body_lean_deg, lean_text, leaning_people, sideways_people
+from lifter._checks import (
+    CUT_OFF_TAIL,
+    ROLL_RECIPE,
+    body_lean_deg,
+    joints_outside,
+    joints_outside_text,
+    lean_text,
+    leaning_people,
+    sideways_people,
+)
 from lifter.camera import MIN_FOCAL_PX, pose_view_deg
+from lifter.detect import KEEP_EVERY_ONE
 from lifter.metrics import mpjpe, pa_mpjpe
 from lifter.skeleton import NUM_JOINTS
 
@@ -449,9 +459,6 @@ def app_wording(text: str) -> str:
     control, not the library's ``min_score`` or ``poselifter lift --min-score`` (a trial: a refused photo named options
     the app does not have); how to undo a roll is the readout Caution's (:func:`roll_recipe`; a trial: the lean note
     sent an app user to a Python recipe)."""
-    from lifter._checks import ROLL_RECIPE
-    from lifter.detect import KEEP_EVERY_ONE
-
     return text.replace(KEEP_EVERY_ONE, APP_KEEP_EVERY_ONE).replace(ROLL_RECIPE, APP_ROLL_NOTE)
 
 
@@ -527,8 +534,6 @@ def edge_caution(state: SessionState) -> list[str]:
     :data:`lifter._checks.CUT_OFF_TAIL`). A video's note named the frames once, in the upload's message (a known gap:
     per-frame notes were not flagged on the frames they name); this caution follows the frame shown, for the
     selected person first, then the others (each named)."""
-    from lifter._checks import CUT_OFF_TAIL, joints_outside, joints_outside_text
-
     up = state.sample.upload
     if up is None or up.kind not in ("image", "video"):
         return []

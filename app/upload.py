@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import re
 import tempfile
 from collections.abc import Callable, Sequence
@@ -40,7 +41,6 @@ from lifter._text import sentence
 from lifter.camera import DEFAULT_DIAGONAL_FOV_DEG, focal_alpha, lens_notes, undistort_pixels_opencv
 from lifter.detect import (
     DEFAULT_MAX_SIDE_PX,
-    DOUBTFUL_SCORE,
     IMAGE_SUFFIXES,
     INSTALL_DETECT,
     MIN_PERSON_SCORE,
@@ -61,6 +61,7 @@ from lifter.pipeline import (
     lift_people,
     plausibility_notes,
     resolve_camera,
+    unsure_people,
 )
 from lifter.skeleton import JOINT_NAMES, NUM_JOINTS
 from lifter.video import MEDIA_HEAD_BYTES, input_kind
@@ -599,10 +600,9 @@ def upload_message(sample: Sample) -> str:
             if info.kind == "image" else f"{info.name}: {info.source_format} keypoints"
             + (f" of {n} people" if n > 1 else ""))
     # (a trial: the notification, cut at 240 characters, lost the note that there may be no person at all)
-    # (the mean, as the library's floor and its note read it: a NaN score gives neither)
-    scored = [(i + 1, np.asarray(sc, np.float64)) for i, sc in enumerate(info.people_scores) if sc is not None]
-    unsure = [i for i, sc in scored if np.size(sc) and float(np.mean(sc)) < DOUBTFUL_SCORE] if info.kind == "image" \
-        else []
+    # (the library's rule, on the mean as its floor and note read it: a NaN score gives neither)
+    means = [float(np.mean(sc)) if sc is not None and np.size(sc) else math.nan for sc in info.people_scores]
+    unsure = [i + 1 for i in unsure_people(means)] if info.kind == "image" else []
     if unsure:
         who = ("it" if n == 1 else f"person {unsure[0]}" if len(unsure) == 1 else
                "people " + ", ".join(str(i) for i in unsure[:-1]) + f" and {unsure[-1]}")

@@ -53,7 +53,7 @@ import threading
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Final, Protocol, cast, runtime_checkable
 
@@ -1314,8 +1314,6 @@ def _checked_scores(det: Detection, estimator: str) -> Detection:
             "people and joints read them so); map the estimator's own scores into [0, 1] in its detect(), e.g. a "
             "sigmoid of logits, or heatmap maxima divided by their largest possible value")
     if seen.size and (seen.min() < 0.0 or seen.max() > 1.0):
-        from dataclasses import replace
-
         return replace(det, scores=np.clip(s, 0.0, 1.0))
     return det
 
@@ -1358,8 +1356,6 @@ def detect_people(image: LoadedImage | str | os.PathLike[str], *, estimator: Pos
     were found. Detections whose mean joint score is below ``min_score`` (:data:`MIN_PERSON_SCORE`; 0 keeps every
     one) are left out first, with a warning when someone else is kept. Raises :class:`ImageError` or
     :class:`NoPersonError` (naming the detections left out, if any)."""
-    from dataclasses import replace
-
     min_score = check_min_score(min_score)
     img = image if isinstance(image, LoadedImage) else load_image(image, max_side=max_side)
     people, left = scored_people(people_h36m(img, estimator=estimator), min_score)
@@ -1392,8 +1388,6 @@ def detect_pose(image: LoadedImage | str | os.PathLike[str], *, estimator: PoseE
     people = detect_people(image, estimator=estimator, max_side=max_side)
     chosen = people[0]
     if len(people) > 1:
-        from dataclasses import replace
-
         box = chosen.raw.bbox_xywh
         chosen = replace(chosen, warnings=chosen.warnings + (
             f"{len(people)} people found; using the largest (box {box[2]:.0f} x {box[3]:.0f} px)",))

@@ -48,6 +48,7 @@ from .camera import (
 )
 from .detect import (
     DEFAULT_MAX_SIDE_PX,
+    DOUBTFUL_SCORE,
     MIN_PERSON_SCORE,
     LoadedImage,
     PoseEstimator2D,
@@ -275,6 +276,13 @@ def _people_list(numbers: list[int]) -> str:
     return f"people {', '.join(map(str, numbers[:-1]))} and {numbers[-1]}"
 
 
+def unsure_people(mean_scores: Sequence[float]) -> list[int]:
+    """The indices of the people (largest first) whose mean score over the 17 joints lifted is below
+    :data:`lifter.detect.DOUBTFUL_SCORE` (NaN: no score, not unsure): those :func:`detector_doubt_notes` names, and
+    the app flags at the start of an upload's message."""
+    return [i for i, v in enumerate(mean_scores) if v < DOUBTFUL_SCORE]
+
+
 def detector_doubt_notes(visibility: list[float]) -> list[str]:
     """A note naming each detected person (largest first) whose mean score over the 17 joints lifted (the
     detector's own confidence, 0-1, :attr:`lifter.detect.DetectedPose.scores`) is below
@@ -283,9 +291,7 @@ def detector_doubt_notes(visibility: list[float]) -> list[str]:
     0.84), the same 12 as on BlazePose's 33 landmarks, which this read before. A user trial's empty-wall photo got
     0.41 over the 17 joints and no note under that rule: BlazePose scores the face points higher
     (``python scripts/empty_crops.py``, ``docs/results/empty_crops.txt``)."""
-    from .detect import DOUBTFUL_SCORE
-
-    low = [(i, v) for i, v in enumerate(visibility) if v < DOUBTFUL_SCORE]
+    low = [(i, visibility[i]) for i in unsure_people(visibility)]
     if not low:
         return []
     who = _by_person(low, len(visibility), "{:.2f}")

@@ -897,11 +897,15 @@ def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = ()) 
         if gaps:
             floored = [i for i in gaps if i in low]
             rest = len(gaps) - len(floored)
-            why = ("the person was not found there" if not floored else
-                   ("in those" if not rest else f"in frame{'s' if len(floored) > 1 else ''} "
-                    f"{_frames_summary(floored)}") + " a person scored below the score floor was left out, maybe this "
-                   "one" + ("" if not rest else f"; in the other {'frame' if rest == 1 else f'{rest} frames'} the "
-                            "person was not found"))
+            floor = "a person scored below the score floor was left out, maybe this one"
+            if not floored:
+                why = "the person was not found there"
+            elif not rest:
+                why = f"in those {floor}"
+            else:
+                where = f"frame{'s' if len(floored) > 1 else ''} {_frames_summary(floored)}"
+                others = "frame" if rest == 1 else f"{rest} frames"
+                why = f"in {where} {floor}; in the other {others} the person was not found"
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
                          f"no pose for it ({why})")
