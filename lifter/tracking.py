@@ -102,9 +102,12 @@ class Tracker:
 
             if not people or not tracks:
                 return
-            rows, cols = linear_sum_assignment(cost)
+            # (pairs past the gate are never matched, so they must not steer the assignment of the others either: a
+            # person far from every track would otherwise push someone near two tracks onto the farther one)
+            within = cost <= gate
+            rows, cols = linear_sum_assignment(np.where(within, cost, _NEVER))
             for r, k in zip(rows, cols):
-                if cost[r, k] <= gate:
+                if within[r, k]:
                     i, tr = people[r], tracks[k]
                     c, d = boxes[i]
                     gap = max(frame - tr.last_frame, 1)

@@ -61,3 +61,28 @@ def test_detector_crops_box_is_a_grown_square_clipped_to_the_image() -> None:
     crop_box = ns["crop_box"]
     assert crop_box(np.array([400.0, 300.0, 100.0, 200.0]), 0.25, 1000, 1000) == (300, 250, 600, 550)  # 300 px square
     assert crop_box(np.array([10.0, 20.0, 100.0, 200.0]), 0.5, 1000, 250) == (0, 0, 260, 250)  # clipped at 0 and H
+
+
+def test_bench_tracking_scores_switches_and_swaps(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``benchmarks/bench_tracking.py``'s counts: a person under the other's track counts as a swap for every frame
+    of it, a new id for the same person as a switch, and each track once."""
+    from types import SimpleNamespace
+
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import bench_tracking
+
+    def frame(*ids: int) -> SimpleNamespace:
+        return SimpleNamespace(people=[SimpleNamespace(track_id=i) for i in ids])
+
+    # person 0 on track 1 throughout; person 1 on track 2, then on track 3 (frames 2-3), then on track 2 again
+    frames = [frame(1, 2), frame(1, 2), frame(1, 3), frame(1, 3), frame(2)]
+    who = [[0, 1], [0, 1], [0, 1], [0, 1], [1]]
+    assert bench_tracking.score(frames, who) == {"switches": 2, "wrong_frames": 0, "person_frames": 9, "tracks": 3}
+    # the two swap tracks for three frames: 2 switches each way, and three frames each under the other's track
+    frames = [frame(1, 2)] * 4 + [frame(2, 1)] * 3
+    who = [[0, 1]] * 7
+    assert bench_tracking.score(frames, who) == {"switches": 2, "wrong_frames": 6, "person_frames": 14, "tracks": 2}
+    # box geometry: a box wholly inside another is hidden entirely; disjoint boxes not at all
+    inner, outer = np.array([1.0, 1.0, 2.0, 2.0]), np.array([0.0, 0.0, 3.0, 3.0])
+    assert bench_tracking.hidden_share(inner, outer) == 1.0
+    assert bench_tracking.hidden_share(inner, inner + 5) == 0.0

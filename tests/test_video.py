@@ -115,6 +115,20 @@ def test_tracker_keeps_ids_through_a_gap_and_ends_tracks():
     assert [t.track_id for t in tr.all_tracks()] == [1, 2, 3]
 
 
+def test_a_person_past_every_gate_does_not_push_another_onto_the_farther_track():
+    """Pairs past the gate are never matched, so they must not steer the others' assignment: here the one
+    assignment of least total cost would give the person beside track 1 to track 2 (0.2 away, not 0.1), so that the
+    newcomer far from both could take track 1 at a cost (0.8) the gate then refuses."""
+    def person(cx: float) -> np.ndarray:  # a box of diagonal 100 px about (cx, 0)
+        h = 50 / np.sqrt(2)
+        return np.array([[cx + dx, dy] for dx, dy in [(-h, -h), (h, h)] * 8 + [(0.0, 0.0)]])
+
+    tr = Tracker()
+    assert tr.update(0, [person(0.0), person(30.0)]) == [1, 2]
+    assert tr.update(1, [person(10.0), person(-80.0)]) == [1, 3]
+    assert tr.tracks[2].last_frame == 0  # (track 2 unmatched, not given the person nearer track 1)
+
+
 @pytest.mark.parametrize("gap", [5, 6, 60])
 def test_tracker_ends_a_stale_track_without_empty_frames_between(gap):
     """The video and sequence paths do not pass frames with nobody to the tracker: a track unseen for more than
