@@ -58,12 +58,30 @@ def check_bind(host: str, port: int) -> str | None:
     return f"cannot listen on --host {host!r} --port {port}: " + "; ".join(errors[:3])
 
 
+def start_lines(*, url: str, requested_port: int, actual_port: int, h36m: Path | None, no_h36m: bool,
+                models: Sequence[str]) -> list[str]:
+    """What ``poselifter-app`` prints once it is up: its URL, where Human3.6M was read from or looked for, the models;
+    before it, a note when ``--port`` was busy and the server took the next free one (a README trial's second app
+    went to 8081 without a word, while the browser still showed the first one on 8080)."""
+    from lifter.data import default_h36m_dir
+
+    lines = []
+    if requested_port != 0 and actual_port != requested_port:
+        lines.append(f"note: port {requested_port} is busy (another poselifter-app?), so this one serves on "
+                     f"{actual_port}: open the URL below (--port to choose another)")
+    where = (str(h36m) if h36m is not None else "off (--no-h36m)" if no_h36m else
+             f"not found at {default_h36m_dir().resolve()}, demo samples only (--h36m DIR or $POSELIFTER_H36M)")
+    lines.append(f"poselifter app: {url}  (Human3.6M: {where}; models: {list(models)})")
+    return lines
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="poselifter-app", description=plain_text(__doc__),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
     p.add_argument("--port", type=_port, default=8080,
-                   help="port 0-65535 (default 8080; 0 = any free port; a busy port: the next free one)")
+                   help="port 0-65535 (default 8080; 0 = any free port; a busy port: the next free one, and a "
+                        "note says so)")
     p.add_argument("--h36m", type=Path, default=None,
                    help="Human3.6M folder (default: ../shared/data/h36m or $POSELIFTER_H36M when present)")
     p.add_argument("--no-h36m", action="store_true", help="demo samples only, even if Human3.6M is present")
@@ -122,7 +140,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Startup objects (models, modules, demo data) never become garbage: keep them out of the collector's full
     # passes, which otherwise stall playback for ~0.15 s every few seconds.
     gc.freeze()
-    print(f"poselifter app: {app.url}  (Human3.6M: {h36m or 'not used'}; models: {app.pool.names})", flush=True)
+    for line in start_lines(url=app.url, requested_port=args.port, actual_port=server.get_port(), h36m=h36m,
+                            no_h36m=args.no_h36m, models=app.pool.names):
+        print(line, flush=True)
     try:
         while True:
             time.sleep(3600)

@@ -2874,3 +2874,47 @@ def test_a_refused_upload_stays_in_the_readout_and_its_notification_goes_once_on
     v._close_refusal()  # (an upload shown: the refusal no longer holds; the upload's own message stays)
     assert v.gui.readout.status.content.startswith("ℹ️ As uploaded: kp.json") and "refused" not in \
         v.gui.readout.status.content
+
+
+def test_start_lines_say_a_busy_port_and_where_human36m_was_looked_for(monkeypatch, tmp_path) -> None:
+    """A README trial: a second app on a busy --port went to the next one without a word, and "Human3.6M: not used"
+    did not say where it had looked, nor how to point it there."""
+    from poselifter_app.main import start_lines
+
+    monkeypatch.setenv("POSELIFTER_H36M", str(tmp_path / "h36m"))
+    kw = {"url": "http://127.0.0.1:8081", "models": ["universal_far"]}
+    moved = start_lines(requested_port=8080, actual_port=8081, h36m=None, no_h36m=False, **kw)
+    assert moved[0].startswith("note: port 8080 is busy") and "serves on 8081" in moved[0]
+    assert moved[1].startswith("poselifter app: http://127.0.0.1:8081  (Human3.6M: not found at "
+                               f"{(tmp_path / 'h36m').resolve()}, demo samples only (--h36m DIR")
+    same = start_lines(requested_port=8081, actual_port=8081, h36m=tmp_path, no_h36m=False, **kw)
+    assert same == [f"poselifter app: http://127.0.0.1:8081  (Human3.6M: {tmp_path}; models: ['universal_far'])"]
+    assert "off (--no-h36m)" in start_lines(requested_port=0, actual_port=43210, h36m=None, no_h36m=True, **kw)[0]
+
+
+def test_a_busy_port_is_named_when_the_app_takes_the_next(tmp_path) -> None:
+    """The real start: a port held by another listener, and the app's first lines say it moved."""
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        p = subprocess.Popen([sys.executable, "-m", "poselifter_app.main", "--no-h36m", "--port", str(port)],
+                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        try:
+            t0, lines = time.time(), []
+            while time.time() - t0 < 120 and not any(ln.startswith("poselifter app:") for ln in lines):
+                line = p.stdout.readline() if p.stdout else ""
+                if not line:
+                    break
+                lines.append(line)
+        finally:
+            p.terminate()
+            p.wait(timeout=30)
+    ours = [ln for ln in lines if ln.startswith(("note:", "poselifter app:"))]  # (viser prints its own box first)
+    assert len(ours) == 2 and ours[0].startswith(f"note: port {port} is busy"), lines
+    assert f"http://127.0.0.1:{port}" not in ours[1] and ours[1].startswith("poselifter app: http://127.0.0.1:")

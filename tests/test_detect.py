@@ -675,3 +675,32 @@ def test_crop_search_keeps_only_the_person_in_the_box(monkeypatch):
     monkeypatch.setattr(est, "_in_crop", in_crop)
     found = est.detect_near(np.zeros((H, W, 3), np.uint8), [bbox_of(me) + [5.0, 0.0, 0.0, 0.0]])
     assert len(found) == 1 and abs(float(found[0].keypoints[:, 0].mean()) - float(me[:, 0].mean())) < 1.0
+
+
+def test_readme_library_detector_example_runs_as_written(tmp_path):
+    """The "Photos in" section's library example (a README trial's ``lift_image(path, lifter=model)`` met a bare
+    TypeError for the estimator it had not been shown how to build), run as written beside a photo and a clip."""
+    import re
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import cv2
+
+    _bundle_or_skip()
+    root = Path(__file__).resolve().parents[1]
+    blocks = re.findall(r"^```python\n(.*?)^```", (root / "README.md").read_text(), flags=re.S | re.M)
+    block = next(b for b in blocks if "BlazePoseEstimator()" in b and "lift_image(" in b)
+    photo = root / "assets" / "demo" / "walking.jpg"
+    shutil.copy(photo, tmp_path / "photo.jpg")
+    frame = cv2.imread(str(photo))
+    vw = cv2.VideoWriter(str(tmp_path / "clip.mp4"), cv2.VideoWriter.fourcc(*"mp4v"), 10.0, frame.shape[1::-1])
+    for _ in range(4):
+        vw.write(frame)
+    vw.release()
+    code = block + ("print('found', len(record.people), len(people), len(clip.frames), "
+                    "[len(f.people) for f in clip.frames])\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert "found 1 1 4 [1, 1, 1, 1]" in proc.stdout, proc.stdout
