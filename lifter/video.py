@@ -616,14 +616,16 @@ TRACKED_IOU: Final[float] = 0.3
 
 
 def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_people: int,
-                 ids: list[Any] | None = None, tracked_ids: list[Any] | None = None) -> list[int]:
+                 ids: list[Any] | None = None, tracked_ids: list[Any] | None = None,
+                 others: list[bool] | None = None) -> list[int]:
     """Which of a frame's people (their ``boxes``, ``(x, y, w, h)`` px, largest first) to lift when it has more than
     ``max_people``: their indices, first those continuing a person tracked in recent frames (the same ``ids`` entry
     as one of ``tracked_ids``, when the file names its people; else a box overlapping one of ``tracked`` by at least
     :data:`TRACKED_IOU`, the best overlap first, not counting a tracked person the file names otherwise;
     ``tracked_ids`` are the names of ``tracked``, in the same order, None where unnamed), then the largest of the
     rest, those that :func:`changed_shape` from a tracked box (a person whose arms moved: a user trial's followed
-    person was dropped for a stranger so) before the others. So ``--max-people 1`` follows one person through a
+    person was dropped for a stranger so) before the others, and last those ``others`` marks True (someone else, seen
+    beside the tracked people until now). So ``--max-people 1`` follows one person through a
     video or a keypoint sequence instead of switching to whoever looks largest in a frame."""
     known = {i for i, pid in enumerate(ids or []) if pid is not None and pid in (tracked_ids or [])}
     names = list(ids) if ids is not None else [None] * len(boxes)
@@ -633,6 +635,8 @@ def keep_tracked(boxes: list[np.ndarray], tracked: list[np.ndarray], *, max_peop
     def rank(i: int) -> tuple[int, float, int]:
         if i in known:
             return (0, 0.0, i)
+        if others is not None and others[i]:
+            return (4, 0.0, i)
         box = np.asarray(boxes[i], float)
         allowed = [np.asarray(b, float) for b, n in zip(tracked, tracked_names) if _names_agree(n, names[i])]
         o = max((box_iou(box, b) for b in allowed), default=0.0)
@@ -702,7 +706,11 @@ class _Followed:
     there is room, so a person missing from a frame or two (a joint left out) is not replaced by whoever was alone
     there; a person unseen for ``horizon`` frames (a track's timeout) is let go. A person the cut kept because their
     box :func:`changed_shape` from a followed one refreshes that box (else it went stale, and a stranger took its
-    place three frames later in a user trial)."""
+    place three frames later in a user trial). ``others``: the boxes of the unnamed people not lifted, with the frame
+    each was last seen in: one who continues them (overlapping by :data:`TRACKED_IOU`, more than any followed box)
+    is someone else, not lifted while the followed people are held (a developer trial's second person, beside the
+    followed one all along, was lifted under the followed one's track while they were hidden for 0.5 s, and kept
+    when they came back)."""
 
     max_people: int
     horizon: int
@@ -710,6 +718,7 @@ class _Followed:
     people: list[tuple[int, np.ndarray, Any]] = field(default_factory=list)
     set_aside: int = 0
     aside_frames: list[int] = field(default_factory=list)
+    others: list[tuple[int, np.ndarray]] = field(default_factory=list)
 
     @classmethod
     def at_fps(cls, *, max_people: int, fps: float) -> _Followed:
@@ -724,9 +733,10 @@ class _Followed:
         if not self.aside_frames:
             return []
         return [f"someone else was found while the people followed were missing, and not lifted, in "
-                f"{len(self.aside_frames)} frame(s) ({_frames_summary(self.aside_frames)}): within "
+                f"{len(self.aside_frames)} frame(s) ({_frames_summary(self.aside_frames)}): someone seen beside them "
+                f"before is not taken for them until they have been gone {TRACK_TIMEOUT_S:g} s, nor, within "
                 f"{FOLLOWED_RECENT_S:g} s of a followed person's last sighting, one whose box overlaps none of theirs "
-                "is not taken for them (--max-people)"]
+                "(--max-people)"]
 
     def keep(self, frame: int, boxes: list[np.ndarray], names: list[Any]) -> list[int]:
         """Which of the frame's people (largest first) to lift (:func:`keep_tracked` when there are too many). While
@@ -734,15 +744,30 @@ class _Followed:
         none of theirs is someone else, set aside (``set_aside`` counts them; the file's names decide where it names
         them all): a developer trial's followed walker, missed by the detector for a frame, was replaced there by
         a person 2 m deeper, 120 px to the side, who took their track (and the walker came back under another).
-        Once they have been unseen longer, someone else is lifted while alone (and followed after ``horizon``)."""
+        Once they have been unseen longer, someone else is lifted while alone (and followed after ``horizon``),
+        except one who continues someone seen beside them (``others``), who waits the whole ``horizon``."""
         self.people = [q for q in self.people if frame - q[0] <= self.horizon]
-        full = len(self.people) >= self.max_people and all(frame - q[0] <= self.recent for q in self.people)
+        self.others = [q for q in self.others if frame - q[0] <= max(self.recent, 1)]
+        held = len(self.people) >= self.max_people
+
+        def other(j: int) -> bool:
+            if names[j] is not None or not held:
+                return False
+            o = max((box_iou(b, boxes[j]) for _, b in self.others), default=0.0)
+            return o >= TRACKED_IOU and o > max((box_iou(b, boxes[j]) for _, b, _ in self.people), default=0.0)
+
+        is_other = [other(j) for j in range(len(boxes))]
+        full = held and all(frame - q[0] <= self.recent for q in self.people)
         if len(boxes) > self.max_people:
             keep = keep_tracked(boxes, [b for _, b, _ in self.people], max_people=self.max_people, ids=names,
-                                tracked_ids=[n for *_, n in self.people])
+                                tracked_ids=[n for *_, n in self.people], others=is_other)
         else:
             keep = list(range(len(boxes)))
         self.set_aside = 0
+        if held and any(is_other[j] for j in keep):  # (someone seen beside the followed people: not them)
+            kept = [j for j in keep if not is_other[j]]
+            self.set_aside, keep = len(keep) - len(kept), kept
+            self.aside_frames.append(frame)
         if full:  # (a person named otherwise than each followed one is lifted: the tracker keeps names apart)
             def them(j: int) -> bool:
                 if names[j] is not None and all(n is not None for *_, n in self.people):
@@ -751,9 +776,10 @@ class _Followed:
                            for _, b, n in self.people)
 
             kept = [j for j in keep if them(j)]
-            self.set_aside, keep = len(keep) - len(kept), kept
-            if self.set_aside:
+            aside = len(keep) - len(kept)
+            if aside and not self.set_aside:
                 self.aside_frames.append(frame)
+            self.set_aside, keep = self.set_aside + aside, kept
         taken: set[int] = set()
         for j in keep:
             same = [k for k, (_, b, n) in enumerate(self.people) if k not in taken and (
@@ -772,6 +798,11 @@ class _Followed:
                     k = max(near)[1]
                     self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
                     taken.add(k)
+        # (everyone unnamed not lifted is someone else, followed frame to frame by their boxes; one lifted is not)
+        for j in range(len(boxes)):
+            self.others = [q for q in self.others if box_iou(q[1], boxes[j]) < TRACKED_IOU]
+            if j not in keep and names[j] is None:
+                self.others.append((frame, np.asarray(boxes[j], np.float64)))
         return keep
 
 
