@@ -15,7 +15,7 @@ import dataclasses
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -326,23 +326,49 @@ def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> 
             "px); a larger photo of them helps"]
 
 
-def joint_doubt_notes(scores: np.ndarray) -> list[str]:
+EDGE_NEAR: Final[float] = 0.1
+"""An unsure joint within this share of the image's height (or width) of its bottom or top (left or right) edge is
+named as near that edge (:func:`joint_doubt_notes`): a limb cut off by the edge is placed inside the image by the
+detector, and scored low (a developer trial's photo cut at the waist: the ankles were put 31 and 58 px above the
+bottom of a 480-px image, and the note said only "an occluded or blurred limb")."""
+
+
+def joint_doubt_notes(scores: np.ndarray, keypoints: np.ndarray | None = None,
+                      image_size: tuple[int, int] | None = None) -> list[str]:
     """A note naming, for each detected person (``scores`` ``(people, 17)``, largest first, H36M order), the joints
     whose score is below :data:`lifter.detect.UNSURE_JOINT_SCORE`: such joints are several times further off than
-    the others on the demo photos (an occluded or blurred wrist, most often), and their 3D with them."""
+    the others on the demo photos (an occluded or blurred wrist, most often), and their 3D with them. Given the
+    people's ``keypoints`` ``(people, 17, 2)`` px and the ``image_size`` ``(W, H)`` px, an unsure joint within
+    :data:`EDGE_NEAR` of an edge is named as near it (a cut-off limb the detector placed inside the image?)."""
     from .detect import UNSURE_JOINT_SCORE
     from .skeleton import JOINT_NAMES
 
     s = np.asarray(scores, np.float64).reshape(-1, len(JOINT_NAMES))
-    who = []
+    k = None if keypoints is None or image_size is None else np.asarray(keypoints, np.float64).reshape(-1, 17, 2)
+    size = None if image_size is None else np.asarray(image_size, np.float64)
+
+    def edge(i: int, j: int) -> str:
+        if k is None or size is None:
+            return ""
+        (x, y), (w, h) = k[i, j], size
+        near = [name for name, d, side in (("bottom", h - y, h), ("top", y, h), ("left", x, w), ("right", w - x, w))
+                if d <= EDGE_NEAR * side]
+        return f", near the {near[0]} edge" if near else ""
+
+    who, at_edge = [], False
     for i, row in enumerate(s):
-        low = [f"{JOINT_NAMES[j]} ({row[j]:.2f})" for j in np.flatnonzero(row < UNSURE_JOINT_SCORE)]
+        unsure = np.flatnonzero(row < UNSURE_JOINT_SCORE)
+        edges = [edge(i, int(j)) for j in unsure]
+        at_edge = at_edge or any(edges)
+        low = [f"{JOINT_NAMES[j]} ({row[j]:.2f}{e})" for j, e in zip(unsure, edges)]
         if low:
             who.append((f"person {i + 1}: " if len(s) > 1 else "") + ", ".join(low))
     if not who:
         return []
+    why = ("an occluded or blurred limb, or, near the edge, one outside the image that the detector placed inside it?"
+           if at_edge else "an occluded or blurred limb?")
     return [f"the detector is unsure of some joints (score below {UNSURE_JOINT_SCORE:g}): {'; '.join(who)}: their 2D, "
-            "and so their 3D, may be off (an occluded or blurred limb?)"]
+            f"and so their 3D, may be off ({why})"]
 
 
 def lift_people(lifter: Any, kp17: np.ndarray, f: np.ndarray, pp: np.ndarray, *, flip_test: bool | None, source: str,
@@ -623,7 +649,7 @@ def lift_image(image: str | Path | LoadedImage, *, lifter: Any, estimator: PoseE
     notes += small_person_notes([float(np.ptp(d.keypoints_2d, axis=0).max()) * img.scale for d in dets],
                                 downscaled=img.scale < 1.0)  # (the box's longer side: lying people too)
     scores = np.stack([d.scores for d in dets])
-    notes += joint_doubt_notes(scores)
+    notes += joint_doubt_notes(scores, kp_people, img.size)
     dist = None
     if distortion is not None:
         dist = check_lens(distortion, distortion_model)

@@ -1078,6 +1078,28 @@ def test_joints_the_detector_is_unsure_of_are_named(tmp_path, weights, kp17):
     assert joint_doubt_notes(np.full((2, 17), 0.3)) == []  # (at the threshold: not below it)
 
 
+def test_unsure_joints_near_the_image_edge_are_named_as_near_it():
+    """A developer trial: a photo cut at the waist; BlazePose put the ankles inside the image, 31 and 58 px above the
+    bottom of a 480-px image, scored low, and the note said only "an occluded or blurred limb". Unsure joints within
+    EDGE_NEAR of an edge say so, and the note names a cut-off limb placed inside the image as a likely cause."""
+    from lifter.pipeline import EDGE_NEAR, joint_doubt_notes
+    from lifter.skeleton import JOINT_NAMES
+
+    assert EDGE_NEAR == 0.1
+    kp = np.tile([[320.0, 200.0]], (17, 1))
+    scores = np.full(17, 0.9)
+    r_ankle, l_ankle, l_wrist = (JOINT_NAMES.index(n) for n in ("r_ankle", "l_ankle", "l_wrist"))
+    kp[r_ankle], kp[l_ankle], kp[l_wrist] = [300, 449], [340, 422], [630, 100]
+    scores[[r_ankle, l_ankle, l_wrist]] = [0.1, 0.2, 0.25]
+    note = joint_doubt_notes(scores[None], kp[None], (640, 480))
+    assert note == ["the detector is unsure of some joints (score below 0.3): r_ankle (0.10, near the bottom edge), "
+                    "l_ankle (0.20), l_wrist (0.25, near the right edge): their 2D, and so their 3D, may be off (an "
+                    "occluded or blurred limb, or, near the edge, one outside the image that the detector placed "
+                    "inside it?)"], note
+    kp[r_ankle], kp[l_wrist] = [300, 300], [300, 100]  # (none near an edge: the plain wording)
+    assert joint_doubt_notes(scores[None], kp[None], (640, 480))[0].endswith("(an occluded or blurred limb?)")
+
+
 def test_h36m_joint_scores_take_the_lowest_source_joint():
     """A converted joint is as sure as the least sure joint it is made from (BlazePose's pelvis reads its hips and
     shoulders)."""
