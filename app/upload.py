@@ -11,7 +11,7 @@ the photo uploaded just before when the sizes agree (so a photo + keypoints work
 Both become a :class:`app.samples.Sample` without 3D ground truth whose 2D is the detected / given one.
 
 Download: :func:`result_record` lifts the tab's current (possibly dragged) clean 2D at the current focal
-length and returns a :class:`lifter.io.LiftRecord`; its ``to_json()`` has the same fields as the
+length and returns a :class:`lifter.io.LiftRecord`; its ``to_dict()`` has the same fields as the
 files ``poselifter lift`` writes (``keypoints_2d``, ``absolute``, ``root``, ``canonical_depth``, ``focal``,
 ``principal_point``, ...). :func:`glb_bytes` is the skeleton as a binary glTF (:mod:`lifter.export`).
 
@@ -518,7 +518,7 @@ def download_stem(sample: Sample) -> str:
 
 
 def json_bytes(record: Any) -> bytes:
-    return json.dumps(record.to_json(), indent=1).encode("utf-8")
+    return json.dumps(record.to_dict(), indent=1).encode("utf-8")
 
 
 def glb_bytes(record: Any) -> bytes:

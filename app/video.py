@@ -409,7 +409,7 @@ def sequence_json_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[
     ``track_id``; smoothed), for ``lifter`` at ``focal`` (:meth:`VideoSequence.record_at`, with the joints
     ``corrected`` in the app; None: the upload's)."""
     rec = seq.record if lifter is None or focal is None else seq.record_at(lifter, focal, corrected=corrected)
-    return json.dumps(rec.to_json(), indent=1).encode("utf-8")
+    return json.dumps(rec.to_dict(), indent=1).encode("utf-8")
 
 
 def sequence_glb_bytes(seq: VideoSequence, *, lifter: Any = None, focal: tuple[float, float] | None = None,

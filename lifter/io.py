@@ -38,6 +38,7 @@ import math
 import os
 import re
 import tempfile
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,8 +72,24 @@ LAYOUT_FORMATS: Final[dict[str, str]] = {"openpose25": "OpenPose's 'pose_keypoin
 """Keypoint format assumed from the joint count when a JSON file names none."""
 
 
+class JsonReady:
+    """``to_dict()`` gives the plain data (lists, numbers, strings) ready for ``json.dump``, as
+    :meth:`lifter.LiftResult.to_dict` does; ``to_json()`` is its old name (it returned the dict, where
+    ``ErrorModel.to_json`` and ``TrainConfig.to_json`` return the text: a developer trial called ``to_dict`` on a
+    record and met an AttributeError)."""
+
+    def to_dict(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def to_json(self) -> dict[str, Any]:
+        """Deprecated: :meth:`to_dict` (the same dict)."""
+        warnings.warn(f"{type(self).__name__}.to_json() is now to_dict() (the same dict, ready for json.dump)",
+                      DeprecationWarning, stacklevel=2)
+        return self.to_dict()
+
+
 @dataclass(frozen=True)
-class PersonResult:
+class PersonResult(JsonReady):
     """One lifted person of an image or keypoint file: keypoints_2d ``(17, 2)`` px, absolute / relative
     ``(17, 3)`` mm, root ``(3,)`` mm, canonical_depth mm, scores ``(17,)`` or None."""
 
@@ -87,7 +104,7 @@ class PersonResult:
     person_id: str | int | None = None
     """Keypoint files: the person's own ``person_id`` (or ``id``, ``track_id``) field, when it has one."""
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         out = {"keypoints_2d": r(self.keypoints_2d, KEYPOINT_DECIMALS), "absolute": r(self.absolute),
                "relative": r(self.relative), "root": r(self.root),
@@ -110,8 +127,8 @@ lifts with its own camera (at 2 decimals a review's focal 801.234567 px moved th
 
 
 @dataclass(frozen=True)
-class LiftRecord:
-    """The result for one input; :meth:`to_json` is what ``DIR/<name>.json`` holds.
+class LiftRecord(JsonReady):
+    """The result for one input; :meth:`to_dict` is what ``DIR/<name>.json`` holds.
 
     keypoints_2d: ``(17, 2)`` px (H36M order); absolute, relative: ``(17, 3)`` mm camera frame;
     root: ``(3,)`` mm; canonical_depth: mm (at a 1000-px focal); focal: ``(fx, fy)`` px;
@@ -155,7 +172,7 @@ class LiftRecord:
         :attr:`focal_source`), as the written record's ``metric_depth`` says."""
         return depth_is_metric(self.focal_source)
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         r = lambda a, d=2: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         return {
             "input": self.input, "kind": self.kind, "model": self.model, "model_info": self.model_info,
@@ -176,7 +193,7 @@ class LiftRecord:
             "source": self.source, "source_format": self.source_format, "detector": self.detector,
             "num_people": self.num_people,
             "scores": None if self.scores is None else r(self.scores, 3), "warnings": list(self.warnings),
-            "people": [q.to_json() for q in self.people],
+            "people": [q.to_dict() for q in self.people],
         }
 
 
@@ -542,7 +559,7 @@ _WRITTEN_FIELDS: Final[frozenset[str]] = frozenset((
     "num_frames", "num_frames_in_file", "first_frame", "last_frame", "bad_frames", "smoothing", "filter",
     "strength", "seconds_per_frame", "time_s", "error", "index", "root_unsmoothed", "track_id", "person_id",
     "input_index"))
-"""Fields of the results this package writes (:meth:`LiftRecord.to_json`, video records), which are read back
+"""Fields of the results this package writes (:meth:`LiftRecord.to_dict`, video records), which are read back
 as keypoint files: not noted as unread."""
 
 
@@ -660,7 +677,7 @@ def _scored(q: dict[str, Any], p: Path) -> Any:
 
 
 def _own_scored(q: dict[str, Any]) -> Any:
-    """A person of this package's own output (:meth:`LiftRecord.to_json`, a video record's frames): its
+    """A person of this package's own output (:meth:`LiftRecord.to_dict`, a video record's frames): its
     ``keypoints_2d`` with its detector ``scores`` as their third values, so that a lift of the output again keeps
     them (and the notes on unsure joints; a user trial lost both). Every joint of such a person was lifted, so a
     score rounded to 0 is read as the smallest positive one, not as a missing joint."""

@@ -66,6 +66,7 @@ from .io import (
     ASSUMED_FPS,
     CAMERA_DECIMALS,
     KEYPOINT_DECIMALS,
+    JsonReady,
     check_frame_rate,
     depth_is_metric,
     distortion_tuple,
@@ -197,7 +198,7 @@ class VideoError(PoseLifterError):
 
 
 @dataclass
-class PersonState:
+class PersonState(JsonReady):
     """One person in one frame. keypoints_2d ``(17, 2)`` px; root ``(3,)``, relative / absolute ``(17, 3)`` mm
     (smoothed when the tracker smooths); root_raw / absolute_raw: the per-frame lift before smoothing;
     canonical_depth: mm at a 1000-px focal (of the smoothed root); scores ``(17,)`` or None."""
@@ -222,7 +223,7 @@ class PersonState:
     def absolute_raw(self) -> np.ndarray:
         return self.root_raw[None, :] + self.relative_raw
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         r = lambda a, d=1: np.round(np.asarray(a, np.float64), d).tolist()  # noqa: E731
         return {"track_id": self.track_id, "keypoints_2d": r(self.keypoints_2d, KEYPOINT_DECIMALS),
                 "absolute": r(self.absolute),
@@ -451,15 +452,15 @@ class SequenceTracker:
 
 
 @dataclass
-class FrameResult:
+class FrameResult(JsonReady):
     """One frame: its number, time (s) and the people in it, largest first."""
 
     index: int
     time_s: float
     people: list[PersonState]
 
-    def to_json(self) -> dict[str, Any]:
-        return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_json() for p in self.people]}
+    def to_dict(self) -> dict[str, Any]:
+        return {"index": self.index, "time_s": round(self.time_s, 4), "people": [p.to_dict() for p in self.people]}
 
 
 OUTPUT_NOTE_LINE: Final[re.Pattern[str]] = re.compile(r"frame \d+: ")
@@ -513,8 +514,8 @@ def output_note_lines(acc: dict[str, tuple[int, int, str]]) -> list[str]:
 
 
 @dataclass
-class SequenceRecord:
-    """A lifted video or keypoint sequence; :meth:`to_json` is what ``DIR/<name>.json`` holds."""
+class SequenceRecord(JsonReady):
+    """A lifted video or keypoint sequence; :meth:`to_dict` is what ``DIR/<name>.json`` holds."""
 
     input: str
     kind: str
@@ -585,7 +586,7 @@ class SequenceRecord:
         (:func:`lifter.io.depth_is_metric` of :attr:`focal_source`), as the written record's ``metric_depth`` says."""
         return depth_is_metric(self.focal_source)
 
-    def to_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         by_track = self.tracks()
         named = self._person_ids(by_track)
         tracks = [{"track_id": tid, "first_frame": seen[0][0], "last_frame": seen[-1][0], "num_frames": len(seen),
@@ -607,7 +608,7 @@ class SequenceRecord:
             "smoothing": {"filter": "one-euro, causal", "strength": self.smoothing},
             "seconds_per_frame": None if self.seconds_per_frame is None else round(self.seconds_per_frame, 4),
             "tracks": tracks, "bad_frames": self.bad_frames, "warnings": self.warnings,
-            "frames": [f.to_json() for f in self.frames],
+            "frames": [f.to_dict() for f in self.frames],
         }
 
 

@@ -823,7 +823,7 @@ def _record_keys() -> list[str]:
     rec = LiftRecord(input="x", kind="image", keypoints_2d=np.zeros((17, 2)), absolute=np.zeros((17, 3)),
                      relative=np.zeros((17, 3)), root=np.zeros(3), canonical_depth=1.0, focal=(1.0, 1.0),
                      focal_source="user", principal_point=(0.0, 0.0), image_size=(1, 1), model="m")
-    return list(rec.to_json())
+    return list(rec.to_dict())
 
 
 # ----------------------------------------------------------------------------------------------
@@ -1149,7 +1149,7 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
     want = lf.lift(project(X, focal=1145.0, principal_point=(512.0, 515.0)), focal=1145.0,
                    principal_point=(512.0, 515.0), source="clean")
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
-    assert rec.to_json()["distortion"] == pytest.approx(lens)
+    assert rec.to_dict()["distortion"] == pytest.approx(lens)
     np.testing.assert_array_equal(rec.keypoints_2d, kp)  # (the 2D as given, with its lens)
     # at another focal (the slider): the lens is undone at the file's own focal, and the record holds that pinhole
     # 2D without a lens, so that lifting the record again gives the same result
@@ -1158,7 +1158,7 @@ def test_a_keypoint_upload_with_a_lens_is_lifted_and_downloaded_undistorted() ->
     want2 = lf.lift(pinhole, focal=2000.0, principal_point=(512.0, 515.0), source="clean")
     np.testing.assert_allclose(rec2.root, want2.root, rtol=1e-6)
     np.testing.assert_allclose(rec2.keypoints_2d, pinhole, atol=1e-6)
-    assert "distortion" not in rec2.to_json()
+    assert "distortion" not in rec2.to_dict()
     assert any("undistorted with the camera's lens at its own focal length (1145.0 px)" in w for w in rec2.warnings)
 
     nofocal = {k: v for k, v in doc.items() if k != "focal"}
@@ -1193,7 +1193,7 @@ def test_a_keypoint_upload_with_an_opencv_lens_is_undistorted_as_it_is_read() ->
     rec = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(f, f))
     want = lf.lift(pinhole, focal=f, principal_point=c, source="clean")
     np.testing.assert_allclose(rec.root, want.root, rtol=1e-6)
-    assert "distortion" not in rec.to_json()
+    assert "distortion" not in rec.to_dict()
     # Human3.6M-order numbers that look like OpenCV's get the library's note
     doc.pop("distortion_model")
     doc["distortion"], doc["keypoints"] = [0.05, -0.1, 0.001, 0.001, 0.3], pinhole.tolist()
@@ -1252,10 +1252,10 @@ def test_keypoint_file_scores_reach_the_download(tmp_path: Path) -> None:
     sample = up.keypoint_sample("scores.json", json.dumps(doc).encode(), key="upload/t/scores.json")
     lf = tiny_lifter()
     got = up.result_record(sample, sample.keypoints_2d, lifter=lf, focal=(800.0, 800.0),
-                           people=[sample.keypoints_2d, *sample.others_2d]).to_json()
+                           people=[sample.keypoints_2d, *sample.others_2d]).to_dict()
     path = tmp_path / "scores.json"
     path.write_text(json.dumps(doc))
-    want = lift_keypoint_file(path, lifter=lf).to_json()
+    want = lift_keypoint_file(path, lifter=lf).to_dict()
     assert got["scores"] == want["scores"] == pytest.approx(sc.tolist())
     assert [p["scores"] for p in got["people"]] == [p["scores"] for p in want["people"]]
     assert got["people"][1]["scores"] == pytest.approx(sc[::-1].tolist())

@@ -405,9 +405,9 @@ def test_a_sequence_lifted_again_with_another_model_says_which_in_model_info(ser
     seq = v.sequence()
     assert seq is not None
     first = app.pool.get(v.state.model)
-    assert seq.record.to_json()["model_info"] == first.provenance()
+    assert seq.record.to_dict()["model_info"] == first.provenance()
     other = app.pool.get("universal_turn")
-    again = seq.record_at(other, (F, F)).to_json()
+    again = seq.record_at(other, (F, F)).to_dict()
     assert again["model"] == "universal_turn" and again["model_info"] == other.provenance()
     assert again["model_info"]["networks"][0]["sha256"] != first.provenance()["networks"][0]["sha256"]
 

@@ -297,12 +297,12 @@ def test_keypoint_file_and_sequence_distortion_is_lifted_undistorted(tmp_path, r
     plain = lift_keypoint_file(_write(tmp_path / "u.json", {"keypoints": u[0].tolist(), **meta}), lifter=lf)
     np.testing.assert_allclose(with_lens.root, plain.root, rtol=1e-6)
     np.testing.assert_allclose(with_lens.keypoints_2d, d[0], atol=1e-9)  # (the record keeps the 2D as given)
-    assert with_lens.to_json()["distortion"] == pytest.approx([*k, *p]) and "distortion" not in plain.to_json()
+    assert with_lens.to_dict()["distortion"] == pytest.approx([*k, *p]) and "distortion" not in plain.to_dict()
     seq = {"frames": [{"keypoints": q.tolist()} for q in d], "fps": 25, **meta, "distortion": [*k, *p]}
     rec = lift_keypoint_sequence(_write(tmp_path / "s.json", seq), lifter=lf, smoothing=0.0)
     ref = lf.lift(u, focal=f, principal_point=c, source="clean")
     np.testing.assert_allclose([fr.people[0].root for fr in rec.frames], ref.root, rtol=1e-6)
-    assert rec.to_json()["distortion"] == pytest.approx([*k, *p])
+    assert rec.to_dict()["distortion"] == pytest.approx([*k, *p])
 
 
 @pytest.mark.parametrize(("distortion", "focal", "message"), [
@@ -427,7 +427,7 @@ def test_other_names_for_read_fields_get_a_note_naming_ours(tmp_path):
                      people=(PersonResult(keypoints_2d=np.asarray(kp), absolute=np.zeros((17, 3)),
                                           relative=np.zeros((17, 3)), root=np.array([0.0, 0.0, 3000.0]),
                                           canonical_depth=3.0, input_index=0),))
-    back = parse_keypoint_json(_write(tmp_path / "r.json", rec.to_json()))
+    back = parse_keypoint_json(_write(tmp_path / "r.json", rec.to_dict()))
     assert back.distortion is not None and not any("not read" in n for n in back.warnings), back.warnings
 
 
@@ -620,12 +620,12 @@ def test_keypoint_file_and_sequence_with_an_opencv_lens(tmp_path, rng):
                                                                      "distortion": d, "distortion_model": model}),
                                  lifter=lf)
         np.testing.assert_allclose(rec.root, plain.root, rtol=1e-6)
-        out = rec.to_json()
+        out = rec.to_dict()
         assert out["distortion"] == pytest.approx(d) and out["distortion_model"] == "opencv"
         assert not any("tangential" in w for w in rec.warnings)
     # the record read back as a keypoint file keeps its lens
     back = tmp_path / "back.json"
-    back.write_text(__import__("json").dumps(rec.to_json()))
+    back.write_text(__import__("json").dumps(rec.to_dict()))
     kf = parse_keypoint_json(back)
     assert kf.distortion_model == "opencv" and kf.distortion is not None and len(kf.distortion) == 5
     wrong = lift_keypoint_file(_write(tmp_path / "w.json", {"keypoints": distorted[0].tolist(), **meta,
@@ -637,7 +637,7 @@ def test_keypoint_file_and_sequence_with_an_opencv_lens(tmp_path, rng):
     srec = lift_keypoint_sequence(_write(tmp_path / "s.json", seq), lifter=lf, smoothing=0.0)
     ref = lf.lift(pinhole, focal=f, principal_point=c, source="clean")
     np.testing.assert_allclose([fr.people[0].root for fr in srec.frames], ref.root, rtol=1e-6)
-    assert srec.to_json()["distortion_model"] == "opencv"
+    assert srec.to_dict()["distortion_model"] == "opencv"
     for bad, msg in (({"distortion": d, "distortion_model": "fisheye"}, "distortion_model must be"),
                      ({"distortion": [0.1, 0.2, 0.0], "distortion_model": "opencv"}, r"OpenCV's distCoeffs.*4, 5, 8")):
         with pytest.raises(PoseLifterError, match=msg):

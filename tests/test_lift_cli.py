@@ -1038,7 +1038,7 @@ def test_a_small_person_in_a_photo_is_noted(tmp_path, weights, kp17):
     big = (150.0 / tall) * (kp17 - kp17[0]) + 500.0
     rec = lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([big]), focal=1000.0)
     assert not any("small" in w for w in rec.warnings), rec.warnings
-    assert rec.metric_depth is True and rec.to_json()["metric_depth"] is True  # (the focal was given)
+    assert rec.metric_depth is True and rec.to_dict()["metric_depth"] is True  # (the focal was given)
     assert lift_image(load_image(p), lifter=lifter, estimator=_StubEstimator([big])).metric_depth is False
     # 150 px tall in a 2000-px photo that the detector sees at 1000 px: 75 px for it
     q = tmp_path / "big.png"

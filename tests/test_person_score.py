@@ -252,7 +252,7 @@ def test_a_keypoint_sequences_low_scored_people_are_left_out_frame_by_frame(tmp_
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": 1000, "image_size": [1280, 720],
                                 "frames": frames}))
     rec = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0)
-    assert [len(f.people) for f in rec.frames] == [1] * 8 and len(rec.to_json()["tracks"]) == 1
+    assert [len(f.people) for f in rec.frames] == [1] * 8 and len(rec.to_dict()["tracks"]) == 1
     assert any(w.startswith("in 2 frame(s) (2, 3), 2 people with a mean joint score below 0.3 (0.05, 0.05) left out")
                for w in rec.warnings), rec.warnings
     everyone = lift_keypoint_sequence(path, lifter=lifter, smoothing=0.0, min_score=0)
@@ -318,7 +318,7 @@ def test_a_videos_low_scored_detections_are_left_out(tmp_path, lifter, kp17):
     script = [[real + [i, 0.0]] for i in range(8)]
     clip = _clip(tmp_path / "c.avi", 8)
     rec = lift_video(clip, lifter=lifter, estimator=_JunkInFrames(script, junk), focal=1000.0, search_every_s=0)
-    assert [len(f.people) for f in rec.frames] == [1] * 8 and len(rec.to_json()["tracks"]) == 1
+    assert [len(f.people) for f in rec.frames] == [1] * 8 and len(rec.to_dict()["tracks"]) == 1
     assert any(w.startswith("in 3 frame(s) (3, 4, 5), 3 detections with a mean joint score below 0.3") for w in
                rec.warnings), rec.warnings
     rec = lift_video(clip, lifter=lifter, estimator=_JunkInFrames(script, junk), focal=1000.0, search_every_s=0,

@@ -76,11 +76,11 @@ def test_records_carry_it_for_their_source_and_flip_test(tmp_path, default):
     f = tmp_path / "clean.json"
     f.write_text(json.dumps({"keypoints": KP.tolist(), "image_size": [1000, 1000], "focal": 1145,
                              "source": "clean"}))
-    rec = lift_keypoint_file(f, lifter=default).to_json()
+    rec = lift_keypoint_file(f, lifter=default).to_dict()
     assert rec["model_info"] == default.provenance(source="clean")
     d = tmp_path / "detected.json"
     d.write_text(json.dumps({"keypoints": KP.tolist(), "image_size": [1000, 1000], "focal": 1145}))
-    rec = lift_keypoint_file(d, lifter=default, flip_test=False).to_json()
+    rec = lift_keypoint_file(d, lifter=default, flip_test=False).to_dict()
     assert rec["model_info"] == default.provenance(flip_test=False)
     # read back as a keypoint file, the field is known (no "unread field" note)
     back = tmp_path / "back.json"
@@ -90,7 +90,7 @@ def test_records_carry_it_for_their_source_and_flip_test(tmp_path, default):
     seq = tmp_path / "seq.json"
     seq.write_text(json.dumps({"fps": 10, "image_size": [1000, 1000], "focal": 1145,
                                "frames": [{"keypoints": (KP + [3 * i, 0]).tolist()} for i in range(3)]}))
-    srec = lift_keypoint_sequence(seq, lifter=default, flip_test=False).to_json()
+    srec = lift_keypoint_sequence(seq, lifter=default, flip_test=False).to_dict()
     assert srec["model_info"] == default.provenance(flip_test=False) != default.provenance()  # (the call's, passed on)
 
 
@@ -227,7 +227,7 @@ def test_photo_and_video_records_give_the_flip_test_of_the_call(tmp_path, flip):
     H, W = 480, 640
     kp = KP * 0.5 + [100, 40]
     img = image_from_array(np.full((H, W, 3), 90, np.uint8))
-    rec = lift_image(img, lifter=small, estimator=ScriptedEstimator([[kp]]), focal=600.0, flip_test=flip).to_json()
+    rec = lift_image(img, lifter=small, estimator=ScriptedEstimator([[kp]]), focal=600.0, flip_test=flip).to_dict()
     assert [n["flip_test"] for n in rec["model_info"]["networks"]] == [flip]
     cv2 = pytest.importorskip("cv2")
     clip = tmp_path / "clip.avi"
@@ -236,8 +236,8 @@ def test_photo_and_video_records_give_the_flip_test_of_the_call(tmp_path, flip):
         vw.write(np.full((H, W, 3), 40 + 20 * i, np.uint8))
     vw.release()
     seq = lift_video(clip, lifter=small, estimator=ScriptedEstimator([[kp]] * 3), focal=600.0, flip_test=flip)
-    assert seq.to_json()["model_info"] == small.provenance(flip_test=flip)
-    assert [n["flip_test"] for n in seq.to_json()["model_info"]["networks"]] == [flip]
+    assert seq.to_dict()["model_info"] == small.provenance(flip_test=flip)
+    assert [n["flip_test"] for n in seq.to_dict()["model_info"]["networks"]] == [flip]
 
 
 def test_poselifter_models_refuses_a_registry_entry_the_loader_refuses(tmp_path, monkeypatch, capsys):

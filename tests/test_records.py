@@ -47,7 +47,7 @@ def test_own_record_relifted_with_another_default_format_keeps_its_h36m_2d(tmp_p
     src = write(tmp_path / "in.json", {"keypoints": coco_from_h36m(KP).tolist(), "image_size": [800, 600],
                                        "focal": 800})
     first = lift_keypoint_file(src, lifter=default, default_format="coco17")
-    record = write(tmp_path / "record.json", first.to_json())
+    record = write(tmp_path / "record.json", first.to_dict())
     again = lift_keypoint_file(record, lifter=default, default_format="coco17")
     plain = lift_keypoint_file(record, lifter=default)
     np.testing.assert_allclose(again.keypoints_2d, first.keypoints_2d, atol=1e-3)
@@ -60,7 +60,7 @@ def test_own_sequence_record_relifted_with_another_default_format(tmp_path, defa
     src = write(tmp_path / "seq.json", {"fps": 10, "image_size": [800, 600], "focal": 800, "format": "h36m17",
                                         "frames": frames})
     rec = lift_keypoint_sequence(src, lifter=default)
-    out = write(tmp_path / "seq_record.json", rec.to_json())
+    out = write(tmp_path / "seq_record.json", rec.to_dict())
     again = lift_keypoint_sequence(out, lifter=default, default_format="coco17")
     for a, b in zip(rec.frames, again.frames):
         np.testing.assert_allclose(b.people[0].keypoints_2d, a.people[0].keypoints_2d, atol=1e-3)
@@ -86,7 +86,7 @@ def test_track_id_comes_before_an_annotation_id(tmp_path, default):
         assert set(by_id) == {0, 1}
         # person 0 is the larger one (KP's height), person 1 is 0.9 of it, before and after the swap
         assert np.ptp(by_id[0].keypoints_2d[:, 1]) > np.ptp(by_id[1].keypoints_2d[:, 1])
-    tracks = {t["person_id"]: t["track_id"] for t in rec.to_json()["tracks"]}
+    tracks = {t["person_id"]: t["track_id"] for t in rec.to_dict()["tracks"]}
     assert set(tracks) == {0, 1} and len(set(tracks.values())) == 2
     for fr in rec.frames:
         assert {q.person_id: q.track_id for q in fr.people} == tracks
@@ -105,7 +105,7 @@ def _gappy_record() -> SequenceRecord:
 
 
 def test_video_record_read_back_keeps_its_frame_indices_and_times(tmp_path, default):
-    p = write(tmp_path / "video.json", _gappy_record().to_json())
+    p = write(tmp_path / "video.json", _gappy_record().to_dict())
     assert parse_keypoint_sequence(p).frame_indices == [0, 1, 2, 5, 6]
     again = lift_keypoint_sequence(p, lifter=default)
     assert [f.index for f in again.frames] == [0, 1, 2, 5, 6]
@@ -117,7 +117,7 @@ def test_video_record_read_back_keeps_its_frame_indices_and_times(tmp_path, defa
 
 
 def test_unreadable_frame_indices_are_said(tmp_path):
-    d = _gappy_record().to_json()
+    d = _gappy_record().to_dict()
     d["frames"][2]["index"] = 9  # (not increasing)
     ks = parse_keypoint_sequence(write(tmp_path / "bad.json", d))
     assert ks.frame_indices is None
@@ -243,7 +243,7 @@ def test_record_read_back_lifts_with_its_own_camera_and_2d(tmp_path, default):
     obj = {"keypoints": KP.tolist(), "format": "h36m17", "image_size": [800, 600], "focal": [801.234567, 799.87654],
            "principal_point": [401.2345, 299.8765], "source": "clean"}
     first = lift_keypoint_file(write(tmp_path / "in.json", obj), lifter=default)
-    out = write(tmp_path / "out.json", first.to_json())
+    out = write(tmp_path / "out.json", first.to_dict())
     kf = parse_keypoint_json(out)
     np.testing.assert_allclose(kf.focal, [801.234567, 799.87654], rtol=0, atol=1e-9)
     np.testing.assert_allclose(kf.principal_point, [401.2345, 299.8765], rtol=0, atol=1e-9)
@@ -274,7 +274,7 @@ def test_the_reassumed_focal_note_reads_like_a_focal(tmp_path, default):
     obj = {"keypoints": KP.tolist(), "format": "h36m17", "image_size": [800, 600]}
     first = lift_keypoint_file(write(tmp_path / "in.json", obj), lifter=default)
     assert first.focal_source == "default-fov"
-    again = lift_keypoint_file(write(tmp_path / "out.json", first.to_json()), lifter=default)
+    again = lift_keypoint_file(write(tmp_path / "out.json", first.to_dict()), lifter=default)
     want = f"the file's focal length ({first.focal[0]:.1f} px) was assumed when it was written"
     assert any(w.startswith(want) for w in again.warnings), again.warnings
 
@@ -447,3 +447,27 @@ def test_a_sequence_in_the_fallback_image_s_pixels_takes_its_exif_focal(tmp_path
     assert rec.focal_source == "keypoint-file" and np.allclose(rec.focal, 700.0)
     with pytest.raises(PoseLifterError, match=r"fallback_image must be \(name, \(W, H\)\)"):
         lift_keypoint_sequence(bare, lifter=default, fallback_image=("room.jpg",))
+
+
+def test_every_record_gives_its_data_by_to_dict_and_to_json_is_deprecated(tmp_path, default):
+    """A developer trial: ``LiftResult.to_dict()`` but ``LiftRecord.to_json()`` (which returned the dict, where
+    ErrorModel's and TrainConfig's ``to_json`` return text) and AttributeError on ``rec.to_dict()``. Every record and
+    its parts give the plain data by ``to_dict()``; ``to_json()`` still returns the same dict, with a
+    DeprecationWarning naming the new name."""
+    import json
+
+    from lifter.io import JsonReady
+    from lifter.video import lift_keypoint_sequence
+
+    sample = lifter.demo_sample("walking")
+    rec = lift_keypoint_file(write(tmp_path / "kp.json", {"keypoints": sample.keypoints_2d.tolist(),
+                                                         "image_size": list(sample.image_size)}), lifter=default)
+    seq = lift_keypoint_sequence(write(tmp_path / "seq.json", {"fps": 10, "image_size": list(sample.image_size),
+                                                               "frames": [
+        {"keypoints": (sample.keypoints_2d + [i, 0]).tolist()} for i in range(3)]}), lifter=default)
+    for obj in (rec, rec.people[0], seq, seq.frames[0], seq.frames[0].people[0]):
+        assert isinstance(obj, JsonReady)
+        d = obj.to_dict()
+        json.dumps(d)  # (plain data)
+        with pytest.warns(DeprecationWarning, match=r"\.to_json\(\) is now to_dict\(\)"):
+            assert obj.to_json() == d

@@ -270,7 +270,7 @@ def test_video_two_people_tracked_and_smoothed(tmp_path, lifter):
                      progress=lambda d, t: seen.append((d, t)))
     assert rec.fps == pytest.approx(25.0) and rec.image_size == (W, H) and len(rec.frames) == 20
     assert seen[-1] == (20, 20)
-    d = rec.to_json()
+    d = rec.to_dict()
     assert [f["index"] for f in d["frames"]] == list(range(20))
     assert d["frames"][3]["time_s"] == pytest.approx(3 / 25.0)
     assert d["frames"][7]["people"] == [] and any("no person found in 1 of 20 frames: 7" in w for w in rec.warnings)
@@ -367,9 +367,9 @@ def test_a_sequence_result_lifted_again_keeps_its_scores(tmp_path):
     frames = [{"people": [{"keypoints": np.column_stack([pose + i, conf]).tolist()}]} for i in range(8)]
     path = tmp_path / "seq.json"
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
-    first = lift_keypoint_sequence(path, lifter=tiny_lifter()).to_json()
+    first = lift_keypoint_sequence(path, lifter=tiny_lifter()).to_dict()
     (tmp_path / "out.json").write_text(json.dumps(first))
-    again = lift_keypoint_sequence(tmp_path / "out.json", lifter=tiny_lifter()).to_json()
+    again = lift_keypoint_sequence(tmp_path / "out.json", lifter=tiny_lifter()).to_dict()
     assert again["frames"][3]["people"][0]["scores"] == first["frames"][3]["people"][0]["scores"]
     assert first["frames"][3]["people"][0]["scores"][13] == 0.1
     assert any("unsure (score below 0.3) of l_wrist in 8 of 8 frames" in w
@@ -648,7 +648,7 @@ def test_a_name_back_after_its_track_ended_takes_it_up_again(tmp_path):
               for i in range(30)]
     path = tmp_path / "leave.json"
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": frames}))
-    d = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=1.0).to_json()
+    d = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=1.0).to_dict()
     ids = {(q["person_id"], q["track_id"]) for fr in d["frames"] for q in fr["people"]}
     assert ids == {("alice", 1), ("bob", 2)}, ids
     assert [(t["track_id"], t["person_id"], t["first_frame"], t["last_frame"], t["num_frames"]) for t in d["tracks"]] \
@@ -666,7 +666,7 @@ def test_a_name_back_after_its_track_ended_takes_it_up_again(tmp_path):
     alone = [{"people": [{"keypoints": (bob - i).tolist(), "person_id": "bob"}]} if not 5 <= i < 20 else {"people": []}
              for i in range(25)]
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": alone}))
-    d = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=1.0).to_json()
+    d = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=1.0).to_dict()
     back = d["frames"][20]["people"][0]
     assert back["track_id"] == 1 and back["root"] == back["root_unsmoothed"], back
 
@@ -695,7 +695,7 @@ def test_tracking_names_leave_out_ids_that_do_not_recur(tmp_path):
     path.write_text(json.dumps({"format": "h36m17", "fps": 10, "focal": F, "image_size": [W, H], "frames": shared}))
     rec = lift_keypoint_sequence(path, lifter=tiny_lifter(), smoothing=0.0)
     assert set(rec.track_person_ids().values()) == {None} and len(rec.track_person_ids()) == 2
-    assert all(t["person_id"] is None for t in rec.to_json()["tracks"])
+    assert all(t["person_id"] is None for t in rec.to_dict()["tracks"])
     assert "person id(s) 1 given to several people in one frame (first at frame 0): not used to follow anyone, nor " \
            "as a track's person_id" in rec.warnings, rec.warnings
     named = [[{"keypoints": (a + i).tolist(), "id": "kid"}, {"keypoints": (b - i).tolist(), "id": "dad"}]
@@ -849,7 +849,7 @@ def _sequence_json(path: Path, n: int = 12, **extra) -> Path:
 
 def test_keypoint_sequence(tmp_path, lifter):
     rec = lift_keypoint_sequence(_sequence_json(tmp_path / "s.json"), lifter=lifter, smoothing=1.0)
-    d = rec.to_json()
+    d = rec.to_dict()
     assert d["kind"] == "keypoint-sequence" and d["fps"] == 30 and len(d["frames"]) == 12
     assert d["frames"][4]["people"] == [] and [t["track_id"] for t in d["tracks"]] == [1, 2]
     # the same 2D lifted one frame at a time (smoothing off) gives the same per-frame roots
@@ -902,7 +902,7 @@ def test_keypoint_sequence_keeps_each_frames_confidences(tmp_path, lifter):
     assert said == [f"track {tid}: the detector is unsure (score below 0.3) of l_wrist in 4 of 7 frames "
                     "(first at frame 3): their 2D, and so their 3D, may be off in those frames (an occluded or "
                     "blurred limb?)"], said
-    assert rec.to_json()["frames"][3]["people"][0]["scores"] is not None
+    assert rec.to_dict()["frames"][3]["people"][0]["scores"] is not None
     # another scale (a detector's raw scores): kept, no threshold read
     raw = json.loads(path.read_text())
     for fr in raw["frames"]:

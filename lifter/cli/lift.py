@@ -569,7 +569,7 @@ def run_lift(args: argparse.Namespace) -> int:
                         for msg in seq.warnings:
                             say(f"{path}: note: {msg}")
                     elif rec is not None:
-                        write_json_atomic(args.out / f"{name}.json", rec.to_json())
+                        write_json_atomic(args.out / f"{name}.json", rec.to_dict())
                         now.append(args.out / f"{name}.json")
                         poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
                         if args.glb:
@@ -681,7 +681,7 @@ def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bo
     files written: ``written`` (a new list when None), each appended once it is whole, so a caller interrupted
     meanwhile knows which are."""
     written = [] if written is None else written
-    write_json_atomic(out / f"{name}.json", seq.to_json())
+    write_json_atomic(out / f"{name}.json", seq.to_dict())
     written.append(out / f"{name}.json")
     tracks = seq.tracks()
     if bvh:
