@@ -352,6 +352,21 @@ def rejoin_tracks(frames: list[FrameResult], *, fps: float, rejoin_s: float = RE
     return joined
 
 
+def renumber_tracks(frames: list[FrameResult], joined: list[Rejoin] | None = None) -> list[Rejoin]:
+    """Number the tracks of ``frames`` 1, 2, 3, ... in the order they first appear (by frame, then the frame's order of
+    people), in place, and return ``joined`` (:func:`rejoin_tracks`) with their kept ids numbered alike (``gone``
+    stays the tracker's). The tracker never gives an id twice, so false detections left out and tracks taken up again
+    leave gaps (a developer trial's two people were tracks 1 and 4); the output's ids have none."""
+    new: dict[int, int] = {}
+    for fr in frames:
+        for q in fr.people:
+            new.setdefault(q.track_id, len(new) + 1)
+    for fr in frames:
+        for q in fr.people:
+            q.track_id = new[q.track_id]
+    return [r._replace(track_id=new.get(r.track_id, r.track_id)) for r in (joined or [])]
+
+
 def rejoin_notes(joined: list[Rejoin]) -> list[str]:
     """One note per track :func:`rejoin_tracks` took up again."""
     return [f"track {r.track_id}: found again at frame {r.frame} after {r.gap_s:.2f} s unseen (longer than the "
@@ -1427,7 +1442,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                             f"from most frames between them, left out as likely false detections (frames "
                             f"{_frames_summary(where)})")
         warnings += dropped
-    warnings.extend(rejoin_notes(rejoin_tracks(frames, fps=fps, rejoin_s=rejoin_s)))  # (after false detections)
+    # (after false detections; then the ids without the gaps those and the rejoined tracks leave)
+    warnings.extend(rejoin_notes(renumber_tracks(frames, rejoin_tracks(frames, fps=fps, rejoin_s=rejoin_s))))
     low = [_left_out_note(left_out, left_out_text([v for _, v in left_out], min_score, detector=estimator.name))
            ] if left_out else []
     if frames and len(nobody) == len(frames):
@@ -1614,7 +1630,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
         lifted_2d[at[i]] = seen[k:k + c]
         k += c
     out = track_lifted(lifted, fps=ks.fps, focal=f, smoothing=smoothing, person_ids=ids, names=kept_names)
-    warnings.extend(rejoin_notes(rejoin_tracks(out, fps=ks.fps, rejoin_s=rejoin_s)))
+    warnings.extend(rejoin_notes(renumber_tracks(out, rejoin_tracks(out, fps=ks.fps, rejoin_s=rejoin_s))))
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))

@@ -1796,3 +1796,21 @@ def test_sequence_tracker_takes_torch_tensors_as_lift_does():
     np.testing.assert_allclose(sa[0].root, sb[0].root)
     np.testing.assert_allclose(sa[0].keypoints_2d, sb[0].keypoints_2d)
     assert sa[0].track_id == sb[0].track_id == 1 and sb[0].scores is not None and sb[0].scores.dtype == np.float64
+
+
+def test_output_track_ids_have_no_gaps():
+    """A developer trial: a video's two people were tracks 1 and 4, the tracker's 2 and 3 having gone to false
+    detections that were left out. The output's ids are 1, 2, ... in order of first appearance, and a rejoin's note
+    names the renumbered id."""
+    from lifter.video import FrameResult, PersonState, Rejoin, renumber_tracks
+
+    def person(tid: int) -> PersonState:
+        z = np.zeros(3)
+        return PersonState(track_id=tid, keypoints_2d=np.zeros((17, 2)), root=z, relative=np.zeros((17, 3)),
+                           root_raw=z, relative_raw=np.zeros((17, 3)), canonical_depth=1.0)
+
+    frames = [FrameResult(0, 0.0, [person(4)]), FrameResult(1, 0.1, [person(4), person(9)]),
+              FrameResult(2, 0.2, [person(7), person(9)])]
+    joined = renumber_tracks(frames, [Rejoin(9, 12, 2, 1.5)])
+    assert [[q.track_id for q in fr.people] for fr in frames] == [[1], [1, 2], [3, 2]]
+    assert joined == [Rejoin(2, 12, 2, 1.5)]
