@@ -17,6 +17,7 @@ import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from lifter._text import plain_text
 
@@ -75,9 +76,20 @@ def start_lines(*, url: str, requested_port: int, actual_port: int, h36m: Path |
     return lines
 
 
+class _OneLineErrors(argparse.ArgumentParser):
+    """argparse, but a bad option is one ``error: ...`` line (exit code 2), as the app's other start-up errors are,
+    not the usage block first (a README trial's ``--port 99999``)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"error: {message} (poselifter-app --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="poselifter-app", description=plain_text(__doc__),
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    from lifter import __version__
+
+    p = _OneLineErrors(prog="poselifter-app", description=plain_text(__doc__),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"poselifter-app {__version__}")
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1, local only)")
     p.add_argument("--port", type=_port, default=8080,
                    help="port 0-65535 (default 8080; 0 = any free port; a busy port: the next free one, and a "

@@ -1662,7 +1662,20 @@ def test_bad_port_or_host_exits_quickly(args, expect) -> None:
     r = subprocess.run([sys.executable, "-m", "poselifter_app.main", "--no-h36m", *args], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 2 and expect in r.stderr and "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()  # (one error line; websockets' INFO lines where the server had started)
+    assert "usage:" not in r.stderr and [ln for ln in lines if "error" in ln] == lines[-1:], r.stderr
     assert time.time() - t0 < 30
+
+
+def test_app_version() -> None:
+    import subprocess
+    import sys
+
+    import lifter
+
+    r = subprocess.run([sys.executable, "-m", "poselifter_app.main", "--version"], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 0 and r.stdout.strip() == f"poselifter-app {lifter.__version__}"
 
 
 def test_default_view_shows_camera_and_person_for_h36m_frames(h36m_app: PoseLifterApp) -> None:
