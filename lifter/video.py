@@ -1170,10 +1170,14 @@ def track_root_step_notes(frames: list[FrameResult], *, fps: float) -> list[str]
         a, b, step = hits[0]
         more = (f", and in {len(hits) - 1} more place(s): {_frames_summary([q[1] for q in hits[1:]])}"
                 if len(hits) > 1 else "")
+        dt = (b - a) / fps
         notes.append(f"track {tid}: its root moves {step / 1000:.2f} m between frames {a} and {b}, and stays moved "
                      f"(the median of the {w} frames either side){more}: two people under one track (an id given to "
                      "someone else, or two tracks swapped where people cross), or 2D wrong for a while; check those "
-                     "frames, and give each person their own id (a keypoint sequence's person_id) where they are two")
+                     "frames, and give each person their own id (a keypoint sequence's person_id) where they are two; "
+                     f"or, if it is one person, the frames lie further apart in time than {fps:g} frames/s says "
+                     f"({step / 1000 / dt:.0f} m/s at that rate: a slideshow or a time-lapse? a video's --video-fps, a "
+                     "sequence's fps)")
     return notes
 
 

@@ -1596,6 +1596,8 @@ def test_a_track_whose_root_steps_and_stays_is_named():
     (note,) = track_root_step_notes(_root_track(stepped, 50.0), fps=50.0)
     assert note.startswith("track 1: its root moves 0.9") and "between frames 249 and 250, and stays moved" in note
     assert "two people under one track" in note and "give each person their own id" in note
+    # (a developer trial's 1-s slideshow labelled 10 fps: the speed at the stated rate says what else it may be)
+    assert "further apart in time than 50 frames/s says (4" in note and "m/s at that rate" in note
     frames = list(range(250)) + list(range(300, 350))  # (gone 1 s, back elsewhere: not a step)
     assert track_root_steps(_root_track(stepped[:300], 50.0, frames), fps=50.0) == {}
     slow = base + np.linspace(0, 1, 300)[:, None] * [0, 0, 1500.0]  # (1.5 m in 6 s: walking away)
