@@ -70,7 +70,7 @@ def start_lines(*, url: str, requested_port: int, actual_port: int, h36m: Path |
     if requested_port != 0 and actual_port != requested_port:
         lines.append(f"note: port {requested_port} is busy (another poselifter-app?), so this one serves on "
                      f"{actual_port}: open the URL below (--port to choose another)")
-    where = (str(h36m) if h36m is not None else "off (--no-h36m)" if no_h36m else
+    where = (str(h36m.resolve()) if h36m is not None else "off (--no-h36m)" if no_h36m else
              f"not found at {default_h36m_dir().resolve()}, demo samples only (--h36m DIR or $POSELIFTER_H36M)")
     lines.append(f"poselifter app: {url}  (Human3.6M: {where}; models: {list(models)})")
     return lines

@@ -326,11 +326,11 @@ def small_person_notes(heights_px: list[float], *, downscaled: bool = False) -> 
             "px); a larger photo of them helps"]
 
 
-EDGE_NEAR: Final[float] = 0.1
+EDGE_NEAR: Final[float] = 0.15
 """An unsure joint within this share of the image's height (or width) of its bottom or top (left or right) edge is
 named as near that edge (:func:`joint_doubt_notes`): a limb cut off by the edge is placed inside the image by the
 detector, and scored low (a developer trial's photo cut at the waist: the ankles were put 31 and 58 px above the
-bottom of a 480-px image, and the note said only "an occluded or blurred limb")."""
+bottom of a 480-px image, 6 and 12 % of its height, and the note said only "an occluded or blurred limb")."""
 
 
 def joint_doubt_notes(scores: np.ndarray, keypoints: np.ndarray | None = None,

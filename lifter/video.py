@@ -765,12 +765,20 @@ class _Followed:
         self.people = [q for q in self.people if frame - q[0] <= self.horizon]
         self.others = [q for q in self.others if frame - q[0] <= max(self.recent, 1)]
         held = len(self.people) >= self.max_people
+        # (each remembered other continues at most one unnamed box of this frame, the best overlapping first, so that
+        # someone standing where the other stood is not taken for them while the other is there too)
+        claims: dict[int, int] = {}  # box -> its entry in self.others
+        pairs = sorted(((box_iou(b, boxes[j]), e, j) for e, (_, b) in enumerate(self.others)
+                        for j in range(len(boxes)) if names[j] is None), reverse=True)
+        for o, e, j in pairs:
+            if o >= TRACKED_IOU and e not in claims.values() and j not in claims:
+                claims[j] = e
 
         def other(j: int) -> bool:
-            if names[j] is not None or not held:
+            if not held or j not in claims:
                 return False
-            o = max((box_iou(b, boxes[j]) for _, b in self.others), default=0.0)
-            return o >= TRACKED_IOU and o > max((box_iou(b, boxes[j]) for _, b, _ in self.people), default=0.0)
+            o = box_iou(self.others[claims[j]][1], boxes[j])
+            return o > max((box_iou(b, boxes[j]) for _, b, _ in self.people), default=0.0)
 
         is_other = [other(j) for j in range(len(boxes))]
         full = held and all(frame - q[0] <= self.recent for q in self.people)
@@ -814,11 +822,12 @@ class _Followed:
                     k = max(near)[1]
                     self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
                     taken.add(k)
-        # (everyone unnamed not lifted is someone else, followed frame to frame by their boxes; one lifted is not)
-        for j in range(len(boxes)):
-            self.others = [q for q in self.others if box_iou(q[1], boxes[j]) < TRACKED_IOU]
-            if j not in keep and names[j] is None:
-                self.others.append((frame, np.asarray(boxes[j], np.float64)))
+        # (the unnamed people not lifted in a frame where a followed person was: someone else, followed from frame to
+        # frame by their boxes as long as they are not lifted; not a stranger set aside while the followed were away)
+        beside = bool(taken)
+        self.others = [q for e, q in enumerate(self.others) if e not in claims.values()] + [
+            (frame, np.asarray(boxes[j], np.float64)) for j in range(len(boxes))
+            if j not in keep and names[j] is None and (beside or j in claims)]
         return keep
 
 

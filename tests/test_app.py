@@ -2901,7 +2901,8 @@ def test_start_lines_say_a_busy_port_and_where_human36m_was_looked_for(monkeypat
     assert moved[1].startswith("poselifter app: http://127.0.0.1:8081  (Human3.6M: not found at "
                                f"{(tmp_path / 'h36m').resolve()}, demo samples only (--h36m DIR")
     same = start_lines(requested_port=8081, actual_port=8081, h36m=tmp_path, no_h36m=False, **kw)
-    assert same == [f"poselifter app: http://127.0.0.1:8081  (Human3.6M: {tmp_path}; models: ['universal_far'])"]
+    assert same == [f"poselifter app: http://127.0.0.1:8081  (Human3.6M: {tmp_path.resolve()}; models: "
+                    "['universal_far'])"]
     assert "off (--no-h36m)" in start_lines(requested_port=0, actual_port=43210, h36m=None, no_h36m=True, **kw)[0]
 
 

@@ -1085,7 +1085,7 @@ def test_unsure_joints_near_the_image_edge_are_named_as_near_it():
     from lifter.pipeline import EDGE_NEAR, joint_doubt_notes
     from lifter.skeleton import JOINT_NAMES
 
-    assert EDGE_NEAR == 0.1
+    assert EDGE_NEAR == 0.15
     kp = np.tile([[320.0, 200.0]], (17, 1))
     scores = np.full(17, 0.9)
     r_ankle, l_ankle, l_wrist = (JOINT_NAMES.index(n) for n in ("r_ankle", "l_ankle", "l_wrist"))
@@ -1093,10 +1093,10 @@ def test_unsure_joints_near_the_image_edge_are_named_as_near_it():
     scores[[r_ankle, l_ankle, l_wrist]] = [0.1, 0.2, 0.25]
     note = joint_doubt_notes(scores[None], kp[None], (640, 480))
     assert note == ["the detector is unsure of some joints (score below 0.3): r_ankle (0.10, near the bottom edge), "
-                    "l_ankle (0.20), l_wrist (0.25, near the right edge): their 2D, and so their 3D, may be off (an "
-                    "occluded or blurred limb, or, near the edge, one outside the image that the detector placed "
-                    "inside it?)"], note
-    kp[r_ankle], kp[l_wrist] = [300, 300], [300, 100]  # (none near an edge: the plain wording)
+                    "l_ankle (0.20, near the bottom edge), l_wrist (0.25, near the right edge): their 2D, and so "
+                    "their 3D, may be off (an occluded or blurred limb, or, near the edge, one outside the image that "
+                    "the detector placed inside it?)"], note
+    kp[r_ankle], kp[l_ankle], kp[l_wrist] = [300, 300], [340, 300], [300, 100]  # (none near an edge: plain)
     assert joint_doubt_notes(scores[None], kp[None], (640, 480))[0].endswith("(an occluded or blurred limb?)")
 
 

@@ -1516,6 +1516,32 @@ def test_max_people_keeps_the_followed_place_from_a_neighbour_while_they_are_hid
     assert followed.keep(4, [t, a, s], [None] * 3) == [1]  # back: followed again
 
 
+def test_the_person_beside_the_followed_one_is_known_in_front_or_behind_and_a_stranger_is_not():
+    """A review of the memory of the people beside the followed one: one in front (larger, so listed first) and
+    overlapping the followed person was forgotten every frame, so while the followed one was hidden behind them they
+    were lifted and took the followed place; and a stranger set aside in the first 0.25 s was then held for the whole
+    second as if seen beside them."""
+    from lifter.video import _Followed
+
+    def box(x: float, w: float = 100.0, h: float = 200.0) -> np.ndarray:
+        return np.array([x, 0.0, w, h])
+
+    for o in (box(140, 120, 240), box(160, 80, 160)):  # in front (overlap 0.33), behind
+        followed, got = _Followed.at_fps(max_people=1, fps=10), []
+        for i in range(25):
+            people = ([("F", box(100))] if i not in range(10, 16) else []) + ([("O", o)] if i >= 3 else [])
+            people.sort(key=lambda q: -q[1][2] * q[1][3])  # (largest first, as the callers give them)
+            keep = followed.keep(i, [b for _, b in people], [None] * len(people))
+            got.append("".join(people[k][0] for k in keep) or "-")
+        assert "".join(got) == "F" * 10 + "-" * 6 + "F" * 9, (o, got)
+    followed, got = _Followed.at_fps(max_people=1, fps=25), []  # (0.25 s = 6 frames)
+    for i in range(30):
+        people = [box(100)] if i < 10 else [box(400)] if i >= 11 else []  # F gone for good; X, never beside F
+        got.append(len(followed.keep(i, people, [None] * len(people))))
+    assert got == [1] * 10 + [0] * 6 + [1] * 14, got  # (X set aside up to 0.25 s after F's last frame, 9)
+    assert followed.aside_note() and "5 frame(s) (11, 12, 13, 14, 15)" in followed.aside_note()[0]
+
+
 def test_sequence_tracker_refuses_nan_and_frames_out_of_order():
     """A user trial: one NaN root left its track's smoother NaN for good, silently; a step back in time was taken
     after the tracker had already moved."""
