@@ -237,8 +237,8 @@ def build_gui(gui: viser.GuiApi, *, demo_names: list[str], sources: list[str], m
                                    hint="look straight at the 2D joints on the image plane"),
             person=cast(viser.GuiDropdownHandle[str], gui.add_dropdown(
                 "person", ["person 1"], initial_value="person 1", disabled=True,
-                hint="photos with several people: whose joints are draggable (1 = largest); everyone is lifted "
-                     "into the same camera space")),
+                hint="photos with several people: whose joints are draggable (1 = largest; in a video, the track's "
+                     "number); everyone is lifted into the same camera space")),
             joint=gui.add_dropdown("joint", list(JOINT_NAMES), initial_value=JOINT_NAMES[0]),
             uv=gui.add_vector2("joint (u, v) px", (0.0, 0.0), step=1.0,
                                hint="type a position to move the joint (applied when the typing pauses)"),

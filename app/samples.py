@@ -8,6 +8,7 @@ time from its folder and never copied.
 
 from __future__ import annotations
 
+import re
 import threading
 from dataclasses import dataclass
 from functools import lru_cache
@@ -69,8 +70,13 @@ class Sample:
         return self.person_tags[k] if 0 <= k < len(self.person_tags) else ""
 
     def person_name(self, k: int) -> str:
-        """How the picker, the readout and the 3D labels name person ``k``: :func:`person_label` with its tag."""
-        return person_label(k, self.person_tag(k))
+        """How the picker, the readout and the 3D labels name person ``k``: :func:`person_label` with its tag; a
+        tracked person (a video's or keypoint sequence's frame, tag ``"track N"``) is person N in every frame (a
+        browser trial's track 2 was "person 2" in one frame and "person 1" in those where track 1 was missing; the
+        output's tracks are numbered 1, 2, ... without gaps, :func:`lifter.video.renumber_tracks`)."""
+        tag = self.person_tag(k)
+        track = re.match(r"track (\d+)", tag)
+        return person_label(int(track.group(1)) - 1 if track else k, tag)
 
 
 def id_tag(person_id: object) -> str:

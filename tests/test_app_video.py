@@ -745,3 +745,16 @@ def test_a_sequence_with_an_empty_frame_names_each_frame_s_own_number(server) ->
     assert wait_for(lambda: "frame 3 of 0–6 (10 fps) · the file's frame 4 (0.40 s)" in v.gui.play.info.content), \
         v.gui.play.info.content
     np.testing.assert_allclose(v.state.keypoints, people[4][0], atol=1e-6)
+
+
+def test_a_tracked_person_keeps_their_number_in_frames_another_track_is_missing_from() -> None:
+    """A browser trial: in a video, track 2 was "person 2 (track 2)" in one frame and "person 1 (track 2)" in the
+    frames where track 1 was missing. A tracked person is person N (track N) in every frame; others keep the order."""
+    import numpy as np
+    from poselifter_app.samples import Sample
+
+    kw = {"key": "k", "label": "l", "keypoints_2d": np.zeros((17, 2)), "pose_3d": None, "detected_2d": None,
+          "camera": None, "image": None}
+    assert Sample(**kw, person_tags=("track 2",)).person_name(0) == "person 2 (track 2)"
+    assert Sample(**kw, person_tags=("track 1", "track 3, id kid")).person_name(1) == "person 3 (track 3, id kid)"
+    assert Sample(**kw, others_2d=(np.zeros((17, 2)),), person_tags=("id 7", "")).person_name(1) == "person 2"
