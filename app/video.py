@@ -257,8 +257,14 @@ class VideoSequence:
                 # but its numbers differ once the upload's one-frame detections were left out: keep the upload's,
                 # which its notes and picker name)
                 st.track_id = was.track_id
-        note = (f"lifted again in the app: model {name!r} at focal length {float(focal_alpha(f)):.1f} px "
-                f"(the upload's: {rec.model!r} at {float(focal_alpha(rec.focal)):.1f} px)")
+        # (why, first: a browser trial's note after a drag alone read "model 'x' at 1144.4 px (the upload's: 'x' at
+        # 1144.4 px)", as if nothing had changed)
+        why = [*([f"model {name!r} in place of the upload's {rec.model!r}"] if name != rec.model else []),
+               *([f"focal length {float(focal_alpha(f)):.1f} px in place of the upload's "
+                  f"{float(focal_alpha(rec.focal)):.1f} px"] if not same_focal else []),
+               *(["2D joints corrected in the app, named below"] if corrected else [])]
+        note = (f"lifted again in the app ({'; '.join(why) or 'as uploaded'}): model {name!r} at focal length "
+                f"{float(focal_alpha(f)):.1f} px")
         if undistorted:
             note += ("; the 2D was undistorted with the lens at the upload's own focal length: keypoints_2d is that "
                      "undistorted 2D, and no 'distortion' is recorded")

@@ -936,13 +936,20 @@ def track_edge_notes(frames: list[FrameResult], image_size: tuple[int, int]) -> 
     return notes
 
 
-def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = ()) -> list[str]:
+FILE_GAP: Final[str] = ("the file does not give this person there, or they were left out for a missing joint or by "
+                         "--max-people")
+"""A keypoint sequence's reason for a track's gap (:func:`track_gap_notes`): no detector looked for the person (a
+browser trial read "not found there" of a person the file itself left out)."""
+
+
+def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = (),
+                    absent: str = "the person was not found there") -> list[str]:
     """One note per track that is missing from some of the frames between its first and last sighting: those frames
     have no pose for it (the detector missed the person there, or the file leaves them out), and a viewer that follows
     the person sees someone else or nobody there (a browser trial's two-person clip: track 1 missed in frames 16 and
     26, and the app's selection moved to track 2 without a word). ``left_out``: the frame indices where a detection
     (or a file's person) was left out below the score floor (:data:`lifter.detect.MIN_PERSON_SCORE`): a gap there is
-    said to be that, not "not found"."""
+    said to be that, not ``absent`` (a video's "not found"; a keypoint sequence's :data:`FILE_GAP`)."""
     notes: list[str] = []
     order = [fr.index for fr in frames]
     low = set(left_out)
@@ -955,13 +962,13 @@ def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = ()) 
             rest = len(gaps) - len(floored)
             floor = "a person scored below the score floor was left out, maybe this one"
             if not floored:
-                why = "the person was not found there"
+                why = absent
             elif not rest:
                 why = f"in those {floor}"
             else:
                 where = f"frame{'s' if len(floored) > 1 else ''} {_frames_summary(floored)}"
                 others = "frame" if rest == 1 else f"{rest} frames"
-                why = f"in {where} {floor}; in the other {others} the person was not found"
+                why = f"in {where} {floor}; in the other {others}: {absent}"
             notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
                          f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
                          f"no pose for it ({why})")
@@ -1647,7 +1654,7 @@ def lift_keypoint_sequence(path: str | Path, *, lifter: Any, focal: Any | None =
     if getattr(res, "warnings", ()):  # per frame and track (the batch's own notes count people of all frames at once)
         warnings.extend(output_note_lines(tracked_output_notes(lifter.network_for(ks.source), out, pp,
                                                                source=ks.source, focal=f, lifted_2d=lifted_2d)))
-    warnings.extend(track_gap_notes(out, left_out=(i for i, _ in left_out)))
+    warnings.extend(track_gap_notes(out, left_out=(i for i, _ in left_out), absent=FILE_GAP))
     warnings.extend(track_jump_notes(out, fps=ks.fps))
     warnings.extend(track_root_step_notes(out, fps=ks.fps))
     given = [sc for *_, sc in lifted if sc is not None]

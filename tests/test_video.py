@@ -352,7 +352,13 @@ def test_track_gap_notes_name_the_frames_a_track_is_missing_from():
                if f.index == 4 else f for f in frames]  # (track 1 missing in frames 2 and 4; left out in 2 only)
     both = track_gap_notes(without, left_out=[2])
     assert both[0].endswith("no pose for it (in frame 2 a person scored below the score floor was left out, maybe "
-                            "this one; in the other frame the person was not found)"), both
+                            "this one; in the other frame: the person was not found there)"), both
+    # a keypoint sequence's gap: no detector looked (a browser trial read "not found" of a person the file left out)
+    from lifter.video import FILE_GAP
+
+    assert track_gap_notes(frames, absent=FILE_GAP)[0].endswith(
+        "no pose for it (the file does not give this person there, or they were left out for a missing joint or by "
+        "--max-people)")
 
 
 def test_a_sequence_result_lifted_again_keeps_its_scores(tmp_path):
