@@ -330,6 +330,10 @@ class SessionView:
         self._sticky_note: Any = None
         self._upload_left: SessionState | None = None
         """The state of a still upload (photo, keypoint file) left with corrected joints: restored on coming back."""
+        self._frames_left: dict[str, SessionState] = {}
+        """The states of an uploaded video's or keypoint sequence's frames left with corrected joints, by sample key:
+        restored when the frame is shown again, and lifted in the download (a browser trial's drag on a frame was
+        dropped on scrubbing to the next, so one frame at a time could be corrected); another sequence's go."""
         self._followed: tuple[str, str] | None = None
         """``(video key, person tag)`` of the person picked in a video (at first, its first frame's first person):
         selected again in each frame that has them (:meth:`_follow`; a trial's pick went back to the first track on
@@ -1120,6 +1124,20 @@ class SessionView:
             st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
                            others_dragged=left.others_dragged, input_kind=left.input_kind)
             self._upload_left = None
+        frames_left = dict(self._frames_left)  # (taken back with the rest when the sample cannot be shown)
+        if source_of(old.sample.key) == "video" and old.sample.key != sample.key:
+            if old.dragged or any(old.others_dragged.values()):
+                self._frames_left[old.sample.key] = old
+            else:
+                self._frames_left.pop(old.sample.key, None)
+        if source_of(sample.key) == "video":
+            self._frames_left = {k: v for k, v in self._frames_left.items()
+                                 if sequence_of(k) == sequence_of(sample.key)}
+            back = self._frames_left.pop(sample.key, None)
+            if back is not None:  # (that frame's corrections, with the person followed now selected)
+                st = ss.with_person(st.evolve(keypoints=back.keypoints, dragged=back.dragged, person=back.person,
+                                              others=back.others, others_dragged=back.others_dragged,
+                                              input_kind=back.input_kind), st.person)
         src = source_of(sample.key)
         same = _same_camera(sample.camera, old.sample.camera, src=src, old_src=source_of(old.sample.key))
         kept = same and src in SEQUENCE_SOURCES  # (a still sample opens at its camera's own focal)
@@ -1137,6 +1155,7 @@ class SessionView:
             # not shown: the tab's own bookkeeping is taken back too (a review: joints corrected on an upload, waiting
             # for it, were forgotten when going back to it failed to draw)
             self._upload_left = upload_left
+            self._frames_left = frames_left
             if typed_focal_at is not None:
                 self._typed_at.setdefault("focal_px", typed_focal_at)
             # (the generation stays new: a key typed meanwhile was stamped with it; the (u, v) being typed for the
@@ -1167,7 +1186,7 @@ class SessionView:
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
-        if moved and source_of(old.sample.key) != "upload" and old.sample.key != sample.key:
+        if moved and source_of(old.sample.key) not in ("upload", "video") and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
             self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped, "
                               "as another sample shows its own 2D (download the result first to keep them)")
@@ -1999,6 +2018,10 @@ class SessionView:
                 stem, model, focal = up.download_stem(st.sample), st.model, st.focal
                 at = frame_of(st.sample.key)
                 corrected = {} if at is None else seq.corrections(at, st.people_2d(), st.people_dragged())
+                for key, was in self._frames_left.items():  # (the other frames' corrections, kept for them)
+                    i = frame_of(key)
+                    if i is not None and sequence_of(key) == seq.key and key != st.sample.key:
+                        corrected.update(seq.corrections(i, was.people_2d(), was.people_dragged()))
             lifter = self.app.pool.get(model)  # (at the tab's model and focal length, as it shows them)
             if fmt == "json":
                 return f"{stem}.json", vid.sequence_json_bytes(seq, lifter=lifter, focal=focal, corrected=corrected)

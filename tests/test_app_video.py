@@ -763,3 +763,34 @@ def test_a_tracked_person_keeps_their_number_in_frames_another_track_is_missing_
     assert Sample(**kw, person_tags=("track 2",)).person_name(0) == "person 2 (track 2)"
     assert Sample(**kw, person_tags=("track 1", "track 3, id kid")).person_name(1) == "person 3 (track 3, id kid)"
     assert Sample(**kw, others_2d=(np.zeros((17, 2)),), person_tags=("id 7", "")).person_name(1) == "person 2"
+
+
+def test_a_sequence_s_corrected_joints_are_kept_frame_by_frame(server) -> None:
+    """A browser trial: a joint dragged on a video's frame was dropped on scrubbing to the next ("dropped, as another
+    sample shows its own 2D"), so one frame at a time could be corrected. Each frame keeps its corrections: back when
+    it is shown again, and every corrected frame lifted in the download."""
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    frames = [{"people": [{"keypoints": p.tolist()} for p in people]} for people in _script(10)]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("walk.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    moved = {}
+    for i in (6, 8):
+        v.gui.play.frame.value = i
+        assert wait_for(lambda i=i: v.state.sample.key.endswith(f"/{i}")), v.state.sample.key
+        moved[i] = np.asarray(v.state.keypoints[16]) + [30.0, -20.0 + i]
+        v.move_joint(16, moved[i])  # r_wrist
+    tid = int(v.state.sample.person_tag(v.state.person).split()[-1])
+    assert not any("dropped" in m for m in v.messages[-5:]), v.messages[-5:]
+    v.gui.play.frame.value = 6
+    assert wait_for(lambda: v.state.sample.key.endswith("/6")), v.state.sample.key
+    np.testing.assert_allclose(v.state.keypoints[16], moved[6], atol=1e-6)
+    assert 16 in v.state.dragged
+    after = json.loads(v.download_payload("json")[1])
+    for i in (6, 8):
+        person = next(p for p in after["frames"][i]["people"] if p["track_id"] == tid)
+        np.testing.assert_allclose(person["keypoints_2d"][16], moved[i], atol=1e-3)
+        assert f"2D joints corrected in the app: frame {i} (track {tid}): r_wrist" in after["warnings"]
+    # another upload: the first one's corrections go with it
+    assert v.load_upload("walk2.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assert not any("corrected" in w for w in json.loads(v.download_payload("json")[1])["warnings"])
