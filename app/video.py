@@ -436,7 +436,10 @@ def video_message(seq: VideoSequence) -> str:
     notes = [n for n in seq.info.warnings if n != seq.info.focal_detail]
     return (f"{seq.label}: everyone lifted, tracked and smoothed{per}; press play (Sample tab) to play it with the "
             f"root trajectories. Focal: {seq.info.focal_detail}."
-            + "".join(f"\n\nNote: {sentence(n)}" for n in notes))  # (each its own paragraph: a browser trial)
+            # (each its own paragraph: a browser trial; each says it is the upload's, as a focal length or model set
+            # since is not lifted until the download: a browser trial read "root moves 1.48 m" as current, where the
+            # download at twice the focal said 2.63 m)
+            + "".join(f"\n\nNote, as uploaded: {sentence(n)}" for n in notes))
 
 
 __all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json", "is_video_upload",

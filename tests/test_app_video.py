@@ -265,7 +265,8 @@ def test_keypoint_sequence_upload_plays_on_a_canvas(server, monkeypatch) -> None
         "the file gives no frame rate: assumed 30 frames/s for playback and smoothing (give \"fps\" at the file's top "
         "level)", f"no image_size in the file: that of the photo room.jpg uploaded before ({W} x {H} px) is used")
     said = next(m for m in reversed(v.messages) if m.startswith("bare.json"))
-    assert said.count("\n\nNote: ") >= 2, said  # (each note its own paragraph: a browser trial read a run-on one)
+    assert said.count("\n\nNote, as uploaded: ") >= 2, said  # (each its own paragraph: a browser trial read a run-on
+    # one; each the upload's: a later trial read a root step's metres, stale after a focal change, as current)
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same camera: the same)
     assert v.load_upload("mmpose.json", json.dumps({**mm, "fps": 10, "image_size": [W, H]}).encode()) is True
     assert v.frame.root == pytest.approx(seq.record.frames[0].people[0].root, abs=1e-3)  # (the same lift)
