@@ -33,7 +33,7 @@ import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Final, NamedTuple
 
@@ -1124,21 +1124,26 @@ class SessionView:
             st = st.evolve(keypoints=left.keypoints, dragged=left.dragged, person=left.person, others=left.others,
                            others_dragged=left.others_dragged, input_kind=left.input_kind)
             self._upload_left = None
+        src = source_of(sample.key)
         frames_left = dict(self._frames_left)  # (taken back with the rest when the sample cannot be shown)
         if source_of(old.sample.key) == "video" and old.sample.key != sample.key:
-            if old.dragged or any(old.others_dragged.values()):
-                self._frames_left[old.sample.key] = old
+            if old.dragged or any(old.others_dragged.values()):  # (without the frame's image: a review counted
+                # about 1 MB a frame of a real video)
+                self._frames_left[old.sample.key] = old.evolve(sample=replace(old.sample, image=None))
             else:
                 self._frames_left.pop(old.sample.key, None)
-        if source_of(sample.key) == "video":
+        gone_frames = 0
+        if src in UPLOADED_SOURCES:  # (another upload: the corrections of the one before go, and are said to)
+            gone_frames = sum(sequence_of(k) != sequence_of(sample.key) for k in self._frames_left)
             self._frames_left = {k: v for k, v in self._frames_left.items()
                                  if sequence_of(k) == sequence_of(sample.key)}
+        back = None
+        if src == "video":
             back = self._frames_left.pop(sample.key, None)
             if back is not None:  # (that frame's corrections, with the person followed now selected)
                 st = ss.with_person(st.evolve(keypoints=back.keypoints, dragged=back.dragged, person=back.person,
                                               others=back.others, others_dragged=back.others_dragged,
                                               input_kind=back.input_kind), st.person)
-        src = source_of(sample.key)
         same = _same_camera(sample.camera, old.sample.camera, src=src, old_src=source_of(old.sample.key))
         kept = same and src in SEQUENCE_SOURCES  # (a still sample opens at its camera's own focal)
         if kept:
@@ -1180,8 +1185,12 @@ class SessionView:
             self._still_frame_typed = self._typed_at.get("frame")
         # (h36m/S1/Walking 1/c3: said once per sequence, not per frame; a still sample is its own sequence)
         seq_key = sequence_of(sample.key)
-        if left is not None:
+        if left is not None or (back is not None and not self.playing):  # (not a note per frame while playing)
             self.show_message(f"{sample.label}: the joints you corrected are back")
+        if gone_frames:  # (a review: the corrections of a sequence's frames went with a new upload without a word)
+            self.show_message(f"the joints you corrected on {gone_frames} frame{'s' if gone_frames != 1 else ''} of "
+                              "the sequence shown before are dropped, as another upload is shown (download it first "
+                              "to keep them)")
         if follow_note is not None:
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])

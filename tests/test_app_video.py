@@ -792,6 +792,26 @@ def test_a_sequence_s_corrected_joints_are_kept_frame_by_frame(server) -> None:
         person = next(p for p in after["frames"][i]["people"] if p["track_id"] == tid)
         np.testing.assert_allclose(person["keypoints_2d"][16], moved[i], atol=1e-3)
         assert f"2D joints corrected in the app: frame {i} (track {tid}): r_wrist" in after["warnings"]
-    # another upload: the first one's corrections go with it
+    # another upload: the first one's corrections go with it, and a note says so (a review: without a word)
+    v.gui.play.frame.value = 3
+    assert wait_for(lambda: v.state.sample.key.endswith("/3")), v.state.sample.key
     assert v.load_upload("walk2.json", json.dumps(doc).encode()) is True, v.messages[-3:]
     assert not any("corrected" in w for w in json.loads(v.download_payload("json")[1])["warnings"])
+    assert any(m.startswith("the joints you corrected on 2 frames of the sequence shown before are dropped")
+               for m in v.messages[-4:]), v.messages[-4:]
+    assert not v._frames_left
+
+
+def test_a_bare_person_number_picks_that_track_in_a_video_frame() -> None:
+    """A review: labels carry the track's number ("person 2 (track 2)" is a frame's first person where track 1 is
+    missing), but a bare "person 2" typed picked by position (track 3), and "person 3" was refused."""
+    from poselifter_app import session as ss
+
+    from lifter import PoseLifterError
+
+    tags = ("track 2", "track 3")
+    assert ss.person_index("person 2", tags=tags) == 0 and ss.person_index("person 3", tags=tags) == 1
+    assert ss.person_index("person 3 (track 3)", tags=tags) == 1
+    with pytest.raises(PoseLifterError, match=r"person 1 is not in this frame: it has person 2, person 3"):
+        ss.person_index("person 1", tags=tags)
+    assert ss.person_index("person 2", tags=("id 7", "id 9")) == 1  # (no tracks: by position, as in a photo)
