@@ -171,6 +171,12 @@ DEFAULT_MAX_PEOPLE: Final[int] = 3
 DEFAULT_SEARCH_EVERY_S: Final[float] = 0.5
 """Videos: the whole frame is searched for (new) people at least this often, in seconds."""
 
+RETURN_SEARCH_S: Final[float] = 0.1
+"""Videos: while fewer people were seen in the last :data:`DEFAULT_SEARCH_EVERY_S` than before someone was lost (for
+up to :data:`REJOIN_MAX_S` after), the whole frame is searched this often instead (s; at least every frame): a
+browser trial's second person, hidden for 1 s, was lifted again 0.3 s after they were back in view, at the next full
+search (``python scripts/returning_person.py --hidden 10:22``)."""
+
 MIN_TRACK_FRAMES: Final[int] = 2
 """Videos of at least :data:`MIN_FRAMES_FOR_TRACK_FILTER` frames: a track the detector saw in fewer frames than this
 is left out (a person flashing up in one frame is almost always a false detection), with a warning naming the
@@ -1349,6 +1355,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         prev_count = 0
         last_search = -(10**9)
         search_every = max(1, round(search_every_s * fps)) if search_every_s > 0 else 1
+        return_every = min(search_every, max(1, round(RETURN_SEARCH_S * fps)))
+        missing_until, missing_count = -1, 0  # (someone lost: until then, while fewer than that, search more often)
         can_track = callable(getattr(estimator, "detect_near", None))
         followed = _Followed.at_fps(max_people=max_people, fps=fps)  # (--max-people)
         while index + 1 < limit:
@@ -1386,7 +1394,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 people = None
                 boxes = [b for seen, b in recent.values() if index - seen <= search_every]
                 left: list[float] = []
-                if can_track and boxes and index - last_search < search_every:
+                # (a near search still covers those seen in the last search_every frames: more often only beyond)
+                every = return_every if index <= missing_until and len(boxes) < missing_count else search_every
+                if can_track and boxes and index - last_search < every:
                     people, left = scored_people(people_h36m(img, estimator=estimator, near=boxes), min_score)
                     if len(people) < prev_count:
                         people = None  # someone was lost: search the whole frame
@@ -1420,7 +1430,11 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                                   np.asarray(res.relative).reshape(-1, 17, 3), cam[0],
                                   scores=np.stack([q.scores for q in people]))
             frames.append(FrameResult(index=index, time_s=t_s, people=states))
-            prev_count = len(states) + followed.set_aside  # (someone set aside: the next frame is searched whole)
+            lifted_now = len(states) + followed.set_aside  # (someone set aside: the next frame is searched whole)
+            if lifted_now < prev_count:  # (someone lost: searched for more often for a while, RETURN_SEARCH_S)
+                missing_count = max(prev_count, missing_count if index <= missing_until else 0)
+                missing_until = index + round(REJOIN_MAX_S * fps)
+            prev_count = lifted_now
             for st, q in zip(states, people):
                 recent[st.track_id] = (index, q.raw.bbox_xywh)
             recent = {tid: v for tid, v in recent.items() if index - v[0] <= search_every}

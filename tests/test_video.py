@@ -1069,6 +1069,24 @@ class FrameIndexedEstimator:
                            if any(b[0] <= k[0, 0] <= b[0] + b[2] and b[1] <= k[0, 1] <= b[1] + b[3] for b in boxes)])
 
 
+def test_video_searches_more_often_for_someone_lost_until_they_are_back(tmp_path, lifter):
+    """A browser trial: a second person, hidden for 1 s, was lifted again 0.3 s after they were back in view, at the
+    next full search. Once a lost person's box is older than the near searches cover, the whole frame is searched
+    every RETURN_SEARCH_S (every frame at 10 fps) until they are back; then every search_every_s again."""
+    from lifter.video import RETURN_SEARCH_S
+
+    assert RETURN_SEARCH_S == 0.1
+    clip = _write_clip(tmp_path / "t.avi", 20, fps=10.0)
+    script = _script(20)
+    for i in range(3, 12):  # (person 2 hidden in frames 3-11, back in frame 12: between full searches 8 and 13)
+        script[i] = script[i][:1]
+    est = FrameIndexedEstimator(script)
+    rec = lift_video(clip, lifter=lifter, estimator=est, focal=F, search_every_s=0.5, rejoin_s=0)
+    assert [len(f.people) for f in rec.frames] == [2] * 3 + [1] * 9 + [2] * 8
+    full = [i for kind, i in est.calls if kind == "full"]
+    assert full == [0, 3, 8, 9, 10, 11, 12, 17], est.calls  # (3: the loss; 4-7: near searches still cover them)
+
+
 def test_video_searches_near_tracked_people_between_full_searches(tmp_path, lifter):
     """A full search every search_every_s, a crop search in between, and a full search of the same frame when
     someone tracked is lost."""
