@@ -75,8 +75,8 @@ class Sample:
         browser trial's track 2 was "person 2" in one frame and "person 1" in those where track 1 was missing; the
         output's tracks are numbered 1, 2, ... without gaps, :func:`lifter.video.renumber_tracks`)."""
         tag = self.person_tag(k)
-        track = re.match(r"track (\d+)", tag)
-        return person_label(int(track.group(1)) - 1 if track else k, tag)
+        number = track_number(tag)
+        return person_label(k if number is None else number - 1, tag)
 
 
 def id_tag(person_id: object) -> str:
@@ -85,6 +85,12 @@ def id_tag(person_id: object) -> str:
     (:func:`person_label`) reads back, and it is cut to 40 characters."""
     text = str(person_id).replace("(", "[").replace(")", "]")
     return "id " + (text if len(text) <= 40 else text[:39] + "…")
+
+
+def track_number(tag: str) -> int | None:
+    """N of a tracked person's tag ``"track N"`` (``"track 3, id kid"`` too: :func:`app.video.track_tag`), else None."""
+    m = re.match(r"track (\d+)", tag)
+    return None if m is None else int(m.group(1))
 
 
 def person_label(k: int, tag: str = "") -> str:
@@ -225,4 +231,5 @@ def open_h36m(root: str) -> H36MCatalog:
     return H36MCatalog(Path(root))
 
 
-__all__ = ["ACTIONS", "DEFAULT_H36M_DIR", "DemoCatalog", "H36MCatalog", "Sample", "default_h36m_root", "open_h36m"]
+__all__ = ["ACTIONS", "DEFAULT_H36M_DIR", "DemoCatalog", "H36MCatalog", "Sample", "default_h36m_root", "open_h36m",
+           "track_number"]

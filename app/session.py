@@ -42,7 +42,7 @@ from .keys import (
     source_of,
     with_frame,
 )
-from .samples import Sample
+from .samples import Sample, track_number
 
 INPUT_KINDS: tuple[str, ...] = ("gt", "detected")
 
@@ -242,8 +242,6 @@ def reset_joints(state: SessionState) -> SessionState:
 
 
 _PERSON_LABEL = re.compile(r"person (\d+)(?: \(([^()]{0,60})\))?")
-_TRACK_TAG = re.compile(r"track (\d+)")
-"""A video's or keypoint sequence's person tag (:func:`app.video.track_tag`): the person's number in every frame."""
 
 
 def sequence_of_subject(sequences: Sequence[str], wanted: str) -> str:
@@ -269,10 +267,11 @@ def person_index(value: object, *, tags: tuple[str, ...] = ()) -> int:
         if m.group(2) and m.group(2) in tags and not (k < len(tags) and tags[k] == m.group(2)):
             return tags.index(m.group(2))  # (moved in this frame's order; one in its own place is that person: two
             # people whose ids read alike, "kid" twice, are each picked)
-        tracks = [_TRACK_TAG.match(t) for t in tags]
-        if not m.group(2) and any(tracks):  # (a tracked person is "person N" for their track N in every frame: a
-            # review typed "person 2" where the picker listed "person 2 (track 2)" first, and got track 3)
-            numbers = [int(t.group(1)) if t else i + 1 for i, t in enumerate(tracks)]
+        tracks = [track_number(t) for t in tags]
+        if not m.group(2) and any(n is not None for n in tracks):  # (a tracked person is "person N" for their
+            # track N in every frame: a review typed "person 2" where the picker listed "person 2 (track 2)" first,
+            # and got track 3)
+            numbers = [i + 1 if n is None else n for i, n in enumerate(tracks)]
             if k + 1 not in numbers:
                 raise PoseLifterError(f"person {k + 1} is not in this frame: it has "
                                       + ", ".join(f"person {n}" for n in numbers))

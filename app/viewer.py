@@ -1195,7 +1195,7 @@ class SessionView:
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
-        if moved and source_of(old.sample.key) not in ("upload", "video") and old.sample.key != sample.key:
+        if moved and source_of(old.sample.key) not in UPLOADED_SOURCES and old.sample.key != sample.key:
             # (an upload's wait for it, above; a trial lost a demo's and a frame's drags on a switch, unsaid)
             self.show_message(f"{moved} dragged joint{'s' if moved != 1 else ''} on {old.sample.label} dropped, "
                               "as another sample shows its own 2D (download the result first to keep them)")

@@ -345,12 +345,11 @@ def joint_doubt_notes(scores: np.ndarray, keypoints: np.ndarray | None = None,
 
     s = np.asarray(scores, np.float64).reshape(-1, len(JOINT_NAMES))
     k = None if keypoints is None or image_size is None else np.asarray(keypoints, np.float64).reshape(-1, 17, 2)
-    size = None if image_size is None else np.asarray(image_size, np.float64)
 
     def edge(i: int, j: int) -> str:
-        if k is None or size is None:
+        if k is None or image_size is None:
             return ""
-        (x, y), (w, h) = k[i, j], size
+        (x, y), (w, h) = k[i, j], image_size
         near = [name for name, d, side in (("bottom", h - y, h), ("top", y, h), ("left", x, w), ("right", w - x, w))
                 if d <= EDGE_NEAR * side]
         return f", near the {near[0]} edge" if near else ""

@@ -774,11 +774,13 @@ class _Followed:
         # (each remembered other continues at most one unnamed box of this frame, the best overlapping first, so that
         # someone standing where the other stood is not taken for them while the other is there too)
         claims: dict[int, int] = {}  # box -> its entry in self.others
+        claimed: set[int] = set()  # (those entries)
         pairs = sorted(((box_iou(b, boxes[j]), e, j) for e, (_, b) in enumerate(self.others)
                         for j in range(len(boxes)) if names[j] is None), reverse=True)
         for o, e, j in pairs:
-            if o >= TRACKED_IOU and e not in claims.values() and j not in claims:
+            if o >= TRACKED_IOU and e not in claimed and j not in claims:
                 claims[j] = e
+                claimed.add(e)
 
         def other(j: int) -> bool:
             if not held or j not in claims:
@@ -831,7 +833,7 @@ class _Followed:
         # (the unnamed people not lifted in a frame where a followed person was: someone else, followed from frame to
         # frame by their boxes as long as they are not lifted; not a stranger set aside while the followed were away)
         beside = bool(taken)
-        self.others = [q for e, q in enumerate(self.others) if e not in claims.values()] + [
+        self.others = [q for e, q in enumerate(self.others) if e not in claimed] + [
             (frame, np.asarray(boxes[j], np.float64)) for j in range(len(boxes))
             if j not in keep and names[j] is None and (beside or j in claims)]
         return keep
