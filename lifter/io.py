@@ -37,6 +37,7 @@ import json
 import math
 import os
 import re
+import stat
 import tempfile
 import warnings
 from collections.abc import Sequence
@@ -1570,15 +1571,36 @@ def _read_umask() -> int:
 _UMASK: Final[int] = _read_umask()
 
 
+def _fsync_folder(folder: Path) -> None:
+    """``fsync`` a folder, so that a rename in it is on disk (POSIX; where a folder cannot be opened so, as on Windows,
+    nothing)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 def write_atomic(path: str | Path, data: bytes | memoryview | str) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder, ``fsync``, then a rename: a full disk
-    or a crash never leaves a partial or empty file behind (the temporary file is removed on failure). Refuses to
-    write through a symbolic link, so an existing link cannot redirect the write out of its folder."""
+    """Write ``data`` to ``path`` through a temporary file in the same folder, ``fsync``, then a rename (and an
+    ``fsync`` of the folder, so that the rename itself survives a power loss): a full disk or a crash never leaves a
+    partial or empty file behind (the temporary file is removed on failure). A file replaced keeps its permission
+    bits (a review's 0600 file came back 0644, readable by all); a new one follows the umask. Refuses to write
+    through a symbolic link, so an existing link cannot redirect the write out of its folder."""
     path = Path(path)
     if path.is_symlink():
         raise PoseLifterError(f"{path}: exists as a symbolic link; refusing to write through it (remove it, or "
                               "choose another output folder)")
     raw = data.encode("utf-8") if isinstance(data, str) else data
+    try:
+        mode = stat.S_IMODE(path.stat().st_mode)
+    except OSError:  # (no such file, or not one we may look at: a new file's mode)
+        mode = 0o666 & ~_UMASK
     try:
         # (the name cut to 64 characters: a 250-character output name that fits was refused as too long once
         # mkstemp's own characters were added; a security trial)
@@ -1590,9 +1612,10 @@ def write_atomic(path: str | Path, data: bytes | memoryview | str) -> Path:
         with os.fdopen(fd, "wb") as f:
             f.write(raw)
             f.flush()
-            os.fchmod(f.fileno(), 0o666 & ~_UMASK)  # mkstemp makes 0600; a new file normally follows the umask
+            os.fchmod(f.fileno(), mode)  # (mkstemp makes 0600)
             os.fsync(f.fileno())
         os.replace(tmp, path)
+        _fsync_folder(path.parent)
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
         raise PoseLifterError(f"{path}: could not write ({exc.strerror or exc})") from None

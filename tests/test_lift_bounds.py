@@ -75,6 +75,19 @@ def test_written_files_follow_the_umask(tmp_path):
     assert [f.name for f in ck.parent.iterdir()] == ["m.pt"]  # no temporary file left
 
 
+def test_a_replaced_file_keeps_its_permissions(tmp_path):
+    """A review: a 0600 file (a result kept private) came back 0644, readable by all, once written again."""
+    from lifter.io import write_atomic
+
+    p = write_atomic(tmp_path / "x.json", "{}")
+    p.chmod(0o600)
+    write_atomic(p, '{"a": 1}')
+    assert (p.stat().st_mode & 0o777) == 0o600 and p.read_text() == '{"a": 1}'
+    p.chmod(0o640)
+    write_atomic(p, b"{}")
+    assert (p.stat().st_mode & 0o777) == 0o640
+
+
 def test_atomic_write_into_a_missing_folder_names_the_problem(tmp_path):
     from lifter.io import write_json_atomic
 

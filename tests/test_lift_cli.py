@@ -447,6 +447,44 @@ def test_exit_code_when_all_fail(tmp_path, weights, capsys):
     assert code == 2 and "--focal takes" in err
 
 
+def test_a_file_of_the_users_in_out_is_not_replaced(tmp_path, weights, kp17, capsys):
+    """A review: keypoints ``photo.json`` kept beside ``photo.jpg`` and lifted with ``--out`` that folder were
+    replaced by the result of another input of that name, with exit 0 and no note. A JSON in the output folder that
+    is not a poselifter result is the user's: left as it is, the result named otherwise, and said."""
+    (tmp_path / "src").mkdir()
+    src = _kp_json(tmp_path / "src" / "photo.json", kp17)
+    mine = tmp_path / "o" / "photo.json"
+    mine.parent.mkdir()
+    mine.write_text('{"keypoints": "mine"}')
+    code, err = run([str(src), "--out", str(mine.parent), "--weights", str(weights)], capsys)
+    assert code == 0 and "lifted 1 of 1" in err
+    assert mine.read_text() == '{"keypoints": "mine"}'
+    assert f"its results are named photo_json.* (photo.json in {mine.parent} is not a poselifter result" in err
+    assert json.loads((mine.parent / "photo_json.json").read_text())["units"]
+    # a result of an earlier run is replaced, as before (the same input's: no new name)
+    code, err = run([str(src), "--out", str(tmp_path / "p"), "--weights", str(weights)], capsys)
+    code, err = run([str(src), "--out", str(tmp_path / "p"), "--weights", str(weights)], capsys)
+    assert code == 0 and "its results are named" not in err and (tmp_path / "p" / "photo.json").is_file()
+
+
+def test_an_output_that_cannot_be_written_leaves_the_json_of_before(tmp_path, weights, kp17, capsys):
+    """A review: a run whose BVH could not be written replaced the JSON first, so the folder held a JSON at one focal
+    length and a BVH at another, and the error did not say which files were new. The JSON is written last."""
+    src = _kp_json(tmp_path / "k.json", kp17)
+    out = tmp_path / "o"
+    code, err = run([str(src), "--out", str(out), "--glb", "--bvh", "--weights", str(weights)], capsys)
+    assert code == 0
+    before = (out / "k.json").read_text()
+    (out / "k.bvh").unlink()
+    (out / "k.bvh").symlink_to(tmp_path / "elsewhere.bvh")  # (write_atomic refuses to write through a link)
+    code, err = run([str(src), "--out", str(out), "--glb", "--bvh", "--focal", "700", "--weights", str(weights)],
+                    capsys)
+    assert code == 1 and "lifted 0 of 1" in err and "symbolic link" in err
+    assert (out / "k.json").read_text() == before
+    assert (f"{src}: note: k.glb was written before the error; its JSON result, written last, was not (any in the "
+            "output folder is from before)") in err
+
+
 def test_strict_exit_code_when_any_input_fails(tmp_path, weights, kp17, capsys):
     """A developer trial: a batch where 4 of 7 inputs failed exited 0, as documented; a pipeline had no way to ask
     for all or nothing. --strict exits 1 when any input fails, and still writes what could be lifted."""
@@ -1204,9 +1242,20 @@ def test_symlinks_are_not_followed_out_of_the_output_folder(tmp_path, weights, k
     out = tmp_path / "o"
     out.mkdir()
     (out / "pose.json").symlink_to(outside)
-    code, err = run([str(_kp_json(tmp_path / "pose.json", kp17)), "--out", str(out), "--weights", str(weights)], capsys)
-    assert code == 1 and "symbolic link" in err
+    src = _kp_json(tmp_path / "pose.json", kp17)
+    code, err = run([str(src), "--out", str(out), "--weights", str(weights)], capsys)
+    # (not a result where it leads: the user's, so the result is named otherwise)
+    assert code == 0 and "its results are named pose_json.*" in err
     assert outside.read_text() == "keep me" and (out / "pose.json").is_symlink()
+    # a link to an earlier result is not written through either
+    res = tmp_path / "earlier.json"
+    res.write_text((out / "pose_json.json").read_text())
+    (out / "pose_json.json").unlink()
+    (out / "pose_json.json").symlink_to(res)
+    before = res.read_text()
+    code, err = run([str(src), "--out", str(out), "--weights", str(weights)], capsys)
+    assert code == 1 and "symbolic link" in err
+    assert res.read_text() == before and (out / "pose_json.json").is_symlink()
 
 
 def test_dangling_symlinks_and_other_files_are_named(tmp_path, weights, kp17, capsys):
@@ -1854,8 +1903,9 @@ def test_openpose_per_frame_files_are_lifted_as_one_sequence(tmp_path, weights, 
 
 
 def test_ctrl_c_while_a_sequence_is_written_names_what_of_it_is_whole(tmp_path, weights, kp17, capsys, monkeypatch):
-    """Ctrl-C after a sequence's JSON is written but before its GLB: the line says the JSON is whole and the rest
-    not (a security trial's run said "interrupted after 0 of 1 input(s) lifted" with clip.json on disk)."""
+    """Ctrl-C after a sequence's BVH is written but before its GLB (and its JSON, written last): the line says the
+    BVH is whole and the rest not (a security trial's run said "interrupted after 0 of 1 input(s) lifted" with
+    clip.json on disk)."""
     from lifter.video import SequenceRecord
 
     def interrupted(self, path):  # noqa: ARG001
@@ -1869,8 +1919,8 @@ def test_ctrl_c_while_a_sequence_is_written_names_what_of_it_is_whole(tmp_path, 
     err = capsys.readouterr().err
     assert code == 130, err
     assert (f"interrupted after 0 of 1 input(s) lifted into {tmp_path / 'o'}; {seq}'s outputs were being written: "
-            "clip.json, clip_track1.bvh are whole, the rest of them not written") in err, err
-    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["clip.json", "clip_track1.bvh"]
+            "clip_track1.bvh is whole, the rest of them not written") in err, err
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["clip_track1.bvh"]
 
 
 def test_ctrl_c_while_an_earlier_run_s_outputs_are_tidied_counts_the_input(tmp_path, weights, kp17, capsys,

@@ -254,10 +254,17 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
     The stem; on a clash with an earlier input, ``<folder>_<stem>`` when the two sit in different folders, else
     ``<stem>_<suffix>``, then a number. A name whose JSON would overwrite one of the inputs is not used. With
     ``per_person`` (``--bvh``: ``<stem>_person<k>`` and ``<stem>_track<ID>`` files too), a stem is not used where
-    one input's per-person names would be another's (``a`` and ``a_person2``: a review lost a BVH so)."""
+    one input's per-person names would be another's (``a`` and ``a_person2``: a review lost a BVH so). Nor is one
+    whose JSON exists in ``out_dir`` and is not a ``poselifter lift`` result: a file of the user's (a review's
+    ``photo.json`` keypoints beside ``photo.jpg``, lifted with ``--out`` that folder, were replaced by the result)."""
     claimed: dict[str, Path] = {}
     inputs = {f.resolve() for f in files}
     names, notes = [], []
+
+    def not_ours(c: str) -> bool:
+        """Whether ``<c>.json`` in ``out_dir`` is an input or a file that is not a result (the user's own)."""
+        j = out_dir / f"{c}.json"
+        return j.resolve() in inputs or (j.exists() and not _is_result_file(j) and _result_input(j, j)[0] is None)
 
     def owner(c: str) -> Path | None:
         """The input that has ``c``, or whose per-person outputs could be named ``c``, or that could have ``c``'s."""
@@ -281,15 +288,17 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
             cands.append(f"{f.parent.name}_{stem}")
         cands += [f"{stem}_{f.suffix.lstrip('.').lower()}"] + [f"{stem}_{i}" for i in range(2, 10_000)]
         for c in cands:
-            if owner(c) is None and (out_dir / f"{c}.json").resolve() not in inputs:
+            if owner(c) is None and not not_ours(c):
                 break
         else:  # pragma: no cover
             raise PoseLifterError(f"cannot name the output of {f}")
         claimed[c] = f
         names.append(c)
         if c != stem:
-            if first is None:
+            if first is None and (out_dir / f"{stem}.json").resolve() in inputs:
                 why = f"{stem}.json in {out_dir} is an input"
+            elif first is None:
+                why = f"{stem}.json in {out_dir} is not a poselifter result, so it is left as it is"
             elif input_stem(first) == stem:
                 why = f"{first} is also named {stem}"
             else:
@@ -504,6 +513,12 @@ def run_lift(args: argparse.Namespace) -> int:
             raise PoseLifterError(f"{path}: cannot detect 2D keypoints: {estimator_error}")
         return estimator
 
+    def say_partial(path: Path, now: list[Path]) -> None:
+        """After an input's error: which of its outputs were written before it (its JSON, written last, was not)."""
+        if now:
+            say(f"{path}: note: {', '.join(q.name for q in now)} {'was' if len(now) == 1 else 'were'} written before "
+                "the error; its JSON result, written last, was not (any in the output folder is from before)")
+
     interrupted = False
     with limit_blas_threads(1):  # see lifter.video.lift_video: faster beside MediaPipe's threads
         seq_kw = {"smoothing": args.smoothing, "max_people": args.max_people, "max_seconds": args.max_seconds,
@@ -569,8 +584,6 @@ def run_lift(args: argparse.Namespace) -> int:
                         for msg in seq.warnings:
                             say(f"{path}: note: {msg}")
                     elif rec is not None:
-                        write_json_atomic(args.out / f"{name}.json", rec.to_dict())
-                        now.append(args.out / f"{name}.json")
                         poses = np.stack([q.absolute for q in rec.people]) if rec.people else rec.absolute[None]
                         if args.glb:
                             from ..export import write_glb
@@ -584,6 +597,10 @@ def run_lift(args: argparse.Namespace) -> int:
                                 bvh = args.out / (f"{name}.bvh" if k == 0 else f"{name}_person{k + 1}.bvh")
                                 write_bvh(pose, bvh)
                                 now.append(bvh)
+                        # (last: a GLB or BVH that cannot be written leaves the JSON of before, not a JSON that
+                        # disagrees with the files beside it, as a review's failed --focal run did)
+                        write_json_atomic(args.out / f"{name}.json", rec.to_dict())
+                        now.append(args.out / f"{name}.json")
                         for msg in rec.warnings:
                             say(f"{path}: note: {msg}")
                     written.update(now)
@@ -598,9 +615,11 @@ def run_lift(args: argparse.Namespace) -> int:
                     if misnamed is not None:  # (what it was read as, which the error may not say)
                         say(f"{path}: note: {misnamed}")
                     say(f"error: {msg if msg.startswith(str(path)) else f'{path}: {msg}'}")
+                    say_partial(path, now)
                     failed += 1
                 except Exception as exc:  # noqa: BLE001 -- one bad input must not stop the batch
                     say(f"error: {path}: unexpected {type(exc).__name__}: {exc}")
+                    say_partial(path, now)
                     failed += 1
         except KeyboardInterrupt:
             interrupted = True
@@ -677,12 +696,11 @@ def tidy_earlier_outputs(out: Path, name: str, written: set[Path], *, glb: bool,
 def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bool, bvh: bool,
                            say: Any = print, written: list[Path] | None = None) -> list[Path]:
     """``out/<name>.json`` for a lifted video or keypoint sequence; with ``bvh`` one animation per track
-    (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``. Returns the
+    (``<name>_track<ID>.bvh``, the track's own frames), with ``glb`` the animated scene ``<name>.glb``; the JSON
+    last, so that a GLB or BVH that cannot be written leaves the JSON of before. Returns the
     files written: ``written`` (a new list when None), each appended once it is whole, so a caller interrupted
     meanwhile knows which are."""
     written = [] if written is None else written
-    write_json_atomic(out / f"{name}.json", seq.to_dict())
-    written.append(out / f"{name}.json")
     tracks = seq.tracks()
     if bvh:
         from ..export import write_bvh_animation
@@ -697,4 +715,6 @@ def write_sequence_outputs(seq: SequenceRecord, out: Path, name: str, *, glb: bo
             written.append(seq.write_glb(out / f"{name}.glb"))
         else:
             say(f"{seq.input}: note: nobody in any frame; no GLB written")
+    write_json_atomic(out / f"{name}.json", seq.to_dict())  # (last: see the photo's outputs in main)
+    written.append(out / f"{name}.json")
     return written
