@@ -19,7 +19,7 @@ from typing import Final
 
 import numpy as np
 
-from ._checks import PoseLifterError
+from ._checks import PoseLifterError, warn_user
 
 ROOT_MIN_CUTOFF_HZ: Final[float] = 0.3
 """Root filter: cutoff (Hz) of a still root at strength 1."""
@@ -33,14 +33,18 @@ D_CUTOFF_HZ: Final[float] = 1.0
 """Cutoff (Hz) of the speed estimate that drives the adaptive cutoff."""
 
 
-def _alpha(cutoff: np.ndarray | float, dt: float) -> np.ndarray | float:
+def _alpha(cutoff: np.ndarray | float, dt: np.ndarray | float) -> np.ndarray | float:
     tau = 1.0 / (2.0 * math.pi * np.asarray(cutoff))
     return 1.0 / (1.0 + tau / dt)
 
 
 class OneEuroFilter:
     """A One-Euro filter over arrays of points ``(..., D)``; the speed of each point (norm over the last axis)
-    sets its cutoff. Call with the sample and its time (s); times must increase. ``reset()`` forgets the past."""
+    sets its cutoff. Call with the sample and its time (s); times must increase. ``reset()`` forgets the past.
+
+    A point with a non-finite coordinate (NaN: not known in this sample) is NaN in the output and leaves that point's
+    filter as it was; it goes on from its last known sample, over the time since then, when it is known again (a
+    review: one NaN sample made every later output NaN)."""
 
     def __init__(self, *, min_cutoff: float, beta: float, d_cutoff: float = D_CUTOFF_HZ) -> None:
         for name, v in (("min_cutoff", min_cutoff), ("d_cutoff", d_cutoff)):
@@ -52,25 +56,37 @@ class OneEuroFilter:
         self.reset()
 
     def reset(self) -> None:
-        self._x: np.ndarray | None = None
-        self._dx: np.ndarray | None = None
-        self._t: float | None = None
+        self._x: np.ndarray | None = None  # (..., D) the filtered points; NaN where never known
+        self._dx: np.ndarray | None = None  # (..., D) their filtered speeds
+        self._tp: np.ndarray | None = None  # (..., 1) the time each point was last known (NaN: never)
+        self._t: float | None = None  # the last sample's time
 
     def __call__(self, x: np.ndarray, t: float) -> np.ndarray:
         x = np.asarray(x, np.float64)
-        if self._x is None or self._t is None or self._dx is None or self._x.shape != x.shape:
-            self._x, self._dx, self._t = x.copy(), np.zeros_like(x), float(t)
+        t = float(t)
+        if not math.isfinite(t):
+            raise PoseLifterError(f"smoothing: a sample's time must be a finite number of seconds, got {t}")
+        known = np.isfinite(x).all(-1, keepdims=True)  # (..., 1)
+        x = np.where(known, x, np.nan)
+        if self._x is None or self._tp is None or self._dx is None or self._t is None or self._x.shape != x.shape:
+            self._x, self._dx, self._t = x.copy(), np.zeros_like(x), t
+            self._tp = np.where(known, t, np.nan)
             return x.copy()
-        dt = float(t) - self._t
-        if not dt > 0:
+        if not t > self._t:
             raise PoseLifterError(f"smoothing: sample times must increase, got {t} after {self._t}")
-        dx = (x - self._x) / dt
-        self._dx = self._dx + _alpha(self.d_cutoff, dt) * (dx - self._dx)
-        speed = np.linalg.norm(self._dx, axis=-1, keepdims=True)
-        a = _alpha(self.min_cutoff + self.beta * speed, dt)
-        self._x = self._x + a * (x - self._x)
-        self._t = float(t)
-        return self._x.copy()
+        had = np.isfinite(self._tp)
+        go = known & had  # (points known now and before: filtered; known now only: taken as they are)
+        dt = np.where(go, t - np.where(had, self._tp, t - 1.0), 1.0)
+        with np.errstate(invalid="ignore"):
+            dx = np.where(go, (x - self._x) / dt, 0.0)
+            self._dx = np.where(go, self._dx + _alpha(self.d_cutoff, dt) * (dx - self._dx),
+                                np.where(known, 0.0, self._dx))
+            speed = np.linalg.norm(self._dx, axis=-1, keepdims=True)
+            a = _alpha(self.min_cutoff + self.beta * speed, dt)
+            self._x = np.where(go, self._x + a * (x - self._x), np.where(known, x, self._x))
+        self._tp = np.where(known, t, self._tp)
+        self._t = t
+        return np.where(known, self._x, np.nan)
 
 
 MAX_STRENGTH: Final[float] = 10.0
@@ -115,11 +131,22 @@ class PoseSmoother:
 def smooth_sequence(root: np.ndarray, relative: np.ndarray, times: np.ndarray, *,
                     strength: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Run a :class:`PoseSmoother` over a whole sequence: ``root (T, 3)``, ``relative (T, J, 3)`` mm at
-    ``times (T,)`` s. Causal: row ``t`` of the output depends on rows ``<= t`` only."""
-    root, relative, times = np.asarray(root, np.float64), np.asarray(relative, np.float64), np.asarray(times)
-    if root.ndim != 2 or root.shape[1] != 3 or relative.shape[:1] != root.shape[:1] or times.shape != root.shape[:1]:
+    ``times (T,)`` s, increasing. Causal: row ``t`` of the output depends on rows ``<= t`` only. A NaN root or joint
+    (not known in that frame) is NaN in the output, and the filter goes on from that point's last known frame."""
+    root, relative = np.asarray(root, np.float64), np.asarray(relative, np.float64)
+    times = np.asarray(times, np.float64)
+    if (root.ndim != 2 or root.shape[1] != 3 or relative.ndim != 3 or relative.shape[2] != 3
+            or relative.shape[:1] != root.shape[:1] or times.shape != root.shape[:1]):
         raise PoseLifterError(f"smooth_sequence: expected root (T, 3), relative (T, J, 3), times (T,), got "
                               f"{root.shape}, {relative.shape}, {times.shape}")
+    if len(times) > 1 and not np.all(np.diff(times) > 0):
+        i = int(np.flatnonzero(~(np.diff(times) > 0))[0])
+        raise PoseLifterError(f"smooth_sequence: times must increase (seconds), got {times[i + 1]:g} after "
+                              f"{times[i]:g} at rows {i}, {i + 1}")
+    if len(times) > 2 and float(np.median(np.diff(times))) > 1.0:  # (the tracker says the same of its times)
+        step = float(np.median(np.diff(times)))
+        warn_user(f"smooth_sequence: the times are {step:g} apart (median), under one frame a second: if they are "
+                  "milliseconds or frame numbers, give seconds (ms / 1000, frame / fps): the cutoffs are in Hz")
     sm = PoseSmoother(strength)
     out_r, out_rel = np.empty_like(root), np.empty_like(relative)
     for i in range(len(root)):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from conftest import ScriptedEstimator, random_pose_cam, tiny_lifter
 
-from lifter import PoseLifterError
+from lifter import PoseLifterError, PoseLifterWarning
 from lifter.camera import project
 from lifter.cli import main
 from lifter.detect import Detection, bbox_of, register_estimator
@@ -83,6 +83,49 @@ def test_one_euro_is_causal_and_smooths():
     np.testing.assert_array_equal(r2[:120], r1[:120])
     r4, _ = smooth_sequence(noisy, rel, t, strength=4)
     assert acc(r4) < acc(r1)  # stronger = smoother
+
+
+def test_a_point_not_known_in_a_frame_is_skipped_not_spread():
+    """A review: one NaN root made every later smoothed root NaN, and an inf joint every later frame of that joint.
+    A point not known in a frame is NaN there only; its filter goes on from its last known frame, as if that frame
+    were not there; the other points are as without it."""
+    rng = np.random.default_rng(1)
+    t = np.arange(60) / 25.0
+    root = np.c_[np.sin(t), np.cos(t), 4 + 0 * t] * 1000 + rng.normal(0, 30, (60, 3))
+    rel = rng.normal(0, 200, (60, 17, 3))
+    rel[:, 0] = 0
+    r_all, q_all = smooth_sequence(root, rel, t)
+    bad_r, bad_q = root.copy(), rel.copy()
+    bad_r[10, 2] = np.nan
+    bad_q[[10, 11], 5, 0] = np.inf
+    r, q = smooth_sequence(bad_r, bad_q, t)
+    assert np.isnan(r[10]).all() and np.isfinite(np.delete(r, 10, 0)).all()
+    assert np.isnan(q[[10, 11], 5]).all() and np.isfinite(np.delete(q, [10, 11], 0)).all()
+    keep = np.delete(np.arange(60), 10)
+    r_skip, _ = smooth_sequence(root[keep], rel[keep], t[keep])
+    np.testing.assert_allclose(np.delete(r, 10, 0), r_skip, rtol=0, atol=1e-9)  # (as if frame 10 were not there)
+    others = [j for j in range(17) if j != 5]
+    np.testing.assert_array_equal(q[:, others], q_all[:, others])
+    keep = np.delete(np.arange(60), [10, 11])
+    _, q_skip = smooth_sequence(root[keep], rel[keep], t[keep])
+    np.testing.assert_allclose(np.delete(q[:, 5], [10, 11], 0), q_skip[:, 5], rtol=0, atol=1e-9)
+    # a root not known in the first frame: taken as it comes when first known
+    first = root.copy()
+    first[0] = np.nan
+    r, _ = smooth_sequence(first, rel, t)
+    np.testing.assert_allclose(r[1:], smooth_sequence(root[1:], rel[1:], t[1:])[0], rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(r_all, smooth_sequence(root, rel, t)[0])  # (inputs untouched)
+
+
+def test_smooth_sequence_says_what_is_wrong_with_its_input():
+    t = np.arange(10) / 25.0
+    root, rel = np.zeros((10, 3)) + [0, 0, 4000], np.zeros((10, 17, 3))
+    with pytest.raises(PoseLifterError, match=r"expected root \(T, 3\), relative \(T, J, 3\).*\(10, 3\)"):
+        smooth_sequence(root, rel[:, 0], t)  # (an IndexError before)
+    with pytest.raises(PoseLifterError, match="times must increase"):
+        smooth_sequence(root, rel, t[::-1])
+    with pytest.warns(PoseLifterWarning, match="if they are milliseconds or frame numbers, give seconds"):
+        smooth_sequence(root, rel, t * 1000)
 
 
 def test_smoothing_errors():
