@@ -23,7 +23,7 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, Final, Literal
 
 import numpy as np
 
@@ -386,11 +386,15 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     """A BVH animation of one person over ``T`` frames, ``poses (T, 17, 3)`` mm (camera frame), ``fps`` frames/s.
 
     A lifted pose's bone lengths change a little from frame to frame, so the animation is exact by
-    translation, not rotation: each OFFSET is the bone vector averaged over the frames, every joint has the
-    channels ``Xposition Yposition Zposition Zrotation Xrotation Yrotation``, the root's position is its
-    location in each frame and a joint's position channels hold its bone vector's change from the OFFSET
-    (added to it), with zero rotations. :func:`read_bvh_frames` reads it back exactly; an importer that ignores
-    position channels on non-root joints shows the average-length bones moving with the root.
+    translation, not rotation: each OFFSET is the bone vector averaged over the frames (the rest pose), every joint
+    has the channels ``Xposition Yposition Zposition Zrotation Xrotation Yrotation``, the root's position is its
+    location in each frame and a joint's position channels hold its whole bone vector in that frame (from its
+    parent, in the parent's frame), which **replaces** the OFFSET, with zero rotations: as Blender's BVH importer
+    and exporter read and write position channels. (Until 2026-12 they held the change from the OFFSET, added to it,
+    which Blender showed as bones a few mm long: ``read_bvh_frames(path, position_channels="add")`` reads such a
+    file.) :func:`read_bvh_frames` reads it back exactly; an importer that ignores position channels on non-root
+    joints shows the average-length bones moving with the root, and one that adds them to the OFFSET (three.js's
+    ``BVHLoader``) shows each bone about twice as long: the GLB (:func:`write_glb_animation`) is the file for those.
     """
     if units not in UNITS_MM:
         raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
@@ -413,7 +417,7 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     lines += ["MOTION", f"Frames: {len(p)}", f"Frame Time: {1.0 / fps:.6f}"]
     zeros = np.zeros(3)
     for t in range(len(p)):
-        lines.append(" ".join(fmt(np.r_[bones[t, j] - offsets[j], zeros]) for j in order))
+        lines.append(" ".join(fmt(np.r_[bones[t, j], zeros]) for j in order))
     return "\n".join(lines) + "\n"
 
 
@@ -440,11 +444,16 @@ def _rot(axis: str, deg: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def read_bvh_frames(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
+def read_bvh_frames(path: str | os.PathLike[str], *, units: str = "cm",
+                    position_channels: Literal["replace", "add"] = "replace") -> np.ndarray:
     """Forward kinematics of every frame of a BVH file (any joint names/channels; Euler angles in the listed
-    channel order, intrinsic; position channels add to a joint's OFFSET). Returns the positions of the joints
-    named like the H36M joints, ``(T, 17, 3)`` mm, camera frame (the inverse of :func:`write_bvh` and
-    :func:`write_bvh_animation`)."""
+    channel order, intrinsic). A joint's position channels are its translation from its parent, in place of its
+    OFFSET (``position_channels="replace"``, as Blender reads them), or added to the OFFSET (``"add"``: as three.js's
+    ``BVHLoader`` reads them, and as :func:`write_bvh_animation` wrote them until 2026-12); a root with an OFFSET of
+    zero, as this module writes, reads the same either way. Returns the positions of the joints named like the H36M
+    joints, ``(T, 17, 3)`` mm, camera frame (the inverse of :func:`write_bvh` and :func:`write_bvh_animation`)."""
+    if position_channels not in ("replace", "add"):
+        raise PoseLifterError(f"position_channels must be 'replace' or 'add', got {position_channels!r}")
     tokens = Path(path).read_text().split()
     i = 0
     joints: list[tuple[str, int, np.ndarray, list[str]]] = []  # name, parent, offset, channels
@@ -505,19 +514,21 @@ def read_bvh_frames(path: str | os.PathLike[str], *, units: str = "cm") -> np.nd
         k = 0
         for j, (_, par, off, ch) in enumerate(joints):
             R = np.eye(3)
-            trans = np.zeros(3)
+            local = off.copy() if position_channels == "add" else off
             for c in ch:
                 v = row[k]
                 k += 1
                 if c.endswith("position"):
-                    trans["XYZ".index(c[0])] = v
+                    if local is off:  # (replace: the channels given, the OFFSET's value for any not given)
+                        local = off.copy()
+                    local["XYZ".index(c[0])] = v + (off["XYZ".index(c[0])] if position_channels == "add" else 0.0)
                 else:
                     R = R @ _rot(c[0], v)
             if par < 0:
-                pos[j] = off + trans
+                pos[j] = local
                 rot[j] = R
             else:
-                pos[j] = pos[par] + rot[par] @ (off + trans)
+                pos[j] = pos[par] + rot[par] @ local
                 rot[j] = rot[par] @ R
         out[f] = np.stack([pos[names.index(n)] for n in JOINT_NAMES])
     return from_y_up(out * UNITS_MM[units])

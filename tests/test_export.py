@@ -21,7 +21,7 @@ from lifter.export import (
     write_bvh_animation,
     write_glb,
 )
-from lifter.skeleton import EDGES, JOINT_NAMES
+from lifter.skeleton import EDGES, JOINT_NAMES, PARENTS
 
 
 @pytest.fixture()
@@ -103,6 +103,53 @@ def test_bvh_animation_round_trip(tmp_path):
     np.testing.assert_allclose(read_bvh(p), poses[0], atol=1e-3)
     one = write_bvh(poses[3], tmp_path / "one.bvh")  # the single-pose writer still reads back
     np.testing.assert_allclose(read_bvh_frames(one)[0], poses[3], atol=1e-3)
+
+
+def test_bvh_animation_position_channels_are_the_whole_translation(tmp_path):
+    """A review: the animation's position channels held each bone's change from its OFFSET, added to it, where
+    Blender's importer and exporter take them as the joint's whole translation from its parent (the OFFSET being
+    the rest pose): imported so, every bone was a few mm long. Read here by the rule Blender uses (channel in place
+    of the OFFSET), each frame's bones are the lifted ones; a Blender-style root with an OFFSET and absolute position
+    channels reads at the channels; a file of the earlier convention reads with position_channels="add"."""
+    rng = np.random.default_rng(3)
+    poses = random_pose_cam(rng, 1)[0][None] + np.cumsum(rng.normal(0, 8, (12, 17, 3)), axis=0)
+    text = bvh_animation_text(poses, fps=25.0)
+    rows = np.array([[float(v) for v in line.split()] for line in text.split("Frame Time: 0.040000\n")[1].split("\n")
+                     if line.strip()])
+    assert rows.shape == (12, 17 * 6)
+    y_up = to_y_up(poses) / 10.0  # cm
+    par = np.array([max(q, 0) for q in PARENTS])
+    bones = y_up - y_up[:, par]
+    order = [JOINT_NAMES.index(line.split()[1]) for line in text.split("MOTION")[0].splitlines()
+             if line.strip().startswith(("ROOT", "JOINT"))]
+    for k, j in enumerate(order):  # (the channels alone give each frame's bone: no OFFSET added)
+        np.testing.assert_allclose(rows[:, 6 * k:6 * k + 3], y_up[:, 0] if j == 0 else bones[:, j], atol=1e-4)
+    np.testing.assert_allclose(rows[:, 3::6], 0.0)
+    np.testing.assert_allclose(rows[:, 4::6], 0.0)
+    # a Blender-style root: OFFSET at rest, channels absolute
+    blender = text.replace("ROOT pelvis\n{\n  OFFSET 0.00000 0.00000 0.00000",
+                           "ROOT pelvis\n{\n  OFFSET 0.00000 90.00000 0.00000")
+    assert blender != text
+    (tmp_path / "blender.bvh").write_text(blender)
+    np.testing.assert_allclose(read_bvh_frames(tmp_path / "blender.bvh"), poses, atol=1e-3)
+    # the earlier convention: channels = bone - OFFSET, read with position_channels="add"
+    offsets_by_joint = {}
+    lines = text.split("MOTION")[0].splitlines()
+    for i, line in enumerate(lines):
+        if line.strip().startswith(("ROOT", "JOINT")):
+            offsets_by_joint[JOINT_NAMES.index(line.split()[1])] = np.array(
+                [float(v) for v in lines[i + 2].split()[1:]])
+    old_rows = rows.copy()
+    for k, j in enumerate(order):
+        if j != 0:
+            old_rows[:, 6 * k:6 * k + 3] -= offsets_by_joint[j]
+    old_text = text.split("Frame Time: 0.040000\n")[0] + "Frame Time: 0.040000\n" + "\n".join(
+        " ".join(f"{v:.5f}" for v in r) for r in old_rows) + "\n"
+    (tmp_path / "old.bvh").write_text(old_text)
+    np.testing.assert_allclose(read_bvh_frames(tmp_path / "old.bvh", position_channels="add"), poses, atol=1e-3)
+    assert np.abs(read_bvh_frames(tmp_path / "old.bvh") - poses).max() > 50  # (not the same files)
+    with pytest.raises(PoseLifterError, match="position_channels must be 'replace' or 'add'"):
+        read_bvh_frames(tmp_path / "old.bvh", position_channels="sum")  # type: ignore[arg-type]
 
 
 def test_glb_animation_round_trip(tmp_path):
