@@ -156,8 +156,12 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
 
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
-    gets translation / rotation / scale channels sampled at every frame of the clip (LINEAR); in a frame
-    without the person, their nodes are scaled to zero (hidden). ``recorded``: the frame indices the input holds
+    gets translation / rotation / scale channels sampled at every frame of its track's span, from the frame before
+    the track's first to the frame after its last (LINEAR; before and after, glTF holds those keys, in which the
+    person is hidden), so a file grows with the frames people are seen in, not with the clip's length times the
+    number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB); in a frame without the
+    person, their nodes are scaled to zero (hidden). The clip's first and last frame and ``fps`` are in the
+    animation's ``extras``. ``recorded``: the frame indices the input holds
     (None: every frame): a frame it does not hold (a sequence that gives every other frame, a video frame that could
     not be read) is no frame without the person, and a person seen before and after it is interpolated there, as a
     BVH is (a developer trial's sequence of every other frame blinked at half its frame rate).
@@ -175,7 +179,12 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     clean: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     for tid, (idx, poses) in tracks.items():
         P = as_points(poses, name=f"track {tid} poses", dim=3, num_joints=NUM_JOINTS)
-        ii = np.asarray(idx, np.int64).reshape(-1)
+        given = np.asarray(idx).reshape(-1)
+        if given.size and not (np.issubdtype(given.dtype, np.number) and np.all(np.isfinite(given))
+                               and np.all(given == np.round(given)) and given.min() >= 0):
+            raise PoseLifterError(f"track {tid}: frame indices must be whole numbers >= 0 (frame i is at i / fps s), "
+                                  f"got {given[:5].tolist()}{' ...' if given.size > 5 else ''}")
+        ii = given.astype(np.int64)
         if P.ndim != 3 or len(P) != len(ii) or len(ii) == 0 or np.any(np.diff(ii) <= 0):
             raise PoseLifterError(f"track {tid}: expected increasing frame indices (n,) and poses (n, 17, 3), got "
                                   f"{ii.shape} and {tuple(P.shape)}")
@@ -191,7 +200,8 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     frames = np.arange(first, last + 1)
     T = len(frames)
     scene = trimesh.Scene()
-    channels: list[tuple[str, str, np.ndarray]] = []  # node name, path, (T, 3|4) values
+    channels: list[tuple[str, str, np.ndarray, int]] = []  # node name, path, (n, 3|4) values, its track's time
+    times: list[np.ndarray] = []  # (n,) frame numbers keyed, per track
     not_held = np.zeros(T, bool) if recorded is None else ~np.isin(frames, np.asarray(recorded))
     for tid, (ii, p) in sorted(clean.items()):
         present = np.isin(frames, ii)
@@ -208,6 +218,11 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
                 full[between] = np.stack([np.interp(frames[between], ii, flat[:, c]) for c in range(flat.shape[1])],
                                          axis=-1).reshape(-1, NUM_JOINTS, 3)
                 present = present | between
+        lo = max(int(np.searchsorted(frames, ii[0])) - 1, 0)  # (the frame before its first, hidden: held before)
+        hi = min(int(np.searchsorted(frames, ii[-1])) + 2, T)  # (past the frame after its last)
+        full, present = full[lo:hi], present[lo:hi]
+        times.append(frames[lo:hi])
+        key = len(times) - 1
         vis = present.astype(np.float64)[:, None]
         pre = f"track{tid}_"
         for j, name in enumerate(JOINT_NAMES):
@@ -215,7 +230,7 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
             sph.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
             nm = f"{pre}joint_{name}"
             scene.add_geometry(sph, node_name=nm, geom_name=nm)
-            channels += [(nm, "translation", full[:, j]), (nm, "scale", np.repeat(vis, 3, axis=1))]
+            channels += [(nm, "translation", full[:, j], key), (nm, "scale", np.repeat(vis, 3, axis=1), key)]
         for a_, b_ in EDGES:
             cyl = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, height=1.0, sections=12)
             cyl.apply_translation([0.0, 0.0, 0.5])  # from the origin along +z, unit length
@@ -227,7 +242,8 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
             d = v / np.maximum(length, 1e-9)[:, None]
             d[length < 1e-9] = [0.0, 0.0, 1.0]
             scale = np.stack([vis[:, 0], vis[:, 0], length * vis[:, 0]], axis=1)
-            channels += [(nm, "translation", full[:, a_]), (nm, "rotation", _quat_z_to(d)), (nm, "scale", scale)]
+            channels += [(nm, "translation", full[:, a_], key), (nm, "rotation", _quat_z_to(d), key),
+                         (nm, "scale", scale, key)]
     glb = scene.export(file_type="glb")
     if not isinstance(glb, bytes):  # pragma: no cover -- trimesh returns bytes for glb
         raise PoseLifterError("GLB export: trimesh returned no bytes")
@@ -252,18 +268,19 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
         return len(accessors) - 1
 
     node_of = {n.get("name"): i for i, n in enumerate(gltf["nodes"])}
-    time_acc = add((frames / fps).astype(np.float32), "SCALAR", minmax=True)
+    time_acc = [add((f / fps).astype(np.float32), "SCALAR", minmax=True) for f in times]
     samplers, chans = [], []
-    for nm, what, values in channels:
+    for nm, what, values, key in channels:
         node = node_of.get(nm)
         if node is None:  # pragma: no cover -- trimesh names nodes as given
             raise PoseLifterError(f"GLB export: node {nm} missing")
         gltf["nodes"][node].pop("matrix", None)
         gltf["nodes"][node][what] = [float(x) for x in values[0]]
-        samplers.append({"input": time_acc, "output": add(values, "VEC4" if what == "rotation" else "VEC3"),
+        samplers.append({"input": time_acc[key], "output": add(values, "VEC4" if what == "rotation" else "VEC3"),
                          "interpolation": "LINEAR"})
         chans.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": what}})
-    gltf["animations"] = [{"name": "poselifter", "samplers": samplers, "channels": chans}]
+    gltf["animations"] = [{"name": "poselifter", "samplers": samplers, "channels": chans,
+                           "extras": {"fps": float(fps), "first_frame": int(first), "last_frame": int(last)}}]
     while len(blob) % 4:
         blob.append(0)
     gltf["buffers"] = [{"byteLength": len(blob)}]
@@ -279,7 +296,8 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
 
 def read_glb_animation(path: str | os.PathLike[str]) -> tuple[np.ndarray, dict[int, np.ndarray]]:
     """``(times (T,) s, {track_id: joints (T, 17, 3) mm camera frame, NaN where the person is hidden})`` from a
-    GLB written by :func:`write_glb_animation` (the joint spheres' animated translations)."""
+    GLB written by :func:`write_glb_animation` (the joint spheres' animated translations): ``times`` every frame of
+    the clip (the animation's ``extras``; else every time any track is keyed at), a track NaN outside its keys."""
     import json
     import re
     import struct
@@ -302,27 +320,38 @@ def read_glb_animation(path: str | os.PathLike[str]) -> tuple[np.ndarray, dict[i
     anims = gltf.get("animations") or []
     if not anims:
         raise PoseLifterError(f"{path}: no animation in this GLB")
-    times: np.ndarray | None = None
-    joints: dict[int, np.ndarray] = {}
-    scales: dict[tuple[int, int], np.ndarray] = {}
+    keyed: list[tuple[int, int, str, np.ndarray, np.ndarray]] = []  # track, joint, path, times (n,) s, values
     for ch in anims[0]["channels"]:
         name = gltf["nodes"][ch["target"]["node"]].get("name", "")
         m = re.fullmatch(r"track(\d+)_joint_(\w+)", name)
-        if not m or m.group(2) not in JOINT_NAMES:
+        if not m or m.group(2) not in JOINT_NAMES or ch["target"]["path"] not in ("translation", "scale"):
             continue
         smp = anims[0]["samplers"][ch["sampler"]]
-        times = read(smp["input"])[:, 0].astype(np.float64)
-        vals = read(smp["output"]).astype(np.float64)
-        tid, j = int(m.group(1)), JOINT_NAMES.index(m.group(2))
-        if ch["target"]["path"] == "translation":
-            joints.setdefault(tid, np.full((len(vals), NUM_JOINTS, 3), np.nan))[:, j] = vals
-        elif ch["target"]["path"] == "scale":
-            scales[(tid, j)] = vals[:, 0]
-    if times is None:
+        keyed.append((int(m.group(1)), JOINT_NAMES.index(m.group(2)), ch["target"]["path"],
+                      read(smp["input"])[:, 0], read(smp["output"]).astype(np.float64)))
+    if not keyed:
         raise PoseLifterError(f"{path}: no animated joints")
-    for (tid, j), sc in scales.items():
-        joints[tid][sc < 0.5, j] = np.nan
-    return times, {tid: from_y_up(v * 1000.0) for tid, v in joints.items()}
+    extras = anims[0].get("extras") or {}
+    if {"fps", "first_frame", "last_frame"} <= set(extras):
+        clock = (np.arange(int(extras["first_frame"]), int(extras["last_frame"]) + 1) / float(extras["fps"]))
+        clock32 = clock.astype(np.float32)  # (the keys' times, as written)
+    else:  # (a file of before 2026-12: every track keyed at every frame of the clip)
+        clock32 = np.unique(np.concatenate([t for *_, t, _ in keyed]))
+        clock = clock32.astype(np.float64)
+    joints: dict[int, np.ndarray] = {}
+    for tid, j, what, t, vals in keyed:
+        at = np.searchsorted(clock32, t)
+        if np.any(at >= len(clock32)) or np.any(clock32[np.minimum(at, len(clock32) - 1)] != t):
+            raise PoseLifterError(f"{path}: track {tid}'s keys are not on the clip's frames")
+        arr = joints.setdefault(tid, np.full((len(clock), NUM_JOINTS, 3), np.nan))
+        if what == "translation":
+            arr[at, j] = np.where(np.isnan(arr[at, j]), vals, arr[at, j])  # (a key marked hidden stays so)
+        else:
+            hidden = at[vals[:, 0] < 0.5]
+            arr[hidden, j] = np.inf  # (marked: NaN below, whichever of the two channels comes first)
+    for arr in joints.values():
+        arr[~np.isfinite(arr)] = np.nan
+    return clock, {tid: from_y_up(v * 1000.0) for tid, v in joints.items()}
 
 
 # ------------------------------------------------------------------------------------------------

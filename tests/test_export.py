@@ -152,6 +152,60 @@ def test_bvh_animation_position_channels_are_the_whole_translation(tmp_path):
         read_bvh_frames(tmp_path / "old.bvh", position_channels="sum")  # type: ignore[arg-type]
 
 
+def _gltf(path):
+    import json
+    import struct
+
+    raw = path.read_bytes()
+    n = struct.unpack_from("<I", raw, 12)[0]
+    gltf = json.loads(raw[20:20 + n])
+    blob = raw[20 + n + 8:]
+
+    def read(i):
+        acc = gltf["accessors"][i]
+        view = gltf["bufferViews"][acc["bufferView"]]
+        w = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[acc["type"]]
+        return np.frombuffer(blob, np.float32, acc["count"] * w, view.get("byteOffset", 0)).reshape(-1, w)
+
+    return gltf, read
+
+
+def test_glb_animation_keys_each_track_over_its_own_span(tmp_path):
+    """A review: every track was keyed at every frame of the clip, however briefly seen (five people seen 1 s each
+    in a 10-minute clip: 95 MB). A track is keyed from the frame before its first to the frame after its last; a
+    glTF player, which holds the first and last keys outside them, hides it there (checked here by evaluating the
+    samplers as glTF says, not by the module's reader)."""
+    from lifter.export import read_glb_animation, write_glb_animation
+
+    rng = np.random.default_rng(2)
+    b = random_pose_cam(rng, 1)[0][None] + rng.normal(0, 5, (5, 17, 3))
+    p = write_glb_animation({4: (np.array([300, 301, 302, 306, 307]), b)}, tmp_path / "late.glb", fps=25.0,
+                            span=(0, 2999))
+    assert p.stat().st_size < 150_000  # (3,000 frames keyed for the one track: 3.2 MB)
+    gltf, read = _gltf(p)
+    assert gltf["animations"][0]["extras"] == {"fps": 25.0, "first_frame": 0, "last_frame": 2999}
+    node = {n["name"]: i for i, n in enumerate(gltf["nodes"])}["track4_joint_pelvis"]
+    smp = {ch["target"]["path"]: gltf["animations"][0]["samplers"][ch["sampler"]]
+           for ch in gltf["animations"][0]["channels"] if ch["target"]["node"] == node}
+    t = read(smp["scale"]["input"])[:, 0]
+    np.testing.assert_allclose(t, np.arange(299, 309) / 25.0, rtol=1e-6)
+    sc = read(smp["scale"]["output"])[:, 0]
+
+    def at(frame):  # (glTF: before the first key the first, after the last the last; LINEAR between)
+        return float(np.interp(frame / 25.0, t, sc))
+
+    np.testing.assert_allclose([at(f) for f in (0, 298, 299, 303, 304, 305, 308, 309, 2999)], 0.0, atol=1e-4)
+    np.testing.assert_allclose([at(f) for f in (300, 301, 302, 306, 307)], 1.0, atol=1e-4)  # (float32 times)
+    times, joints = read_glb_animation(p)
+    np.testing.assert_allclose(times, np.arange(3000) / 25.0)
+    np.testing.assert_allclose(joints[4][[300, 301, 302, 306, 307]], b, atol=0.05)
+    assert np.isnan(np.delete(joints[4], [300, 301, 302, 306, 307], axis=0)).all()
+    with pytest.raises(PoseLifterError, match=r"frame indices must be whole numbers >= 0"):
+        write_glb_animation({1: (np.array([0.5, 1.5]), b[:2])}, tmp_path / "x.glb", fps=25.0)
+    with pytest.raises(PoseLifterError, match=r"frame indices must be whole numbers >= 0"):
+        write_glb_animation({1: (np.array([-1, 0]), b[:2])}, tmp_path / "x.glb", fps=25.0)
+
+
 def test_glb_animation_round_trip(tmp_path):
     """Two tracks over a clip: every joint of every frame comes back; a person is hidden where absent."""
     import trimesh
