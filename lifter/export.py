@@ -396,6 +396,8 @@ def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) ->
     """The BVH file for ``pose`` ``(17, 3)`` mm (camera frame); see the module docstring."""
     if units not in UNITS_MM:
         raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
+    if not (math.isfinite(frame_time) and frame_time > 0):
+        raise PoseLifterError(f"frame_time must be > 0 s, got {frame_time}")
     p = to_y_up(_pose(pose)) / UNITS_MM[units]
 
     def fmt(v: np.ndarray) -> str:
@@ -483,7 +485,21 @@ def read_bvh_frames(path: str | os.PathLike[str], *, units: str = "cm",
     joints, ``(T, 17, 3)`` mm, camera frame (the inverse of :func:`write_bvh` and :func:`write_bvh_animation`)."""
     if position_channels not in ("replace", "add"):
         raise PoseLifterError(f"position_channels must be 'replace' or 'add', got {position_channels!r}")
-    tokens = Path(path).read_text().split()
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise PoseLifterError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    try:
+        return _bvh_frames(text, path, units=units, position_channels=position_channels)
+    except PoseLifterError:
+        raise
+    except (ValueError, IndexError) as exc:  # (a number that is not one, a brace or a field missing)
+        raise PoseLifterError(f"{path}: not a well-formed BVH file ({type(exc).__name__}: {exc})") from None
+
+
+def _bvh_frames(text: str, path: Any, *, units: str, position_channels: str) -> np.ndarray:
+    """:func:`read_bvh_frames` of the file's ``text``; a malformed file raises ValueError or IndexError."""
+    tokens = text.split()
     i = 0
     joints: list[tuple[str, int, np.ndarray, list[str]]] = []  # name, parent, offset, channels
     stack: list[int] = []

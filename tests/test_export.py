@@ -206,6 +206,23 @@ def test_glb_animation_keys_each_track_over_its_own_span(tmp_path):
         write_glb_animation({1: (np.array([-1, 0]), b[:2])}, tmp_path / "x.glb", fps=25.0)
 
 
+def test_a_malformed_bvh_is_named(tmp_path, pose):
+    """A review: a BVH with a word among its numbers raised a bare ValueError, without the file's name."""
+    good = bvh_text(pose)
+    bad = tmp_path / "bad.bvh"
+    bad.write_text(good.rsplit("\n", 2)[0] + "\n" + "x " * 54 + "\n")
+    with pytest.raises(PoseLifterError, match=r"bad.bvh: not a well-formed BVH file \(ValueError: could not convert"):
+        read_bvh_frames(bad)
+    bad.write_text(good.replace("Frames: 1", "Frames: 2"))
+    with pytest.raises(PoseLifterError, match=r"bad.bvh: BVH MOTION has 54 values, expected 2 x 54"):
+        read_bvh_frames(bad)
+    with pytest.raises(PoseLifterError, match=r"frame_time must be > 0 s, got 0"):
+        bvh_text(pose, frame_time=0.0)
+    bad.write_text(good.replace("r_hip", "r_hipé"), encoding="utf-8")  # (read as UTF-8 on any system)
+    with pytest.raises(PoseLifterError, match=r"BVH lacks the H36M joints \['r_hip'\]"):
+        read_bvh_frames(bad)
+
+
 def test_glb_animation_round_trip(tmp_path):
     """Two tracks over a clip: every joint of every frame comes back; a person is hidden where absent."""
     import trimesh
