@@ -265,8 +265,8 @@ def load_checkpoint(source: str | os.PathLike[str] | bytes, *, expected_sha256: 
         raise CheckpointError(f"{where}: bad codec statistics: {exc}") from None
     # its random initialisation is overwritten below: loading never moves the caller's global generator (a seeded
     # run drew other batches and dropout after loading its --error-model or teacher, a seeded script other numbers)
-    with torch.random.fork_rng(devices=[]):
-        net = PoseLifterNet(config)
+    with torch.random.fork_rng(devices=[]):  # (float32 whatever torch's default dtype: a developer trial set float64
+        net = PoseLifterNet(config).float()  # first, and the lift met "mat1 and mat2 must have the same dtype")
     derived = {k: v.clone() for k, v in net.state_dict().items() if k in ("in_perm", "in_sign")}
     net.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in state.items()}, strict=True)
     for k, v in derived.items():  # the mirror maps follow from the config and the codec, never from the file

@@ -75,6 +75,24 @@ def test_network_off_the_cpu_is_refused_with_the_fix(keypoints):
         lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
 
 
+def test_a_checkpoint_loaded_under_a_float64_default_lifts_as_under_float32(tmp_path, keypoints):
+    """A developer trial: ``torch.set_default_dtype(torch.float64)`` before loading built the network in float64, and
+    the lift met torch's "mat1 and mat2 must have the same dtype". A loaded network is float32 whatever the default."""
+    lifter = tiny_lifter(64, name="camera")
+    path = save_checkpoint(tmp_path / "m.pt", lifter.net, lifter.codec)
+    want = Lifter.from_checkpoint(path).lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0), warn=False)
+    before = torch.get_default_dtype()
+    torch.set_default_dtype(torch.float64)
+    try:
+        loaded = Lifter.from_checkpoint(path)
+        assert {p.dtype for p in loaded.net.parameters()} == {torch.float32}
+        for n in (1, 6):  # (the packed path for a few rows, the numpy and torch paths for more)
+            got = loaded.lift(keypoints[:n], focal=1145.0, principal_point=(512.0, 515.0), warn=False)
+            np.testing.assert_allclose(got.absolute, want.absolute[:n], rtol=0, atol=1e-3)
+    finally:
+        torch.set_default_dtype(before)
+
+
 def test_root_lies_on_the_ray_of_the_2d_root(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     reproj = project(res.root[:, None, :], focal=1145.0, principal_point=(512.0, 515.0))[:, 0]
