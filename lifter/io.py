@@ -414,27 +414,48 @@ CAMERA_MATRIX_FIELDS: Final[tuple[str, ...]] = ("K", "camera_matrix", "intrinsic
 ``{"rows": 3, "cols": 3, "data": [...]}``."""
 
 
-def _camera_matrix(raw: Any) -> np.ndarray | None:
-    """The ``(3, 3)`` camera matrix in ``raw`` (:data:`CAMERA_MATRIX_FIELDS`' layouts): numbers, no skew, last row
-    ``[0, 0, 1]``; None when it is not one."""
+MAX_SKEW: Final[float] = 1e-3
+"""A camera matrix's skew ``K[0][1]`` up to this share of ``fx`` is left out (a calibration's 0.5 px at fx 1600 moves
+a point by under 0.2 px); more is refused, as the lift's camera has none."""
+
+
+def _camera_matrix(raw: Any) -> tuple[np.ndarray | None, str | None]:
+    """The ``(3, 3)`` camera matrix in ``raw`` (:data:`CAMERA_MATRIX_FIELDS`' layouts): nine numbers, skew at most
+    :data:`MAX_SKEW` (left out), last row ``[0, 0, 1]`` or a multiple of it (divided out: the same camera); and None,
+    or (None, what is wrong) for nine numbers that are no such matrix (a developer trial's K with a skew of 0.5 px, a
+    transposed K and one whose last row was ``[0, 0, 2]`` were each dropped with a note asking for ``focal``).
+    (None, None) when ``raw`` is not nine numbers."""
     if isinstance(raw, dict):
         raw = raw.get("data")
     if not isinstance(raw, list):
-        return None
+        return None, None
     flat = [v for row in raw for v in row] if all(isinstance(r, list) for r in raw) else raw
     if len(flat) != 9 or not all(_is_number(v) for v in flat):
-        return None
+        return None, None
     K = np.asarray(flat, np.float64).reshape(3, 3)
-    if not (np.all(np.isfinite(K)) and K[0, 1] == 0 and K[1, 0] == 0 and np.array_equal(K[2], [0.0, 0.0, 1.0])):
-        return None
-    return K
+    if not np.all(np.isfinite(K)):
+        return None, "its numbers must be finite"
+    if K[0, 2] == 0 and K[1, 2] == 0 and K[2, 2] != 0 and (K[2, 0] != 0 or K[2, 1] != 0) and K[0, 1] == 0:
+        return None, ("it is transposed: its last row holds the principal point (MATLAB's intrinsicMatrix layout); "
+                      "give [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]")
+    if K[2, 0] != 0 or K[2, 1] != 0 or not K[2, 2] > 0:
+        return None, f"its last row must be [0, 0, 1], got {K[2].tolist()}: give [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]"
+    K = K / K[2, 2]
+    if K[1, 0] != 0 or abs(K[0, 1]) > MAX_SKEW * abs(K[0, 0]):
+        return None, (f"its skew ({K[0, 1]:g}, {K[1, 0]:g}) is more than the {MAX_SKEW:g} x fx left out: the lift's "
+                      "camera has none; undistort and give a camera without skew")
+    K[0, 1] = 0.0
+    return K, None
 
 
 def _camera_matrix_field(meta: dict[str, Any], *, where: str) -> tuple[str, np.ndarray, np.ndarray] | None:
     """``(its name, focal (fx, fy), principal point (cx, cy))`` from a keypoint file's camera matrix, or None
     when it has none. Checked as ``focal`` and ``principal_point`` are."""
     for key in CAMERA_MATRIX_FIELDS:
-        K = _camera_matrix(meta.get(key))
+        K, problem = _camera_matrix(meta.get(key))
+        if problem is not None:
+            raise PoseLifterError(f"{where}: {key!r} is read as the camera matrix, but {problem} (or give 'focal' "
+                                  "and 'principal_point')")
         if K is not None:
             return (key, _camera_field([K[0, 0], K[1, 1]], name=f"{key}'s focal", where=where),
                     _camera_field([K[0, 2], K[1, 2]], name=f"{key}'s principal point", where=where))
@@ -594,7 +615,7 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
     for key in meta:
         if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS or key in _OTHER_FIELDS:
             continue
-        if key in CAMERA_MATRIX_FIELDS and _camera_matrix(meta[key]) is not None:
+        if key in CAMERA_MATRIX_FIELDS and any(v is not None for v in _camera_matrix(meta[key])):
             continue  # (read: _camera_meta)
         ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(
             iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None) or _one_typo(key)

@@ -483,6 +483,17 @@ def test_a_keypoint_files_camera_matrix_is_read(tmp_path, rng):
         lift_keypoint_file(_write(tmp_path / "both.json", {"keypoints": kp, "K": K, "focal": 1000}), lifter=lf)
     same = lift_keypoint_file(_write(tmp_path / "same.json", {"keypoints": kp, "K": K, "focal": list(f)}), lifter=lf)
     np.testing.assert_allclose(same.root, want.root, rtol=1e-9)
+    # (a developer trial: each of these was dropped, the focal assumed, with a note asking for 'focal') a multiple
+    # of K is the same camera; a calibration's tiny skew is left out; a transposed K or a real skew is refused by name
+    for name, value in (("scaled", (2 * np.asarray(K)).tolist()), ("skew", [[f[0], 0.5, c[0]], K[1], K[2]])):
+        rec = lift_keypoint_file(_write(tmp_path / f"{name}.json", {"keypoints": kp, "K": value}), lifter=lf)
+        np.testing.assert_allclose(rec.root, want.root, rtol=1e-9)
+        assert rec.focal == f and rec.focal_source == "keypoint-file"
+    for value, match in ((np.asarray(K).T.tolist(), "it is transposed: its last row holds the principal point"),
+                         ([[f[0], 30, c[0]], K[1], K[2]], r"its skew \(30, 0\) is more than the 0.001 x fx left out"),
+                         ([K[0], K[1], [0, 0.1, 1]], r"its last row must be \[0, 0, 1\], got \[0.0, 0.1, 1.0\]")):
+        with pytest.raises(PoseLifterError, match=r"'K' is read as the camera matrix, but " + match):
+            lift_keypoint_file(_write(tmp_path / "bad.json", {"keypoints": kp, "K": value}), lifter=lf)
 
 
 def test_unread_field_notes_name_the_right_field_and_spare_other_formats():
