@@ -478,13 +478,13 @@ class Lifter:
                          ensemble=[load_checkpoint(m) for m in ensemble])
 
     @classmethod
-    def from_pretrained(cls, name: str | os.PathLike[str] = "default", *, quantize: bool = False) -> Lifter:
+    def from_pretrained(cls, name: str | os.PathLike[str] | None = "default", *, quantize: bool = False) -> Lifter:
         """Shipped weights by name (``"default"``, or one of :func:`available_models`), checked against their
         sha256; or a checkpoint path (``.pt``) of your own; or several joined by ``+`` (``"a.pt+b.pt"``): an
         ensemble for detected 2D whose lifts are averaged (:attr:`ensemble`; :meth:`from_checkpoint` with
         ``ensemble=``), each network with its checkpoint's flip-test default. ``quantize=True``: see
-        :meth:`quantized`."""
-        ref, shipped = str(name), assets.model_names()
+        :meth:`quantized`. ``None`` is the default (a developer trial's ``None`` read "unknown model 'None'")."""
+        ref, shipped = ("default" if name is None else str(name)), assets.model_names()
         if "+" in ref and ref not in shipped and not Path(ref).is_file() and (
                 any(part in (*shipped, "default") for part in ref.split("+")) or not ref.endswith(".pt")):
             raise PoseLifterError(f"{ref!r}: shipped models cannot be joined by '+' (the default already averages its "
@@ -698,7 +698,10 @@ class Lifter:
                 focal, focal_source = CANONICAL_FOCAL, "reference"
         f = _broadcast(as_pair(focal, name="focal", positive=True, scalar=True, lead=lead), lead, name="focal",
                        given=focal)
-        for name, arr in (("keypoints", kp), ("principal_point", pp), ("focal", f)):
+        # (a principal point left out is image_size's centre: image_size is named, a developer trial's 1e9 x 1e9
+        # image was refused as a principal point it had not given)
+        sizes = (("image_size", wh),) if wh is not None and not pp_given else (("principal_point", pp),)
+        for name, arr in (("keypoints", kp), *sizes, ("focal", f)):
             if arr.size and float(np.abs(arr).max()) > MAX_ABS_PX:
                 raise PoseLifterError(f"{name}: values up to {float(np.abs(arr).max()):.3g} px; image pixel values "
                                       f"must be below {MAX_ABS_PX:.0e} in magnitude")
@@ -724,6 +727,10 @@ class Lifter:
                                       "(px) too, or leave distortion out")
             d = check_lens(distortion, lens_model, lead=lead)  # (also for a network given the 2D as it is)
             said = lens_notes(d, lens_model)
+            if self.lens != "pinhole" and np.any(d):  # (a developer trial's lens made no difference, and nothing said)
+                said = [f"model {self.name!r} learned Human3.6M's 2D with that camera's own lens distortion and lifts "
+                        "the keypoints as they are: the distortion given is not undone (the default model undoes "
+                        "it)", *said]
             if self.lens == "pinhole":
                 try:
                     kp = (undistort_pixels_opencv(kp, focal=f, principal_point=pp, dist_coeffs=d)

@@ -393,8 +393,10 @@ def check_opencv_distortion(dist_coeffs: ArrayLike, *, lead: tuple[int, ...] = (
     except (TypeError, ValueError):
         raise PoseLifterError(f"distortion (opencv) must be numbers {_OPENCV_FORM}, got "
                               f"{str(dist_coeffs)[:80]}") from None
-    if d.ndim == 2 and 1 in d.shape and not lead:
-        d = d.reshape(-1)  # (cv2.calibrateCamera returns distCoeffs as a (1, n) row, cv2.FileStorage as (n, 1))
+    if d.ndim == 2 and ((d.shape[0] == 1 and not lead) or (d.shape[1] == 1 and d.shape[0] in OPENCV_DISTORTION_COUNTS)):
+        # (cv2.calibrateCamera returns distCoeffs as a (1, n) row, cv2.FileStorage as (n, 1): one lens, for one pose
+        # or a batch; a developer trial's (5, 1) was refused for a batch of poses alone)
+        d = d.reshape(-1)
     if d.ndim == 0 or d.shape[-1] not in OPENCV_DISTORTION_COUNTS:
         raise PoseLifterError(f"distortion (opencv) must be {_OPENCV_FORM}; got shape {d.shape} ({d.size} value(s))"
                               + ("; OpenCV's thin-prism and tilted-sensor terms (12 or 14 values) are not taken: "

@@ -93,6 +93,15 @@ def test_a_checkpoint_loaded_under_a_float64_default_lifts_as_under_float32(tmp_
         torch.set_default_dtype(before)
 
 
+def test_a_huge_image_size_is_named_as_such(camera_lifter, keypoints):
+    """A developer trial: image_size=(1e9, 1e9) was refused as "principal_point: values up to 5e+08 px", a principal
+    point they had not given."""
+    with pytest.raises(PoseLifterError, match=r"^image_size: values up to 1e\+09 px"):
+        camera_lifter.lift(keypoints, focal=1145.0, image_size=(1e9, 1e9))
+    with pytest.raises(PoseLifterError, match=r"^principal_point: values up to 2e\+06 px"):
+        camera_lifter.lift(keypoints, focal=1145.0, principal_point=(2e6, 0), image_size=(1e9, 1e9))
+
+
 def test_root_lies_on_the_ray_of_the_2d_root(small_lifter, keypoints):
     res = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     reproj = project(res.root[:, None, :], focal=1145.0, principal_point=(512.0, 515.0))[:, 0]
@@ -439,6 +448,7 @@ def test_unknown_pretrained_name():
     assert "Lifter.from_pretrained('path/to/model.pt')" in str(exc.value)
     # one message for every command: `train --init` and `evaluate` take a path too, and have no --weights
     assert "pass its .pt path on the command line" in str(exc.value) and "--weights" not in str(exc.value)
+    assert Lifter.from_pretrained(None).name == Lifter.from_pretrained().name  # (a developer trial: "unknown 'None'")
 
 
 def test_quantized_lifter_matches_float32(small_lifter, keypoints):
