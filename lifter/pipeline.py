@@ -77,6 +77,12 @@ def _px(v: Any) -> str:
     return " x ".join(f"{float(x):g}" for x in np.ravel(v)) + " px"
 
 
+def _point(v: Any) -> str:
+    """A point in the image, ``(x, y) px`` (a developer trial read "(0 x 0 px)" as a size)."""
+    x, y = np.broadcast_to(np.asarray(v, np.float64).ravel(), (2,))
+    return f"({x:g}, {y:g}) px"
+
+
 def resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None, file_focal: np.ndarray | None,
             file_pp: np.ndarray | None, image_size: tuple[int, int] | None, exif: Any, sensor_width_mm: float | None,
             fov_deg: float, where: str, file_distortion: np.ndarray | None = None, unread: Sequence[str] = (),
@@ -156,7 +162,7 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
     if user_pp is not None:
         pp = user_pp
         if file_pp is not None and not np.allclose(np.broadcast_to(file_pp, (2,)), user_pp):
-            notes.append(f"the principal point given ({_px(user_pp)}) replaces the file's own ({_px(file_pp)})")
+            notes.append(f"the principal point given, {_point(user_pp)}, replaces the file's own, {_point(file_pp)}")
     elif file_pp is not None:
         pp = file_pp
     else:

@@ -16,7 +16,7 @@ import torch
 from .._checks import PoseLifterError, plot_format
 from ..api import Lifter, ensemble_parts
 from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS, trained_protocol
-from ..detections import with_sh_detections
+from ..detections import missing_detection_note, with_sh_detections
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
@@ -194,8 +194,9 @@ def run(args: argparse.Namespace) -> int:
                                  max_frames_per_sequence=args.max_frames_per_sequence)
     note = ""
     if args.inputs == "sh":
-        samples, dropped = with_sh_detections(samples, data=data)
-        note = f"; real SH detections, {dropped} samples without a detection dropped"
+        missing = missing_detection_note(samples, data=data)
+        samples, _ = with_sh_detections(samples, data=data)
+        note = "; real SH detections" + (f", {missing}" if missing else "")
     source = args.source or ("clean" if args.inputs == "gt" else "detected")
     if args.inputs == "sh" and source == "clean":
         print("note: --source clean with --inputs sh tells the lifter that detector output is exact 2D (the clean "
