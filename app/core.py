@@ -398,12 +398,14 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                  two_networks=lifter.network_for("clean") is not lifter.network_for("detected"),
                  caution=(*used.output_notes(res.keypoints_2d[0], pp, res.root[0], source=source,
                                              relative=res.relative[0], focal=f, misfit_cause=misfit_cause(state)),
-                                         *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
-                                                            input_space=used.input_space),
-                                         *short_focal_caution(focal=f, camera_focal=cam.alpha,
-                                                              input_space=used.input_space,
-                                                              camera_focal_known=camera_focal_known(state)),
-                                         *bone_caution(res_rel[0], why=bone_cause(state)),
+                                         *(focal_said := [
+                                             *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
+                                                                input_space=used.input_space),
+                                             *short_focal_caution(focal=f, camera_focal=cam.alpha,
+                                                                  input_space=used.input_space,
+                                                                  camera_focal_known=camera_focal_known(state))]),
+                                         *bone_caution(res_rel[0], why=bone_cause(state),
+                                                       focal=f if focal_said else None),
                                          *tilt_caution(res.keypoints_2d[0], kind=None if state.sample.upload is None
                                                        else state.sample.upload.kind),
                                          *edge_caution(state)))
@@ -424,11 +426,13 @@ def reference_bones_mm() -> np.ndarray:
     return bone_lengths(demo_sample("standing").pose_3d)
 
 
-def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
+def bone_caution(relative: np.ndarray, *, why: str = "", focal: Any = None) -> list[str]:
     """The readout's caution when a bone of the lifted pose ``(17, 3)`` mm is out of :data:`BONE_RATIO_LIMITS` of
     the reference body's: no body has it, so the 2D is one the lift cannot explain (a trial dragged a wrist within
     the allowed range and got a 1258-mm forearm, the wrist at the camera, without a word). ``why``: the likely cause
-    said after "the 2D" (:func:`bone_cause`)."""
+    said after "the 2D" (:func:`bone_cause`). ``focal`` (px): the focal length in use, where the readout cautions of
+    it (far shorter than the camera's, or a view no camera has): then that is named as the cause (a researcher's
+    ground-truth 2D at 100 px read "the 2D is not one a body makes")."""
     from lifter.skeleton import EDGES, JOINT_NAMES, bone_lengths
 
     ref = reference_bones_mm()
@@ -441,6 +445,13 @@ def bone_caution(relative: np.ndarray, *, why: str = "") -> list[str]:
     said = ", ".join(f"{JOINT_NAMES[EDGES[i][0]]}-{JOINT_NAMES[EDGES[i][1]]} {lengths[i]:.0f} mm (a body's: about "
                      f"{ref[i]:.0f})" for i in bad[:2])
     more = f" and {len(bad) - 2} more" if len(bad) > 2 else ""
+    if focal is not None:
+        from lifter.camera import focal_alpha
+
+        why = (f"{why[:-1] if why.endswith('?') else why}, " if why else "") + (
+            f"at {float(focal_alpha(focal)):.0f} px, the focal length cautioned of above")
+        return [f"the lifted pose has bones no body has: {said}{more}; the 2D ({why}) is not one a body makes through "
+                "that lens, so this lift is not a pose to trust"]
     cause = f" ({why})" if why else ""
     return [f"the lifted pose has bones no body has: {said}{more}; the 2D{cause} is not one a body makes, so this lift "
             "is not a pose to trust"]
@@ -561,6 +572,10 @@ def tilt_caution(keypoints: np.ndarray, *, kind: str | None = None) -> list[str]
     if not np.all(np.isfinite(k)):
         return []
     if sideways_people(k)[0]:
+        if kind is None:  # (a demo or Human3.6M camera, known and upright: a researcher trial read "a photo turned")
+            return ["the body lies sideways in the image (head and ankles apart along x): this sample's camera is "
+                    "known and upright, so the person is lying or bent over, a pose rare in the training data; the "
+                    "lift is likely off"]
         return ["the body lies sideways in the image (head and ankles apart along x): a photo or video turned a "
                 "quarter (its orientation lost), or a person lying down, a pose rare in the training data; the lift "
                 "is likely off"]

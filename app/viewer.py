@@ -375,6 +375,7 @@ class SessionView:
         self._frame_user_t = -math.inf  # the frame box's timestamp from the last write that was not the player's
         self._info_playing = False  # the play info line says "playing" (:meth:`_show_play_info`)
         self._typed_name: dict[int, str] = {}  # id(handle) -> its name in _typed_at (:meth:`_typed_controls`)
+        self._uv_box_stale = False  # the tab's (u, v) box not sent the selected joint's moves during playback
         self._frame_box_stale = False
         """The tab's frame box does not show the server's value: playback's frames stay on the server (and in the bar
         under the box) until it stops, so none lands in the box while someone types a frame in it (:meth:`_write`),
@@ -678,6 +679,9 @@ class SessionView:
             if self._frame_box_stale and not self.playing:  # (playback stopped: the box shows the frame shown)
                 self._frame_box_stale = False
                 send_value(self.gui.play.frame)
+            if self._uv_box_stale and not self.playing:  # (and the (u, v) box the selected joint's: _draw_2d)
+                self._uv_box_stale = False
+                send_value(self.gui.joints.uv)
             if self._info_playing != self.playing:  # (started or stopped with no new frame: a trial's paused
                 self._show_play_info()  # upload still said "playing")
             with self._status_lock:
@@ -1347,7 +1351,12 @@ class SessionView:
         with self._flags:
             typing = self._typed_uv is not None  # (a position being typed is left in its box until applied)
         if not typing and tuple(float(v) for v in self.gui.joints.uv.value) != uv:
-            self.gui.joints.uv.value = uv
+            if self.playing:  # (on the server only: a researcher trial's u typed while playing was overwritten by
+                set_value_here(self.gui.joints.uv, uv)  # the frames within 0.5 s, and never reached the app, so
+                self._uv_box_stale = True  # the "pause first" note never came; sent once playback stops)
+            else:
+                self.gui.joints.uv.value = uv
+                self._uv_box_stale = False
         noisy = noisy if st.noise_level > 0 else None  # (what is lifted at a noise level above 0)
         poses = {"gt": s.keypoints_2d if (self.gui.lift.gt.value and s.has_gt_2d) else None,
                  "detected": s.detected_2d, "noisy": noisy, "current": kp}
@@ -1836,9 +1845,9 @@ class SessionView:
             self.gui.play.play.label, self.gui.play.play.icon = "play", viser.Icon.PLAYER_PLAY
         except Exception:  # noqa: BLE001 - the tab may be gone
             pass
-        if self._frame_box_stale or self._info_playing:  # (that pass sends the tab the frame box's value and drops
-            self._do(self._runner.request)  # "playing" from the line; through the error wrapper: this runs on the
-            # player's thread too)
+        if self._frame_box_stale or self._uv_box_stale or self._info_playing:  # (that pass sends the tab the boxes'
+            self._do(self._runner.request)  # values and drops "playing" from the line; through the error wrapper:
+            # this runs on the player's thread too)
 
     @control
     def toggle_play(self) -> None:

@@ -2237,6 +2237,50 @@ def test_a_joint_typed_while_playing_is_answered(app: PoseLifterApp) -> None:
         assert not np.any(np.all(np.isclose(kp, (140.0, 100.0)), axis=-1))
 
 
+def test_playback_sends_the_tab_no_joint_box_value_until_it_stops(app: PoseLifterApp) -> None:
+    """A researcher trial (Chromium): a u typed into the joint box while S11 Walking played was overwritten by the
+    frames within 0.5 s (400 became 352), and never reached the app, so the "pause first" note never came. While
+    playing, the selected joint's moves stay on the server; once playback stops the tab is sent where it is."""
+    import threading
+    import time
+
+    from viser import _messages
+
+    with open_tab(app) as (tab, v):
+        box = v.gui.joints.uv
+        ws = box._impl.gui_api._websock_interface
+        sent: list[tuple[str, object]] = []
+        guard = threading.Lock()
+        queue = ws.queue_message
+
+        def spy(msg: object) -> None:
+            if (isinstance(msg, _messages.GuiUpdateMessage) and "value" in msg.updates
+                    and getattr(msg, "excluded_self_client", None) is None):
+                with guard:
+                    sent.append((msg.uuid, msg.updates["value"]))
+            queue(msg)
+
+        ws.queue_message = spy
+        try:
+            v.gui.play.play.value = True  # the demo motion plays
+            assert wait_for(lambda: v.playing, timeout=5)
+            time.sleep(0.3)
+            with guard:
+                sent.clear()
+            start = tuple(box.value)
+            assert wait_for(lambda: tuple(box.value) != start, timeout=10)  # (the joint moves on the server)
+            time.sleep(0.5)
+            with guard:
+                assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent
+        finally:
+            v.gui.play.play.value = True  # pause
+        assert wait_for(lambda: not v.playing, timeout=5)
+        want = tuple(float(round(x, 1)) for x in v.state.keypoints[v.selected])
+        assert wait_for(lambda: any(u == box._impl.uuid and tuple(val) == want for u, val in list(sent)), timeout=5), (
+            want, sent[-5:])
+        ws.queue_message = queue
+
+
 def test_a_drag_refused_or_during_playback_is_said_once(app: PoseLifterApp) -> None:
     """A browser trial: a joint dragged past the image raised one refusal (and one red notification) per pointer
     move, 10 for one drag; a drag during playback was dropped by the next frame without a word. One message per
@@ -2370,6 +2414,26 @@ def test_drags_dropped_by_another_sample_are_said(app: PoseLifterApp) -> None:
     n = len(v.messages)
     assert v.select_demo(first) is True and not v.state.dragged
     assert not any("dropped" in m for m in v.messages[n:])  # (nothing dragged on the way back)
+
+
+@requires_h36m_app
+def test_bones_no_body_has_at_a_short_focal_name_the_focal(h36m_app: PoseLifterApp) -> None:
+    """A researcher trial: S7 Greeting's ground-truth 2D at 100 px (the camera's is 1145) read "the lifted pose has
+    bones no body has ... the 2D is not one a body makes", blaming exact 2D; the focal was the cause. Where the readout
+    cautions of the focal, the bone caution names it."""
+    v = h36m_app.headless_view()
+    assert v.select_h36m(subject=7, sequence="Greeting", camera="55011271", frame=395) is True
+    focal = 100.0
+    v.gui.lift.focal.value = focal
+    said = [c for c in v.frame.caution if "bones no body has" in c]
+    assert said, v.frame.caution
+    said, caution = said[0], v.frame.caution
+    assert any("of the camera's own focal length" in c or "of view" in c for c in caution)
+    assert f"the 2D (at {focal:.0f} px, the focal length cautioned of above) is not one a body makes through that " \
+           "lens" in said, said
+    assert "the 2D is not one a body makes" not in said
+    v.gui.lift.focal.value = v.state.sample.camera.alpha  # (the camera's own: nothing to say)
+    assert not any("bones no body has" in c for c in v.frame.caution)
 
 
 def test_a_lift_with_bones_no_body_has_is_cautioned(app: PoseLifterApp) -> None:

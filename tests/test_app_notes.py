@@ -112,6 +112,10 @@ def test_the_tilt_caution_follows_the_2d_shown():
                                                                                              kind="keypoints")[0]
     side = tilt_caution(rolled(90.0))
     assert len(side) == 1 and side[0].startswith("the body lies sideways in the image")
+    # (a researcher trial: a Human3.6M frame's sideways body was put down to "a photo or video turned a quarter")
+    assert "this sample's camera is known and upright, so the person is lying or bent over" in side[0]
+    assert "turned a quarter" not in side[0]
+    assert "a photo or video turned a quarter" in tilt_caution(rolled(90.0), kind="image")[0]
     nan = up.copy()
     nan[3] = np.nan
     assert tilt_caution(nan) == []
