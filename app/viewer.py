@@ -1385,11 +1385,13 @@ class SessionView:
             draw_pose(self.scene.pose, self.scene.camera, fr, show_gt=bool(self.gui.lift.gt.value),
                       name=st.sample.person_name(st.person), labels=not self._close_up)
             self._update_trail(fr)
-        ro = self.gui.readout
-        ro.readout.content = readout_markdown(fr, st)
-        ro.spread.content = spread_details(fr.spread) if fr.spread is not None else ""
-        ro.response.image = response_image(fr.lifted, root=fr.root, gt=fr.gt_3d if self.gui.lift.gt.value else None,
-                                           cloud=fr.cloud)
+            # (in the same batch as the scene: a researcher trial's readout, applied apart from it, said Z 10959 mm
+            # beside the scene's "root Z 11.10 m" in every screenshot taken while playing)
+            ro = self.gui.readout
+            ro.readout.content = readout_markdown(fr, st)
+            ro.spread.content = spread_details(fr.spread) if fr.spread is not None else ""
+            ro.response.image = response_image(fr.lifted, root=fr.root,
+                                               gt=fr.gt_3d if self.gui.lift.gt.value else None, cloud=fr.cloud)
         if self.gui.lift.auto_frame.value:  # (the head-on view keeps to the joints: _keep_in_view)
             since = self._since_typed("focal_px")
             if since < TYPING_SETTLE_S:  # a focal being typed ("1", "11", "114", "1144"): reframe once it settles,

@@ -2281,6 +2281,38 @@ def test_playback_sends_the_tab_no_joint_box_value_until_it_stops(app: PoseLifte
         ws.queue_message = queue
 
 
+def test_the_readout_goes_to_the_tab_in_one_batch_with_the_scene(app: PoseLifterApp) -> None:
+    """A researcher trial (Chromium, playing): the readout said Z 10959 mm beside the scene's "root Z 11.10 m" in
+    every screenshot; the readout was sent apart from the scene's batch. Its update is queued inside the atomic block
+    that holds the scene's (viser sends a block's messages together)."""
+    import threading
+
+    from viser import _messages
+
+    with open_tab(app) as (tab, v):
+        ro = v.gui.readout.readout
+        ws = ro._impl.gui_api._websock_interface
+        buffer = ws.get_message_buffer()
+        seen: list[tuple[str, int]] = []
+        guard = threading.Lock()
+        queue = ws.queue_message
+
+        def spy(msg: object) -> None:
+            if isinstance(msg, _messages.GuiUpdateMessage) and msg.uuid == ro._impl.uuid and "_markdown" in msg.updates:
+                with guard:
+                    seen.append((str(msg.updates["_markdown"]), buffer.atomic_counter))
+            queue(msg)
+
+        ws.queue_message = spy
+        try:
+            v.gui.lift.focal.value = 2000.0
+            assert wait_for(lambda: any("2000" in c for c, _ in list(seen)), timeout=10), seen
+        finally:
+            ws.queue_message = queue
+        with guard:
+            assert all(depth > 0 for c, depth in seen if "2000" in c), seen
+
+
 def test_a_drag_refused_or_during_playback_is_said_once(app: PoseLifterApp) -> None:
     """A browser trial: a joint dragged past the image raised one refusal (and one red notification) per pointer
     move, 10 for one drag; a drag during playback was dropped by the next frame without a word. One message per
