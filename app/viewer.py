@@ -1696,6 +1696,8 @@ class SessionView:
                 self.selected = j
                 self._drop_typed_uv()
                 self._draw_2d(self.state.keypoints, self.frame.noisy_2d if self.frame is not None else None)
+                if self._uv_box_stale:  # (while playing: the box shows the joint just picked, where it is now)
+                    send_value(self.gui.joints.uv)
 
     def _on_uv_event(self, event: Any) -> None:
         """The (u, v) boxes. A browser sends every keystroke ("9", "99", "999", "9999"): applying each would move the

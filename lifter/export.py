@@ -157,8 +157,9 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
     gets translation / rotation / scale channels sampled at every frame of its track's span, from the frame before
-    the track's first to the frame after its last (LINEAR; before and after, glTF holds those keys, in which the
-    person is hidden), so a file grows with the frames people are seen in, not with the clip's length times the
+    the track's first to the frame after its last, and at the clip's first and last frames (LINEAR; the person is
+    hidden in those keys, so everywhere outside the span, and every track's keys end where the clip does), so a file
+    grows with the frames people are seen in, not with the clip's length times the
     number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB); in a frame without the
     person, their nodes are scaled to zero (hidden). The clip's first and last frame and ``fps`` are in the
     animation's ``extras``. ``recorded``: the frame indices the input holds
@@ -220,8 +221,11 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
                 present = present | between
         lo = max(int(np.searchsorted(frames, ii[0])) - 1, 0)  # (the frame before its first, hidden: held before)
         hi = min(int(np.searchsorted(frames, ii[-1])) + 2, T)  # (past the frame after its last)
-        full, present = full[lo:hi], present[lo:hi]
-        times.append(frames[lo:hi])
+        # and the clip's first and last frames, hidden: a player takes the clip's length from its keys (a review: a
+        # person seen only early in a 10-s video made a 2-s animation, out of step with the video when looped)
+        keep = np.unique(np.r_[0, np.arange(lo, hi), T - 1])
+        full, present = full[keep], present[keep]
+        times.append(frames[keep])
         key = len(times) - 1
         vis = present.astype(np.float64)[:, None]
         pre = f"track{tid}_"
@@ -581,7 +585,10 @@ def _bvh_frames(text: str, path: Any, *, units: str, position_channels: str) -> 
 
 def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
     """The first frame of :func:`read_bvh_frames`: ``(17, 3)`` mm, camera frame (the inverse of :func:`write_bvh`)."""
-    return read_bvh_frames(path, units=units)[0]
+    frames = read_bvh_frames(path, units=units)
+    if not len(frames):
+        raise PoseLifterError(f"{path}: the BVH has no frames (Frames: 0)")
+    return frames[0]
 
 
 __all__ = ["bvh_animation_text", "bvh_text", "from_y_up", "person_prefix", "read_bvh", "read_bvh_frames",

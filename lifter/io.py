@@ -433,6 +433,8 @@ def _camera_matrix(raw: Any) -> tuple[np.ndarray | None, str | None]:
     if len(flat) != 9 or not all(_is_number(v) for v in flat):
         return None, None
     K = np.asarray(flat, np.float64).reshape(3, 3)
+    if not np.any(K):  # (ROS marks an uncalibrated camera so: not a camera matrix, noted by unread_field_notes)
+        return None, None
     if not np.all(np.isfinite(K)):
         return None, "its numbers must be finite"
     if K[0, 2] == 0 and K[1, 2] == 0 and K[2, 2] != 0 and (K[2, 0] != 0 or K[2, 1] != 0) and K[0, 1] == 0:
@@ -451,8 +453,11 @@ def _camera_matrix(raw: Any) -> tuple[np.ndarray | None, str | None]:
 def _camera_matrix_field(meta: dict[str, Any], *, where: str) -> tuple[str, np.ndarray, np.ndarray] | None:
     """``(its name, focal (fx, fy), principal point (cx, cy))`` from a keypoint file's camera matrix, or None
     when it has none. Checked as ``focal`` and ``principal_point`` are."""
+    own = meta.get("focal") is not None or meta.get("principal_point") is not None
     for key in CAMERA_MATRIX_FIELDS:
         K, problem = _camera_matrix(meta.get(key))
+        if problem is not None and own:
+            continue  # (the file's own focal and principal point are read; unread_field_notes says why K is not)
         if problem is not None:
             raise PoseLifterError(f"{where}: {key!r} is read as the camera matrix, but {problem} (or give 'focal' "
                                   "and 'principal_point')")
@@ -615,8 +620,20 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
     for key in meta:
         if not isinstance(key, str) or key in READ_FIELDS or key in _WRITTEN_FIELDS or key in _OTHER_FIELDS:
             continue
-        if key in CAMERA_MATRIX_FIELDS and any(v is not None for v in _camera_matrix(meta[key])):
-            continue  # (read: _camera_meta)
+        if key in CAMERA_MATRIX_FIELDS:
+            K, problem = _camera_matrix(meta[key])
+            if problem is not None:  # (refused by _camera_matrix_field, unless the file gives its own camera)
+                notes.append(f"{key!r} is not read as the camera matrix: {problem}; the file's 'focal' and "
+                             "'principal_point' are used")
+                continue
+            if K is not None:
+                continue  # (read: _camera_meta)
+            raw = meta[key].get("data") if isinstance(meta[key], dict) else meta[key]
+            flat = [v for row in raw for v in row] if isinstance(raw, list) and all(
+                isinstance(r, list) for r in raw) else raw
+            if isinstance(flat, list) and len(flat) == 9 and all(_is_number(v) and v == 0 for v in flat):
+                notes.append(f"{key!r} is all zeros, as ROS marks an uncalibrated camera: not read")
+                continue
         ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(
             iter(difflib.get_close_matches(key.lower(), READ_FIELDS, n=1, cutoff=0.88)), None) or _one_typo(key)
         if ours is None or all(n in meta for n in ours.split(" and ")):
@@ -1619,7 +1636,7 @@ def write_atomic(path: str | Path, data: bytes | memoryview | str) -> Path:
                               "choose another output folder)")
     raw = data.encode("utf-8") if isinstance(data, str) else data
     try:
-        mode = stat.S_IMODE(path.stat().st_mode)
+        mode = stat.S_IMODE(path.stat().st_mode) & 0o777  # (not setuid, setgid or sticky bits)
     except OSError:  # (no such file, or not one we may look at: a new file's mode)
         mode = 0o666 & ~_UMASK
     try:

@@ -165,7 +165,8 @@ class QuantizedCoupledLinear(nn.Module):
     def __init__(self, layer: MirrorCoupledLinear) -> None:
         super().__init__()
         w = layer.weight_sum.shape[0]
-        on_sum, on_diff = nn.Linear(w, w), nn.Linear(w, w, bias=False)
+        # (float32 whatever torch's default dtype: quantize_dynamic keeps a float64 layer's inputs float64)
+        on_sum, on_diff = nn.Linear(w, w, dtype=torch.float32), nn.Linear(w, w, bias=False, dtype=torch.float32)
         with torch.no_grad():
             on_sum.weight.copy_(layer.weight_sum)
             on_sum.bias.copy_(layer.bias)

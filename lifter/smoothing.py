@@ -116,8 +116,10 @@ class PoseSmoother:
 
     def __call__(self, root: np.ndarray, relative: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         """The smoothed ``(root, relative)`` at time ``t`` (s)."""
-        if self.strength == 0:
-            return np.asarray(root, np.float64).copy(), np.asarray(relative, np.float64).copy()
+        if self.strength == 0:  # (off: the input, a point not known NaN, as the filter gives it)
+            r, rel = np.asarray(root, np.float64), np.asarray(relative, np.float64)
+            return (np.where(np.isfinite(r).all(-1, keepdims=True), r, np.nan),
+                    np.where(np.isfinite(rel).all(-1, keepdims=True), rel, np.nan))
         r = self._root(np.asarray(root, np.float64)[None], t)[0]
         rel = self._pose(relative, t)
         rel[..., 0, :] = 0.0  # the root row of a root-relative pose stays zero

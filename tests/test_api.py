@@ -89,6 +89,12 @@ def test_a_checkpoint_loaded_under_a_float64_default_lifts_as_under_float32(tmp_
         for n in (1, 6):  # (the packed path for a few rows, the numpy and torch paths for more)
             got = loaded.lift(keypoints[:n], focal=1145.0, principal_point=(512.0, 515.0), warn=False)
             np.testing.assert_allclose(got.absolute, want.absolute[:n], rtol=0, atol=1e-3)
+        # the int8 lifter too, a mirror network's coupled layers included (a review: "expected scalar type Float
+        # but found Double")
+        for net in (lifter, tiny_lifter(64, name="mirror", symmetry="mirror")):
+            q = Lifter.from_checkpoint(save_checkpoint(tmp_path / f"{net.name}.pt", net.net, net.codec)).quantized()
+            got = q.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0), warn=False)
+            assert got.absolute.shape == (6, 17, 3) and np.isfinite(got.absolute).all()
     finally:
         torch.set_default_dtype(before)
 

@@ -2246,6 +2246,8 @@ def test_playback_sends_the_tab_no_joint_box_value_until_it_stops(app: PoseLifte
 
     from viser import _messages
 
+    from lifter.skeleton import JOINT_NAMES
+
     with open_tab(app) as (tab, v):
         box = v.gui.joints.uv
         ws = box._impl.gui_api._websock_interface
@@ -2272,6 +2274,17 @@ def test_playback_sends_the_tab_no_joint_box_value_until_it_stops(app: PoseLifte
             time.sleep(0.5)
             with guard:
                 assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent
+            # another joint picked while playing: the box shows it once, where it is then (a review: the previous
+            # joint's stayed until the pause)
+            other = "l_wrist" if v.gui.joints.joint.value != "l_wrist" else "r_wrist"
+            _send_value(tab, v.gui.joints.joint, other)
+            assert wait_for(lambda: JOINT_NAMES[v.selected] == other, timeout=5)
+            assert wait_for(lambda: any(u == box._impl.uuid for u, _ in list(sent)), timeout=5)
+            with guard:
+                sent.clear()
+            time.sleep(0.5)
+            with guard:
+                assert not [val for uuid, val in sent if uuid == box._impl.uuid], sent  # (and then no more)
         finally:
             v.gui.play.play.value = True  # pause
         assert wait_for(lambda: not v.playing, timeout=5)

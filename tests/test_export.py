@@ -188,7 +188,11 @@ def test_glb_animation_keys_each_track_over_its_own_span(tmp_path):
     smp = {ch["target"]["path"]: gltf["animations"][0]["samplers"][ch["sampler"]]
            for ch in gltf["animations"][0]["channels"] if ch["target"]["node"] == node}
     t = read(smp["scale"]["input"])[:, 0]
-    np.testing.assert_allclose(t, np.arange(299, 309) / 25.0, rtol=1e-6)
+    # its span, and the clip's first and last frames: every track's keys end where the clip does (a review: a player
+    # takes the clip's length from its latest key, and the animation was 2 s of a 10-s video)
+    np.testing.assert_allclose(t, np.r_[0, np.arange(299, 309), 2999] / 25.0, rtol=1e-6)
+    ends = [gltf["accessors"][smp_["input"]]["max"][0] for smp_ in gltf["animations"][0]["samplers"]]
+    np.testing.assert_allclose(ends, 2999 / 25.0, rtol=1e-6)
     sc = read(smp["scale"]["output"])[:, 0]
 
     def at(frame):  # (glTF: before the first key the first, after the last the last; LINEAR between)
@@ -216,6 +220,9 @@ def test_a_malformed_bvh_is_named(tmp_path, pose):
     bad.write_text(good.replace("Frames: 1", "Frames: 2"))
     with pytest.raises(PoseLifterError, match=r"bad.bvh: BVH MOTION has 54 values, expected 2 x 54"):
         read_bvh_frames(bad)
+    bad.write_text(good.replace("Frames: 1", "Frames: 0"))
+    with pytest.raises(PoseLifterError, match=r"bad.bvh: the BVH has no frames"):
+        read_bvh(bad)  # (a review: a bare IndexError)
     with pytest.raises(PoseLifterError, match=r"frame_time must be > 0 s, got 0"):
         bvh_text(pose, frame_time=0.0)
     bad.write_text(good.replace("r_hip", "r_hipé"), encoding="utf-8")  # (read as UTF-8 on any system)

@@ -501,6 +501,18 @@ def test_a_keypoint_files_camera_matrix_is_read(tmp_path, rng):
                          ([K[0], K[1], [0, 0.1, 1]], r"its last row must be \[0, 0, 1\], got \[0.0, 0.1, 1.0\]")):
         with pytest.raises(PoseLifterError, match=r"'K' is read as the camera matrix, but " + match):
             lift_keypoint_file(_write(tmp_path / "bad.json", {"keypoints": kp, "K": value}), lifter=lf)
+        # (a review) beside the file's own focal and principal point, such a K is left out, and said
+        rec = lift_keypoint_file(_write(tmp_path / "own.json", {"keypoints": kp, "K": value, "focal": list(f),
+                                                                "principal_point": list(c)}), lifter=lf)
+        np.testing.assert_allclose(rec.root, want.root, rtol=1e-9)
+        assert any("'K' is not read as the camera matrix: " in w and "'focal' and 'principal_point' are used" in w
+                   for w in rec.warnings), rec.warnings
+    # (a review) ROS marks an uncalibrated camera with a K of zeros: not read, said, the file's own camera used
+    zeros = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]
+    rec = lift_keypoint_file(_write(tmp_path / "ros.json", {"keypoints": kp, "K": zeros, "focal": list(f),
+                                                            "principal_point": list(c)}), lifter=lf)
+    np.testing.assert_allclose(rec.root, want.root, rtol=1e-9)
+    assert any("'K' is all zeros, as ROS marks an uncalibrated camera: not read" in w for w in rec.warnings)
 
 
 def test_unread_field_notes_name_the_right_field_and_spare_other_formats():

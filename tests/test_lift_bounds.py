@@ -86,6 +86,9 @@ def test_a_replaced_file_keeps_its_permissions(tmp_path):
     p.chmod(0o640)
     write_atomic(p, b"{}")
     assert (p.stat().st_mode & 0o777) == 0o640
+    p.chmod(0o4755)  # (a review: setuid kept on the new file)
+    write_atomic(p, b"{}")
+    assert (p.stat().st_mode & 0o7777) == 0o755
 
 
 def test_atomic_write_into_a_missing_folder_names_the_problem(tmp_path):

@@ -115,6 +115,9 @@ def test_a_point_not_known_in_a_frame_is_skipped_not_spread():
     r, _ = smooth_sequence(first, rel, t)
     np.testing.assert_allclose(r[1:], smooth_sequence(root[1:], rel[1:], t[1:])[0], rtol=0, atol=1e-9)
     np.testing.assert_array_equal(r_all, smooth_sequence(root, rel, t)[0])  # (inputs untouched)
+    r0, q0 = smooth_sequence(bad_r, bad_q, t, strength=0)  # (off: the input, not known NaN, as with the filter)
+    assert np.isnan(r0[10]).all() and np.isnan(q0[[10, 11], 5]).all() and not np.isinf(q0).any()
+    np.testing.assert_array_equal(np.delete(r0, 10, 0), np.delete(root, 10, 0))
 
 
 def test_smooth_sequence_says_what_is_wrong_with_its_input():
