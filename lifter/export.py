@@ -27,7 +27,7 @@ from typing import Any, Final, Literal
 
 import numpy as np
 
-from ._checks import PoseLifterError, as_points
+from ._checks import PoseLifterError, as_points, warn_user
 from .io import write_atomic
 from .skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, PARENTS, joint_side
 
@@ -580,7 +580,25 @@ def _bvh_frames(text: str, path: Any, *, units: str, position_channels: str) -> 
                 pos[j] = pos[par] + rot[par] @ local
                 rot[j] = rot[par] @ R
         out[f] = np.stack([pos[names.index(n)] for n in JOINT_NAMES])
+    if position_channels == "replace" and n_frames:
+        _note_delta_channels(joints, values[:n_frames * n_ch].reshape(n_frames, n_ch), path)
     return from_y_up(out * UNITS_MM[units])
+
+
+def _note_delta_channels(joints: list[tuple[str, int, np.ndarray, list[str]]], motion: np.ndarray, path: Any) -> None:
+    """Warn when the non-root joints' position channels, read as their translations, are mostly far shorter than
+    their OFFSETs (median under a quarter): a file whose channels hold the change from the OFFSET, as
+    :func:`write_bvh_animation` wrote them before 2026-12 (a review: such a file read now was 735 mm off, silently)."""
+    k, ratios = 0, []
+    for _, par, off, ch in joints:
+        idx = [k + i for i, c in enumerate(ch) if c.endswith("position")]
+        k += len(ch)
+        if par >= 0 and len(idx) == 3 and np.linalg.norm(off) > 0:
+            ratios.append(float(np.median(np.linalg.norm(motion[:, idx], axis=1))) / float(np.linalg.norm(off)))
+    if len(ratios) >= 4 and float(np.median(ratios)) < 0.25:
+        warn_user(f"{path}: its joints' position channels are mostly far shorter than their OFFSETs (median "
+                  f"{float(np.median(ratios)):.2f} of them), as in a file that holds each bone's change from its "
+                  "OFFSET (poselifter before 2026-12): read it with position_channels=\"add\"")
 
 
 def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:
