@@ -737,17 +737,21 @@ class _Followed:
     max_people: int
     horizon: int
     recent: int = 0
+    seen_every: int = 1  # (frames between sightings of the people not lifted: a video's full searches)
     people: list[tuple[int, np.ndarray, Any]] = field(default_factory=list)
     set_aside: int = 0
     aside_frames: list[int] = field(default_factory=list)
     others: list[tuple[int, np.ndarray]] = field(default_factory=list)
 
     @classmethod
-    def at_fps(cls, *, max_people: int, fps: float) -> _Followed:
+    def at_fps(cls, *, max_people: int, fps: float, seen_every: int = 1) -> _Followed:
         """Followed people let go after the track timeout (:data:`TRACK_TIMEOUT_S`), recent within
-        :data:`FOLLOWED_RECENT_S`, in frames at ``fps``."""
+        :data:`FOLLOWED_RECENT_S`, in frames at ``fps``. ``seen_every``: how many frames apart the people not lifted
+        are seen (a video searches the whole frame every so many; between, only around those lifted): those seen
+        beside the followed people are remembered that long at least (a developer trial's, seen every 5th frame and
+        forgotten after 2, took the followed person's place when they were hidden)."""
         return cls(max_people=max_people, horizon=timeout_frames(TRACK_TIMEOUT_S, fps),
-                   recent=round(fps * FOLLOWED_RECENT_S))
+                   recent=round(fps * FOLLOWED_RECENT_S), seen_every=max(int(seen_every), 1))
 
     def aside_note(self) -> list[str]:
         """The note on the frames where someone was set aside (else they read only as frames the followed people
@@ -769,7 +773,7 @@ class _Followed:
         Once they have been unseen longer, someone else is lifted while alone (and followed after ``horizon``),
         except one who continues someone seen beside them (``others``), who waits the whole ``horizon``."""
         self.people = [q for q in self.people if frame - q[0] <= self.horizon]
-        self.others = [q for q in self.others if frame - q[0] <= max(self.recent, 1)]
+        self.others = [q for q in self.others if frame - q[0] <= max(self.recent, self.seen_every, 1)]
         held = len(self.people) >= self.max_people
         # (each remembered other continues at most one unnamed box of this frame, the best overlapping first, so that
         # someone standing where the other stood is not taken for them while the other is there too)
@@ -813,6 +817,7 @@ class _Followed:
                 self.aside_frames.append(frame)
             self.set_aside, keep = self.set_aside + aside, kept
         taken: set[int] = set()
+        unmatched: list[int] = []
         for j in keep:
             same = [k for k, (_, b, n) in enumerate(self.people) if k not in taken and (
                 n == names[j] if n is not None and names[j] is not None else box_iou(b, boxes[j]) >= TRACKED_IOU)]
@@ -830,6 +835,20 @@ class _Followed:
                     k = max(near)[1]
                     self.people[k] = (frame, boxes[j], names[j] if names[j] is not None else self.people[k][2])
                     taken.add(k)
+                else:
+                    unmatched.append(j)
+            else:
+                unmatched.append(j)
+        # one lifted while someone seen beside the followed people is there in the same frame, whom no followed
+        # box continues, is a followed person back where their box no longer reaches (a developer trial's followed
+        # person, hidden 0.8 s, came back 60 px away: lifted for 1 s, then their entry, never refreshed, was let go
+        # and the other took their place for the rest of the sequence): that person's entry, the longest unseen
+        if unmatched and any(is_other):
+            stale = sorted((q[0], k) for k, q in enumerate(self.people)
+                           if k not in taken and frame - q[0] > self.recent)
+            for j, (_, k) in zip([j for j in unmatched if names[j] is None], stale):
+                self.people[k] = (frame, boxes[j], self.people[k][2])
+                taken.add(k)
         # (the unnamed people not lifted in a frame where a followed person was: someone else, followed from frame to
         # frame by their boxes as long as they are not lifted; not a stranger set aside while the followed were away)
         beside = bool(taken)
@@ -1360,7 +1379,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         return_every = min(search_every, max(1, round(RETURN_SEARCH_S * fps)))
         missing_until, missing_count = -1, 0  # (someone lost: until then, while fewer than that, search more often)
         can_track = callable(getattr(estimator, "detect_near", None))
-        followed = _Followed.at_fps(max_people=max_people, fps=fps)  # (--max-people)
+        followed = _Followed.at_fps(max_people=max_people, fps=fps, seen_every=search_every)  # (--max-people)
         while index + 1 < limit:
             t0 = time.perf_counter()
             ok, bgr = cap.read()
