@@ -417,19 +417,67 @@ def bvh_text(pose: Any, *, units: str = "cm", frame_time: float = 1.0 / 30.0) ->
     return "\n".join(lines) + "\n"
 
 
+def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """``v (..., 3)`` scaled to unit length; ``fallback`` where it has (nearly) none."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.where(n > 1e-9, v / np.maximum(n, 1e-12), fallback)
+
+
+def _align(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(..., 3, 3)``: the smallest rotations turning the unit vectors ``a (3,)`` onto ``b (..., 3)``."""
+    v = np.cross(a, b)
+    c = b @ a
+    vx = np.zeros(v.shape[:-1] + (3, 3))
+    vx[..., 0, 1], vx[..., 0, 2], vx[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    vx[..., 1, 0], vx[..., 2, 0], vx[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    R = np.eye(3) + vx + vx @ vx / np.maximum(1.0 + c, 1e-12)[..., None, None]
+    back = c < -1.0 + 1e-9  # (opposite: half a turn about an axis across a)
+    if np.any(back):
+        axis = np.cross(a, [1.0, 0.0, 0.0])
+        axis = axis if np.linalg.norm(axis) > 1e-6 else np.cross(a, [0.0, 1.0, 0.0])
+        axis = axis / np.linalg.norm(axis)
+        R[back] = 2.0 * np.outer(axis, axis) - np.eye(3)
+    return R
+
+
+def _fit_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(T, 3, 3)``: the rotations best turning the vectors ``a (n, 3)`` onto ``b (T, n, 3)`` (Kabsch, least
+    squares, no reflection)."""
+    H = np.einsum("ni,tnj->tij", a, b)
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    D = np.zeros_like(H)
+    D[:, 0, 0], D[:, 1, 1], D[:, 2, 2] = 1.0, 1.0, np.where(d == 0, 1.0, d)
+    return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
+
+
+def _euler_zxy_deg(R: np.ndarray) -> np.ndarray:
+    """``(..., 3)`` degrees (z, x, y) with ``R = Rz(z) Rx(x) Ry(y)`` for the rotations ``R (..., 3, 3)``: the
+    ``Zrotation Xrotation Yrotation`` channels (read in that order, intrinsic)."""
+    sx = np.clip(R[..., 2, 1], -1.0, 1.0)
+    x = np.arcsin(sx)
+    lock = np.abs(sx) > 1.0 - 1e-9  # (x at +-90 deg: z and y turn about one axis; all of it in z)
+    z = np.where(lock, np.arctan2(R[..., 1, 0], R[..., 0, 0]), np.arctan2(-R[..., 0, 1], R[..., 1, 1]))
+    y = np.where(lock, 0.0, np.arctan2(-R[..., 2, 0], R[..., 2, 2]))
+    return np.degrees(np.stack([z, x, y], axis=-1))
+
+
 def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     """A BVH animation of one person over ``T`` frames, ``poses (T, 17, 3)`` mm (camera frame), ``fps`` frames/s.
 
-    A lifted pose's bone lengths change a little from frame to frame, so the animation is exact by
-    translation, not rotation: each OFFSET is the bone vector averaged over the frames (the rest pose), every joint
-    has the channels ``Xposition Yposition Zposition Zrotation Xrotation Yrotation``, the root's position is its
-    location in each frame and a joint's position channels hold its whole bone vector in that frame (from its
-    parent, in the parent's frame), which **replaces** the OFFSET, with zero rotations: as Blender's BVH importer
-    and exporter read and write position channels. (Until 2026-12 they held the change from the OFFSET, added to it,
-    which Blender showed as bones a few mm long: ``read_bvh_frames(path, position_channels="add")`` reads such a
-    file.) :func:`read_bvh_frames` reads it back exactly; an importer that ignores position channels on non-root
-    joints shows the average-length bones moving with the root, and one that adds them to the OFFSET (three.js's
-    ``BVHLoader``) shows each bone about twice as long: the GLB (:func:`write_glb_animation`) is the file for those.
+    A rig as animation tools take it: the rest pose (the OFFSETs) has each bone at its mean length over the frames,
+    along its mean direction; each frame turns every joint (``Zrotation Xrotation Yrotation``, degrees) so that its
+    bones point at their children (the one bone of a joint with one child exactly; the two or three of the pelvis and
+    the thorax as nearly as one rotation can, least squares), so that a tool drawing bones from the rest pose, as
+    Blender does, draws them from joint to joint. A lifted pose's bone lengths change a little from frame to frame, so
+    every joint also has ``Xposition Yposition Zposition`` channels: its whole translation from its parent in the
+    parent's turned frame, in place of the OFFSET (as Blender's BVH importer and exporter read and write them), so
+    the joint positions are exact. (Until 2026-12 the channels held each bone's change from the OFFSET, added to it,
+    with no rotations: Blender drew bones a few mm long; a review. ``read_bvh_frames(path,
+    position_channels="add")`` reads those files.) :func:`read_bvh_frames` reads it back exactly; an importer that
+    ignores position channels on non-root joints shows mean-length bones turned as the person turns, and one that
+    adds them to the OFFSET (three.js's ``BVHLoader``) shows each bone about twice as long: the GLB
+    (:func:`write_glb_animation`) is the file for those.
     """
     if units not in UNITS_MM:
         raise PoseLifterError(f"units must be one of {sorted(UNITS_MM)}, got {units!r}")
@@ -440,19 +488,33 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
         raise PoseLifterError(f"poses: expected (T, 17, 3) mm with T >= 1, got {tuple(P.shape)}")
     p = to_y_up(P) / UNITS_MM[units]
     par = np.array([max(q, 0) for q in PARENTS])
-    bones = p - p[:, par]
-    bones[:, 0] = p[:, 0]
-    offsets = bones.mean(0)
+    bones = p - p[:, par]  # (T, 17, 3); row 0 unused
+    length = np.linalg.norm(bones, axis=-1).mean(0)
+    rest_dir = _unit(bones.mean(0), _unit(bones[0], np.array([0.0, 1.0, 0.0])))
+    offsets = rest_dir * length[:, None]
     offsets[0] = 0.0
-
-    def fmt(v: np.ndarray) -> str:
-        return " ".join(f"{x:.5f}" for x in v)
-
-    lines, order = _bvh_hierarchy(offsets, fmt, lambda j: _CHANNELS_6)
-    lines += ["MOTION", f"Frames: {len(p)}", f"Frame Time: {1.0 / fps:.6f}"]
-    zeros = np.zeros(3)
-    for t in range(len(p)):
-        lines.append(" ".join(fmt(np.r_[bones[t, j], zeros]) for j in order))
+    lines, order = _bvh_hierarchy(offsets, lambda v: " ".join(f"{x:.5f}" for x in v), lambda j: _CHANNELS_6)
+    T = len(p)
+    G = np.zeros((T, NUM_JOINTS, 3, 3))  # each joint's turn in the y-up frame (of its children's offsets)
+    for j in order:  # (parents first)
+        kids = _children(j)
+        if not kids:
+            G[:, j] = G[:, PARENTS[j]]
+        elif len(kids) == 1:
+            c = kids[0]
+            G[:, j] = _align(_unit(offsets[c], np.array([0.0, 1.0, 0.0])),
+                             _unit(bones[:, c], _unit(offsets[c], np.array([0.0, 1.0, 0.0]))))
+        else:
+            G[:, j] = _fit_rotation(offsets[kids], bones[:, kids])
+    parent_G = G[:, par]  # (the root's parent: none; its rows below are its own)
+    local_R = np.swapaxes(parent_G, -1, -2) @ G
+    local_R[:, 0] = G[:, 0]
+    local_t = np.einsum("tjki,tjk->tji", parent_G, bones)  # (G_parent^T @ bone)
+    local_t[:, 0] = p[:, 0]
+    euler = _euler_zxy_deg(local_R)
+    rows = np.concatenate([local_t, euler], axis=-1)[:, order].reshape(T, -1)
+    lines += ["MOTION", f"Frames: {T}", f"Frame Time: {1.0 / fps:.6f}"]
+    lines += [" ".join(f"{x:.5f}" for x in row) for row in rows]
     return "\n".join(lines) + "\n"
 
 
@@ -586,19 +648,27 @@ def _bvh_frames(text: str, path: Any, *, units: str, position_channels: str) -> 
 
 
 def _note_delta_channels(joints: list[tuple[str, int, np.ndarray, list[str]]], motion: np.ndarray, path: Any) -> None:
-    """Warn when the non-root joints' position channels, read as their translations, are mostly far shorter than
-    their OFFSETs (median under a quarter): a file whose channels hold the change from the OFFSET, as
-    :func:`write_bvh_animation` wrote them before 2026-12 (a review: such a file read now was 735 mm off, silently)."""
-    k, ratios = 0, []
+    """Warn when a BVH reads as one whose joints' position channels hold each bone's change from its OFFSET, added to
+    it, as :func:`write_bvh_animation` wrote them before 2026-12 (a review: such a file read now was 735 mm off,
+    silently): no rotation anywhere, and the bones' lengths over the frames far steadier with the channels added to
+    the OFFSETs than in place of them (a body's bones keep their lengths); in one frame, channels mostly far shorter
+    than the OFFSETs."""
+    k, add, replace, short, turned = 0, [], [], [], False
     for _, par, off, ch in joints:
-        idx = [k + i for i, c in enumerate(ch) if c.endswith("position")]
+        pos = [k + i for i, c in enumerate(ch) if c.endswith("position")]
+        turned = turned or bool(np.any(motion[:, [k + i for i, c in enumerate(ch) if c.endswith("rotation")]]))
         k += len(ch)
-        if par >= 0 and len(idx) == 3 and np.linalg.norm(off) > 0:
-            ratios.append(float(np.median(np.linalg.norm(motion[:, idx], axis=1))) / float(np.linalg.norm(off)))
-    if len(ratios) >= 4 and float(np.median(ratios)) < 0.25:
-        warn_user(f"{path}: its joints' position channels are mostly far shorter than their OFFSETs (median "
-                  f"{float(np.median(ratios)):.2f} of them), as in a file that holds each bone's change from its "
-                  "OFFSET (poselifter before 2026-12): read it with position_channels=\"add\"")
+        if par >= 0 and len(pos) == 3 and np.linalg.norm(off) > 0:
+            for out, vec in ((add, off + motion[:, pos]), (replace, motion[:, pos])):
+                n = np.linalg.norm(vec, axis=1)
+                out.append(float(n.std() / max(n.mean(), 1e-9)))
+            short.append(float(np.median(np.linalg.norm(motion[:, pos], axis=1)) / np.linalg.norm(off)))
+    if turned or len(short) < 4:
+        return
+    if (float(np.median(add)) < 0.5 * float(np.median(replace)) if len(motion) > 1 else float(np.median(short)) < 0.25):
+        warn_user(f"{path}: its joints' position channels read as each bone's change from its OFFSET (no rotations, "
+                  "and the bones keep their lengths far better with the channels added to the OFFSETs), as in a file "
+                  "poselifter wrote before 2026-12: read it with position_channels=\"add\"")
 
 
 def read_bvh(path: str | os.PathLike[str], *, units: str = "cm") -> np.ndarray:

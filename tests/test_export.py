@@ -105,50 +105,121 @@ def test_bvh_animation_round_trip(tmp_path):
     np.testing.assert_allclose(read_bvh_frames(one)[0], poses[3], atol=1e-3)
 
 
-def test_bvh_animation_position_channels_are_the_whole_translation(tmp_path):
+def _bvh_parse(text: str):
+    """An independent BVH reader for the tests: joints (name, parent, OFFSET, channels) and the MOTION rows."""
+    head, motion = text.split("MOTION")
+    joints, stack, pending, end_site = [], [], -1, False
+    tok = head.split()
+    i = 0
+    while i < len(tok):
+        t = tok[i]
+        if t in ("ROOT", "JOINT"):
+            joints.append([tok[i + 1], stack[-1] if stack else -1, None, []])
+            pending, i = len(joints) - 1, i + 2
+        elif t == "End":
+            end_site, i = True, i + 2
+        elif t == "{":
+            stack.append(-2 if end_site else pending)
+            i += 1
+        elif t == "}":
+            end_site = False if stack.pop() == -2 else end_site
+            i += 1
+        elif t == "OFFSET":
+            if stack[-1] != -2:
+                joints[stack[-1]][2] = np.array([float(v) for v in tok[i + 1:i + 4]])
+            i += 4
+        elif t == "CHANNELS":
+            joints[stack[-1]][3] = tok[i + 2:i + 2 + int(tok[i + 1])]
+            i += 2 + int(tok[i + 1])
+        else:
+            i += 1
+    rows = np.array([[float(v) for v in ln.split()] for ln in motion.splitlines()[3:] if ln.strip()])
+    return joints, rows
+
+
+def _fk_blender(joints, row):
+    """Blender's reading of one MOTION row: a joint's transform is its translation (its position channels in place
+    of its OFFSET) then its rotation (Euler channels in the listed order, intrinsic); positions and global
+    rotations of every joint, in the file's order."""
+    def rot(axis, deg):
+        c, s_ = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+        return {"X": np.array([[1, 0, 0], [0, c, -s_], [0, s_, c]]),
+                "Y": np.array([[c, 0, s_], [0, 1, 0], [-s_, 0, c]]),
+                "Z": np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]])}[axis]
+
+    pos, glob, k = [], [], 0
+    for _, parent, off, ch in joints:
+        t, R = off.copy(), np.eye(3)
+        for c in ch:
+            if c.endswith("position"):
+                t["XYZ".index(c[0])] = row[k]
+            else:
+                R = R @ rot(c[0], row[k])
+            k += 1
+        if parent < 0:
+            pos.append(t)
+            glob.append(R)
+        else:
+            pos.append(pos[parent] + glob[parent] @ t)
+            glob.append(glob[parent] @ R)
+    return np.array(pos), np.array(glob)
+
+
+def test_bvh_animation_is_a_rig_whose_bones_point_at_their_joints(tmp_path):
     """A review: the animation's position channels held each bone's change from its OFFSET, added to it, where
-    Blender's importer and exporter take them as the joint's whole translation from its parent (the OFFSET being
-    the rest pose): imported so, every bone was a few mm long. Read here by the rule Blender uses (channel in place
-    of the OFFSET), each frame's bones are the lifted ones; a Blender-style root with an OFFSET and absolute position
-    channels reads at the channels; a file of the earlier convention reads with position_channels="add"."""
+    Blender's importer takes them as the joint's whole translation (every bone a few mm long); then a trial: with no
+    rotations, and rest bones the mean bone vectors (short where the person turned), Blender drew each bone from its
+    joint along its rest direction, 15-20 cm off the child joint on average. Read as Blender reads it (independently
+    here), every joint is where the lift put it, and every bone of a joint with one child, turned by the rotations,
+    points at that child; the rest bones have the bones' mean lengths."""
     rng = np.random.default_rng(3)
-    poses = random_pose_cam(rng, 1)[0][None] + np.cumsum(rng.normal(0, 8, (12, 17, 3)), axis=0)
+    base = random_pose_cam(rng, 1)[0]
+    turn = [np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]) for a in np.linspace(0, 3, 30)]
+    poses = np.stack([(base - base[0]) @ R.T + base[0] + [5.0 * t, 0, 0] for t, R in enumerate(turn)])
+    poses += rng.normal(0, 6, poses.shape)  # (a person turning half round and walking; bone lengths jitter)
     text = bvh_animation_text(poses, fps=25.0)
-    rows = np.array([[float(v) for v in line.split()] for line in text.split("Frame Time: 0.040000\n")[1].split("\n")
-                     if line.strip()])
-    assert rows.shape == (12, 17 * 6)
+    joints, rows = _bvh_parse(text)
+    assert rows.shape == (30, 17 * 6) and np.abs(rows[:, 3::6]).max() > 20  # (turned: not zero rotations)
+    names = [j[0] for j in joints]
     y_up = to_y_up(poses) / 10.0  # cm
-    par = np.array([max(q, 0) for q in PARENTS])
-    bones = y_up - y_up[:, par]
-    order = [JOINT_NAMES.index(line.split()[1]) for line in text.split("MOTION")[0].splitlines()
-             if line.strip().startswith(("ROOT", "JOINT"))]
-    for k, j in enumerate(order):  # (the channels alone give each frame's bone: no OFFSET added)
-        np.testing.assert_allclose(rows[:, 6 * k:6 * k + 3], y_up[:, 0] if j == 0 else bones[:, j], atol=1e-4)
-    np.testing.assert_allclose(rows[:, 3::6], 0.0)
-    np.testing.assert_allclose(rows[:, 4::6], 0.0)
+    for t in range(30):
+        pos, glob = _fk_blender(joints, rows[t])
+        np.testing.assert_allclose(pos[[names.index(n) for n in JOINT_NAMES]], y_up[t], atol=1e-3)
+        for k in range(len(joints)):
+            kids = [c for c, q in enumerate(joints) if q[1] == k]
+            if len(kids) == 1:  # (its bone drawn along its turned rest bone: at the child)
+                drawn = glob[k] @ joints[kids[0]][2]
+                real = pos[kids[0]] - pos[k]
+                cos = drawn @ real / np.linalg.norm(drawn) / np.linalg.norm(real)
+                assert cos > 1 - 1e-6, (t, names[k], cos)
+    lengths = np.linalg.norm(y_up - y_up[:, [max(q, 0) for q in PARENTS]], axis=-1).mean(0)
+    for name, _, off, _ in joints[1:]:
+        assert np.linalg.norm(off) == pytest.approx(lengths[JOINT_NAMES.index(name)], abs=1e-4)
+    np.testing.assert_allclose(read_bvh_frames(write_bvh_animation(poses, tmp_path / "turn.bvh", fps=25.0)), poses,
+                               atol=1e-3)
     # a Blender-style root: OFFSET at rest, channels absolute
     blender = text.replace("ROOT pelvis\n{\n  OFFSET 0.00000 0.00000 0.00000",
                            "ROOT pelvis\n{\n  OFFSET 0.00000 90.00000 0.00000")
     assert blender != text
     (tmp_path / "blender.bvh").write_text(blender)
     np.testing.assert_allclose(read_bvh_frames(tmp_path / "blender.bvh"), poses, atol=1e-3)
-    # the earlier convention: channels = bone - OFFSET, read with position_channels="add"
-    offsets_by_joint = {}
-    lines = text.split("MOTION")[0].splitlines()
-    for i, line in enumerate(lines):
-        if line.strip().startswith(("ROOT", "JOINT")):
-            offsets_by_joint[JOINT_NAMES.index(line.split()[1])] = np.array(
-                [float(v) for v in lines[i + 2].split()[1:]])
-    old_rows = rows.copy()
-    for k, j in enumerate(order):
-        if j != 0:
-            old_rows[:, 6 * k:6 * k + 3] -= offsets_by_joint[j]
-    old_text = text.split("Frame Time: 0.040000\n")[0] + "Frame Time: 0.040000\n" + "\n".join(
+    # the earlier convention (OFFSETs the mean bone vectors, channels = bone - OFFSET, no rotations), read with
+    # position_channels="add", and named when read without it
+    from lifter.export import _bvh_hierarchy
+
+    bones = y_up - y_up[:, [max(q, 0) for q in PARENTS]]
+    bones[:, 0] = y_up[:, 0]
+    mean = bones.mean(0)
+    mean[0] = 0.0
+    hier, order = _bvh_hierarchy(mean, lambda v: " ".join(f"{x:.5f}" for x in v), lambda j: "CHANNELS 6 Xposition "
+                                 "Yposition Zposition Zrotation Xrotation Yrotation")
+    old_rows = np.concatenate([bones - mean, np.zeros_like(bones)], axis=-1)[:, order].reshape(30, -1)
+    old_text = "\n".join(hier) + "\nMOTION\nFrames: 30\nFrame Time: 0.040000\n" + "\n".join(
         " ".join(f"{v:.5f}" for v in r) for r in old_rows) + "\n"
     (tmp_path / "old.bvh").write_text(old_text)
     np.testing.assert_allclose(read_bvh_frames(tmp_path / "old.bvh", position_channels="add"), poses, atol=1e-3)
-    with pytest.warns(PoseLifterWarning, match=r"old.bvh: its joints' position channels are mostly far shorter than "
-                                               r"their OFFSETs .* read it with position_channels=\"add\""):
+    with pytest.warns(PoseLifterWarning, match=r"old.bvh: its joints' position channels read as each bone's change "
+                                               r"from its OFFSET .* read it with position_channels=\"add\""):
         assert np.abs(read_bvh_frames(tmp_path / "old.bvh") - poses).max() > 50  # (not the same files, and said)
     with pytest.raises(PoseLifterError, match="position_channels must be 'replace' or 'add'"):
         read_bvh_frames(tmp_path / "old.bvh", position_channels="sum")  # type: ignore[arg-type]
