@@ -165,6 +165,20 @@ def _fk_blender(joints, row):
     return np.array(pos), np.array(glob)
 
 
+def test_bvh_euler_channels_give_back_the_rotation_gimbal_lock_included():
+    """The animation's rotation channels (Zrotation Xrotation Yrotation, read in that order, intrinsic) turned back
+    into matrices as the BVH reader composes them are the rotations written, at x = +-90 deg too."""
+    from lifter.export import _euler_zxy_deg, _rot
+
+    rng = np.random.default_rng(0)
+    q, r = np.linalg.qr(rng.normal(size=(500, 3, 3)))
+    R = q * np.sign(np.diagonal(r, axis1=-2, axis2=-1))[:, None, :]
+    R[np.linalg.det(R) < 0] *= -1  # (rotations, not reflections)
+    R = np.concatenate([R, np.stack([_rot("Z", 30) @ _rot("X", s * 90) @ _rot("Y", 40) for s in (1, -1)])])
+    back = np.stack([_rot("Z", z) @ _rot("X", x) @ _rot("Y", y) for z, x, y in _euler_zxy_deg(R)])
+    np.testing.assert_allclose(back, R, atol=1e-9)
+
+
 def test_bvh_animation_is_a_rig_whose_bones_point_at_their_joints(tmp_path):
     """A review: the animation's position channels held each bone's change from its OFFSET, added to it, where
     Blender's importer takes them as the joint's whole translation (every bone a few mm long); then a trial: with no
