@@ -996,9 +996,13 @@ def track_gap_notes(frames: list[FrameResult], *, left_out: Iterable[int] = (),
                 where = f"frame{'s' if len(floored) > 1 else ''} {_frames_summary(floored)}"
                 others = "frame" if rest == 1 else f"{rest} frames"
                 why = f"in {where} {floor}; in the other {others}: {absent}"
-            notes.append(f"track {tid}: missing from {len(gaps)} of the {len(have) + len(gaps)} frames between its "
-                         f"first (frame {first}) and last (frame {last}): {_frames_summary(gaps)}; those frames have "
-                         f"no pose for it ({why})")
+            held, span = len(have) + len(gaps), last - first + 1
+            # (a trial read "30 of the 97 frames between frame 0 and 99" where the file left out 3 frame numbers)
+            not_held = (f" that the input holds ({span - held} frame number{'s' if span - held > 1 else ''} between "
+                        f"{'are' if span - held > 1 else 'is'} not in it)" if held < span else "")
+            notes.append(f"track {tid}: missing from {len(gaps)} of the {held} frames between its "
+                         f"first (frame {first}) and last (frame {last}){not_held}: {_frames_summary(gaps)}; those "
+                         f"frames have no pose for it ({why})")
     return notes
 
 

@@ -384,10 +384,17 @@ def test_track_gap_notes_name_the_frames_a_track_is_missing_from():
     seen = {0: [1], 1: [1, 2], 2: [2], 4: [1, 2], 5: [1], 6: [2], 7: []}  # (frame 3 not in the record: a bad frame)
     frames = [FrameResult(index=i, time_s=i / 25, people=[person(t) for t in ids]) for i, ids in seen.items()]
     notes = track_gap_notes(frames)
-    assert notes == ["track 1: missing from 1 of the 5 frames between its first (frame 0) and last (frame 5): 2; "
-                     "those frames have no pose for it (the person was not found there)",
-                     "track 2: missing from 1 of the 5 frames between its first (frame 1) and last (frame 6): 5; "
-                     "those frames have no pose for it (the person was not found there)"]
+    # (a trial read "30 of the 97 frames between frame 0 and 99" where the file left 3 frame numbers out: said)
+    assert notes == ["track 1: missing from 1 of the 5 frames between its first (frame 0) and last (frame 5) that the "
+                     "input holds (1 frame number between is not in it): 2; those frames have no pose for it (the "
+                     "person was not found there)",
+                     "track 2: missing from 1 of the 5 frames between its first (frame 1) and last (frame 6) that the "
+                     "input holds (1 frame number between is not in it): 5; those frames have no pose for it (the "
+                     "person was not found there)"]
+    whole = [FrameResult(index=i, time_s=i / 25, people=[person(1)] if i != 2 else []) for i in range(5)]
+    assert track_gap_notes(whole) == ["track 1: missing from 1 of the 5 frames between its first (frame 0) and last "
+                                      "(frame 4): 2; those frames have no pose for it (the person was not found "
+                                      "there)"]
     assert track_gap_notes([f for f in frames if f.index != 5 and f.index != 1 and f.index != 2]) == []
     # a gap where someone was left out below the score floor says so, not "not found" (frame 2 left out; frame 5 not)
     floored = track_gap_notes(frames, left_out=[2, 6])
