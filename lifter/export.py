@@ -463,12 +463,30 @@ def _euler_zxy_deg(R: np.ndarray) -> np.ndarray:
     return np.degrees(np.stack([z, x, y], axis=-1))
 
 
+def _continuous_euler(E: np.ndarray) -> np.ndarray:
+    """``E (T, ..., 3)`` Euler degrees (z, x, y) of :func:`_euler_zxy_deg`, each frame's the one of its two equivalent
+    triples (``(z + 180, 180 - x, y + 180)`` turns the same), plus whole turns, nearest the frame before's: a tool
+    interpolating between frames turns a joint the short way (a review counted 62 jumps of more than 180 deg in S9's
+    Walking 1)."""
+    out = E.copy()
+    alt = E + np.array([180.0, 0.0, 180.0])
+    alt[..., 1] = 180.0 - E[..., 1]
+    for t in range(1, len(E)):
+        prev = out[t - 1]
+        a = E[t] + 360.0 * np.round((prev - E[t]) / 360.0)
+        b = alt[t] + 360.0 * np.round((prev - alt[t]) / 360.0)
+        use_b = np.abs(b - prev).sum(-1, keepdims=True) < np.abs(a - prev).sum(-1, keepdims=True)
+        out[t] = np.where(use_b, b, a)
+    return out
+
+
 def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     """A BVH animation of one person over ``T`` frames, ``poses (T, 17, 3)`` mm (camera frame), ``fps`` frames/s.
 
     A rig as animation tools take it: the rest pose (the OFFSETs) has each bone at its mean length over the frames,
-    along its mean direction; each frame turns every joint (``Zrotation Xrotation Yrotation``, degrees) so that its
-    bones point at their children (the one bone of a joint with one child exactly; the two or three of the pelvis and
+    along its direction in the first frame; each frame turns every joint (``Zrotation Xrotation Yrotation``, degrees,
+    in its parent's turned frame, continuous from frame to frame) so that its bones point at their children (the one
+    bone of a joint with one child exactly; the two or three of the pelvis and
     the thorax as nearly as one rotation can, least squares), so that a tool drawing bones from the rest pose, as
     Blender does, draws them from joint to joint. A lifted pose's bone lengths change a little from frame to frame, so
     every joint also has ``Xposition Yposition Zposition`` channels: its whole translation from its parent in the
@@ -491,28 +509,34 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
     par = np.array([max(q, 0) for q in PARENTS])
     bones = p - p[:, par]  # (T, 17, 3); row 0 unused
     length = np.linalg.norm(bones, axis=-1).mean(0)
-    rest_dir = _unit(bones.mean(0), _unit(bones[0], np.array([0.0, 1.0, 0.0])))
+    up = np.array([0.0, 1.0, 0.0])
+    # (the first frame's directions: a pose the body had; directions averaged over a clip where the person turns
+    # point the hips and shoulders anywhere, a review's up and down)
+    rest_dir = _unit(bones[0], _unit(bones.mean(0), up))
     offsets = rest_dir * length[:, None]
     offsets[0] = 0.0
     lines, order = _bvh_hierarchy(offsets, lambda v: " ".join(f"{x:.5f}" for x in v), lambda j: _CHANNELS_6)
     T = len(p)
     G = np.zeros((T, NUM_JOINTS, 3, 3))  # each joint's turn in the y-up frame (of its children's offsets)
-    for j in order:  # (parents first)
-        kids = _children(j)
+    for j in order:  # (parents first; each joint turned in its parent's turned frame, so only by its own bend: a
+        kids = _children(j)  # review saw every joint undo the whole body's turn, 90 deg at the median)
+        Gp = np.broadcast_to(np.eye(3), (T, 3, 3)) if j == 0 else G[:, PARENTS[j]]
         if not kids:
-            G[:, j] = G[:, PARENTS[j]]
-        elif len(kids) == 1:
-            c = kids[0]
-            G[:, j] = _align(_unit(offsets[c], np.array([0.0, 1.0, 0.0])),
-                             _unit(bones[:, c], _unit(offsets[c], np.array([0.0, 1.0, 0.0]))))
+            G[:, j] = Gp
+            continue
+        seen = np.einsum("tki,tnk->tni", Gp, bones[:, kids])  # (the children's bones in the parent's frame)
+        if len(kids) == 1:
+            rest = _unit(offsets[kids[0]], up)
+            L = _align(rest, _unit(seen[:, 0], rest))
         else:
-            G[:, j] = _fit_rotation(offsets[kids], bones[:, kids])
+            L = _fit_rotation(offsets[kids], seen)
+        G[:, j] = Gp @ L
     parent_G = G[:, par]  # (the root's parent: none; its rows below are its own)
     local_R = np.swapaxes(parent_G, -1, -2) @ G
     local_R[:, 0] = G[:, 0]
     local_t = np.einsum("tjki,tjk->tji", parent_G, bones)  # (G_parent^T @ bone)
     local_t[:, 0] = p[:, 0]
-    euler = _euler_zxy_deg(local_R)
+    euler = _continuous_euler(_euler_zxy_deg(local_R))
     rows = np.concatenate([local_t, euler], axis=-1)[:, order].reshape(T, -1)
     lines += ["MOTION", f"Frames: {T}", f"Frame Time: {1.0 / fps:.6f}"]
     lines += [" ".join(f"{x:.5f}" for x in row) for row in rows]
@@ -666,7 +690,7 @@ def _note_delta_channels(joints: list[tuple[str, int, np.ndarray, list[str]]], m
             short.append(float(np.median(np.linalg.norm(motion[:, pos], axis=1)) / np.linalg.norm(off)))
     if turned or len(short) < 4:
         return
-    if (float(np.median(add)) < 0.5 * float(np.median(replace)) if len(motion) > 1 else float(np.median(short)) < 0.25):
+    if float(np.median(short)) < 0.25 or (len(motion) > 1 and float(np.median(add)) < 0.5 * float(np.median(replace))):
         warn_user(f"{path}: its joints' position channels read as each bone's change from its OFFSET (no rotations, "
                   "and the bones keep their lengths far better with the channels added to the OFFSETs), as in a file "
                   "poselifter wrote before 2026-12: read it with position_channels=\"add\"")

@@ -843,12 +843,16 @@ class _Followed:
         # box continues, is a followed person back where their box no longer reaches (a developer trial's followed
         # person, hidden 0.8 s, came back 60 px away: lifted for 1 s, then their entry, never refreshed, was let go
         # and the other took their place for the rest of the sequence): that person's entry, the longest unseen
+        # (near where they were and about their size: a review's stranger far away took the place of a followed
+        # person coming back to the very box they left)
         if unmatched and any(is_other):
             stale = sorted((q[0], k) for k, q in enumerate(self.people)
                            if k not in taken and frame - q[0] > self.recent)
-            for j, (_, k) in zip([j for j in unmatched if names[j] is None], stale):
-                self.people[k] = (frame, boxes[j], self.people[k][2])
-                taken.add(k)
+            for j in [j for j in unmatched if names[j] is None]:
+                near = [k for _, k in stale if k not in taken and _near_box(self.people[k][1], boxes[j])]
+                if near:
+                    self.people[near[0]] = (frame, boxes[j], self.people[near[0]][2])
+                    taken.add(near[0])
         # (the unnamed people not lifted in a frame where a followed person was: someone else, followed from frame to
         # frame by their boxes as long as they are not lifted; not a stranger set aside while the followed were away)
         beside = bool(taken)
@@ -856,6 +860,15 @@ class _Followed:
             (frame, np.asarray(boxes[j], np.float64)) for j in range(len(boxes))
             if j not in keep and names[j] is None and (beside or j in claims)]
         return keep
+
+
+def _near_box(old: np.ndarray, new: np.ndarray) -> bool:
+    """Whether the box ``new`` ``(x, y, w, h)`` px could be the person of ``old`` back after a while: its centre within
+    the wider box's width across and half the taller's height up or down, its area within half to twice ``old``'s."""
+    (x0, y0, w0, h0), (x1, y1, w1, h1) = (np.asarray(b, np.float64) for b in (old, new))
+    area = (w1 * h1) / max(w0 * h0, 1e-9)
+    return bool(abs((x1 + w1 / 2) - (x0 + w0 / 2)) <= max(w0, w1) and abs((y1 + h1 / 2) - (y0 + h0 / 2))
+                <= 0.5 * max(h0, h1) and 0.5 <= area <= 2.0)
 
 
 def _left_out_note(left_out: list[tuple[int, float]], text: str) -> str:

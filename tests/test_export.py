@@ -193,7 +193,7 @@ def test_bvh_animation_is_a_rig_whose_bones_point_at_their_joints(tmp_path):
     poses += rng.normal(0, 6, poses.shape)  # (a person turning half round and walking; bone lengths jitter)
     text = bvh_animation_text(poses, fps=25.0)
     joints, rows = _bvh_parse(text)
-    assert rows.shape == (30, 17 * 6) and np.abs(rows[:, 3::6]).max() > 20  # (turned: not zero rotations)
+    assert rows.shape == (30, 17 * 6) and np.abs(rows.reshape(30, 17, 6)[:, :, 3:]).max() > 20  # (turned)
     names = [j[0] for j in joints]
     y_up = to_y_up(poses) / 10.0  # cm
     for t in range(30):
@@ -206,6 +206,19 @@ def test_bvh_animation_is_a_rig_whose_bones_point_at_their_joints(tmp_path):
                 real = pos[kids[0]] - pos[k]
                 cos = drawn @ real / np.linalg.norm(drawn) / np.linalg.norm(real)
                 assert cos > 1 - 1e-6, (t, names[k], cos)
+    # (a review) a body turning twice round, rigid: only the root turns, each joint only by its own bend (none here:
+    # before, every joint's channels undid the body's turn), and the channels run on without jumps of whole turns
+    spin = np.stack([(base - base[0]) @ np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]).T
+                     + base[0] for a in np.linspace(0, 4 * np.pi, 121)])
+    sj, srows = _bvh_parse(bvh_animation_text(spin, fps=25.0))
+    ch = srows.reshape(121, 17, 6)[:, :, 3:]
+    assert np.abs(ch[:, 1:]).max() < 1e-3  # (the joints after the root: no turn of their own)
+    assert np.abs(np.diff(ch[:, 0], axis=0)).max() < 10.0  # (6 deg a frame: continuous, no 360-deg wraps)
+    assert np.ptp(ch[:, 0]).max() > 700  # (the root's channels run on through the two turns)
+    for t in (0, 60, 120):
+        pos, _ = _fk_blender(sj, srows[t])
+        np.testing.assert_allclose(pos[[[j[0] for j in sj].index(n) for n in JOINT_NAMES]], to_y_up(spin[t]) / 10.0,
+                                   atol=1e-3)
     lengths = np.linalg.norm(y_up - y_up[:, [max(q, 0) for q in PARENTS]], axis=-1).mean(0)
     for name, _, off, _ in joints[1:]:
         assert np.linalg.norm(off) == pytest.approx(lengths[JOINT_NAMES.index(name)], abs=1e-4)

@@ -1638,6 +1638,19 @@ def test_a_followed_person_back_elsewhere_while_the_other_is_there_is_followed_a
         keep = followed.keep(i, [b for _, b in people], [None] * len(people))
         got.append("".join(people[k][0] for k in keep) or "-")
     assert "".join(got) == "A" * 30 + "-" * 20 + "A" * 50, "".join(got)
+    # (a review) a stranger far away, there while A is hidden, does not take A's place: A, back in the very box
+    # they left, is followed again
+    for max_people in (1, 2):
+        followed, got = _Followed.at_fps(max_people=max_people, fps=25), []
+        for i in range(80):
+            people = (([("A", box(100))] if not 30 <= i < 45 else []) + ([("B", box(400))] if i >= 3 else [])
+                      + ([("C", box(900))] if i >= 38 else []))
+            if max_people == 2:
+                people += [("D", box(1300) * [1, 1, 1.2, 1.2])] if i < 80 else []
+            people.sort(key=lambda q: -q[1][2] * q[1][3])
+            keep = followed.keep(i, [b for _, b in people], [None] * len(people))
+            got.append("".join(sorted(people[k][0] for k in keep)) or "-")
+        assert all("A" in g for g in got[45:]), (max_people, got)
 
 
 def test_the_other_seen_only_at_a_videos_full_searches_is_remembered_between_them():
