@@ -157,15 +157,15 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
     gets translation / rotation / scale channels sampled at every frame of its track's span, from the frame before
-    the track's first to the frame after its last, and at the clip's first and last frames (LINEAR, the scales STEP,
-    so a person appears and goes at once; the person is hidden in those keys, so everywhere outside the span, and
-    every track's keys end where the clip does), so a file grows with the frames people are seen in, not with the
-    clip's length times the number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB); in
-    a frame without the person, their nodes are scaled to zero (hidden). The clip's first and last frame and ``fps``
-    are in the animation's ``extras``. ``recorded``: the frame indices the input holds (None: every frame): a frame
-    it does not hold (a sequence that gives every other frame, a video frame that could not be read) is no frame
-    without the person, and a person seen before and after it is interpolated there, as a BVH is (a developer trial's
-    sequence of every other frame blinked at half its frame rate).
+    the track's first to the frame after its last, and at the clip's first and last frames (LINEAR; the person is
+    hidden in those keys, so everywhere outside the span, and every track's keys end where the clip does), so a file
+    grows with the frames people are seen in, not with the clip's length times the
+    number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB); in a frame without the
+    person, their nodes are scaled to zero (hidden). The clip's first and last frame and ``fps`` are in the
+    animation's ``extras``. ``recorded``: the frame indices the input holds
+    (None: every frame): a frame it does not hold (a sequence that gives every other frame, a video frame that could
+    not be read) is no frame without the person, and a person seen before and after it is interpolated there, as a
+    BVH is (a developer trial's sequence of every other frame blinked at half its frame rate).
     :func:`read_glb_animation` reads it back.
     """
     import json
@@ -281,8 +281,7 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
         gltf["nodes"][node].pop("matrix", None)
         gltf["nodes"][node][what] = [float(x) for x in values[0]]
         samplers.append({"input": time_acc[key], "output": add(values, "VEC4" if what == "rotation" else "VEC3"),
-                         # (a person shown or hidden at once, not grown in between two frames: a trial's player)
-                         "interpolation": "STEP" if what == "scale" else "LINEAR"})
+                         "interpolation": "LINEAR"})
         chans.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": what}})
     gltf["animations"] = [{"name": "poselifter", "samplers": samplers, "channels": chans,
                            "extras": {"fps": float(fps), "first_frame": int(first), "last_frame": int(last)}}]
