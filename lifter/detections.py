@@ -106,16 +106,22 @@ def with_sh_detections(samples: PoseSamples, *, data: H36M | None = None) -> tup
     """``samples`` with their 2D replaced by the real SH detections (converted to h36m17); samples without a
     detection are dropped. Returns ``(new samples, number dropped)``."""
     det, ok = load_sh_detections(samples, data=data)
-    return samples.subset(np.flatnonzero(ok)).with_keypoints(det[ok]), int((~ok).sum())
+    return detected_subset(samples, det, ok), int((~ok).sum())
 
 
-def missing_detection_note(samples: PoseSamples, *, data: H36M | None = None) -> str:
-    """Which of ``samples`` have no SH detection, in words: the sequences and cameras with none at all named
-    (S11 "Directions", camera 54138969: the file has none), and the count of the others ("" when none is missing).
-    A developer trial read "19 samples without a detection dropped" as frames missing here and there."""
+def detected_subset(samples: PoseSamples, detections: np.ndarray, valid: np.ndarray) -> Any:
+    """``samples`` where ``valid``, with their 2D replaced by ``detections`` (:func:`load_sh_detections`' pair)."""
+    return samples.subset(np.flatnonzero(valid)).with_keypoints(detections[valid])
+
+
+def missing_detection_note(samples: PoseSamples, valid: np.ndarray) -> str:
+    """Which of ``samples`` have no SH detection (``valid (N,)``: :func:`load_sh_detections`'), in words: the
+    sequences and cameras with none at all named (S11 "Directions", camera 54138969: the file has none), and the count
+    of the others ("" when none is missing). A developer trial read "19 samples without a detection dropped" as frames
+    missing here and there."""
     from .data import CAMERA_IDS
 
-    _, ok = load_sh_detections(samples, data=data)
+    ok = np.asarray(valid, bool)
     if ok.all():
         return ""
     whole, rest = [], 0

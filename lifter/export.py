@@ -29,6 +29,7 @@ import numpy as np
 
 from ._checks import PoseLifterError, as_points, warn_user
 from .io import write_atomic
+from .metrics import best_rotation
 from .skeleton import EDGES, JOINT_NAMES, NUM_JOINTS, PARENTS, joint_side
 
 _Y_UP: Final[np.ndarray] = np.diag([1.0, -1.0, -1.0])
@@ -440,17 +441,6 @@ def _align(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return R
 
 
-def _fit_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``(T, 3, 3)``: the rotations best turning the vectors ``a (n, 3)`` onto ``b (T, n, 3)`` (Kabsch, least
-    squares, no reflection)."""
-    H = np.einsum("ni,tnj->tij", a, b)
-    U, _, Vt = np.linalg.svd(H)
-    d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
-    D = np.zeros_like(H)
-    D[:, 0, 0], D[:, 1, 1], D[:, 2, 2] = 1.0, 1.0, np.where(d == 0, 1.0, d)
-    return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
-
-
 def _euler_zxy_deg(R: np.ndarray) -> np.ndarray:
     """``(..., 3)`` degrees (z, x, y) with ``R = Rz(z) Rx(x) Ry(y)`` for the rotations ``R (..., 3, 3)``: the
     ``Zrotation Xrotation Yrotation`` channels (read in that order, intrinsic)."""
@@ -528,7 +518,7 @@ def bvh_animation_text(poses: Any, *, fps: float, units: str = "cm") -> str:
             rest = _unit(offsets[kids[0]], up)
             L = _align(rest, _unit(seen[:, 0], rest))
         else:
-            L = _fit_rotation(offsets[kids], seen)
+            L = best_rotation(np.broadcast_to(offsets[kids], seen.shape), seen)[0]
         G[:, j] = Gp @ L
     parent_G = G[:, par]  # (the root's parent: none; its rows below are its own)
     local_R = np.swapaxes(parent_G, -1, -2) @ G
@@ -649,14 +639,13 @@ def _bvh_frames(text: str, path: Any, *, units: str, position_channels: str) -> 
         k = 0
         for j, (_, par, off, ch) in enumerate(joints):
             R = np.eye(3)
-            local = off.copy() if position_channels == "add" else off
+            local = off.copy()  # (replace: the channels given, the OFFSET's value for any not given)
             for c in ch:
                 v = row[k]
                 k += 1
                 if c.endswith("position"):
-                    if local is off:  # (replace: the channels given, the OFFSET's value for any not given)
-                        local = off.copy()
-                    local["XYZ".index(c[0])] = v + (off["XYZ".index(c[0])] if position_channels == "add" else 0.0)
+                    axis = "XYZ".index(c[0])
+                    local[axis] = v + (off[axis] if position_channels == "add" else 0.0)
                 else:
                     R = R @ _rot(c[0], v)
             if par < 0:

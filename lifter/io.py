@@ -419,21 +419,27 @@ MAX_SKEW: Final[float] = 1e-3
 a point by under 0.2 px); more is refused, as the lift's camera has none."""
 
 
+def _nine_numbers(raw: Any) -> np.ndarray | None:
+    """The ``(3, 3)`` of nine numbers in ``raw`` (:data:`CAMERA_MATRIX_FIELDS`' layouts: nested, flat, or ROS's
+    ``{"data": [...]}``), else None."""
+    if isinstance(raw, dict):
+        raw = raw.get("data")
+    if not isinstance(raw, list):
+        return None
+    flat = [v for row in raw for v in row] if all(isinstance(r, list) for r in raw) else raw
+    if len(flat) != 9 or not all(_is_number(v) for v in flat):
+        return None
+    return np.asarray(flat, np.float64).reshape(3, 3)
+
+
 def _camera_matrix(raw: Any) -> tuple[np.ndarray | None, str | None]:
     """The ``(3, 3)`` camera matrix in ``raw`` (:data:`CAMERA_MATRIX_FIELDS`' layouts): nine numbers, skew at most
     :data:`MAX_SKEW` (left out), last row ``[0, 0, 1]`` or a multiple of it (divided out: the same camera); and None,
     or (None, what is wrong) for nine numbers that are no such matrix (a developer trial's K with a skew of 0.5 px, a
     transposed K and one whose last row was ``[0, 0, 2]`` were each dropped with a note asking for ``focal``).
-    (None, None) when ``raw`` is not nine numbers."""
-    if isinstance(raw, dict):
-        raw = raw.get("data")
-    if not isinstance(raw, list):
-        return None, None
-    flat = [v for row in raw for v in row] if all(isinstance(r, list) for r in raw) else raw
-    if len(flat) != 9 or not all(_is_number(v) for v in flat):
-        return None, None
-    K = np.asarray(flat, np.float64).reshape(3, 3)
-    if not np.any(K):  # (ROS marks an uncalibrated camera so: not a camera matrix, noted by unread_field_notes)
+    (None, None) when ``raw`` is not nine numbers, or all zeros."""
+    K = _nine_numbers(raw)
+    if K is None or not np.any(K):  # (ROS marks an uncalibrated camera by zeros: noted by unread_field_notes)
         return None, None
     if not np.all(np.isfinite(K)):
         return None, "its numbers must be finite"
@@ -628,10 +634,8 @@ def unread_field_notes(meta: dict[str, Any]) -> list[str]:
                 continue
             if K is not None:
                 continue  # (read: _camera_meta)
-            raw = meta[key].get("data") if isinstance(meta[key], dict) else meta[key]
-            flat = [v for row in raw for v in row] if isinstance(raw, list) and all(
-                isinstance(r, list) for r in raw) else raw
-            if isinstance(flat, list) and len(flat) == 9 and all(_is_number(v) and v == 0 for v in flat):
+            nine = _nine_numbers(meta[key])
+            if nine is not None and not np.any(nine):
                 notes.append(f"{key!r} is all zeros, as ROS marks an uncalibrated camera: not read")
                 continue
         ours = (_FIELD_LETTERS.get(key) if len(key) == 1 else _FIELD_NAMES_ELSEWHERE.get(key.lower())) or next(

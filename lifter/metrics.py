@@ -60,21 +60,27 @@ def procrustes_align(
     return _procrustes_align(pred, gt, variant=variant)
 
 
+def best_rotation(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rotations ``R (..., 3, 3)`` (no reflection) minimizing ``sum_j |R X_j - Y_j|^2`` for the vectors
+    ``X, Y (..., J, 3)`` (Kabsch: SVD of the cross-covariance ``sum_j Y_j X_j^T``), and ``trace(R M) (...)``, the
+    numerator of the best scale (:func:`procrustes_align`)."""
+    M = np.einsum("...ji,...jk->...ik", Y, X)
+    U, S, Vt = np.linalg.svd(M)
+    D = np.ones(S.shape)
+    D[..., -1] = np.sign(np.linalg.det(U @ Vt))
+    return U @ (D[..., :, None] * Vt), (S * D).sum(-1)
+
+
 def _procrustes_align(pred: np.ndarray, gt: np.ndarray, *, variant: str) -> np.ndarray:
     mu_p = pred.mean(axis=-2, keepdims=True)
     mu_g = gt.mean(axis=-2, keepdims=True)
     X = pred - mu_p
     Y = gt - mu_g
-    # Rotation R (3x3) minimizing |R X_j - Y_j|: SVD of the cross-covariance sum_j Y_j X_j^T.
-    M = np.einsum("...ji,...jk->...ik", Y, X)
-    U, S, Vt = np.linalg.svd(M)
     if variant == "standard":
-        d = np.sign(np.linalg.det(U @ Vt))
-        D = np.ones(S.shape)
-        D[..., -1] = d
-        R = U @ (D[..., :, None] * Vt)
-        scale = (S * D).sum(-1) / np.maximum((X**2).sum((-1, -2)), 1e-12)
+        R, trace = best_rotation(X, Y)
+        scale = trace / np.maximum((X**2).sum((-1, -2)), 1e-12)
     elif variant == "repo":
+        U, _, Vt = np.linalg.svd(np.einsum("...ji,...jk->...ik", Y, X))
         R = U @ Vt
         scale = np.sqrt((Y**2).sum((-1, -2)) / np.maximum((X**2).sum((-1, -2)), 1e-12))
     else:

@@ -15,7 +15,7 @@ detections of S9 at 50 fps, see the README), 2 = twice as smooth (cutoffs halved
 from __future__ import annotations
 
 import math
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -36,6 +36,14 @@ D_CUTOFF_HZ: Final[float] = 1.0
 def _alpha(cutoff: np.ndarray | float, dt: np.ndarray | float) -> np.ndarray | float:
     tau = 1.0 / (2.0 * math.pi * np.asarray(cutoff))
     return 1.0 / (1.0 + tau / dt)
+
+
+def _unknown_as_nan(x: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``x (..., D)`` as float64 with every point that has a non-finite coordinate all NaN (not known), and which
+    points are known ``(..., 1)``."""
+    x = np.asarray(x, np.float64)
+    known = np.isfinite(x).all(-1, keepdims=True)
+    return np.where(known, x, np.nan), known
 
 
 class OneEuroFilter:
@@ -62,12 +70,10 @@ class OneEuroFilter:
         self._t: float | None = None  # the last sample's time
 
     def __call__(self, x: np.ndarray, t: float) -> np.ndarray:
-        x = np.asarray(x, np.float64)
         t = float(t)
         if not math.isfinite(t):
             raise PoseLifterError(f"smoothing: a sample's time must be a finite number of seconds, got {t}")
-        known = np.isfinite(x).all(-1, keepdims=True)  # (..., 1)
-        x = np.where(known, x, np.nan)
+        x, known = _unknown_as_nan(x)
         if self._x is None or self._tp is None or self._dx is None or self._t is None or self._x.shape != x.shape:
             self._x, self._dx, self._t = x.copy(), np.zeros_like(x), t
             self._tp = np.where(known, t, np.nan)
@@ -117,9 +123,7 @@ class PoseSmoother:
     def __call__(self, root: np.ndarray, relative: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         """The smoothed ``(root, relative)`` at time ``t`` (s)."""
         if self.strength == 0:  # (off: the input, a point not known NaN, as the filter gives it)
-            r, rel = np.asarray(root, np.float64), np.asarray(relative, np.float64)
-            return (np.where(np.isfinite(r).all(-1, keepdims=True), r, np.nan),
-                    np.where(np.isfinite(rel).all(-1, keepdims=True), rel, np.nan))
+            return _unknown_as_nan(root)[0], _unknown_as_nan(relative)[0]
         r = self._root(np.asarray(root, np.float64)[None], t)[0]
         rel = self._pose(relative, t)
         rel[..., 0, :] = 0.0  # the root row of a root-relative pose stays zero

@@ -90,14 +90,15 @@ def test_a_compacted_copy_can_keep_each_subject_at_its_own_rate(tmp_path):
 def test_missing_detections_are_named_by_sequence_and_camera(h36m):
     """A developer trial read "19 samples without a detection dropped" as frames missing here and there: the file
     has none for one whole sequence and camera, which the note now names."""
-    from lifter.detections import missing_detection_note, with_sh_detections
+    from lifter.detections import load_sh_detections, missing_detection_note, with_sh_detections
 
     s = h36m.load_protocol(1, "test", stride=200)
-    note = missing_detection_note(s, data=h36m)
+    note = missing_detection_note(s, load_sh_detections(s, data=h36m)[1])
     _, dropped = with_sh_detections(s, data=h36m)
     assert dropped > 0 and note == (f"{dropped} samples without a detection dropped: the file has none for "
                                     f"S11/Directions camera 54138969 ({dropped})")
-    assert missing_detection_note(s.subset(np.flatnonzero(s.camera == 1)), data=h36m) == ""
+    one = s.subset(np.flatnonzero(s.camera == 1))
+    assert missing_detection_note(one, load_sh_detections(one, data=h36m)[1]) == ""
 
 
 @requires_h36m

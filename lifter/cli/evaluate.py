@@ -16,7 +16,7 @@ import torch
 from .._checks import PoseLifterError, plot_format
 from ..api import Lifter, ensemble_parts
 from ..data import CAMERA_IDS, H36M, MISSING_TEST_SEQUENCES, PROTOCOLS, trained_protocol
-from ..detections import missing_detection_note, with_sh_detections
+from ..detections import detected_subset, load_sh_detections, missing_detection_note
 from ..evaluate import evaluate_lifter, focal_sweep, format_focal_table, format_per_action, format_table
 from ..io import check_writable, write_json_atomic
 from ..metrics import AUC_THRESHOLDS_MM
@@ -194,8 +194,9 @@ def run(args: argparse.Namespace) -> int:
                                  max_frames_per_sequence=args.max_frames_per_sequence)
     note = ""
     if args.inputs == "sh":
-        missing = missing_detection_note(samples, data=data)
-        samples, _ = with_sh_detections(samples, data=data)
+        det, ok = load_sh_detections(samples, data=data)  # (once: the note and the subset)
+        missing = missing_detection_note(samples, ok)
+        samples = detected_subset(samples, det, ok)
         note = "; real SH detections" + (f", {missing}" if missing else "")
     source = args.source or ("clean" if args.inputs == "gt" else "detected")
     if args.inputs == "sh" and source == "clean":
