@@ -157,12 +157,13 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
 
     trimesh writes no glTF animations, so the meshes are written by trimesh (per track ``track<ID>_joint_<name>``
     spheres and ``track<ID>_bone_<a>_<b>`` unit cylinders) and the animation is added to its glTF: each node
-    gets translation / rotation / scale channels sampled at every frame of its track's span, from the frame before
-    the track's first to the frame after its last, and at the clip's first and last frames (LINEAR; the person is
-    hidden in those keys, so everywhere outside the span, and every track's keys end where the clip does), so a file
-    grows with the frames people are seen in, not with the clip's length times the
-    number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB); in a frame without the
-    person, their nodes are scaled to zero (hidden). The clip's first and last frame and ``fps`` are in the
+    gets translation (and a bone rotation and length) channels sampled at every frame of its track's span, from the
+    frame before the track's first to the frame after its last, and at the clip's first and last frames (LINEAR,
+    every track's keys ending where the clip does), so a file grows with the frames people are seen in, not with the
+    clip's length times the number of tracks (a review: five people seen 1 s each in a 10-minute clip made 95 MB).
+    The nodes of a track are children of a node ``track<ID>`` scaled to zero (hidden) in a frame without the person:
+    STEP keys half a frame before each change, so a player shows a person from exactly the frame they are first seen
+    in, whatever its clock's rounding. The clip's first and last frame and ``fps`` are in the
     animation's ``extras``. ``recorded``: the frame indices the input holds
     (None: every frame): a frame it does not hold (a sequence that gives every other frame, a video frame that could
     not be read) is no frame without the person, and a person seen before and after it is interpolated there, as a
@@ -205,37 +206,38 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     channels: list[tuple[str, str, np.ndarray, int]] = []  # node name, path, (n, 3|4) values, its track's time
     times: list[np.ndarray] = []  # (n,) frame numbers keyed, per track
     not_held = np.zeros(T, bool) if recorded is None else ~np.isin(frames, np.asarray(recorded))
+    shown: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # track node name: STEP keys' frame times, values (0 / 1)
     for tid, (ii, p) in sorted(clean.items()):
         present = np.isin(frames, ii)
-        full = np.zeros((T, NUM_JOINTS, 3))
+        # every frame's pose: a sighting's own; between two, the straight line from one to the next (hidden where the
+        # input holds the frame without them, shown where it does not hold the frame: a sequence of every other frame
+        # would blink at half its rate); before the first and after the last, held
+        flat = p.reshape(len(ii), -1)
+        full = np.stack([np.interp(frames, ii, flat[:, c]) for c in range(flat.shape[1])],
+                        axis=-1).reshape(T, NUM_JOINTS, 3)
         full[present] = p
-        # hold the nearest seen pose where absent (hidden by a zero scale there)
-        seen = np.flatnonzero(present)
-        nearest = seen[np.clip(np.searchsorted(seen, np.arange(T)), 0, len(seen) - 1)]
-        full[~present] = full[nearest[~present]]
-        if not_held.any():  # frames the input does not hold, between two sightings: interpolated, shown
-            between = ~present & (frames > ii[0]) & (frames < ii[-1]) & not_held
-            if between.any():
-                flat = p.reshape(len(ii), -1)
-                full[between] = np.stack([np.interp(frames[between], ii, flat[:, c]) for c in range(flat.shape[1])],
-                                         axis=-1).reshape(-1, NUM_JOINTS, 3)
-                present = present | between
+        present = present | (not_held & (frames > ii[0]) & (frames < ii[-1]))
         lo = max(int(np.searchsorted(frames, ii[0])) - 1, 0)  # (the frame before its first, hidden: held before)
         hi = min(int(np.searchsorted(frames, ii[-1])) + 2, T)  # (past the frame after its last)
-        # and the clip's first and last frames, hidden: a player takes the clip's length from its keys (a review: a
-        # person seen only early in a 10-s video made a 2-s animation, out of step with the video when looped)
+        # and the clip's first and last frames: a player takes the clip's length from its keys (a review: a person
+        # seen only early in a 10-s video made a 2-s animation, out of step with the video when looped)
         keep = np.unique(np.r_[0, np.arange(lo, hi), T - 1])
-        full, present = full[keep], present[keep]
+        full = full[keep]
         times.append(frames[keep])
         key = len(times) - 1
-        vis = present.astype(np.float64)[:, None]
+        # shown or hidden: STEP keys half a frame before each change, so a player evaluating at a frame's time is half
+        # a frame from every key whatever its clock's rounding (LINEAR scales grew a person in between two frames in a
+        # trial's player; STEP keys on the frames' own float32 times landed a float64 clock just before them)
+        change = np.flatnonzero(np.diff(present.astype(np.int8))) + 1
+        at = np.r_[frames[0], frames[change] - 0.5, frames[-1]] if T > 1 else frames[:1].astype(np.float64)
+        shown[f"track{tid}"] = (at, present[np.r_[0, change, T - 1][:len(at)]].astype(np.float64))
         pre = f"track{tid}_"
         for j, name in enumerate(JOINT_NAMES):
             sph = trimesh.creation.icosphere(subdivisions=2, radius=joint_radius_mm / 1000.0)
             sph.visual.face_colors = SIDE_COLORS[joint_side(j)]  # type: ignore[union-attr]
             nm = f"{pre}joint_{name}"
             scene.add_geometry(sph, node_name=nm, geom_name=nm)
-            channels += [(nm, "translation", full[:, j], key), (nm, "scale", np.repeat(vis, 3, axis=1), key)]
+            channels.append((nm, "translation", full[:, j], key))
         for a_, b_ in EDGES:
             cyl = trimesh.creation.cylinder(radius=bone_radius_mm / 1000.0, height=1.0, sections=12)
             cyl.apply_translation([0.0, 0.0, 0.5])  # from the origin along +z, unit length
@@ -246,7 +248,7 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
             length = np.linalg.norm(v, axis=-1)
             d = v / np.maximum(length, 1e-9)[:, None]
             d[length < 1e-9] = [0.0, 0.0, 1.0]
-            scale = np.stack([vis[:, 0], vis[:, 0], length * vis[:, 0]], axis=1)
+            scale = np.stack([np.ones_like(length), np.ones_like(length), length], axis=1)
             channels += [(nm, "translation", full[:, a_], key), (nm, "rotation", _quat_z_to(d), key),
                          (nm, "scale", scale, key)]
     glb = scene.export(file_type="glb")
@@ -275,6 +277,16 @@ def write_glb_animation(tracks: dict[int, tuple[Any, Any]], path: str | os.PathL
     node_of = {n.get("name"): i for i, n in enumerate(gltf["nodes"])}
     time_acc = [add((f / fps).astype(np.float32), "SCALAR", minmax=True) for f in times]
     samplers, chans = [], []
+    # a node per track, parent of its joints and bones, that shows or hides them (scale 1 or 0, STEP)
+    roots = []
+    for name, (at, vis) in shown.items():
+        kids = [node_of[n] for n in node_of if isinstance(n, str) and n.startswith(name + "_")]
+        gltf["nodes"].append({"name": name, "children": kids, "scale": [float(vis[0])] * 3})
+        roots.append(len(gltf["nodes"]) - 1)
+        samplers.append({"input": add((at / fps).astype(np.float32), "SCALAR", minmax=True),
+                         "output": add(np.repeat(vis[:, None], 3, axis=1), "VEC3"), "interpolation": "STEP"})
+        chans.append({"sampler": len(samplers) - 1, "target": {"node": roots[-1], "path": "scale"}})
+    gltf["scenes"][gltf.get("scene", 0)]["nodes"] = roots
     for nm, what, values, key in channels:
         node = node_of.get(nm)
         if node is None:  # pragma: no cover -- trimesh names nodes as given
@@ -326,12 +338,17 @@ def read_glb_animation(path: str | os.PathLike[str]) -> tuple[np.ndarray, dict[i
     if not anims:
         raise PoseLifterError(f"{path}: no animation in this GLB")
     keyed: list[tuple[int, int, str, np.ndarray, np.ndarray]] = []  # track, joint, path, times (n,) s, values
+    shown: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # track: its node's scale keys' times (n,) s, values (n,)
     for ch in anims[0]["channels"]:
         name = gltf["nodes"][ch["target"]["node"]].get("name", "")
+        smp = anims[0]["samplers"][ch["sampler"]]
+        whole = re.fullmatch(r"track(\d+)", name)
+        if whole and ch["target"]["path"] == "scale":  # the track shown or hidden (STEP)
+            shown[int(whole.group(1))] = (read(smp["input"])[:, 0], read(smp["output"])[:, 0])
+            continue
         m = re.fullmatch(r"track(\d+)_joint_(\w+)", name)
         if not m or m.group(2) not in JOINT_NAMES or ch["target"]["path"] not in ("translation", "scale"):
             continue
-        smp = anims[0]["samplers"][ch["sampler"]]
         keyed.append((int(m.group(1)), JOINT_NAMES.index(m.group(2)), ch["target"]["path"],
                       read(smp["input"])[:, 0], read(smp["output"]).astype(np.float64)))
     if not keyed:
@@ -351,9 +368,13 @@ def read_glb_animation(path: str | os.PathLike[str]) -> tuple[np.ndarray, dict[i
         arr = joints.setdefault(tid, np.full((len(clock), NUM_JOINTS, 3), np.nan))
         if what == "translation":
             arr[at, j] = np.where(np.isnan(arr[at, j]), vals, arr[at, j])  # (a key marked hidden stays so)
-        else:
+        else:  # (a file of before 2026-12: each joint scaled to zero where hidden, LINEAR keys on the frames)
             hidden = at[vals[:, 0] < 0.5]
             arr[hidden, j] = np.inf  # (marked: NaN below, whichever of the two channels comes first)
+    for tid, (t, vals) in shown.items():
+        if tid in joints:  # (a player's STEP: the last key at or before the time; before the first, the first)
+            on = vals[np.maximum(np.searchsorted(t, clock32, side="right") - 1, 0)] >= 0.5
+            joints[tid][~on] = np.inf
     for arr in joints.values():
         arr[~np.isfinite(arr)] = np.nan
     return clock, {tid: from_y_up(v * 1000.0) for tid, v in joints.items()}

@@ -284,22 +284,49 @@ def test_glb_animation_keys_each_track_over_its_own_span(tmp_path):
     assert p.stat().st_size < 150_000  # (3,000 frames keyed for the one track: 3.2 MB)
     gltf, read = _gltf(p)
     assert gltf["animations"][0]["extras"] == {"fps": 25.0, "first_frame": 0, "last_frame": 2999}
-    node = {n["name"]: i for i, n in enumerate(gltf["nodes"])}["track4_joint_pelvis"]
-    smp = {ch["target"]["path"]: gltf["animations"][0]["samplers"][ch["sampler"]]
-           for ch in gltf["animations"][0]["channels"] if ch["target"]["node"] == node}
-    t = read(smp["scale"]["input"])[:, 0]
+    names = {n["name"]: i for i, n in enumerate(gltf["nodes"])}
+    anim = gltf["animations"][0]
+
+    def sampler(node_name, what):
+        (ch,) = [c for c in anim["channels"] if c["target"] == {"node": names[node_name], "path": what}]
+        smp = anim["samplers"][ch["sampler"]]
+        return read(smp["input"])[:, 0].astype(np.float64), read(smp["output"]), smp["interpolation"]
+
+    t, xyz, how = sampler("track4_joint_pelvis", "translation")
+    assert how == "LINEAR"
     # its span, and the clip's first and last frames: every track's keys end where the clip does (a review: a player
     # takes the clip's length from its latest key, and the animation was 2 s of a 10-s video)
     np.testing.assert_allclose(t, np.r_[0, np.arange(299, 309), 2999] / 25.0, rtol=1e-6)
-    ends = [gltf["accessors"][smp_["input"]]["max"][0] for smp_ in gltf["animations"][0]["samplers"]]
+    ends = [gltf["accessors"][smp_["input"]]["max"][0] for smp_ in anim["samplers"]]
     np.testing.assert_allclose(ends, 2999 / 25.0, rtol=1e-6)
-    sc = read(smp["scale"]["output"])[:, 0]
+    # the joints are children of the track's node, which is shown or hidden: the scene's only roots
+    assert gltf["scenes"][0]["nodes"] == [names["track4"]]
+    assert sorted(gltf["nodes"][names["track4"]]["children"]) == sorted(
+        i for n, i in names.items() if n.startswith("track4_"))
+    tv, vis, how = sampler("track4", "scale")
+    assert how == "STEP"
 
-    def at(frame):  # (glTF: before the first key the first, after the last the last; LINEAR between)
-        return float(np.interp(frame / 25.0, t, sc))
+    def shown(sec):  # (glTF STEP: the last key at or before the time; before the first key, the first)
+        return float(vis[max(int(np.searchsorted(tv, sec, side="right")) - 1, 0), 0])
 
-    np.testing.assert_allclose([at(f) for f in (0, 298, 299, 303, 304, 305, 308, 309, 2999)], 0.0, atol=1e-4)
-    np.testing.assert_allclose([at(f) for f in (300, 301, 302, 306, 307)], 1.0, atol=1e-4)  # (float32 times)
+    def where(sec):  # (glTF LINEAR, held before the first key and after the last), metres y-up
+        return np.array([np.interp(sec, t, xyz[:, c]) for c in range(3)])
+
+    seen, unseen = [300, 301, 302, 306, 307], [0, 298, 299, 303, 304, 305, 308, 309, 2999]
+    # at each frame's time, and a hair either side of it (a player's clock need not land on the float32 key times;
+    # a trial's player grew a person in between two frames with LINEAR scales, and STEP keys on the frames' times
+    # showed a person a frame late)
+    for eps in (0.0, -1e-5, 1e-5):
+        assert [shown(f / 25.0 + eps) for f in seen] == [1.0] * 5
+        assert [shown(f / 25.0 + eps) for f in unseen] == [0.0] * 9
+    # shown from half a frame before their first frame, already where they are in it (not sliding in from elsewhere);
+    # likewise until half a frame after the frame they leave in, and into the gap (303-305) at no more than the
+    # straight line's pace from where they left to where they come back
+    assert shown(299.6 / 25.0) == 1.0 and shown(302.4 / 25.0) == 1.0 and shown(302.6 / 25.0) == 0.0
+    pelvis = to_y_up(b[:, 0]) / 1000.0
+    np.testing.assert_allclose(where(299.6 / 25.0), pelvis[0], atol=1e-6)
+    np.testing.assert_allclose(where(307.4 / 25.0), pelvis[4], atol=1e-6)
+    np.testing.assert_allclose(where(302.4 / 25.0), pelvis[2] + 0.4 * (pelvis[3] - pelvis[2]) / 4, atol=1e-6)
     times, joints = read_glb_animation(p)
     np.testing.assert_allclose(times, np.arange(3000) / 25.0)
     np.testing.assert_allclose(joints[4][[300, 301, 302, 306, 307]], b, atol=0.05)
