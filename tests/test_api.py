@@ -164,9 +164,11 @@ def test_unknown_focal(small_lifter, keypoints):
 
 
 def test_principal_point_from_image_size(small_lifter, keypoints):
-    a = small_lifter.lift(keypoints, focal=1145.0, image_size=(1000, 1000))
-    b = small_lifter.lift(keypoints, focal=1145.0, principal_point=(500.0, 500.0))
+    a = small_lifter.lift(keypoints, focal=1145.0, image_size=(1280, 720))  # (w, h): not square, so (x, y) is pinned
+    b = small_lifter.lift(keypoints, focal=1145.0, principal_point=(640.0, 360.0))
     np.testing.assert_allclose(a.absolute, b.absolute)
+    assert np.abs(small_lifter.lift(keypoints, focal=1145.0, principal_point=(360.0, 640.0)).absolute
+                  - a.absolute).max() > 10
 
 
 def test_flip_test_is_equivariant(small_lifter, keypoints):
@@ -462,8 +464,13 @@ def test_quantized_lifter_matches_float32(small_lifter, keypoints):
     a = small_lifter.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     b = q.lift(keypoints, focal=1145.0, principal_point=(512.0, 515.0))
     assert "int8" in q.name
-    # int8 weights: close to, but not bit-identical with, the float32 network
-    assert np.abs(a.relative - b.relative).max() < 0.05 * np.abs(a.relative).max() + 1.0
+    # int8 weights: close to, but not bit-identical with, the float32 network (a review: with quantized() a plain
+    # copy, this test passed; the blocks' Linear layers must be int8 ones and the lift must differ)
+    layers = [type(m).__module__ for m in q.net.blocks.modules()]
+    assert any("quantized" in mod for mod in layers), layers
+    assert not any("quantized" in type(m).__module__ for m in small_lifter.net.modules())
+    diff = np.abs(a.relative - b.relative).max()
+    assert 1e-4 < diff < 0.05 * np.abs(a.relative).max() + 1.0
     assert np.allclose(a.canonical_depth, b.canonical_depth, rtol=0.05)
 
 

@@ -303,11 +303,16 @@ def test_shape_checks():
 @settings(max_examples=25, deadline=None)
 @given(k=st.floats(0.1, 10.0), seed=st.integers(0, 1000), view=st.sampled_from(["camera", "look_at"]))
 def test_lift_is_resolution_invariant(k, seed, view):
-    """The property the product promises: a scaled image with scaled intrinsics lifts to the same root and pose
-    (within 0.5 %; in practice float32 rounding)."""
+    """The property the product promises: a scaled image with scaled intrinsics, or the principal point and the 2D
+    moved together, lifts to the same root and pose (the issue asks within 0.5 %; by construction it holds to
+    float32 rounding, and is tested at that: a review found half a pixel's offset in the reference-camera map,
+    3.4 mm of pose, passed the 0.5 % tolerance)."""
     lifter = tiny_lifter(64, view=view)
     kp = project(_pose(seed, n=3), focal=F, principal_point=C)
     a = lifter.lift(kp, focal=F, principal_point=C)
     b = lifter.lift(kp * k, focal=F * k, principal_point=C * k)
-    np.testing.assert_allclose(b.root, a.root, rtol=5e-3)
-    np.testing.assert_allclose(b.relative, a.relative, rtol=5e-3, atol=0.05)
+    d = np.array([-170.0, 95.0]) * (1 + seed % 3)
+    c = lifter.lift(kp + d, focal=F, principal_point=C + d)
+    for other in (b, c):
+        np.testing.assert_allclose(other.root, a.root, rtol=1e-5)
+        np.testing.assert_allclose(other.relative, a.relative, rtol=0, atol=0.01)

@@ -106,6 +106,27 @@ def test_canonical_depth_is_depth_at_1000px():
     np.testing.assert_allclose(cam.depth_from_canonical_depth(2500.0, focal=(2000.0, 2000.0)), 5000.0)
 
 
+def test_a_flip_swaps_left_and_right_joints_by_name():
+    """Written out joint by joint, not from one flip helper against another (a review: with ``mirror`` negating x
+    but no longer swapping joints, every flip test passed, each comparing two helpers built on it)."""
+    from lifter.skeleton import mirror
+
+    rng = np.random.default_rng(5)
+    p = rng.normal(0, 300, (17, 3))
+    kp = rng.uniform(0, 1000, (17, 2))
+    W, c = 1000.0, (480.0, 510.0)
+    flipped, c_out = cam.flip_keypoints_2d(kp, image_width=W, principal_point=c)
+    np.testing.assert_allclose(c_out, [W - 480.0, 510.0])
+    swap = {"l_hip": "r_hip", "l_knee": "r_knee", "l_ankle": "r_ankle", "l_shoulder": "r_shoulder",
+            "l_elbow": "r_elbow", "l_wrist": "r_wrist"}
+    swap.update({b: a for a, b in swap.items()})
+    for j, name in enumerate(JOINT_NAMES):
+        src = JOINT_NAMES.index(swap.get(name, name))
+        np.testing.assert_allclose(mirror(p)[j], [-p[src, 0], p[src, 1], p[src, 2]], err_msg=name)
+        np.testing.assert_allclose(cam.flip_pose_3d(p)[j], [-p[src, 0], p[src, 1], p[src, 2]], err_msg=name)
+        np.testing.assert_allclose(flipped[j], [W - kp[src, 0], kp[src, 1]], err_msg=name)
+
+
 @settings(max_examples=50, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), W=st.integers(200, 3000))
 def test_flip_twice_is_identity(seed, W):

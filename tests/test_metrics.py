@@ -27,6 +27,19 @@ def test_pa_mpjpe_of_similar_copy_is_zero(variant):
     assert np.all(mpjpe(pred, gt) > 10)
 
 
+def test_only_the_repo_variant_aligns_a_mirror_image():
+    """The authors' variant has no reflection fix, so it aligns a mirrored copy exactly; the standard one keeps a
+    rotation and cannot (a review: with the standard branch run for "repo", every metric test passed)."""
+    rng = np.random.default_rng(4)
+    gt = random_pose_cam(rng, 4)
+    mirrored = gt * np.array([-1.0, 1.0, 1.0])
+    np.testing.assert_allclose(pa_mpjpe(mirrored, gt, variant="repo"), 0, atol=1e-6)
+    assert np.all(pa_mpjpe(mirrored, gt, variant="standard") > 10)
+    # and its scale is the RMS ratio, not the least-squares one: they differ once the shapes differ
+    noisy = 0.8 * gt + rng.normal(0, 40, gt.shape)
+    assert np.all(np.abs(pa_mpjpe(noisy, gt, variant="repo") - pa_mpjpe(noisy, gt, variant="standard")) > 0.1)
+
+
 def test_pa_mpjpe_positive_for_nonrigid_error_and_bounded_by_mpjpe():
     rng = np.random.default_rng(1)
     gt = random_pose_cam(rng, 20)
@@ -74,6 +87,12 @@ def test_pck_and_auc():
     assert pck(pred, gt, joints=None)[0] == pytest.approx(np.mean(all_err < 150))
     c = pck_curve(pred, gt)
     assert np.all(np.diff(c) >= 0) and c[0] == pytest.approx(0.0)  # strict <: zero error fails at 0 mm
+    # each threshold's share of the 14 PCK joints, written out (a review: a curve over all 17 joints passed)
+    scored = all_err[list(PCK_JOINTS)]
+    expected = [np.mean(scored < t) for t in range(0, 151, 5)]
+    np.testing.assert_allclose(c, expected)
+    assert abs(np.mean([np.mean(all_err < t) for t in range(0, 151, 5)]) - np.mean(expected)) > 0.01  # (differs)
+    assert auc(pred, gt) == pytest.approx(np.mean(expected))
     assert auc(gt, gt) == pytest.approx(30 / 31)
 
 
@@ -93,6 +112,34 @@ def test_analytic_root_recovers_root_under_weak_perspective(method):
     root = analytic_root(kp, rel, focal=1150.0, principal_point=(500.0, 500.0), method=method)
     err, _ = root_errors(root, pose[:, 0])
     assert np.all(err < 0.01 * pose[:, 0, 2])
+
+
+@pytest.mark.parametrize("correct", [True, False])
+def test_analytic_root_methods_by_their_definitions(correct):
+    """On a body with depth and 2D noise, where the two methods disagree: "rms" matches the 2D pose's RMS size to
+    the 3D pose's seen at depth z, "lstsq" fits the 2D pose as (f / z) times the 3D pose's x, y by least squares
+    (solved here by np.linalg.lstsq); ``mean_depth_correction`` moves the root by the mean relative depth (a review:
+    both methods were tested only where they agree, and the correction's off switch never)."""
+    rng = np.random.default_rng(8)
+    pose = random_pose_cam(rng, 3)
+    rel = pose - pose[:, :1]
+    f, c = 1150.0, np.array([500.0, 500.0])
+    kp = project(pose, focal=f, principal_point=c) + rng.normal(0, 3, (3, 17, 2))
+    roots = {}
+    for method in ("rms", "lstsq"):
+        roots[method] = analytic_root(kp, rel, focal=f, principal_point=c, method=method,
+                                      mean_depth_correction=correct)
+    for i in range(3):
+        dk = kp[i] - kp[i].mean(0)
+        dP = rel[i, :, :2] - rel[i, :, :2].mean(0)
+        shift = rel[i, :, 2].mean() if correct else 0.0
+        z_rms = f * np.sqrt((dP**2).sum() / (dk**2).sum()) - shift
+        m = np.linalg.lstsq(dP.reshape(-1, 1), dk.reshape(-1), rcond=None)[0][0]  # dk ~ (f / z) dP
+        z_lstsq = f / m - shift
+        for method, z in (("rms", z_rms), ("lstsq", z_lstsq)):
+            np.testing.assert_allclose(roots[method][i, 2], z, rtol=1e-9)
+            np.testing.assert_allclose(roots[method][i, :2], (kp[i, 0] - c) * z / f, rtol=1e-9)
+    assert np.abs(roots["rms"][:, 2] - roots["lstsq"][:, 2]).max() > 5  # (the two differ here)
 
 
 def test_metric_input_errors_name_the_problem():

@@ -69,14 +69,6 @@ def photo(tmp_path) -> Path:
     return p
 
 
-def test_the_default_floor_lies_between_invented_and_real_people():
-    """BlazePose scores the people of the 84 demo photos 0.84-1 and its invented 'people' 0.13 (the lower quartile)
-    and up (docs/results/empty_crops.txt); the floor lies between, below the 'unsure' note's 0.5."""
-    from lifter.detect import DOUBTFUL_SCORE
-
-    assert 0.13 < MIN_PERSON_SCORE < DOUBTFUL_SCORE < 0.84
-
-
 def test_a_photos_only_detection_below_the_floor_is_no_person(photo, lifter, kp17):
     junk = _Scored([(kp17, 0.14)])
     with pytest.raises(NoPersonError, match=r"p\.png: no person found by the scored 2D detector; 1 detection with a "

@@ -62,6 +62,8 @@ def test_own_sequence_record_relifted_with_another_default_format(tmp_path, defa
     rec = lift_keypoint_sequence(src, lifter=default)
     out = write(tmp_path / "seq_record.json", rec.to_dict())
     again = lift_keypoint_sequence(out, lifter=default, default_format="coco17")
+    assert len(again.frames) == len(rec.frames) == 4
+    assert [len(f.people) for f in again.frames] == [1] * 4
     for a, b in zip(rec.frames, again.frames):
         np.testing.assert_allclose(b.people[0].keypoints_2d, a.people[0].keypoints_2d, atol=1e-3)
 

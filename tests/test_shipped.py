@@ -116,7 +116,9 @@ def test_shipped_weights_reproduce_recorded_metrics(h36m, name, key):
 def test_default_is_invariant_to_image_scale_and_principal_point(k, shift, source):
     """The shipped default, on the issue's property: the same physical camera imaged at k x the resolution
     (keypoints, focal and principal point scaled together), or with the principal point and the 2D moved
-    together, gives the same root and pose within 0.5 % (camera-space input: exact up to float32 rounding)."""
+    together, gives the same root and pose (the issue asks within 0.5 %; camera-space input makes it exact up to
+    float32 rounding, and it is tested at that: a review found a principal point rounded to whole pixels, 1.8 mm
+    of pose, passed the 0.5 % tolerance)."""
     lifter = _default()
     if lifter.config.input_space != "camera":
         pytest.skip("the default reads pixels; only reference-camera models are invariant by construction")
@@ -127,8 +129,8 @@ def test_default_is_invariant_to_image_scale_and_principal_point(k, shift, sourc
     d = np.asarray(shift)
     c = lifter.lift(kp + d, focal=_F, principal_point=_C + d, source=source)
     for other in (b, c):
-        np.testing.assert_allclose(other.root, a.root, rtol=5e-3)
-        np.testing.assert_allclose(other.relative, a.relative, atol=5e-3 * np.abs(a.relative).max())
+        np.testing.assert_allclose(other.root, a.root, rtol=1e-5)
+        np.testing.assert_allclose(other.relative, a.relative, rtol=0, atol=0.01)
 
 
 def test_default_knows_the_root_only_up_to_z_over_f_without_a_focal():
