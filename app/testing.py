@@ -60,10 +60,11 @@ class FakeTab:
         self.conn.send(msgspec.msgpack.encode(msg.as_serializable_dict()))
 
     def upload(self, handle: Any, name: str, content: bytes, *, chunk_size: int = 512 * 1024,
-               declared_size: int | None = None, max_parts: int | None = None) -> None:
+               declared_size: int | None = None, max_parts: int | None = None, part_tag: str | None = None) -> str:
         """Upload ``content`` through the upload button ``handle`` the way the browser does (a
-        ``FileTransferStartUpload`` then 512-KiB ``FileTransferPart`` s). ``declared_size`` / ``max_parts``
-        let a test announce a size it does not send."""
+        ``FileTransferStartUpload`` then 512-KiB ``FileTransferPart`` s); returns the transfer's id.
+        ``declared_size`` / ``max_parts`` let a test announce a size it does not send, ``part_tag`` name another
+        control in the parts (a hostile client's)."""
         uuid = handle._impl.uuid
         transfer = uuid4().hex
         parts = [content[i:i + chunk_size] for i in range(0, len(content), chunk_size)]
@@ -71,8 +72,9 @@ class FakeTab:
             source_component_uuid=uuid, transfer_uuid=transfer, filename=name, mime_type="", part_count=len(parts),
             size_bytes=len(content) if declared_size is None else int(declared_size)))
         for i, part in enumerate(parts[:max_parts]):
-            self.send(_messages.FileTransferPart(source_component_uuid=uuid, transfer_uuid=transfer, part_index=i,
-                                                 content=part))
+            self.send(_messages.FileTransferPart(source_component_uuid=uuid if part_tag is None else part_tag,
+                                                 transfer_uuid=transfer, part_index=i, content=part))
+        return transfer
 
     def close(self) -> None:
         self.conn.close()

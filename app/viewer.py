@@ -103,7 +103,15 @@ from .scene import (
 from .scene import head_on as scene_head_on
 from .scene import overview as scene_overview
 from .video import VideoSequence
-from .viser_hooks import clear_box, limit_uploads, note_typed_values, report_rejected_values, send_value, set_value_here
+from .viser_hooks import (
+    UploadBudget,
+    clear_box,
+    limit_uploads,
+    note_typed_values,
+    report_rejected_values,
+    send_value,
+    set_value_here,
+)
 
 log = logging.getLogger("poselifter.app")
 LABEL_SOURCES = {v: k for k, v in SOURCE_LABELS.items()}
@@ -177,6 +185,9 @@ uploaded successfully" about the transfer itself (a user trial read both as succ
 UPLOAD_TOO_LARGE_TITLE: Final[str] = "Upload refused: the file is too large"
 """The title of the notification of an upload stopped during its transfer for its size (:data:`UPLOAD_REFUSED_TITLE`
 said it had arrived, where its message said it was stopped: a user trial)."""
+UPLOADS_HELD_FACTOR: Final[int] = 4
+"""Every tab's unfinished uploads together may hold this many times the upload limit (80 MiB at 20 MiB), so two
+tabs can each send two files at once while many raw connections cannot make the server hold more."""
 UPLOAD_BUSY_TITLE: Final[str] = "Upload refused: other uploads are still arriving"
 """The title of the notification of an upload refused as it starts, while two others from the tab are still
 arriving (:func:`poselifter_app.viser_hooks.limit_uploads`)."""
@@ -443,6 +454,8 @@ class SessionView:
         self.scene: Scene = build_scene(target.scene, on_drag=lambda j, ev: self._do(self.on_joint_drag, j, ev))
         first = app.demo.get(app.demo.names[0])
         self.state = SessionState(sample=first, model=app.default_model)
+        self._wire_uploads()  # (before the first sample is drawn: an upload sent meanwhile waits for the lock, where
+        # before it arrived with no callback and vanished, a security review)
         with self.lock:
             if h is not None:  # with Human3.6M the app opens on it: a frame with a photo when there is one
                 s = int(self._gui_subject()[1:])
@@ -451,13 +464,6 @@ class SessionView:
             self._show_sample(first, reframe=True)
         self._wire()
         client_id = target.client_id if isinstance(target, viser.ClientHandle) else None
-        limit_uploads(target.gui, self.gui.files.upload, max_bytes=app.max_upload_bytes, client_id=client_id,
-                      refuse=lambda name, size: self.show_message(
-                          up.oversize_message(name, size, max_bytes=app.max_upload_bytes), error=True,
-                          title=UPLOAD_TOO_LARGE_TITLE, sticky=True),
-                      refuse_busy=lambda name, n: self.show_message(
-                          f"{name}: not uploaded: {n} uploads from this tab are still arriving; upload it again when "
-                          "they are done (what is shown is unchanged)", error=True, title=UPLOAD_BUSY_TITLE))
         report_rejected_values(target.gui, lambda msg: self.show_message(msg, error=True))
         note_typed_values(target.gui, self._typed_controls(), self._note_key, client_id=client_id)
 
@@ -556,6 +562,26 @@ class SessionView:
         """A GUI callback running ``func(*args)`` through :meth:`_guarded`."""
         return lambda _event: self._do(func, *args)
 
+    def _wire_uploads(self) -> None:
+        """The upload button's callback and the bounds on what viser buffers for it."""
+        app, target, g = self.app, self.target, self.gui
+        limit_uploads(target.gui, g.files.upload, max_bytes=app.max_upload_bytes, budget=app.upload_budget,
+                      client_id=target.client_id if isinstance(target, viser.ClientHandle) else None,
+                      refuse=lambda name, size: self.show_message(
+                          up.oversize_message(up.safe_name(name), size, max_bytes=app.max_upload_bytes), error=True,
+                          title=UPLOAD_TOO_LARGE_TITLE, sticky=True),
+                      refuse_busy=lambda name, n: self.show_message(
+                          f"{up.safe_name(name)}: not uploaded: {n} uploads from this tab are still arriving; upload "
+                          "it again when they are done (what is shown is unchanged)", error=True,
+                          title=UPLOAD_BUSY_TITLE),
+                      refuse_full=lambda name, held: self.show_message(
+                          f"{up.safe_name(name)}: not uploaded: the app is receiving other uploads "
+                          f"({held / 2**20:.0f} MiB still arriving, {app.upload_budget.max_bytes // 2**20} MiB in all "
+                          "at most); upload it again in a moment (what is shown is unchanged)", error=True,
+                          title=UPLOAD_BUSY_TITLE))
+        g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
+                                                                   g.files.upload.value.content)))
+
     def _wire(self) -> None:
         g = self.gui
         sync = self._on(self._runner.request)
@@ -582,8 +608,6 @@ class SessionView:
         g.lift.auto_frame.on_update(self._on(self._auto_frame))
         g.play.play.on_click(self._on(self.toggle_play))
         g.play.speed.on_update(self._on(self._on_speed))
-        g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
-                                                                   g.files.upload.value.content)))
         g.files.download_json.on_click(self._on(self.download, "json"))
         g.files.download_glb.on_click(self._on(self.download, "glb"))
 
@@ -2095,6 +2119,8 @@ class PoseLifterApp:
                  max_upload_bytes: int = up.MAX_UPLOAD_BYTES) -> None:
         self.server = server
         self.max_upload_bytes = int(max_upload_bytes)
+        self.upload_budget = UploadBudget(max_bytes=UPLOADS_HELD_FACTOR * self.max_upload_bytes)
+        """What every tab's unfinished uploads may hold together (:func:`poselifter_app.viser_hooks.limit_uploads`)."""
         self._estimator_factory = estimator_factory or _default_estimator
         self._estimator: Any = None
         self._estimator_error: Exception | None = None

@@ -1,9 +1,10 @@
 """Everything of the app that touches viser 1.1.1 internals (private attributes and its message protocol), in one
 place. Each hook is best effort: when viser's internals change it does nothing (and logs why) rather than fail.
 
-* :func:`limit_uploads`: an upload is stopped as soon as the size the browser announces, or the bytes actually
-  received so far, exceed the app's limit (viser itself buffers uploads of any size), or when it starts while two
-  others from the same tab are still arriving;
+* :func:`limit_uploads`: uploads go through the upload button only; one is stopped as soon as the size the browser
+  announces, or the bytes actually received so far, exceed the app's limit (viser itself buffers uploads of any
+  size, to any control), when it starts while two others from the same tab are still arriving, or when all tabs'
+  unfinished uploads would pass :class:`UploadBudget`;
 * :func:`report_rejected_values`: a GUI value that viser cannot cast to the control's type (e.g. text for a
   slider) is reported to the user and the control shows the value in use again (viser alone only logs an
   asyncio traceback);
@@ -24,7 +25,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -34,79 +34,163 @@ import viser
 log = logging.getLogger("poselifter.app")
 
 
+class UploadBudget:
+    """The bytes that every tab of a server may hold in uploads still arriving, together (viser buffers each
+    transfer until it is complete: a security review's eight raw connections, each with two unfinished 18-MiB
+    uploads, held 288 MB), and how long a transfer may go without a part before it is dropped. Shared by the
+    :func:`limit_uploads` hooks of a server's tabs."""
+
+    def __init__(self, *, max_bytes: int, idle_s: float = 60.0) -> None:
+        import weakref
+
+        self.max_bytes = int(max_bytes)
+        self.idle_s = float(idle_s)
+        self._guis: weakref.WeakSet[Any] = weakref.WeakSet()
+        self._last_part: dict[str, float] = {}  # transfer -> time.monotonic() of its start or latest part
+
+    def add(self, gui: Any) -> None:
+        self._guis.add(gui)
+
+    def held(self) -> int:
+        """Bytes buffered in unfinished uploads of every tab."""
+        return sum(int(st.get("transferred_bytes", 0)) for gui in list(self._guis)
+                   for st in list(gui._current_file_upload_states.values()))
+
+    def touch(self, transfer: str) -> None:
+        self._last_part[transfer] = time.monotonic()
+
+    def drop_idle(self) -> None:
+        """Drop the transfers of every tab that have had no part for :attr:`idle_s` (a client that starts an upload and
+        never finishes it held its bytes until it disconnected)."""
+        now = time.monotonic()
+        for gui in list(self._guis):
+            states = gui._current_file_upload_states
+            for t in list(states):
+                if now - self._last_part.setdefault(t, now) > self.idle_s:
+                    states.pop(t, None)
+                    log.warning("upload %s dropped: no part for %.0f s", t, self.idle_s)
+        live = {t for gui in list(self._guis) for t in gui._current_file_upload_states}
+        for t in [t for t in self._last_part if t not in live]:
+            self._last_part.pop(t, None)
+
+
+_NOT_HERE = "poselifter: refused"
+"""What an upload's control uuid is changed to, before viser reads the message, so that viser ignores it (no
+control has this uuid)."""
+
+
 def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max_bytes: int,
                   refuse: Callable[[str, int], None], refuse_busy: Callable[[str, int], None],
+                  refuse_full: Callable[[str, int], None] | None = None, budget: UploadBudget | None = None,
                   client_id: int | None = None, max_in_flight: int = 2) -> bool:
-    """Refuse uploads through ``button`` larger than ``max_bytes``: on the announced size, and on the bytes
-    received (checked before viser buffers each part). ``refuse(file name, bytes)`` is called once per refused
-    upload. An upload that starts while ``max_in_flight`` others through the button are still arriving is refused
-    too, with ``refuse_busy(file name, max_in_flight)`` (viser buffers every transfer: a security trial's 60 open
-    transfers of 19 MiB held 1 GB). ``client_id``: only that client's uploads (None: any). Returns False when the
-    hook could not be installed."""
+    """Bound what viser buffers for the uploads of ``gui`` (a tab's): uploads go through ``button`` only, each at
+    most ``max_bytes``, at most ``max_in_flight`` at a time, and all tabs' together within ``budget``.
+
+    * A transfer announced for another control (a slider: viser would set its value to the file) is ignored; so is
+      every part of a transfer this hook did not let start, whatever control the part names (viser buffers parts by
+      their transfer only: a security review's part tagged with another control's id was buffered to 1 GB).
+    * An upload announcing more than ``max_bytes``, or whose bytes received pass it, is stopped (checked before
+      viser buffers each part, on viser's own count of the transfer's bytes): ``refuse(file name, bytes)``, once.
+    * An upload that starts while ``max_in_flight`` others through the button are still arriving is refused with
+      ``refuse_busy(file name, max_in_flight)``.
+    * An upload that would take every tab's unfinished uploads past ``budget.max_bytes`` is stopped with
+      ``refuse_full(file name, bytes held)``; transfers without a part for ``budget.idle_s`` are dropped.
+
+    ``client_id``: only that client's messages (None: any). Install it before the button's callbacks can be used.
+    Returns False when the hook could not be installed."""
     try:
         from viser import _messages
 
         iface = gui._websock_interface
         states: dict[str, Any] = gui._current_file_upload_states
         handlers: dict[Any, list[Any]] = iface._incoming_handlers
+        controls: dict[str, Any] = gui._gui_input_handle_from_uuid
         uuid = button._impl.uuid
     except AttributeError as exc:
         log.warning("upload size limit not installed (viser internals changed: %s)", exc)
         return False
-    received: dict[str, tuple[str, int]] = {}
-    lock = threading.Lock()
+    mine: dict[str, str] = {}  # transfers let start through the button -> file name
+    # every transfer let start on this GUI by a hook like this one (a GUI may hold several upload buttons, each
+    # hooked): transfer -> button
+    let: dict[str, str] = gui.__dict__.setdefault("_poselifter_uploads", {})
+    if budget is not None:
+        budget.add(gui)
 
-    def stop(transfer: str, name: str, size: int, total: int, say: Callable[[str, int], None] = refuse) -> None:
-        states.pop(transfer, None)  # later parts are ignored by viser
-        iface.queue_message(_messages.FileTransferPartAck(  # ends the browser's progress bar
+    def ack(transfer: str, total: int) -> None:  # ends the browser's progress bar
+        iface.queue_message(_messages.FileTransferPartAck(
             source_component_uuid=uuid, transfer_uuid=transfer, transferred_bytes=total, total_bytes=total))
-        say(name, size)
 
-    def ours(cid: int, msg: Any) -> bool:
-        return msg.source_component_uuid == uuid and (client_id is None or cid == client_id)
+    def stop(transfer: str, name: str, size: int, total: int, say: Callable[[str, int], None] | None) -> None:
+        states.pop(transfer, None)  # later parts are ignored by viser
+        mine.pop(transfer, None)
+        let.pop(transfer, None)
+        ack(transfer, total)
+        if say is not None:
+            say(name, size)
 
-    def on_start(cid: int, msg: Any) -> None:
+    def on_start(cid: int, msg: Any) -> None:  # (before viser's handler, which makes the transfer's buffer)
         try:
-            if not ours(cid, msg):
+            if client_id is not None and cid != client_id:
                 return
+            if msg.source_component_uuid != uuid:
+                other = controls.get(msg.source_component_uuid)
+                if other is not None and not isinstance(other, viser.GuiUploadButtonHandle):
+                    log.warning("an upload to control %s, not an upload button, ignored", msg.source_component_uuid)
+                    msg.source_component_uuid = _NOT_HERE
+                return  # (another upload button's: its own hook checks it; an unknown control's: viser ignores it)
+            refusal: tuple[Callable[[str, int], None] | None, int] | None = None
+            if budget is not None:
+                budget.drop_idle()
+            for done in [t for t in mine if t not in states]:  # (finished or dropped since)
+                mine.pop(done)
+                let.pop(done, None)
             if msg.size_bytes > max_bytes:
-                stop(msg.transfer_uuid, msg.filename, msg.size_bytes, msg.size_bytes)
+                refusal = (refuse, msg.size_bytes)
+            elif len(mine) >= max_in_flight:
+                refusal = (refuse_busy, max_in_flight)
+            elif budget is not None and budget.held() + msg.size_bytes > budget.max_bytes:
+                refusal = (refuse_full, budget.held())
+            if refusal is not None:
+                msg.source_component_uuid = _NOT_HERE  # viser makes no buffer for it
+                say, n = refusal
+                ack(msg.transfer_uuid, msg.size_bytes)
+                if say is not None:
+                    say(msg.filename, n)
                 return
-            with lock:
-                for done in [t for t in received if t not in states]:  # (finished or dropped since)
-                    received.pop(done)
-                busy = len(received) >= max_in_flight
-                if not busy:
-                    received[msg.transfer_uuid] = (msg.filename, 0)
-            if busy:
-                stop(msg.transfer_uuid, msg.filename, max_in_flight, msg.size_bytes, refuse_busy)
+            mine[msg.transfer_uuid] = msg.filename
+            let[msg.transfer_uuid] = uuid
+            if budget is not None:
+                budget.touch(msg.transfer_uuid)
         except Exception:  # noqa: BLE001 - never break viser's message loop
-            log.exception("upload size check failed")
+            log.exception("upload check failed")
+            msg.source_component_uuid = _NOT_HERE
 
-    def on_part(cid: int, msg: Any) -> None:
+    def on_part(cid: int, msg: Any) -> None:  # (before viser's handler, which buffers the part)
         try:
-            if not ours(cid, msg):
+            if client_id is not None and cid != client_id:
                 return
-            with lock:
-                if msg.transfer_uuid not in received:
-                    return
-                name, n = received[msg.transfer_uuid]
-                n += len(msg.content)
-                received[msg.transfer_uuid] = (name, n)
-                if msg.transfer_uuid not in states:  # finished or dropped
-                    received.pop(msg.transfer_uuid, None)
-                    return
-                over = n > max_bytes
-                if over:
-                    received.pop(msg.transfer_uuid, None)
-            if over:
-                stop(msg.transfer_uuid, name, n, states.get(msg.transfer_uuid, {}).get("total_bytes", n))
+            t = msg.transfer_uuid
+            state = states.get(t)
+            if state is None:
+                return  # (viser ignores it too)
+            if t not in let:  # (a transfer no hook let start: to another control, or begun before the hooks)
+                states.pop(t, None)
+                return
+            if t not in mine:
+                return  # (another upload button's: its hook checks it)
+            msg.source_component_uuid = uuid  # (viser gives the finished file to the control a part names)
+            n = int(state.get("transferred_bytes", 0)) + len(msg.content)
+            if n > max_bytes:
+                stop(t, mine[t], n, int(state.get("total_bytes", n)), refuse)
+            elif budget is not None and budget.held() + len(msg.content) > budget.max_bytes:
+                stop(t, mine[t], budget.held(), int(state.get("total_bytes", n)), refuse_full)
+            elif budget is not None:
+                budget.touch(t)
         except Exception:  # noqa: BLE001
-            log.exception("upload size check failed")
+            log.exception("upload check failed")
+            states.pop(msg.transfer_uuid, None)
 
-    # The start check runs after viser's own handler (which creates the transfer we drop); the part check before
-    # it, so a part over the limit is never buffered.
-    handlers.setdefault(_messages.FileTransferStartUpload, []).append(on_start)
+    handlers.setdefault(_messages.FileTransferStartUpload, []).insert(0, on_start)
     handlers.setdefault(_messages.FileTransferPart, []).insert(0, on_part)
     return True
 

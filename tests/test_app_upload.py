@@ -375,6 +375,67 @@ def test_uploads_in_flight_from_one_tab_are_capped(app: PoseLifterApp) -> None:
         tab2.close()
 
 
+def test_what_viser_buffers_is_bounded_whatever_the_messages_name(app: PoseLifterApp) -> None:
+    """A security review: viser buffers a transfer's parts whatever control they name and whatever size was
+    announced, so parts tagged with another control's id went past the 20-MiB check to 1 GB; a transfer started on
+    the focal slider was buffered (100 MiB) and, once complete, made the slider's value a file, breaking the tab; and
+    many raw connections each holding two unfinished uploads added up without bound. Each is stopped before viser
+    buffers it, and the tab keeps working."""
+    from poselifter_app.viewer import UPLOAD_BUSY_TITLE, UPLOADS_HELD_FACTOR
+
+    big = b"\xff\xd8" + b"\x00" * (up.MAX_UPLOAD_BYTES + 10)
+    tab, v = _open_tab(app)
+    tabs = [tab]
+    try:
+        snap = _snapshot(v)
+        states = v.target.gui._current_file_upload_states
+        held = []  # (bytes viser holds for this tab, sampled as the parts arrive)
+        # parts naming the slider, for a transfer started through the button: counted all the same
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "spoof.jpg", big, declared_size=1024, max_parts=45,
+                   part_tag=v.gui.lift.focal._impl.uuid)
+        assert wait_for(lambda: (held.append(sum(st["transferred_bytes"] for st in states.values())) or True)
+                        and len(v.messages) > n_msgs and "spoof.jpg" in v.messages[-1])
+        assert "more than the 20 MiB" in v.messages[-1] and not states
+        assert max(held) <= up.MAX_UPLOAD_BYTES, max(held)
+        # a transfer started on the focal slider: nothing buffered, and the slider keeps a number
+        focal = float(v.gui.lift.focal.value)
+        tab.upload(v.gui.lift.focal, "x.jpg", b"\xff\xd8" + b"\x00" * 2_000_000)
+        tab.upload(v.gui.lift.focal, "empty.jpg", b"")  # (zero parts: viser would finish it at once)
+        time.sleep(1.0)
+        assert not states and float(v.gui.lift.focal.value) == focal
+        _assert_unchanged(v, snap)
+        # every tab's unfinished uploads together: within UPLOADS_HELD_FACTOR x the limit
+        part = b"\xff\xd8" + b"\x00" * (4 * 1024**2)
+        views = [v]
+        for _ in range(3):
+            t, w = _open_tab(app)
+            tabs.append(t)
+            views.append(w)
+        for t, w in zip(tabs, views):
+            for k in range(2):  # (four 4-MiB parts announced, three sent: still arriving, 12 MiB each)
+                t.upload(w.gui.files.upload, f"slow{k}.jpg", part * 4, chunk_size=len(part), max_parts=3)
+        every = [w.target.gui._current_file_upload_states for w in views]
+        assert wait_for(lambda: any(w.notices and w.notices[-1][0] == UPLOAD_BUSY_TITLE for w in views))
+        time.sleep(1.0)
+        total = sum(st["transferred_bytes"] for sts in every for st in sts.values())
+        assert total <= UPLOADS_HELD_FACTOR * up.MAX_UPLOAD_BYTES, total
+        refused = [m for w in views for m in w.messages if "the app is receiving other uploads" in m]
+        assert refused and "upload it again in a moment" in refused[0], refused
+        # and the first tab still takes a keypoint file once its own transfers are gone
+        for sts in every:
+            sts.clear()
+        kp = json.dumps({"keypoints": demo_sample("walking").keypoints_2d.tolist(), "focal": 1145.0,
+                         "image_size": [1000, 1000]}).encode()
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "pose.json", kp)
+        assert wait_for(lambda: any("pose.json" in m for m in v.messages[n_msgs:])), v.messages[n_msgs:]
+        assert v.state.sample.upload is not None
+    finally:
+        for t in tabs:
+            t.close()
+
+
 def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) -> None:
     def no_mediapipe():
         raise MissingDependencyError("the BlazePose 2D detector needs the optional 'detect' extra")
