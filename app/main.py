@@ -60,13 +60,19 @@ def check_bind(host: str, port: int) -> str | None:
 
 
 def start_lines(*, url: str, requested_port: int, actual_port: int, h36m: Path | None, no_h36m: bool,
-                models: Sequence[str]) -> list[str]:
+                models: Sequence[str], host: str = "127.0.0.1") -> list[str]:
     """What ``poselifter-app`` prints once it is up: its URL, where Human3.6M was read from or looked for, the models;
     before it, a note when ``--port`` was busy and the server took the next free one (a README trial's second app
-    went to 8081 without a word, while the browser still showed the first one on 8080)."""
+    went to 8081 without a word, while the browser still showed the first one on 8080); and a warning when ``host``
+    is not this machine's loopback (the app has no login: whoever reaches the port can use it)."""
     from lifter.data import default_h36m_dir
 
+    from .viser_hooks import is_loopback
+
     lines = []
+    if not is_loopback(host):
+        lines.append(f"warning: --host {host} lets anyone who can reach this machine on port {actual_port} use the app "
+                     "and upload files to it (it has no login); leave --host out to serve this machine only")
     if requested_port != 0 and actual_port != requested_port:
         lines.append(f"note: port {requested_port} is busy (another poselifter-app?), so this one serves on "
                      f"{actual_port}: open the URL below (--port to choose another)")
@@ -153,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # passes, which otherwise stall playback for ~0.15 s every few seconds.
     gc.freeze()
     for line in start_lines(url=app.url, requested_port=args.port, actual_port=server.get_port(), h36m=h36m,
-                            no_h36m=args.no_h36m, models=app.pool.names):
+                            no_h36m=args.no_h36m, models=app.pool.names, host=args.host):
         print(line, flush=True)
     try:
         while True:

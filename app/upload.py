@@ -534,24 +534,36 @@ def glb_bytes(record: Any) -> bytes:
 __all__ = ["CAMERA_HEIGHT_MM", "DetectorMissing", "DISPLAY_MAX_SIDE", "MAX_UPLOAD_BYTES", "MissingDependencyError",
            "Photo", "UploadError", "UploadInfo", "UploadRefused", "check_upload", "decode_photo", "download_stem",
            "focal_note", "glb_bytes", "is_json_upload", "json_bytes", "keypoint_sample", "missing_detector_message",
-           "oversize_message", "photo_sample", "result_record", "safe_name", "upload_camera"]
+           "note_if_busy", "oversize_message", "photo_sample", "result_record", "safe_name", "upload_camera"]
+
+
+def note_if_busy(lock: Any, on_wait: Callable[[], None] | None) -> None:
+    """Call ``on_wait()`` when ``lock`` (the app's detector lock) is held now: the upload about to need it waits for
+    another upload's detection (a security review: a photo waited minutes behind another tab's video, unsaid)."""
+    if lock.acquire(blocking=False):
+        lock.release()
+    elif on_wait is not None:
+        on_wait()
 
 
 def upload_sample(name: str, content: bytes, *, key: str, photo: Photo | None, max_bytes: int,
                   estimator: Callable[[], Any], lifter: Any, detect_lock: Any,
-                  min_score: float = MIN_PERSON_SCORE) -> tuple[Sample, Photo | None]:
+                  min_score: float = MIN_PERSON_SCORE,
+                  on_wait: Callable[[], None] | None = None) -> tuple[Sample, Photo | None]:
     """The upload rules: ``(sample, photo)`` for an uploaded file — a keypoint JSON (drawn on ``photo``, the photo
     uploaded before, when the sizes agree) or a photo (the largest person by ``estimator()``'s detector, lifted by
     ``lifter`` for its focal; ``detect_lock`` serialises detection). ``photo`` comes back updated: a decodable photo
     is kept for a keypoint JSON uploaded next, even when detection then fails. Raises :class:`PoseLifterError`
     with a message for the user (too large, not an image, nobody found, the detector extra missing, ...).
-    ``min_score``: the score floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score")."""
+    ``min_score``: the score floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score").
+    ``on_wait()``: called when the photo must wait for another upload's detection (:func:`note_if_busy`)."""
     name = safe_name(name)
     content = bytes(content or b"")
     check_upload(name, content, max_bytes=max_bytes)
     if is_json_upload(name, content):
         return keypoint_sample(name, content, key=key, photo=photo, min_score=min_score), photo
     new_photo, img = decode_photo(name, content)  # not-an-image / truncated / too many pixels raise here
+    note_if_busy(detect_lock, on_wait)
     try:
         est = estimator()
     except MissingDependencyError as exc:

@@ -62,6 +62,7 @@ from .upload import (
     display_canvas,
     focal_note,
     missing_detector_message,
+    note_if_busy,
     safe_name,
     upload_camera,
 )
@@ -70,6 +71,9 @@ FOCAL_SAME_PX: Final[float] = 0.5
 """A focal length within this of the upload's (alpha, px) is the upload's (the focal box shows 0.1 px)."""
 VIDEO_MAX_SECONDS: Final[float] = 20.0
 """Uploaded videos and keypoint sequences are lifted up to this duration (the rest is dropped, with a note)."""
+VIDEO_MAX_FRAMES: Final[int] = 1200
+"""And uploaded videos up to this many frames (20 s at 60 frames/s; a security review's 1000-frames/s clip of 20,000
+frames held the app's detector, which every tab shares, for twenty minutes)."""
 VIDEO_DISPLAY_MAX_SIDE: Final[int] = 640
 """Frames are kept for display downscaled to this longer side, as JPEG."""
 
@@ -315,7 +319,7 @@ def _display_jpeg(bgr: np.ndarray, *, max_side: int = VIDEO_DISPLAY_MAX_SIDE) ->
 def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimator: Callable[[], Any] | None,
                    max_bytes: int, detect_lock: Any, max_seconds: float = VIDEO_MAX_SECONDS,
                    progress: Callable[[int, int | None], None] | None = None, photo: Any | None = None,
-                   min_score: float = MIN_PERSON_SCORE) -> VideoSequence:
+                   min_score: float = MIN_PERSON_SCORE, on_wait: Callable[[], None] | None = None) -> VideoSequence:
     """Lift an uploaded video (``estimator()`` gives the 2D detector) or keypoint sequence JSON into a
     :class:`VideoSequence` (module docstring). Raises :class:`lifter.PoseLifterError` with a message for the user:
     too large, not decodable, zero-length, nobody in any frame, the detector extra missing, ... A keypoint sequence
@@ -323,7 +327,9 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
     principal point the size of ``photo`` (:class:`app.upload.Photo`, the photo uploaded before) where its poses fit
     it, each with a note (``lift_keypoint_sequence``'s ``assumed_fps`` and ``fallback_image``); the photo's EXIF
     focal length is then used where the sequence gives none, as for a single keypoint file. ``min_score``: the score
-    floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score")."""
+    floor (:data:`lifter.detect.MIN_PERSON_SCORE`; the File tab's "min person score"). A video is lifted up to
+    :data:`VIDEO_MAX_FRAMES` frames; ``on_wait()`` is called when it must wait for another upload's detection, and an
+    exception ``progress`` raises stops the lift (the tab closed)."""
     nm = safe_name(name)
     content = bytes(content or b"")
     check_upload(nm, content, max_bytes=max_bytes)
@@ -337,6 +343,7 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
             if is_video:
                 if estimator is None:
                     raise UploadError(f"{nm}: no 2D detector for videos")
+                note_if_busy(detect_lock, on_wait)
                 try:
                     est = estimator()
                 except MissingDependencyError as exc:  # (the install's problem, as for a photo: not a refusal)
@@ -344,7 +351,8 @@ def video_sequence(name: str, content: bytes, *, key: str, lifter: Any, estimato
                 shown: dict[int, bytes] = {}  # display copies, made while the video is decoded for lifting
                 with detect_lock:
                     rec = lift_video(path, lifter=lifter, estimator=est, max_people=MAX_PEOPLE,
-                                     max_seconds=max_seconds, progress=progress, cli_options=False, min_score=min_score,
+                                     max_seconds=max_seconds, max_frames=VIDEO_MAX_FRAMES, progress=progress,
+                                     cli_options=False, min_score=min_score,
                                      on_frame=lambda i, bgr: shown.__setitem__(i, _display_jpeg(bgr)))
                 jpegs = [shown[fr.index] for fr in rec.frames if fr.people]
             else:
@@ -442,5 +450,5 @@ def video_message(seq: VideoSequence) -> str:
             + "".join(f"\n\nNote, as uploaded: {sentence(n)}" for n in notes))
 
 
-__all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json", "is_video_upload",
-           "sequence_glb_bytes", "sequence_json_bytes", "video_message", "video_sequence"]
+__all__ = ["VIDEO_DISPLAY_MAX_SIDE", "VIDEO_MAX_FRAMES", "VIDEO_MAX_SECONDS", "VideoSequence", "is_sequence_json",
+           "is_video_upload", "sequence_glb_bytes", "sequence_json_bytes", "video_message", "video_sequence"]

@@ -426,6 +426,8 @@ class SessionView:
         self._photo: up.Photo | None = None
         self._video: VideoSequence | None = None
         self._uploads_begun = 0
+        self.gone = False
+        """The tab has disconnected: a video being lifted for it stops (:meth:`_load_video`)."""
         """Uploads this tab has begun, numbered from 1 (:meth:`_superseded`)."""
         self._upload_shown = 0
         """The number of the latest upload shown: one begun before it and finished after is not shown."""
@@ -1981,7 +1983,7 @@ class SessionView:
                 name, content, key=upload_key(self.app.next_upload_id(), up.safe_name(name)), photo=self._photo,
                 max_bytes=self.app.max_upload_bytes, estimator=self.app.estimator,
                 lifter=self.app.pool.get(self.state.model), detect_lock=self.app.detect_lock,
-                min_score=self._min_score())
+                min_score=self._min_score(), on_wait=self._waiting_note(up.safe_name(name)))
         except up.UploadFailed as exc:
             with self.lock:
                 kept = self._uploads_begun == mine  # (the photo a later keypoint file is drawn on: not a stale one's)
@@ -2002,6 +2004,16 @@ class SessionView:
             self._last_upload = sample
         self.show_message(up.upload_message(sample), keep=True)
 
+    def _waiting_note(self, name: str) -> Callable[[], None]:
+        """What an upload that waits for the detector (another upload's, maybe another tab's) shows meanwhile."""
+        def note() -> None:
+            with self._status_lock:
+                self.gui.readout.status.content = (f"⏳ {name}: waiting for the detector: another upload (of this tab "
+                                                   "or another) is being lifted")
+                self._status_notes = [q for q in self._status_notes if q.keep]
+                self._note_until = 0.0
+        return note
+
     def _load_video(self, name: str, content: bytes, *, mine: int, since: float) -> None:
         """A video or keypoint sequence: lifted with a progress note (one notification, updated), then shown."""
         nm = up.safe_name(name)
@@ -2012,6 +2024,8 @@ class SessionView:
         last = [0.0]
 
         def progress(done: int, total: int | None) -> None:
+            if self.gone:  # (a security review: a closed tab's video held the shared detector to its end)
+                raise up.UploadRefused(f"{nm}: the tab was closed; lifting stopped")
             now = time.perf_counter()
             if now - last[0] < 0.5:
                 return
@@ -2029,7 +2043,8 @@ class SessionView:
             seq = vid.video_sequence(name, content, key=video_key(self.app.next_upload_id(), nm),
                                      lifter=self.app.pool.get(self.state.model), estimator=self.app.estimator,
                                      max_bytes=self.app.max_upload_bytes, detect_lock=self.app.detect_lock,
-                                     progress=progress, photo=self._photo, min_score=self._min_score())
+                                     progress=progress, photo=self._photo, min_score=self._min_score(),
+                                     on_wait=self._waiting_note(nm))
         finally:
             if note is not None:
                 note.remove()
@@ -2186,6 +2201,7 @@ class PoseLifterApp:
         with self._lock:
             view = self.views.pop(client.client_id, None)
         if view is not None:
+            view.gone = True
             view.stop_playback(wait=False)
 
     def estimator(self) -> Any:

@@ -312,7 +312,23 @@ def drag_callback(node: Any) -> Callable[[Any], None]:
 
 
 LOOPBACK_NAMES: frozenset[str] = frozenset({"127.0.0.1", "localhost", "::1"})
-"""Host names a server bound to a loopback address answers to (:func:`guard_requests`)."""
+"""Host names a server bound to a loopback address answers to (:func:`guard_requests`), with every other address
+:func:`is_loopback` takes (127.0.0.0/8)."""
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` (a name or an address, IPv6 with or without brackets) is this machine's loopback: ``localhost``
+    or an address in 127.0.0.0/8 or ``::1`` (a security review: a server bound to 127.0.0.2 was taken for a public one,
+    and its Host check was off)."""
+    import ipaddress
+
+    h = str(host).strip().strip("[]").lower()
+    if h in LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(h).is_loopback
+    except ValueError:
+        return False
 
 
 def _host_name(value: str) -> str:
@@ -331,7 +347,7 @@ def request_refusal(headers: Any, *, loopback: bool) -> str | None:
     from urllib.parse import urlsplit
 
     host = headers.get("Host", "") or ""
-    if loopback and _host_name(host) not in LOOPBACK_NAMES:
+    if loopback and not is_loopback(_host_name(host)):
         return f"Host {host!r} is not this machine's loopback name (open the app at http://127.0.0.1:PORT)"
     if (headers.get("Upgrade", "") or "").lower() == "websocket":
         origin = headers.get("Origin")
@@ -361,7 +377,7 @@ def guard_requests() -> bool:
 
     def serve(handler: Any, host: Any = None, port: Any = None, *args: Any, process_request: Any = None,
               **kwargs: Any) -> Any:
-        loopback = str(host).strip("[]").lower() in LOOPBACK_NAMES
+        loopback = is_loopback(str(host))
 
         def check(connection: Any, request: Any) -> Any:
             why = request_refusal(request.headers, loopback=loopback)

@@ -84,6 +84,14 @@ def check_max_side(max_side: int, *, name: str = "max_side") -> None:
 
 MAX_IMAGE_PIXELS: Final[int] = 400_000_000
 """Larger images (e.g. decompression bombs) are refused without decoding them."""
+MAX_DECODE_BYTES: Final[int] = 1 << 30
+"""An image whose decoding would take more memory than this (its pixels at the size it is decoded at, in Pillow's
+layout for its mode, and the copies its conversion to 8-bit RGB makes) is refused before it is decoded: a security
+review's 389-KB palette PNG of 20000 x 19999 px took 3.7 GB, a grey-and-alpha one 4.8 GB. JPEGs decode at reduced
+size, so any JPEG within :data:`MAX_IMAGE_PIXELS` passes; a 400-MP 8-bit grey PNG does, an RGB PNG up to 268 MP."""
+_DECODE_LOCK = threading.Lock()
+"""One image decoded at a time in a process (the app decodes uploads on viser's thread pool: three at once took
+three times the memory, a security review)."""
 
 
 FULL_FRAME_DIAGONAL_MM: Final[float] = math.hypot(36.0, 24.0)
@@ -423,7 +431,24 @@ def _to_rgb8(img: Any, *, max_side: int | None = None) -> Any:
         rgba = fit(img if img.mode == "RGBA" else img.convert("RGBA"))
         bg = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
         return Image.alpha_composite(bg, rgba).convert("RGB")
-    return fit(img) if img.mode == "RGB" else fit(img.convert("RGB"))
+    if img.mode in ("RGB", "L"):  # (downscaled in their own mode: no full-size RGB copy of a grey image)
+        return fit(img).convert("RGB")
+    return fit(img.convert("RGB"))
+
+
+def _decode_bytes(mode: str, width: int, height: int) -> int:
+    """About the memory (bytes) that decoding a ``width x height`` px image of Pillow ``mode`` and converting it to
+    8-bit RGB (:func:`_to_rgb8`) takes at its peak: Pillow keeps 1 byte a pixel for ``1``, ``L`` and ``P``, 2 for
+    16-bit greyscale, 4 for every other mode (RGB too), and the conversion adds a full-size 8-bit copy (16-bit and
+    32-bit greyscale) or a 4-byte one (alpha other than RGBA's, and modes Pillow converts before downscaling)."""
+    layout = 1 if mode in ("1", "L", "P") else 2 if mode.startswith("I;16") else 4
+    if mode.startswith("I;16") or mode in ("I", "F"):
+        extra = 1
+    elif mode in ("RGB", "L", "RGBA"):
+        extra = 0
+    else:  # (LA, PA, P, 1, CMYK, YCbCr, ...: converted at full size)
+        extra = 4
+    return width * height * (layout + extra)
 
 
 def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE_PX,
@@ -454,15 +479,31 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
             if W0 * H0 > max_pixels:
                 raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP), more than the "
                                  f"{max_pixels / 1e6:.0f} MP this tool decodes; downscale it first")
-            exif = ExifCamera.from_pil(img)
-            orientation = 1
-            try:
-                orientation = int(img.getexif().get(0x0112, 1))
-            except Exception:  # noqa: BLE001
-                pass
             if max(W0, H0) > max_side and img.format == "JPEG":
                 img.draft("RGB", (max(1, W0 * max_side // max(W0, H0)), max(1, H0 * max_side // max(W0, H0))))
-            img.load()
+            need = _decode_bytes(img.mode, *img.size)  # (at the size it decodes at: a JPEG's reduced one)
+            if need > MAX_DECODE_BYTES:  # (before the EXIF: Pillow decodes a whole PNG to look for its eXIf chunk)
+                raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP, Pillow mode {img.mode}); "
+                                 f"decoding it would take about {need / 2**30:.1f} GiB of memory, more than the "
+                                 f"{MAX_DECODE_BYTES / 2**30:.0f} GiB this tool allows: save it as a JPEG or "
+                                 "downscale it first")
+            _DECODE_LOCK.acquire()
+            try:
+                exif = ExifCamera.from_pil(img)
+                orientation = 1
+                try:
+                    orientation = int(img.getexif().get(0x0112, 1))
+                except Exception:  # noqa: BLE001
+                    pass
+                img.load()
+                if orientation in (5, 6, 7, 8):
+                    W0, H0 = H0, W0
+                if 2 <= orientation <= 8:  # (1: upright; others are not orientations: an EXIF of 99 was "noted")
+                    img = ImageOps.exif_transpose(img)
+                    notes.append(f"rotated upright per EXIF orientation {orientation}")
+                img = _to_rgb8(img, max_side=max_side)  # (downscaled there, before the RGB copy)
+            finally:
+                _DECODE_LOCK.release()
     except ImageError:
         raise
     except UnidentifiedImageError:
@@ -472,12 +513,6 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
         raise ImageError(f"{p}: not an image (or a format this tool cannot read){hint}") from None
     except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise ImageError(f"{p}: unreadable or truncated image ({exc})") from None
-    if orientation in (5, 6, 7, 8):
-        W0, H0 = H0, W0
-    if 2 <= orientation <= 8:  # (1: upright; others are not orientations: an EXIF value of 99 was "noted" as done)
-        img = ImageOps.exif_transpose(img)
-        notes.append(f"rotated upright per EXIF orientation {orientation}")
-    img = _to_rgb8(img, max_side=max_side)  # (downscaled there, before the RGB copy)
     w, h = img.size
     scale = w / W0
     if scale < 1.0:

@@ -168,6 +168,10 @@ DEFAULT_MAX_SECONDS: Final[float] = 600.0
 DEFAULT_MAX_PEOPLE: Final[int] = 3
 """People looked for per image / frame by default (the largest are kept)."""
 
+MAX_FRAME_PIXELS: Final[int] = 40_000_000
+"""A video whose frames are larger than this (px; 8K DCI is 35 MP) is refused before its frames are decoded: a
+security review's 3-MiB video of 16000 x 16000 px frames took 4.1 GB."""
+
 DEFAULT_SEARCH_EVERY_S: Final[float] = 0.5
 """Videos: the whole frame is searched for (new) people at least this often, in seconds."""
 
@@ -1256,6 +1260,12 @@ def _frame_limit(max_seconds: float, fps: float, *, where: Any, what: str,
     return limit
 
 
+def _check_frame_pixels(width: int, height: int, *, where: Any) -> None:
+    if width * height > MAX_FRAME_PIXELS:
+        raise VideoError(f"{where}: its frames are {width} x {height} px ({width * height / 1e6:.0f} MP), more than "
+                         f"the {MAX_FRAME_PIXELS / 1e6:.0f} MP this tool decodes; downscale the video first")
+
+
 def _check_common(smoothing: float, max_people: int, max_seconds: float) -> None:
     PoseSmoother(smoothing)
     if max_people < 1:
@@ -1273,8 +1283,12 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                progress: Callable[[int, int | None], None] | None = None,
                on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
                fps: float | None = None, video_fps: float | None = None,
-               rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE) -> SequenceRecord:
-    """Detect, lift, track and smooth everyone in a video file (module docstring). ``min_score``: detections whose
+               rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE,
+               max_frames: int | None = None) -> SequenceRecord:
+    """Detect, lift, track and smooth everyone in a video file (module docstring). ``max_frames``: lift at most this
+    many frames from the start, within ``max_seconds`` (None: no bound but the duration; the app's, whose duration
+    bound alone let a 1000-frames/s clip hold its detector for minutes). Frames larger than :data:`MAX_FRAME_PIXELS`
+    are refused. ``min_score``: detections whose
     mean joint score is below it are left out, frame by frame, as no person (:data:`lifter.detect.MIN_PERSON_SCORE`,
     :func:`lifter.detect.detect_people`; 0 keeps every one). ``rejoin_s``: how long (s) after
     their last sighting a person found again where their 3D root leads keeps their track (:data:`REJOIN_MAX_S`; 0:
@@ -1298,6 +1312,9 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
     spin beside MediaPipe's own threads cost more than they give (see the README's timings).
     """
     check_max_side(max_side)  # (up front: not as the same error for every frame)
+    if max_frames is not None and (isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer))
+                                   or max_frames < 1):
+        raise PoseLifterError(f"max_frames must be a whole number >= 1 (or None), got {max_frames!r}")
     check_rejoin_s(rejoin_s)
     check_frame_rate(fps, name="fps (--fps)")
     check_frame_rate(video_fps, name="video_fps (--video-fps)")
@@ -1307,7 +1324,7 @@ def lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, foc
                            fov_deg=fov_deg, smoothing=smoothing, max_people=max_people, max_seconds=max_seconds,
                            max_side=max_side, flip_test=flip_test, search_every_s=search_every_s, progress=progress,
                            on_frame=on_frame, cli_options=cli_options, given_fps=fps, video_fps=video_fps,
-                           rejoin_s=rejoin_s, min_score=min_score)
+                           rejoin_s=rejoin_s, min_score=min_score, max_frames=max_frames)
 
 
 class limit_blas_threads:  # noqa: N801 -- a context manager, named like one
@@ -1338,7 +1355,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                 progress: Callable[[int, int | None], None] | None,
                 on_frame: Callable[[int, np.ndarray], None] | None = None, cli_options: bool = True,
                 given_fps: float | None = None, video_fps: float | None = None,
-                rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE) -> SequenceRecord:
+                rejoin_s: float = REJOIN_MAX_S, min_score: float = MIN_PERSON_SCORE,
+                max_frames: int | None = None) -> SequenceRecord:
     import cv2
 
     from .pipeline import detected_sideways_notes, plausibility_notes, resolve_camera
@@ -1354,6 +1372,8 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
     try:
         if not cap.isOpened():
             raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")
+        _check_frame_pixels(int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0),
+                            where=p)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
         warnings: list[str] = []
         noted: set[int] = set()  # frames whose lift had notes (said once tracked: tracked_output_notes)
@@ -1373,10 +1393,15 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
                                                             "header, slow motion)" if cli_options else ""))
         declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         limit = _frame_limit(max_seconds, fps, where=p, what="video", error=VideoError)
-        total = min(declared, limit) if declared > 0 else None
-        if declared > limit:
+        if max_frames is not None and max_frames < limit:
+            if declared > max_frames:
+                warnings.append(f"the video holds {declared} frames ({fps:g} frames/s); only its first {max_frames} "
+                                f"({max_frames / fps:.1f} s) are lifted (at most {max_frames} frames)")
+            limit = max_frames
+        elif declared > limit:
             warnings.append(f"the video is {declared / fps:.1f} s long; only its first {max_seconds:g} s "
                             f"({limit} frames) are lifted (the duration bound, --max-seconds)")
+        total = min(declared, limit) if declared > 0 else None
         frames: list[FrameResult] = []
         bad: list[dict[str, Any]] = []
         nobody: list[int] = []
@@ -1413,6 +1438,7 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             failures_in_a_row = 0
             H, W = bgr.shape[:2]
             if size is None:
+                _check_frame_pixels(W, H, where=p)  # (a header may say less than the frames hold)
                 size = (W, H)
                 f, src, pp, notes = resolve_camera(
                     user_focal=None if focal is None else as_pair(focal, name="focal", positive=True, scalar=True),

@@ -2996,6 +2996,13 @@ def test_start_lines_say_a_busy_port_and_where_human36m_was_looked_for(monkeypat
     assert same == [f"poselifter app: http://127.0.0.1:8081  (Human3.6M: {tmp_path.resolve()}; models: "
                     "['universal_far'])"]
     assert "off (--no-h36m)" in start_lines(requested_port=0, actual_port=43210, h36m=None, no_h36m=True, **kw)[0]
+    # bound beyond this machine: said (a security review: --host 0.0.0.0 started without a word); loopback: not
+    wide = start_lines(requested_port=8081, actual_port=8081, h36m=None, no_h36m=True, host="0.0.0.0", **kw)
+    assert wide[0] == ("warning: --host 0.0.0.0 lets anyone who can reach this machine on port 8081 use the app and "
+                       "upload files to it (it has no login); leave --host out to serve this machine only")
+    for host in ("127.0.0.1", "127.0.0.2", "localhost", "::1"):
+        assert not any(line.startswith("warning") for line in start_lines(
+            requested_port=8081, actual_port=8081, h36m=None, no_h36m=True, host=host, **kw))
 
 
 def test_a_busy_port_is_named_when_the_app_takes_the_next(tmp_path) -> None:

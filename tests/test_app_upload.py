@@ -1458,3 +1458,10 @@ def test_the_server_refuses_pages_of_other_sites_and_other_host_names():
     assert request_refusal({**ws, "Origin": "http://lab-pc:8080"}, loopback=False) is None
     assert request_refusal({**ws, "Origin": "http://evil.example.com"}, loopback=False) is not None
     assert request_refusal({"Host": "[::1]:8080"}, loopback=True) is None
+    # any address of 127.0.0.0/8 is this machine's (a security review: --host 127.0.0.2 turned the Host check off)
+    from poselifter_app.viser_hooks import is_loopback
+
+    assert all(is_loopback(h) for h in ("127.0.0.2", "127.1.2.3", "localhost", "::1", "[::1]", "LOCALHOST"))
+    assert not any(is_loopback(h) for h in ("0.0.0.0", "192.168.1.5", "lab-pc", "127.0.0.1.evil.example", "::"))
+    assert request_refusal({"Host": "127.0.0.2:8080"}, loopback=True) is None
+    assert request_refusal({"Host": "127.0.0.2.nip.io:8080"}, loopback=True) is not None

@@ -183,6 +183,39 @@ def test_bad_videos_keep_the_tab(server, tmp_path: Path) -> None:
     assert v.state.sample.key == key and v.sequence() is None
 
 
+def test_a_video_waiting_for_the_detector_says_so_and_a_closed_tab_s_video_stops(server, tmp_path: Path) -> None:
+    """A security review: a photo waited minutes behind another tab's video with nothing said, and a closed tab's
+    video went on holding the detector every tab shares to its last frame."""
+    import threading
+
+    est = ScriptedEstimator(_script(8), full_width=W)
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: est)
+    v = app.headless_view()
+    clip = _clip(tmp_path / "walk.avi", 8)
+    key = v.state.sample.key
+    shown: list[str] = []
+    app.detect_lock.acquire()  # (another tab's upload is being lifted)
+    try:
+        done = threading.Thread(target=v.load_upload, args=("walk.avi", clip))
+        done.start()
+        assert wait_for(lambda: "waiting for the detector" in v.gui.readout.status.content)
+        shown.append(v.gui.readout.status.content)
+    finally:
+        app.detect_lock.release()
+    done.join(timeout=60)
+    assert "⏳ walk.avi: waiting for the detector: another upload (of this tab or another) is being lifted" == shown[0]
+    assert v.sequence() is not None and len(v.sequence().frames) == 8  # (then lifted)
+    # the tab goes: its video stops at the next frame, and the tab's state is left as it was
+    v2 = app.headless_view()
+    key2 = v2.state.sample.key
+    v2.gone = True
+    est.n = 0
+    assert v2.load_upload("walk2.avi", clip) is False
+    assert "walk2.avi: the tab was closed; lifting stopped" in v2.messages[-1]
+    assert v2.state.sample.key == key2 and est.n <= 1
+    assert key != v.state.sample.key
+
+
 def test_a_misnamed_photo_or_video_upload_is_shown_as_what_it_holds(server, tmp_path: Path) -> None:
     """A browser trial: a JPEG renamed .mp4 played as a one-frame video, and a video named .jpg was refused as "not an
     image". Each is now shown as what its bytes hold, and the upload's message says so."""

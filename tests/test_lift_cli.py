@@ -8,6 +8,7 @@ import io
 import json
 import math
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -622,6 +623,46 @@ def test_huge_images_are_downscaled_or_refused(tmp_path):
         load_image(p, max_pixels=1_000_000)
     a = image_from_array(np.zeros((100, 5000, 3), np.uint8), max_side=1000)
     assert a.size == (5000, 100) and a.rgb.shape[1] == 1000
+
+
+def _png_header_only(path: Path, width: int, height: int, *, bit_depth: int, colour_type: int,
+                     palette: bool = False) -> Path:
+    """A PNG that declares ``width x height`` px and holds one tiny IDAT (a decompression bomb's header, written
+    without making its pixels)."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    body = chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, 0))
+    if palette:
+        body += chunk(b"PLTE", b"\x00\x00\x00\xff\xff\xff") + chunk(b"tRNS", b"\x00")
+    body += chunk(b"IDAT", zlib.compress(b"\x00" * 64)) + chunk(b"IEND", b"")
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + body)
+    return path
+
+
+def test_an_image_whose_decoding_would_take_too_much_memory_is_refused_before_it(tmp_path):
+    """A security review: small PNGs of 20000 x 19999 px took 2.1-4.8 GB to decode (a 389-KB palette PNG 3.7 GB),
+    within the 400-MP limit, and three uploads at once took three times that. Refused by the memory its mode takes in
+    Pillow, before anything is decoded (or the EXIF read, which decodes a whole PNG); JPEGs decode at reduced size."""
+    from lifter.detect import MAX_DECODE_BYTES, _decode_bytes
+
+    assert _decode_bytes("L", 20000, 20000) == 400_000_000 <= MAX_DECODE_BYTES  # (downscaled in its own mode)
+    assert _decode_bytes("RGB", 20000, 20000) == 1_600_000_000 > MAX_DECODE_BYTES  # (Pillow: 4 bytes a pixel)
+    assert _decode_bytes("P", 20000, 20000) == 2_000_000_000  # (converted to RGB or RGBA at full size)
+    assert _decode_bytes("I;16", 20000, 20000) == 1_200_000_000
+    for name, depth, colour, pal, mode in (("p.png", 8, 3, True, "P"), ("la.png", 8, 4, False, "LA"),
+                                           ("rgba.png", 8, 6, False, "RGBA"), ("g16.png", 16, 0, False, "I;16")):
+        bomb = _png_header_only(tmp_path / name, 20000, 19999, bit_depth=depth, colour_type=colour, palette=pal)
+        with pytest.raises(ImageError, match=rf"20000 x 19999 px \(400 MP, Pillow mode {re.escape(mode)}\); "
+                                             r"decoding it would take about [\d.]+ GiB of memory, more than the 1 GiB"):
+            load_image(bomb)
+    # within the memory bound: decoded (this one's data is cut short: named as truncated, not as too large)
+    grey = _png_header_only(tmp_path / "grey.png", 12000, 11999, bit_depth=8, colour_type=0)
+    with pytest.raises(ImageError, match="unreadable or truncated image"):
+        load_image(grey)
 
 
 class _StubEstimator:

@@ -457,6 +457,30 @@ def test_track_doubt_notes_ranks_joints_and_caps_the_list():
         track_doubt_notes(frames, max_joints=0)
 
 
+def test_video_frame_count_and_frame_size_bounds(tmp_path, lifter, monkeypatch):
+    """A security review: a 1000-frames/s clip of 20,000 frames was taken within the app's 20 s and held its shared
+    detector for minutes, and a 3-MiB video of 16000 x 16000 px frames took 4.1 GB. ``max_frames`` bounds the first
+    (the app's VIDEO_MAX_FRAMES), with a note; frames beyond MAX_FRAME_PIXELS are refused by name before any is
+    decoded (the header's size) or after the first (a header that says less)."""
+    import lifter.video as lv
+
+    clip = _write_clip(tmp_path / "c.avi", 30, fps=10.0)
+    rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_frames=12)
+    assert len(rec.frames) == 12
+    assert "the video holds 30 frames (10 frames/s); only its first 12 (1.2 s) are lifted (at most 12 frames)" \
+        in rec.warnings, rec.warnings
+    for bad in (0, 2.5, True):
+        with pytest.raises(PoseLifterError, match="max_frames must be a whole number >= 1"):
+            lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_frames=bad)
+    monkeypatch.setattr(lv, "MAX_FRAME_PIXELS", W * H - 1)
+    with pytest.raises(VideoError, match=rf"its frames are {W} x {H} px \(\d+ MP\), more than the 0 MP this tool "
+                                         "decodes; downscale the video first"):
+        lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F)
+    from poselifter_app.video import VIDEO_MAX_FRAMES
+
+    assert VIDEO_MAX_FRAMES <= 1200  # (20 s at 60 frames/s)
+
+
 def test_video_max_people_and_duration_bound(tmp_path, lifter):
     clip = _write_clip(tmp_path / "c.avi", 30, fps=10.0)
     rec = lift_video(clip, lifter=lifter, estimator=ScriptedEstimator(_script(30)), focal=F, max_people=1,
