@@ -400,7 +400,8 @@ def compute_frame(state: SessionState, lifter: Lifter, error_model: ErrorModelLi
                                              relative=res.relative[0], focal=f, misfit_cause=misfit_cause(state)),
                                          *(focal_said := [
                                              *wide_view_caution(noisy, focal=f, camera_focal=cam.alpha,
-                                                                input_space=used.input_space),
+                                                                input_space=used.input_space,
+                                                                camera_focal_known=camera_focal_known(state)),
                                              *short_focal_caution(focal=f, camera_focal=cam.alpha,
                                                                   input_space=used.input_space,
                                                                   camera_focal_known=camera_focal_known(state))]),
@@ -519,13 +520,15 @@ def bone_cause(state: SessionState) -> str:
 
 
 def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
-                      input_space: Literal["pixel", "camera"] = "camera") -> list[str]:
+                      input_space: Literal["pixel", "camera"] = "camera",
+                      camera_focal_known: bool = True) -> list[str]:
     """The readout's caution when the 2D pose ``(17, 2)`` px spans more than
     :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at the focal length in use ``focal`` (px): no camera sees a
     whole person that wide, so a lifter that reads the 2D through the focal (``input_space="camera"``, the default)
     leaves what its networks learned and bends (a teacher's slider at 100 px: PA-MPJPE over 200 mm); a pixel-space
     model (the paper's) lifts the same pose at every focal, and only its depth follows (a user trial: the caution
-    said it bent). The camera's own focal length ``camera_focal`` (px) is named."""
+    said it bent). The camera's own focal length ``camera_focal`` (px) is named, or, where it was only assumed from the
+    image size (``camera_focal_known=False``), named as that assumption (a trial read a 65° guess as the camera's)."""
     from lifter.camera import MAX_PLAUSIBLE_VIEW_DEG, focal_alpha, pose_view_deg, view_deg_text
 
     view = float(pose_view_deg(np.asarray(keypoints, np.float64), focal))
@@ -536,7 +539,8 @@ def wide_view_caution(keypoints: np.ndarray, *, focal: Any, camera_focal: float,
             "the depth follows the slider")
     return [f"at {float(focal_alpha(focal)):.0f} px this 2D pose spans {view_deg_text(view)}° of view (a whole person "
             f"rarely spans more than {MAX_PLAUSIBLE_VIEW_DEG:.0f}°, even through an ultra-wide lens): {what}; the "
-            f"camera's own focal length is {camera_focal:.0f} px"]
+            + (f"camera's own focal length is {camera_focal:.0f} px" if camera_focal_known else
+               f"focal length assumed for this image (its camera's is not known) is {camera_focal:.0f} px")]
 
 
 def edge_caution(state: SessionState) -> list[str]:

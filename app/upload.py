@@ -596,7 +596,7 @@ def kept_photo_note(photo: Photo) -> str:
     w, h = photo.size
     return (f"The photo ({w} x {h} px) stays the one a keypoint JSON uploaded next is drawn on where its 2D is in the "
             "photo's pixels (with the photo's EXIF focal length where the file gives none), for 2D of your own, until "
-            "another photo is uploaded")
+            f"another photo is uploaded; this one, {photo.name}, not the one still shown")
 
 
 class DetectorMissing(UploadFailed):

@@ -1260,6 +1260,43 @@ def _frame_limit(max_seconds: float, fps: float, *, where: Any, what: str,
     return limit
 
 
+def _iso_media_damage(path: Path) -> str | None:
+    """Why an MP4 / QuickTime file (ISO base media: a chain of boxes, ``ftyp`` first) that OpenCV cannot open is
+    damaged, read from its top-level boxes: one running past the end of the file (cut short) or no ``moov`` box (the
+    index a player needs, which a recording writes last). None: not such a file, or its boxes are whole (an app
+    trial's MP4 cut short was said to be "not a video, or a codec OpenCV cannot decode")."""
+    import struct
+
+    try:
+        size = path.stat().st_size
+        with path.open("rb") as fh:
+            head = fh.read(12)
+            if len(head) < 12 or head[4:8] != b"ftyp":
+                return None
+            boxes, at = [], 0
+            while at + 8 <= size and len(boxes) < 10_000:
+                fh.seek(at)
+                n, kind = struct.unpack(">I4s", fh.read(8))
+                if n == 1:
+                    n = struct.unpack(">Q", fh.read(8))[0]
+                elif n == 0:
+                    n = size - at
+                if n < 8:
+                    return "an MP4 / QuickTime file whose structure is damaged"
+                boxes.append(kind)
+                if at + n > size:
+                    return (f"an MP4 / QuickTime file cut short: its '{kind.decode('latin-1')}' box runs "
+                            f"{at + n - size} bytes past the end of the file, as an interrupted download or recording "
+                            "leaves it")
+                at += n
+    except OSError:
+        return None
+    if b"moov" not in boxes:
+        return ("an MP4 / QuickTime file without its index (no 'moov' box, which a recording writes last): cut short "
+                "or not finished")
+    return None
+
+
 def _check_frame_pixels(width: int, height: int, *, where: Any) -> None:
     if width * height > MAX_FRAME_PIXELS:
         raise VideoError(f"{where}: its frames are {width} x {height} px ({width * height / 1e6:.0f} MP), more than "
@@ -1371,7 +1408,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
         cap = cv2.VideoCapture(str(p))
     try:
         if not cap.isOpened():
-            raise VideoError(f"{p}: cannot open as a video (not a video, or a codec OpenCV cannot decode)")
+            damage = _iso_media_damage(p)
+            raise VideoError(f"{p}: cannot open as a video " + (f"({damage})" if damage else
+                                                                 "(not a video, or a codec OpenCV cannot decode)"))
         _check_frame_pixels(int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0),
                             where=p)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)

@@ -1211,6 +1211,17 @@ def test_a_focal_so_short_the_pose_spans_too_wide_a_view_is_cautioned(view: Sess
     assert "bends" not in md
     view.reset_focal()
     assert "spans" not in view.gui.readout.readout.content
+    # a focal only assumed from the image size is not called the camera's own (an app trial: a photo without EXIF,
+    # its 65° guess of 17759 px named "the camera's own focal length")
+    from poselifter_app.core import wide_view_caution
+
+    from lifter import demo_sample
+
+    kp = demo_sample("walking").keypoints_2d
+    known = wide_view_caution(kp, focal=100.0, camera_focal=800.0)
+    guessed = wide_view_caution(kp, focal=100.0, camera_focal=800.0, camera_focal_known=False)
+    assert known[0].endswith("the camera's own focal length is 800 px"), known
+    assert guessed[0].endswith("the focal length assumed for this image (its camera's is not known) is 800 px"), guessed
 
 
 def test_a_focal_far_shorter_than_the_cameras_is_cautioned(view: SessionView) -> None:

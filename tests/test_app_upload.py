@@ -533,6 +533,8 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert v.load_upload("empty_room.jpg", _jpeg(rgb)) is False and "no person found" in v.messages[-1]
         # (a trial: that the refused photo stays the one a keypoint file is drawn on was not said)
         assert "The photo (800 x 600 px) stays the one a keypoint JSON uploaded next is drawn on" in v.messages[-1]
+        # (an app trial: the screen still showed the photo before, and "the photo" read as that one)
+        assert v.messages[-1].rstrip(".").endswith(", not the one still shown"), v.messages[-1]
         _assert_unchanged(v, snap)
         # a huge image: downscaled for detection, keypoints in full-resolution px, focal slider range follows
         est.people, est.full_width = [s.keypoints_2d * 4], 3200

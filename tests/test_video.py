@@ -824,6 +824,34 @@ def test_video_bad_and_resized_frames_are_reported_and_skipped(tmp_path, lifter,
     assert any("2 bad frame(s) skipped: 4, 5" in w for w in rec.warnings)
 
 
+def test_an_mp4_cut_short_is_said_to_be_cut_short(tmp_path, lifter):
+    """An app trial: the first 40 % of an MP4 was refused as "not a video, or a codec OpenCV cannot decode", which
+    points at codecs; a cut AVI got a clear note. The MP4's boxes say it is cut short (or has no index)."""
+    clip = tmp_path / "whole.mp4"
+    vw = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), 10.0, (W, H))
+    assert vw.isOpened()
+    for i in range(10):
+        vw.write(np.full((H, W, 3), 20 * i, np.uint8))
+    vw.release()
+    data = clip.read_bytes()
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(data[: int(0.4 * len(data))])
+    with pytest.raises(VideoError, match=r"cut.mp4: cannot open as a video \(an MP4 / QuickTime file cut short: its "
+                                         r"'mdat' box runs \d+ bytes past the end of the file"):
+        lift_video(cut, lifter=lifter, estimator=ScriptedEstimator(_script(10)), focal=F)
+    from lifter.video import _iso_media_damage
+
+    assert _iso_media_damage(clip) is None  # (a whole file: nothing said)
+    no_index = tmp_path / "no_index.mp4"  # (the boxes whole, the index left out)
+    ftyp_len = int.from_bytes(data[:4], "big")
+    no_index.write_bytes(data[:ftyp_len] + (16).to_bytes(4, "big") + b"free" + b"\0" * 8)
+    assert "without its index (no 'moov' box" in (_iso_media_damage(no_index) or "")
+    junk = tmp_path / "junk.mp4"
+    junk.write_bytes(b"\x00\x01 not a video" * 50)
+    with pytest.raises(VideoError, match=r"\(not a video, or a codec OpenCV cannot decode\)"):
+        lift_video(junk, lifter=lifter, estimator=ScriptedEstimator(_script(10)), focal=F)
+
+
 def _portrait_phone_clip(path: Path, n: int = 4) -> Path:
     """An MP4 stored 320 x 240 (landscape) with a 90 deg display matrix in its track header, as a phone writes a
     portrait video; a bright block in the stored frames' top-left corner shows which way is up."""
