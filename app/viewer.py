@@ -1221,7 +1221,11 @@ class SessionView:
             self.show_message(f"the joints you corrected on {gone_frames} frame{'s' if gone_frames != 1 else ''} of "
                               "the sequence shown before are dropped, as another upload is shown (download it first "
                               "to keep them)")
-        if follow_note is not None:
+        if follow_note is not None and self._since_typed("frame") < TYPING_SETTLE_S:
+            # (an app trial typed 35 and read "track 3 is not found in ... frame 3": each key loads a frame, and the
+            # note, said once, named the first key's; said once the typing settles, for the frame then shown)
+            self._later_once("follow", TYPING_SETTLE_S - self._since_typed("frame") + 0.05, self._say_follow_note)
+        elif follow_note is not None:
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
@@ -1277,6 +1281,18 @@ class SessionView:
         return st, self._followed, ((seq, tag), f"{tag} is not found in {sample.label}: showing {name}; {tag} is "
                                     "selected again in each frame that has them (said once; the download's warnings "
                                     "list the frames it is missing from)")
+
+    def _say_follow_note(self) -> None:
+        """The note of :meth:`_follow` on the frame shown, held while the frame box was typed, said now if the followed
+        person is still not in it (once per video and person, as when not typed)."""
+        with self.lock:
+            if self._since_typed("frame") < TYPING_SETTLE_S:
+                self._later_once("follow", TYPING_SETTLE_S - self._since_typed("frame") + 0.05, self._say_follow_note)
+                return
+            _, _, note = self._follow(self.state, self.state.sample)
+            if note is not None and note[0] not in self._gaps_said:
+                self._gaps_said.add(note[0])
+                self.show_message(note[1])
 
     def _say_no_detection(self) -> None:
         """:func:`poselifter_app.session.no_detection_note`, held while the frame box was typed, said now if the

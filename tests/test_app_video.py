@@ -634,6 +634,42 @@ def test_a_sequence_download_keeps_the_joints_dragged_on_its_frame(server) -> No
         assert a["people"] == b["people"]
 
 
+def test_the_not_found_note_names_the_frame_typed(server) -> None:
+    """An app trial typed 35 in the frame box and read "track 3 is not found in ... frame 3": each key loads a frame,
+    and the note (said once per video and person) named the first key's. It is said once the typing settles, for
+    the frame then shown; not at all when the person is in that frame."""
+    from poselifter_app.viewer import TYPING_SETTLE_S
+
+    app = PoseLifterApp(server, h36m_root=None, estimator_factory=lambda: None)
+    v = app.headless_view()
+    people = _script(40)
+    for i in (3, 35):
+        people[i] = people[i][1:]  # track 1 (the nearer person) not found in frames 3 and 35
+    frames = [{"people": [{"keypoints": p.tolist()} for p in pp]} for pp in people]
+    doc = {"fps": 10, "image_size": [W, H], "focal": F, "format": "h36m17", "frames": frames}
+    assert v.load_upload("two.json", json.dumps(doc).encode()) is True, v.messages[-3:]
+    assert v.state.sample.person_tag(v.state.person) == "track 1"
+    for value in (3, 35):  # typed key by key: "3", then "35"
+        v._note_key("frame")
+        v.gui.play.frame.value = value
+        assert wait_for(lambda value=value: v.state.sample.key.endswith(f"/{value}")), v.state.sample.key
+    assert not any("is not found" in m for m in v.messages)  # not yet: the box is being typed
+    assert wait_for(lambda: any("is not found" in m for m in v.messages), timeout=TYPING_SETTLE_S + 3)
+    said = [m for m in v.messages if "is not found" in m]
+    assert len(said) == 1 and "track 1 is not found in two.json frame 35" in said[0], said
+    # typed to a frame that has them: nothing said
+    v2 = app.headless_view()
+    assert v2.load_upload("two.json", json.dumps(doc).encode()) is True
+    for value in (3, 34):
+        v2._note_key("frame")
+        v2.gui.play.frame.value = value
+        assert wait_for(lambda value=value: v2.state.sample.key.endswith(f"/{value}")), v2.state.sample.key
+    import time
+
+    time.sleep(TYPING_SETTLE_S + 0.5)
+    assert not any("is not found" in m for m in v2.messages), v2.messages[-3:]
+
+
 def test_a_keypoint_sequence_s_person_picker_names_the_file_s_person_ids(server) -> None:
     """A browser trial: a keypoint sequence's person picker said "person 1 (track 1)", "person 2 (track 2)", not the
     file's own ``person_id``s, which the keypoint-file upload's picker shows ("person 1 (id 7)"). A track whose
