@@ -19,6 +19,7 @@ to ``assets/demo/`` (``samples.npz`` + one JPEG per sample); :func:`load_demo_sa
 
 from __future__ import annotations
 
+import io
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +29,7 @@ import numpy as np
 import trimesh
 
 from lifter.camera import image_centre, project, project_generic, world_to_camera
+from lifter.io import write_atomic
 from lifter.skeleton import EDGES, JOINT_NAMES, NUM_JOINTS
 
 DEMO_DIR = Path(__file__).resolve().parent.parent / "assets" / "demo"
@@ -327,12 +329,17 @@ def write_demo_assets(out_dir: Path = DEMO_DIR, *, specs: tuple[DemoSpec, ...] =
     samples = [make_sample(s) for s in specs]
     for s in samples:
         path = out_dir / f"{s['name']}.jpg"
-        cv2.imwrite(str(path), cv2.cvtColor(s["image"], cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, 88])
+        ok, jpg = cv2.imencode(".jpg", cv2.cvtColor(s["image"], cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, 88])
+        if not ok:
+            raise RuntimeError(f"could not encode {path}")
+        write_atomic(path, jpg.tobytes())
         log(f"wrote {path}")
     keys = ("keypoints_2d", "pose_3d", "pose_world", "focal", "principal_point", "image_size", "R", "t")
     arrays = {k: np.stack([s[k] for s in samples]) for k in keys}
     arrays["names"] = np.array([str(s["name"]) for s in samples])
-    np.savez_compressed(out_dir / "samples.npz", **arrays)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    write_atomic(out_dir / "samples.npz", buf.getvalue())
     log(f"wrote {out_dir / 'samples.npz'}")
     return out_dir
 

@@ -90,7 +90,7 @@ def main() -> int:
     if not (demo / "annotations.npz").is_file():
         print(f"needs the Human3.6M demo frames at {demo}", file=sys.stderr)
         return 1
-    ann = np.load(demo / "annotations.npz", allow_pickle=True)
+    ann = np.load(demo / "annotations.npz")
     rng = np.random.default_rng(args.seed)
     estimators = {name: BlazePoseEstimator(max_people=max(args.people) + 1, window_aspect=a)
                   for name, a in RULES.items()}

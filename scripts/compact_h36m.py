@@ -18,14 +18,15 @@ never commit it.
 from __future__ import annotations
 
 import argparse
+import io
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 
 from lifter.data import COMPACT_FILE, default_h36m_dir
 from lifter.detections import SH_DETECTIONS_FILE
+from lifter.io import write_atomic
 
 KEEP_EVERY = 5
 TEST_SUBJECTS = ("S9", "S11")
@@ -53,14 +54,16 @@ def main() -> int:
     if args.out.resolve() == src.resolve():
         p.error(f"--out {args.out} is the Human3.6M folder itself: write the copy elsewhere")
     args.out.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(src / "cameras.json", args.out / "cameras.json")  # not the source's read-only mode
+    write_atomic(args.out / "cameras.json", (src / "cameras.json").read_bytes())  # not the source's read-only mode
     poses = np.load(src / "poses3d_world_17j_mm.npz")
     out = {}
     for k in poses.files:
         a = poses[k].copy()
         a[np.arange(len(a)) % every(k) != 0] = 0
         out[k] = a
-    np.savez_compressed(args.out / "poses3d_world_17j_mm.npz", **out)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **out)
+    write_atomic(args.out / "poses3d_world_17j_mm.npz", buf.getvalue())
     det = np.load(src / SH_DETECTIONS_FILE)
     out = {}
     for k in det.files:
@@ -68,12 +71,14 @@ def main() -> int:
         if k.split("/")[0] in TEST_SUBJECTS:  # row i is frame i; training subjects are stored every 5th frame
             a[np.arange(len(a)) % args.test_every != 0] = np.nan
         out[k] = a
-    np.savez_compressed(args.out / SH_DETECTIONS_FILE, **out)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **out)
+    write_atomic(args.out / SH_DETECTIONS_FILE, buf.getvalue())
     # H36M(out) reads this and refuses frames that were dropped (they hold zeros, not poses)
     subjects = sorted({k.split("/")[0] for k in poses.files}, key=lambda s: int(s[1:]))
     keep: int | dict[str, int] = (args.train_every if args.train_every == args.test_every
                                   else {s: every(s) for s in subjects})
-    (args.out / COMPACT_FILE).write_text(json.dumps({"keep_every": keep}) + "\n")
+    write_atomic(args.out / COMPACT_FILE, json.dumps({"keep_every": keep}) + "\n")
     total = sum(f.stat().st_size for f in args.out.iterdir())
     print(f"wrote {args.out} ({total / 1e6:.1f} MB; frames kept: every {args.train_every} of the training subjects, "
           f"every {args.test_every} of S9 and S11)")

@@ -62,7 +62,7 @@ def main() -> int:
     from lifter.detect import detect_people, get_estimator, image_from_array
 
     demo = Path(data.root) / "demo"
-    ann = np.load(demo / "annotations.npz", allow_pickle=True)
+    ann = np.load(demo / "annotations.npz")
     f, c, dist = demo_intrinsics(demo_cameras(data, ann))
     est = get_estimator("blazepose", max_people=2)
     rows = []

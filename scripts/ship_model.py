@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 from pathlib import Path
 
 import torch
@@ -37,6 +36,7 @@ from lifter.checkpoint import sha256_file
 from lifter.data import H36M
 from lifter.detections import with_sh_detections
 from lifter.evaluate import evaluate_lifter
+from lifter.io import write_atomic
 from lifter.resources import assets_root
 
 EVALUATIONS = {"gt_clean_s5": ("gt", "clean", 5), "gt_clean_s50": ("gt", "clean", 50),
@@ -86,10 +86,10 @@ def main() -> None:
 
     def ship(src: Path, dst: Path) -> Path:
         """Copy a checkpoint and its learning curve (``.curve.json`` / ``.curve.png`` beside it, if any)."""
-        shutil.copyfile(src, dst)
+        write_atomic(dst, src.read_bytes())
         for ext in (".curve.json", ".curve.png"):
             if src.with_suffix(ext).is_file():
-                shutil.copyfile(src.with_suffix(ext), dst.with_suffix(ext))
+                write_atomic(dst.with_suffix(ext), src.with_suffix(ext).read_bytes())
         return dst
 
     dst = ship(args.checkpoint, weights / f"{args.name}.pt")

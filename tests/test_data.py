@@ -104,7 +104,7 @@ def test_missing_detections_are_named_by_sequence_and_camera(h36m):
 @requires_h36m
 def test_projection_with_distortion_matches_dataset_2d(h36m):
     """Our camera-frame 3D + distorted projection reproduces the 2D annotations shipped with the demo frames."""
-    ann = np.load(H36M_DIR / "demo" / "annotations.npz", allow_pickle=True)
+    ann = np.load(H36M_DIR / "demo" / "annotations.npz")
     for i in range(0, len(ann["image"]), 7):
         subject = int(str(ann["subject"][i]).lstrip("S"))
         c = h36m.camera(subject, str(ann["camera"][i]))
