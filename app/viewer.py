@@ -425,13 +425,13 @@ class SessionView:
         """Key of the last Human3.6M sample shown (coming back to Human3.6M goes back to that frame)."""
         self._photo: up.Photo | None = None
         self._video: VideoSequence | None = None
+        """The last uploaded video / keypoint sequence (its frames are the samples ``video/<id>/<name>/<i>``)."""
         self._uploads_begun = 0
-        self.gone = False
-        """The tab has disconnected: a video being lifted for it stops (:meth:`_load_video`)."""
         """Uploads this tab has begun, numbered from 1 (:meth:`_superseded`)."""
         self._upload_shown = 0
         """The number of the latest upload shown: one begun before it and finished after is not shown."""
-        """The last uploaded video / keypoint sequence (its frames are the samples ``video/<id>/<name>/<i>``)."""
+        self.gone = False
+        """The tab has disconnected: a video being lifted for it stops (:meth:`_load_video`)."""
         self.last_download: tuple[str, bytes] | None = None
         """``(file name, content)`` of the last download sent (or prepared, for a headless view)."""
         self.trail: dict[int, np.ndarray] = {}
@@ -580,6 +580,10 @@ class SessionView:
                           f"{up.safe_name(name)}: not uploaded: the app is receiving other uploads "
                           f"({held / 2**20:.0f} MiB still arriving, {app.upload_budget.max_bytes // 2**20} MiB in all "
                           "at most); upload it again in a moment (what is shown is unchanged)", error=True,
+                          title=UPLOAD_BUSY_TITLE),
+                      refuse_idle=lambda name, idle_s: self.show_message(
+                          f"{up.safe_name(name)}: upload dropped: nothing of it arrived for {idle_s} s (a connection "
+                          "lost?); upload it again (what is shown is unchanged)", error=True,
                           title=UPLOAD_BUSY_TITLE))
         g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
                                                                    g.files.upload.value.content)))

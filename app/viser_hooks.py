@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -37,41 +38,74 @@ log = logging.getLogger("poselifter.app")
 class UploadBudget:
     """The bytes that every tab of a server may hold in uploads still arriving, together (viser buffers each
     transfer until it is complete: a security review's eight raw connections, each with two unfinished 18-MiB
-    uploads, held 288 MB), and how long a transfer may go without a part before it is dropped. Shared by the
-    :func:`limit_uploads` hooks of a server's tabs."""
+    uploads, held 288 MB), and how long a transfer may go without a new part before it is dropped. Shared by the
+    :func:`limit_uploads` hooks of a server's tabs; thread-safe (tabs are built on viser's thread pool, messages
+    handled on its event loop)."""
 
     def __init__(self, *, max_bytes: int, idle_s: float = 60.0) -> None:
         import weakref
 
         self.max_bytes = int(max_bytes)
         self.idle_s = float(idle_s)
+        self._lock = threading.Lock()
         self._guis: weakref.WeakSet[Any] = weakref.WeakSet()
-        self._last_part: dict[str, float] = {}  # transfer -> time.monotonic() of its start or latest part
+        self._last_part: dict[str, tuple[float, Callable[[], None]]] = {}  # transfer -> (time of its start or latest
+        # new part, what tells its tab it is dropped)
 
     def add(self, gui: Any) -> None:
-        self._guis.add(gui)
+        with self._lock:
+            self._guis.add(gui)
+
+    def _states(self) -> list[dict[str, Any]]:
+        with self._lock:
+            return [gui._current_file_upload_states for gui in list(self._guis)]
 
     def held(self) -> int:
-        """Bytes buffered in unfinished uploads of every tab."""
-        return sum(int(st.get("transferred_bytes", 0)) for gui in list(self._guis)
-                   for st in list(gui._current_file_upload_states.values()))
+        """Bytes every tab's unfinished uploads hold or have announced, whichever is more (an upload is let start on
+        what it announces: a review's third upload, let start on what the others had received so far, was stopped
+        half-way)."""
+        return sum(held_by(st) for states in self._states() for st in list(states.values()))
 
-    def touch(self, transfer: str) -> None:
-        self._last_part[transfer] = time.monotonic()
+    def touch(self, transfer: str, dropped: Callable[[], None]) -> None:
+        """``transfer`` started or got a new part now; ``dropped()`` tells its tab if it is dropped for idling."""
+        with self._lock:
+            self._last_part[transfer] = (time.monotonic(), dropped)
 
     def drop_idle(self) -> None:
-        """Drop the transfers of every tab that have had no part for :attr:`idle_s` (a client that starts an upload and
-        never finishes it held its bytes until it disconnected)."""
+        """Drop the transfers of every tab that have had no new part for :attr:`idle_s` (a client that starts an upload
+        and never finishes it held its bytes until it disconnected), each with its ``dropped()``."""
         now = time.monotonic()
-        for gui in list(self._guis):
-            states = gui._current_file_upload_states
+        told: list[Callable[[], None]] = []
+        for states in self._states():
             for t in list(states):
-                if now - self._last_part.setdefault(t, now) > self.idle_s:
+                with self._lock:
+                    when, dropped = self._last_part.setdefault(t, (now, lambda: None))
+                if now - when > self.idle_s:
                     states.pop(t, None)
+                    told.append(dropped)
                     log.warning("upload %s dropped: no part for %.0f s", t, self.idle_s)
-        live = {t for gui in list(self._guis) for t in gui._current_file_upload_states}
-        for t in [t for t in self._last_part if t not in live]:
-            self._last_part.pop(t, None)
+        live = {t for states in self._states() for t in list(states)}
+        with self._lock:
+            for t in [t for t in self._last_part if t not in live]:
+                self._last_part.pop(t, None)
+        for dropped in told:
+            try:
+                dropped()
+            except Exception:  # noqa: BLE001
+                log.exception("could not tell a tab its upload was dropped")
+
+
+PART_COST_BYTES: int = 128
+"""What each part of an upload counts for beside its bytes: viser keeps about 114 bytes for every part, however
+small, so a review's 100,000 one-byte parts, counted as 100 KB, held 11 MiB (the browser sends 512-KiB parts). A
+transfer may cost :data:`PART_COST_BYTES` a part on top of the upload limit's bytes up to 1/64 of that limit."""
+
+
+def held_by(state: dict[str, Any]) -> int:
+    """What a transfer in viser's buffer holds, or announced (whichever is more): its bytes and
+    :data:`PART_COST_BYTES` a part."""
+    got = int(state.get("transferred_bytes", 0)) + PART_COST_BYTES * len(state.get("parts", ()))
+    return max(got, int(state.get("total_bytes", 0)))
 
 
 _NOT_HERE = "poselifter: refused"
@@ -81,7 +115,8 @@ control has this uuid)."""
 
 def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max_bytes: int,
                   refuse: Callable[[str, int], None], refuse_busy: Callable[[str, int], None],
-                  refuse_full: Callable[[str, int], None] | None = None, budget: UploadBudget | None = None,
+                  refuse_full: Callable[[str, int], None] | None = None,
+                  refuse_idle: Callable[[str, int], None] | None = None, budget: UploadBudget | None = None,
                   client_id: int | None = None, max_in_flight: int = 2) -> bool:
     """Bound what viser buffers for the uploads of ``gui`` (a tab's): uploads go through ``button`` only, each at
     most ``max_bytes``, at most ``max_in_flight`` at a time, and all tabs' together within ``budget``.
@@ -94,7 +129,10 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
     * An upload that starts while ``max_in_flight`` others through the button are still arriving is refused with
       ``refuse_busy(file name, max_in_flight)``.
     * An upload that would take every tab's unfinished uploads past ``budget.max_bytes`` is stopped with
-      ``refuse_full(file name, bytes held)``; transfers without a part for ``budget.idle_s`` are dropped.
+      ``refuse_full(file name, bytes held)`` (admitted on the sizes announced, counted on the bytes received where
+      more); a transfer without a new part for ``budget.idle_s`` is dropped, with ``refuse_idle(file name, seconds)``.
+    * Each part counts :data:`PART_COST_BYTES` on top of its bytes (viser keeps about 114 bytes a part, however
+      small): a transfer of many tiny parts is stopped once that passes the limit by 1/64.
 
     ``client_id``: only that client's messages (None: any). Install it before the button's callbacks can be used.
     Returns False when the hook could not be installed."""
@@ -128,6 +166,15 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
         if say is not None:
             say(name, size)
 
+    def idle_drop(transfer: str, name: str, total: int) -> Callable[[], None]:
+        def dropped() -> None:
+            mine.pop(transfer, None)
+            let.pop(transfer, None)
+            ack(transfer, total)
+            if refuse_idle is not None:
+                refuse_idle(name, int(budget.idle_s) if budget is not None else 0)
+        return dropped
+
     def on_start(cid: int, msg: Any) -> None:  # (before viser's handler, which makes the transfer's buffer)
         try:
             if client_id is not None and cid != client_id:
@@ -160,7 +207,7 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
             mine[msg.transfer_uuid] = msg.filename
             let[msg.transfer_uuid] = uuid
             if budget is not None:
-                budget.touch(msg.transfer_uuid)
+                budget.touch(msg.transfer_uuid, idle_drop(msg.transfer_uuid, msg.filename, msg.size_bytes))
         except Exception:  # noqa: BLE001 - never break viser's message loop
             log.exception("upload check failed")
             msg.source_component_uuid = _NOT_HERE
@@ -175,17 +222,21 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
                 return  # (viser ignores it too)
             if t not in let:  # (a transfer no hook let start: to another control, or begun before the hooks)
                 states.pop(t, None)
+                ack(t, int(state.get("total_bytes", 0)))
                 return
             if t not in mine:
                 return  # (another upload button's: its hook checks it)
             msg.source_component_uuid = uuid  # (viser gives the finished file to the control a part names)
             n = int(state.get("transferred_bytes", 0)) + len(msg.content)
-            if n > max_bytes:
-                stop(t, mine[t], n, int(state.get("total_bytes", n)), refuse)
-            elif budget is not None and budget.held() + len(msg.content) > budget.max_bytes:
-                stop(t, mine[t], budget.held(), int(state.get("total_bytes", n)), refuse_full)
-            elif budget is not None:
-                budget.touch(t)
+            total = int(state.get("total_bytes", 0))
+            before = held_by(state)
+            after = max(n + PART_COST_BYTES * (len(state.get("parts", ())) + 1), total)  # (with this part)
+            if n > max_bytes or after > max_bytes + max_bytes // 64:
+                stop(t, mine[t], max(n, after), total or n, refuse)
+            elif budget is not None and budget.held() - before + after > budget.max_bytes:
+                stop(t, mine[t], budget.held(), total or n, refuse_full)
+            elif budget is not None and msg.content and msg.part_index not in state.get("parts", {}):
+                budget.touch(t, idle_drop(t, mine[t], int(state.get("total_bytes", n))))  # (a new part: not idle)
         except Exception:  # noqa: BLE001
             log.exception("upload check failed")
             states.pop(msg.transfer_uuid, None)

@@ -451,13 +451,24 @@ def _decode_bytes(mode: str, width: int, height: int) -> int:
     return width * height * (layout + extra)
 
 
+_DECODED_ONCE: Final[frozenset[str]] = frozenset({"JPEG", "MPO", "PNG", "BMP", "GIF", "PPM", "TGA"})
+"""Formats Pillow decodes straight into the image's own memory. Others (WebP, AVIF, HEIF, TIFF, ...) pass through
+buffers of their own, measured at 2.5-4 times the image (a review: a 140-KB lossless WebP of 8000 x 8000 px took 976
+MiB), so :func:`load_image` counts them 4 times (:data:`MAX_DECODE_BYTES`)."""
+
+_ORIENTATION_TURN: Final[dict[int, str]] = {2: "FLIP_LEFT_RIGHT", 3: "ROTATE_180", 4: "FLIP_TOP_BOTTOM", 5: "TRANSPOSE",
+                                            6: "ROTATE_270", 7: "TRANSVERSE", 8: "ROTATE_90"}
+"""The PIL transpose that turns an image of each EXIF orientation upright (Pillow's ``ImageOps.exif_transpose``),
+applied after the downscale: a full-size copy of a large image turned upright doubled its memory (a review)."""
+
+
 def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE_PX,
                max_pixels: int = MAX_IMAGE_PIXELS) -> LoadedImage:
     """Open and decode an image file, apply the EXIF orientation and downscale it so that its longer
     side is at most ``max_side`` px (JPEGs are decoded at reduced size directly). Raises
     :class:`ImageError` with a clear message for a missing file, a file that is not an image, a
     truncated or corrupt one, or one with more than ``max_pixels`` pixels."""
-    from PIL import Image, ImageOps, UnidentifiedImageError
+    from PIL import Image, UnidentifiedImageError
 
     check_max_side(max_side)
     p = Path(path)
@@ -479,9 +490,11 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
             if W0 * H0 > max_pixels:
                 raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP), more than the "
                                  f"{max_pixels / 1e6:.0f} MP this tool decodes; downscale it first")
-            if max(W0, H0) > max_side and img.format == "JPEG":
+            if max(W0, H0) > max_side and img.format in ("JPEG", "MPO"):  # (MPO: a JPEG with more pictures)
                 img.draft("RGB", (max(1, W0 * max_side // max(W0, H0)), max(1, H0 * max_side // max(W0, H0))))
             need = _decode_bytes(img.mode, *img.size)  # (at the size it decodes at: a JPEG's reduced one)
+            if img.format not in _DECODED_ONCE:
+                need *= 4
             if need > MAX_DECODE_BYTES:  # (before the EXIF: Pillow decodes a whole PNG to look for its eXIf chunk)
                 raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP, Pillow mode {img.mode}); "
                                  f"decoding it would take about {need / 2**30:.1f} GiB of memory, more than the "
@@ -496,12 +509,12 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
                 except Exception:  # noqa: BLE001
                     pass
                 img.load()
+                img = _to_rgb8(img, max_side=max_side)  # (downscaled there, before the RGB copy)
                 if orientation in (5, 6, 7, 8):
                     W0, H0 = H0, W0
                 if 2 <= orientation <= 8:  # (1: upright; others are not orientations: an EXIF of 99 was "noted")
-                    img = ImageOps.exif_transpose(img)
+                    img = img.transpose(getattr(Image.Transpose, _ORIENTATION_TURN[orientation]))
                     notes.append(f"rotated upright per EXIF orientation {orientation}")
-                img = _to_rgb8(img, max_side=max_side)  # (downscaled there, before the RGB copy)
             finally:
                 _DECODE_LOCK.release()
     except ImageError:

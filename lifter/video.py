@@ -1270,15 +1270,23 @@ def _iso_media_damage(path: Path) -> str | None:
     try:
         size = path.stat().st_size
         with path.open("rb") as fh:
-            head = fh.read(12)
-            if len(head) < 12 or head[4:8] != b"ftyp":
+            head = fh.read(4096)
+            if len(head) < 16 or head[4:8] != b"ftyp":
+                return None
+            ftyp_end = min(int.from_bytes(head[:4], "big"), len(head))
+            brands = {head[i:i + 4] for i in range(8, ftyp_end - 3, 4) if i != 12}
+            if brands & _HEIF_IMAGE_BRANDS:  # (an image, not a video)
                 return None
             boxes, at = [], 0
-            while at + 8 <= size and len(boxes) < 10_000:
+            while at + 8 <= size and len(boxes) < 100_000:
                 fh.seek(at)
                 n, kind = struct.unpack(">I4s", fh.read(8))
                 if n == 1:
-                    n = struct.unpack(">Q", fh.read(8))[0]
+                    wide = fh.read(8)
+                    if len(wide) < 8:
+                        return (f"an MP4 / QuickTime file cut short inside the header of its "
+                                f"'{kind.decode('latin-1')}' box")
+                    n = struct.unpack(">Q", wide)[0]
                 elif n == 0:
                     n = size - at
                 if n < 8:
@@ -1289,7 +1297,9 @@ def _iso_media_damage(path: Path) -> str | None:
                             f"{at + n - size} bytes past the end of the file, as an interrupted download or recording "
                             "leaves it")
                 at += n
-    except OSError:
+    except (OSError, struct.error):
+        return None
+    if len(boxes) >= 100_000:
         return None
     if b"moov" not in boxes:
         return ("an MP4 / QuickTime file without its index (no 'moov' box, which a recording writes last): cut short "

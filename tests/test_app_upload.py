@@ -436,6 +436,71 @@ def test_what_viser_buffers_is_bounded_whatever_the_messages_name(app: PoseLifte
             t.close()
 
 
+def test_upload_bookkeeping_holds_for_tiny_parts_spoofed_tags_empty_files_and_idle_transfers(app: PoseLifterApp
+                                                                                              ) -> None:
+    """A review of the upload bounds: one-byte parts, counted by their bytes, held 114 bytes each in viser; a transfer
+    whose parts name another control was only stopped, never shown to be given to the button; uploads let start on
+    what the others had received were stopped half-way; idle transfers were dropped without a word; and a closed
+    tab's flag was set only by hand in a test."""
+    from poselifter_app.viser_hooks import PART_COST_BYTES
+
+    tab, v = _open_tab(app)
+    try:
+        states = v.target.gui._current_file_upload_states
+        # tiny parts: stopped once their count passes the limit by 1/64, whatever their bytes
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "tiny.jpg", b"\xff" * 6000, chunk_size=1)
+        assert wait_for(lambda: len(v.messages) > n_msgs and "tiny.jpg" in v.messages[-1]), v.messages[-2:]
+        assert not states and up.MAX_UPLOAD_BYTES // 64 // PART_COST_BYTES < 6000
+        # a keypoint file whose parts name the focal slider: given to the upload button all the same, the slider kept
+        focal = float(v.gui.lift.focal.value)
+        kp = json.dumps({"keypoints": demo_sample("walking").keypoints_2d.tolist(), "focal": 1145.0,
+                         "image_size": [1000, 1000]}).encode()
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "tagged.json", kp, part_tag=v.gui.lift.focal._impl.uuid)
+        assert wait_for(lambda: any("tagged.json" in m for m in v.messages[n_msgs:])), v.messages[n_msgs:]
+        assert v.state.sample.upload is not None and "tagged" in v.state.sample.key
+        assert isinstance(v.gui.lift.focal.value, float), v.gui.lift.focal.value  # (not the file)
+        assert v.gui.lift.focal.value == pytest.approx(1145.0) != focal  # (the upload's own focal)
+        # an empty file through the button: said to be empty
+        n_msgs = len(v.messages)
+        tab.upload(v.gui.files.upload, "empty.jpg", b"")
+        assert wait_for(lambda: any("empty.jpg" in m for m in v.messages[n_msgs:])), v.messages[n_msgs:]
+        assert "empty" in [m for m in v.messages[n_msgs:] if "empty.jpg" in m][-1]
+        # admitted on what they announce: four uploads of 18 MiB still arriving on two other tabs, one part sent
+        # each; a fifth of 10 MiB would take the announced sizes past the 80-MiB budget: refused as it starts, not
+        # stopped half-way
+        part = b"\x00" * (512 * 1024)
+        budget = app.upload_budget
+        tab2, v2 = _open_tab(app)
+        tab3, v3 = _open_tab(app)
+        try:
+            for t, w in ((tab2, v2), (tab3, v3)):
+                for k in range(2):
+                    t.upload(w.gui.files.upload, f"big{k}.jpg", part * 36, max_parts=1)  # (18 MiB announced each)
+            assert wait_for(lambda: budget.held() >= 4 * 18 * 2**20)
+            n_msgs = len(v.messages)
+            tab.upload(v.gui.files.upload, "late.jpg", part * 20, max_parts=1)  # (10 MiB: past 80 MiB in all)
+            assert wait_for(lambda: any("late.jpg" in m for m in v.messages[n_msgs:])), v.messages[n_msgs:]
+            assert "the app is receiving other uploads" in v.messages[-1] and not states
+            # idle: dropped when the next upload starts, each tab told
+            budget.idle_s = 0.0
+            time.sleep(0.05)
+            n2 = len(v2.messages)
+            tab.upload(v.gui.files.upload, "pose.json", kp)
+            assert wait_for(lambda: any("upload dropped: nothing of it arrived" in m for m in v2.messages[n2:]))
+            assert wait_for(lambda: not v2.target.gui._current_file_upload_states)
+        finally:
+            budget.idle_s = 60.0
+            tab2.close()
+            tab3.close()
+        # a tab that goes is marked gone (its video, if one were being lifted, stops at its next frame)
+        tab.close()
+        assert wait_for(lambda: v.gone)
+    finally:
+        tab.close()
+
+
 def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) -> None:
     def no_mediapipe():
         raise MissingDependencyError("the BlazePose 2D detector needs the optional 'detect' extra")

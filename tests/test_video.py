@@ -846,6 +846,15 @@ def test_an_mp4_cut_short_is_said_to_be_cut_short(tmp_path, lifter):
     ftyp_len = int.from_bytes(data[:4], "big")
     no_index.write_bytes(data[:ftyp_len] + (16).to_bytes(4, "big") + b"free" + b"\0" * 8)
     assert "without its index (no 'moov' box" in (_iso_media_damage(no_index) or "")
+    # a file ending inside a box's 64-bit size (a review: struct.error, an internal error in the app)
+    wide = tmp_path / "wide.mp4"
+    wide.write_bytes(data[:ftyp_len] + (1).to_bytes(4, "big") + b"mdat" + b"\0\0\0")
+    assert "cut short inside the header of its 'mdat' box" in (_iso_media_damage(wide) or "")
+    wide.write_bytes(data[:ftyp_len] + (1).to_bytes(4, "big") + b"mdat" + (1 << 40).to_bytes(8, "big"))
+    assert "its 'mdat' box runs" in (_iso_media_damage(wide) or "")
+    avif = tmp_path / "still.mp4"  # (an AVIF image's boxes: not a video, nothing said of its index)
+    avif.write_bytes((24).to_bytes(4, "big") + b"ftypavif" + b"\0\0\0\0" + b"mif1miaf" + b"\0" * 64)
+    assert _iso_media_damage(avif) is None
     junk = tmp_path / "junk.mp4"
     junk.write_bytes(b"\x00\x01 not a video" * 50)
     with pytest.raises(VideoError, match=r"\(not a video, or a codec OpenCV cannot decode\)"):
