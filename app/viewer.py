@@ -185,6 +185,9 @@ uploaded successfully" about the transfer itself (a user trial read both as succ
 UPLOAD_TOO_LARGE_TITLE: Final[str] = "Upload refused: the file is too large"
 """The title of the notification of an upload stopped during its transfer for its size (:data:`UPLOAD_REFUSED_TITLE`
 said it had arrived, where its message said it was stopped: a user trial)."""
+UPLOADS_OFF: Final[str] = ("Uploads are off: the app could not bound what viser buffers for them (its internals are "
+                           "not viser 1.1.1's; install the pinned viser==1.1.1)")
+"""The upload button's hint when :func:`poselifter_app.viser_hooks.limit_uploads` could not be installed."""
 UPLOADS_HELD_FACTOR: Final[int] = 4
 """Every tab's unfinished uploads together may hold this many times the upload limit (80 MiB at 20 MiB), so two
 tabs can each send two files at once while many raw connections cannot make the server hold more."""
@@ -565,9 +568,10 @@ class SessionView:
         return lambda _event: self._do(func, *args)
 
     def _wire_uploads(self) -> None:
-        """The upload button's callback and the bounds on what viser buffers for it."""
+        """The upload button's callback and the bounds on what viser buffers for it; without the bounds (viser's
+        internals not the ones they hook) the button is off and says why, rather than take files unbounded."""
         app, target, g = self.app, self.target, self.gui
-        limit_uploads(target.gui, g.files.upload, max_bytes=app.max_upload_bytes, budget=app.upload_budget,
+        bounded = limit_uploads(target.gui, g.files.upload, max_bytes=app.max_upload_bytes, budget=app.upload_budget,
                       client_id=target.client_id if isinstance(target, viser.ClientHandle) else None,
                       refuse=lambda name, size: self.show_message(
                           up.oversize_message(up.safe_name(name), size, max_bytes=app.max_upload_bytes), error=True,
@@ -585,6 +589,10 @@ class SessionView:
                           f"{up.safe_name(name)}: upload dropped: nothing of it arrived for {idle_s} s (a connection "
                           "lost?); upload it again (what is shown is unchanged)", error=True,
                           title=UPLOAD_BUSY_TITLE))
+        if not bounded:
+            g.files.upload.disabled = True
+            g.files.upload.hint = UPLOADS_OFF
+            return
         g.files.upload.on_upload(self._on(lambda: self.load_upload(g.files.upload.value.name,
                                                                    g.files.upload.value.content)))
 

@@ -501,6 +501,22 @@ def test_upload_bookkeeping_holds_for_tiny_parts_spoofed_tags_empty_files_and_id
         tab.close()
 
 
+def test_without_the_upload_bounds_the_upload_button_is_off(monkeypatch) -> None:
+    """A review: when the bounds could not be installed (viser's internals changed), uploads went on unbounded. The
+    button is off instead, and its hint says why."""
+    import poselifter_app.viewer as viewer_module
+    from poselifter_app.viewer import UPLOADS_OFF
+
+    monkeypatch.setattr(viewer_module, "limit_uploads", lambda *a, **k: False)
+    server = local_server()
+    try:
+        v = PoseLifterApp(server, h36m_root=None).headless_view()
+        assert v.gui.files.upload.disabled and v.gui.files.upload.hint == UPLOADS_OFF
+        assert not v.gui.files.upload._impl.update_cb  # (no callback takes a file)
+    finally:
+        server.stop()
+
+
 def test_missing_mediapipe_message_and_json_on_that_photo(app: PoseLifterApp) -> None:
     def no_mediapipe():
         raise MissingDependencyError("the BlazePose 2D detector needs the optional 'detect' extra")
