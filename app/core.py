@@ -826,7 +826,10 @@ def people_line(frame: Frame, state: SessionState) -> str:
     me_name = state.sample.person_name(state.person)
     video = source_of(state.sample.key) == "video"  # (a trial: only the selected person's root said it is unsmoothed)
     parts = [f"**People** {n} in one camera space · **{me_name}** selected (drag its joints; the person picker "
-             "selects another)" + (" · roots: this frame's own lifts, unsmoothed, as the Root line's" if video else "")]
+             "selects another)" + (" · roots: this frame's own lifts, unsmoothed, as the Root line's" if video else "")
+             # (an app trial: with noise on, a distance mixed the selected person's noisy root with a clean one)
+             + (f" · the noise (level {state.noise_level:g}) is drawn for {me_name} only: the others are lifted from "
+                "their 2D as it is" if state.noise_level > 0 else "")]
     for o in frame.others:
         X, Y, Z = o.root
         parts.append(f"{o.name}: root X {X:.0f} · Y {Y:.0f} · Z {Z:.0f} mm, "

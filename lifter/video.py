@@ -1581,8 +1581,9 @@ def _lift_video(path: str | Path, *, lifter: Any, estimator: PoseEstimator2D, fo
             nobody = [fr.index for fr in frames if not fr.people]
         if flashes:
             where = sorted(i for tid in flashes for i, _ in seen[tid])
-            dropped.append(f"{len(flashes)} detection(s) seen in fewer than {MIN_TRACK_FRAMES} frames left out as "
-                            f"likely false detections (frames {_frames_summary(where)})")
+            seen_in = ("in one frame only" if MIN_TRACK_FRAMES == 2 else f"in fewer than {MIN_TRACK_FRAMES} frames")
+            dropped.append(f"{len(flashes)} detection(s) seen {seen_in}, each left out as a likely false detection "
+                           f"(frames {_frames_summary(where)}; a person cut off by the frame's edge can be one)")
         if sparse:
             where = sorted(i for tid in sparse for i, _ in seen[tid])
             dropped.append(f"{len(sparse)} track(s) seen in fewer than {SPARSE_TRACK_FRAMES} frames far apart, missing "

@@ -608,6 +608,13 @@ def test_photo_upload_with_fake_detector(app: PoseLifterApp) -> None:
         assert "**People** 2 in one camera space" in v.gui.readout.readout.content
         assert "unsmoothed" not in v.gui.readout.readout.content  # (a photo: nothing is smoothed)
         assert "person 2: root" in v.gui.readout.readout.content
+        assert "is drawn for" not in v.gui.readout.readout.content
+        # with noise on, the line says whose 2D it is drawn for (an app trial read the distance as noisy for both)
+        v.gui.noise.level.value = 1.0
+        assert wait_for(lambda: "the noise (level 1) is drawn for person 1 only: the others are lifted from their 2D "
+                        "as it is" in v.gui.readout.readout.content), v.gui.readout.readout.content
+        v.gui.noise.level.value = 0.0
+        assert wait_for(lambda: "is drawn for" not in v.gui.readout.readout.content)
         # nobody
         est.people = []
         snap = _snapshot(v)
