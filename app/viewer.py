@@ -2170,6 +2170,8 @@ class PoseLifterApp:
         self.detect_lock = threading.Lock()
         """Serialises 2D detection (one shared MediaPipe graph)."""
         self._upload_ids = 0
+        self._gone_early: set[int] = set()
+        """Clients that disconnected while their view was being built (:meth:`_on_connect` drops it)."""
         self.demo = DemoCatalog(demo_dir) if demo_dir is not None else DemoCatalog()
         self.motion = DemoMotion(self.demo)
         self.h36m: H36MCatalog | None = open_h36m(str(h36m_root)) if h36m_root is not None else None
@@ -2221,13 +2223,23 @@ class PoseLifterApp:
             view = SessionView(self, client)
         except Exception:  # noqa: BLE001
             log.error("could not build a session for client %s:\n%s", client.client_id, traceback.format_exc())
+            with self._lock:
+                self._gone_early.discard(client.client_id)
             return
         with self._lock:
-            self.views[client.client_id] = view
+            gone = client.client_id in self._gone_early
+            self._gone_early.discard(client.client_id)
+            if not gone:
+                self.views[client.client_id] = view
+        if gone:  # (the tab went while its view was being built: a review found such views kept for good)
+            view.gone = True
+            view.stop_playback(wait=False)
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             view = self.views.pop(client.client_id, None)
+            if view is None:  # (its view is still being built: dropped once built)
+                self._gone_early.add(client.client_id)
         if view is not None:
             view.gone = True
             view.stop_playback(wait=False)

@@ -501,6 +501,32 @@ def test_upload_bookkeeping_holds_for_tiny_parts_spoofed_tags_empty_files_and_id
         tab.close()
 
 
+def test_a_tab_that_goes_while_its_view_is_built_leaves_no_view(app: PoseLifterApp, monkeypatch) -> None:
+    """A review: a tab that disconnected while its view was being built had nothing to drop yet, and the view, added
+    once built, was kept for good (its state, its playback)."""
+    import types
+    from typing import Any
+
+    import poselifter_app.viewer as viewer_module
+
+    built: list[Any] = []
+
+    class Built:
+        def __init__(self, app_: Any, client: Any) -> None:
+            self.gone, self.stopped = False, False
+            app_._on_disconnect(client)  # (the tab goes meanwhile)
+            built.append(self)
+
+        def stop_playback(self, wait: bool = True) -> None:
+            self.stopped = True
+
+    monkeypatch.setattr(viewer_module, "SessionView", Built)
+    client = types.SimpleNamespace(client_id=987654)
+    app._on_connect(client)  # type: ignore[arg-type]
+    assert 987654 not in app.views and built[0].gone and built[0].stopped
+    assert 987654 not in app._gone_early  # (nothing kept of it)
+
+
 def test_without_the_upload_bounds_the_upload_button_is_off(monkeypatch) -> None:
     """A review: when the bounds could not be installed (viser's internals changed), uploads went on unbounded. The
     button is off instead, and its hint says why."""
