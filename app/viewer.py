@@ -1233,11 +1233,9 @@ class SessionView:
             self.show_message(f"the joints you corrected on {gone_frames} frame{'s' if gone_frames != 1 else ''} of "
                               "the sequence shown before are dropped, as another upload is shown (download it first "
                               "to keep them)")
-        if follow_note is not None and self._since_typed("frame") < TYPING_SETTLE_S:
-            # (an app trial typed 35 and read "track 3 is not found in ... frame 3": each key loads a frame, and the
-            # note, said once, named the first key's; said once the typing settles, for the frame then shown)
-            self._later_once("follow", TYPING_SETTLE_S - self._since_typed("frame") + 0.05, self._say_follow_note)
-        elif follow_note is not None:
+        # (an app trial typed 35 and read "track 3 is not found in ... frame 3": each key loads a frame, and the note,
+        # said once, named the first key's; said once the typing settles, for the frame then shown)
+        if follow_note is not None and not self._held_while_typing("follow", self._say_follow_note):
             self._gaps_said.add(follow_note[0])
             self.show_message(follow_note[1])
         moved = len(old.dragged) + sum(len(v) for k, v in old.others_dragged.items() if k != old.person)
@@ -1294,12 +1292,19 @@ class SessionView:
                                     "selected again in each frame that has them (said once; the download's warnings "
                                     "list the frames it is missing from)")
 
+    def _held_while_typing(self, kind: str, say: Callable[[], None]) -> bool:
+        """Whether the frame box is being typed (a key within :data:`TYPING_SETTLE_S`): then ``say`` runs once it
+        settles (:meth:`_later_once` of ``kind``), for the frame then shown, and a note is not said now."""
+        left = TYPING_SETTLE_S - self._since_typed("frame")
+        if left > 0:
+            self._later_once(kind, left + 0.05, say)
+        return left > 0
+
     def _say_follow_note(self) -> None:
         """The note of :meth:`_follow` on the frame shown, held while the frame box was typed, said now if the followed
         person is still not in it (once per video and person, as when not typed)."""
         with self.lock:
-            if self._since_typed("frame") < TYPING_SETTLE_S:
-                self._later_once("follow", TYPING_SETTLE_S - self._since_typed("frame") + 0.05, self._say_follow_note)
+            if self._held_while_typing("follow", self._say_follow_note):
                 return
             _, _, note = self._follow(self.state, self.state.sample)
             if note is not None and note[0] not in self._gaps_said:
@@ -1310,9 +1315,7 @@ class SessionView:
         """:func:`poselifter_app.session.no_detection_note`, held while the frame box was typed, said now if the
         frame shown still has no detection of its own (once per sequence)."""
         with self.lock:
-            if self._since_typed("frame") < TYPING_SETTLE_S:
-                self._later_once("fallback", TYPING_SETTLE_S - self._since_typed("frame") + 0.05,
-                                 self._say_no_detection)
+            if self._held_while_typing("fallback", self._say_no_detection):
                 return
             st = self.state
             key = st.sample.key

@@ -167,13 +167,7 @@ def limit_uploads(gui: viser.GuiApi, button: viser.GuiUploadButtonHandle, *, max
             say(name, size)
 
     def idle_drop(transfer: str, name: str, total: int) -> Callable[[], None]:
-        def dropped() -> None:
-            mine.pop(transfer, None)
-            let.pop(transfer, None)
-            ack(transfer, total)
-            if refuse_idle is not None:
-                refuse_idle(name, int(budget.idle_s) if budget is not None else 0)
-        return dropped
+        return lambda: stop(transfer, name, int(budget.idle_s) if budget is not None else 0, total, refuse_idle)
 
     def on_start(cid: int, msg: Any) -> None:  # (before viser's handler, which makes the transfer's buffer)
         try:

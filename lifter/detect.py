@@ -436,11 +436,12 @@ def _to_rgb8(img: Any, *, max_side: int | None = None) -> Any:
     return fit(img.convert("RGB"))
 
 
-def _decode_bytes(mode: str, width: int, height: int) -> int:
+def _decode_bytes(mode: str, width: int, height: int, image_format: str | None = None) -> int:
     """About the memory (bytes) that decoding a ``width x height`` px image of Pillow ``mode`` and converting it to
     8-bit RGB (:func:`_to_rgb8`) takes at its peak: Pillow keeps 1 byte a pixel for ``1``, ``L`` and ``P``, 2 for
     16-bit greyscale, 4 for every other mode (RGB too), and the conversion adds a full-size 8-bit copy (16-bit and
-    32-bit greyscale) or a 4-byte one (alpha other than RGBA's, and modes Pillow converts before downscaling)."""
+    32-bit greyscale) or a 4-byte one (alpha other than RGBA's, and modes Pillow converts before downscaling). An
+    ``image_format`` Pillow does not decode straight into the image (not in :data:`_DECODED_ONCE`) counts 4 times."""
     layout = 1 if mode in ("1", "L", "P") else 2 if mode.startswith("I;16") else 4
     if mode.startswith("I;16") or mode in ("I", "F"):
         extra = 1
@@ -448,13 +449,14 @@ def _decode_bytes(mode: str, width: int, height: int) -> int:
         extra = 0
     else:  # (LA, PA, P, 1, CMYK, YCbCr, ...: converted at full size)
         extra = 4
-    return width * height * (layout + extra)
+    once = width * height * (layout + extra)
+    return once if image_format is None or image_format in _DECODED_ONCE else 4 * once
 
 
 _DECODED_ONCE: Final[frozenset[str]] = frozenset({"JPEG", "MPO", "PNG", "BMP", "GIF", "PPM", "TGA"})
 """Formats Pillow decodes straight into the image's own memory. Others (WebP, AVIF, HEIF, TIFF, ...) pass through
 buffers of their own, measured at 2.5-4 times the image (a review: a 140-KB lossless WebP of 8000 x 8000 px took 976
-MiB), so :func:`load_image` counts them 4 times (:data:`MAX_DECODE_BYTES`)."""
+MiB), so :func:`_decode_bytes` counts them 4 times (:data:`MAX_DECODE_BYTES`)."""
 
 _ORIENTATION_TURN: Final[dict[int, str]] = {2: "FLIP_LEFT_RIGHT", 3: "ROTATE_180", 4: "FLIP_TOP_BOTTOM", 5: "TRANSPOSE",
                                             6: "ROTATE_270", 7: "TRANSVERSE", 8: "ROTATE_90"}
@@ -492,9 +494,7 @@ def load_image(path: str | os.PathLike[str], *, max_side: int = DEFAULT_MAX_SIDE
                                  f"{max_pixels / 1e6:.0f} MP this tool decodes; downscale it first")
             if max(W0, H0) > max_side and img.format in ("JPEG", "MPO"):  # (MPO: a JPEG with more pictures)
                 img.draft("RGB", (max(1, W0 * max_side // max(W0, H0)), max(1, H0 * max_side // max(W0, H0))))
-            need = _decode_bytes(img.mode, *img.size)  # (at the size it decodes at: a JPEG's reduced one)
-            if img.format not in _DECODED_ONCE:
-                need *= 4
+            need = _decode_bytes(img.mode, *img.size, img.format)  # (at the size it decodes at: a JPEG's reduced one)
             if need > MAX_DECODE_BYTES:  # (before the EXIF: Pillow decodes a whole PNG to look for its eXIf chunk)
                 raise ImageError(f"{p}: image is {W0} x {H0} px ({W0 * H0 / 1e6:.0f} MP, Pillow mode {img.mode}); "
                                  f"decoding it would take about {need / 2**30:.1f} GiB of memory, more than the "
