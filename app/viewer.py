@@ -2035,15 +2035,18 @@ class SessionView:
             self._last_upload = sample
         self.show_message(up.upload_message(sample), keep=True)
 
+    def _show_progress(self, text: str) -> None:
+        """``⏳ text`` in the status line: progress, not a message (no rule of theirs clears it; the upload shown keeps
+        its own, a review), cleared by the next success."""
+        with self._status_lock:
+            self.gui.readout.status.content = "⏳ " + text
+            self._status_notes = [q for q in self._status_notes if q.keep]
+            self._note_until = 0.0
+
     def _waiting_note(self, name: str) -> Callable[[], None]:
         """What an upload that waits for the detector (another upload's, maybe another tab's) shows meanwhile."""
-        def note() -> None:
-            with self._status_lock:
-                self.gui.readout.status.content = (f"⏳ {name}: waiting for the detector: another upload (of this tab "
-                                                   "or another) is being lifted")
-                self._status_notes = [q for q in self._status_notes if q.keep]
-                self._note_until = 0.0
-        return note
+        return lambda: self._show_progress(f"{name}: waiting for the detector: another upload (of this tab or "
+                                           "another) is being lifted")
 
     def _load_video(self, name: str, content: bytes, *, mine: int, since: float) -> None:
         """A video or keypoint sequence: lifted with a progress note (one notification, updated), then shown."""
@@ -2062,11 +2065,7 @@ class SessionView:
                 return
             last[0] = now
             text = f"{nm}: lifting frame {done}" + (f" of {total}" if total else "")
-            with self._status_lock:
-                self.gui.readout.status.content = "⏳ " + text
-                # (progress, not a message: no rule of theirs clears it; the upload shown keeps its own, a review)
-                self._status_notes = [q for q in self._status_notes if q.keep]
-                self._note_until = 0.0  # (progress, not a note: the next success clears it)
+            self._show_progress(text)
             if note is not None:
                 note.body = text
 
