@@ -1270,12 +1270,8 @@ def _iso_media_damage(path: Path) -> str | None:
     try:
         size = path.stat().st_size
         with path.open("rb") as fh:
-            head = fh.read(4096)
-            if len(head) < 16 or head[4:8] != b"ftyp":
-                return None
-            ftyp_end = min(int.from_bytes(head[:4], "big"), len(head))
-            brands = {head[i:i + 4] for i in range(8, ftyp_end - 3, 4) if i != 12}
-            if brands & _HEIF_IMAGE_BRANDS:  # (an image, not a video)
+            head = fh.read(MEDIA_HEAD_BYTES)
+            if head[4:8] != b"ftyp" or media_kind(head) != "video":  # (not ISO media, or a HEIF / AVIF image)
                 return None
             boxes, at = [], 0
             while at + 8 <= size and len(boxes) < 100_000:
