@@ -670,6 +670,36 @@ def pose_task_cache_path() -> Path:
     return Path(base) / "poselifter" / POSE_TASK_NAME
 
 
+def _checksum_path(bundle: Path) -> Path:
+    """The file beside a built bundle that holds its sha256 (hex), written when it is built."""
+    return bundle.with_name(bundle.name + ".sha256")
+
+
+def _file_sha256(path: Path) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _cached_bundle_problem(bundle: Path) -> str | None:
+    """Why the cached ``bundle`` cannot be used as it is (``None``: it matches the sha256 recorded beside it when
+    it was built). A bundle cut short, changed after it was built, or built before checksums were recorded is not
+    run: MediaPipe would load whatever the file holds."""
+    try:
+        recorded = _checksum_path(bundle).read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError):
+        return f"no checksum was recorded beside it ({_checksum_path(bundle).name})"
+    actual = _file_sha256(bundle)
+    if actual != recorded:
+        return (f"its sha256 {actual[:12]}... is not the {recorded[:12]}... recorded when it was built "
+                "(changed or cut short)")
+    return None
+
+
 def _with_normalization_metadata(model: bytes, *, mean: float = 0.0, std: float = 255.0) -> bytes:
     """The tflite ``model`` with TFLite metadata for its image input added: RGB, ``(pixel - mean) / std``.
     The Tasks API needs it to feed a float input; the legacy graph that ``pose_landmark_full.tflite`` was
@@ -787,13 +817,19 @@ def build_pose_task(out: str | os.PathLike[str] | None = None, *, wheel: str | o
                                          f"({exc})") from None
     members["pose_landmarks_detector.tflite"] = _with_normalization_metadata(members["pose_landmarks_detector.tflite"])
     out_path.parent.mkdir(parents=True, exist_ok=True)
+    from .io import write_atomic
+
+    _checksum_path(out_path).unlink(missing_ok=True)  # (a bundle never stands beside another's checksum)
     _write_task_zip(out_path, members)
+    write_atomic(_checksum_path(out_path), _file_sha256(out_path) + "\n")
     return out_path
 
 
 def ensure_pose_task(*, build: bool = True, log: Callable[[str], None] | None = None) -> Path:
-    """The BlazePose bundle to use: ``$POSELIFTER_POSE_TASK`` if set, else the cached one, built on first use
-    (:func:`build_pose_task`) unless ``build=False``. Offline once built."""
+    """The BlazePose bundle to use: ``$POSELIFTER_POSE_TASK`` if set (the user's own file, used as it is), else the
+    cached one, built on first use (:func:`build_pose_task`) unless ``build=False``. Offline once built. The cached
+    bundle is checked against the sha256 written beside it (``<bundle>.sha256``) each time; one that does not match
+    (changed or cut short) is built again, or with ``build=False`` refused with an error that says so."""
     env = os.environ.get(POSE_TASK_ENV)
     if env:
         p = Path(env)
@@ -802,7 +838,16 @@ def ensure_pose_task(*, build: bool = True, log: Callable[[str], None] | None = 
         return p
     p = pose_task_cache_path()
     if p.is_file():
-        return p
+        problem = _cached_bundle_problem(p)
+        if problem is None:
+            return p
+        if not build:
+            raise MissingDependencyError(f"the cached BlazePose model bundle {p} is not used: {problem}. Build it "
+                                         "again with lifter.detect.build_pose_task(), or delete it to have it "
+                                         "built on next use")
+        if log is not None:
+            log(f"the cached BlazePose model bundle {p} is not used: {problem}; building it again")
+        return build_pose_task(p, log=log)
     if not build:
         raise MissingDependencyError(f"the BlazePose model bundle {p} is not built yet (lifter.detect.build_pose_task)")
     return build_pose_task(p, log=log)

@@ -157,6 +157,63 @@ def test_bundle_errors_are_clear(tmp_path, monkeypatch):
     assert not (tmp_path / "o.task").exists()
 
 
+def test_cached_bundle_is_checked_against_its_checksum(tmp_path, monkeypatch):
+    """The cached bundle is run only if it matches the sha256 recorded beside it when it was built; one cut short,
+    changed or without a record is built again (or refused with build=False). Built here from a stand-in wheel
+    (the model files' checksums and the metadata step patched), so it runs without mediapipe."""
+    import hashlib
+    import zipfile
+
+    from lifter import detect
+
+    files = {"pose_detector.tflite": b"detector" * 100, "pose_landmarks_detector.tflite": b"landmarks" * 100}
+    wheel = tmp_path / "mediapipe-0.10.21-x.whl"
+    inner = {}
+    with zipfile.ZipFile(wheel, "w") as z:
+        for name, data in files.items():
+            inner[name] = (f"mediapipe/modules/{name}", hashlib.sha256(data).hexdigest())
+            z.writestr(inner[name][0], data)
+    monkeypatch.setattr(detect, "MODEL_FILES", inner)
+    monkeypatch.setattr(detect, "_with_normalization_metadata", lambda model: model + b"metadata")
+    monkeypatch.delenv(detect.POSE_TASK_ENV, raising=False)
+    monkeypatch.setenv(detect.MODEL_WHEEL_ENV, str(wheel))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+
+    bundle = detect.ensure_pose_task()
+    record = bundle.with_name(bundle.name + ".sha256")
+    good = bundle.read_bytes()
+    assert record.read_text().strip() == hashlib.sha256(good).hexdigest()
+    with zipfile.ZipFile(bundle) as z:
+        assert z.read("pose_landmarks_detector.tflite") == files["pose_landmarks_detector.tflite"] + b"metadata"
+    assert detect.ensure_pose_task(build=False) == bundle
+
+    bundle.write_bytes(good[: len(good) // 2])  # cut short
+    with pytest.raises(detect.MissingDependencyError, match=r"is not used: its sha256 .*changed or cut short.*"
+                                                            r"build_pose_task\(\), or delete it"):
+        detect.ensure_pose_task(build=False)
+    said: list[str] = []
+    assert detect.ensure_pose_task(log=said.append) == bundle
+    assert bundle.read_bytes() == good
+    assert any("building it again" in m for m in said)
+
+    changed = bytearray(good)
+    changed[-100] ^= 1  # one bit, the size unchanged
+    bundle.write_bytes(bytes(changed))
+    with pytest.raises(detect.MissingDependencyError, match="changed or cut short"):
+        detect.ensure_pose_task(build=False)
+    assert detect.ensure_pose_task() == bundle and bundle.read_bytes() == good
+
+    record.unlink()  # built before checksums were recorded
+    with pytest.raises(detect.MissingDependencyError, match=r"no checksum was recorded beside it \(.*\.sha256\)"):
+        detect.ensure_pose_task(build=False)
+    assert detect.ensure_pose_task() == bundle and record.is_file()
+
+    own = tmp_path / "own.task"  # the user's own bundle is used as it is
+    own.write_bytes(b"whatever")
+    monkeypatch.setenv(detect.POSE_TASK_ENV, str(own))
+    assert detect.ensure_pose_task(build=False) == own
+
+
 # ------------------------------------------------------------------------------------------------
 # BlazePose (needs mediapipe and the model bundle, built once by lifter.detect.ensure_pose_task)
 # ------------------------------------------------------------------------------------------------
