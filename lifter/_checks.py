@@ -214,12 +214,13 @@ def as_pair(x: Any, *, name: str, positive: bool = False, scalar: bool = False,
 
 
 def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_given: bool = True,
-                   placeholders: bool = True) -> list[str]:
+                   placeholders: bool = True, focal_from_exif: bool = False) -> list[str]:
     """What looks wrong in 2D keypoints ``(..., 17, 2)`` px that the lifter takes anyway (finite, checked shape):
     a pose spanning more than :data:`lifter.camera.MAX_PLAUSIBLE_VIEW_DEG` of view at ``focal`` (scalar or
     ``(..., 2)`` px; None: not checked), usually a focal length in mm; a joint at exactly (0, 0) far from the rest
     of its pose, usually a detector's placeholder for a missing joint. One message per kind, naming the first
-    pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice.
+    pose. focal_given: False when ``focal`` was assumed (from the image size or EXIF), which changes the advice;
+    focal_from_exif: it was read from a photo's EXIF (a developer trial's note said "assumed" of an EXIF focal).
     placeholders: False when the (0, 0) joints were already said in the keypoints' own format
     (:func:`lifter.keypoints.placeholder_notes`), whose advice fits a file better.
     :meth:`lifter.Lifter.lift` warns with these (:class:`PoseLifterWarning`)."""
@@ -248,6 +249,9 @@ def input_warnings(keypoints: np.ndarray, focal: np.ndarray | None, *, focal_giv
                              f"{where_in_batch(wide)}: " + (
                                  "is the focal length in pixels? (f_px = f_mm * image width px / sensor width mm; or "
                                  "leave it out to assume a field of view)" if focal_given else
+                                 "the focal length was read from the photo's EXIF, not given: is the EXIF right, and "
+                                 "are the keypoints in this image's pixels? (or give the true focal length in pixels)"
+                                 if focal_from_exif else
                                  "the focal length was assumed, not given: are the keypoints in this image's pixels? "
                                  "(or give the true focal length in pixels)"))
     if focal is not None:
@@ -372,13 +376,14 @@ def outside_image_notes(keypoints: np.ndarray, image_size: Any, *, detected: boo
             f"{n} lie mostly outside the {W} x {H} px image{at}{more}: are the keypoints in this image's pixels?"]
 
 
-def view_angle_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str]:
+def view_angle_notes(focal: Any, image_size: tuple[int, int] | None, *, from_exif: bool = False) -> list[str]:
     """A note when the focal length ``focal`` (px, scalar or ``(fx, fy)``) gives the ``image_size`` image a diagonal
     field of view narrower than :data:`MIN_PLAUSIBLE_VIEW_DEG` or wider than :data:`MAX_PLAUSIBLE_IMAGE_VIEW_DEG`
     (None: not checked): a focal length in other pixels or units, or a typo (a user trial's 100000 px on a 1000 px
     image placed a person at 438 m with only a note about the distance; a developer trial's 26 mm phone focal on a
     4000 x 3000 px photo, a small person near its centre, went unnoticed). The depth is proportional to the focal
-    length."""
+    length. from_exif: the focal length was read from the photo's EXIF (a developer trial's EXIF gave 114 px for a
+    1000-px image, with no such note), whose advice differs."""
     if image_size is None:
         return []
     from .camera import focal_alpha
@@ -388,16 +393,22 @@ def view_angle_notes(focal: Any, image_size: tuple[int, int] | None) -> list[str
         return []
     W, H = image_size
     fov = math.degrees(2.0 * math.atan(math.hypot(W, H) / (2.0 * alpha)))
+    which = "the EXIF's focal length" if from_exif else "the focal length"
     if fov > MAX_PLAUSIBLE_IMAGE_VIEW_DEG:
-        return [f"the focal length {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.0f} deg "
+        return [f"{which} {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.0f} deg "
                 "(diagonal), wider than any camera's without a fisheye lens (the widest phone ultra-wides: about "
-                "120 deg): is it in mm, not px (f_px = f_mm * image width px / sensor width mm)? Every depth is "
-                "proportional to it"]
+                "120 deg): " + ("the photo's EXIF is probably wrong (its focal-plane resolution or sensor size): "
+                                "give the focal length in px." if from_exif else
+                                "is it in mm, not px (f_px = f_mm * image width px / sensor width mm)?")
+                + " Every depth is proportional to it"]
     if not fov < MIN_PLAUSIBLE_VIEW_DEG:
         return []
-    return [f"the focal length {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.2g} deg "
-            f"(diagonal), narrower than a 2000 mm telephoto lens's on a full-frame camera (1.2 deg): is it in this "
-            "image's pixels (f_px = f_mm * image width px / sensor width mm)? Every depth is proportional to it"]
+    return [f"{which} {alpha:.6g} px gives this {W} x {H} px image a field of view of {fov:.2g} deg "
+            f"(diagonal), narrower than a 2000 mm telephoto lens's on a full-frame camera (1.2 deg): "
+            + ("the photo's EXIF is probably wrong (its focal-plane resolution or sensor size): give the focal length "
+               "in px." if from_exif else
+               "is it in this image's pixels (f_px = f_mm * image width px / sensor width mm)?")
+            + " Every depth is proportional to it"]
 
 
 PRINCIPAL_POINT_EDGE: float = 0.05

@@ -343,10 +343,11 @@ class Lifter:
 
     @property
     def misfit_limit(self) -> float | None:
-        """Detected 2D whose lift misses it by more than this share of its size gets a note (:meth:`output_notes`,
+        """2D whose lift misses it by more than this share of its size gets a note (:meth:`output_notes`,
         :func:`lifter.camera.reprojection_misfit`): a limit measured for this network's lifts
-        (``meta["misfit_limit"]``; the default's: :data:`lifter.camera.MAX_DETECTED_MISFIT`), None (no such note)
-        for a network nobody measured: an untrained or unusual one may not fit even good 2D."""
+        (``meta["misfit_limit"]``; the default's detected networks: :data:`lifter.camera.MAX_DETECTED_MISFIT`, its
+        clean network: :data:`lifter.camera.MAX_CLEAN_MISFIT`), None (no such note) for a network nobody measured:
+        an untrained or unusual one may not fit even good 2D."""
         v = self.meta.get("misfit_limit")
         return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 else None
 
@@ -381,9 +382,11 @@ class Lifter:
         a reference-camera network) roots farther than :attr:`far_root_depth_mm`. For callers that show one pose of a
         batch (the app), or that name the people of a batch (``whose``, or each one's label ``names`` such as a video's
         ``"track 3"``: :func:`lifter._checks.where_in_batch`). With the relative poses ``(..., 17, 3)`` mm and the
-        ``focal`` length px, detected 2D that its lift does not fit (:data:`lifter.camera.MAX_DETECTED_MISFIT`:
-        most likely a detector's confident mistake) is noted too; ``misfit_cause``: what that note names as the likely
-        cause instead, where the caller knows better (the app: the noise it drew, a dragged joint)."""
+        ``focal`` length px, 2D that its lift does not fit (past :attr:`misfit_limit`; the default's networks:
+        :data:`lifter.camera.MAX_DETECTED_MISFIT` for detected 2D, most likely a detector's confident mistake, and
+        :data:`lifter.camera.MAX_CLEAN_MISFIT` for clean 2D, most likely joints in another order) is noted too;
+        ``misfit_cause``: what that note names as the likely cause instead, where the caller knows better (the app:
+        the noise it drew, a dragged joint)."""
         from .normalization import location_and_scale
 
         root = np.asarray(root, np.float64)
@@ -418,7 +421,7 @@ class Lifter:
                 notes.append(OutputNote(f"{int(far.sum())} of {far.size} root(s) lifted beyond {limit / 1000:.1f} m"
                                         f"{where_in_batch(far, whose=whose, names=names)}: {why}", kind="far"))
         limit = self.misfit_limit
-        if source == "detected" and limit is not None and relative is not None and focal is not None and root.size:
+        if limit is not None and relative is not None and focal is not None and root.size:
             absolute = np.asarray(relative, np.float64) + root[..., None, :]
             f2 = np.asarray(focal, np.float64)  # (checked by lift; the app passes its own checked pair)
             misfit = _misfit(np.asarray(keypoints, np.float64), absolute, (f2 if f2.ndim else f2[None])[..., None, :])
@@ -428,9 +431,12 @@ class Lifter:
                 notes.append(OutputNote(
                     f"{int(off.sum())} of {off.size} lifted pose(s) do not fit their 2D"
                     f"{where_in_batch(off, whose=whose, names=names)}: projected back, the joints lie up to "
-                    f"{worst:.0%} of the 2D pose's size from it (median joint), where a detector's usual errors leave "
-                    f"under {limit:.0%}: the 2D is probably wrong in places ("
-                    + (misfit_cause or "a confident detector mistake: joints bunched together or on the wrong limb")
+                    f"{worst:.1%} of the 2D pose's size from it (median joint), where "
+                    + ("exact 2D of real people stays" if source == "clean" else "a detector's usual errors leave")
+                    + f" under {limit:.0%}: the 2D is probably wrong in places ("
+                    + (misfit_cause or ("joints in another order than Human3.6M's (lifter.JOINT_NAMES), or placed "
+                                        "where no body bends" if source == "clean" else
+                                        "a confident detector mistake: joints bunched together or on the wrong limb"))
                     + "), and so is the lift; check the 2D",
                     kind="misfit"))
         behind = root[..., 2] <= 0
@@ -513,6 +519,8 @@ class Lifter:
             ck = dataclasses.replace(ck, meta={**ck.meta, "trained_zoom": entry["trained_zoom"]})
         if "misfit_limit" in entry:  # (measured on the shipped networks after they were written)
             ck = dataclasses.replace(ck, meta={**ck.meta, "misfit_limit": entry["misfit_limit"]})
+        if clean is not None and "clean_misfit_limit" in entry:
+            clean = dataclasses.replace(clean, meta={**clean.meta, "misfit_limit": entry["clean_misfit_limit"]})
         return cls._from(ck, entry["name"], quantize, flip_test=entry.get("flip_test"), clean=clean, ensemble=members)
 
     load = from_pretrained

@@ -169,8 +169,8 @@ def _resolve_camera(*, user_focal: np.ndarray | None, user_pp: np.ndarray | None
         assert image_size is not None  # (checked above)
         pp = image_centre(image_size)
     notes += principal_point_notes(pp, image_size)
-    if src in FOCAL_GIVEN_SOURCES:
-        notes += view_angle_notes(focal, image_size)
+    if src in FOCAL_GIVEN_SOURCES or src.startswith("exif"):  # (not the field of view assumed)
+        notes += view_angle_notes(focal, image_size, from_exif=src.startswith("exif"))
     return np.asarray(focal, np.float64), src, np.asarray(pp, np.float64), notes
 
 
@@ -193,7 +193,7 @@ def plausibility_notes(kp17: np.ndarray, focal: np.ndarray, image_size: tuple[in
     if not len(k):
         return notes
     notes += input_warnings(k, focal, focal_given=focal_source in FOCAL_GIVEN_SOURCES,
-                            placeholders=source_format == H36M17)
+                            placeholders=source_format == H36M17, focal_from_exif=focal_source.startswith("exif"))
     if not detected:  # (the package's own detector gives upright image coordinates, in (x, y) order)
         notes += upside_down_notes(k)
         notes += sideways_notes(k)

@@ -9,7 +9,10 @@ limit (``misfit_limit``, :data:`lifter.camera.MAX_DETECTED_MISFIT`):
 2. the 84 demo photos through BlazePose (the ``detect`` extra), lifted with each camera's focal, principal point
    and lens: percentiles and the worst photos;
 3. a user trial's case: a photo scaled up about 3x and padded to a 3024 x 4032 portrait frame, where BlazePose
-   collapses the person (joints bunched, with high scores); the same photo padded to landscape for comparison.
+   collapses the person (joints bunched, with high scores); the same photo padded to landscape for comparison;
+4. clean 2D through the clean network, whose limit is ``clean_misfit_limit`` (:data:`lifter.camera.MAX_CLEAN_MISFIT`):
+   the exact (undistorted) 2D of the training subjects, every 5th frame, and of S9 and S11; the test subjects' with
+   Gaussian noise of 5 and 10 px (2D placed by hand); and the test subjects' exact 2D with joints in another order.
 
 Nothing from Human3.6M is written.
 
@@ -97,6 +100,33 @@ def main() -> int:
               f"{np.median(err2d):.0f} px (mean score {np.mean(d.scores):.2f}), misfit {mi:.3f}, MPJPE "
               f"{float(mpjpe(r.relative, ann['p3d_cam'][i])):.0f} mm; noted: "
               f"{any(getattr(w, 'kind', '') == 'misfit' for w in r.warnings)}")
+
+    clean_limit = lf.network_for("clean").misfit_limit
+    print(f"4. clean 2D, clean network: clean_misfit_limit {clean_limit}")
+    rng = np.random.default_rng(0)
+    for label, subjects, stride in (("training subjects' exact 2D", [1, 5, 6, 7, 8], 5),
+                                    ("S9 + S11 exact 2D", [9, 11], args.stride)):
+        t = data.load(subjects, stride=stride, lens="pinhole")
+        rc = lf.lift(t.keypoints_2d, focal=t.focal, principal_point=t.principal_point, source="clean", warn=False)
+        mc = reprojection_misfit(rc.keypoints_2d, rc.absolute, focal=rc.focal, principal_point=rc.principal_point)
+        print(f"   {label}, stride {stride}: {len(mc)} samples; misfit median / 99.9th / 99.99th percentile / max "
+              f"{np.median(mc):.4f} / {np.percentile(mc, 99.9):.4f} / {np.percentile(mc, 99.99):.4f} / "
+              f"{mc.max():.4f}; above {clean_limit}: {int((mc > clean_limit).sum())}")
+    for sigma in (5.0, 10.0):
+        kp = s.keypoints_2d + rng.normal(0.0, sigma, s.keypoints_2d.shape)
+        rc = lf.lift(kp, focal=s.focal, principal_point=s.principal_point, source="clean", warn=False)
+        mc = reprojection_misfit(rc.keypoints_2d, rc.absolute, focal=rc.focal, principal_point=rc.principal_point)
+        print(f"   S9 + S11 exact 2D with {sigma:g}-px Gaussian noise: above {clean_limit}: "
+              f"{np.mean(mc > clean_limit):.2%}")
+    orders = {"knees <-> elbows": [0, 1, 15, 3, 4, 12, 6, 7, 8, 9, 10, 11, 5, 13, 14, 2, 16],
+              "wrists <-> feet": [0, 1, 2, 16, 4, 5, 13, 7, 8, 9, 10, 11, 12, 6, 14, 15, 3],
+              "left <-> right legs": [0, 4, 5, 6, 1, 2, 3, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]}
+    for label, order in orders.items():
+        rc = lf.lift(s.keypoints_2d[:, order], focal=s.focal, principal_point=s.principal_point, source="clean",
+                     warn=False)
+        mc = reprojection_misfit(rc.keypoints_2d, rc.absolute, focal=rc.focal, principal_point=rc.principal_point)
+        noted = (mc > clean_limit) | np.isnan(mc)  # (NaN: a joint behind the camera, noted as such)
+        print(f"   S9 + S11, {label}: noted {np.mean(noted):.1%} (misfit median {np.nanmedian(mc):.3f})")
     return 0
 
 

@@ -1044,9 +1044,10 @@ def test_reprojection_misfit_pins_its_convention(rng):
     assert np.isnan(reprojection_misfit(kp, behind, focal=1145.0, principal_point=(512.0, 515.0))[1])
 
 
-def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
+def test_misfit_notes_only_for_a_measured_limit(rng, keypoints):
     """An untrained network does not fit even good 2D: the note needs a limit measured for the network
-    (meta ``misfit_limit``, the default's registry entry); then detected 2D past it is noted, clean 2D never."""
+    (meta ``misfit_limit``, the default's registry entry); then 2D past it is noted, detected or clean, each with
+    its likely cause."""
     plain = tiny_lifter(64)
     assert plain.misfit_limit is None
     assert not [w for w in plain.lift(keypoints, focal=1145.0, principal_point=(512, 515), warn=False).warnings
@@ -1060,7 +1061,10 @@ def test_misfit_notes_only_for_a_measured_limit_and_detected_2d(rng, keypoints):
                                  relative=res.relative, focal=res.focal, misfit_cause="a dragged joint?")
     assert told == [res.warnings[0].replace("a confident detector mistake: joints bunched together or on the wrong "
                                             "limb", "a dragged joint?")]
-    assert not measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings
+    clean = measured.lift(keypoints, focal=1145.0, principal_point=(512, 515), source="clean", warn=False).warnings
+    assert [w.kind for w in clean] == ["misfit"]
+    assert "where exact 2D of real people stays under 15%" in clean[0]
+    assert "(joints in another order than Human3.6M's (lifter.JOINT_NAMES), or placed where no body bends)" in clean[0]
 
 
 def test_a_focal_per_first_index_error_names_the_shape_given():

@@ -4,6 +4,7 @@ a stub)."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
@@ -583,6 +584,57 @@ def test_focal_rules():
     assert g6.source == "default-fov" and "--sensor-width" in g6.detail
     with pytest.raises(PoseLifterError, match="field of view"):
         default_focal(size, fov_deg=190)
+
+
+def test_an_exif_focal_gets_the_field_of_view_check_and_is_not_called_assumed():
+    """A developer trial: an EXIF focal of 114 px for a 1000-px photo (162 deg of view) got no field-of-view note,
+    which --focal 114 gets, and the note on the pose's wide view said the focal was "assumed, not given"."""
+    from lifter import demo_sample
+    from lifter.pipeline import plausibility_notes, resolve_camera
+
+    exif = ExifCamera(focal_mm=8.0, focal_plane_xres=1000.0 / 7.0, focal_plane_unit_mm=10.0, pixel_x=1000, pixel_y=1000)
+    f, src, _, notes = resolve_camera(user_focal=None, user_pp=None, file_focal=None, file_pp=None,
+                                      image_size=(1000, 1000), exif=exif, sensor_width_mm=None,
+                                      fov_deg=DEFAULT_DIAGONAL_FOV_DEG, where="x.jpg")
+    assert src == "exif-focal-plane" and f[0] == pytest.approx(114.2857, rel=1e-4)
+    assert any(n.startswith("the EXIF's focal length 114.286 px gives this 1000 x 1000 px image a field of view of "
+                            "162 deg") and "the photo's EXIF is probably wrong" in n for n in notes), notes
+    kp = np.asarray(demo_sample("walking").keypoints_2d)  # (a pose spanning more than 120 deg at half that focal)
+    wide = [n for n in plausibility_notes(kp, f / 2, (1000, 1000), focal_source=src) if "deg of view" in n]
+    assert len(wide) == 1 and "the focal length was read from the photo's EXIF, not given" in wide[0], wide
+    assert "assumed" not in wide[0]
+    # the field of view assumed is not checked (it is the default's own), a focal given is, as before
+    _, _, _, given = resolve_camera(user_focal=np.array([114.2857, 114.2857]), user_pp=None, file_focal=None,
+                                    file_pp=None, image_size=(1000, 1000), exif=None, sensor_width_mm=None,
+                                    fov_deg=DEFAULT_DIAGONAL_FOV_DEG, where="x.jpg")
+    assert any(n.startswith("the focal length 114.286 px gives") and "is it in mm, not px" in n for n in given)
+
+
+def test_strict_exit_code_for_a_result_its_notes_call_not_valid(tmp_path, weights, kp17, capsys):
+    """A developer trial: --strict exited 0 for a root behind the camera ("the result is not a valid pose") and for a
+    focal length in mm (35 px: the person 0.25 m away). Such a result is still written, says why it is not valid,
+    and with --strict the exit code is 1."""
+    from lifter.cli.lift import not_valid_reasons
+    from lifter.pipeline import lift_keypoint_file
+
+    good = _kp_json(tmp_path / "good.json", kp17, focal=1000.0)
+    mm = _kp_json(tmp_path / "mm.json", kp17, focal=26.0)
+    square = _kp_json(tmp_path / "fxfy.json", kp17, focal=[1000.0, 10000.0])
+    code, err = run([str(good), "--weights", str(weights), "--out", str(tmp_path / "a"), "--strict"], capsys)
+    assert code == 0 and "not valid" not in err
+    for path, why in ((mm, "a focal length (26 px) that gives the image a field of view no pinhole lens has"),
+                      (square, "a focal length whose fx / fy is 0.1, beyond the 1.25 of real cameras")):
+        code, err = run([str(path), "--weights", str(weights), "--out", str(tmp_path / "b")], capsys)
+        assert code == 0 and f"{path}: note: the result is not valid: {why} (--strict makes it exit code 1)" in err
+        assert "1 of the 1 lifted with a result that is not valid" in err
+        code, err = run([str(good), str(path), "--weights", str(weights), "--out", str(tmp_path / "c"), "--strict"],
+                        capsys)
+        assert code == 1 and err.rstrip().endswith("exit code 1 (--strict)"), err
+        assert (tmp_path / "c" / f"{path.stem}.json").is_file()  # (still written)
+    rec = lift_keypoint_file(good, lifter=Lifter.from_checkpoint(weights), focal=None)
+    assert not_valid_reasons(rec, None) == []
+    behind = dataclasses.replace(rec, people=(dataclasses.replace(rec.people[0], root=rec.root * [1, 1, -1]),))
+    assert not_valid_reasons(behind, None) == ["1 root(s) behind the camera (Z <= 0)"]
 
 
 def _jpeg_with_exif(path: Path, size, *, orientation: int = 1, focal_mm=None, f35=None) -> Path:

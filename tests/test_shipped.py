@@ -400,9 +400,37 @@ def test_the_default_notes_detected_2d_its_lift_does_not_fit():
     bad = kp.copy()
     bad[[10, 9]] = kp[[3, 2]]
     with pytest.warns(PoseLifterWarning, match=r"1 of 1 lifted pose\(s\) do not fit their 2D: projected back, the "
-                                               r"joints lie up to \d+% of the 2D pose's size"):
+                                               r"joints lie up to \d+\.\d% of the 2D pose's size"):
         res = lf.lift(bad, focal=f, principal_point=pp)
     assert [w.kind for w in res.warnings] == ["misfit"]
     with warnings.catch_warnings():
         warnings.simplefilter("error", PoseLifterWarning)
-        lf.lift(bad, focal=f, principal_point=pp, source="clean")  # (exact 2D, however odd: no such note)
+        # (the clean network fits this one: under its own limit, measured on exact 2D)
+        lf.lift(bad, focal=f, principal_point=pp, source="clean")
+
+
+def test_the_default_notes_clean_2d_in_another_joint_order():
+    """A developer trial: exact 2D with the knees and elbows swapped, told source="clean", was lifted 3.3 m too near
+    with no note (24 of 40 random joint orders had none); the misfit note was for detected 2D only. The clean network
+    has its own limit (MAX_CLEAN_MISFIT, measured on the training subjects' exact 2D): the shipped samples in H36M
+    order are not noted, the same joints in another order are, naming that cause."""
+    import warnings
+
+    from lifter.camera import MAX_CLEAN_MISFIT, reprojection_misfit
+
+    lf = _default()
+    assert lf.network_for("clean").misfit_limit == MAX_CLEAN_MISFIT
+    for name in ("walking", "sitting", "standing", "reaching", "crouching"):
+        d = demo_sample(name)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", PoseLifterWarning)
+            lf.lift(d.keypoints_2d, focal=d.focal, principal_point=d.principal_point, source="clean")
+    kp, f, pp = _DEMO.keypoints_2d, _DEMO.focal, _DEMO.principal_point
+    swapped = kp[[0, 1, 15, 3, 4, 12, 6, 7, 8, 9, 10, 11, 5, 13, 14, 2, 16]]  # knees <-> elbows
+    with pytest.warns(PoseLifterWarning, match=r"1 of 1 lifted pose\(s\) do not fit their 2D: projected back, the "
+                                               r"joints lie up to \d+\.\d% of the 2D pose's size from it \(median "
+                                               r"joint\), where exact 2D of real people stays under 13%: the 2D is "
+                                               r"probably wrong in places \(joints in another order than Human3.6M's"):
+        res = lf.lift(swapped, focal=f, principal_point=pp, source="clean")
+    assert [w.kind for w in res.warnings] == ["misfit"]
+    assert float(reprojection_misfit(res.keypoints_2d, res.absolute, focal=f, principal_point=pp)) > MAX_CLEAN_MISFIT

@@ -51,8 +51,8 @@ JSON numbers: ``image_size`` whole px in [1, 100000] (:data:`MAX_IMAGE_SIDE_PX`)
 Bad input never stops the batch: each failure is reported as ``<input>: error: ...`` and the next
 input is processed; a photo with several people uses the largest and says so; images larger than
 ``--max-side`` px are downscaled for detection. **Exit code**: 0 when at least one input was lifted,
-1 when every input failed (or none was found; with ``--strict``, when any failed), 2 for a usage error (bad
-arguments, no lifter weights).
+1 when every input failed (or none was found; with ``--strict``, when any failed, or when a result is one its
+notes call not valid: :func:`not_valid_reasons`), 2 for a usage error (bad arguments, no lifter weights).
 """
 
 from __future__ import annotations
@@ -307,6 +307,37 @@ def output_names(files: list[Path], out_dir: Path, *, per_person: bool = False) 
     return names, notes
 
 
+def not_valid_reasons(rec: LiftRecord | None, seq: SequenceRecord | None) -> list[str]:
+    """Why a lifted input's result is one its own notes call not valid, for ``--strict``: a root behind the camera
+    (Z <= 0: "the result is not a valid pose"), or a camera no lens has: a focal length that gives the image a field
+    of view wider than :data:`lifter._checks.MAX_PLAUSIBLE_IMAGE_VIEW_DEG` or narrower than
+    :data:`lifter._checks.MIN_PLAUSIBLE_VIEW_DEG` (a focal in mm), or fx / fy beyond
+    :data:`lifter._checks.MAX_FOCAL_ASPECT` (every depth is proportional to it). Empty for a result to keep (a
+    developer trial's --strict run exited 0 with a root at Z = -628 mm, and with --focal 35, a focal in mm, placing
+    the person 0.25 m away)."""
+    from .._checks import MAX_FOCAL_ASPECT, view_angle_notes
+
+    if seq is not None:
+        roots = [q.root_raw for fr in seq.frames for q in fr.people]
+        focal, size = seq.focal, seq.image_size
+    elif rec is not None:
+        roots = [q.root for q in rec.people] if rec.people else [rec.root]
+        focal, size = rec.focal, rec.image_size
+    else:
+        return []
+    reasons = []
+    behind = sum(float(np.asarray(r, np.float64)[2]) <= 0 for r in roots)
+    if behind:
+        reasons.append(f"{behind} root(s) behind the camera (Z <= 0)")
+    fx, fy = (float(v) for v in focal)
+    if view_angle_notes((fx, fy), None if size is None else (int(size[0]), int(size[1]))):
+        reasons.append(f"a focal length ({fx:.6g} px) that gives the image a field of view no pinhole lens has")
+    if not 1.0 / MAX_FOCAL_ASPECT <= fx / fy <= MAX_FOCAL_ASPECT:
+        reasons.append(f"a focal length whose fx / fy is {fx / fy:.3g}, beyond the {MAX_FOCAL_ASPECT:g} of real "
+                       "cameras")
+    return reasons
+
+
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register the ``lift`` sub-command on an ``add_subparsers()`` object."""
     p = sub.add_parser(
@@ -320,8 +351,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "frame pattern of keypoint files (DIR/video_%%012d_keypoints.json: one file per frame)")
     p.add_argument("-o", "--out", type=Path, required=True, help="output folder")
     p.add_argument("--strict", action="store_true",
-                   help="exit code 1 when any input fails, not only when all do (for pipelines; the inputs that "
-                        "could be lifted are still written)")
+                   help="exit code 1 when any input fails, not only when all do, or when a result is one its notes "
+                        "call not valid: a root behind the camera, a focal length no lens has (in mm?) (for "
+                        "pipelines; the inputs that could be lifted are still written)")
     p.add_argument("--focal", type=float, nargs="+", metavar="F", default=None,
                    help="focal length FX [FY] in px (one or two values) for every input (default, per input: a "
                    "keypoint file's focal; a photo's EXIF; else the --fov field of view of the image size, which a "
@@ -484,7 +516,7 @@ def run_lift(args: argparse.Namespace) -> int:
         print(f"note: {msg}", file=sys.stderr)
     estimator: Any = None
     estimator_error: str | None = None
-    ok, failed = 0, len(problems)
+    ok, failed, not_valid = 0, len(problems), 0
     quiet = True if args.no_progress else None  # (tqdm's None: no bar when stderr is not a terminal, e.g. a pipe)
     bar = tqdm(list(zip(files, names)), desc="lift", unit="input", disable=quiet, file=sys.stderr, position=0)
 
@@ -605,6 +637,10 @@ def run_lift(args: argparse.Namespace) -> int:
                             say(f"{path}: note: {msg}")
                     written.update(now)
                     ok += 1  # (its outputs are whole: counted before an earlier run's are tidied away)
+                    if why_not := not_valid_reasons(rec, seq):
+                        not_valid += 1
+                        say(f"{path}: note: the result is not valid: {'; '.join(why_not)}"
+                            + (" (--strict: exit code 1)" if args.strict else " (--strict makes it exit code 1)"))
                     now = []
                     if again:  # (only this input's own earlier result: never another's, nor the user's files)
                         for msg in tidy_earlier_outputs(args.out, name, written, glb=args.glb, bvh=args.bvh,
@@ -633,10 +669,13 @@ def run_lift(args: argparse.Namespace) -> int:
         print(f"poselifter lift: interrupted after {ok} of {len(files)} input(s) lifted into {args.out}{part} (the "
               "files written are complete: each is written whole or not at all)", file=sys.stderr)
         return 130
+    strict_fails = args.strict and (failed or not_valid)
     print(f"lifted {ok} of {total} input(s) into {args.out}"
           + (f"; {failed} failed (see the messages above)" if failed else "")
-          + ("; exit code 1 (--strict)" if failed and ok and args.strict else ""), file=sys.stderr)
-    return 0 if ok and not (args.strict and failed) else 1
+          + (f"; {not_valid} of the {ok} lifted with a result that is not valid (see the notes above)"
+             if not_valid else "")
+          + ("; exit code 1 (--strict)" if strict_fails and ok else ""), file=sys.stderr)
+    return 0 if ok and not strict_fails else 1
 
 
 def _result_input(target: Path, path: Path) -> tuple[str | None, bool]:
